@@ -1,0 +1,115 @@
+//! The cornea: a neo-Hookean sphere inflated uniformly (Adkins; MODEL.md §3).
+//!
+//! ΔP = 4 C_c H_c / (α R_c) · (1 − α⁻⁶) for α ∈ (1, 7^(1/6)). The right side peaks at
+//! α = 7^(1/6), so a larger ΔP has no inflated cornea at all: that is an error naming the
+//! limit. The cornea fixes the shell's front edge: θ* = L/R_c, r* = α R_c sin(L/R_c),
+//! z* = α R_c (1 + cos(L/R_c)).
+
+use super::params::CorneaParams;
+use super::ModelError;
+
+/// The pressure of a cornea inflated to stretch `alpha`.
+pub fn pressure(c: &CorneaParams, alpha: f64) -> f64 {
+    4.0 * c.c * c.h / c.r0 * (1.0 / alpha - alpha.powi(-7))
+}
+
+/// The stretch at which the cornea's pressure peaks, 7^(1/6).
+pub fn alpha_max() -> f64 {
+    7f64.powf(1.0 / 6.0)
+}
+
+/// The largest pressure the cornea can hold: 4 C_c H_c / R_c · (6/7) · 7^(−1/6).
+pub fn max_pressure(c: &CorneaParams) -> f64 {
+    pressure(c, alpha_max())
+}
+
+/// The cornea's stretch α at pressure `dp`, to full double precision.
+///
+/// Bisection keeps the root bracketed; Newton steps inside the bracket give the last digits.
+pub fn stretch(c: &CorneaParams, dp: f64) -> Result<f64, ModelError> {
+    let p_max = max_pressure(c);
+    if !(dp >= 0.0) {
+        return Err(ModelError::NegativePressure { dp });
+    }
+    if dp > p_max {
+        return Err(ModelError::PressureAboveCorneaLimit { dp, max: p_max });
+    }
+    if dp == 0.0 {
+        return Ok(1.0);
+    }
+    let (mut lo, mut hi) = (1.0, alpha_max());
+    let k = 4.0 * c.c * c.h / c.r0;
+    let mut a = 0.5 * (lo + hi);
+    for _ in 0..200 {
+        let g = pressure(c, a) - dp;
+        if g == 0.0 {
+            return Ok(a);
+        }
+        if g < 0.0 {
+            lo = a;
+        } else {
+            hi = a;
+        }
+        let dg = k * (-a.powi(-2) + 7.0 * a.powi(-8));
+        let newton = a - g / dg;
+        a = if dg > 0.0 && newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+        if hi - lo <= 4.0 * f64::EPSILON * hi || (a - lo).min(hi - a) == 0.0 {
+            break;
+        }
+        if (g / dg).abs() <= f64::EPSILON * a {
+            break;
+        }
+    }
+    Ok(a)
+}
+
+/// Where the cornea holds the shell's front edge (MODEL.md §3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CorneaEdge {
+    /// The cornea's stretch α.
+    pub alpha: f64,
+    /// θ* = L / R_c.
+    pub theta: f64,
+    /// r* = α R_c sin(L / R_c).
+    pub r: f64,
+    /// z* = α R_c (1 + cos(L / R_c)).
+    pub z: f64,
+}
+
+/// The edge conditions at Σ = L for a shell of material length `length`.
+pub fn edge(c: &CorneaParams, dp: f64, length: f64) -> Result<CorneaEdge, ModelError> {
+    let alpha = stretch(c, dp)?;
+    let phi = length / c.r0;
+    Ok(CorneaEdge {
+        alpha,
+        theta: phi,
+        r: alpha * c.r0 * phi.sin(),
+        z: alpha * c.r0 * (1.0 + phi.cos()),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper() -> CorneaParams {
+        CorneaParams { c: 100.0, h: 0.65, r0: 10.0 }
+    }
+
+    #[test]
+    fn default_stretch_matches_model_md() {
+        let a = stretch(&paper(), 2.0).unwrap();
+        assert!((a - 1.0136216901111).abs() < 1e-12, "alpha = {a:.16}");
+        // Full precision: the residual is at round-off.
+        assert!((pressure(&paper(), a) - 2.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn pressure_above_limit_names_the_limit() {
+        let max = max_pressure(&paper());
+        assert!((max - 26.0 * 6.0 / 7.0 * 7f64.powf(-1.0 / 6.0)).abs() < 1e-12);
+        let err = stretch(&paper(), max * 1.001).unwrap_err();
+        assert!(err.to_string().contains(&format!("{max:.6}")), "{err}");
+        assert!((stretch(&paper(), max).unwrap() - alpha_max()).abs() < 1e-7);
+    }
+}

@@ -1,0 +1,16 @@
+//! The physics, and nothing of the solvers (MODEL.md §1–4): parameters, material
+//! profiles, the constitutive law and the cornea.
+
+pub mod constitutive;
+pub mod cornea;
+pub mod params;
+pub mod profiles;
+
+/// A set of parameters for which the model itself has no answer.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum ModelError {
+    #[error("pressure.dP = {dp} is above the cornea's limit: the largest admissible ΔP is {max:.6} kPa (4 C_c H_c / R_c · (6/7) · 7^(-1/6))")]
+    PressureAboveCorneaLimit { dp: f64, max: f64 },
+    #[error("pressure.dP = {dp} must be non-negative")]
+    NegativePressure { dp: f64 },
+}

@@ -1,0 +1,146 @@
+//! Parameters of the elastic shell and their defaults: the paper's table (MODEL.md §8).
+//!
+//! Units: mm, kPa, kPa·mm³. Every field maps to one scene key (given beside it).
+
+/// Thickness profile H(Σ) of the unloaded, ungrown shell (MODEL.md §4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Thickness {
+    /// H(Σ) = H0 everywhere.
+    Uniform,
+    /// The paper's two-piece tanh profile, thick at the back, with a jump at πR0/2.
+    NonUniform,
+}
+
+/// The cornea: a neo-Hookean sphere inflated uniformly (Adkins; MODEL.md §3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CorneaParams {
+    /// cornea.C: shear modulus C_c (kPa).
+    pub c: f64,
+    /// cornea.H: thickness H_c (mm).
+    pub h: f64,
+    /// cornea.R0: radius R_c (mm).
+    pub r0: f64,
+}
+
+/// The physical parameters of one elastic problem.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params {
+    /// pressure.dP: pressure difference ΔP (kPa).
+    pub dp: f64,
+    /// material.C: neo-Hookean modulus C of the sclera (kPa).
+    pub c: f64,
+    /// material.bending: bending stiffness E_b (kPa·mm³).
+    pub e_b: f64,
+    /// material.thickness.
+    pub thickness: Thickness,
+    /// material.H0: uniform thickness H0 (mm).
+    pub h0: f64,
+    /// fibres.D: fibre stiffness D (kPa). Zero means no fibres: ψ is never evaluated.
+    pub d: f64,
+    /// cornea.*
+    pub cornea: CorneaParams,
+    /// geometry.R0: radius of the reference sphere (mm).
+    pub r0: f64,
+    /// geometry.fraction: f, with L = π f R0.
+    pub fraction: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            dp: 2.0,
+            c: 100.0,
+            e_b: 18.0,
+            thickness: Thickness::Uniform,
+            h0: 0.65,
+            d: 0.0,
+            cornea: CorneaParams { c: 100.0, h: 0.65, r0: 10.0 },
+            r0: 10.0,
+            fraction: 0.8,
+        }
+    }
+}
+
+impl Params {
+    /// Material length of the shell, L = π f R0.
+    pub fn length(&self) -> f64 {
+        std::f64::consts::PI * self.fraction * self.r0
+    }
+
+    /// True when the scene has fibres (D > 0); otherwise ψ is not part of the model.
+    pub fn has_fibres(&self) -> bool {
+        self.d > 0.0
+    }
+
+    /// The parameters of MODEL.md §7, whose solution is a uniformly inflated sphere:
+    /// uniform H0, no fibres, and a cornea of the same material and radius as the sclera.
+    pub fn exact_sphere(&self) -> Params {
+        Params {
+            thickness: Thickness::Uniform,
+            d: 0.0,
+            cornea: CorneaParams { c: self.c, h: self.h0, r0: self.r0 },
+            ..*self
+        }
+    }
+}
+
+/// Which finite-difference scheme discretises the BVP (MODEL.md §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scheme {
+    /// Trapezoidal rule: order 2.
+    Trapezoid,
+    /// Hermite–Simpson = 3-stage Lobatto IIIA (bvp4c's scheme): order 4.
+    HermiteSimpson,
+}
+
+impl Scheme {
+    /// The scheme's classical order of accuracy.
+    pub fn order(self) -> u32 {
+        match self {
+            Scheme::Trapezoid => 2,
+            Scheme::HermiteSimpson => 4,
+        }
+    }
+}
+
+/// Which direct linear solver factors the Newton matrix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinearSolverKind {
+    /// SUNDIALS band LU.
+    Band,
+    /// SuiteSparse KLU through SUNDIALS' sunlinsol_klu.
+    Klu,
+}
+
+/// Numerical settings of one elastic solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverSettings {
+    /// solver.nodes: number of uniform nodes on [ε, L]; breakpoints and pole nodes come on top.
+    pub nodes: usize,
+    /// solver.epsilon: pole truncation ε (mm).
+    pub epsilon: f64,
+    /// solver.scheme.
+    pub scheme: Scheme,
+    /// solver.linear.
+    pub linear: LinearSolverKind,
+    /// solver.newton_tol: KINSOL's tolerance on the scaled residual (max norm).
+    pub newton_tol: f64,
+    /// solver.max_newton: the most Newton iterations per solve.
+    pub max_newton: usize,
+    /// solver.pole_grading: insert geometrically graded nodes next to the pole (MODEL.md §3 trap).
+    pub pole_grading: bool,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            nodes: 501,
+            epsilon: 1e-3,
+            scheme: Scheme::HermiteSimpson,
+            linear: LinearSolverKind::Band,
+            newton_tol: 1e-10,
+            max_newton: 50,
+            pole_grading: true,
+        }
+    }
+}
