@@ -1,0 +1,139 @@
+//! The material nodes Σ_i on [ε, L] (MODEL.md §3–4).
+//!
+//! `uniform` nodes are spread evenly, so ladders N = 101, 201, 401, … are nested. On top:
+//! - the material breakpoints (πR0/2, and a, b with fibres) become nodes, so that data
+//!   jump or kink only at nodes and never inside an interval;
+//! - next to the pole, graded nodes ε + h q^k (k = 1..K, q = 0.3) shrink the spacing until
+//!   it is no larger than ε. The equations carry 1/r and 1/r² coefficients, stiff where
+//!   r ~ Σ is small; on a uniform mesh κ and α_s at the first nodes converge only at
+//!   order 1. With spacing ≲ distance from the pole the scheme keeps its order.
+
+/// Ratio q of the geometric grading next to the pole.
+pub const POLE_RATIO: f64 = 0.3;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// Σ_0 = ε < Σ_1 < … < Σ_{M−1} = L.
+    pub nodes: Vec<f64>,
+    /// The uniform nodes asked for (solver.nodes).
+    pub uniform: usize,
+    /// Indices of nodes that are material breakpoints.
+    pub breakpoint_nodes: Vec<usize>,
+    /// Breakpoints that were added as new nodes (not already uniform nodes).
+    pub inserted_breakpoints: usize,
+    /// Graded nodes added next to the pole.
+    pub pole_nodes: usize,
+}
+
+impl Mesh {
+    /// Lay the nodes: `uniform` ≥ 2 even nodes on [ε, L], the `breakpoints` inside (ε, L),
+    /// and the pole grading when `grade_pole`.
+    pub fn new(epsilon: f64, length: f64, uniform: usize, breakpoints: &[f64], grade_pole: bool) -> Mesh {
+        assert!(uniform >= 2 && epsilon < length, "mesh needs ε < L and two nodes");
+        let h = (length - epsilon) / (uniform - 1) as f64;
+        let mut nodes: Vec<f64> = (0..uniform).map(|i| epsilon + i as f64 * h).collect();
+        nodes[uniform - 1] = length;
+        let mut pole_nodes = 0;
+        if grade_pole {
+            let mut spacing = h;
+            while spacing > epsilon {
+                spacing *= POLE_RATIO;
+                nodes.push(epsilon + spacing);
+                pole_nodes += 1;
+            }
+        }
+        // A breakpoint within round-off of an existing node replaces it; otherwise it is added.
+        let snap = 1e-10 * length;
+        let mut inserted = 0;
+        let mut exact = Vec::new();
+        for &b in breakpoints.iter().filter(|&&b| b > epsilon && b < length) {
+            match nodes.iter().position(|&x| (x - b).abs() <= snap) {
+                Some(i) => nodes[i] = b,
+                None => {
+                    nodes.push(b);
+                    inserted += 1;
+                }
+            }
+            exact.push(b);
+        }
+        nodes.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        nodes.dedup();
+        let breakpoint_nodes = exact
+            .iter()
+            .map(|b| nodes.iter().position(|x| x == b).unwrap())
+            .collect();
+        Mesh { nodes, uniform, breakpoint_nodes, inserted_breakpoints: inserted, pole_nodes }
+    }
+
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    pub fn intervals(&self) -> usize {
+        self.nodes.len() - 1
+    }
+
+    /// Length of interval i, [Σ_i, Σ_{i+1}].
+    pub fn step(&self, i: usize) -> f64 {
+        self.nodes[i + 1] - self.nodes[i]
+    }
+
+    /// The interval holding Σ (the last one for Σ = L), or None outside [ε, L].
+    pub fn locate(&self, sigma_ref: f64) -> Option<usize> {
+        let (first, last) = (self.nodes[0], *self.nodes.last().unwrap());
+        if !(sigma_ref >= first && sigma_ref <= last) {
+            return None;
+        }
+        let i = self.nodes.partition_point(|&x| x <= sigma_ref);
+        Some(i.saturating_sub(1).min(self.intervals() - 1))
+    }
+
+    /// Index of the node at exactly Σ, if any.
+    pub fn node_at(&self, sigma_ref: f64) -> Option<usize> {
+        self.nodes.binary_search_by(|x| x.partial_cmp(&sigma_ref).unwrap()).ok()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniform_ladders_are_nested() {
+        let coarse = Mesh::new(1e-3, 25.0, 101, &[], false);
+        let fine = Mesh::new(1e-3, 25.0, 201, &[], false);
+        for (i, x) in coarse.nodes.iter().enumerate() {
+            assert!((fine.nodes[2 * i] - x).abs() < 1e-13);
+        }
+    }
+
+    #[test]
+    fn pole_grading_reaches_epsilon() {
+        let m = Mesh::new(1e-3, 25.0, 501, &[], true);
+        let h: f64 = (25.0 - 1e-3) / 500.0;
+        assert_eq!(m.pole_nodes, ((h / 1e-3).ln() / (1.0 / POLE_RATIO).ln()).ceil() as usize);
+        assert!(m.step(0) <= 1e-3 && m.step(0) > 1e-3 * POLE_RATIO);
+        // Each graded spacing is a bounded multiple, (1 − q)/q, of the distance from the pole.
+        for i in 0..m.pole_nodes {
+            assert!(m.step(i) <= (1.0 - POLE_RATIO) / POLE_RATIO * m.nodes[i] + 1e-15, "spacing too large at node {i}");
+        }
+        assert_eq!(m.len(), 501 + m.pole_nodes);
+    }
+
+    #[test]
+    fn breakpoints_become_nodes() {
+        let bps = [1.5707963267948966, 3.9269908169872414, 15.707963267948966];
+        let m = Mesh::new(1e-3, 8.0 * std::f64::consts::PI, 101, &bps, true);
+        for (k, &b) in bps.iter().enumerate() {
+            assert_eq!(m.nodes[m.breakpoint_nodes[k]], b);
+        }
+        assert!(m.nodes.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(m.locate(bps[2]), Some(m.breakpoint_nodes[2]));
+        assert_eq!(m.locate(*m.nodes.last().unwrap()), Some(m.intervals() - 1));
+        assert_eq!(m.locate(0.0), None);
+    }
+}
