@@ -1,0 +1,338 @@
+//! The discrete equations on the material nodes (MODEL.md §3): trapezoidal (order 2) or
+//! Hermite–Simpson = 3-stage Lobatto IIIA (order 4, bvp4c's scheme), the truncated pole
+//! conditions at Σ = ε and the cornea conditions at Σ = L, with the analytic Jacobian.
+//!
+//! Unknowns are interleaved by node, u = [y_0, y_1, …, y_{M−1}], y = (κ, r, θ, Q, t_s).
+//! Rows: the three pole conditions (on y_0), then five rows per interval (on y_i, y_{i+1}),
+//! then the two cornea conditions (on y_{M−1}). Every row's columns lie within 7 below and
+//! 6 above the diagonal, so the Jacobian is a band matrix with ml = 7, mu = 6.
+//!
+//! At a material breakpoint each interval evaluates f with the data from its own side, so
+//! α_s may jump there while t_s, κ, r, θ, Q stay continuous (MODEL.md §4).
+
+use super::equations::{self, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, Q, R, THETA, TS};
+use crate::mesh::Mesh;
+use crate::model::cornea::CorneaEdge;
+use crate::model::params::Scheme;
+use crate::sundials::MatrixSink;
+
+/// Unknowns per node.
+pub const NY: usize = 5;
+/// Band widths of the Jacobian (below, above the diagonal).
+pub const LOWER: usize = 7;
+pub const UPPER: usize = 6;
+/// Rows at the pole before the first interval's rows.
+const POLE_ROWS: usize = 3;
+
+/// Where the discrete equations could not be evaluated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EvalFailure {
+    pub node: usize,
+    pub sigma_ref: f64,
+    pub why: PointError,
+}
+
+/// The shell's material data on the mesh: at each node from either side, and at the
+/// interval midpoints (used by Hermite–Simpson).
+#[derive(Clone, Debug)]
+pub struct MaterialData {
+    /// Node i seen from interval i (the limit from above). Length M.
+    pub above: Vec<MaterialPoint>,
+    /// Node i seen from interval i−1 (the limit from below). Length M.
+    pub below: Vec<MaterialPoint>,
+    /// Midpoint of interval i. Length M−1.
+    pub mid: Vec<MaterialPoint>,
+}
+
+impl MaterialData {
+    fn jumps(&self, i: usize) -> bool {
+        self.above[i] != self.below[i]
+    }
+}
+
+/// Point evaluations at the current state, shared by the residual and the Jacobian.
+#[derive(Clone, Debug, Default)]
+struct Evaluations {
+    /// u at which they were taken.
+    u: Vec<f64>,
+    /// Interval i's left end (node i, from above).
+    left: Vec<PointEval>,
+    /// Interval i's right end (node i+1, from below).
+    right: Vec<PointEval>,
+    /// Hermite–Simpson midpoint of interval i, and y there.
+    mid: Vec<PointEval>,
+    y_mid: Vec<Vec5>,
+}
+
+/// The discrete boundary value problem F(u) = 0.
+#[derive(Clone, Debug)]
+pub struct Discretisation {
+    pub shell: Shell,
+    pub scheme: Scheme,
+    pub mesh: Mesh,
+    pub data: MaterialData,
+    pub edge: CorneaEdge,
+    evals: Evaluations,
+    /// Seeds for the α_s solves, from the last evaluation.
+    guess_left: Vec<f64>,
+    guess_right: Vec<f64>,
+    guess_mid: Vec<f64>,
+}
+
+#[inline]
+fn y_at(u: &[f64], i: usize) -> Vec5 {
+    Vec5::from_column_slice(&u[NY * i..NY * i + NY])
+}
+
+impl Discretisation {
+    pub fn new(shell: Shell, scheme: Scheme, mesh: Mesh, data: MaterialData, edge: CorneaEdge) -> Self {
+        let m = mesh.len();
+        assert!(data.above.len() == m && data.below.len() == m && data.mid.len() == m - 1);
+        let seed = edge.alpha;
+        Discretisation {
+            shell,
+            scheme,
+            mesh,
+            data,
+            edge,
+            evals: Evaluations::default(),
+            guess_left: vec![seed; m - 1],
+            guess_right: vec![seed; m - 1],
+            guess_mid: vec![seed; m - 1],
+        }
+    }
+
+    /// Number of unknowns (and equations), 5 M.
+    pub fn len(&self) -> usize {
+        NY * self.mesh.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.mesh.is_empty()
+    }
+
+    /// Evaluate f (and ∂f/∂y) at every point the scheme uses, unless already done at `u`.
+    fn evaluate(&mut self, u: &[f64]) -> Result<(), EvalFailure> {
+        if self.evals.u.as_slice() == u && !self.evals.left.is_empty() {
+            return Ok(());
+        }
+        self.evals.u.clear();
+        let m = self.mesh.len();
+        let fail = |node: usize, sigma_ref: f64| move |why| EvalFailure { node, sigma_ref, why };
+        let mut left = Vec::with_capacity(m - 1);
+        let mut right = Vec::with_capacity(m - 1);
+        for i in 0..m - 1 {
+            let mp = &self.data.above[i];
+            let e = equations::evaluate(&self.shell, mp, &y_at(u, i), self.guess_left[i]).map_err(fail(i, mp.sigma_ref))?;
+            left.push(e);
+        }
+        for i in 0..m - 1 {
+            let k = i + 1;
+            let e = if k < m - 1 && !self.data.jumps(k) {
+                left[k]
+            } else {
+                let mp = &self.data.below[k];
+                equations::evaluate(&self.shell, mp, &y_at(u, k), self.guess_right[i]).map_err(fail(k, mp.sigma_ref))?
+            };
+            right.push(e);
+        }
+        let (mut mid, mut y_mid) = (Vec::new(), Vec::new());
+        if self.scheme == Scheme::HermiteSimpson {
+            mid.reserve(m - 1);
+            y_mid.reserve(m - 1);
+            for i in 0..m - 1 {
+                let h = self.mesh.step(i);
+                let ym = 0.5 * (y_at(u, i) + y_at(u, i + 1)) + (h / 8.0) * (left[i].f - right[i].f);
+                let mp = &self.data.mid[i];
+                let e = equations::evaluate(&self.shell, mp, &ym, self.guess_mid[i]).map_err(fail(i, mp.sigma_ref))?;
+                self.guess_mid[i] = e.alpha_s;
+                mid.push(e);
+                y_mid.push(ym);
+            }
+        }
+        for i in 0..m - 1 {
+            self.guess_left[i] = left[i].alpha_s;
+            self.guess_right[i] = right[i].alpha_s;
+        }
+        self.evals = Evaluations { u: u.to_vec(), left, right, mid, y_mid };
+        Ok(())
+    }
+
+    /// σ_ε, the grown arclength at the truncated pole.
+    fn sigma_eps(&self) -> f64 {
+        self.data.above[0].sigma
+    }
+
+    /// F(u) into `f`.
+    pub fn residual(&mut self, u: &[f64], f: &mut [f64]) -> Result<(), EvalFailure> {
+        self.evaluate(u)?;
+        let ev = &self.evals;
+        let m = self.mesh.len();
+        // Pole (MODEL.md §3): r = σ_ε α_s, θ = σ_ε α_s κ, and the first integral.
+        let y0 = y_at(u, 0);
+        let se = self.sigma_eps();
+        let a0 = ev.left[0].alpha_s;
+        f[0] = y0[R] - se * a0;
+        f[1] = y0[THETA] - se * a0 * y0[KAPPA];
+        f[2] = equations::first_integral(self.shell.dp, &y0);
+        for i in 0..m - 1 {
+            let h = self.mesh.step(i);
+            let dy = y_at(u, i + 1) - y_at(u, i);
+            let r = match self.scheme {
+                Scheme::Trapezoid => dy - (0.5 * h) * (ev.left[i].f + ev.right[i].f),
+                Scheme::HermiteSimpson => dy - (h / 6.0) * (ev.left[i].f + 4.0 * ev.mid[i].f + ev.right[i].f),
+            };
+            f[POLE_ROWS + NY * i..POLE_ROWS + NY * i + NY].copy_from_slice(r.as_slice());
+        }
+        let yl = y_at(u, m - 1);
+        let n = self.len();
+        f[n - 2] = yl[R] - self.edge.r;
+        f[n - 1] = yl[THETA] - self.edge.theta;
+        Ok(())
+    }
+
+    /// ∂F/∂u at `u`, every structural entry written into `jac`.
+    pub fn jacobian<S: MatrixSink + ?Sized>(&mut self, u: &[f64], jac: &mut S) -> Result<(), EvalFailure> {
+        self.evaluate(u)?;
+        let ev = &self.evals;
+        let m = self.mesh.len();
+        let y0 = y_at(u, 0);
+        let se = self.sigma_eps();
+        let e0 = &ev.left[0];
+        let (a0, a0_r, a0_ts) = (e0.alpha_s, e0.alpha_s_r, e0.alpha_s_ts);
+        // r − σ_ε α_s
+        jac.set(0, R, 1.0 - se * a0_r);
+        jac.set(0, TS, -se * a0_ts);
+        // θ − σ_ε α_s κ
+        jac.set(1, KAPPA, -se * a0);
+        jac.set(1, R, -se * a0_r * y0[KAPPA]);
+        jac.set(1, THETA, 1.0);
+        jac.set(1, TS, -se * a0_ts * y0[KAPPA]);
+        // Q cos θ + r t_s sin θ − r² ΔP / 2
+        let (sn, cs) = y0[THETA].sin_cos();
+        jac.set(2, R, y0[TS] * sn - y0[R] * self.shell.dp);
+        jac.set(2, THETA, -y0[Q] * sn + y0[R] * y0[TS] * cs);
+        jac.set(2, Q, cs);
+        jac.set(2, TS, y0[R] * sn);
+        let id = Mat5::identity();
+        for i in 0..m - 1 {
+            let h = self.mesh.step(i);
+            let (jl, jr) = (&ev.left[i].jac, &ev.right[i].jac);
+            let (dl, dr) = match self.scheme {
+                Scheme::Trapezoid => (-id - (0.5 * h) * jl, id - (0.5 * h) * jr),
+                Scheme::HermiteSimpson => {
+                    // y_m = (y_i + y_{i+1})/2 + h/8 (f_i − f_{i+1}), so
+                    // ∂R/∂y_i = −I − h/6 J_i − h/3 J_m − h²/12 J_m J_i, and likewise for y_{i+1}.
+                    let jm = &ev.mid[i].jac;
+                    let jm_jl = jm * jl;
+                    let jm_jr = jm * jr;
+                    (
+                        -id - (h / 6.0) * jl - (h / 3.0) * jm - (h * h / 12.0) * jm_jl,
+                        id - (h / 6.0) * jr - (h / 3.0) * jm + (h * h / 12.0) * jm_jr,
+                    )
+                }
+            };
+            let row = POLE_ROWS + NY * i;
+            for a in 0..NY {
+                for b in 0..NY {
+                    jac.set(row + a, NY * i + b, dl[(a, b)]);
+                    jac.set(row + a, NY * (i + 1) + b, dr[(a, b)]);
+                }
+            }
+        }
+        let n = self.len();
+        jac.set(n - 2, n - NY + R, 1.0);
+        jac.set(n - 1, n - NY + THETA, 1.0);
+        Ok(())
+    }
+
+    /// The CSR pattern of the Jacobian (for sparse solvers): each row's columns are one
+    /// contiguous block.
+    pub fn pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        let n = self.len();
+        let mut row_ptr = vec![0];
+        let mut col_idx = Vec::new();
+        for row in 0..n {
+            let cols = if row < POLE_ROWS {
+                0..NY
+            } else if row >= n - 2 {
+                n - NY..n
+            } else {
+                let i = (row - POLE_ROWS) / NY;
+                NY * i..NY * (i + 2)
+            };
+            col_idx.extend(cols);
+            row_ptr.push(col_idx.len());
+        }
+        (row_ptr, col_idx)
+    }
+
+    /// The point evaluations at the last state, for output: (left ends, right ends, midpoints).
+    pub fn point_evaluations(&mut self, u: &[f64]) -> Result<(&[PointEval], &[PointEval], &[PointEval], &[Vec5]), EvalFailure> {
+        self.evaluate(u)?;
+        let e = &self.evals;
+        Ok((&e.left, &e.right, &e.mid, &e.y_mid))
+    }
+
+    /// Typical sizes of the five unknowns, for KINSOL's scaling: κ ~ 1/R, r ~ R, θ ~ 1,
+    /// t_s ~ ΔP R / 2 (Laplace), Q ~ r t_s (the first integral balances them).
+    pub fn typical(&self, r0: f64) -> Vec5 {
+        let ts = (0.5 * self.shell.dp * r0).max(1e-3 * self.shell.law.c * self.data.above[0].zeta);
+        Vec5::new(1.0 / r0, r0, 1.0, ts * r0, ts)
+    }
+
+    /// (u_scale, f_scale): the inverse typical size of each unknown and each equation.
+    pub fn scales(&self, r0: f64) -> (Vec<f64>, Vec<f64>) {
+        let typ = self.typical(r0);
+        let n = self.len();
+        let u_scale: Vec<f64> = (0..n).map(|k| 1.0 / typ[k % NY]).collect();
+        let mut f_scale = vec![0.0; n];
+        f_scale[0] = 1.0 / typ[R];
+        f_scale[1] = 1.0 / typ[THETA];
+        f_scale[2] = 1.0 / typ[Q];
+        for k in POLE_ROWS..n - 2 {
+            f_scale[k] = 1.0 / typ[(k - POLE_ROWS) % NY];
+        }
+        f_scale[n - 2] = 1.0 / typ[R];
+        f_scale[n - 1] = 1.0 / typ[THETA];
+        (u_scale, f_scale)
+    }
+
+    /// The equation (row) a residual index belongs to, and the node it sits at.
+    pub fn locate_row(&self, row: usize) -> (usize, &'static str) {
+        let n = self.len();
+        if row < POLE_ROWS {
+            (0, ["pole r = σ_ε α_s", "pole θ = σ_ε α_s κ", "pole first integral"][row])
+        } else if row >= n - 2 {
+            (self.mesh.len() - 1, ["cornea r = r*", "cornea θ = θ*"][row + 2 - n])
+        } else {
+            let i = (row - POLE_ROWS) / NY;
+            (i, equations::NAMES[(row - POLE_ROWS) % NY])
+        }
+    }
+}
+
+/// A dense n×n matrix that the Jacobian can be written into, for tests and diagnostics.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DenseSink {
+    pub n: usize,
+    pub data: Vec<f64>,
+}
+
+impl DenseSink {
+    pub fn new(n: usize) -> Self {
+        DenseSink { n, data: vec![0.0; n * n] }
+    }
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.data[i * self.n + j]
+    }
+}
+
+impl MatrixSink for DenseSink {
+    fn nrows(&self) -> usize {
+        self.n
+    }
+    fn set(&mut self, i: usize, j: usize, v: f64) {
+        self.data[i * self.n + j] = v;
+    }
+}
