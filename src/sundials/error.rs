@@ -1,0 +1,205 @@
+//! Typed errors for the SUNDIALS layer, and the symbolic names of the return flags.
+//!
+//! Why our own flag tables: `KINGetReturnFlagName` returns a malloc'd string per call, and
+//! the same integer means different things in KINSOL, KINLS and SUNLinSol; a static table per
+//! family gives a `&'static str` name and a fallback description when SUNDIALS sent no message.
+
+use std::fmt;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SundialsError {
+    /// A SUNDIALS function returned a failure flag.
+    #[error("{function} failed with {name} ({flag}){}", Colon(message))]
+    Flag {
+        function: &'static str,
+        flag: i32,
+        /// The flag's symbolic name, e.g. "KIN_LINESEARCH_NONCONV".
+        name: &'static str,
+        /// What SUNDIALS said (captured by the error handler), or a description of the flag.
+        message: String,
+    },
+    /// A constructor returned NULL.
+    #[error("{0} returned NULL (out of memory or invalid arguments)")]
+    NullHandle(&'static str),
+    /// One of our callbacks failed fatally or panicked.
+    #[error("callback failed: {0}")]
+    Callback(String),
+    /// KLU was asked for but was not found when the crate was built.
+    #[error("the KLU sparse linear solver is not available: sunlinsol_klu/klu were not found when eyeshell was built (apt-get install -y libsundials-dev libsuitesparse-dev, then rebuild)")]
+    KluUnavailable,
+    /// The caller passed something the layer cannot use (wrong length, bad pattern, ...).
+    #[error("invalid argument: {0}")]
+    Invalid(String),
+}
+
+/// ": message" on one line, or nothing when the message is empty.
+struct Colon<'a>(&'a str);
+
+impl fmt::Display for Colon<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let one_line = one_line(self.0);
+        if one_line.is_empty() {
+            Ok(())
+        } else {
+            write!(f, ": {one_line}")
+        }
+    }
+}
+
+/// Collapse whitespace (SUNDIALS messages may contain newlines and tabs).
+pub(crate) fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Which family a flag belongs to: the same integer means different things in each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum FlagFamily {
+    Kin,
+    KinLs,
+    SunLs,
+    /// Plain 0 / nonzero (SUNContext, N_Vector utilities).
+    Generic,
+}
+
+impl FlagFamily {
+    /// (symbolic name, short description).
+    pub(crate) fn describe(self, flag: i32) -> (&'static str, &'static str) {
+        let table: &[(i32, &str, &str)] = match self {
+            FlagFamily::Kin => KIN_FLAGS,
+            FlagFamily::KinLs => KINLS_FLAGS,
+            FlagFamily::SunLs => SUNLS_FLAGS,
+            FlagFamily::Generic => &[(0, "SUCCESS", "success")],
+        };
+        table
+            .iter()
+            .find(|(f, _, _)| *f == flag)
+            .map(|(_, n, d)| (*n, *d))
+            .unwrap_or(("UNKNOWN_FLAG", "unrecognised return flag"))
+    }
+
+    pub(crate) fn name(self, flag: i32) -> &'static str {
+        self.describe(flag).0
+    }
+}
+
+const KIN_FLAGS: &[(i32, &str, &str)] = &[
+    (0, "KIN_SUCCESS", "success"),
+    (1, "KIN_INITIAL_GUESS_OK", "the initial guess already satisfies the stopping criterion"),
+    (2, "KIN_STEP_LT_STPTOL", "the scaled step fell below the scaled step tolerance"),
+    (99, "KIN_WARNING", "warning"),
+    (-1, "KIN_MEM_NULL", "the KINSOL memory is NULL"),
+    (-2, "KIN_ILL_INPUT", "an input argument is illegal"),
+    (-3, "KIN_NO_MALLOC", "KINSOL memory was not allocated by KINInit"),
+    (-4, "KIN_MEM_FAIL", "a memory allocation failed"),
+    (-5, "KIN_LINESEARCH_NONCONV", "the line search could not find an iterate sufficiently distinct from the current one"),
+    (-6, "KIN_MAXITER_REACHED", "the maximum number of nonlinear iterations was reached"),
+    (-7, "KIN_MXNEWT_5X_EXCEEDED", "five consecutive steps had the maximum Newton step length"),
+    (-8, "KIN_LINESEARCH_BCFAIL", "the line search could not satisfy the beta condition"),
+    (-9, "KIN_LINSOLV_NO_RECOVERY", "the linear solver failed recoverably but the Jacobian is current"),
+    (-10, "KIN_LINIT_FAIL", "the linear solver initialisation failed"),
+    (-11, "KIN_LSETUP_FAIL", "the linear solver setup (Jacobian or factorisation) failed"),
+    (-12, "KIN_LSOLVE_FAIL", "the linear solve failed"),
+    (-13, "KIN_SYSFUNC_FAIL", "the residual function failed unrecoverably"),
+    (-14, "KIN_FIRST_SYSFUNC_ERR", "the residual function failed recoverably at the initial guess"),
+    (-15, "KIN_REPTD_SYSFUNC_ERR", "the residual function failed recoverably repeatedly"),
+    (-16, "KIN_VECTOROP_ERR", "a vector operation failed"),
+    (-17, "KIN_CONTEXT_ERR", "the SUNContext is invalid"),
+];
+
+const KINLS_FLAGS: &[(i32, &str, &str)] = &[
+    (0, "KINLS_SUCCESS", "success"),
+    (-1, "KINLS_MEM_NULL", "the KINSOL memory is NULL"),
+    (-2, "KINLS_LMEM_NULL", "the linear solver interface is not attached"),
+    (-3, "KINLS_ILL_INPUT", "an input argument is illegal or the linear solver is incompatible"),
+    (-4, "KINLS_MEM_FAIL", "a memory allocation failed"),
+    (-5, "KINLS_PMEM_NULL", "the preconditioner memory is NULL"),
+    (-6, "KINLS_JACFUNC_ERR", "the Jacobian function failed"),
+    (-7, "KINLS_SUNMAT_FAIL", "a SUNMatrix operation failed"),
+    (-8, "KINLS_SUNLS_FAIL", "a SUNLinearSolver operation failed"),
+];
+
+const SUNLS_FLAGS: &[(i32, &str, &str)] = &[
+    (0, "SUNLS_SUCCESS", "success"),
+    (-801, "SUNLS_MEM_NULL", "the linear solver memory is NULL"),
+    (-802, "SUNLS_ILL_INPUT", "an input argument is illegal"),
+    (-803, "SUNLS_MEM_FAIL", "a memory allocation failed"),
+    (-804, "SUNLS_ATIMES_NULL", "the A-times function is NULL"),
+    (-805, "SUNLS_ATIMES_FAIL_UNREC", "the A-times function failed unrecoverably"),
+    (-806, "SUNLS_PSET_FAIL_UNREC", "the preconditioner setup failed unrecoverably"),
+    (-807, "SUNLS_PSOLVE_NULL", "the preconditioner solve function is NULL"),
+    (-808, "SUNLS_PSOLVE_FAIL_UNREC", "the preconditioner solve failed unrecoverably"),
+    (-809, "SUNLS_PACKAGE_FAIL_UNREC", "the external package (e.g. KLU) failed unrecoverably"),
+    (-810, "SUNLS_GS_FAIL", "Gram-Schmidt orthogonalisation failed"),
+    (-811, "SUNLS_QRSOL_FAIL", "QR solve found a singular R"),
+    (-812, "SUNLS_VECTOROP_ERR", "a vector operation failed"),
+    (801, "SUNLS_RES_REDUCED", "nonconvergent solve, residual reduced"),
+    (802, "SUNLS_CONV_FAIL", "nonconvergent solve"),
+    (803, "SUNLS_ATIMES_FAIL_REC", "the A-times function failed recoverably"),
+    (804, "SUNLS_PSET_FAIL_REC", "the preconditioner setup failed recoverably"),
+    (805, "SUNLS_PSOLVE_FAIL_REC", "the preconditioner solve failed recoverably"),
+    (806, "SUNLS_PACKAGE_FAIL_REC", "the external package (e.g. KLU: singular matrix) failed recoverably"),
+    (807, "SUNLS_QRFACT_FAIL", "QR factorisation found a singular matrix"),
+    (808, "SUNLS_LUFACT_FAIL", "LU factorisation found a singular matrix"),
+];
+
+/// Ok for 0, otherwise a `Flag` error named from `family` with `message` (or the flag's
+/// description when `message` is empty).
+pub(crate) fn check(
+    function: &'static str,
+    flag: i32,
+    family: FlagFamily,
+    message: Option<String>,
+) -> Result<(), SundialsError> {
+    if flag == 0 {
+        return Ok(());
+    }
+    Err(flag_error(function, flag, family, message))
+}
+
+pub(crate) fn flag_error(
+    function: &'static str,
+    flag: i32,
+    family: FlagFamily,
+    message: Option<String>,
+) -> SundialsError {
+    let (name, description) = family.describe(flag);
+    let message = message
+        .map(|m| one_line(&m))
+        .filter(|m| !m.is_empty())
+        .unwrap_or_else(|| description.to_string());
+    SundialsError::Flag { function, flag, name, message }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flag_display_is_one_line_and_names_the_flag() {
+        let e = flag_error("KINSol", -5, FlagFamily::Kin, Some("line\n\tsearch  failed".into()));
+        assert_eq!(e.to_string(), "KINSol failed with KIN_LINESEARCH_NONCONV (-5): line search failed");
+        let e = flag_error("SUNLinSolSetup", 808, FlagFamily::SunLs, None);
+        assert!(e.to_string().contains("SUNLS_LUFACT_FAIL (808): LU factorisation"));
+    }
+
+    /// Our names agree with KINSOL's own `KINGetReturnFlagName` where it has one.
+    #[test]
+    fn kin_names_match_kinsol() {
+        extern "C" {
+            fn free(p: *mut std::ffi::c_void);
+        }
+        for &(flag, name, _) in KIN_FLAGS {
+            // SAFETY: KINGetReturnFlagName returns a malloc'd NUL-terminated string we free.
+            let theirs = unsafe {
+                let p = sundials_sys::KINGetReturnFlagName(flag as std::os::raw::c_long);
+                let s = std::ffi::CStr::from_ptr(p).to_string_lossy().into_owned();
+                free(p.cast());
+                s
+            };
+            if theirs == "NONE" {
+                continue; // KINSOL 6.4 names only some flags (not 99, -13 ... -17)
+            }
+            assert_eq!(theirs, name, "flag {flag}");
+        }
+    }
+}
