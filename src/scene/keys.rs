@@ -1,0 +1,335 @@
+//! The table of scene keys: the one place where a key's name, type, default, documentation,
+//! range and setter live. Parsing, `--set`, validation messages, `eyeshell keys`, `eyeshell
+//! check` and the parameters in summary.json are all driven by [`KEYS`].
+//!
+//! To add a key, add one [`KeySpec`] here (and the field it sets); nothing else needs to change.
+
+use super::Scene;
+use crate::model::params::{LinearSolverKind, Scheme, Thickness};
+
+/// How a key is read from and written to a [`Scene`]; the variant is the key's type.
+#[derive(Clone, Copy)]
+pub enum Access {
+    /// A real number; TOML integers are accepted too (`dP = 2`).
+    Float { get: fn(&Scene) -> f64, set: fn(&mut Scene, f64) },
+    /// A non-negative integer.
+    Count { get: fn(&Scene) -> usize, set: fn(&mut Scene, usize) },
+    /// `true` or `false`.
+    Bool { get: fn(&Scene) -> bool, set: fn(&mut Scene, bool) },
+    /// One of a fixed list of strings; get/set work with the index into `names`.
+    Choice { names: &'static [&'static str], get: fn(&Scene) -> usize, set: fn(&mut Scene, usize) },
+    /// Free text (scene metadata, not a parameter of the model).
+    Text { get: fn(&Scene) -> Option<String>, set: fn(&mut Scene, String) },
+}
+
+/// The admissible range of a single key (cross-key limits are checked in `Scene::validate`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rule {
+    /// No range restriction (floats must still be finite).
+    Any,
+    /// > 0.
+    Positive,
+    /// ≥ 0.
+    NonNegative,
+    /// An integer ≥ n.
+    AtLeast(usize),
+    /// Strictly between 0 and 1.
+    OpenUnit,
+}
+
+impl Rule {
+    /// A short description for `eyeshell keys`.
+    pub fn describe(self) -> String {
+        match self {
+            Rule::Any => String::new(),
+            Rule::Positive => "> 0".into(),
+            Rule::NonNegative => ">= 0".into(),
+            Rule::AtLeast(n) => format!(">= {n}"),
+            Rule::OpenUnit => "in (0, 1)".into(),
+        }
+    }
+
+    /// The reason `x` breaks this rule, as the end of a sentence "KEY = x ...".
+    pub fn check_float(self, x: f64) -> Result<(), String> {
+        if !x.is_finite() {
+            return Err("must be a finite number".into());
+        }
+        match self {
+            Rule::Positive if !(x > 0.0) => Err("must be positive".into()),
+            Rule::NonNegative if !(x >= 0.0) => Err("must be non-negative".into()),
+            Rule::AtLeast(n) if !(x >= n as f64) => Err(format!("must be at least {n}")),
+            Rule::OpenUnit if !(x > 0.0 && x < 1.0) => {
+                Err("must lie strictly between 0 and 1".into())
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The reason the count `n` breaks this rule.
+    pub fn check_count(self, n: usize) -> Result<(), String> {
+        match self {
+            Rule::AtLeast(m) if n < m => Err(format!("must be at least {m}")),
+            Rule::Positive if n == 0 => Err("must be positive".into()),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// One scene key.
+#[derive(Clone, Copy)]
+pub struct KeySpec {
+    /// The dotted key, `section.name` (or a bare top-level name).
+    pub key: &'static str,
+    /// Type and accessors.
+    pub access: Access,
+    /// Admissible range.
+    pub rule: Rule,
+    /// One-line documentation (units, meaning, MODEL.md section).
+    pub doc: &'static str,
+}
+
+/// A typed value of a scene key.
+#[derive(Clone, Debug, PartialEq)]
+pub enum KeyValue {
+    Float(f64),
+    Count(usize),
+    Bool(bool),
+    Choice(&'static str),
+    Text(Option<String>),
+}
+
+impl KeyValue {
+    /// The value as JSON (non-finite floats become null, as JSON has no NaN).
+    pub fn to_json(&self) -> serde_json::Value {
+        match self {
+            KeyValue::Float(x) => serde_json::Number::from_f64(*x)
+                .map(serde_json::Value::Number)
+                .unwrap_or(serde_json::Value::Null),
+            KeyValue::Count(n) => serde_json::Value::from(*n),
+            KeyValue::Bool(b) => serde_json::Value::Bool(*b),
+            KeyValue::Choice(s) => serde_json::Value::from(*s),
+            KeyValue::Text(Some(s)) => serde_json::Value::from(s.as_str()),
+            KeyValue::Text(None) => serde_json::Value::Null,
+        }
+    }
+}
+
+/// The value as a TOML literal that reads back to the same value (floats keep a `.` or an
+/// exponent and all their digits).
+impl std::fmt::Display for KeyValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            KeyValue::Float(x) if x.is_nan() => f.write_str("nan"),
+            KeyValue::Float(x) if x.is_infinite() => f.write_str(if *x > 0.0 { "inf" } else { "-inf" }),
+            KeyValue::Float(x) => write!(f, "{x:?}"),
+            KeyValue::Count(n) => write!(f, "{n}"),
+            KeyValue::Bool(b) => write!(f, "{b}"),
+            KeyValue::Choice(s) => write!(f, "\"{s}\""),
+            KeyValue::Text(Some(s)) => write!(f, "{}", toml::Value::String(s.clone())),
+            KeyValue::Text(None) => f.write_str("(none)"),
+        }
+    }
+}
+
+impl KeySpec {
+    /// The key's type as shown by `eyeshell keys`.
+    pub fn type_name(&self) -> String {
+        match self.access {
+            Access::Float { .. } => "float".into(),
+            Access::Count { .. } => "integer".into(),
+            Access::Bool { .. } => "bool".into(),
+            Access::Choice { names, .. } => names
+                .iter()
+                .map(|n| format!("\"{n}\""))
+                .collect::<Vec<_>>()
+                .join(" | "),
+            Access::Text { .. } => "string".into(),
+        }
+    }
+
+    /// The key's value in `scene`.
+    pub fn get(&self, scene: &Scene) -> KeyValue {
+        match self.access {
+            Access::Float { get, .. } => KeyValue::Float(get(scene)),
+            Access::Count { get, .. } => KeyValue::Count(get(scene)),
+            Access::Bool { get, .. } => KeyValue::Bool(get(scene)),
+            Access::Choice { names, get, .. } => KeyValue::Choice(names[get(scene)]),
+            Access::Text { get, .. } => KeyValue::Text(get(scene)),
+        }
+    }
+
+    /// The key's default: its value in `Scene::default()` (the Default impls in params.rs).
+    pub fn default_value(&self) -> KeyValue {
+        self.get(&Scene::default())
+    }
+
+    /// True for keys that are parameters of the problem (not scene metadata).
+    pub fn is_parameter(&self) -> bool {
+        !matches!(self.access, Access::Text { .. })
+    }
+
+    /// The section of a dotted key (`material` for `material.C`), if any.
+    pub fn section(&self) -> Option<&'static str> {
+        self.key.split_once('.').map(|(s, _)| s)
+    }
+}
+
+/// Look a key up by its exact name.
+pub fn find(key: &str) -> Option<&'static KeySpec> {
+    KEYS.iter().find(|k| k.key == key)
+}
+
+const THICKNESS: &[&str] = &["uniform", "nonuniform"];
+const SCHEMES: &[&str] = &["trapezoid", "hermite-simpson"];
+const LINEAR: &[&str] = &["band", "klu"];
+
+/// Every scene key, in the order they are listed and validated.
+pub static KEYS: &[KeySpec] = &[
+    KeySpec {
+        key: "name",
+        access: Access::Text { get: |s| s.name.clone(), set: |s, v| s.name = Some(v) },
+        rule: Rule::Any,
+        doc: "name of the scene (defaults to the file name)",
+    },
+    KeySpec {
+        key: "description",
+        access: Access::Text { get: |s| s.description.clone(), set: |s, v| s.description = Some(v) },
+        rule: Rule::Any,
+        doc: "free-text description of the scene",
+    },
+    KeySpec {
+        key: "pressure.dP",
+        access: Access::Float { get: |s| s.params.dp, set: |s, v| s.params.dp = v },
+        rule: Rule::NonNegative,
+        doc: "pressure difference ΔP (kPa); at most the cornea's limit (MODEL.md §3)",
+    },
+    KeySpec {
+        key: "material.C",
+        access: Access::Float { get: |s| s.params.c, set: |s, v| s.params.c = v },
+        rule: Rule::Positive,
+        doc: "neo-Hookean modulus C of the sclera (kPa) (MODEL.md §2)",
+    },
+    KeySpec {
+        key: "material.bending",
+        access: Access::Float { get: |s| s.params.e_b, set: |s, v| s.params.e_b = v },
+        rule: Rule::Positive,
+        doc: "bending stiffness E_b (kPa·mm³) (MODEL.md §2)",
+    },
+    KeySpec {
+        key: "material.thickness",
+        access: Access::Choice {
+            names: THICKNESS,
+            get: |s| match s.params.thickness {
+                Thickness::Uniform => 0,
+                Thickness::NonUniform => 1,
+            },
+            set: |s, i| {
+                s.params.thickness = if i == 0 { Thickness::Uniform } else { Thickness::NonUniform }
+            },
+        },
+        rule: Rule::Any,
+        doc: "thickness profile H(Σ): uniform H0, or the paper's two-piece tanh profile (MODEL.md §4)",
+    },
+    KeySpec {
+        key: "material.H0",
+        access: Access::Float { get: |s| s.params.h0, set: |s, v| s.params.h0 = v },
+        rule: Rule::Positive,
+        doc: "uniform thickness H0 (mm), used when material.thickness = \"uniform\" (MODEL.md §4)",
+    },
+    KeySpec {
+        key: "fibres.D",
+        access: Access::Float { get: |s| s.params.d, set: |s, v| s.params.d = v },
+        rule: Rule::NonNegative,
+        doc: "fibre stiffness D (kPa); 0 means no fibres (MODEL.md §2)",
+    },
+    KeySpec {
+        key: "cornea.C",
+        access: Access::Float { get: |s| s.params.cornea.c, set: |s, v| s.params.cornea.c = v },
+        rule: Rule::Positive,
+        doc: "cornea's neo-Hookean modulus C_c (kPa) (MODEL.md §3)",
+    },
+    KeySpec {
+        key: "cornea.H",
+        access: Access::Float { get: |s| s.params.cornea.h, set: |s, v| s.params.cornea.h = v },
+        rule: Rule::Positive,
+        doc: "cornea's thickness H_c (mm) (MODEL.md §3)",
+    },
+    KeySpec {
+        key: "cornea.R0",
+        access: Access::Float { get: |s| s.params.cornea.r0, set: |s, v| s.params.cornea.r0 = v },
+        rule: Rule::Positive,
+        doc: "cornea's radius R_c (mm) (MODEL.md §3)",
+    },
+    KeySpec {
+        key: "geometry.R0",
+        access: Access::Float { get: |s| s.params.r0, set: |s, v| s.params.r0 = v },
+        rule: Rule::Positive,
+        doc: "radius R0 of the initial sphere (mm) (MODEL.md §1)",
+    },
+    KeySpec {
+        key: "geometry.fraction",
+        access: Access::Float { get: |s| s.params.fraction, set: |s, v| s.params.fraction = v },
+        rule: Rule::OpenUnit,
+        doc: "fraction f of the sphere that is sclera: L = π·f·R0 (MODEL.md §1)",
+    },
+    KeySpec {
+        key: "solver.nodes",
+        access: Access::Count { get: |s| s.solver.nodes, set: |s, v| s.solver.nodes = v },
+        rule: Rule::AtLeast(5),
+        doc: "number of uniform nodes on [ε, L]; breakpoint and pole nodes come on top",
+    },
+    KeySpec {
+        key: "solver.epsilon",
+        access: Access::Float { get: |s| s.solver.epsilon, set: |s, v| s.solver.epsilon = v },
+        rule: Rule::Positive,
+        doc: "pole truncation ε (mm), 0 < ε < L (MODEL.md §3)",
+    },
+    KeySpec {
+        key: "solver.scheme",
+        access: Access::Choice {
+            names: SCHEMES,
+            get: |s| match s.solver.scheme {
+                Scheme::Trapezoid => 0,
+                Scheme::HermiteSimpson => 1,
+            },
+            set: |s, i| {
+                s.solver.scheme = if i == 0 { Scheme::Trapezoid } else { Scheme::HermiteSimpson }
+            },
+        },
+        rule: Rule::Any,
+        doc: "finite-difference scheme: trapezoid (order 2) or Hermite–Simpson (order 4)",
+    },
+    KeySpec {
+        key: "solver.linear",
+        access: Access::Choice {
+            names: LINEAR,
+            get: |s| match s.solver.linear {
+                LinearSolverKind::Band => 0,
+                LinearSolverKind::Klu => 1,
+            },
+            set: |s, i| {
+                s.solver.linear = if i == 0 { LinearSolverKind::Band } else { LinearSolverKind::Klu }
+            },
+        },
+        rule: Rule::Any,
+        doc: "direct linear solver of the Newton matrix: SUNDIALS band LU or KLU",
+    },
+    KeySpec {
+        key: "solver.newton_tol",
+        access: Access::Float { get: |s| s.solver.newton_tol, set: |s, v| s.solver.newton_tol = v },
+        rule: Rule::Positive,
+        doc: "KINSOL's tolerance on the scaled residual (max norm)",
+    },
+    KeySpec {
+        key: "solver.max_newton",
+        access: Access::Count { get: |s| s.solver.max_newton, set: |s, v| s.solver.max_newton = v },
+        rule: Rule::AtLeast(1),
+        doc: "the most Newton iterations per solve",
+    },
+    KeySpec {
+        key: "solver.pole_grading",
+        access: Access::Bool { get: |s| s.solver.pole_grading, set: |s, v| s.solver.pole_grading = v },
+        rule: Rule::Any,
+        doc: "insert geometrically graded nodes next to the pole (MODEL.md §3 trap)",
+    },
+];

@@ -1,0 +1,472 @@
+//! Scenes: TOML files that set the parameters of one problem (MODEL.md §8 gives the defaults).
+//!
+//! A scene is read in three steps, each reporting the first problem as one line that names
+//! the origin (file or `--set` text) and the key:
+//! 1. the file is parsed as TOML and every leaf is matched to a key of [`keys::KEYS`]
+//!    (unknown keys and sections are errors, with the closest known key suggested);
+//! 2. the `--set key=value` overrides are applied in order, after the file, so they win;
+//! 3. the effective values are validated: each key's own range, then the limits that tie
+//!    keys together (ΔP below the cornea's limit, ε below L = π·f·R0).
+//!
+//! Every key is optional; a missing key keeps the default of `params.rs`.
+
+pub mod keys;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use crate::model::params::{Params, SolverSettings};
+pub use keys::{Access, KeySpec, KeyValue, Rule, KEYS};
+
+/// Everything a scene sets: the physical parameters and the numerical settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub params: Params,
+    pub solver: SolverSettings,
+    /// Top-level `name`, if the scene gives one.
+    pub name: Option<String>,
+    /// Top-level `description`, if the scene gives one.
+    pub description: Option<String>,
+    /// Where the scene came from: the file path, or the origin given to `from_toml_str`.
+    pub origin: String,
+    /// The `--set` overrides applied on top of the file, in order.
+    pub overrides: Vec<String>,
+}
+
+impl Default for Scene {
+    fn default() -> Self {
+        Scene {
+            params: Params::default(),
+            solver: SolverSettings::default(),
+            name: None,
+            description: None,
+            origin: "(defaults)".into(),
+            overrides: Vec::new(),
+        }
+    }
+}
+
+/// A scene that cannot be used. Display is one line: origin, key, and what is wrong.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum SceneError {
+    #[error("{path}: cannot read the scene: {message}")]
+    Read { path: String, message: String },
+    #[error("{origin}: invalid TOML at line {line}, column {column}: {message}")]
+    Syntax { origin: String, line: usize, column: usize, message: String },
+    #[error("{origin}: unknown key '{key}'{}", suggest(suggestion))]
+    UnknownKey { origin: String, key: String, suggestion: Option<String> },
+    #[error("{origin}: unknown section [{section}]{}", suggest_section(suggestion))]
+    UnknownSection { origin: String, section: String, suggestion: Option<String> },
+    #[error("{origin}: {key} must be {expected}, found {found}")]
+    WrongType { origin: String, key: String, expected: String, found: String },
+    #[error("{origin}: {key} = {value} {problem}")]
+    Invalid { origin: String, key: String, value: String, problem: String },
+    #[error("{origin}: {problem}")]
+    BadOverride { origin: String, problem: String },
+}
+
+impl SceneError {
+    /// The scene key the error is about, when there is one.
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            SceneError::UnknownKey { key, .. }
+            | SceneError::WrongType { key, .. }
+            | SceneError::Invalid { key, .. } => Some(key),
+            SceneError::UnknownSection { section, .. } => Some(section),
+            _ => None,
+        }
+    }
+}
+
+fn suggest(s: &Option<String>) -> String {
+    s.as_ref().map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default()
+}
+
+fn suggest_section(s: &Option<String>) -> String {
+    s.as_ref().map(|s| format!(" (did you mean [{s}]?)")).unwrap_or_default()
+}
+
+/// Make text safe for a one-line message: control characters are escaped.
+fn one_line(s: &str) -> String {
+    s.chars()
+        .flat_map(|c| if c.is_control() { c.escape_debug().collect::<Vec<_>>() } else { vec![c] })
+        .collect()
+}
+
+/// The origin shown for a `--set` override.
+fn override_origin(text: &str) -> String {
+    format!("--set {}", one_line(text))
+}
+
+/// Which origin set each key last; a later set wins (sequence number first).
+type Sources = BTreeMap<&'static str, (usize, String)>;
+
+impl Scene {
+    /// Read, override and validate the scene in `path`.
+    pub fn from_file(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
+        let origin = one_line(&path.display().to_string());
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Read {
+            path: origin.clone(),
+            message: one_line(&e.to_string()),
+        })?;
+        Scene::from_toml_str(&text, &origin, overrides)
+    }
+
+    /// Parse `text` (named `origin` in messages), apply `overrides` (`key=value`), validate.
+    pub fn from_toml_str(text: &str, origin: &str, overrides: &[String]) -> Result<Scene, SceneError> {
+        let origin = one_line(origin);
+        let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            let (line, column) = line_column(text, e.span().map(|s| s.start).unwrap_or(0));
+            SceneError::Syntax { origin: origin.clone(), line, column, message: one_line(e.message()) }
+        })?;
+        let mut scene = Scene { origin: origin.clone(), ..Scene::default() };
+        let mut sources = Sources::new();
+        let mut leaves = Vec::new();
+        flatten(&table, "", &origin, &mut leaves)?;
+        for (key, value) in leaves {
+            scene.set_from(&key, &value, &origin, &mut sources)?;
+        }
+        for text in overrides {
+            scene.apply_override_from(text, &mut sources)?;
+        }
+        scene.validate_from(&sources)?;
+        Ok(scene)
+    }
+
+    /// Set one key from a TOML value, checking the key and the type but not the range
+    /// (call [`Scene::validate`] when done). `origin` names the source in messages.
+    pub fn set(&mut self, key: &str, value: &toml::Value, origin: &str) -> Result<(), SceneError> {
+        self.set_from(key, value, origin, &mut Sources::new())
+    }
+
+    /// Apply one `key=value` override (value parsed as TOML, else taken as a string),
+    /// without validating the range; call [`Scene::validate`] when done.
+    pub fn apply_override(&mut self, text: &str) -> Result<(), SceneError> {
+        self.apply_override_from(text, &mut Sources::new())
+    }
+
+    /// Check every key's range and the limits that tie keys together.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        self.validate_from(&Sources::new())
+    }
+
+    /// The effective value of every key, in table order.
+    pub fn entries(&self) -> Vec<(&'static str, KeyValue)> {
+        KEYS.iter().map(|k| (k.key, k.get(self))).collect()
+    }
+
+    /// The effective parameters (every key but the metadata) as a JSON object.
+    pub fn parameters_json(&self) -> serde_json::Value {
+        let map = KEYS
+            .iter()
+            .filter(|k| k.is_parameter())
+            .map(|k| (k.key.to_string(), k.get(self).to_json()))
+            .collect::<serde_json::Map<_, _>>();
+        serde_json::Value::Object(map)
+    }
+
+    /// The effective scene as TOML (dotted keys), which reads back to the same scene.
+    pub fn to_toml(&self) -> String {
+        let mut out = String::new();
+        for k in KEYS {
+            match k.get(self) {
+                KeyValue::Text(None) => {}
+                v => out.push_str(&format!("{} = {}\n", k.key, v)),
+            }
+        }
+        out
+    }
+
+    /// The scene's name: `name` if given, else the file stem of the origin.
+    pub fn display_name(&self) -> String {
+        self.name.clone().unwrap_or_else(|| {
+            Path::new(&self.origin)
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| self.origin.clone())
+        })
+    }
+
+    fn apply_override_from(&mut self, text: &str, sources: &mut Sources) -> Result<(), SceneError> {
+        let origin = override_origin(text);
+        let Some((key, value)) = text.split_once('=') else {
+            return Err(SceneError::BadOverride {
+                origin,
+                problem: "an override must have the form key=value (e.g. pressure.dP=2)".into(),
+            });
+        };
+        let (key, value) = (key.trim(), value.trim());
+        if key.is_empty() {
+            return Err(SceneError::BadOverride { origin, problem: "the key before '=' is empty".into() });
+        }
+        // A value that is not a TOML literal is a bare string: solver.scheme=trapezoid.
+        let parsed = value
+            .parse::<toml::Value>()
+            .unwrap_or_else(|_| toml::Value::String(value.to_string()));
+        self.set_from(key, &parsed, &origin, sources)?;
+        self.overrides.push(text.to_string());
+        Ok(())
+    }
+
+    fn set_from(
+        &mut self,
+        key: &str,
+        value: &toml::Value,
+        origin: &str,
+        sources: &mut Sources,
+    ) -> Result<(), SceneError> {
+        let Some(spec) = find_key(key) else {
+            return Err(unknown_key(origin, key));
+        };
+        let wrong = |expected: &str| SceneError::WrongType {
+            origin: origin.to_string(),
+            key: spec.key.to_string(),
+            expected: expected.to_string(),
+            found: describe(value),
+        };
+        match spec.access {
+            Access::Float { set, .. } => match value {
+                toml::Value::Float(x) => set(self, *x),
+                toml::Value::Integer(i) => set(self, *i as f64),
+                _ => return Err(wrong("a number")),
+            },
+            Access::Count { set, .. } => match value {
+                toml::Value::Integer(i) if *i >= 0 => set(self, usize::try_from(*i).unwrap_or(usize::MAX)),
+                toml::Value::Integer(i) => {
+                    let problem = match spec.rule {
+                        Rule::AtLeast(n) => format!("must be at least {n}"),
+                        _ => "must be non-negative".to_string(),
+                    };
+                    return Err(SceneError::Invalid {
+                        origin: origin.to_string(),
+                        key: spec.key.to_string(),
+                        value: i.to_string(),
+                        problem,
+                    });
+                }
+                _ => return Err(wrong("an integer")),
+            },
+            Access::Bool { set, .. } => match value {
+                toml::Value::Boolean(b) => set(self, *b),
+                _ => return Err(wrong("true or false")),
+            },
+            Access::Choice { names, set, .. } => {
+                let choices = names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ");
+                match value {
+                    toml::Value::String(s) => match names.iter().position(|n| n == s) {
+                        Some(i) => set(self, i),
+                        None => {
+                            return Err(SceneError::Invalid {
+                                origin: origin.to_string(),
+                                key: spec.key.to_string(),
+                                value: describe_string(s),
+                                problem: format!("must be one of {choices}"),
+                            })
+                        }
+                    },
+                    _ => return Err(wrong(&format!("one of {choices}"))),
+                }
+            }
+            Access::Text { set, .. } => match value {
+                toml::Value::String(s) => set(self, s.clone()),
+                _ => return Err(wrong("a string")),
+            },
+        }
+        let seq = sources.values().map(|(n, _)| *n).max().unwrap_or(0) + 1;
+        sources.insert(spec.key, (seq, origin.to_string()));
+        Ok(())
+    }
+
+    /// The origin of the most recent of `keys` to be set, else the scene's origin.
+    fn origin_of(&self, sources: &Sources, keys: &[&str]) -> String {
+        keys.iter()
+            .filter_map(|k| sources.get(k))
+            .max_by_key(|(n, _)| *n)
+            .map(|(_, o)| o.clone())
+            .unwrap_or_else(|| self.origin.clone())
+    }
+
+    fn validate_from(&self, sources: &Sources) -> Result<(), SceneError> {
+        let invalid = |keys: &[&str], value: String, problem: String| SceneError::Invalid {
+            origin: self.origin_of(sources, keys),
+            key: keys[0].to_string(),
+            value,
+            problem,
+        };
+        for spec in KEYS {
+            let check = match spec.get(self) {
+                KeyValue::Float(x) => spec.rule.check_float(x),
+                KeyValue::Count(n) => spec.rule.check_count(n),
+                _ => Ok(()),
+            };
+            if let Err(problem) = check {
+                return Err(invalid(&[spec.key], show(&spec.get(self)), problem));
+            }
+        }
+        // Limits that tie keys together; every key is finite and in its own range by now.
+        let p = &self.params;
+        let p_max = crate::model::cornea::max_pressure(&p.cornea);
+        if p.dp > p_max {
+            return Err(invalid(
+                &["pressure.dP", "cornea.C", "cornea.H", "cornea.R0"],
+                show(&KeyValue::Float(p.dp)),
+                format!(
+                    "is above the cornea's limit: the largest admissible ΔP is {p_max:.6} kPa \
+                     (4 C_c H_c / R_c · (6/7) · 7^(-1/6) with cornea.C = {}, cornea.H = {}, cornea.R0 = {})",
+                    p.cornea.c, p.cornea.h, p.cornea.r0
+                ),
+            ));
+        }
+        let length = p.length();
+        if self.solver.epsilon >= length {
+            return Err(invalid(
+                &["solver.epsilon", "geometry.R0", "geometry.fraction"],
+                show(&KeyValue::Float(self.solver.epsilon)),
+                format!(
+                    "must be below the shell's length L = π·fraction·R0 = {length:.6} mm \
+                     (geometry.fraction = {}, geometry.R0 = {})",
+                    p.fraction, p.r0
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Look a key up; a key given with the wrong case is not accepted (but is suggested).
+fn find_key(key: &str) -> Option<&'static KeySpec> {
+    keys::find(key)
+}
+
+/// The known sections (`pressure`, `material`, ...), in table order.
+pub fn sections() -> Vec<&'static str> {
+    let mut out: Vec<&'static str> = Vec::new();
+    for s in KEYS.iter().filter_map(|k| k.section()) {
+        if !out.contains(&s) {
+            out.push(s);
+        }
+    }
+    out
+}
+
+/// Collect the leaves of `table` as (dotted key, value), rejecting unknown keys and sections.
+fn flatten(
+    table: &toml::Table,
+    prefix: &str,
+    origin: &str,
+    out: &mut Vec<(String, toml::Value)>,
+) -> Result<(), SceneError> {
+    for (name, value) in table {
+        let key = if prefix.is_empty() { name.clone() } else { format!("{prefix}.{name}") };
+        if find_key(&key).is_some() {
+            out.push((key, value.clone()));
+            continue;
+        }
+        let is_section = KEYS.iter().any(|k| k.key.starts_with(&format!("{key}.")));
+        match value {
+            toml::Value::Table(sub) if is_section => flatten(sub, &key, origin, out)?,
+            toml::Value::Table(_) => {
+                return Err(SceneError::UnknownSection {
+                    origin: origin.to_string(),
+                    suggestion: closest(&key, sections().into_iter()).map(str::to_string),
+                    section: one_line(&key),
+                })
+            }
+            _ if is_section => {
+                return Err(SceneError::WrongType {
+                    origin: origin.to_string(),
+                    key: one_line(&key),
+                    expected: format!("a table ([{key}])"),
+                    found: describe(value),
+                })
+            }
+            _ => return Err(unknown_key(origin, &key)),
+        }
+    }
+    Ok(())
+}
+
+fn unknown_key(origin: &str, key: &str) -> SceneError {
+    SceneError::UnknownKey {
+        origin: origin.to_string(),
+        key: one_line(key),
+        suggestion: closest(key, KEYS.iter().map(|k| k.key)).map(str::to_string),
+    }
+}
+
+/// The known name closest to `name`, if it is close enough to be a likely typo: same name
+/// in another case, the same last component in another section, or a small edit distance.
+fn closest<'a>(name: &str, known: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    let lower = name.to_lowercase();
+    let last = lower.rsplit('.').next().unwrap_or(&lower).to_string();
+    let limit = 2.max(lower.chars().count() / 3);
+    known
+        .map(|k| {
+            let kl = k.to_lowercase();
+            let score = if kl == lower {
+                0
+            } else if kl.rsplit('.').next() == Some(last.as_str()) {
+                1
+            } else {
+                levenshtein(&lower, &kl)
+            };
+            (score, k)
+        })
+        .filter(|(score, _)| *score <= limit)
+        .min_by_key(|(score, _)| *score)
+        .map(|(_, k)| k)
+}
+
+fn levenshtein(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
+/// A value as shown in messages: like TOML, but whole numbers without ".0" (`C = -1`).
+fn show(v: &KeyValue) -> String {
+    match v {
+        KeyValue::Float(x) if x.fract() == 0.0 && x.abs() < 1e15 => format!("{x}"),
+        v => v.to_string(),
+    }
+}
+
+/// A TOML value as "type value" for messages, on one line.
+fn describe(value: &toml::Value) -> String {
+    match value {
+        toml::Value::String(s) => format!("string {}", describe_string(s)),
+        toml::Value::Integer(i) => format!("integer {i}"),
+        toml::Value::Float(x) => format!("float {}", show(&KeyValue::Float(*x))),
+        toml::Value::Boolean(b) => format!("boolean {b}"),
+        toml::Value::Datetime(d) => format!("datetime {d}"),
+        toml::Value::Array(_) => "an array".into(),
+        toml::Value::Table(_) => "a table".into(),
+    }
+}
+
+fn describe_string(s: &str) -> String {
+    let short: String = s.chars().take(60).collect();
+    let ell = if s.chars().count() > 60 { "…" } else { "" };
+    format!("\"{}{ell}\"", short.escape_debug())
+}
+
+/// 1-based line and column (in characters) of byte offset `at` in `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let at = at.min(text.len());
+    let before = text.get(..at).unwrap_or(text);
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map(|l| l.chars().count()).unwrap_or(0) + 1;
+    (line, column)
+}
+
+#[cfg(test)]
+mod tests;
