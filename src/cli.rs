@@ -1,0 +1,292 @@
+//! The command line: `eyeshell solve | check | keys`.
+//!
+//! Every failure is printed as one line `eyeshell: error: <message>` on stderr. Exit codes:
+//! 0 success, 2 bad input (usage, scene, validation, `--at`, an output path that may not be
+//! overwritten), 1 failure of the computation or of writing the results.
+//!
+//! A subcommand is a variant of [`Command`] and a `fn cmd_*(&Args) -> Result<(), Failure>`;
+//! scene loading ([`SceneArgs`]) and output directories ([`crate::output::OutputDir`]) are
+//! shared, so later subcommands (grow, figures, converge) slot in the same way.
+
+use std::ffi::OsString;
+use std::io::Write;
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+use crate::output::{self, OutputDir, OutputError};
+use crate::scene::{Scene, SceneError, KEYS};
+
+/// Exit code for bad input: usage, scene, validation.
+pub const EXIT_BAD_INPUT: i32 = 2;
+/// Exit code for a failed computation or a failed write.
+pub const EXIT_FAILURE: i32 = 1;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "eyeshell",
+    version,
+    about = "Numerical solver for the morphoelastic shell model of eye growth",
+    color = clap::ColorChoice::Never
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Solve the loaded elastic shell of a scene; write fields.csv, summary.json (and at.csv)
+    Solve(SolveArgs),
+    /// Validate a scene and print its effective parameters (as TOML)
+    Check(SceneArgs),
+    /// List every scene key with its type, default and meaning
+    Keys,
+}
+
+/// A scene file and the overrides applied on top of it.
+#[derive(Args, Debug)]
+struct SceneArgs {
+    /// The scene (TOML); see `eyeshell keys` for its keys
+    #[arg(value_name = "SCENE.toml")]
+    scene: PathBuf,
+    /// Override a scene key, e.g. --set pressure.dP=2.5 or --set solver.scheme=trapezoid (repeatable; later wins)
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+impl SceneArgs {
+    fn load(&self) -> Result<Scene, Failure> {
+        Ok(Scene::from_file(&self.scene, &self.set)?)
+    }
+}
+
+#[derive(Args, Debug)]
+struct SolveArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Also write at.csv with every field at these material points Σ (in [ε, L])
+    #[arg(long, value_name = "S1,S2,...", value_delimiter = ',', allow_hyphen_values = true)]
+    at: Vec<String>,
+    /// Output directory (created whole or not at all; a previous eyeshell output is replaced)
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Print nothing on success
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+/// A failed command: the one-line message and the exit code.
+#[derive(Debug)]
+pub struct Failure {
+    pub code: i32,
+    pub message: String,
+}
+
+impl Failure {
+    pub fn bad_input(message: impl Into<String>) -> Self {
+        Failure { code: EXIT_BAD_INPUT, message: message.into() }
+    }
+    pub fn failed(message: impl Into<String>) -> Self {
+        Failure { code: EXIT_FAILURE, message: message.into() }
+    }
+}
+
+impl From<SceneError> for Failure {
+    fn from(e: SceneError) -> Self {
+        Failure::bad_input(e.to_string())
+    }
+}
+
+impl From<OutputError> for Failure {
+    fn from(e: OutputError) -> Self {
+        if e.is_refusal() { Failure::bad_input(e.to_string()) } else { Failure::failed(e.to_string()) }
+    }
+}
+
+impl From<crate::bvp::BvpError> for Failure {
+    fn from(e: crate::bvp::BvpError) -> Self {
+        Failure::failed(e.to_string())
+    }
+}
+
+/// Entry point of the binary: parse `std::env::args`, run, and return the exit code.
+pub fn main() -> i32 {
+    run(std::env::args_os())
+}
+
+/// Parse `args` (including the program name), run the command, report, return the exit code.
+pub fn run<I, T>(args: I) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(e),
+    };
+    let result = match &cli.command {
+        Command::Solve(a) => cmd_solve(a),
+        Command::Check(a) => cmd_check(a),
+        Command::Keys => cmd_keys(),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(f) => {
+            report(&f.message);
+            f.code
+        }
+    }
+}
+
+/// Print one error line on stderr (control characters escaped, so it stays one line).
+fn report(message: &str) {
+    let line: String = message.chars().map(|c| if c == '\n' || c == '\r' { ' ' } else { c }).collect();
+    let _ = writeln!(std::io::stderr(), "eyeshell: error: {line}");
+}
+
+/// Help and version go to stdout with exit 0; anything else is one line and exit 2.
+fn usage_error(e: clap::Error) -> i32 {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            let _ = write!(std::io::stdout(), "{}", e.render());
+            0
+        }
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand => {
+            report("missing subcommand: one of solve, check, keys (see 'eyeshell --help')");
+            EXIT_BAD_INPUT
+        }
+        _ => {
+            // clap's message is a paragraph, then tips and usage: keep the paragraph, on one line.
+            let text = e.render().to_string();
+            let paragraph: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .skip_while(|l| l.is_empty())
+                .take_while(|l| !l.is_empty())
+                .collect();
+            let joined = paragraph.join(" ");
+            let message = joined.strip_prefix("error: ").unwrap_or(&joined);
+            let message = if message.is_empty() { "invalid arguments" } else { message };
+            report(&format!("{message} (see 'eyeshell --help')"));
+            EXIT_BAD_INPUT
+        }
+    }
+}
+
+/// Write to stdout, ignoring a closed pipe (`eyeshell keys | head` must not panic).
+fn out(text: &str) {
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
+/// Parse and check the `--at` material points against [ε, L] of `scene`.
+fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Failure> {
+    let (lo, hi) = (scene.solver.epsilon, scene.params.length());
+    values
+        .iter()
+        .map(|v| {
+            let t = v.trim();
+            let x: f64 = t.parse().map_err(|_| {
+                Failure::bad_input(format!("--at: {:?} is not a number (expected material points Σ separated by commas)", t))
+            })?;
+            if !x.is_finite() {
+                return Err(Failure::bad_input(format!("--at: Σ = {t} must be a finite number")));
+            }
+            if x < lo || x > hi {
+                return Err(Failure::bad_input(format!(
+                    "--at: Σ = {t} is outside the shell [ε, L] = [{lo}, {hi}] (solver.epsilon, π·geometry.fraction·geometry.R0)"
+                )));
+            }
+            Ok(x)
+        })
+        .collect()
+}
+
+fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
+    let scene = a.scene.load()?;
+    let at = parse_at(&a.at, &scene)?;
+    // Refuse a foreign output directory before the computation, not after.
+    output::check_target(&a.out)?;
+
+    let solution = crate::bvp::solve(&scene.params, &scene.solver, None)?;
+    let at_rows = at.iter().map(|&s| solution.at(s)).collect::<Result<Vec<_>, _>>()?;
+
+    let dir = OutputDir::create(&a.out)?;
+    output::write_fields_csv(&dir.file(output::FIELDS_FILE), &solution.rows)?;
+    if !at.is_empty() {
+        output::write_fields_csv(&dir.file(output::AT_FILE), &at_rows)?;
+    }
+    // summary.json last: it marks the directory as a complete eyeshell output.
+    output::write_summary_json(&dir.file(output::SUMMARY_FILE), &scene, &solution.stats)?;
+    let target = dir.commit()?;
+
+    if !a.quiet {
+        let s = &solution.stats;
+        out(&format!(
+            "eyeshell: solved {} ({})\n  nodes           {} ({} uniform + {} breakpoint + {} pole)\n  Newton          {} iterations, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
+            scene.origin,
+            scene.display_name(),
+            s.nodes,
+            s.uniform_nodes,
+            s.breakpoint_nodes,
+            s.pole_nodes,
+            s.newton_iterations,
+            s.residual_norm,
+            s.first_integral_max,
+            s.wall_seconds,
+            target.display(),
+        ));
+    }
+    Ok(())
+}
+
+fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
+    let scene = a.load()?;
+    let p = &scene.params;
+    let mut text = format!("# {}: valid scene '{}'\n", scene.origin, scene.display_name());
+    for o in &scene.overrides {
+        text.push_str(&format!("# --set {o}\n"));
+    }
+    text.push_str(&format!(
+        "# L = π·fraction·R0 = {:.6} mm; cornea's limit ΔP_max = {:.6} kPa",
+        p.length(),
+        crate::model::cornea::max_pressure(&p.cornea)
+    ));
+    if let Ok(alpha) = crate::model::cornea::stretch(&p.cornea, p.dp) {
+        text.push_str(&format!("; cornea stretch α = {alpha:.12}"));
+    }
+    text.push('\n');
+    text.push_str(&scene.to_toml());
+    out(&text);
+    Ok(())
+}
+
+/// The `eyeshell keys` listing.
+pub fn keys_listing() -> String {
+    let rows: Vec<[String; 4]> = KEYS
+        .iter()
+        .map(|k| {
+            let range = k.rule.describe();
+            let doc = if range.is_empty() { k.doc.to_string() } else { format!("{} [{range}]", k.doc) };
+            [k.key.to_string(), k.type_name(), k.default_value().to_string(), doc]
+        })
+        .collect();
+    let header = ["KEY", "TYPE", "DEFAULT", "DESCRIPTION"].map(String::from);
+    let width = |i: usize| {
+        rows.iter().chain(std::iter::once(&header)).map(|r| r[i].chars().count()).max().unwrap_or(0)
+    };
+    let w = [width(0), width(1), width(2)];
+    let mut text = String::new();
+    for r in std::iter::once(&header).chain(rows.iter()) {
+        let line = format!("{:w0$}  {:w1$}  {:w2$}  {}", r[0], r[1], r[2], r[3], w0 = w[0], w1 = w[1], w2 = w[2]);
+        text.push_str(line.trim_end());
+        text.push('\n');
+    }
+    text
+}
+
+fn cmd_keys() -> Result<(), Failure> {
+    out(&keys_listing());
+    Ok(())
+}
