@@ -224,7 +224,7 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
     if !a.quiet {
         let s = &solution.stats;
         out(&format!(
-            "eyeshell: solved {} ({})\n  nodes           {} ({} uniform + {} breakpoint + {} pole)\n  Newton          {} iterations, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
+            "eyeshell: solved {} ({})\n  nodes           {} ({} uniform + {} breakpoint + {} pole)\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
             scene.origin,
             scene.display_name(),
             s.nodes,
@@ -232,6 +232,7 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
             s.breakpoint_nodes,
             s.pole_nodes,
             s.newton_iterations,
+            if s.newton_iterations == 1 { "" } else { "s" },
             s.residual_norm,
             s.first_integral_max,
             s.wall_seconds,

@@ -196,6 +196,9 @@ fn a_foreign_output_directory_is_refused_and_untouched() {
     assert_bad(&run, "data: exists and is not an eyeshell output directory", "foreign dir");
     assert_eq!(std::fs::read_to_string(dir.path().join("data/precious.txt")).unwrap(), "keep");
     assert_eq!(std::fs::read_dir(dir.path().join("data")).unwrap().count(), 1);
+    let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "missing/parent/out"]);
+    assert_bad(&run, "missing/parent/out: the parent directory does not exist", "missing parent");
+    assert!(!dir.path().join("missing").exists());
     std::fs::write(dir.path().join("file"), "x").unwrap();
     let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "file"]);
     assert_bad(&run, "refusing", "file as out");

@@ -30,6 +30,8 @@ pub enum OutputError {
     Refused { path: PathBuf },
     #[error("{}: the output path has no file name", path.display())]
     NoName { path: PathBuf },
+    #[error("{}: the parent directory does not exist", path.display())]
+    NoParent { path: PathBuf },
 }
 
 impl OutputError {
@@ -39,7 +41,7 @@ impl OutputError {
 
     /// True when the error is the user's (a target that may not be overwritten), not I/O.
     pub fn is_refusal(&self) -> bool {
-        matches!(self, OutputError::Refused { .. } | OutputError::NoName { .. })
+        matches!(self, OutputError::Refused { .. } | OutputError::NoName { .. } | OutputError::NoParent { .. })
     }
 }
 
@@ -63,7 +65,14 @@ fn inspect(target: &Path) -> Result<Target, OutputError> {
     }
     let meta = match fs::symlink_metadata(target) {
         Ok(m) => m,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Target::Absent),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return match target.parent() {
+                Some(p) if !p.as_os_str().is_empty() && !p.is_dir() => {
+                    Err(OutputError::NoParent { path: target.to_path_buf() })
+                }
+                _ => Ok(Target::Absent),
+            }
+        }
         Err(e) => return Err(OutputError::io(target, e)),
     };
     if !meta.is_dir() {
@@ -323,6 +332,9 @@ mod tests {
         let file = dir.path().join("file");
         fs::write(&file, "x").unwrap();
         assert!(OutputDir::create(&file).unwrap_err().is_refusal());
+        // A missing parent is refused, not created.
+        assert!(OutputDir::create(&dir.path().join("no/such/out")).unwrap_err().is_refusal());
+        assert!(!dir.path().join("no").exists());
         // An empty directory is fine.
         let empty = dir.path().join("empty");
         fs::create_dir(&empty).unwrap();
