@@ -66,7 +66,12 @@ struct SolveArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// Also write at.csv with every field at these material points Σ (in [ε, L])
-    #[arg(long, value_name = "S1,S2,...", value_delimiter = ',', allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "S1,S2,...",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
     at: Vec<String>,
     /// Output directory (created whole or not at all; a previous eyeshell output is replaced)
     #[arg(long, value_name = "DIR")]
@@ -85,10 +90,16 @@ pub struct Failure {
 
 impl Failure {
     pub fn bad_input(message: impl Into<String>) -> Self {
-        Failure { code: EXIT_BAD_INPUT, message: message.into() }
+        Failure {
+            code: EXIT_BAD_INPUT,
+            message: message.into(),
+        }
     }
     pub fn failed(message: impl Into<String>) -> Self {
-        Failure { code: EXIT_FAILURE, message: message.into() }
+        Failure {
+            code: EXIT_FAILURE,
+            message: message.into(),
+        }
     }
 }
 
@@ -100,7 +111,11 @@ impl From<SceneError> for Failure {
 
 impl From<OutputError> for Failure {
     fn from(e: OutputError) -> Self {
-        if e.is_refusal() { Failure::bad_input(e.to_string()) } else { Failure::failed(e.to_string()) }
+        if e.is_refusal() {
+            Failure::bad_input(e.to_string())
+        } else {
+            Failure::failed(e.to_string())
+        }
     }
 }
 
@@ -141,7 +156,10 @@ where
 
 /// Print one error line on stderr (control characters escaped, so it stays one line).
 fn report(message: &str) {
-    let line: String = message.chars().map(|c| if c == '\n' || c == '\r' { ' ' } else { c }).collect();
+    let line: String = message
+        .chars()
+        .map(|c| if c == '\n' || c == '\r' { ' ' } else { c })
+        .collect();
     let _ = writeln!(std::io::stderr(), "eyeshell: error: {line}");
 }
 
@@ -168,7 +186,11 @@ fn usage_error(e: clap::Error) -> i32 {
                 .collect();
             let joined = paragraph.join(" ");
             let message = joined.strip_prefix("error: ").unwrap_or(&joined);
-            let message = if message.is_empty() { "invalid arguments" } else { message };
+            let message = if message.is_empty() {
+                "invalid arguments"
+            } else {
+                message
+            };
             report(&format!("{message} (see 'eyeshell --help')"));
             EXIT_BAD_INPUT
         }
@@ -210,7 +232,10 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
     output::check_target(&a.out)?;
 
     let solution = crate::bvp::solve(&scene.params, &scene.solver, None)?;
-    let at_rows = at.iter().map(|&s| solution.at(s)).collect::<Result<Vec<_>, _>>()?;
+    let at_rows = at
+        .iter()
+        .map(|&s| solution.at(s))
+        .collect::<Result<Vec<_>, _>>()?;
 
     let dir = OutputDir::create(&a.out)?;
     output::write_fields_csv(&dir.file(output::FIELDS_FILE), &solution.rows)?;
@@ -245,7 +270,11 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
 fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
     let scene = a.load()?;
     let p = &scene.params;
-    let mut text = format!("# {}: valid scene '{}'\n", scene.origin, scene.display_name());
+    let mut text = format!(
+        "# {}: valid scene '{}'\n",
+        scene.origin,
+        scene.display_name()
+    );
     for o in &scene.overrides {
         text.push_str(&format!("# --set {o}\n"));
     }
@@ -269,18 +298,40 @@ pub fn keys_listing() -> String {
         .iter()
         .map(|k| {
             let range = k.rule.describe();
-            let doc = if range.is_empty() { k.doc.to_string() } else { format!("{} [{range}]", k.doc) };
-            [k.key.to_string(), k.type_name(), k.default_value().to_string(), doc]
+            let doc = if range.is_empty() {
+                k.doc.to_string()
+            } else {
+                format!("{} [{range}]", k.doc)
+            };
+            [
+                k.key.to_string(),
+                k.type_name(),
+                k.default_value().to_string(),
+                doc,
+            ]
         })
         .collect();
     let header = ["KEY", "TYPE", "DEFAULT", "DESCRIPTION"].map(String::from);
     let width = |i: usize| {
-        rows.iter().chain(std::iter::once(&header)).map(|r| r[i].chars().count()).max().unwrap_or(0)
+        rows.iter()
+            .chain(std::iter::once(&header))
+            .map(|r| r[i].chars().count())
+            .max()
+            .unwrap_or(0)
     };
     let w = [width(0), width(1), width(2)];
     let mut text = String::new();
     for r in std::iter::once(&header).chain(rows.iter()) {
-        let line = format!("{:w0$}  {:w1$}  {:w2$}  {}", r[0], r[1], r[2], r[3], w0 = w[0], w1 = w[1], w2 = w[2]);
+        let line = format!(
+            "{:w0$}  {:w1$}  {:w2$}  {}",
+            r[0],
+            r[1],
+            r[2],
+            r[3],
+            w0 = w[0],
+            w1 = w[1],
+            w2 = w[2]
+        );
         text.push_str(line.trim_end());
         text.push('\n');
     }

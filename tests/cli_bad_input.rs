@@ -26,13 +26,35 @@ fn eyeshell(dir: &Path, args: &[&str]) -> Run {
 
 /// Assert a clean bad-input failure that names `needle`.
 fn assert_bad(run: &Run, needle: &str, what: &str) {
-    assert_eq!(run.code, Some(2), "{what}: exit code, stderr: {}", run.stderr);
-    assert!(!run.stderr.contains("panicked"), "{what}: panic: {}", run.stderr);
+    assert_eq!(
+        run.code,
+        Some(2),
+        "{what}: exit code, stderr: {}",
+        run.stderr
+    );
+    assert!(
+        !run.stderr.contains("panicked"),
+        "{what}: panic: {}",
+        run.stderr
+    );
     let lines: Vec<&str> = run.stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{what}: stderr must be one line: {:?}", run.stderr);
+    assert_eq!(
+        lines.len(),
+        1,
+        "{what}: stderr must be one line: {:?}",
+        run.stderr
+    );
     assert!(run.stderr.ends_with('\n'), "{what}: {:?}", run.stderr);
-    assert!(lines[0].starts_with("eyeshell: error: "), "{what}: {}", lines[0]);
-    assert!(lines[0].contains(needle), "{what}: {needle:?} not named in: {}", lines[0]);
+    assert!(
+        lines[0].starts_with("eyeshell: error: "),
+        "{what}: {}",
+        lines[0]
+    );
+    assert!(
+        lines[0].contains(needle),
+        "{what}: {needle:?} not named in: {}",
+        lines[0]
+    );
     assert!(run.stdout.is_empty(), "{what}: stdout: {}", run.stdout);
 }
 
@@ -49,10 +71,22 @@ fn solve_fails(scene: &str, sets: &[&str], needle: &str, origin: &str) {
     let what = format!("scene {scene:?} --set {sets:?}");
     let run = eyeshell(dir.path(), &args);
     assert_bad(&run, needle, &what);
-    assert!(run.stderr.starts_with(&format!("eyeshell: error: {origin}")), "{what}: {}", run.stderr);
+    assert!(
+        run.stderr
+            .starts_with(&format!("eyeshell: error: {origin}")),
+        "{what}: {}",
+        run.stderr
+    );
     assert!(!dir.path().join("out").exists(), "{what}: out/ was created");
-    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert_eq!(names, vec![std::ffi::OsString::from("scene.toml")], "{what}: leftovers");
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        names,
+        vec![std::ffi::OsString::from("scene.toml")],
+        "{what}: leftovers"
+    );
 }
 
 fn file_fails(scene: &str, needle: &str) {
@@ -86,7 +120,15 @@ fn wrong_type() {
 
 #[test]
 fn non_positive_moduli_thickness_bending_radius() {
-    for key in ["material.C", "material.H0", "material.bending", "geometry.R0", "cornea.C", "cornea.H", "cornea.R0"] {
+    for key in [
+        "material.C",
+        "material.H0",
+        "material.bending",
+        "geometry.R0",
+        "cornea.C",
+        "cornea.H",
+        "cornea.R0",
+    ] {
         for v in ["0", "-1"] {
             file_fails(&format!("{key} = {v}"), key);
             set_fails(&format!("{key}={v}"), key);
@@ -137,9 +179,19 @@ fn fraction_outside_the_unit_interval() {
 #[test]
 fn nan_and_inf_via_file_and_set() {
     for v in ["nan", "inf", "-inf"] {
-        for key in ["pressure.dP", "material.C", "material.H0", "fibres.D", "solver.epsilon", "geometry.R0"] {
+        for key in [
+            "pressure.dP",
+            "material.C",
+            "material.H0",
+            "fibres.D",
+            "solver.epsilon",
+            "geometry.R0",
+        ] {
             file_fails(&format!("{key} = {v}"), key);
-            set_fails(&format!("{key}={v}"), &format!("{key} = {v} must be a finite number"));
+            set_fails(
+                &format!("{key}={v}"),
+                &format!("{key} = {v} must be a finite number"),
+            );
         }
     }
 }
@@ -182,7 +234,19 @@ fn at_points_are_checked_before_solving() {
         assert!(!dir.path().join("out").exists());
     }
     // ε and L follow the scene: Σ = 20 is beyond L for R0 = 5.
-    let run = eyeshell(dir.path(), &["solve", "s.toml", "--set", "geometry.R0=5", "--out", "out", "--at", "20"]);
+    let run = eyeshell(
+        dir.path(),
+        &[
+            "solve",
+            "s.toml",
+            "--set",
+            "geometry.R0=5",
+            "--out",
+            "out",
+            "--at",
+            "20",
+        ],
+    );
     assert_bad(&run, "Σ = 20 is outside", "at beyond L(R0 = 5)");
 }
 
@@ -193,11 +257,28 @@ fn a_foreign_output_directory_is_refused_and_untouched() {
     std::fs::create_dir(dir.path().join("data")).unwrap();
     std::fs::write(dir.path().join("data/precious.txt"), "keep").unwrap();
     let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "data"]);
-    assert_bad(&run, "data: exists and is not an eyeshell output directory", "foreign dir");
-    assert_eq!(std::fs::read_to_string(dir.path().join("data/precious.txt")).unwrap(), "keep");
-    assert_eq!(std::fs::read_dir(dir.path().join("data")).unwrap().count(), 1);
-    let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "missing/parent/out"]);
-    assert_bad(&run, "missing/parent/out: the parent directory does not exist", "missing parent");
+    assert_bad(
+        &run,
+        "data: exists and is not an eyeshell output directory",
+        "foreign dir",
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("data/precious.txt")).unwrap(),
+        "keep"
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path().join("data")).unwrap().count(),
+        1
+    );
+    let run = eyeshell(
+        dir.path(),
+        &["solve", "s.toml", "--out", "missing/parent/out"],
+    );
+    assert_bad(
+        &run,
+        "missing/parent/out: the parent directory does not exist",
+        "missing parent",
+    );
     assert!(!dir.path().join("missing").exists());
     std::fs::write(dir.path().join("file"), "x").unwrap();
     let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "file"]);
@@ -225,6 +306,20 @@ fn check_fails_like_solve() {
     std::fs::write(dir.path().join("s.toml"), "[material]\nC = -1\n").unwrap();
     let run = eyeshell(dir.path(), &["check", "s.toml"]);
     assert_bad(&run, "s.toml: material.C = -1 must be positive", "check");
-    let run = eyeshell(dir.path(), &["check", "s.toml", "--set", "material.C=5", "--set", "solver.nodes=3"]);
-    assert_bad(&run, "--set solver.nodes=3: solver.nodes = 3 must be at least 5", "check --set");
+    let run = eyeshell(
+        dir.path(),
+        &[
+            "check",
+            "s.toml",
+            "--set",
+            "material.C=5",
+            "--set",
+            "solver.nodes=3",
+        ],
+    );
+    assert_bad(
+        &run,
+        "--set solver.nodes=3: solver.nodes = 3 must be at least 5",
+        "check --set",
+    );
 }

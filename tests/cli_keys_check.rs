@@ -6,7 +6,11 @@ use std::process::Command;
 use eyeshell::scene::{Scene, KEYS};
 
 fn eyeshell(dir: &Path, args: &[&str]) -> (Option<i32>, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell")).args(args).current_dir(dir).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
     (
         out.status.code(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -34,12 +38,31 @@ fn keys_lists_every_key_with_type_default_and_doc() {
         assert!(line.contains(key.doc), "{line}");
     }
     for key in [
-        "pressure.dP", "material.C", "material.bending", "material.thickness", "material.H0", "fibres.D",
-        "cornea.C", "cornea.H", "cornea.R0", "geometry.R0", "geometry.fraction", "solver.nodes",
-        "solver.epsilon", "solver.scheme", "solver.linear", "solver.newton_tol", "solver.max_newton",
+        "pressure.dP",
+        "material.C",
+        "material.bending",
+        "material.thickness",
+        "material.H0",
+        "fibres.D",
+        "cornea.C",
+        "cornea.H",
+        "cornea.R0",
+        "geometry.R0",
+        "geometry.fraction",
+        "solver.nodes",
+        "solver.epsilon",
+        "solver.scheme",
+        "solver.linear",
+        "solver.newton_tol",
+        "solver.max_newton",
         "solver.pole_grading",
     ] {
-        assert!(lines.iter().any(|l| l.split_whitespace().next() == Some(key)), "{key} missing");
+        assert!(
+            lines
+                .iter()
+                .any(|l| l.split_whitespace().next() == Some(key)),
+            "{key} missing"
+        );
     }
 }
 
@@ -47,20 +70,36 @@ fn keys_lists_every_key_with_type_default_and_doc() {
 fn check_prints_the_effective_scene_as_toml() {
     let (code, out, err) = eyeshell(
         repo(),
-        &["check", "scenes/fibres-nonuniform.toml", "--set", "pressure.dP=3", "--set", "solver.scheme=trapezoid"],
+        &[
+            "check",
+            "scenes/fibres-nonuniform.toml",
+            "--set",
+            "pressure.dP=3",
+            "--set",
+            "solver.scheme=trapezoid",
+        ],
     );
     assert_eq!(code, Some(0), "{err}");
     assert!(err.is_empty(), "{err}");
-    assert!(out.starts_with("# scenes/fibres-nonuniform.toml: valid scene 'fibres-nonuniform'"), "{out}");
+    assert!(
+        out.starts_with("# scenes/fibres-nonuniform.toml: valid scene 'fibres-nonuniform'"),
+        "{out}"
+    );
     assert!(out.contains("pressure.dP = 3.0\n"), "{out}");
     assert!(out.contains("fibres.D = 200.0\n"), "{out}");
-    assert!(out.contains("material.thickness = \"nonuniform\"\n"), "{out}");
+    assert!(
+        out.contains("material.thickness = \"nonuniform\"\n"),
+        "{out}"
+    );
     assert!(out.contains("solver.scheme = \"trapezoid\"\n"), "{out}");
     // Every parameter is printed, and the listing reads back to the same scene.
     let back = Scene::from_toml_str(&out, "check output", &[]).unwrap();
     let direct = Scene::from_file(
         &repo().join("scenes/fibres-nonuniform.toml"),
-        &["pressure.dP=3".to_string(), "solver.scheme=trapezoid".to_string()],
+        &[
+            "pressure.dP=3".to_string(),
+            "solver.scheme=trapezoid".to_string(),
+        ],
     )
     .unwrap();
     assert_eq!(back.params, direct.params);
@@ -69,7 +108,11 @@ fn check_prints_the_effective_scene_as_toml() {
 
 #[test]
 fn shipped_scenes_check() {
-    for s in ["scenes/default.toml", "scenes/fibres-nonuniform.toml", "scenes/exact-sphere.toml"] {
+    for s in [
+        "scenes/default.toml",
+        "scenes/fibres-nonuniform.toml",
+        "scenes/exact-sphere.toml",
+    ] {
         let (code, out, err) = eyeshell(repo(), &["check", s]);
         assert_eq!(code, Some(0), "{s}: {err}");
         assert!(out.contains("valid scene"), "{out}");
@@ -85,7 +128,12 @@ fn help_and_version_succeed() {
     }
     let (code, out, _) = eyeshell(repo(), &["solve", "--help"]);
     assert_eq!(code, Some(0));
-    assert!(out.contains("--set") && out.contains("--at") && out.contains("--out") && out.contains("--quiet"));
+    assert!(
+        out.contains("--set")
+            && out.contains("--at")
+            && out.contains("--out")
+            && out.contains("--quiet")
+    );
     let (code, out, _) = eyeshell(repo(), &["--version"]);
     assert_eq!(code, Some(0));
     assert!(out.starts_with("eyeshell "));

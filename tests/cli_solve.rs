@@ -21,7 +21,11 @@ fn repo() -> &'static Path {
 }
 
 fn eyeshell(args: &[&str]) -> (Option<i32>, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell")).args(args).current_dir(repo()).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+        .args(args)
+        .current_dir(repo())
+        .output()
+        .unwrap();
     (
         out.status.code(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -33,7 +37,9 @@ fn read_csv(path: &Path) -> (String, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
     let header = lines.next().unwrap().to_string();
-    let rows = lines.map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect()).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
     (header, rows)
 }
 
@@ -45,15 +51,28 @@ fn solve_writes_fields_summary_and_at() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let out_s = out.to_str().unwrap();
-    let (code, stdout, stderr) =
-        eyeshell(&["solve", "scenes/default.toml", "--set", "solver.nodes=101", "--at", "0.001,1,12.5,25.132741228718345", "--out", out_s]);
+    let (code, stdout, stderr) = eyeshell(&[
+        "solve",
+        "scenes/default.toml",
+        "--set",
+        "solver.nodes=101",
+        "--at",
+        "0.001,1,12.5,25.132741228718345",
+        "--out",
+        out_s,
+    ]);
     assert_eq!(code, Some(0), "{stderr}");
-    assert!(stdout.contains("Newton") && stdout.contains(out_s), "{stdout}");
+    assert!(
+        stdout.contains("Newton") && stdout.contains(out_s),
+        "{stdout}"
+    );
 
     let header = eyeshell::bvp::COLUMNS.join(",");
     let (h, fields) = read_csv(&out.join("fields.csv"));
     assert_eq!(h, header);
-    assert!(fields.iter().all(|r| r.len() == eyeshell::bvp::COLUMNS.len() && r.iter().all(|x| x.is_finite())));
+    assert!(fields
+        .iter()
+        .all(|r| r.len() == eyeshell::bvp::COLUMNS.len() && r.iter().all(|x| x.is_finite())));
     // Σ increases from ε to L.
     assert!((fields[0][0] - 1e-3).abs() < 1e-15);
     assert!((fields.last().unwrap()[0] - std::f64::consts::PI * 8.0).abs() < 1e-12);
@@ -65,7 +84,10 @@ fn solve_writes_fields_summary_and_at() {
     assert_eq!(summary["uniform_nodes"], 101);
     assert_eq!(summary["parameters"]["solver.nodes"], 101);
     assert_eq!(summary["scheme"], "hermite-simpson");
-    assert!(summary["first_integral_max"].as_f64().unwrap() < 1e-6, "{summary}");
+    assert!(
+        summary["first_integral_max"].as_f64().unwrap() < 1e-6,
+        "{summary}"
+    );
     assert!((summary["cornea_alpha"].as_f64().unwrap() - 1.0136216901111).abs() < 1e-12);
 
     let (h, at) = read_csv(&out.join("at.csv"));
@@ -76,16 +98,36 @@ fn solve_writes_fields_summary_and_at() {
     }
     // At a node, the interpolant agrees with the nodal values.
     for (a, f) in at[0].iter().zip(&fields[0]) {
-        assert!((a - f).abs() <= 1e-9 * (1.0 + f.abs()), "{:?} vs {:?}", at[0], fields[0]);
+        assert!(
+            (a - f).abs() <= 1e-9 * (1.0 + f.abs()),
+            "{:?} vs {:?}",
+            at[0],
+            fields[0]
+        );
     }
 
     // Solving again into the same directory replaces the previous output (no at.csv now).
-    let (code, stdout, stderr) = eyeshell(&["solve", "scenes/default.toml", "--set", "solver.nodes=51", "--out", out_s, "--quiet"]);
+    let (code, stdout, stderr) = eyeshell(&[
+        "solve",
+        "scenes/default.toml",
+        "--set",
+        "solver.nodes=51",
+        "--out",
+        out_s,
+        "--quiet",
+    ]);
     assert_eq!(code, Some(0), "{stderr}");
     assert!(stdout.is_empty());
     assert!(!out.join("at.csv").exists());
-    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert_eq!(names, vec![std::ffi::OsString::from("run")], "leftovers next to the output");
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        names,
+        vec![std::ffi::OsString::from("run")],
+        "leftovers next to the output"
+    );
 }
 
 #[test]
@@ -95,13 +137,22 @@ fn exact_sphere_is_reproduced() {
     }
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sphere");
-    let (code, _, stderr) = eyeshell(&["solve", "scenes/exact-sphere.toml", "--out", out.to_str().unwrap(), "--quiet"]);
+    let (code, _, stderr) = eyeshell(&[
+        "solve",
+        "scenes/exact-sphere.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     assert_eq!(code, Some(0), "{stderr}");
     let (_, fields) = read_csv(&out.join("fields.csv"));
     let alpha = 1.0136216901111_f64;
     for row in &fields {
         let (sigma, kappa, r, theta) = (row[1], row[2], row[4], row[5]);
-        assert!((r - alpha * 10.0 * (sigma / 10.0).sin()).abs() < 1e-6, "{row:?}");
+        assert!(
+            (r - alpha * 10.0 * (sigma / 10.0).sin()).abs() < 1e-6,
+            "{row:?}"
+        );
         assert!((theta - sigma / 10.0).abs() < 1e-6, "{row:?}");
         assert!((kappa - 1.0 / (alpha * 10.0)).abs() < 1e-5, "{row:?}");
     }

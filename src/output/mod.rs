@@ -25,7 +25,10 @@ pub const AT_FILE: &str = "at.csv";
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{}: exists and is not an eyeshell output directory (no {SUMMARY_FILE}); refusing to overwrite it", path.display())]
     Refused { path: PathBuf },
     #[error("{}: the output path has no file name", path.display())]
@@ -36,12 +39,18 @@ pub enum OutputError {
 
 impl OutputError {
     fn io(path: &Path, source: std::io::Error) -> Self {
-        OutputError::Io { path: path.to_path_buf(), source }
+        OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
     }
 
     /// True when the error is the user's (a target that may not be overwritten), not I/O.
     pub fn is_refusal(&self) -> bool {
-        matches!(self, OutputError::Refused { .. } | OutputError::NoName { .. } | OutputError::NoParent { .. })
+        matches!(
+            self,
+            OutputError::Refused { .. } | OutputError::NoName { .. } | OutputError::NoParent { .. }
+        )
     }
 }
 
@@ -61,22 +70,26 @@ pub fn check_target(target: &Path) -> Result<(), OutputError> {
 
 fn inspect(target: &Path) -> Result<Target, OutputError> {
     if target.file_name().is_none() {
-        return Err(OutputError::NoName { path: target.to_path_buf() });
+        return Err(OutputError::NoName {
+            path: target.to_path_buf(),
+        });
     }
     let meta = match fs::symlink_metadata(target) {
         Ok(m) => m,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             return match target.parent() {
-                Some(p) if !p.as_os_str().is_empty() && !p.is_dir() => {
-                    Err(OutputError::NoParent { path: target.to_path_buf() })
-                }
+                Some(p) if !p.as_os_str().is_empty() && !p.is_dir() => Err(OutputError::NoParent {
+                    path: target.to_path_buf(),
+                }),
                 _ => Ok(Target::Absent),
             }
         }
         Err(e) => return Err(OutputError::io(target, e)),
     };
     if !meta.is_dir() {
-        return Err(OutputError::Refused { path: target.to_path_buf() });
+        return Err(OutputError::Refused {
+            path: target.to_path_buf(),
+        });
     }
     if target.join(SUMMARY_FILE).is_file() {
         return Ok(Target::PreviousOutput);
@@ -85,7 +98,9 @@ fn inspect(target: &Path) -> Result<Target, OutputError> {
     if entries.next().is_none() {
         Ok(Target::EmptyDir)
     } else {
-        Err(OutputError::Refused { path: target.to_path_buf() })
+        Err(OutputError::Refused {
+            path: target.to_path_buf(),
+        })
     }
 }
 
@@ -102,18 +117,28 @@ impl OutputDir {
     /// Check the target and create the temporary directory next to it.
     pub fn create(target: &Path) -> Result<OutputDir, OutputError> {
         inspect(target)?;
-        let name = target.file_name().ok_or_else(|| OutputError::NoName { path: target.to_path_buf() })?;
+        let name = target.file_name().ok_or_else(|| OutputError::NoName {
+            path: target.to_path_buf(),
+        })?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        let tmp = parent.join(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()));
+        let tmp = parent.join(format!(
+            ".{}.tmp-{}",
+            name.to_string_lossy(),
+            std::process::id()
+        ));
         if tmp.exists() {
             // A leftover of a killed run with our pid: ours to remove.
             fs::remove_dir_all(&tmp).map_err(|e| OutputError::io(&tmp, e))?;
         }
         fs::create_dir(&tmp).map_err(|e| OutputError::io(&tmp, e))?;
-        Ok(OutputDir { target: target.to_path_buf(), tmp, committed: false })
+        Ok(OutputDir {
+            target: target.to_path_buf(),
+            tmp,
+            committed: false,
+        })
     }
 
     /// The final path of the directory.
@@ -138,7 +163,10 @@ impl OutputDir {
                 // Move the old output aside first, so the target is never half-deleted.
                 let old = self.tmp.with_file_name(format!(
                     ".{}.old-{}",
-                    self.target.file_name().unwrap_or_default().to_string_lossy(),
+                    self.target
+                        .file_name()
+                        .unwrap_or_default()
+                        .to_string_lossy(),
                     std::process::id()
                 ));
                 if old.exists() {
@@ -186,7 +214,12 @@ pub fn write_fields_csv(path: &Path, rows: &[FieldRow]) -> Result<(), OutputErro
     let mut write = || -> std::io::Result<()> {
         writeln!(w, "{}", csv_header())?;
         for row in rows {
-            let line = row.values().iter().map(|&x| format_value(x)).collect::<Vec<_>>().join(",");
+            let line = row
+                .values()
+                .iter()
+                .map(|&x| format_value(x))
+                .collect::<Vec<_>>()
+                .join(",");
             writeln!(w, "{line}")?;
         }
         w.flush()
@@ -200,12 +233,18 @@ pub fn sundials_version() -> Option<String> {
 }
 
 fn num(x: f64) -> serde_json::Value {
-    serde_json::Number::from_f64(x).map(serde_json::Value::Number).unwrap_or(serde_json::Value::Null)
+    serde_json::Number::from_f64(x)
+        .map(serde_json::Value::Number)
+        .unwrap_or(serde_json::Value::Null)
 }
 
 /// The content of summary.json for one solve of `scene`.
 pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
-    let name = |k: &str| crate::scene::keys::find(k).map(|s| s.get(scene).to_json()).unwrap_or_default();
+    let name = |k: &str| {
+        crate::scene::keys::find(k)
+            .map(|s| s.get(scene).to_json())
+            .unwrap_or_default()
+    };
     serde_json::json!({
         "eyeshell_version": env!("CARGO_PKG_VERSION"),
         "sundials_version": sundials_version(),
@@ -236,7 +275,11 @@ pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
 }
 
 /// Write [`summary_json`] to `path`, pretty-printed.
-pub fn write_summary_json(path: &Path, scene: &Scene, stats: &SolveStats) -> Result<(), OutputError> {
+pub fn write_summary_json(
+    path: &Path,
+    scene: &Scene,
+    stats: &SolveStats,
+) -> Result<(), OutputError> {
     let mut text = serde_json::to_string_pretty(&summary_json(scene, stats))
         .map_err(|e| OutputError::io(path, std::io::Error::other(e)))?;
     text.push('\n');
@@ -248,7 +291,15 @@ mod tests {
     use super::*;
 
     fn row(k: f64) -> FieldRow {
-        FieldRow { sigma_ref: k, sigma: k / 3.0, kappa: 0.1 + k, alpha_s: 1.0136216901111, r: 1e-300, theta: -2.5e17, ..FieldRow::default() }
+        FieldRow {
+            sigma_ref: k,
+            sigma: k / 3.0,
+            kappa: 0.1 + k,
+            alpha_s: 1.0136216901111,
+            r: 1e-300,
+            theta: -2.5e17,
+            ..FieldRow::default()
+        }
     }
 
     #[test]
@@ -261,7 +312,12 @@ mod tests {
         let mut lines = text.lines();
         assert_eq!(lines.next().unwrap(), COLUMNS.join(","));
         for r in &rows {
-            let back: Vec<f64> = lines.next().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+            let back: Vec<f64> = lines
+                .next()
+                .unwrap()
+                .split(',')
+                .map(|v| v.parse().unwrap())
+                .collect();
             assert_eq!(back, r.values().to_vec());
         }
         assert!(lines.next().is_none());
@@ -269,12 +325,29 @@ mod tests {
 
     #[test]
     fn summary_has_every_stat_and_parameter() {
-        let stats = SolveStats { newton_iterations: 7, nodes: 509, residual_norm: 1e-12, ..SolveStats::default() };
+        let stats = SolveStats {
+            newton_iterations: 7,
+            nodes: 509,
+            residual_norm: 1e-12,
+            ..SolveStats::default()
+        };
         let v = summary_json(&Scene::default(), &stats);
         for k in [
-            "newton_iterations", "residual_evaluations", "jacobian_evaluations", "residual_norm",
-            "first_integral_max", "nodes", "uniform_nodes", "breakpoint_nodes", "pole_nodes",
-            "cornea_alpha", "wall_seconds", "scheme", "linear_solver", "epsilon", "sundials_version",
+            "newton_iterations",
+            "residual_evaluations",
+            "jacobian_evaluations",
+            "residual_norm",
+            "first_integral_max",
+            "nodes",
+            "uniform_nodes",
+            "breakpoint_nodes",
+            "pole_nodes",
+            "cornea_alpha",
+            "wall_seconds",
+            "scheme",
+            "linear_solver",
+            "epsilon",
+            "sundials_version",
         ] {
             assert!(v.get(k).is_some(), "missing {k}");
         }
@@ -283,7 +356,13 @@ mod tests {
         assert_eq!(v["parameters"]["pressure.dP"], 2.0);
         assert_eq!(v["parameters"]["solver.nodes"], 501);
         let n = v["parameters"].as_object().unwrap().len();
-        assert_eq!(n, crate::scene::KEYS.iter().filter(|k| k.is_parameter()).count());
+        assert_eq!(
+            n,
+            crate::scene::KEYS
+                .iter()
+                .filter(|k| k.is_parameter())
+                .count()
+        );
     }
 
     #[test]
@@ -302,9 +381,15 @@ mod tests {
         fs::write(out.file(SUMMARY_FILE), "{\"new\":1}").unwrap();
         out.commit().unwrap();
         assert!(!target.join("old-only").exists());
-        assert_eq!(fs::read_to_string(target.join(SUMMARY_FILE)).unwrap(), "{\"new\":1}");
+        assert_eq!(
+            fs::read_to_string(target.join(SUMMARY_FILE)).unwrap(),
+            "{\"new\":1}"
+        );
         // Nothing is left next to it.
-        let names: Vec<_> = fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        let names: Vec<_> = fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("out")]);
     }
 
@@ -327,13 +412,21 @@ mod tests {
         fs::write(target.join("precious.txt"), "keep").unwrap();
         let e = OutputDir::create(&target).unwrap_err();
         assert!(e.is_refusal());
-        assert!(e.to_string().contains("data") && e.to_string().contains("refusing"), "{e}");
-        assert_eq!(fs::read_to_string(target.join("precious.txt")).unwrap(), "keep");
+        assert!(
+            e.to_string().contains("data") && e.to_string().contains("refusing"),
+            "{e}"
+        );
+        assert_eq!(
+            fs::read_to_string(target.join("precious.txt")).unwrap(),
+            "keep"
+        );
         let file = dir.path().join("file");
         fs::write(&file, "x").unwrap();
         assert!(OutputDir::create(&file).unwrap_err().is_refusal());
         // A missing parent is refused, not created.
-        assert!(OutputDir::create(&dir.path().join("no/such/out")).unwrap_err().is_refusal());
+        assert!(OutputDir::create(&dir.path().join("no/such/out"))
+            .unwrap_err()
+            .is_refusal());
         assert!(!dir.path().join("no").exists());
         // An empty directory is fine.
         let empty = dir.path().join("empty");

@@ -11,15 +11,31 @@ use crate::model::params::{LinearSolverKind, Scheme, Thickness};
 #[derive(Clone, Copy)]
 pub enum Access {
     /// A real number; TOML integers are accepted too (`dP = 2`).
-    Float { get: fn(&Scene) -> f64, set: fn(&mut Scene, f64) },
+    Float {
+        get: fn(&Scene) -> f64,
+        set: fn(&mut Scene, f64),
+    },
     /// A non-negative integer.
-    Count { get: fn(&Scene) -> usize, set: fn(&mut Scene, usize) },
+    Count {
+        get: fn(&Scene) -> usize,
+        set: fn(&mut Scene, usize),
+    },
     /// `true` or `false`.
-    Bool { get: fn(&Scene) -> bool, set: fn(&mut Scene, bool) },
+    Bool {
+        get: fn(&Scene) -> bool,
+        set: fn(&mut Scene, bool),
+    },
     /// One of a fixed list of strings; get/set work with the index into `names`.
-    Choice { names: &'static [&'static str], get: fn(&Scene) -> usize, set: fn(&mut Scene, usize) },
+    Choice {
+        names: &'static [&'static str],
+        get: fn(&Scene) -> usize,
+        set: fn(&mut Scene, usize),
+    },
     /// Free text (scene metadata, not a parameter of the model).
-    Text { get: fn(&Scene) -> Option<String>, set: fn(&mut Scene, String) },
+    Text {
+        get: fn(&Scene) -> Option<String>,
+        set: fn(&mut Scene, String),
+    },
 }
 
 /// The admissible range of a single key (cross-key limits are checked in `Scene::validate`).
@@ -55,10 +71,11 @@ impl Rule {
             return Err("must be a finite number".into());
         }
         match self {
-            Rule::Positive if !(x > 0.0) => Err("must be positive".into()),
-            Rule::NonNegative if !(x >= 0.0) => Err("must be non-negative".into()),
-            Rule::AtLeast(n) if !(x >= n as f64) => Err(format!("must be at least {n}")),
-            Rule::OpenUnit if !(x > 0.0 && x < 1.0) => {
+            // x is finite here, so plain comparisons are exact.
+            Rule::Positive if x <= 0.0 => Err("must be positive".into()),
+            Rule::NonNegative if x < 0.0 => Err("must be non-negative".into()),
+            Rule::AtLeast(n) if x < n as f64 => Err(format!("must be at least {n}")),
+            Rule::OpenUnit if x <= 0.0 || x >= 1.0 => {
                 Err("must lie strictly between 0 and 1".into())
             }
             _ => Ok(()),
@@ -120,7 +137,9 @@ impl std::fmt::Display for KeyValue {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             KeyValue::Float(x) if x.is_nan() => f.write_str("nan"),
-            KeyValue::Float(x) if x.is_infinite() => f.write_str(if *x > 0.0 { "inf" } else { "-inf" }),
+            KeyValue::Float(x) if x.is_infinite() => {
+                f.write_str(if *x > 0.0 { "inf" } else { "-inf" })
+            }
             KeyValue::Float(x) => write!(f, "{x:?}"),
             KeyValue::Count(n) => write!(f, "{n}"),
             KeyValue::Bool(b) => write!(f, "{b}"),

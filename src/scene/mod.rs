@@ -52,15 +52,38 @@ pub enum SceneError {
     #[error("{path}: cannot read the scene: {message}")]
     Read { path: String, message: String },
     #[error("{origin}: invalid TOML at line {line}, column {column}: {message}")]
-    Syntax { origin: String, line: usize, column: usize, message: String },
+    Syntax {
+        origin: String,
+        line: usize,
+        column: usize,
+        message: String,
+    },
     #[error("{origin}: unknown key '{key}'{}", suggest(suggestion))]
-    UnknownKey { origin: String, key: String, suggestion: Option<String> },
+    UnknownKey {
+        origin: String,
+        key: String,
+        suggestion: Option<String>,
+    },
     #[error("{origin}: unknown section [{section}]{}", suggest_section(suggestion))]
-    UnknownSection { origin: String, section: String, suggestion: Option<String> },
+    UnknownSection {
+        origin: String,
+        section: String,
+        suggestion: Option<String>,
+    },
     #[error("{origin}: {key} must be {expected}, found {found}")]
-    WrongType { origin: String, key: String, expected: String, found: String },
+    WrongType {
+        origin: String,
+        key: String,
+        expected: String,
+        found: String,
+    },
     #[error("{origin}: {key} = {value} {problem}")]
-    Invalid { origin: String, key: String, value: String, problem: String },
+    Invalid {
+        origin: String,
+        key: String,
+        value: String,
+        problem: String,
+    },
     #[error("{origin}: {problem}")]
     BadOverride { origin: String, problem: String },
 }
@@ -79,17 +102,27 @@ impl SceneError {
 }
 
 fn suggest(s: &Option<String>) -> String {
-    s.as_ref().map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default()
+    s.as_ref()
+        .map(|s| format!(" (did you mean '{s}'?)"))
+        .unwrap_or_default()
 }
 
 fn suggest_section(s: &Option<String>) -> String {
-    s.as_ref().map(|s| format!(" (did you mean [{s}]?)")).unwrap_or_default()
+    s.as_ref()
+        .map(|s| format!(" (did you mean [{s}]?)"))
+        .unwrap_or_default()
 }
 
 /// Make text safe for a one-line message: control characters are escaped.
 fn one_line(s: &str) -> String {
     s.chars()
-        .flat_map(|c| if c.is_control() { c.escape_debug().collect::<Vec<_>>() } else { vec![c] })
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_debug().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
         .collect()
 }
 
@@ -113,13 +146,25 @@ impl Scene {
     }
 
     /// Parse `text` (named `origin` in messages), apply `overrides` (`key=value`), validate.
-    pub fn from_toml_str(text: &str, origin: &str, overrides: &[String]) -> Result<Scene, SceneError> {
+    pub fn from_toml_str(
+        text: &str,
+        origin: &str,
+        overrides: &[String],
+    ) -> Result<Scene, SceneError> {
         let origin = one_line(origin);
         let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
             let (line, column) = line_column(text, e.span().map(|s| s.start).unwrap_or(0));
-            SceneError::Syntax { origin: origin.clone(), line, column, message: one_line(e.message()) }
+            SceneError::Syntax {
+                origin: origin.clone(),
+                line,
+                column,
+                message: one_line(e.message()),
+            }
         })?;
-        let mut scene = Scene { origin: origin.clone(), ..Scene::default() };
+        let mut scene = Scene {
+            origin: origin.clone(),
+            ..Scene::default()
+        };
         let mut sources = Sources::new();
         let mut leaves = Vec::new();
         flatten(&table, "", &origin, &mut leaves)?;
@@ -197,7 +242,10 @@ impl Scene {
         };
         let (key, value) = (key.trim(), value.trim());
         if key.is_empty() {
-            return Err(SceneError::BadOverride { origin, problem: "the key before '=' is empty".into() });
+            return Err(SceneError::BadOverride {
+                origin,
+                problem: "the key before '=' is empty".into(),
+            });
         }
         // A value that is not a TOML literal is a bare string: solver.scheme=trapezoid.
         let parsed = value
@@ -231,7 +279,9 @@ impl Scene {
                 _ => return Err(wrong("a number")),
             },
             Access::Count { set, .. } => match value {
-                toml::Value::Integer(i) if *i >= 0 => set(self, usize::try_from(*i).unwrap_or(usize::MAX)),
+                toml::Value::Integer(i) if *i >= 0 => {
+                    set(self, usize::try_from(*i).unwrap_or(usize::MAX))
+                }
                 toml::Value::Integer(i) => {
                     let problem = match spec.rule {
                         Rule::AtLeast(n) => format!("must be at least {n}"),
@@ -251,7 +301,11 @@ impl Scene {
                 _ => return Err(wrong("true or false")),
             },
             Access::Choice { names, set, .. } => {
-                let choices = names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ");
+                let choices = names
+                    .iter()
+                    .map(|n| format!("\"{n}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ");
                 match value {
                     toml::Value::String(s) => match names.iter().position(|n| n == s) {
                         Some(i) => set(self, i),
@@ -357,7 +411,11 @@ fn flatten(
     out: &mut Vec<(String, toml::Value)>,
 ) -> Result<(), SceneError> {
     for (name, value) in table {
-        let key = if prefix.is_empty() { name.clone() } else { format!("{prefix}.{name}") };
+        let key = if prefix.is_empty() {
+            name.clone()
+        } else {
+            format!("{prefix}.{name}")
+        };
         if find_key(&key).is_some() {
             out.push((key, value.clone()));
             continue;
@@ -464,7 +522,12 @@ fn line_column(text: &str, at: usize) -> (usize, usize) {
     let at = at.min(text.len());
     let before = text.get(..at).unwrap_or(text);
     let line = before.matches('\n').count() + 1;
-    let column = before.rsplit('\n').next().map(|l| l.chars().count()).unwrap_or(0) + 1;
+    let column = before
+        .rsplit('\n')
+        .next()
+        .map(|l| l.chars().count())
+        .unwrap_or(0)
+        + 1;
     (line, column)
 }
 
