@@ -2,7 +2,7 @@
 //! Hermite–Simpson = 3-stage Lobatto IIIA (order 4, bvp4c's scheme), the truncated pole
 //! conditions at Σ = ε and the cornea conditions at Σ = L, with the analytic Jacobian.
 //!
-//! Unknowns are interleaved by node, u = [y_0, y_1, …, y_{M−1}], y = (κ, r, θ, Q, t_s).
+//! Unknowns are interleaved by node, u = [y_0, y_1, …, y_{M−1}], y = (κ, r, θ, q_s, t_s).
 //! Rows: the three pole conditions (on y_0), then five rows per interval (on y_i, y_{i+1}),
 //! then the two cornea conditions (on y_{M−1}). Every row's columns lie within 7 below and
 //! 6 above the diagonal, so the Jacobian is a band matrix with ml = 7, mu = 6.
@@ -10,7 +10,7 @@
 //! At a material breakpoint each interval evaluates f with the data from its own side, so
 //! α_s may jump there while t_s, κ, r, θ, Q stay continuous (MODEL.md §4).
 
-use super::equations::{self, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, Q, R, THETA, TS};
+use super::equations::{self, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, QS, R, THETA, TS};
 use crate::mesh::Mesh;
 use crate::model::cornea::CorneaEdge;
 use crate::model::params::Scheme;
@@ -168,13 +168,13 @@ impl Discretisation {
         self.evaluate(u)?;
         let ev = &self.evals;
         let m = self.mesh.len();
-        // Pole (MODEL.md §3): r = σ_ε α_s, θ = σ_ε α_s κ, and the first integral.
+        // Pole (MODEL.md §3): r = σ_ε α_s, θ = σ_ε α_s κ, and the first integral over r.
         let y0 = y_at(u, 0);
         let se = self.sigma_eps();
         let a0 = ev.left[0].alpha_s;
         f[0] = y0[R] - se * a0;
         f[1] = y0[THETA] - se * a0 * y0[KAPPA];
-        f[2] = equations::first_integral(self.shell.dp, &y0);
+        f[2] = equations::first_integral_over_r(self.shell.dp, &y0);
         for i in 0..m - 1 {
             let h = self.mesh.step(i);
             let dy = y_at(u, i + 1) - y_at(u, i);
@@ -208,12 +208,12 @@ impl Discretisation {
         jac.set(1, R, -se * a0_r * y0[KAPPA]);
         jac.set(1, THETA, 1.0);
         jac.set(1, TS, -se * a0_ts * y0[KAPPA]);
-        // Q cos θ + r t_s sin θ − r² ΔP / 2
+        // q_s cos θ + t_s sin θ − r ΔP / 2
         let (sn, cs) = y0[THETA].sin_cos();
-        jac.set(2, R, y0[TS] * sn - y0[R] * self.shell.dp);
-        jac.set(2, THETA, -y0[Q] * sn + y0[R] * y0[TS] * cs);
-        jac.set(2, Q, cs);
-        jac.set(2, TS, y0[R] * sn);
+        jac.set(2, R, -0.5 * self.shell.dp);
+        jac.set(2, THETA, -y0[QS] * sn + y0[TS] * cs);
+        jac.set(2, QS, cs);
+        jac.set(2, TS, sn);
         let id = Mat5::identity();
         for i in 0..m - 1 {
             let h = self.mesh.step(i);
@@ -275,10 +275,10 @@ impl Discretisation {
     }
 
     /// Typical sizes of the five unknowns, for KINSOL's scaling: κ ~ 1/R, r ~ R, θ ~ 1,
-    /// t_s ~ ΔP R / 2 (Laplace), Q ~ r t_s (the first integral balances them).
+    /// t_s ~ ΔP R / 2 (Laplace), q_s ~ t_s (the first integral balances them).
     pub fn typical(&self, r0: f64) -> Vec5 {
         let ts = (0.5 * self.shell.dp * r0).max(1e-3 * self.shell.law.c * self.data.above[0].zeta);
-        Vec5::new(1.0 / r0, r0, 1.0, ts * r0, ts)
+        Vec5::new(1.0 / r0, r0, 1.0, ts, ts)
     }
 
     /// (u_scale, f_scale): the inverse typical size of each unknown and each equation.
@@ -289,7 +289,7 @@ impl Discretisation {
         let mut f_scale = vec![0.0; n];
         f_scale[0] = 1.0 / typ[R];
         f_scale[1] = 1.0 / typ[THETA];
-        f_scale[2] = 1.0 / typ[Q];
+        f_scale[2] = 1.0 / typ[TS];
         for k in POLE_ROWS..n - 2 {
             f_scale[k] = 1.0 / typ[(k - POLE_ROWS) % NY];
         }

@@ -1,14 +1,19 @@
 //! The equilibrium equations at one material point (MODEL.md §3), with their exact
-//! Jacobian. The unknowns are y = (κ, r, θ, Q, t_s): carrying the traction t_s instead of
-//! α_s keeps it continuous across jumps of the material data (MODEL.md §4), and α_s comes
-//! back from the constitutive law at each point (t_s is strictly increasing in α_s).
+//! Jacobian. The unknowns are y = (κ, r, θ, q_s, t_s):
+//! - the traction t_s instead of α_s keeps it continuous across jumps of the material data
+//!   (MODEL.md §4); α_s comes back from the constitutive law at each point (t_s is strictly
+//!   increasing in α_s);
+//! - the shear q_s = Q / r instead of Q: near the pole Q = O(r²) carries the information
+//!   that fixes t_s there (through the first integral) in digits far below the round-off
+//!   of Q elsewhere, so with Q as unknown t_s at Σ = ε is lost to round-off amplified by
+//!   1/(r sin θ) ~ 1/(ε² κ) (measured: 2e-7 at ε = 1e-3, not falling with h). q_s is O(1).
 //!
-//! In the material coordinate Σ (d/dΣ = γ d/dσ, γ = ∂σ/∂Σ):
-//!   κ' = γ α_s [ (sin θ / r − κ) cos θ / r − Q / (r E_b) ]
-//!   r' = γ α_s cos θ
-//!   θ' = γ α_s κ
-//!   Q' = γ α_s [ r ΔP − κ r t_s − sin θ t_φ ]
-//!   t_s' = γ (α_s / r) [ κ Q + (t_φ − t_s) cos θ ]
+//! In the material coordinate Σ (d/dΣ = γ d/dσ, γ = ∂σ/∂Σ), with P = t_φ:
+//!   κ'   = γ α_s [ (sin θ / r − κ) cos θ / r − q_s / E_b ]
+//!   r'   = γ α_s cos θ
+//!   θ'   = γ α_s κ
+//!   q_s' = γ α_s [ ΔP − κ t_s − sin θ P / r − q_s cos θ / r ]      (Q' / r − Q r' / r²)
+//!   t_s' = γ α_s [ κ q_s + (P − t_s) cos θ / r ]
 
 use crate::model::constitutive::{FibreDirection, Law, Tensions};
 use nalgebra::{SMatrix, SVector};
@@ -20,11 +25,11 @@ pub type Mat5 = SMatrix<f64, 5, 5>;
 pub const KAPPA: usize = 0;
 pub const R: usize = 1;
 pub const THETA: usize = 2;
-pub const Q: usize = 3;
+pub const QS: usize = 3;
 pub const TS: usize = 4;
 
 /// Names of the components of y, for error messages.
-pub const NAMES: [&str; 5] = ["kappa", "r", "theta", "Q", "t_s"];
+pub const NAMES: [&str; 5] = ["kappa", "r", "theta", "q_s", "t_s"];
 
 /// The constants of the shell that enter the equations.
 #[derive(Clone, Copy, Debug)]
@@ -99,7 +104,7 @@ pub fn evaluate(shell: &Shell, mp: &MaterialPoint, y: &Vec5, guess: f64) -> Resu
     if !y.iter().all(|v| v.is_finite()) {
         return Err(PointError::NotFinite);
     }
-    let (kappa, r, theta, q, ts) = (y[KAPPA], y[R], y[THETA], y[Q], y[TS]);
+    let (kappa, r, theta, q, ts) = (y[KAPPA], y[R], y[THETA], y[QS], y[TS]);
     let (a, a_r, a_ts, t) = stretch(shell, mp, r, ts, guess)?;
     let g = mp.gamma;
     let (sn, cs) = theta.sin_cos();
@@ -110,62 +115,58 @@ pub fn evaluate(shell: &Shell, mp: &MaterialPoint, y: &Vec5, guess: f64) -> Resu
     let p_r = t.tphi_a * a_r + t.tphi_phi / mp.rho;
     let p_ts = t.tphi_a * a_ts;
 
+    // Each right side is γ α_s g(y); its row is γ (α_s ∂g/∂y + g ∂α_s/∂y), where α_s
+    // depends on r and t_s only. `grad` holds ∂g/∂(κ, r, θ, q_s, t_s).
     let mut f = Vec5::zeros();
     let mut j = Mat5::zeros();
-
-    // κ' = γ a g0
+    let mut row = |k: usize, gv: f64, grad: [f64; 5]| {
+        f[k] = g * a * gv;
+        for c in 0..5 {
+            j[(k, c)] = g * a * grad[c];
+        }
+        j[(k, R)] += g * gv * a_r;
+        j[(k, TS)] += g * gv * a_ts;
+    };
     let u = sn * inv_r - kappa;
-    let g0 = u * cs * inv_r - q * inv_r / eb;
-    let g0_k = -cs * inv_r;
-    let g0_r = -sn * cs * inv_r * inv_r * inv_r - u * cs * inv_r * inv_r + q * inv_r * inv_r / eb;
-    let g0_th = (cs * cs - sn * sn) * inv_r * inv_r + kappa * sn * inv_r;
-    let g0_q = -inv_r / eb;
-    f[KAPPA] = g * a * g0;
-    j[(KAPPA, KAPPA)] = g * a * g0_k;
-    j[(KAPPA, R)] = g * (a * g0_r + g0 * a_r);
-    j[(KAPPA, THETA)] = g * a * g0_th;
-    j[(KAPPA, Q)] = g * a * g0_q;
-    j[(KAPPA, TS)] = g * g0 * a_ts;
-
-    // r' = γ a cos θ
-    f[R] = g * a * cs;
-    j[(R, R)] = g * a_r * cs;
-    j[(R, THETA)] = -g * a * sn;
-    j[(R, TS)] = g * a_ts * cs;
-
-    // θ' = γ a κ
-    f[THETA] = g * a * kappa;
-    j[(THETA, KAPPA)] = g * a;
-    j[(THETA, R)] = g * a_r * kappa;
-    j[(THETA, TS)] = g * a_ts * kappa;
-
-    // Q' = γ a g3, g3 = r ΔP − κ r t_s − sin θ t_φ
-    let g3 = r * shell.dp - kappa * r * ts - sn * p;
-    f[Q] = g * a * g3;
-    j[(Q, KAPPA)] = -g * a * r * ts;
-    j[(Q, R)] = g * (a * (shell.dp - kappa * ts - sn * p_r) + g3 * a_r);
-    j[(Q, THETA)] = -g * a * cs * p;
-    j[(Q, TS)] = g * (a * (-kappa * r - sn * p_ts) + g3 * a_ts);
-
-    // t_s' = γ w g4, w = a / r, g4 = κ Q + (t_φ − t_s) cos θ
-    let w = a * inv_r;
-    let w_r = a_r * inv_r - a * inv_r * inv_r;
-    let w_ts = a_ts * inv_r;
-    let g4 = kappa * q + (p - ts) * cs;
-    f[TS] = g * w * g4;
-    j[(TS, KAPPA)] = g * w * q;
-    j[(TS, R)] = g * (w * p_r * cs + g4 * w_r);
-    j[(TS, THETA)] = -g * w * (p - ts) * sn;
-    j[(TS, Q)] = g * w * kappa;
-    j[(TS, TS)] = g * (w * (p_ts - 1.0) * cs + g4 * w_ts);
+    let r2 = inv_r * inv_r;
+    row(
+        KAPPA,
+        u * cs * inv_r - q / eb,
+        [-cs * inv_r, -sn * cs * r2 * inv_r - u * cs * r2, (cs * cs - sn * sn) * r2 + kappa * sn * inv_r, -1.0 / eb, 0.0],
+    );
+    row(R, cs, [0.0, 0.0, -sn, 0.0, 0.0]);
+    row(THETA, kappa, [1.0, 0.0, 0.0, 0.0, 0.0]);
+    row(
+        QS,
+        shell.dp - kappa * ts - sn * p * inv_r - q * cs * inv_r,
+        [
+            -ts,
+            -sn * p_r * inv_r + sn * p * r2 + q * cs * r2,
+            -cs * p * inv_r + q * sn * inv_r,
+            -cs * inv_r,
+            -kappa - sn * p_ts * inv_r,
+        ],
+    );
+    let d = p - ts;
+    row(
+        TS,
+        kappa * q + d * cs * inv_r,
+        [q, p_r * cs * inv_r - d * cs * r2, -d * sn * inv_r, kappa, (p_ts - 1.0) * cs * inv_r],
+    );
 
     Ok(PointEval { f, jac: j, alpha_s: a, alpha_s_r: a_r, alpha_s_ts: a_ts, tensions: t })
 }
 
-/// The first integral Q cos θ + r t_s sin θ − r² ΔP / 2, zero along a closed shell.
-pub fn first_integral(dp: f64, y: &Vec5) -> f64 {
+/// The first integral divided by r, q_s cos θ + t_s sin θ − r ΔP / 2: the pole condition.
+pub fn first_integral_over_r(dp: f64, y: &Vec5) -> f64 {
     let (sn, cs) = y[THETA].sin_cos();
-    y[Q] * cs + y[R] * y[TS] * sn - 0.5 * y[R] * y[R] * dp
+    y[QS] * cs + y[TS] * sn - 0.5 * y[R] * dp
+}
+
+/// The first integral Q cos θ + r t_s sin θ − r² ΔP / 2 (Q = r q_s), zero along a closed
+/// shell (MODEL.md §3).
+pub fn first_integral(dp: f64, y: &Vec5) -> f64 {
+    y[R] * first_integral_over_r(dp, y)
 }
 
 #[cfg(test)]

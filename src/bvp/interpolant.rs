@@ -5,7 +5,7 @@
 
 use crate::mesh::Mesh;
 
-/// Quantities interpolated: κ, r, θ, Q, t_s and the quadratures s, z.
+/// Quantities interpolated: κ, r, θ, q_s, t_s and the quadratures s, z.
 pub const NQ: usize = 7;
 
 #[derive(Clone, Debug, PartialEq)]

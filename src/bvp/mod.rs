@@ -2,7 +2,6 @@
 //! schemes on the material nodes, the analytic banded Jacobian, the KINSOL driver and a
 //! continuous interpolant of the solution.
 
-use crate::model::params::{Params, SolverSettings};
 
 /// The columns of `fields.csv` and `at.csv`, in order.
 pub const COLUMNS: [&str; 14] = [
@@ -62,8 +61,14 @@ pub struct SolveStats {
     pub pole_nodes: usize,
     /// Cornea stretch α from Adkins' equation.
     pub cornea_alpha: f64,
+    /// Stages of pressure continuation used (0 when Newton converged directly).
+    pub continuation_stages: usize,
     pub wall_seconds: f64,
 }
 
+pub mod discretisation;
+pub mod equations;
+pub mod interpolant;
+pub mod material;
 pub mod solve;
 pub use solve::{solve, BvpError, Solution};

@@ -1,0 +1,41 @@
+//! Canonical problems shared by the tests: the exact sphere of MODEL.md §7 and the paper's
+//! scenes, as diffsol keeps its test models.
+#![allow(dead_code)]
+
+use eyeshell::bvp::{self, Solution};
+use eyeshell::model::params::{Params, Scheme, SolverSettings, Thickness};
+
+/// MODEL.md §7: uniform H0, D = 0, cornea of the sclera's material and radius.
+pub fn exact_sphere() -> Params {
+    Params::default().exact_sphere()
+}
+
+/// The non-uniform shell with fibres, D = 200.
+pub fn fibre_shell() -> Params {
+    Params { thickness: Thickness::NonUniform, d: 200.0, ..Params::default() }
+}
+
+pub fn settings(nodes: usize, scheme: Scheme) -> SolverSettings {
+    SolverSettings { nodes, scheme, newton_tol: 1e-12, ..SolverSettings::default() }
+}
+
+pub fn solve(p: &Params, nodes: usize, scheme: Scheme) -> Solution {
+    bvp::solve(p, &settings(nodes, scheme), None)
+        .unwrap_or_else(|e| panic!("solve failed at N = {nodes}, {scheme:?}: {e}"))
+}
+
+/// The five fields of bvp4c's state at a node: κ, α_s, r, θ, Q.
+pub fn five(row: &eyeshell::bvp::FieldRow) -> [f64; 5] {
+    [row.kappa, row.alpha_s, row.r, row.theta, row.q]
+}
+
+/// Observed orders log2(e_k / e_{k+1}) of a ladder whose spacing halves.
+pub fn orders(errors: &[f64]) -> Vec<f64> {
+    errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
+}
+
+/// A list of numbers in short scientific notation, for the tables the tests print.
+pub fn sci(v: &[f64]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| format!("{x:.2e}")).collect();
+    format!("[{}]", parts.join(", "))
+}
