@@ -41,8 +41,8 @@ impl FieldRow {
     }
 }
 
-/// Solver diagnostics of one elastic solve (written to summary.json).
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Solver diagnostics of one elastic solve (written to summary.json, every field by name).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct SolveStats {
     pub newton_iterations: usize,
     pub residual_evaluations: usize,

@@ -245,7 +245,7 @@ pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
             .map(|s| s.get(scene).to_json())
             .unwrap_or_default()
     };
-    serde_json::json!({
+    let mut summary = serde_json::json!({
         "eyeshell_version": env!("CARGO_PKG_VERSION"),
         "sundials_version": sundials_version(),
         "scene": {
@@ -254,24 +254,18 @@ pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
             "description": scene.description,
             "overrides": scene.overrides,
         },
-        "newton_iterations": stats.newton_iterations,
-        "residual_evaluations": stats.residual_evaluations,
-        "jacobian_evaluations": stats.jacobian_evaluations,
-        "residual_norm": num(stats.residual_norm),
-        "first_integral_max": num(stats.first_integral_max),
-        "nodes": stats.nodes,
-        "uniform_nodes": stats.uniform_nodes,
-        "breakpoint_nodes": stats.breakpoint_nodes,
-        "pole_nodes": stats.pole_nodes,
-        "cornea_alpha": num(stats.cornea_alpha),
-        "wall_seconds": num(stats.wall_seconds),
         "scheme": name("solver.scheme"),
         "scheme_order": scene.solver.scheme.order(),
         "linear_solver": name("solver.linear"),
         "epsilon": num(scene.solver.epsilon),
         "length": num(scene.params.length()),
         "parameters": scene.parameters_json(),
-    })
+    });
+    // Every solver statistic, by its field name (non-finite values become null).
+    if let (Some(map), Ok(serde_json::Value::Object(stats))) = (summary.as_object_mut(), serde_json::to_value(stats)) {
+        map.extend(stats);
+    }
+    summary
 }
 
 /// Write [`summary_json`] to `path`, pretty-printed.
@@ -343,6 +337,7 @@ mod tests {
             "breakpoint_nodes",
             "pole_nodes",
             "cornea_alpha",
+            "continuation_stages",
             "wall_seconds",
             "scheme",
             "linear_solver",
