@@ -1,3 +1,4 @@
+#![allow(clippy::needless_range_loop)] // index loops mirror the maths
 //! KINSOL through the safe layer: the same roots with every linear solver, typed errors for
 //! failing and panicking callbacks, non-convergence, and many create/drop cycles.
 

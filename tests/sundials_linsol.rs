@@ -1,3 +1,4 @@
+#![allow(clippy::needless_range_loop)] // index loops mirror the maths
 //! The linear solvers used standalone: a 3×3 system with dense, band and KLU; a singular
 //! matrix gives a named flag; misuse gives Invalid.
 

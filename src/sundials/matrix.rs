@@ -167,7 +167,7 @@ impl MatrixSink for CsrMut<'_> {
         match self.index(i, j) {
             Some(k) => self.values[k] = v,
             None => {
-                debug_assert!(false, "({i},{j}) is not in the sparsity pattern");
+                debug_assert!(false, "({i},{j}) is outside the sparsity pattern");
                 self.outside.set(self.outside.get() + 1);
             }
         }
