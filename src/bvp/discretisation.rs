@@ -50,18 +50,48 @@ impl MaterialData {
     }
 }
 
-/// Point evaluations at the current state, shared by the residual and the Jacobian.
+/// Point evaluations at the current state, shared by the residual and the Jacobian. The
+/// buffers live as long as the discretisation: a Newton iteration allocates nothing.
 #[derive(Clone, Debug, Default)]
-struct Evaluations {
-    /// u at which they were taken.
+pub struct Evaluations {
+    /// u at which they were taken (empty: none yet).
     u: Vec<f64>,
-    /// Interval i's left end (node i, from above).
-    left: Vec<PointEval>,
-    /// Interval i's right end (node i+1, from below).
-    right: Vec<PointEval>,
+    /// Node i from above (interval i's left end); the last node from below.
+    node: Vec<PointEval>,
+    /// Nodes where the data jump, seen from below (interval i−1's right end): (i, eval).
+    below: Vec<(usize, PointEval)>,
     /// Hermite–Simpson midpoint of interval i, and y there.
     mid: Vec<PointEval>,
     y_mid: Vec<Vec5>,
+}
+
+impl Evaluations {
+    /// f and ∂f/∂y at interval i's left end.
+    #[inline]
+    pub fn left(&self, i: usize) -> &PointEval {
+        &self.node[i]
+    }
+
+    /// f and ∂f/∂y at interval i's right end, from inside the interval.
+    #[inline]
+    pub fn right(&self, i: usize) -> &PointEval {
+        match self.below.iter().find(|(k, _)| *k == i + 1) {
+            Some((_, e)) => e,
+            None => &self.node[i + 1],
+        }
+    }
+
+    /// At interval i's Hermite–Simpson midpoint (empty for the trapezoidal scheme).
+    #[inline]
+    pub fn mid(&self, i: usize) -> &PointEval {
+        &self.mid[i]
+    }
+
+    /// y at interval i's Hermite–Simpson midpoint.
+    #[inline]
+    pub fn y_mid(&self, i: usize) -> &Vec5 {
+        &self.y_mid[i]
+    }
 }
 
 /// The discrete boundary value problem F(u) = 0.
@@ -73,10 +103,18 @@ pub struct Discretisation {
     pub data: MaterialData,
     pub edge: CorneaEdge,
     evals: Evaluations,
-    /// Seeds for the α_s solves, from the last evaluation.
-    guess_left: Vec<f64>,
-    guess_right: Vec<f64>,
-    guess_mid: Vec<f64>,
+    /// Nodes whose data jump (a material breakpoint of H).
+    jump_nodes: Vec<usize>,
+}
+
+/// Write `v` at index i of a buffer that is filled in order (grows on first use only).
+#[inline]
+fn store<T>(buf: &mut Vec<T>, i: usize, v: T) {
+    if i < buf.len() {
+        buf[i] = v;
+    } else {
+        buf.push(v);
+    }
 }
 
 #[inline]
@@ -88,18 +126,8 @@ impl Discretisation {
     pub fn new(shell: Shell, scheme: Scheme, mesh: Mesh, data: MaterialData, edge: CorneaEdge) -> Self {
         let m = mesh.len();
         assert!(data.above.len() == m && data.below.len() == m && data.mid.len() == m - 1);
-        let seed = edge.alpha;
-        Discretisation {
-            shell,
-            scheme,
-            mesh,
-            data,
-            edge,
-            evals: Evaluations::default(),
-            guess_left: vec![seed; m - 1],
-            guess_right: vec![seed; m - 1],
-            guess_mid: vec![seed; m - 1],
-        }
+        let jump_nodes = (1..m - 1).filter(|&i| data.jumps(i)).collect();
+        Discretisation { shell, scheme, mesh, data, edge, evals: Evaluations::default(), jump_nodes }
     }
 
     /// Number of unknowns (and equations), 5 M.
@@ -112,49 +140,42 @@ impl Discretisation {
     }
 
     /// Evaluate f (and ∂f/∂y) at every point the scheme uses, unless already done at `u`.
+    /// Each α_s solve is seeded with the α_s of the previous evaluation at the same point.
     fn evaluate(&mut self, u: &[f64]) -> Result<(), EvalFailure> {
-        if self.evals.u.as_slice() == u && !self.evals.left.is_empty() {
+        let ev = &mut self.evals;
+        if !ev.u.is_empty() && ev.u.as_slice() == u {
             return Ok(());
         }
-        self.evals.u.clear();
+        ev.u.clear(); // invalid until every point is done
         let m = self.mesh.len();
-        let fail = |node: usize, sigma_ref: f64| move |why| EvalFailure { node, sigma_ref, why };
-        let mut left = Vec::with_capacity(m - 1);
-        let mut right = Vec::with_capacity(m - 1);
-        for i in 0..m - 1 {
-            let mp = &self.data.above[i];
-            let e = equations::evaluate(&self.shell, mp, &y_at(u, i), self.guess_left[i]).map_err(fail(i, mp.sigma_ref))?;
-            left.push(e);
+        let seed = self.edge.alpha;
+        let fail = |node: usize, mp: &MaterialPoint| {
+            let sigma_ref = mp.sigma_ref;
+            move |why| EvalFailure { node, sigma_ref, why }
+        };
+        let guess = |v: &Vec<PointEval>, i: usize| v.get(i).map_or(seed, |e| e.alpha_s);
+        for i in 0..m {
+            let mp = if i < m - 1 { &self.data.above[i] } else { &self.data.below[i] };
+            let e = equations::evaluate(&self.shell, mp, &y_at(u, i), guess(&ev.node, i)).map_err(fail(i, mp))?;
+            store(&mut ev.node, i, e);
         }
-        for i in 0..m - 1 {
-            let k = i + 1;
-            let e = if k < m - 1 && !self.data.jumps(k) {
-                left[k]
-            } else {
-                let mp = &self.data.below[k];
-                equations::evaluate(&self.shell, mp, &y_at(u, k), self.guess_right[i]).map_err(fail(k, mp.sigma_ref))?
-            };
-            right.push(e);
+        for (k, &i) in self.jump_nodes.iter().enumerate() {
+            let mp = &self.data.below[i];
+            let g = ev.below.get(k).map_or(seed, |e| e.1.alpha_s);
+            let e = equations::evaluate(&self.shell, mp, &y_at(u, i), g).map_err(fail(i, mp))?;
+            store(&mut ev.below, k, (i, e));
         }
-        let (mut mid, mut y_mid) = (Vec::new(), Vec::new());
         if self.scheme == Scheme::HermiteSimpson {
-            mid.reserve(m - 1);
-            y_mid.reserve(m - 1);
             for i in 0..m - 1 {
                 let h = self.mesh.step(i);
-                let ym = 0.5 * (y_at(u, i) + y_at(u, i + 1)) + (h / 8.0) * (left[i].f - right[i].f);
+                let ym = 0.5 * (y_at(u, i) + y_at(u, i + 1)) + (h / 8.0) * (ev.left(i).f - ev.right(i).f);
                 let mp = &self.data.mid[i];
-                let e = equations::evaluate(&self.shell, mp, &ym, self.guess_mid[i]).map_err(fail(i, mp.sigma_ref))?;
-                self.guess_mid[i] = e.alpha_s;
-                mid.push(e);
-                y_mid.push(ym);
+                let e = equations::evaluate(&self.shell, mp, &ym, guess(&ev.mid, i)).map_err(fail(i, mp))?;
+                store(&mut ev.mid, i, e);
+                store(&mut ev.y_mid, i, ym);
             }
         }
-        for i in 0..m - 1 {
-            self.guess_left[i] = left[i].alpha_s;
-            self.guess_right[i] = right[i].alpha_s;
-        }
-        self.evals = Evaluations { u: u.to_vec(), left, right, mid, y_mid };
+        ev.u.extend_from_slice(u);
         Ok(())
     }
 
@@ -171,7 +192,7 @@ impl Discretisation {
         // Pole (MODEL.md §3): r = σ_ε α_s, θ = σ_ε α_s κ, and the first integral over r.
         let y0 = y_at(u, 0);
         let se = self.sigma_eps();
-        let a0 = ev.left[0].alpha_s;
+        let a0 = ev.left(0).alpha_s;
         f[0] = y0[R] - se * a0;
         f[1] = y0[THETA] - se * a0 * y0[KAPPA];
         f[2] = equations::first_integral_over_r(self.shell.dp, &y0);
@@ -179,8 +200,8 @@ impl Discretisation {
             let h = self.mesh.step(i);
             let dy = y_at(u, i + 1) - y_at(u, i);
             let r = match self.scheme {
-                Scheme::Trapezoid => dy - (0.5 * h) * (ev.left[i].f + ev.right[i].f),
-                Scheme::HermiteSimpson => dy - (h / 6.0) * (ev.left[i].f + 4.0 * ev.mid[i].f + ev.right[i].f),
+                Scheme::Trapezoid => dy - (0.5 * h) * (ev.left(i).f + ev.right(i).f),
+                Scheme::HermiteSimpson => dy - (h / 6.0) * (ev.left(i).f + 4.0 * ev.mid(i).f + ev.right(i).f),
             };
             f[POLE_ROWS + NY * i..POLE_ROWS + NY * i + NY].copy_from_slice(r.as_slice());
         }
@@ -198,7 +219,7 @@ impl Discretisation {
         let m = self.mesh.len();
         let y0 = y_at(u, 0);
         let se = self.sigma_eps();
-        let e0 = &ev.left[0];
+        let e0 = ev.left(0);
         let (a0, a0_r, a0_ts) = (e0.alpha_s, e0.alpha_s_r, e0.alpha_s_ts);
         // r − σ_ε α_s
         jac.set(0, R, 1.0 - se * a0_r);
@@ -217,13 +238,13 @@ impl Discretisation {
         let id = Mat5::identity();
         for i in 0..m - 1 {
             let h = self.mesh.step(i);
-            let (jl, jr) = (&ev.left[i].jac, &ev.right[i].jac);
+            let (jl, jr) = (&ev.left(i).jac, &ev.right(i).jac);
             let (dl, dr) = match self.scheme {
                 Scheme::Trapezoid => (-id - (0.5 * h) * jl, id - (0.5 * h) * jr),
                 Scheme::HermiteSimpson => {
                     // y_m = (y_i + y_{i+1})/2 + h/8 (f_i − f_{i+1}), so
                     // ∂R/∂y_i = −I − h/6 J_i − h/3 J_m − h²/12 J_m J_i, and likewise for y_{i+1}.
-                    let jm = &ev.mid[i].jac;
+                    let jm = &ev.mid(i).jac;
                     let jm_jl = jm * jl;
                     let jm_jr = jm * jr;
                     (
@@ -267,11 +288,10 @@ impl Discretisation {
         (row_ptr, col_idx)
     }
 
-    /// The point evaluations at the last state, for output: (left ends, right ends, midpoints).
-    pub fn point_evaluations(&mut self, u: &[f64]) -> Result<(&[PointEval], &[PointEval], &[PointEval], &[Vec5]), EvalFailure> {
+    /// The point evaluations at `u`, for output.
+    pub fn point_evaluations(&mut self, u: &[f64]) -> Result<&Evaluations, EvalFailure> {
         self.evaluate(u)?;
-        let e = &self.evals;
-        Ok((&e.left, &e.right, &e.mid, &e.y_mid))
+        Ok(&self.evals)
     }
 
     /// Typical sizes of the five unknowns, for KINSOL's scaling: κ ~ 1/R, r ~ R, θ ~ 1,

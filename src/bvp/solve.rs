@@ -326,27 +326,27 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
     let dp = disc.shell.dp;
     let data = disc.data.clone();
     let mesh = disc.mesh.clone();
-    let (left, right, mid, y_mid) = disc.point_evaluations(u).map_err(BvpError::Evaluation)?;
+    let ev = disc.point_evaluations(u).map_err(BvpError::Evaluation)?;
     let y = |i: usize| Vec5::from_column_slice(&u[NY * i..NY * i + NY]);
     // ds/dΣ = γ α_s, dz/dΣ = −γ α_s sin θ.
     let ds = |g: f64, a: f64| g * a;
     let dz = |g: f64, a: f64, th: f64| -g * a * th.sin();
     let mut s = vec![0.0; m];
     let mut z = vec![0.0; m];
-    s[0] = data.above[0].sigma * left[0].alpha_s;
+    s[0] = data.above[0].sigma * ev.left(0).alpha_s;
     let mut dzi = vec![0.0; m - 1];
     let mut slope_left = Vec::with_capacity(m - 1);
     let mut slope_right = Vec::with_capacity(m - 1);
     for i in 0..m - 1 {
         let h = mesh.step(i);
         let (ga, gb) = (data.above[i].gamma, data.below[i + 1].gamma);
-        let (aa, ab) = (left[i].alpha_s, right[i].alpha_s);
+        let (aa, ab) = (ev.left(i).alpha_s, ev.right(i).alpha_s);
         let (ta, tb) = (y(i)[THETA], y(i + 1)[THETA]);
         let (s_a, s_b, z_a, z_b) = (ds(ga, aa), ds(gb, ab), dz(ga, aa, ta), dz(gb, ab, tb));
         let (ds_i, dz_i) = if hs {
             let gm = data.mid[i].gamma;
-            let am = mid[i].alpha_s;
-            let thm = y_mid[i][THETA];
+            let am = ev.mid(i).alpha_s;
+            let thm = ev.y_mid(i)[THETA];
             (
                 h / 6.0 * (s_a + 4.0 * ds(gm, am) + s_b),
                 h / 6.0 * (z_a + 4.0 * dz(gm, am, thm) + z_b),
@@ -356,8 +356,8 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
         };
         s[i + 1] = s[i] + ds_i;
         dzi[i] = dz_i;
-        let fl = left[i].f;
-        let fr = right[i].f;
+        let fl = ev.left(i).f;
+        let fr = ev.right(i).f;
         slope_left.push([fl[0], fl[1], fl[2], fl[3], fl[4], s_a, z_a]);
         slope_right.push([fr[0], fr[1], fr[2], fr[3], fr[4], s_b, z_b]);
     }
@@ -374,7 +374,7 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
     // Node rows use the profile's own value at a breakpoint: the limit from below.
     let rows: Vec<FieldRow> = (0..m)
         .map(|i| {
-            let (mp, e) = if i == 0 { (&data.above[0], &left[0]) } else { (&data.below[i], &right[i - 1]) };
+            let (mp, e) = if i == 0 { (&data.above[0], ev.left(0)) } else { (&data.below[i], ev.right(i - 1)) };
             field_row(mp, &values[i], e.alpha_s, e.tensions.tphi)
         })
         .collect();

@@ -1,0 +1,78 @@
+//! Elastic solve timings (issue: the shell at equilibrium). Run with
+//!   cargo bench --bench elastic
+//! Figures go in BENCHMARKS.md.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use eyeshell::bvp::solve::{discretise, sphere_guess};
+use eyeshell::bvp::{self};
+use eyeshell::model::params::{Params, Scheme, SolverSettings, Thickness};
+use eyeshell::sundials::MatrixSink;
+use std::hint::black_box;
+
+fn fibre_shell() -> Params {
+    Params { thickness: Thickness::NonUniform, d: 200.0, ..Params::default() }
+}
+
+fn settings(nodes: usize) -> SolverSettings {
+    SolverSettings { nodes, scheme: Scheme::HermiteSimpson, newton_tol: 1e-10, ..SolverSettings::default() }
+}
+
+/// One cold and one warm-started solve of the fibre shell at N = 501, order 4.
+fn cold_and_warm(c: &mut Criterion) {
+    let p = fibre_shell();
+    let s = settings(501);
+    let mut g = c.benchmark_group("fibre_shell_n501_hs");
+    g.bench_function("cold", |b| b.iter(|| bvp::solve(black_box(&p), &s, None).unwrap()));
+    // Warm: the previous solution at a 1 % higher pressure, as in a continuation or a growth step.
+    let near = bvp::solve(&Params { dp: p.dp * 1.01, ..p }, &s, None).unwrap();
+    g.bench_function("warm", |b| b.iter(|| bvp::solve(black_box(&p), &s, Some(&near)).unwrap()));
+    g.finish();
+}
+
+/// Cost per node: a cold solve over N from 101 to 20001 (linear in N if the band holds).
+fn scaling(c: &mut Criterion) {
+    let p = fibre_shell();
+    let mut g = c.benchmark_group("cold_solve_by_nodes");
+    g.sample_size(10);
+    for n in [101usize, 501, 2001, 20001] {
+        g.throughput(Throughput::Elements(n as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, &n| {
+            let s = settings(n);
+            b.iter(|| bvp::solve(black_box(&p), &s, None).unwrap())
+        });
+    }
+    g.finish();
+}
+
+/// A sink that only touches the band entries, to time assembly without SUNDIALS.
+struct NullSink(f64);
+impl MatrixSink for NullSink {
+    fn nrows(&self) -> usize {
+        0
+    }
+    fn set(&mut self, _i: usize, _j: usize, v: f64) {
+        self.0 += v;
+    }
+}
+
+/// Residual and Jacobian assembly alone at N = 501.
+fn assembly(c: &mut Criterion) {
+    let p = fibre_shell();
+    let mut disc = discretise(&p, &settings(501)).unwrap();
+    let u = sphere_guess(&disc, p.r0);
+    let mut f = vec![0.0; disc.len()];
+    c.bench_function("residual_and_jacobian_n501_hs", |b| {
+        b.iter(|| {
+            // Perturb one entry so that the evaluation cache is not reused.
+            let mut v = u.clone();
+            v[3] += 1e-9 * black_box(1.0);
+            disc.residual(&v, &mut f).unwrap();
+            let mut sink = NullSink(0.0);
+            disc.jacobian(&v, &mut sink).unwrap();
+            black_box(sink.0)
+        })
+    });
+}
+
+criterion_group!(benches, cold_and_warm, scaling, assembly);
+criterion_main!(benches);
