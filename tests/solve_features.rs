@@ -78,3 +78,24 @@ fn first_integral_falls_at_the_scheme_order() {
         assert!(q.iter().all(|&o| (o - p_).abs() < 0.3), "{scheme:?}: orders {q:?}");
     }
 }
+
+/// Newton converges from the inflated reference sphere on every shipped scene, with no
+/// continuation.
+#[test]
+fn every_shipped_scene_solves_from_the_default_guess() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let scene = eyeshell::scene::Scene::from_file(&path, &[]).unwrap();
+        let sol = bvp::solve(&scene.params, &scene.solver, None).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        println!("{}: {} Newton iterations", path.display(), sol.stats.newton_iterations);
+        assert_eq!(sol.stats.continuation_stages, 0, "{}", path.display());
+        assert!(sol.stats.newton_iterations <= 8, "{}", path.display());
+        count += 1;
+    }
+    assert!(count >= 2, "no scenes found in {}", dir.display());
+}

@@ -72,13 +72,16 @@ pub struct PointEval {
 }
 
 /// Why the equations cannot be evaluated at a state.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum PointError {
     /// r ≤ 0 or not finite: the shell has passed through the axis.
+    #[error("r ≤ 0: the shell has passed through its axis")]
     NonPositiveRadius,
     /// A component of y is not finite.
+    #[error("an unknown is not finite")]
     NotFinite,
     /// The constitutive law could not be inverted for α_s.
+    #[error("no stretch α_s gives this t_s")]
     StretchNotFound,
 }
 

@@ -37,7 +37,7 @@ pub enum BvpError {
         equation: &'static str,
         reason: String,
     },
-    #[error("the equations cannot be evaluated at node {} (Σ = {:.6}): {:?}", .0.node, .0.sigma_ref, .0.why)]
+    #[error("the equations cannot be evaluated at node {} (Σ = {:.6}): {}", .0.node, .0.sigma_ref, .0.why)]
     Evaluation(EvalFailure),
 }
 
@@ -51,7 +51,7 @@ impl ElasticSystem {
     fn record(&mut self, r: Result<(), EvalFailure>) -> CallbackResult {
         r.map_err(|e| {
             self.failure = Some(e);
-            CallbackError::Recoverable(format!("cannot evaluate at node {} (Σ = {}): {:?}", e.node, e.sigma_ref, e.why))
+            CallbackError::Recoverable(format!("cannot evaluate at node {} (Σ = {}): {}", e.node, e.sigma_ref, e.why))
         })
     }
 }

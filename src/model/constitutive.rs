@@ -114,6 +114,11 @@ impl Law {
                 let a = a - step;
                 return Some((a, self.tensions(zeta, fibre, a, phi)));
             }
+            // A root on the fibres' kink (I4 = 1) can leave Newton's step from the soft side
+            // above the tolerance while the bracket has shrunk to adjacent doubles.
+            if hi.is_finite() && hi - lo <= 2.0 * f64::EPSILON * hi {
+                return Some((a, t));
+            }
             let mut next = a - step;
             if !(next > lo && next < hi) {
                 next = if hi.is_finite() { 0.5 * (lo + hi) } else { 2.0 * a.max(lo) };
@@ -176,5 +181,32 @@ mod tests {
         let with = law.tensions(0.65, f, 0.95, 0.97);
         let without = Law { d: None, ..law }.tensions(0.65, None, 0.95, 0.97);
         assert_eq!(with, without);
+    }
+}
+#[cfg(test)]
+mod stiff_fibres {
+    use super::*;
+
+    /// Stiff fibres (D = 1e5 ≫ C) put roots on the kink I4 = 1; the inverse must still
+    /// find them, to the last bit the kink allows.
+    #[test]
+    fn inverse_finds_roots_on_the_fibre_kink() {
+        let law = Law { c: 100.0, d: Some(1e5) };
+        for k in 0..400 {
+            let f = Some(FibreDirection::from_angle(0.2 + 1.2 * (k % 20) as f64 / 20.0));
+            let phi = 0.95 + 0.1 * (k / 20) as f64 / 20.0;
+            // The stretch at which the fibres come taut, and points around it.
+            let kink = ((1.0 - phi * phi * f.unwrap().cos2) / f.unwrap().sin2).max(0.0).sqrt();
+            for a in [0.9, kink * (1.0 - 1e-12), kink, kink * (1.0 + 1e-12), 1.05] {
+                if !(a > 0.0) {
+                    continue;
+                }
+                let ts = law.tensions(0.5, f, a, phi).ts;
+                for guess in [0.5, 1.0, 2.0] {
+                    let (b, _) = law.alpha_s_from_ts(0.5, f, ts, phi, guess).expect("no root found");
+                    assert!((a - b).abs() < 1e-12, "a = {a}, found {b}");
+                }
+            }
+        }
     }
 }
