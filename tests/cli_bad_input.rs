@@ -270,17 +270,13 @@ fn a_foreign_output_directory_is_refused_and_untouched() {
         std::fs::read_dir(dir.path().join("data")).unwrap().count(),
         1
     );
-    let run = eyeshell(
-        dir.path(),
-        &["solve", "s.toml", "--out", "missing/parent/out"],
-    );
+    std::fs::write(dir.path().join("file"), "x").unwrap();
+    let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "file/inside/out"]);
     assert_bad(
         &run,
-        "missing/parent/out: the parent directory does not exist",
-        "missing parent",
+        "file/inside/out: a parent of the output path is not a directory",
+        "parent is a file",
     );
-    assert!(!dir.path().join("missing").exists());
-    std::fs::write(dir.path().join("file"), "x").unwrap();
     let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "file"]);
     assert_bad(&run, "refusing", "file as out");
 }

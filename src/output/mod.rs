@@ -33,7 +33,7 @@ pub enum OutputError {
     Refused { path: PathBuf },
     #[error("{}: the output path has no file name", path.display())]
     NoName { path: PathBuf },
-    #[error("{}: the parent directory does not exist", path.display())]
+    #[error("{}: a parent of the output path is not a directory", path.display())]
     NoParent { path: PathBuf },
 }
 
@@ -77,12 +77,12 @@ fn inspect(target: &Path) -> Result<Target, OutputError> {
     let meta = match fs::symlink_metadata(target) {
         Ok(m) => m,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return match target.parent() {
-                Some(p) if !p.as_os_str().is_empty() && !p.is_dir() => Err(OutputError::NoParent {
-                    path: target.to_path_buf(),
-                }),
-                _ => Ok(Target::Absent),
-            }
+            // Missing parents are created on commit; one that exists must be a directory.
+            let blocked = target.ancestors().skip(1).any(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir());
+            return if blocked { Err(OutputError::NoParent { path: target.to_path_buf() }) } else { Ok(Target::Absent) };
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotADirectory => {
+            return Err(OutputError::NoParent { path: target.to_path_buf() })
         }
         Err(e) => return Err(OutputError::io(target, e)),
     };
@@ -111,6 +111,8 @@ pub struct OutputDir {
     target: PathBuf,
     tmp: PathBuf,
     committed: bool,
+    /// Parent directories this run created (outermost first), removed again if it fails.
+    created: Vec<PathBuf>,
 }
 
 impl OutputDir {
@@ -124,6 +126,9 @@ impl OutputDir {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        let mut created: Vec<PathBuf> = parent.ancestors().filter(|a| !a.as_os_str().is_empty() && !a.exists()).map(Path::to_path_buf).collect();
+        created.reverse();
+        fs::create_dir_all(&parent).map_err(|e| OutputError::io(&parent, e))?;
         let tmp = parent.join(format!(
             ".{}.tmp-{}",
             name.to_string_lossy(),
@@ -138,6 +143,7 @@ impl OutputDir {
             target: target.to_path_buf(),
             tmp,
             committed: false,
+            created,
         })
     }
 
@@ -192,6 +198,9 @@ impl Drop for OutputDir {
     fn drop(&mut self) {
         if !self.committed {
             let _ = fs::remove_dir_all(&self.tmp);
+            for dir in self.created.iter().rev() {
+                let _ = fs::remove_dir(dir); // only if still empty
+            }
         }
     }
 }
@@ -418,10 +427,12 @@ mod tests {
         let file = dir.path().join("file");
         fs::write(&file, "x").unwrap();
         assert!(OutputDir::create(&file).unwrap_err().is_refusal());
-        // A missing parent is refused, not created.
-        assert!(OutputDir::create(&dir.path().join("no/such/out"))
-            .unwrap_err()
-            .is_refusal());
+        // A parent that is a file is refused; missing parents are created, and removed
+        // again when the run does not commit.
+        assert!(OutputDir::create(&file.join("out")).unwrap_err().is_refusal());
+        let nested = OutputDir::create(&dir.path().join("no/such/out")).unwrap();
+        assert!(dir.path().join("no/such").is_dir());
+        drop(nested);
         assert!(!dir.path().join("no").exists());
         // An empty directory is fine.
         let empty = dir.path().join("empty");
