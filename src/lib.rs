@@ -9,6 +9,7 @@
 pub mod bvp;
 pub mod cli;
 pub mod error;
+pub mod growth;
 pub mod mesh;
 pub mod model;
 pub mod output;

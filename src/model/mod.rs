@@ -5,6 +5,7 @@ pub mod constitutive;
 pub mod cornea;
 pub mod params;
 pub mod profiles;
+pub mod stimulus;
 
 /// A set of parameters for which the model itself has no answer.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]

@@ -1,0 +1,158 @@
+//! Growth in time (MODEL.md §5–6): a method-of-lines system on the material points the
+//! elastic scheme uses, integrated by CVODE (BDF) or by the published explicit Euler. The
+//! elastic problem is solved at every right-hand-side evaluation, warm-started.
+
+use crate::model::stimulus::{Refraction, Surface};
+
+/// How the thickness of the unloaded shell follows growth (MODEL.md §5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ThicknessLaw {
+    /// ζ = H: no growth across the thickness (γ_n = 1), the paper's choice.
+    None,
+    /// ζ = H / (γ_s γ_φ): mass conserved.
+    Mass,
+}
+
+/// The growth model of one scene (MODEL.md §4–6).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GrowthParams {
+    /// growth.eta0: η0, the largest growth rate.
+    pub eta0: f64,
+    /// growth.Gamma: Γ, where the growth capacity falls to half.
+    pub gamma: f64,
+    /// growth.delta: δ, the width of that fall.
+    pub delta: f64,
+    /// growth.t_end: the end of the run (dimensionless time).
+    pub t_end: f64,
+    /// growth.thickness_law.
+    pub thickness_law: ThicknessLaw,
+    /// The best-focus surface for blue light (growth stops where the retina reaches it).
+    pub blue: Surface,
+    /// The best-focus surface for red light (for the classification only).
+    pub red: Surface,
+}
+
+impl Default for GrowthParams {
+    fn default() -> Self {
+        GrowthParams {
+            eta0: 70.0,
+            gamma: 8.0,
+            delta: 4.0,
+            t_end: 1.0,
+            thickness_law: ThicknessLaw::None,
+            blue: Surface::blue(),
+            red: Surface::default_red(),
+        }
+    }
+}
+
+/// Which time integrator runs the growth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// CVODE: BDF, variable order and step, error-controlled.
+    Cvode,
+    /// Explicit Euler with a fixed number of steps (MODEL.md §8), for comparison.
+    Euler,
+}
+
+/// Numerical settings of the time integration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GrowthSettings {
+    /// solver.integrator.
+    pub integrator: Integrator,
+    /// solver.rtol, solver.atol: CVODE's tolerances.
+    pub rtol: f64,
+    pub atol: f64,
+    /// solver.steps: Euler's number of steps to t_end.
+    pub steps: usize,
+    /// output.times: when to write snapshots (sorted, in (0, t_end]); t = 0 is always written.
+    pub output_times: Vec<f64>,
+}
+
+impl Default for GrowthSettings {
+    fn default() -> Self {
+        GrowthSettings {
+            integrator: Integrator::Cvode,
+            rtol: 1e-6,
+            atol: 1e-8,
+            steps: 200,
+            output_times: vec![0.1, 0.2, 0.4, 1.0],
+        }
+    }
+}
+
+/// One row of series.csv: the eye at one output time, at the posterior pole.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeriesRow {
+    pub t: f64,
+    /// z of the retina at the posterior pole (MODEL.md §6).
+    pub axial_length: f64,
+    /// The largest radius of the retina.
+    pub equatorial_radius: f64,
+    /// Distance of the retina behind the blue surface along its polar ray (negative: in front).
+    pub retina_minus_blue: f64,
+    /// The same for the red surface.
+    pub retina_minus_red: f64,
+    pub class: Refraction,
+}
+
+/// The growth fields at one node, beside the elastic fields.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GrowthRow {
+    pub rho: f64,
+    pub zeta: f64,
+    pub eta: f64,
+    pub g_v: f64,
+    pub z_retina: f64,
+    pub r_retina: f64,
+}
+
+/// Extra columns of a snapshot, after `bvp::COLUMNS`.
+pub const GROWTH_COLUMNS: [&str; 6] = ["rho", "zeta", "eta", "g_v", "z_retina", "r_retina"];
+
+impl GrowthRow {
+    pub fn values(&self) -> [f64; 6] {
+        [self.rho, self.zeta, self.eta, self.g_v, self.z_retina, self.r_retina]
+    }
+}
+
+/// The state of the eye at one output time.
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    pub t: f64,
+    pub fields: Vec<crate::bvp::FieldRow>,
+    pub growth: Vec<GrowthRow>,
+    pub series: SeriesRow,
+}
+
+/// Work done by a growth run (summary.json).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct GrowthStats {
+    pub steps: usize,
+    pub rhs_evaluations: usize,
+    pub bvp_solves: usize,
+    pub newton_iterations: usize,
+    pub jacobian_products: usize,
+    pub error_test_failures: usize,
+    pub nonlinear_iterations: usize,
+    pub nonlinear_failures: usize,
+    pub linear_iterations: usize,
+    pub t_reached: f64,
+    pub wall_seconds: f64,
+}
+
+/// Receives the results as they come, so that nothing is lost if the run fails later.
+pub trait Observer {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), crate::Error>;
+    /// Called now and then with the time reached (for a progress bar).
+    fn progress(&mut self, _t: f64, _t_end: f64) {}
+}
+
+/// A growth run that stopped: where, why, and the work done until then.
+#[derive(Debug, thiserror::Error)]
+#[error("growth failed at t = {t:.6}: {reason}")]
+pub struct GrowthError {
+    pub t: f64,
+    pub reason: String,
+    pub stats: GrowthStats,
+}

@@ -1,0 +1,123 @@
+//! The visual stimulus (MODEL.md §6): best-focus surfaces for blue and red light, the
+//! growth signal g_v, and the refractive classification.
+//!
+//! A surface is given in polar form about the axis point (0, z_B):
+//! R(φ) = P1 φ⁴ + P2 φ² + P3 (+ an offset along the polar rays), for φ < φ_max, with
+//! φ = atan2(r, z − z_B) measured from the +z axis (the posterior pole has φ = 0).
+
+/// A best-focus surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    pub p1: f64,
+    pub p2: f64,
+    pub p3: f64,
+    /// z of the polar centre on the axis.
+    pub z_b: f64,
+    /// The largest polar angle the surface is defined for (rad).
+    pub phi_max: f64,
+    /// Distance the surface is pushed back along its polar rays (mm).
+    pub offset: f64,
+}
+
+/// Longitudinal chromatic aberration between 400 and 600 nm of the Indiana chromatic eye
+/// (Thibos et al. 1992: 1.77 D), as a distance in a 60 D eye of index 1.336 (MODEL.md §6).
+pub const RED_OFFSET: f64 = 0.655;
+
+impl Surface {
+    /// The blue best-focus surface published with the paper's code.
+    pub fn blue() -> Surface {
+        Surface {
+            p1: -4.464456500210127,
+            p2: -8.019851138753314,
+            p3: 23.6349728997666,
+            z_b: -0.5064886748669879,
+            phi_max: 0.5870000878571975,
+            offset: 0.0,
+        }
+    }
+
+    /// The default red surface: the blue one pushed back by [`RED_OFFSET`] (the paper's own
+    /// red surface is not published).
+    pub fn default_red() -> Surface {
+        Surface { offset: RED_OFFSET, ..Surface::blue() }
+    }
+
+    /// Radius of the surface along the polar ray at angle φ.
+    pub fn radius(&self, phi: f64) -> f64 {
+        let p2 = phi * phi;
+        (self.p1 * p2 + self.p2) * p2 + self.p3 + self.offset
+    }
+
+    /// Polar angle of a point (z, r) about the surface's centre.
+    pub fn angle(&self, z: f64, r: f64) -> f64 {
+        r.atan2(z - self.z_b)
+    }
+
+    /// How far the surface lies behind the point (z, r) along its polar ray:
+    /// d = R(φ) − |(z − z_B, r)|. Positive: the point is in front of the surface.
+    pub fn depth(&self, z: f64, r: f64) -> f64 {
+        self.radius(self.angle(z, r)) - r.hypot(z - self.z_b)
+    }
+}
+
+/// Refractive state at a retina point (MODEL.md §6).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refraction {
+    /// In front of the blue surface: the eye still grows there.
+    Hyperopic,
+    /// Between the blue and the red surfaces.
+    Emmetropic,
+    /// Behind the red surface.
+    Myopic,
+}
+
+impl Refraction {
+    /// From the depths of the blue and red surfaces behind the point.
+    pub fn classify(depth_blue: f64, depth_red: f64) -> Refraction {
+        if depth_blue > 0.0 {
+            Refraction::Hyperopic
+        } else if depth_red >= 0.0 {
+            Refraction::Emmetropic
+        } else {
+            Refraction::Myopic
+        }
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Refraction::Hyperopic => "hyperopic",
+            Refraction::Emmetropic => "emmetropic",
+            Refraction::Myopic => "myopic",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blue_surface_on_the_axis() {
+        let b = Surface::blue();
+        assert_eq!(b.radius(0.0), b.p3);
+        // A point on the axis 1 mm in front of the surface has depth 1.
+        let z = b.z_b + b.p3 - 1.0;
+        assert!((b.depth(z, 0.0) - 1.0).abs() < 1e-12);
+        assert_eq!(b.angle(z, 0.0), 0.0);
+    }
+
+    #[test]
+    fn red_lies_behind_blue_by_the_chromatic_offset() {
+        let (b, r) = (Surface::blue(), Surface::default_red());
+        for phi in [0.0, 0.2, 0.5] {
+            assert!((r.radius(phi) - b.radius(phi) - 0.655).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn classification_follows_the_surfaces() {
+        assert_eq!(Refraction::classify(0.1, 0.7), Refraction::Hyperopic);
+        assert_eq!(Refraction::classify(-0.1, 0.5), Refraction::Emmetropic);
+        assert_eq!(Refraction::classify(-0.7, -0.05), Refraction::Myopic);
+    }
+}
