@@ -359,14 +359,16 @@ mod tests {
         assert_eq!(v["scheme"], "hermite-simpson");
         assert_eq!(v["parameters"]["pressure.dP"], 2.0);
         assert_eq!(v["parameters"]["solver.nodes"], 501);
+        // Every elastic parameter; the growth keys only when the scene grows.
         let n = v["parameters"].as_object().unwrap().len();
         assert_eq!(
             n,
             crate::scene::KEYS
                 .iter()
-                .filter(|k| k.is_parameter())
+                .filter(|k| k.is_parameter() && !k.growth)
                 .count()
         );
+        assert!(v["parameters"].get("growth.eta0").is_none());
     }
 
     #[test]

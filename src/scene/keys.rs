@@ -5,6 +5,7 @@
 //! To add a key, add one [`KeySpec`] here (and the field it sets); nothing else needs to change.
 
 use super::Scene;
+use crate::growth::{GrowthParams, Integrator, ThicknessLaw};
 use crate::model::params::{LinearSolverKind, Scheme, Thickness};
 
 /// How a key is read from and written to a [`Scene`]; the variant is the key's type.
@@ -36,6 +37,12 @@ pub enum Access {
         get: fn(&Scene) -> Option<String>,
         set: fn(&mut Scene, String),
     },
+    /// A list of real numbers (`[0.1, 0.2, 1.0]`); TOML integers are accepted too, and a
+    /// single number is a list of one.
+    Floats {
+        get: fn(&Scene) -> Vec<f64>,
+        set: fn(&mut Scene, Vec<f64>),
+    },
 }
 
 /// The admissible range of a single key (cross-key limits are checked in `Scene::validate`).
@@ -51,6 +58,10 @@ pub enum Rule {
     AtLeast(usize),
     /// Strictly between 0 and 1.
     OpenUnit,
+    /// An angle strictly between 0 and π.
+    OpenHalfTurn,
+    /// A non-empty list of positive numbers in strictly increasing order.
+    PositiveIncreasing,
 }
 
 impl Rule {
@@ -62,6 +73,8 @@ impl Rule {
             Rule::NonNegative => ">= 0".into(),
             Rule::AtLeast(n) => format!(">= {n}"),
             Rule::OpenUnit => "in (0, 1)".into(),
+            Rule::OpenHalfTurn => "in (0, π)".into(),
+            Rule::PositiveIncreasing => "each > 0, strictly increasing".into(),
         }
     }
 
@@ -78,8 +91,46 @@ impl Rule {
             Rule::OpenUnit if x <= 0.0 || x >= 1.0 => {
                 Err("must lie strictly between 0 and 1".into())
             }
+            Rule::OpenHalfTurn if x <= 0.0 || x >= std::f64::consts::PI => {
+                Err("must lie strictly between 0 and π (radians)".into())
+            }
+            Rule::PositiveIncreasing if x <= 0.0 => Err("must be positive".into()),
             _ => Ok(()),
         }
+    }
+
+    /// The reason the list `xs` breaks this rule. Lists are never sorted for the user: an
+    /// unsorted list is an error, since it is more likely a typo than a wish.
+    pub fn check_floats(self, xs: &[f64]) -> Result<(), String> {
+        if self == Rule::PositiveIncreasing && xs.is_empty() {
+            return Err("must list at least one time".into());
+        }
+        for (i, &x) in xs.iter().enumerate() {
+            if !x.is_finite() {
+                return Err(format!(
+                    "must hold finite numbers only (item {} is {})",
+                    i + 1,
+                    x
+                ));
+            }
+            if self == Rule::PositiveIncreasing {
+                if x <= 0.0 {
+                    return Err(format!(
+                        "must hold positive numbers only (item {} is {})",
+                        i + 1,
+                        x
+                    ));
+                }
+                if i > 0 && x <= xs[i - 1] {
+                    return Err(format!(
+                        "must be strictly increasing (they are not sorted for you): {} follows {}",
+                        x,
+                        xs[i - 1]
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The reason the count `n` breaks this rule.
@@ -103,6 +154,9 @@ pub struct KeySpec {
     pub rule: Rule,
     /// One-line documentation (units, meaning, MODEL.md section).
     pub doc: &'static str,
+    /// A key of the growth model or of its numerics: shown, written and summarised only
+    /// when the scene grows (a scene without `growth.*` keys is a pure elastic scene).
+    pub growth: bool,
 }
 
 /// A typed value of a scene key.
@@ -113,6 +167,7 @@ pub enum KeyValue {
     Bool(bool),
     Choice(&'static str),
     Text(Option<String>),
+    Floats(Vec<f64>),
 }
 
 impl KeyValue {
@@ -127,6 +182,9 @@ impl KeyValue {
             KeyValue::Choice(s) => serde_json::Value::from(*s),
             KeyValue::Text(Some(s)) => serde_json::Value::from(s.as_str()),
             KeyValue::Text(None) => serde_json::Value::Null,
+            KeyValue::Floats(xs) => {
+                serde_json::Value::Array(xs.iter().map(|x| KeyValue::Float(*x).to_json()).collect())
+            }
         }
     }
 }
@@ -146,6 +204,16 @@ impl std::fmt::Display for KeyValue {
             KeyValue::Choice(s) => write!(f, "\"{s}\""),
             KeyValue::Text(Some(s)) => write!(f, "{}", toml::Value::String(s.clone())),
             KeyValue::Text(None) => f.write_str("(none)"),
+            KeyValue::Floats(xs) => {
+                f.write_str("[")?;
+                for (i, x) in xs.iter().enumerate() {
+                    if i > 0 {
+                        f.write_str(", ")?;
+                    }
+                    write!(f, "{}", KeyValue::Float(*x))?;
+                }
+                f.write_str("]")
+            }
         }
     }
 }
@@ -163,6 +231,7 @@ impl KeySpec {
                 .collect::<Vec<_>>()
                 .join(" | "),
             Access::Text { .. } => "string".into(),
+            Access::Floats { .. } => "list of floats".into(),
         }
     }
 
@@ -174,6 +243,7 @@ impl KeySpec {
             Access::Bool { get, .. } => KeyValue::Bool(get(scene)),
             Access::Choice { names, get, .. } => KeyValue::Choice(names[get(scene)]),
             Access::Text { get, .. } => KeyValue::Text(get(scene)),
+            Access::Floats { get, .. } => KeyValue::Floats(get(scene)),
         }
     }
 
@@ -185,6 +255,12 @@ impl KeySpec {
     /// True for keys that are parameters of the problem (not scene metadata).
     pub fn is_parameter(&self) -> bool {
         !matches!(self.access, Access::Text { .. })
+    }
+
+    /// True when the key is in use in `scene`: every elastic key, and the growth keys
+    /// when the scene grows.
+    pub fn applies_to(&self, scene: &Scene) -> bool {
+        !self.growth || scene.growth.is_some()
     }
 
     /// The section of a dotted key (`material` for `material.C`), if any.
@@ -201,6 +277,13 @@ pub fn find(key: &str) -> Option<&'static KeySpec> {
 const THICKNESS: &[&str] = &["uniform", "nonuniform"];
 const SCHEMES: &[&str] = &["trapezoid", "hermite-simpson"];
 const LINEAR: &[&str] = &["band", "klu"];
+const THICKNESS_LAWS: &[&str] = &["none", "mass"];
+const INTEGRATORS: &[&str] = &["cvode", "euler"];
+
+/// The growth parameters of `s`, or their defaults when the scene does not grow.
+fn growth(s: &Scene) -> GrowthParams {
+    s.growth.clone().unwrap_or_default()
+}
 
 /// Every scene key, in the order they are listed and validated.
 pub static KEYS: &[KeySpec] = &[
@@ -209,30 +292,35 @@ pub static KEYS: &[KeySpec] = &[
         access: Access::Text { get: |s| s.name.clone(), set: |s, v| s.name = Some(v) },
         rule: Rule::Any,
         doc: "name of the scene (defaults to the file name)",
+        growth: false,
     },
     KeySpec {
         key: "description",
         access: Access::Text { get: |s| s.description.clone(), set: |s, v| s.description = Some(v) },
         rule: Rule::Any,
         doc: "free-text description of the scene",
+        growth: false,
     },
     KeySpec {
         key: "pressure.dP",
         access: Access::Float { get: |s| s.params.dp, set: |s, v| s.params.dp = v },
         rule: Rule::NonNegative,
         doc: "pressure difference ΔP (kPa); at most the cornea's limit (MODEL.md §3)",
+        growth: false,
     },
     KeySpec {
         key: "material.C",
         access: Access::Float { get: |s| s.params.c, set: |s, v| s.params.c = v },
         rule: Rule::Positive,
         doc: "neo-Hookean modulus C of the sclera (kPa) (MODEL.md §2)",
+        growth: false,
     },
     KeySpec {
         key: "material.bending",
         access: Access::Float { get: |s| s.params.e_b, set: |s, v| s.params.e_b = v },
         rule: Rule::Positive,
         doc: "bending stiffness E_b (kPa·mm³) (MODEL.md §2)",
+        growth: false,
     },
     KeySpec {
         key: "material.thickness",
@@ -248,60 +336,70 @@ pub static KEYS: &[KeySpec] = &[
         },
         rule: Rule::Any,
         doc: "thickness profile H(Σ): uniform H0, or the paper's two-piece tanh profile (MODEL.md §4)",
+        growth: false,
     },
     KeySpec {
         key: "material.H0",
         access: Access::Float { get: |s| s.params.h0, set: |s, v| s.params.h0 = v },
         rule: Rule::Positive,
         doc: "uniform thickness H0 (mm), used when material.thickness = \"uniform\" (MODEL.md §4)",
+        growth: false,
     },
     KeySpec {
         key: "fibres.D",
         access: Access::Float { get: |s| s.params.d, set: |s, v| s.params.d = v },
         rule: Rule::NonNegative,
         doc: "fibre stiffness D (kPa); 0 means no fibres (MODEL.md §2)",
+        growth: false,
     },
     KeySpec {
         key: "cornea.C",
         access: Access::Float { get: |s| s.params.cornea.c, set: |s, v| s.params.cornea.c = v },
         rule: Rule::Positive,
         doc: "cornea's neo-Hookean modulus C_c (kPa) (MODEL.md §3)",
+        growth: false,
     },
     KeySpec {
         key: "cornea.H",
         access: Access::Float { get: |s| s.params.cornea.h, set: |s, v| s.params.cornea.h = v },
         rule: Rule::Positive,
         doc: "cornea's thickness H_c (mm) (MODEL.md §3)",
+        growth: false,
     },
     KeySpec {
         key: "cornea.R0",
         access: Access::Float { get: |s| s.params.cornea.r0, set: |s, v| s.params.cornea.r0 = v },
         rule: Rule::Positive,
         doc: "cornea's radius R_c (mm) (MODEL.md §3)",
+        growth: false,
     },
     KeySpec {
         key: "geometry.R0",
         access: Access::Float { get: |s| s.params.r0, set: |s, v| s.params.r0 = v },
         rule: Rule::Positive,
         doc: "radius R0 of the initial sphere (mm) (MODEL.md §1)",
+        growth: false,
     },
     KeySpec {
         key: "geometry.fraction",
         access: Access::Float { get: |s| s.params.fraction, set: |s, v| s.params.fraction = v },
         rule: Rule::OpenUnit,
         doc: "fraction f of the sphere that is sclera: L = π·f·R0 (MODEL.md §1)",
+        growth: false,
     },
     KeySpec {
         key: "solver.nodes",
         access: Access::Count { get: |s| s.solver.nodes, set: |s, v| s.solver.nodes = v },
         rule: Rule::AtLeast(5),
         doc: "number of uniform nodes on [ε, L]; breakpoint and pole nodes come on top",
+        growth: false,
     },
     KeySpec {
         key: "solver.epsilon",
         access: Access::Float { get: |s| s.solver.epsilon, set: |s, v| s.solver.epsilon = v },
         rule: Rule::Positive,
         doc: "pole truncation ε (mm), 0 < ε < L (MODEL.md §3)",
+        growth: false,
     },
     KeySpec {
         key: "solver.scheme",
@@ -317,6 +415,7 @@ pub static KEYS: &[KeySpec] = &[
         },
         rule: Rule::Any,
         doc: "finite-difference scheme: trapezoid (order 2) or Hermite–Simpson (order 4)",
+        growth: false,
     },
     KeySpec {
         key: "solver.linear",
@@ -332,23 +431,192 @@ pub static KEYS: &[KeySpec] = &[
         },
         rule: Rule::Any,
         doc: "direct linear solver of the Newton matrix: SUNDIALS band LU or KLU",
+        growth: false,
     },
     KeySpec {
         key: "solver.newton_tol",
         access: Access::Float { get: |s| s.solver.newton_tol, set: |s, v| s.solver.newton_tol = v },
         rule: Rule::Positive,
         doc: "KINSOL's tolerance on the scaled residual (max norm)",
+        growth: false,
     },
     KeySpec {
         key: "solver.max_newton",
         access: Access::Count { get: |s| s.solver.max_newton, set: |s, v| s.solver.max_newton = v },
         rule: Rule::AtLeast(1),
         doc: "the most Newton iterations per solve",
+        growth: false,
     },
     KeySpec {
         key: "solver.pole_grading",
         access: Access::Bool { get: |s| s.solver.pole_grading, set: |s, v| s.solver.pole_grading = v },
         rule: Rule::Any,
         doc: "insert geometrically graded nodes next to the pole (MODEL.md §3 trap)",
+        growth: false,
+    },
+    KeySpec {
+        key: "growth.eta0",
+        access: Access::Float { get: |s| growth(s).eta0, set: |s, v| s.growth_mut().eta0 = v },
+        rule: Rule::NonNegative,
+        doc: "η0, the largest growth rate (MODEL.md §4–5); any growth.* key turns growth on",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.Gamma",
+        access: Access::Float { get: |s| growth(s).gamma, set: |s, v| s.growth_mut().gamma = v },
+        rule: Rule::Any,
+        doc: "Γ (mm): the growth capacity falls to half at Σ = Γ; any sign, outside [0, L] too (MODEL.md §4)",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.delta",
+        access: Access::Float { get: |s| growth(s).delta, set: |s, v| s.growth_mut().delta = v },
+        rule: Rule::Positive,
+        doc: "δ (mm): the width of the fall of the growth capacity (MODEL.md §4)",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.t_end",
+        access: Access::Float { get: |s| growth(s).t_end, set: |s, v| s.growth_mut().t_end = v },
+        rule: Rule::Positive,
+        doc: "end of the growth run (dimensionless time; the paper's t ∈ [0, 1], MODEL.md §8)",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.thickness_law",
+        access: Access::Choice {
+            names: THICKNESS_LAWS,
+            get: |s| match growth(s).thickness_law {
+                ThicknessLaw::None => 0,
+                ThicknessLaw::Mass => 1,
+            },
+            set: |s, i| {
+                s.growth_mut().thickness_law = if i == 0 { ThicknessLaw::None } else { ThicknessLaw::Mass }
+            },
+        },
+        rule: Rule::Any,
+        doc: "unloaded thickness under growth: none (ζ = H, the paper's) or mass (ζ = H/(γ_s γ_φ)) (MODEL.md §5)",
+        growth: true,
+    },
+    KeySpec {
+        key: "solver.integrator",
+        access: Access::Choice {
+            names: INTEGRATORS,
+            get: |s| match s.growth_settings.integrator {
+                Integrator::Cvode => 0,
+                Integrator::Euler => 1,
+            },
+            set: |s, i| {
+                s.growth_settings.integrator = if i == 0 { Integrator::Cvode } else { Integrator::Euler }
+            },
+        },
+        rule: Rule::Any,
+        doc: "time integrator of the growth: CVODE (BDF, error-controlled) or the published explicit Euler",
+        growth: true,
+    },
+    KeySpec {
+        key: "solver.rtol",
+        access: Access::Float { get: |s| s.growth_settings.rtol, set: |s, v| s.growth_settings.rtol = v },
+        rule: Rule::OpenUnit,
+        doc: "CVODE's relative tolerance",
+        growth: true,
+    },
+    KeySpec {
+        key: "solver.atol",
+        access: Access::Float { get: |s| s.growth_settings.atol, set: |s, v| s.growth_settings.atol = v },
+        rule: Rule::Positive,
+        doc: "CVODE's absolute tolerance",
+        growth: true,
+    },
+    KeySpec {
+        key: "solver.steps",
+        access: Access::Count { get: |s| s.growth_settings.steps, set: |s, v| s.growth_settings.steps = v },
+        rule: Rule::AtLeast(1),
+        doc: "number of explicit Euler steps to growth.t_end (solver.integrator = \"euler\"; the paper used 200)",
+        growth: true,
+    },
+    KeySpec {
+        key: "output.times",
+        access: Access::Floats { get: |s| s.growth_settings.output_times.clone(), set: |s, v| s.growth_settings.output_times = v },
+        rule: Rule::PositiveIncreasing,
+        doc: "times of the growth snapshots, in (0, growth.t_end], strictly increasing; t = 0 is always written",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.blue.P1",
+        access: Access::Float { get: |s| s.blue().p1, set: |s, v| s.set_blue(|c| c.p1 = v) },
+        rule: Rule::Any,
+        doc: "blue best-focus surface: P1 (mm) of R(φ) = P1 φ⁴ + P2 φ² + P3 (MODEL.md §6); setting any stimulus.blue.* and no stimulus.red.* makes red follow blue, pushed back by 0.655",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.blue.P2",
+        access: Access::Float { get: |s| s.blue().p2, set: |s, v| s.set_blue(|c| c.p2 = v) },
+        rule: Rule::Any,
+        doc: "blue best-focus surface: P2 (mm) of R(φ) = P1 φ⁴ + P2 φ² + P3 (MODEL.md §6); setting any stimulus.blue.* and no stimulus.red.* makes red follow blue, pushed back by 0.655",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.blue.P3",
+        access: Access::Float { get: |s| s.blue().p3, set: |s, v| s.set_blue(|c| c.p3 = v) },
+        rule: Rule::Any,
+        doc: "blue best-focus surface: P3 (mm) of R(φ) = P1 φ⁴ + P2 φ² + P3 (MODEL.md §6); setting any stimulus.blue.* and no stimulus.red.* makes red follow blue, pushed back by 0.655",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.blue.z_B",
+        access: Access::Float { get: |s| s.blue().z_b, set: |s, v| s.set_blue(|c| c.z_b = v) },
+        rule: Rule::Any,
+        doc: "blue best-focus surface: z (mm) of the polar centre on the axis (MODEL.md §6); setting any stimulus.blue.* and no stimulus.red.* makes red follow blue, pushed back by 0.655",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.blue.phi_max",
+        access: Access::Float { get: |s| s.blue().phi_max, set: |s, v| s.set_blue(|c| c.phi_max = v) },
+        rule: Rule::OpenHalfTurn,
+        doc: "blue best-focus surface: largest polar angle φ_max (rad) the surface is defined for (MODEL.md §6); setting any stimulus.blue.* and no stimulus.red.* makes red follow blue, pushed back by 0.655",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.red.P1",
+        access: Access::Float { get: |s| s.red().p1, set: |s, v| s.set_red(|c| c.p1 = v) },
+        rule: Rule::Any,
+        doc: "red best-focus surface: P1 (mm) of R(φ) = P1 φ⁴ + P2 φ² + P3 (MODEL.md §6); default: the blue surface's",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.red.P2",
+        access: Access::Float { get: |s| s.red().p2, set: |s, v| s.set_red(|c| c.p2 = v) },
+        rule: Rule::Any,
+        doc: "red best-focus surface: P2 (mm) of R(φ) = P1 φ⁴ + P2 φ² + P3 (MODEL.md §6); default: the blue surface's",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.red.P3",
+        access: Access::Float { get: |s| s.red().p3, set: |s, v| s.set_red(|c| c.p3 = v) },
+        rule: Rule::Any,
+        doc: "red best-focus surface: P3 (mm) of R(φ) = P1 φ⁴ + P2 φ² + P3 (MODEL.md §6); default: the blue surface's",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.red.z_B",
+        access: Access::Float { get: |s| s.red().z_b, set: |s, v| s.set_red(|c| c.z_b = v) },
+        rule: Rule::Any,
+        doc: "red best-focus surface: z (mm) of the polar centre on the axis (MODEL.md §6); default: the blue surface's",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.red.phi_max",
+        access: Access::Float { get: |s| s.red().phi_max, set: |s, v| s.set_red(|c| c.phi_max = v) },
+        rule: Rule::OpenHalfTurn,
+        doc: "red best-focus surface: largest polar angle φ_max (rad) the surface is defined for (MODEL.md §6); default: the blue surface's",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.red.offset",
+        access: Access::Float { get: |s| s.red().offset, set: |s, v| s.set_red(|c| c.offset = v) },
+        rule: Rule::Any,
+        doc: "red surface pushed back along its polar rays by this (mm): 0.655, the Indiana eye's 400–600 nm chromatic aberration (MODEL.md §6)",
+        growth: true,
     },
 ];

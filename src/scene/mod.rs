@@ -9,13 +9,20 @@
 //!    keys together (ΔP below the cornea's limit, ε below L = π·f·R0).
 //!
 //! Every key is optional; a missing key keeps the default of `params.rs`.
+//!
+//! Growth: a scene with any `growth.*` key (in the file or from `--set`) grows, with the
+//! defaults of `growth/mod.rs` for the keys it does not give; a scene without one is a pure
+//! elastic scene ([`Scene::growth`] is `None`), whose growth keys (solver.integrator, ...,
+//! output.times, stimulus.*) are kept but not used, shown or summarised.
 
 pub mod keys;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use crate::growth::{GrowthParams, GrowthSettings};
 use crate::model::params::{Params, SolverSettings};
+use crate::model::stimulus::{Surface, RED_OFFSET};
 pub use keys::{Access, KeySpec, KeyValue, Rule, KEYS};
 
 /// Everything a scene sets: the physical parameters and the numerical settings.
@@ -31,6 +38,34 @@ pub struct Scene {
     pub origin: String,
     /// The `--set` overrides applied on top of the file, in order.
     pub overrides: Vec<String>,
+    /// The growth model: `Some` as soon as any `growth.*` key is given; `None` for a pure
+    /// elastic scene. Its surfaces are those of [`Scene::stimulus`].
+    pub growth: Option<GrowthParams>,
+    /// The numerics of the time integration and the output times (used only with growth).
+    pub growth_settings: GrowthSettings,
+    /// The best-focus surfaces as the scene gives them (kept here too while the scene does
+    /// not grow, so that `stimulus.*` keys do not turn growth on).
+    pub stimulus: Stimulus,
+}
+
+/// The visual stimulus of a scene: the blue and red best-focus surfaces (MODEL.md §6).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stimulus {
+    pub blue: Surface,
+    pub red: Surface,
+    /// True while no `stimulus.red.*` key is given: the red surface is then the blue one
+    /// pushed back by [`RED_OFFSET`], whatever the blue one is.
+    pub red_follows_blue: bool,
+}
+
+impl Default for Stimulus {
+    fn default() -> Self {
+        Stimulus {
+            blue: Surface::blue(),
+            red: Surface::default_red(),
+            red_follows_blue: true,
+        }
+    }
 }
 
 impl Default for Scene {
@@ -42,6 +77,9 @@ impl Default for Scene {
             description: None,
             origin: "(defaults)".into(),
             overrides: Vec::new(),
+            growth: None,
+            growth_settings: GrowthSettings::default(),
+            stimulus: Stimulus::default(),
         }
     }
 }
@@ -195,25 +233,93 @@ impl Scene {
         self.validate_from(&Sources::new())
     }
 
-    /// The effective value of every key, in table order.
-    pub fn entries(&self) -> Vec<(&'static str, KeyValue)> {
-        KEYS.iter().map(|k| (k.key, k.get(self))).collect()
+    /// The growth model, turning growth on (with the defaults and the scene's surfaces) if
+    /// the scene did not grow yet.
+    pub fn growth_mut(&mut self) -> &mut GrowthParams {
+        let (blue, red) = (self.stimulus.blue, self.stimulus.red);
+        self.growth.get_or_insert_with(|| GrowthParams {
+            blue,
+            red,
+            ..GrowthParams::default()
+        })
     }
 
-    /// The effective parameters (every key but the metadata) as a JSON object.
+    /// The blue best-focus surface in effect.
+    pub fn blue(&self) -> Surface {
+        self.growth.as_ref().map_or(self.stimulus.blue, |g| g.blue)
+    }
+
+    /// The red best-focus surface in effect.
+    pub fn red(&self) -> Surface {
+        self.growth.as_ref().map_or(self.stimulus.red, |g| g.red)
+    }
+
+    /// Change the blue surface; the red one follows it (pushed back by [`RED_OFFSET`]) as
+    /// long as no red key was given.
+    pub fn set_blue(&mut self, change: impl FnOnce(&mut Surface)) {
+        self.edit_stimulus(|st| {
+            change(&mut st.blue);
+            if st.red_follows_blue {
+                st.red = Surface {
+                    offset: RED_OFFSET,
+                    ..st.blue
+                };
+            }
+        });
+    }
+
+    /// Change the red surface. The first red key starts from the default red surface
+    /// (the published blue one pushed back by [`RED_OFFSET`]), not from the scene's blue.
+    pub fn set_red(&mut self, change: impl FnOnce(&mut Surface)) {
+        self.edit_stimulus(|st| {
+            if st.red_follows_blue {
+                st.red = Surface::default_red();
+                st.red_follows_blue = false;
+            }
+            change(&mut st.red);
+        });
+    }
+
+    /// Edit the surfaces in effect (those of the growth model when the scene grows) and
+    /// keep the two copies equal.
+    fn edit_stimulus(&mut self, edit: impl FnOnce(&mut Stimulus)) {
+        if let Some(g) = &self.growth {
+            self.stimulus.blue = g.blue;
+            self.stimulus.red = g.red;
+        }
+        edit(&mut self.stimulus);
+        if let Some(g) = &mut self.growth {
+            g.blue = self.stimulus.blue;
+            g.red = self.stimulus.red;
+        }
+    }
+
+    /// The keys in use: every elastic key, and the growth keys when the scene grows.
+    pub fn keys(&self) -> impl Iterator<Item = &'static KeySpec> + '_ {
+        KEYS.iter().filter(move |k| k.applies_to(self))
+    }
+
+    /// The effective value of every key in use, in table order.
+    pub fn entries(&self) -> Vec<(&'static str, KeyValue)> {
+        self.keys().map(|k| (k.key, k.get(self))).collect()
+    }
+
+    /// The effective parameters (every key in use but the metadata) as a JSON object: the
+    /// growth keys only when the scene grows.
     pub fn parameters_json(&self) -> serde_json::Value {
-        let map = KEYS
-            .iter()
+        let map = self
+            .keys()
             .filter(|k| k.is_parameter())
             .map(|k| (k.key.to_string(), k.get(self).to_json()))
             .collect::<serde_json::Map<_, _>>();
         serde_json::Value::Object(map)
     }
 
-    /// The effective scene as TOML (dotted keys), which reads back to the same scene.
+    /// The effective scene as TOML (dotted keys), which reads back to the same scene (the
+    /// growth keys only when the scene grows).
     pub fn to_toml(&self) -> String {
         let mut out = String::new();
-        for k in KEYS {
+        for k in self.keys() {
             match k.get(self) {
                 KeyValue::Text(None) => {}
                 v => out.push_str(&format!("{} = {}\n", k.key, v)),
@@ -325,6 +431,37 @@ impl Scene {
                 toml::Value::String(s) => set(self, s.clone()),
                 _ => return Err(wrong("a string")),
             },
+            Access::Floats { set, .. } => {
+                let expected = "a list of numbers (e.g. [0.1, 0.5, 1.0])";
+                let number = |v: &toml::Value| match v {
+                    toml::Value::Float(x) => Some(*x),
+                    toml::Value::Integer(i) => Some(*i as f64),
+                    _ => None,
+                };
+                match value {
+                    toml::Value::Array(items) => {
+                        let mut xs = Vec::with_capacity(items.len());
+                        for (i, item) in items.iter().enumerate() {
+                            match number(item) {
+                                Some(x) => xs.push(x),
+                                None => {
+                                    return Err(SceneError::WrongType {
+                                        origin: origin.to_string(),
+                                        key: format!("{}[{}]", spec.key, i + 1),
+                                        expected: "a number".into(),
+                                        found: describe(item),
+                                    })
+                                }
+                            }
+                        }
+                        set(self, xs)
+                    }
+                    v => match number(v) {
+                        Some(x) => set(self, vec![x]),
+                        None => return Err(wrong(expected)),
+                    },
+                }
+            }
         }
         let seq = sources.values().map(|(n, _)| *n).max().unwrap_or(0) + 1;
         sources.insert(spec.key, (seq, origin.to_string()));
@@ -351,6 +488,7 @@ impl Scene {
             let check = match spec.get(self) {
                 KeyValue::Float(x) => spec.rule.check_float(x),
                 KeyValue::Count(n) => spec.rule.check_count(n),
+                KeyValue::Floats(xs) => spec.rule.check_floats(&xs),
                 _ => Ok(()),
             };
             if let Err(problem) = check {
@@ -383,6 +521,19 @@ impl Scene {
                 ),
             ));
         }
+        if let Some(g) = &self.growth {
+            let times = &self.growth_settings.output_times;
+            if let Some(&last) = times.last().filter(|&&t| t > g.t_end) {
+                return Err(invalid(
+                    &["output.times", "growth.t_end"],
+                    show(&KeyValue::Floats(times.clone())),
+                    format!(
+                        "must lie in (0, growth.t_end]: {} is after growth.t_end = {}",
+                        last, g.t_end
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 }
@@ -392,12 +543,16 @@ fn find_key(key: &str) -> Option<&'static KeySpec> {
     keys::find(key)
 }
 
-/// The known sections (`pressure`, `material`, ...), in table order.
+/// The known sections (`pressure`, `material`, ..., and nested ones such as
+/// `stimulus.blue`), in table order.
 pub fn sections() -> Vec<&'static str> {
     let mut out: Vec<&'static str> = Vec::new();
-    for s in KEYS.iter().filter_map(|k| k.section()) {
-        if !out.contains(&s) {
-            out.push(s);
+    for k in KEYS {
+        for (i, _) in k.key.match_indices('.') {
+            let s = &k.key[..i];
+            if !out.contains(&s) {
+                out.push(s);
+            }
         }
     }
     out
@@ -494,6 +649,13 @@ fn levenshtein(a: &str, b: &str) -> usize {
 fn show(v: &KeyValue) -> String {
     match v {
         KeyValue::Float(x) if x.fract() == 0.0 && x.abs() < 1e15 => format!("{x}"),
+        KeyValue::Floats(xs) => format!(
+            "[{}]",
+            xs.iter()
+                .map(|x| show(&KeyValue::Float(*x)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
         v => v.to_string(),
     }
 }
