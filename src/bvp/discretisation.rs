@@ -94,6 +94,23 @@ impl Evaluations {
     }
 }
 
+/// The quadratures s(Σ), z(Σ) at the nodes, with their slopes (ds/dΣ, dz/dΣ) at each
+/// interval's ends from inside the interval.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Quadratures {
+    pub s: Vec<f64>,
+    pub z: Vec<f64>,
+    pub slope_left: Vec<[f64; 2]>,
+    pub slope_right: Vec<[f64; 2]>,
+}
+
+impl Quadratures {
+    /// z at the middle of interval i, from the cubic Hermite through its ends.
+    pub fn z_mid(&self, i: usize, h: f64) -> f64 {
+        0.5 * (self.z[i] + self.z[i + 1]) + h / 8.0 * (self.slope_left[i][1] - self.slope_right[i][1])
+    }
+}
+
 /// The discrete boundary value problem F(u) = 0.
 #[derive(Clone, Debug)]
 pub struct Discretisation {
@@ -128,6 +145,53 @@ impl Discretisation {
         assert!(data.above.len() == m && data.below.len() == m && data.mid.len() == m - 1);
         let jump_nodes = (1..m - 1).filter(|&i| data.jumps(i)).collect();
         Discretisation { shell, scheme, mesh, data, edge, evals: Evaluations::default(), jump_nodes }
+    }
+
+    /// Replace the unloaded shell's data (after growth); evaluations at the old data are dropped.
+    pub fn set_data(&mut self, data: MaterialData) {
+        let m = self.mesh.len();
+        assert!(data.above.len() == m && data.below.len() == m && data.mid.len() == m - 1);
+        self.jump_nodes = (1..m - 1).filter(|&i| data.jumps(i)).collect();
+        self.data = data;
+        self.evals.u.clear();
+    }
+
+    /// s and z along the shell by the scheme's own quadrature (Simpson with the
+    /// Hermite–Simpson midpoints, else trapezoidal): ds/dΣ = γ α_s from s(ε) = σ_ε α_s,
+    /// dz/dΣ = −γ α_s sin θ from the cornea's z(L) = z*.
+    pub fn quadratures(&mut self, u: &[f64]) -> Result<Quadratures, EvalFailure> {
+        self.evaluate(u)?;
+        let (m, ev, data) = (self.mesh.len(), &self.evals, &self.data);
+        let rates = |mp: &MaterialPoint, e: &PointEval, theta: f64| [mp.gamma * e.alpha_s, -mp.gamma * e.alpha_s * theta.sin()];
+        let mut q = Quadratures {
+            s: vec![0.0; m],
+            z: vec![0.0; m],
+            slope_left: Vec::with_capacity(m - 1),
+            slope_right: Vec::with_capacity(m - 1),
+        };
+        q.s[0] = data.above[0].sigma * ev.left(0).alpha_s;
+        let mut dz = vec![0.0; m - 1];
+        for i in 0..m - 1 {
+            let h = self.mesh.step(i);
+            let a = rates(&data.above[i], ev.left(i), u[NY * i + THETA]);
+            let b = rates(&data.below[i + 1], ev.right(i), u[NY * (i + 1) + THETA]);
+            let step = match self.scheme {
+                Scheme::HermiteSimpson => {
+                    let c = rates(&data.mid[i], ev.mid(i), ev.y_mid(i)[THETA]);
+                    [h / 6.0 * (a[0] + 4.0 * c[0] + b[0]), h / 6.0 * (a[1] + 4.0 * c[1] + b[1])]
+                }
+                Scheme::Trapezoid => [0.5 * h * (a[0] + b[0]), 0.5 * h * (a[1] + b[1])],
+            };
+            q.s[i + 1] = q.s[i] + step[0];
+            dz[i] = step[1];
+            q.slope_left.push(a);
+            q.slope_right.push(b);
+        }
+        q.z[m - 1] = self.edge.z;
+        for i in (0..m - 1).rev() {
+            q.z[i] = q.z[i + 1] - dz[i];
+        }
+        Ok(q)
     }
 
     /// Number of unknowns (and equations), 5 M.
@@ -288,10 +352,14 @@ impl Discretisation {
         (row_ptr, col_idx)
     }
 
-    /// The point evaluations at `u`, for output.
-    pub fn point_evaluations(&mut self, u: &[f64]) -> Result<&Evaluations, EvalFailure> {
-        self.evaluate(u)?;
-        Ok(&self.evals)
+    /// Make sure the point evaluations are those at `u` (see [`Self::evaluations`]).
+    pub fn evaluate_at(&mut self, u: &[f64]) -> Result<(), EvalFailure> {
+        self.evaluate(u)
+    }
+
+    /// The point evaluations of the last state evaluated.
+    pub fn evaluations(&self) -> &Evaluations {
+        &self.evals
     }
 
     /// Typical sizes of the five unknowns, for KINSOL's scaling: κ ~ 1/R, r ~ R, θ ~ 1,

@@ -27,6 +27,8 @@ pub enum BvpError {
     Sundials(#[from] SundialsError),
     #[error("Σ = {sigma} is outside the shell [{lo}, {hi}]")]
     OutOfRange { sigma: f64, lo: f64, hi: f64 },
+    #[error("Σ = {sigma} is not a node: a grown shell's fields are given at its nodes only")]
+    GrownShellBetweenNodes { sigma: f64 },
     #[error("Newton did not converge at ΔP = {dp} after {iterations} iterations (scaled residual {residual_norm:.3e}); worst equation: {equation} at node {node} (Σ = {sigma_ref:.6}): {reason}")]
     NewtonFailed {
         dp: f64,
@@ -84,6 +86,9 @@ pub struct Solution {
     pub rows: Vec<FieldRow>,
     pub interpolant: Interpolant,
     pub stats: SolveStats,
+    /// The unloaded shell has grown: its data are known at the mesh's points only, so
+    /// `at` answers at nodes only.
+    pub grown: bool,
 }
 
 impl Solution {
@@ -96,6 +101,9 @@ impl Solution {
     pub fn at(&self, sigma_ref: f64) -> Result<FieldRow, BvpError> {
         if let Some(k) = self.mesh.node_at(sigma_ref) {
             return Ok(self.rows[k]);
+        }
+        if self.grown {
+            return Err(BvpError::GrownShellBetweenNodes { sigma: sigma_ref });
         }
         let i = self.mesh.locate(sigma_ref).ok_or(BvpError::OutOfRange {
             sigma: sigma_ref,
@@ -242,63 +250,117 @@ fn newton(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], r0: f64, work: &mut Wo
     }
 }
 
+/// An elastic solver that lives across solves: KINSOL, its matrix and factorisation, the
+/// discretisation and the last converged unknowns. Growth re-solves it at every change of
+/// the unloaded shell, warm-started from the last solution.
+pub struct ElasticSolver {
+    kin: Kinsol<ElasticSystem>,
+    params: Params,
+    settings: SolverSettings,
+    /// The current unknowns (the last converged state after a successful solve).
+    pub u: Vec<f64>,
+    work: Work,
+}
+
+impl ElasticSolver {
+    /// The solver for the reference (ungrown) shell, starting from the inflated sphere.
+    pub fn new(params: &Params, settings: &SolverSettings) -> Result<Self, BvpError> {
+        let disc = discretise(params, settings)?;
+        let spec = linear_spec(&disc, settings.linear);
+        let n = disc.len();
+        let u = sphere_guess(&disc, params.r0);
+        let kin = Kinsol::new(ElasticSystem { disc, failure: None }, n, spec, &kinsol_options(settings))?;
+        Ok(ElasticSolver { kin, params: *params, settings: *settings, u, work: Work::default() })
+    }
+
+    pub fn discretisation(&self) -> &Discretisation {
+        &self.kin.system().disc
+    }
+
+    pub fn discretisation_mut(&mut self) -> &mut Discretisation {
+        &mut self.kin.system_mut().disc
+    }
+
+    /// Newton from the current unknowns; on success they hold the root.
+    pub fn newton(&mut self) -> Result<(), BvpError> {
+        let ElasticSolver { kin, u, work, params, .. } = self;
+        newton(kin, u, params.r0, work)
+    }
+
+    /// Newton iterations (and residual, Jacobian evaluations) since the solver was made.
+    pub fn newton_iterations(&self) -> usize {
+        self.work.iterations
+    }
+
+    /// A cold start: from the inflated sphere, with pressure continuation if Newton fails.
+    /// Returns the number of continuation stages used.
+    pub fn solve_cold(&mut self) -> Result<usize, BvpError> {
+        self.u = sphere_guess(self.discretisation(), self.params.r0);
+        let err = match self.newton() {
+            Ok(()) => return Ok(0),
+            Err(e) if self.params.dp == 0.0 => return Err(e),
+            Err(e) => e,
+        };
+        // Pressure continuation from the unloaded sphere: each stage starts from the last.
+        let mut last_err = err;
+        let mut stages = 0;
+        for count in [4usize, 16] {
+            match self.ramp_pressure(count, &mut stages) {
+                Ok(()) => return Ok(stages),
+                Err(e) => last_err = e,
+            }
+        }
+        self.set_pressure(self.params.dp)?;
+        Err(last_err)
+    }
+
+    fn set_pressure(&mut self, dp: f64) -> Result<(), BvpError> {
+        let edge = cornea::edge(&self.params.cornea, dp, self.params.length())?;
+        let d = self.discretisation_mut();
+        d.shell.dp = dp;
+        d.edge = edge;
+        d.set_data(d.data.clone()); // drop evaluations taken at the old pressure
+        Ok(())
+    }
+
+    fn ramp_pressure(&mut self, count: usize, stages: &mut usize) -> Result<(), BvpError> {
+        for k in 1..=count {
+            self.set_pressure(self.params.dp * k as f64 / count as f64)?;
+            if k == 1 {
+                self.u = sphere_guess(self.discretisation(), self.params.r0);
+            }
+            *stages += 1;
+            self.newton()?;
+        }
+        Ok(())
+    }
+
+    /// The converged state with every field, its interpolant and the work so far.
+    pub fn solution(&mut self) -> Result<Solution, BvpError> {
+        let (params, settings) = (self.params, self.settings);
+        let u = self.u.clone();
+        let mut sol = assemble_solution(&params, &settings, self.discretisation_mut(), &u)?;
+        sol.stats.newton_iterations = self.work.iterations;
+        sol.stats.residual_evaluations = self.work.residuals;
+        sol.stats.jacobian_evaluations = self.work.jacobians;
+        sol.stats.residual_norm = self.work.fnorm;
+        Ok(sol)
+    }
+}
+
 /// Solve the elastic BVP, warm-started from `warm` when given.
 pub fn solve(params: &Params, settings: &SolverSettings, warm: Option<&Solution>) -> Result<Solution, BvpError> {
     let start = Instant::now();
-    let disc = discretise(params, settings)?;
-    let spec = linear_spec(&disc, settings.linear);
-    let n = disc.len();
-    let mut u = match warm {
-        Some(w) => resample(w, &disc.mesh)?,
-        None => sphere_guess(&disc, params.r0),
+    let mut solver = ElasticSolver::new(params, settings)?;
+    let stages = match warm {
+        Some(w) => {
+            solver.u = resample(w, &solver.discretisation().mesh)?;
+            solver.newton()?;
+            0
+        }
+        None => solver.solve_cold()?,
     };
-    let mut kin = Kinsol::new(ElasticSystem { disc, failure: None }, n, spec, &kinsol_options(settings))?;
-    let mut work = Work::default();
-    let mut stages = 0;
-    let first = newton(&mut kin, &mut u, params.r0, &mut work);
-    if let Err(err) = first {
-        // Pressure continuation from the unloaded sphere: each stage starts from the last.
-        if warm.is_some() || params.dp == 0.0 {
-            return Err(err);
-        }
-        let mut last_err = err;
-        let mut ok = false;
-        for count in [4usize, 16] {
-            let mut failed = false;
-            for k in 1..=count {
-                let dp = params.dp * k as f64 / count as f64;
-                let p = Params { dp, ..*params };
-                let edge = cornea::edge(&p.cornea, dp, p.length())?;
-                {
-                    let d = &mut kin.system_mut().disc;
-                    d.shell.dp = dp;
-                    d.edge = edge;
-                    if k == 1 {
-                        u = sphere_guess(d, p.r0);
-                    }
-                }
-                stages += 1;
-                if let Err(e) = newton(&mut kin, &mut u, p.r0, &mut work) {
-                    last_err = e;
-                    failed = true;
-                    break;
-                }
-            }
-            if !failed {
-                ok = true;
-                break;
-            }
-        }
-        if !ok {
-            return Err(last_err);
-        }
-    }
-    let disc = &mut kin.system_mut().disc;
-    let mut sol = assemble_solution(params, settings, disc, &u)?;
-    sol.stats.newton_iterations = work.iterations;
-    sol.stats.residual_evaluations = work.residuals;
-    sol.stats.jacobian_evaluations = work.jacobians;
-    sol.stats.residual_norm = work.fnorm;
+    let mut sol = solver.solution()?;
     sol.stats.continuation_stages = stages;
     sol.stats.wall_seconds = start.elapsed().as_secs_f64();
     Ok(sol)
@@ -320,72 +382,38 @@ fn resample(w: &Solution, mesh: &Mesh) -> Result<Vec<f64>, BvpError> {
 
 /// Fields, quadratures (s, z) and the interpolant from the converged unknowns.
 fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Discretisation, u: &[f64]) -> Result<Solution, BvpError> {
+    let quad = disc.quadratures(u).map_err(BvpError::Evaluation)?;
     let m = disc.mesh.len();
-    let hs = disc.scheme == Scheme::HermiteSimpson;
-    let edge = disc.edge;
-    let dp = disc.shell.dp;
-    let data = disc.data.clone();
-    let mesh = disc.mesh.clone();
-    let ev = disc.point_evaluations(u).map_err(BvpError::Evaluation)?;
+    disc.evaluate_at(u).map_err(BvpError::Evaluation)?;
+    let ev = disc.evaluations();
     let y = |i: usize| Vec5::from_column_slice(&u[NY * i..NY * i + NY]);
-    // ds/dΣ = γ α_s, dz/dΣ = −γ α_s sin θ.
-    let ds = |g: f64, a: f64| g * a;
-    let dz = |g: f64, a: f64, th: f64| -g * a * th.sin();
-    let mut s = vec![0.0; m];
-    let mut z = vec![0.0; m];
-    s[0] = data.above[0].sigma * ev.left(0).alpha_s;
-    let mut dzi = vec![0.0; m - 1];
-    let mut slope_left = Vec::with_capacity(m - 1);
-    let mut slope_right = Vec::with_capacity(m - 1);
-    for i in 0..m - 1 {
-        let h = mesh.step(i);
-        let (ga, gb) = (data.above[i].gamma, data.below[i + 1].gamma);
-        let (aa, ab) = (ev.left(i).alpha_s, ev.right(i).alpha_s);
-        let (ta, tb) = (y(i)[THETA], y(i + 1)[THETA]);
-        let (s_a, s_b, z_a, z_b) = (ds(ga, aa), ds(gb, ab), dz(ga, aa, ta), dz(gb, ab, tb));
-        let (ds_i, dz_i) = if hs {
-            let gm = data.mid[i].gamma;
-            let am = ev.mid(i).alpha_s;
-            let thm = ev.y_mid(i)[THETA];
-            (
-                h / 6.0 * (s_a + 4.0 * ds(gm, am) + s_b),
-                h / 6.0 * (z_a + 4.0 * dz(gm, am, thm) + z_b),
-            )
-        } else {
-            (0.5 * h * (s_a + s_b), 0.5 * h * (z_a + z_b))
-        };
-        s[i + 1] = s[i] + ds_i;
-        dzi[i] = dz_i;
-        let fl = ev.left(i).f;
-        let fr = ev.right(i).f;
-        slope_left.push([fl[0], fl[1], fl[2], fl[3], fl[4], s_a, z_a]);
-        slope_right.push([fr[0], fr[1], fr[2], fr[3], fr[4], s_b, z_b]);
-    }
-    z[m - 1] = edge.z;
-    for i in (0..m - 1).rev() {
-        z[i] = z[i + 1] - dzi[i];
-    }
     let values: Vec<[f64; NQ]> = (0..m)
         .map(|i| {
             let v = y(i);
-            [v[0], v[1], v[2], v[3], v[4], s[i], z[i]]
+            [v[0], v[1], v[2], v[3], v[4], quad.s[i], quad.z[i]]
         })
         .collect();
+    let slope = |f: &Vec5, q: &[f64; 2]| [f[0], f[1], f[2], f[3], f[4], q[0], q[1]];
+    let slope_left = (0..m - 1).map(|i| slope(&ev.left(i).f, &quad.slope_left[i])).collect();
+    let slope_right = (0..m - 1).map(|i| slope(&ev.right(i).f, &quad.slope_right[i])).collect();
     // Node rows use the profile's own value at a breakpoint: the limit from below.
+    let data = &disc.data;
     let rows: Vec<FieldRow> = (0..m)
         .map(|i| {
             let (mp, e) = if i == 0 { (&data.above[0], ev.left(0)) } else { (&data.below[i], ev.right(i - 1)) };
             field_row(mp, &values[i], e.alpha_s, e.tensions.tphi)
         })
         .collect();
+    let dp = disc.shell.dp;
     let first_integral_max = (0..m).map(|i| equations::first_integral(dp, &y(i)).abs()).fold(0.0, f64::max);
+    let mesh = disc.mesh.clone();
     let stats = SolveStats {
         first_integral_max,
         nodes: m,
         uniform_nodes: mesh.uniform,
         breakpoint_nodes: mesh.inserted_breakpoints,
         pole_nodes: mesh.pole_nodes,
-        cornea_alpha: edge.alpha,
+        cornea_alpha: disc.edge.alpha,
         ..SolveStats::default()
     };
     Ok(Solution {
@@ -396,5 +424,12 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
         rows,
         interpolant: Interpolant { values, slope_left, slope_right },
         stats,
+        grown: !is_reference(params, data),
     })
+}
+
+/// True when `data` is the ungrown reference shell of `params` (so `Solution::at` may
+/// evaluate the material data at any Σ).
+fn is_reference(params: &Params, data: &super::discretisation::MaterialData) -> bool {
+    data.above.iter().all(|mp| *mp == reference_point(params, mp.sigma_ref, Side::Above))
 }
