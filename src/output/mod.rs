@@ -6,6 +6,10 @@
 //! holds `summary.json`) or an empty directory; anything else is refused. On any error, and
 //! when an [`OutputDir`] is dropped without [`OutputDir::commit`], the temporary directory
 //! is removed.
+//!
+//! A growth run ([`growth::GrowthWriter`]) writes in place instead, as its results come.
+
+pub mod growth;
 
 use std::fs;
 use std::io::{BufWriter, Write};
@@ -13,6 +17,8 @@ use std::path::{Path, PathBuf};
 
 use crate::bvp::{FieldRow, SolveStats, COLUMNS};
 use crate::scene::Scene;
+
+pub use growth::{progress_wanted, GrowthWriter};
 
 /// The file whose presence marks a directory as an eyeshell output.
 pub const SUMMARY_FILE: &str = "summary.json";
@@ -78,11 +84,22 @@ fn inspect(target: &Path) -> Result<Target, OutputError> {
         Ok(m) => m,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             // Missing parents are created on commit; one that exists must be a directory.
-            let blocked = target.ancestors().skip(1).any(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir());
-            return if blocked { Err(OutputError::NoParent { path: target.to_path_buf() }) } else { Ok(Target::Absent) };
+            let blocked = target
+                .ancestors()
+                .skip(1)
+                .any(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir());
+            return if blocked {
+                Err(OutputError::NoParent {
+                    path: target.to_path_buf(),
+                })
+            } else {
+                Ok(Target::Absent)
+            };
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotADirectory => {
-            return Err(OutputError::NoParent { path: target.to_path_buf() })
+            return Err(OutputError::NoParent {
+                path: target.to_path_buf(),
+            })
         }
         Err(e) => return Err(OutputError::io(target, e)),
     };
@@ -126,7 +143,11 @@ impl OutputDir {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        let mut created: Vec<PathBuf> = parent.ancestors().filter(|a| !a.as_os_str().is_empty() && !a.exists()).map(Path::to_path_buf).collect();
+        let mut created: Vec<PathBuf> = parent
+            .ancestors()
+            .filter(|a| !a.as_os_str().is_empty() && !a.exists())
+            .map(Path::to_path_buf)
+            .collect();
         created.reverse();
         fs::create_dir_all(&parent).map_err(|e| OutputError::io(&parent, e))?;
         let tmp = parent.join(format!(
@@ -247,14 +268,15 @@ fn num(x: f64) -> serde_json::Value {
         .unwrap_or(serde_json::Value::Null)
 }
 
-/// The content of summary.json for one solve of `scene`.
-pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
+/// The part of summary.json every run of `scene` shares: versions, the scene, the elastic
+/// scheme and the effective parameters.
+fn run_json(scene: &Scene) -> serde_json::Value {
     let name = |k: &str| {
         crate::scene::keys::find(k)
             .map(|s| s.get(scene).to_json())
             .unwrap_or_default()
     };
-    let mut summary = serde_json::json!({
+    serde_json::json!({
         "eyeshell_version": env!("CARGO_PKG_VERSION"),
         "sundials_version": sundials_version(),
         "scene": {
@@ -269,9 +291,16 @@ pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
         "epsilon": num(scene.solver.epsilon),
         "length": num(scene.params.length()),
         "parameters": scene.parameters_json(),
-    });
+    })
+}
+
+/// The content of summary.json for one solve of `scene`.
+pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
+    let mut summary = run_json(scene);
     // Every solver statistic, by its field name (non-finite values become null).
-    if let (Some(map), Ok(serde_json::Value::Object(stats))) = (summary.as_object_mut(), serde_json::to_value(stats)) {
+    if let (Some(map), Ok(serde_json::Value::Object(stats))) =
+        (summary.as_object_mut(), serde_json::to_value(stats))
+    {
         map.extend(stats);
     }
     summary
@@ -431,7 +460,9 @@ mod tests {
         assert!(OutputDir::create(&file).unwrap_err().is_refusal());
         // A parent that is a file is refused; missing parents are created, and removed
         // again when the run does not commit.
-        assert!(OutputDir::create(&file.join("out")).unwrap_err().is_refusal());
+        assert!(OutputDir::create(&file.join("out"))
+            .unwrap_err()
+            .is_refusal());
         let nested = OutputDir::create(&dir.path().join("no/such/out")).unwrap();
         assert!(dir.path().join("no/such").is_dir());
         drop(nested);

@@ -1,0 +1,626 @@
+//! Writing the results of a growth run as they come, so that nothing is lost if it fails:
+//!
+//! - `series.csv`: one row per output time (t = 0 first), appended and flushed at once;
+//! - `snapshots/snapshot_<k>_t<t>.csv`: every elastic and growth field on every node at
+//!   output time number k (names sort in time order), each written to a temporary file and
+//!   renamed, so a snapshot is never half-written;
+//! - `summary.json`: `"status": "running"` from the start (which marks the directory as an
+//!   eyeshell output, so a run that was killed can be replaced by the next), then `"ok"`
+//!   with every [`GrowthStats`] field, or `"failed"` with `failed_at_t`, `error` and the
+//!   statistics so far.
+//!
+//! Unlike `solve`, whose directory appears whole or not at all, a growth run writes in
+//! place: the target is checked like [`super::OutputDir`]'s (a directory that is not an
+//! eyeshell output is refused), a previous output is removed first, and the directory is
+//! created fresh.
+
+use std::fs;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use super::{format_value, inspect, num, OutputError, Target, SUMMARY_FILE};
+use crate::bvp::COLUMNS;
+use crate::growth::{GrowthError, GrowthStats, Observer, SeriesRow, Snapshot, GROWTH_COLUMNS};
+use crate::scene::Scene;
+
+/// The time series at the posterior pole, one row per output time.
+pub const SERIES_FILE: &str = "series.csv";
+/// The directory of the snapshot files.
+pub const SNAPSHOT_DIR: &str = "snapshots";
+/// The columns of series.csv.
+pub const SERIES_COLUMNS: [&str; 6] = [
+    "t",
+    "axial_length",
+    "equatorial_radius",
+    "retina_minus_blue",
+    "retina_minus_red",
+    "class",
+];
+
+/// The file name of output time number `k` (0 for t = 0) at time `t`: names sort in time
+/// order (`snapshot_00002_t0.200000.csv`).
+pub fn snapshot_name(k: usize, t: f64) -> String {
+    format!("snapshot_{k:05}_t{t:.6}.csv")
+}
+
+/// The header of a snapshot file: the elastic [`COLUMNS`], then the [`GROWTH_COLUMNS`].
+pub fn snapshot_header() -> String {
+    COLUMNS
+        .iter()
+        .chain(GROWTH_COLUMNS.iter())
+        .copied()
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// The header of series.csv.
+pub fn series_header() -> String {
+    SERIES_COLUMNS.join(",")
+}
+
+/// One line of series.csv (without the newline).
+pub fn series_line(row: &SeriesRow) -> String {
+    format!(
+        "{},{},{},{},{},{}",
+        format_value(row.t),
+        format_value(row.axial_length),
+        format_value(row.equatorial_radius),
+        format_value(row.retina_minus_blue),
+        format_value(row.retina_minus_red),
+        row.class.as_str()
+    )
+}
+
+/// Should a growth run show a progress bar? Only on a terminal: not with `--quiet`, not
+/// when stderr is redirected, not when the environment variable `CI` is set.
+pub fn progress_wanted(quiet: bool) -> bool {
+    !quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none()
+}
+
+/// A snapshot file written so far: its time and its path relative to the output directory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WrittenSnapshot {
+    pub t: f64,
+    pub file: String,
+}
+
+/// How a growth run ended, for summary.json.
+#[derive(Clone, Copy, Debug)]
+pub enum RunStatus<'a> {
+    /// Still running (or killed): written at the start.
+    Running,
+    /// Reached t_end.
+    Ok(&'a GrowthStats),
+    /// Stopped by an error.
+    Failed(&'a GrowthError),
+}
+
+/// The content of summary.json of a growth run of `scene`, given the snapshots written so
+/// far and the last series row.
+pub fn growth_summary_json(
+    scene: &Scene,
+    status: RunStatus<'_>,
+    snapshots: &[WrittenSnapshot],
+    last: Option<&SeriesRow>,
+) -> serde_json::Value {
+    let growth = scene.growth.clone().unwrap_or_default();
+    let settings = &scene.growth_settings;
+    let key = |k: &str| {
+        crate::scene::keys::find(k)
+            .map(|s| s.get(scene).to_json())
+            .unwrap_or_default()
+    };
+    let mut summary = super::run_json(scene);
+    let map = summary.as_object_mut().expect("run_json is an object");
+    let status_name = match status {
+        RunStatus::Running => "running",
+        RunStatus::Ok(_) => "ok",
+        RunStatus::Failed(_) => "failed",
+    };
+    map.insert("status".into(), status_name.into());
+    map.insert("integrator".into(), key("solver.integrator"));
+    map.insert("rtol".into(), num(settings.rtol));
+    map.insert("atol".into(), num(settings.atol));
+    map.insert("euler_steps".into(), settings.steps.into());
+    map.insert("t_end".into(), num(growth.t_end));
+    map.insert(
+        "output_times".into(),
+        serde_json::Value::Array(settings.output_times.iter().map(|&t| num(t)).collect()),
+    );
+    map.insert("thickness_law".into(), key("growth.thickness_law"));
+    map.insert("series_file".into(), SERIES_FILE.into());
+    map.insert(
+        "snapshots".into(),
+        serde_json::Value::Array(
+            snapshots
+                .iter()
+                .map(|s| serde_json::json!({ "t": num(s.t), "file": s.file }))
+                .collect(),
+        ),
+    );
+    map.insert(
+        "last_output_t".into(),
+        snapshots.last().map(|s| num(s.t)).unwrap_or_default(),
+    );
+    map.insert(
+        "final".into(),
+        last.map(|r| {
+            serde_json::json!({
+                "t": num(r.t),
+                "axial_length": num(r.axial_length),
+                "equatorial_radius": num(r.equatorial_radius),
+                "retina_minus_blue": num(r.retina_minus_blue),
+                "retina_minus_red": num(r.retina_minus_red),
+                "class": r.class.as_str(),
+            })
+        })
+        .unwrap_or_default(),
+    );
+    let stats = match status {
+        RunStatus::Running => None,
+        RunStatus::Ok(stats) => Some(stats),
+        RunStatus::Failed(e) => {
+            map.insert("failed_at_t".into(), num(e.t));
+            map.insert("error".into(), one_line(&e.to_string()).into());
+            Some(&e.stats)
+        }
+    };
+    // Every statistic of the run, by its field name (non-finite values become null).
+    if let Some(Ok(serde_json::Value::Object(stats))) = stats.map(serde_json::to_value) {
+        map.extend(stats);
+    }
+    summary
+}
+
+fn one_line(s: &str) -> String {
+    s.chars()
+        .map(|c| if c == '\n' || c == '\r' { ' ' } else { c })
+        .collect()
+}
+
+/// Write `text` to `path` through a temporary sibling and a rename: never half-written.
+fn write_atomic(path: &Path, text: &[u8]) -> Result<(), OutputError> {
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    let tmp = path.with_file_name(format!(".{name}.tmp"));
+    let write = || -> std::io::Result<()> {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(text)?;
+        f.flush()
+    };
+    if let Err(e) = write() {
+        let _ = fs::remove_file(&tmp);
+        return Err(OutputError::io(&tmp, e));
+    }
+    fs::rename(&tmp, path).map_err(|e| OutputError::io(path, e))
+}
+
+/// Writes a growth run into its output directory as the results come; an [`Observer`] of
+/// [`crate::growth::grow`].
+#[derive(Debug)]
+pub struct GrowthWriter {
+    dir: PathBuf,
+    scene: Scene,
+    series: fs::File,
+    snapshots: Vec<WrittenSnapshot>,
+    last: Option<SeriesRow>,
+    bar: ProgressBar,
+}
+
+impl GrowthWriter {
+    /// Check `target` (a directory that exists and is not an eyeshell output is refused),
+    /// remove a previous output there, and create the directory with `snapshots/`, the
+    /// header of series.csv and a summary.json that says `"status": "running"`. With
+    /// `progress`, a progress bar is drawn on stderr (see [`progress_wanted`]).
+    pub fn create(
+        target: &Path,
+        scene: &Scene,
+        progress: bool,
+    ) -> Result<GrowthWriter, OutputError> {
+        match inspect(target)? {
+            Target::Absent => {}
+            Target::EmptyDir => {}
+            Target::PreviousOutput => {
+                fs::remove_dir_all(target).map_err(|e| OutputError::io(target, e))?
+            }
+        }
+        let snapshots = target.join(SNAPSHOT_DIR);
+        fs::create_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
+        let series_path = target.join(SERIES_FILE);
+        let mut series =
+            fs::File::create(&series_path).map_err(|e| OutputError::io(&series_path, e))?;
+        writeln!(series, "{}", series_header())
+            .and_then(|_| series.flush())
+            .map_err(|e| OutputError::io(&series_path, e))?;
+        let bar = if progress {
+            let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
+            if let Ok(style) = ProgressStyle::with_template(
+                "{spinner} growing [{bar:40}] {percent:>3}% {elapsed_precise} {msg}",
+            ) {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            bar
+        } else {
+            ProgressBar::hidden()
+        };
+        let writer = GrowthWriter {
+            dir: target.to_path_buf(),
+            scene: scene.clone(),
+            series,
+            snapshots: Vec::new(),
+            last: None,
+            bar,
+        };
+        writer.write_summary(RunStatus::Running)?;
+        Ok(writer)
+    }
+
+    /// The output directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The snapshots written so far, in time order.
+    pub fn snapshots(&self) -> &[WrittenSnapshot] {
+        &self.snapshots
+    }
+
+    /// The last row written to series.csv.
+    pub fn last_row(&self) -> Option<&SeriesRow> {
+        self.last.as_ref()
+    }
+
+    /// Write the snapshot file of `s`, then append its row to series.csv and flush.
+    pub fn write_snapshot(&mut self, s: &Snapshot) -> Result<(), OutputError> {
+        let k = self.snapshots.len();
+        let name = snapshot_name(k, s.t);
+        let path = self.dir.join(SNAPSHOT_DIR).join(&name);
+        if s.fields.len() != s.growth.len() {
+            return Err(OutputError::io(
+                &path,
+                std::io::Error::other(format!(
+                    "snapshot at t = {} has {} rows of elastic fields but {} rows of growth fields",
+                    s.t,
+                    s.fields.len(),
+                    s.growth.len()
+                )),
+            ));
+        }
+        let mut text = snapshot_header();
+        text.push('\n');
+        for (f, g) in s.fields.iter().zip(&s.growth) {
+            let line = f
+                .values()
+                .iter()
+                .chain(g.values().iter())
+                .map(|&x| format_value(x))
+                .collect::<Vec<_>>()
+                .join(",");
+            text.push_str(&line);
+            text.push('\n');
+        }
+        write_atomic(&path, text.as_bytes())?;
+        let series_path = self.dir.join(SERIES_FILE);
+        writeln!(self.series, "{}", series_line(&s.series))
+            .and_then(|_| self.series.flush())
+            .map_err(|e| OutputError::io(&series_path, e))?;
+        self.snapshots.push(WrittenSnapshot {
+            t: s.t,
+            file: format!("{SNAPSHOT_DIR}/{name}"),
+        });
+        self.last = Some(s.series);
+        self.bar.set_message(format!(
+            "t = {:.4}: axial length {:.4} mm, {}",
+            s.t,
+            s.series.axial_length,
+            s.series.class.as_str()
+        ));
+        Ok(())
+    }
+
+    fn write_summary(&self, status: RunStatus<'_>) -> Result<(), OutputError> {
+        let v = growth_summary_json(&self.scene, status, &self.snapshots, self.last.as_ref());
+        let mut text = serde_json::to_string_pretty(&v)
+            .map_err(|e| OutputError::io(&self.dir.join(SUMMARY_FILE), std::io::Error::other(e)))?;
+        text.push('\n');
+        write_atomic(&self.dir.join(SUMMARY_FILE), text.as_bytes())
+    }
+
+    /// The run reached its end: write summary.json with `"status": "ok"` and `stats`.
+    pub fn finish(self, stats: &GrowthStats) -> Result<PathBuf, OutputError> {
+        self.bar.finish_and_clear();
+        self.write_summary(RunStatus::Ok(stats))?;
+        Ok(self.dir)
+    }
+
+    /// The run failed: write summary.json with `"status": "failed"`, where, why, and the
+    /// statistics so far. The snapshots and series rows written stay.
+    pub fn fail(self, error: &GrowthError) -> Result<PathBuf, OutputError> {
+        self.bar.abandon();
+        self.write_summary(RunStatus::Failed(error))?;
+        Ok(self.dir)
+    }
+}
+
+impl Observer for GrowthWriter {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), crate::Error> {
+        self.write_snapshot(s).map_err(|e| match e {
+            OutputError::Io { path, source } => crate::Error::Io { path, source },
+            other => crate::Error::Io {
+                path: self.dir.clone(),
+                source: std::io::Error::other(other.to_string()),
+            },
+        })
+    }
+
+    fn progress(&mut self, t: f64, t_end: f64) {
+        if t_end > 0.0 && t.is_finite() {
+            let at = (t / t_end).clamp(0.0, 1.0) * 1000.0;
+            self.bar.set_position(at.round() as u64);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvp::FieldRow;
+    use crate::growth::GrowthRow;
+    use crate::model::stimulus::Refraction;
+
+    fn growing_scene() -> Scene {
+        Scene::from_toml_str("growth.eta0 = 70\nsolver.nodes = 11", "g.toml", &[]).unwrap()
+    }
+
+    /// A synthetic snapshot at time t with n nodes.
+    fn snapshot(t: f64, n: usize) -> Snapshot {
+        let fields = (0..n)
+            .map(|i| FieldRow {
+                sigma_ref: i as f64,
+                sigma: i as f64 * (1.0 + t),
+                kappa: 0.1 / (1.0 + t),
+                r: 1e-300 + i as f64,
+                ..FieldRow::default()
+            })
+            .collect();
+        let growth = (0..n)
+            .map(|i| GrowthRow {
+                rho: i as f64 + t,
+                zeta: 0.65,
+                eta: 70.0 / 3.0,
+                g_v: t,
+                z_retina: -(i as f64),
+                r_retina: i as f64 * 0.5,
+            })
+            .collect();
+        let class = if t < 0.5 {
+            Refraction::Hyperopic
+        } else {
+            Refraction::Emmetropic
+        };
+        Snapshot {
+            t,
+            fields,
+            growth,
+            series: SeriesRow {
+                t,
+                axial_length: 20.0 + t / 3.0,
+                equatorial_radius: 10.0 + t,
+                retina_minus_blue: t - 0.5,
+                retina_minus_red: t - 1.155,
+                class,
+            },
+        }
+    }
+
+    fn read_series(dir: &Path) -> Vec<Vec<String>> {
+        let text = fs::read_to_string(dir.join(SERIES_FILE)).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next().unwrap(), series_header());
+        lines
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect()
+    }
+
+    fn summary(dir: &Path) -> serde_json::Value {
+        serde_json::from_str(&fs::read_to_string(dir.join(SUMMARY_FILE)).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn header_and_names() {
+        assert_eq!(
+            series_header(),
+            "t,axial_length,equatorial_radius,retina_minus_blue,retina_minus_red,class"
+        );
+        let h = snapshot_header();
+        assert!(h.starts_with("Sigma,sigma,kappa"), "{h}");
+        assert!(
+            h.ends_with("h,t_s,t_phi,rho,zeta,eta,g_v,z_retina,r_retina"),
+            "{h}"
+        );
+        // Names sort in time order.
+        let times = [0.0, 0.1, 0.2, 0.4, 1.0, 2.5, 10.0, 100.0];
+        let names: Vec<String> = times
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| snapshot_name(k, t))
+            .collect();
+        let mut sorted = names.clone();
+        sorted.sort();
+        assert_eq!(names, sorted);
+        assert_eq!(snapshot_name(2, 0.2), "snapshot_00002_t0.200000.csv");
+    }
+
+    #[test]
+    fn writes_as_it_goes_and_summarises_success() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("run");
+        let scene = growing_scene();
+        let mut w = GrowthWriter::create(&dir, &scene, false).unwrap();
+        // From the start: the directory, the series header and a running summary.
+        assert!(dir.join(SNAPSHOT_DIR).is_dir());
+        assert!(read_series(&dir).is_empty());
+        assert_eq!(summary(&dir)["status"], "running");
+        let times = [0.0, 0.1, 0.2, 0.4, 1.0];
+        for (k, &t) in times.iter().enumerate() {
+            Observer::snapshot(&mut w, &snapshot(t, 7)).unwrap();
+            w.progress(t, 1.0);
+            // Each row is on disk at once, in order, and parses back.
+            let rows = read_series(&dir);
+            assert_eq!(rows.len(), k + 1);
+            let last = &rows[k];
+            assert_eq!(last[0].parse::<f64>().unwrap(), t);
+            assert_eq!(last[1].parse::<f64>().unwrap(), 20.0 + t / 3.0);
+            assert_eq!(last[4].parse::<f64>().unwrap(), t - 1.155);
+            assert_eq!(last[5], if t < 0.5 { "hyperopic" } else { "emmetropic" });
+        }
+        let stats = GrowthStats {
+            steps: 42,
+            rhs_evaluations: 99,
+            bvp_solves: 99,
+            t_reached: 1.0,
+            wall_seconds: 0.5,
+            ..GrowthStats::default()
+        };
+        let out = w.finish(&stats).unwrap();
+        assert_eq!(out, dir);
+        // Snapshot files: one per output time, the right header and one row per node,
+        // round-trip values, and no temporary file left.
+        let mut names: Vec<String> = fs::read_dir(dir.join(SNAPSHOT_DIR))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names.len(), times.len());
+        for (k, (name, &t)) in names.iter().zip(&times).enumerate() {
+            assert_eq!(name, &snapshot_name(k, t));
+            let text = fs::read_to_string(dir.join(SNAPSHOT_DIR).join(name)).unwrap();
+            let mut lines = text.lines();
+            assert_eq!(lines.next().unwrap(), snapshot_header());
+            let rows: Vec<Vec<f64>> = lines
+                .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+                .collect();
+            assert_eq!(rows.len(), 7);
+            let expect = snapshot(t, 7);
+            for (i, row) in rows.iter().enumerate() {
+                assert_eq!(row.len(), COLUMNS.len() + GROWTH_COLUMNS.len());
+                let mut want = expect.fields[i].values().to_vec();
+                want.extend(expect.growth[i].values());
+                assert_eq!(row, &want);
+            }
+        }
+        let v = summary(&dir);
+        assert_eq!(v["status"], "ok");
+        for k in [
+            "steps",
+            "rhs_evaluations",
+            "bvp_solves",
+            "newton_iterations",
+            "jacobian_products",
+            "error_test_failures",
+            "nonlinear_iterations",
+            "nonlinear_failures",
+            "linear_iterations",
+            "t_reached",
+            "wall_seconds",
+            "integrator",
+            "rtol",
+            "atol",
+            "euler_steps",
+            "sundials_version",
+            "parameters",
+        ] {
+            assert!(v.get(k).is_some(), "missing {k}");
+        }
+        assert_eq!(v["steps"], 42);
+        assert_eq!(v["rhs_evaluations"], 99);
+        assert_eq!(v["integrator"], "cvode");
+        assert_eq!(v["rtol"], 1e-6);
+        assert_eq!(v["parameters"]["growth.eta0"], 70.0);
+        assert_eq!(v["parameters"]["solver.nodes"], 11);
+        assert_eq!(v["snapshots"].as_array().unwrap().len(), 5);
+        assert_eq!(v["last_output_t"], 1.0);
+        assert_eq!(v["final"]["class"], "emmetropic");
+        assert!(v.get("failed_at_t").is_none() && v.get("error").is_none());
+        // Nothing else in the directory.
+        let mut top: Vec<String> = fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        top.sort();
+        assert_eq!(top, vec![SERIES_FILE, SNAPSHOT_DIR, SUMMARY_FILE]);
+    }
+
+    #[test]
+    fn failure_keeps_the_results_so_far() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("run");
+        let mut w = GrowthWriter::create(&dir, &growing_scene(), false).unwrap();
+        w.write_snapshot(&snapshot(0.0, 5)).unwrap();
+        w.write_snapshot(&snapshot(0.1, 5)).unwrap();
+        let error = GrowthError {
+            t: 0.1734,
+            reason: "CVODE: the corrector did not converge\nat all".into(),
+            stats: GrowthStats {
+                steps: 17,
+                t_reached: 0.1734,
+                ..GrowthStats::default()
+            },
+        };
+        w.fail(&error).unwrap();
+        assert_eq!(read_series(&dir).len(), 2);
+        assert_eq!(fs::read_dir(dir.join(SNAPSHOT_DIR)).unwrap().count(), 2);
+        let v = summary(&dir);
+        assert_eq!(v["status"], "failed");
+        assert_eq!(v["failed_at_t"], 0.1734);
+        assert_eq!(v["steps"], 17);
+        assert_eq!(v["last_output_t"], 0.1);
+        let e = v["error"].as_str().unwrap();
+        assert!(e.starts_with("growth failed at t = 0.173400: CVODE"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+
+    #[test]
+    fn a_mismatched_snapshot_is_an_error_and_writes_nothing() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("run");
+        let mut w = GrowthWriter::create(&dir, &growing_scene(), false).unwrap();
+        let mut s = snapshot(0.0, 5);
+        s.growth.pop();
+        let e = Observer::snapshot(&mut w, &s).unwrap_err().to_string();
+        assert!(e.contains("5 rows of elastic fields but 4"), "{e}");
+        assert!(read_series(&dir).is_empty());
+        assert_eq!(fs::read_dir(dir.join(SNAPSHOT_DIR)).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn replaces_previous_outputs_and_refuses_foreign_directories() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("run");
+        // A previous run (even a killed one: its summary says running) is replaced whole.
+        let mut w = GrowthWriter::create(&dir, &growing_scene(), false).unwrap();
+        w.write_snapshot(&snapshot(0.0, 3)).unwrap();
+        w.write_snapshot(&snapshot(0.5, 3)).unwrap();
+        drop(w);
+        fs::write(dir.join("stray.txt"), "x").unwrap();
+        let w = GrowthWriter::create(&dir, &growing_scene(), false).unwrap();
+        assert!(!dir.join("stray.txt").exists());
+        assert!(read_series(&dir).is_empty());
+        assert_eq!(fs::read_dir(dir.join(SNAPSHOT_DIR)).unwrap().count(), 0);
+        drop(w);
+        // A solve output is replaced too; a foreign directory is refused and untouched.
+        let data = tmp.path().join("data");
+        fs::create_dir(&data).unwrap();
+        fs::write(data.join("precious.txt"), "keep").unwrap();
+        let e = GrowthWriter::create(&data, &growing_scene(), false).unwrap_err();
+        assert!(e.is_refusal(), "{e}");
+        assert_eq!(fs::read_dir(&data).unwrap().count(), 1);
+        // An empty directory and missing parents are fine.
+        let empty = tmp.path().join("empty");
+        fs::create_dir(&empty).unwrap();
+        GrowthWriter::create(&empty, &growing_scene(), false).unwrap();
+        GrowthWriter::create(&tmp.path().join("a/b/c"), &growing_scene(), false).unwrap();
+        assert!(tmp.path().join("a/b/c").join(SERIES_FILE).is_file());
+    }
+}
