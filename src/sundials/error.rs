@@ -1,8 +1,9 @@
 //! Typed errors for the SUNDIALS layer, and the symbolic names of the return flags.
 //!
-//! Why our own flag tables: `KINGetReturnFlagName` returns a malloc'd string per call, and
-//! the same integer means different things in KINSOL, KINLS and SUNLinSol; a static table per
-//! family gives a `&'static str` name and a fallback description when SUNDIALS sent no message.
+//! Why our own flag tables: `KINGetReturnFlagName` (and CVODE's `CVodeGetReturnFlagName`)
+//! returns a malloc'd string per call, and the same integer means different things in KINSOL,
+//! KINLS, CVODE, CVLS and SUNLinSol; a static table per family gives a `&'static str` name and
+//! a fallback description when SUNDIALS sent no message.
 
 use std::fmt;
 
@@ -56,6 +57,8 @@ pub(crate) fn one_line(s: &str) -> String {
 pub(crate) enum FlagFamily {
     Kin,
     KinLs,
+    Cv,
+    CvLs,
     SunLs,
     /// Plain 0 / nonzero (SUNContext, N_Vector utilities).
     Generic,
@@ -67,6 +70,8 @@ impl FlagFamily {
         let table: &[(i32, &str, &str)] = match self {
             FlagFamily::Kin => KIN_FLAGS,
             FlagFamily::KinLs => KINLS_FLAGS,
+            FlagFamily::Cv => CV_FLAGS,
+            FlagFamily::CvLs => CVLS_FLAGS,
             FlagFamily::SunLs => SUNLS_FLAGS,
             FlagFamily::Generic => &[(0, "SUCCESS", "success")],
         };
@@ -116,6 +121,56 @@ const KINLS_FLAGS: &[(i32, &str, &str)] = &[
     (-6, "KINLS_JACFUNC_ERR", "the Jacobian function failed"),
     (-7, "KINLS_SUNMAT_FAIL", "a SUNMatrix operation failed"),
     (-8, "KINLS_SUNLS_FAIL", "a SUNLinearSolver operation failed"),
+];
+
+const CV_FLAGS: &[(i32, &str, &str)] = &[
+    (0, "CV_SUCCESS", "success"),
+    (1, "CV_TSTOP_RETURN", "the stop time was reached"),
+    (2, "CV_ROOT_RETURN", "a root was found"),
+    (99, "CV_WARNING", "warning"),
+    (-1, "CV_TOO_MUCH_WORK", "the maximum number of internal steps was taken before reaching tout"),
+    (-2, "CV_TOO_MUCH_ACC", "the requested accuracy could not be achieved"),
+    (-3, "CV_ERR_FAILURE", "error test failures occurred too many times or with |h| = hmin"),
+    (-4, "CV_CONV_FAILURE", "nonlinear convergence failures occurred too many times or with |h| = hmin"),
+    (-5, "CV_LINIT_FAIL", "the linear solver initialisation failed"),
+    (-6, "CV_LSETUP_FAIL", "the linear solver setup failed unrecoverably"),
+    (-7, "CV_LSOLVE_FAIL", "the linear solve failed unrecoverably"),
+    (-8, "CV_RHSFUNC_FAIL", "the right-hand side function failed unrecoverably"),
+    (-9, "CV_FIRST_RHSFUNC_ERR", "the right-hand side function failed recoverably at the first call"),
+    (-10, "CV_REPTD_RHSFUNC_ERR", "the right-hand side function failed recoverably repeatedly"),
+    (-11, "CV_UNREC_RHSFUNC_ERR", "the right-hand side function failed recoverably and could not recover"),
+    (-12, "CV_RTFUNC_FAIL", "the root function failed"),
+    (-13, "CV_NLS_INIT_FAIL", "the nonlinear solver initialisation failed"),
+    (-14, "CV_NLS_SETUP_FAIL", "the nonlinear solver setup failed"),
+    (-15, "CV_CONSTR_FAIL", "the inequality constraints could not be met"),
+    (-16, "CV_NLS_FAIL", "the nonlinear solver failed unrecoverably"),
+    (-20, "CV_MEM_FAIL", "a memory allocation failed"),
+    (-21, "CV_MEM_NULL", "the CVODE memory is NULL"),
+    (-22, "CV_ILL_INPUT", "an input argument is illegal"),
+    (-23, "CV_NO_MALLOC", "CVODE memory was not allocated by CVodeInit"),
+    (-24, "CV_BAD_K", "the derivative order k is illegal"),
+    (-25, "CV_BAD_T", "t is outside the last step"),
+    (-26, "CV_BAD_DKY", "the output vector is NULL"),
+    (-27, "CV_TOO_CLOSE", "tout is too close to t0 to start the integration"),
+    (-28, "CV_VECTOROP_ERR", "a vector operation failed"),
+    (-29, "CV_PROJ_MEM_NULL", "the projection memory is NULL"),
+    (-30, "CV_PROJFUNC_FAIL", "the projection function failed unrecoverably"),
+    (-31, "CV_REPTD_PROJFUNC_ERR", "the projection function failed recoverably repeatedly"),
+    (-32, "CV_CONTEXT_ERR", "the SUNContext is invalid"),
+    (-99, "CV_UNRECOGNIZED_ERR", "unrecognised error"),
+];
+
+const CVLS_FLAGS: &[(i32, &str, &str)] = &[
+    (0, "CVLS_SUCCESS", "success"),
+    (-1, "CVLS_MEM_NULL", "the CVODE memory is NULL"),
+    (-2, "CVLS_LMEM_NULL", "the linear solver interface is not attached"),
+    (-3, "CVLS_ILL_INPUT", "an input argument is illegal or the linear solver is incompatible"),
+    (-4, "CVLS_MEM_FAIL", "a memory allocation failed"),
+    (-5, "CVLS_PMEM_NULL", "the preconditioner memory is NULL"),
+    (-6, "CVLS_JACFUNC_UNRECVR", "the Jacobian function failed unrecoverably"),
+    (-7, "CVLS_JACFUNC_RECVR", "the Jacobian function failed recoverably"),
+    (-8, "CVLS_SUNMAT_FAIL", "a SUNMatrix operation failed"),
+    (-9, "CVLS_SUNLS_FAIL", "a SUNLinearSolver operation failed"),
 ];
 
 const SUNLS_FLAGS: &[(i32, &str, &str)] = &[
@@ -182,24 +237,58 @@ mod tests {
         assert!(e.to_string().contains("SUNLS_LUFACT_FAIL (808): LU factorisation"));
     }
 
+    extern "C" {
+        fn free(p: *mut std::ffi::c_void);
+    }
+
+    /// Call one of SUNDIALS's `*Get*ReturnFlagName` functions, which return a malloc'd string.
+    fn their_name(f: unsafe extern "C" fn(std::os::raw::c_long) -> *mut std::os::raw::c_char, flag: i32) -> String {
+        // SAFETY: f returns a malloc'd NUL-terminated string (or NULL) that we free once.
+        unsafe {
+            let p = f(flag as std::os::raw::c_long);
+            if p.is_null() {
+                return String::from("NONE");
+            }
+            let s = std::ffi::CStr::from_ptr(p).to_string_lossy().into_owned();
+            free(p.cast());
+            s
+        }
+    }
+
     /// Our names agree with KINSOL's own `KINGetReturnFlagName` where it has one.
     #[test]
     fn kin_names_match_kinsol() {
-        extern "C" {
-            fn free(p: *mut std::ffi::c_void);
-        }
         for &(flag, name, _) in KIN_FLAGS {
-            // SAFETY: KINGetReturnFlagName returns a malloc'd NUL-terminated string we free.
-            let theirs = unsafe {
-                let p = sundials_sys::KINGetReturnFlagName(flag as std::os::raw::c_long);
-                let s = std::ffi::CStr::from_ptr(p).to_string_lossy().into_owned();
-                free(p.cast());
-                s
-            };
+            let theirs = their_name(sundials_sys::KINGetReturnFlagName, flag);
             if theirs == "NONE" {
                 continue; // KINSOL 6.4 names only some flags (not 99, -13 ... -17)
             }
             assert_eq!(theirs, name, "flag {flag}");
+        }
+    }
+
+    /// Our names agree with `CVodeGetReturnFlagName` and `CVodeGetLinReturnFlagName` wherever
+    /// CVODE 6.4 has a name, except for its misspelling of -14: we keep the header's
+    /// `CV_NLS_SETUP_FAIL` (cvode.h), CVODE 6.4 prints "CV_NLS_SETUPT_FAIL". CVODE 6.4 has no
+    /// name (says "NONE") for 99, -15, -28, -32 and -99.
+    #[test]
+    fn cv_names_match_cvode() {
+        let mut mismatched = Vec::new();
+        let mut unnamed = Vec::new();
+        for &(flag, name, _) in CV_FLAGS {
+            let theirs = their_name(sundials_sys::CVodeGetReturnFlagName, flag);
+            match theirs.as_str() {
+                "NONE" => unnamed.push(flag),
+                "CV_NLS_SETUPT_FAIL" if flag == -14 => {}
+                t if t == name => {}
+                _ => mismatched.push((flag, name, theirs)),
+            }
+        }
+        assert!(mismatched.is_empty(), "ours vs CVODE's: {mismatched:?}");
+        assert!(unnamed.len() <= 6, "CVODE 6.4 leaves unnamed only a few flags: {unnamed:?}");
+        assert_eq!(sundials_sys::CV_NLS_SETUP_FAIL, -14);
+        for &(flag, name, _) in CVLS_FLAGS {
+            assert_eq!(their_name(sundials_sys::CVodeGetLinReturnFlagName, flag), name, "CVLS flag {flag}");
         }
     }
 }
