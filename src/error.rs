@@ -12,6 +12,8 @@ pub enum Error {
     Bvp(#[from] crate::bvp::BvpError),
     #[error(transparent)]
     Sundials(#[from] crate::sundials::SundialsError),
+    #[error(transparent)]
+    Growth(Box<crate::growth::GrowthError>),
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
 }

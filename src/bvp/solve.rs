@@ -181,7 +181,8 @@ fn kinsol_options(s: &SolverSettings) -> KinsolOptions {
     }
 }
 
-fn linear_spec(disc: &Discretisation, kind: LinearSolverKind) -> LinearSolverSpec {
+/// The linear solver for a discretisation: band (its bandwidths) or KLU (its pattern).
+pub fn linear_spec(disc: &Discretisation, kind: LinearSolverKind) -> LinearSolverSpec {
     match kind {
         LinearSolverKind::Band => LinearSolverSpec::Band { upper: UPPER, lower: LOWER },
         LinearSolverKind::Klu => {

@@ -2,16 +2,13 @@
 //! elastic scheme uses, integrated by CVODE (BDF) or by the published explicit Euler. The
 //! elastic problem is solved at every right-hand-side evaluation, warm-started.
 
-use crate::model::stimulus::{Refraction, Surface};
+pub mod cvode;
+pub mod euler;
+pub mod points;
+pub mod system;
 
-/// How the thickness of the unloaded shell follows growth (MODEL.md §5).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ThicknessLaw {
-    /// ζ = H: no growth across the thickness (γ_n = 1), the paper's choice.
-    None,
-    /// ζ = H / (γ_s γ_φ): mass conserved.
-    Mass,
-}
+pub use crate::model::growth_law::ThicknessLaw;
+use crate::model::stimulus::{Refraction, Surface};
 
 /// The growth model of one scene (MODEL.md §4–6).
 #[derive(Clone, Debug, PartialEq)]
@@ -155,4 +152,64 @@ pub struct GrowthError {
     pub t: f64,
     pub reason: String,
     pub stats: GrowthStats,
+}
+
+/// Run the growth of `growth` on the shell of `params` from t = 0 to t_end, handing each
+/// snapshot (t = 0, each output time, t_end) to `observer` as soon as it is computed.
+pub fn grow(
+    params: &crate::model::params::Params,
+    solver: &crate::model::params::SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    observer: &mut dyn Observer,
+) -> Result<GrowthStats, GrowthError> {
+    let start = std::time::Instant::now();
+    let t_end = growth.t_end;
+    let fail = |t: f64, reason: String, stats: GrowthStats| GrowthError { t, reason, stats };
+    let mut sys = system::GrowthSystem::new(params, solver, growth).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
+    let p0 = sys.points.initial_state();
+    let mut times: Vec<f64> = settings.output_times.iter().copied().filter(|&t| t > 0.0 && t < t_end).collect();
+    times.push(t_end);
+    // Both the snapshots and the progress reports go to the one observer.
+    let observer = std::cell::RefCell::new(observer);
+    let mut emit = |sys: &mut system::GrowthSystem, t: f64, p: &[f64]| -> Result<(), crate::Error> {
+        let snap = sys.snapshot(t, p).map_err(|e| crate::Error::Growth(Box::new(fail(t, e.to_string(), GrowthStats::default()))))?;
+        observer.borrow_mut().snapshot(&snap)
+    };
+    emit(&mut sys, 0.0, &p0).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
+    let mut stats = GrowthStats::default();
+    let mut progress = |t: f64| observer.borrow_mut().progress(t, t_end);
+    let outcome = match settings.integrator {
+        Integrator::Euler => {
+            let r = euler::integrate(&mut sys, &p0, t_end, settings.steps, &times, &mut emit, &mut progress);
+            stats.steps = settings.steps;
+            stats.rhs_evaluations = sys.work.rhs_evaluations;
+            r.map(|_| ()).map_err(|(t, e)| (t, e.to_string()))
+        }
+        Integrator::Cvode => {
+            let (cv, r) = cvode::integrate(&mut sys, &p0, t_end, settings, &times, &mut emit, &mut progress);
+            stats.steps = cv.steps;
+            stats.rhs_evaluations = cv.rhs_evaluations;
+            stats.error_test_failures = cv.error_test_failures;
+            stats.nonlinear_iterations = cv.nonlinear_iterations;
+            stats.nonlinear_failures = cv.nonlinear_convergence_failures;
+            stats.linear_iterations = cv.linear_iterations;
+            stats.t_reached = cv.current_time;
+            r
+        }
+    };
+    stats.bvp_solves = sys.work.bvp_solves;
+    stats.newton_iterations = sys.elastic.newton_iterations();
+    stats.jacobian_products = sys.work.jacobian_products;
+    stats.wall_seconds = start.elapsed().as_secs_f64();
+    match outcome {
+        Ok(()) => {
+            stats.t_reached = t_end;
+            Ok(stats)
+        }
+        Err((t, reason)) => {
+            stats.t_reached = t;
+            Err(fail(t, reason, stats))
+        }
+    }
 }

@@ -3,6 +3,7 @@
 
 pub mod constitutive;
 pub mod cornea;
+pub mod growth_law;
 pub mod params;
 pub mod profiles;
 pub mod stimulus;

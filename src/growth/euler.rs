@@ -1,0 +1,49 @@
+//! The published method (MODEL.md §8): explicit Euler with a fixed number of steps,
+//! p_{n+1} = p_n + Δt G(p_n), kept for comparison and reproduction. An output time that
+//! falls inside a step is reached by a partial Euler step from the step's start.
+
+use super::system::{GrowthSystem, RhsError};
+
+/// Integrate from t = 0 to `t_end` in `steps` equal steps; `output(t, p)` is called at each
+/// of `times` (increasing, in (0, t_end]) and `progress(t)` after each step. Returns the state at t_end, or the time and error
+/// where a right-hand side failed.
+pub fn integrate(
+    sys: &mut GrowthSystem,
+    p0: &[f64],
+    t_end: f64,
+    steps: usize,
+    times: &[f64],
+    output: &mut dyn FnMut(&mut GrowthSystem, f64, &[f64]) -> Result<(), crate::Error>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Vec<f64>, (f64, EulerError)> {
+    let dt = t_end / steps as f64;
+    let mut p = p0.to_vec();
+    let mut rate = vec![0.0; p.len()];
+    let mut next = times.iter().peekable();
+    for n in 0..steps {
+        let t = n as f64 * dt;
+        let t1 = if n + 1 == steps { t_end } else { (n + 1) as f64 * dt };
+        sys.rhs(&p, &mut rate).map_err(|e| (t, EulerError::Rhs(e)))?;
+        while let Some(&&tout) = next.peek() {
+            if tout > t1 * (1.0 + 1e-12) {
+                break;
+            }
+            let q: Vec<f64> = p.iter().zip(&rate).map(|(a, r)| a + (tout - t) * r).collect();
+            output(sys, tout, &q).map_err(|e| (tout, EulerError::Output(e)))?;
+            next.next();
+        }
+        for (a, r) in p.iter_mut().zip(&rate) {
+            *a += (t1 - t) * r;
+        }
+        progress(t1);
+    }
+    Ok(p)
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum EulerError {
+    #[error(transparent)]
+    Rhs(RhsError),
+    #[error(transparent)]
+    Output(crate::Error),
+}

@@ -1,0 +1,301 @@
+//! The growth system dp/dt = G(p) (MODEL.md §5–6): p holds (ρ, γ_s) at the growth points;
+//! each evaluation solves the elastic problem for the shell p describes (warm-started from
+//! the last solution) and turns its state into growth rates through the visual stimulus.
+//!
+//! Jacobian products by the implicit-function theorem. With F(u; p) = 0 the elastic
+//! equations and g(u, p) the rates, G(p) = g(u*(p), p) and
+//!     J v = g_p v + g_u w,   w = −F_u⁻¹ F_p v.
+//! F_u is assembled and factored once per Jacobian set-up at the converged u*, so a
+//! product costs one residual evaluation (F_p v, by a directional difference at fixed u*),
+//! one back-substitution, and one evaluation of the rates at (u* + δw, p + δv), which gives
+//! g_p v + g_u w as a single directional difference. No elastic re-solve per column.
+
+use super::points::{GrowthPoints, NP};
+use super::{GrowthParams, GrowthRow, SeriesRow};
+use crate::bvp::discretisation::{EvalFailure, NY};
+use crate::bvp::equations::{R, THETA};
+use crate::bvp::solve::{linear_spec, BvpError, ElasticSolver, Solution};
+use crate::model::growth_law;
+use crate::model::params::{Params, SolverSettings};
+use crate::model::stimulus::{Refraction, Surface};
+use crate::sundials::{Context, LinearSolver, Matrix, NVector, SundialsError};
+use std::rc::Rc;
+
+/// What the rates saw at one point: the retina and the stimulus there.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointStimulus {
+    pub z_retina: f64,
+    pub r_retina: f64,
+    /// Depth of the blue surface behind the retina (MODEL.md §6).
+    pub depth_blue: f64,
+    pub angle: f64,
+    pub g_v: f64,
+    pub eta: f64,
+}
+
+/// Counters of the work behind the right-hand side.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Work {
+    pub rhs_evaluations: usize,
+    pub bvp_solves: usize,
+    pub jacobian_products: usize,
+    pub jacobian_setups: usize,
+}
+
+/// Why a right-hand side could not be evaluated.
+#[derive(Debug, thiserror::Error)]
+pub enum RhsError {
+    #[error("the elastic solve failed: {0}")]
+    Elastic(#[from] BvpError),
+    #[error("the growth rates cannot be evaluated at node {} (Σ = {:.6}): {}", .0.node, .0.sigma_ref, .0.why)]
+    Evaluation(EvalFailure),
+    #[error(transparent)]
+    Sundials(#[from] SundialsError),
+}
+
+/// F_u factored at the converged state of one p, for Jacobian products.
+struct Factored {
+    matrix: Matrix,
+    solver: LinearSolver,
+    /// F(u*; p) as evaluated (≈ 0), the base of the directional difference F_p v.
+    residual: Vec<f64>,
+    /// The p it was factored for.
+    at: Vec<f64>,
+    rhs: NVector,
+    x: NVector,
+}
+
+pub struct GrowthSystem {
+    pub elastic: ElasticSolver,
+    pub points: GrowthPoints,
+    growth: GrowthParams,
+    linear: crate::model::params::LinearSolverKind,
+    /// The last state the elastic problem was solved for, and its converged unknowns.
+    solved_at: Vec<f64>,
+    last_good_u: Vec<f64>,
+    ctx: Rc<Context>,
+    factored: Option<Factored>,
+    pub work: Work,
+}
+
+impl GrowthSystem {
+    pub fn new(params: &Params, solver: &SolverSettings, growth: &GrowthParams) -> Result<Self, RhsError> {
+        let mut elastic = ElasticSolver::new(params, solver)?;
+        elastic.solve_cold()?;
+        let disc = elastic.discretisation();
+        let points = GrowthPoints::new(params, growth, &disc.mesh, disc.scheme);
+        let last_good_u = elastic.u.clone();
+        Ok(GrowthSystem {
+            elastic,
+            points,
+            growth: growth.clone(),
+            linear: solver.linear,
+            solved_at: vec![],
+            last_good_u,
+            ctx: Context::new()?,
+            factored: None,
+            work: Work::default(),
+        })
+    }
+
+    /// The number of growth unknowns.
+    pub fn len(&self) -> usize {
+        NP * self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Solve the elastic problem for the shell in state `p` (nothing to do if it was the last).
+    pub fn solve_elastic(&mut self, p: &[f64]) -> Result<(), RhsError> {
+        if self.solved_at.as_slice() == p {
+            return Ok(());
+        }
+        self.solved_at.clear();
+        let data = self.points.material_data(p);
+        self.elastic.discretisation_mut().set_data(data);
+        self.work.bvp_solves += 1;
+        if let Err(e) = self.elastic.newton() {
+            // Start the next attempt (a shorter step) from the last converged state.
+            self.elastic.u.clone_from(&self.last_good_u);
+            return Err(e.into());
+        }
+        self.last_good_u.clone_from(&self.elastic.u);
+        self.solved_at.extend_from_slice(p);
+        Ok(())
+    }
+
+    /// G(p): solve the elastic problem, then the growth rates.
+    pub fn rhs(&mut self, p: &[f64], out: &mut [f64]) -> Result<(), RhsError> {
+        self.work.rhs_evaluations += 1;
+        self.solve_elastic(p)?;
+        let u = std::mem::take(&mut self.elastic.u);
+        let r = self.rates(&u, p, out, None);
+        self.elastic.u = u;
+        r
+    }
+
+    /// Rates g(u, p) with the discretisation's data already set to p. With `detail`, also
+    /// what the stimulus saw at each point.
+    fn rates(&mut self, u: &[f64], p: &[f64], out: &mut [f64], detail: Option<&mut Vec<PointStimulus>>) -> Result<(), RhsError> {
+        let disc = self.elastic.discretisation_mut();
+        let quad = disc.quadratures(u).map_err(RhsError::Evaluation)?;
+        let (m, pts) = (disc.mesh.len(), &self.points);
+        let ev = disc.evaluations();
+        let n_pts = pts.len();
+        // r, θ, z, α_s at every point (a point shared by two slots takes either: equal).
+        let mut local = vec![(0.0, 0.0, 0.0, 0.0); n_pts];
+        for i in 0..m {
+            let (r, th, z) = (u[NY * i + R], u[NY * i + THETA], quad.z[i]);
+            if i < m - 1 {
+                local[pts.above[i]] = (r, th, z, ev.left(i).alpha_s);
+            }
+            if i > 0 {
+                local[pts.below[i]] = (r, th, z, ev.right(i - 1).alpha_s);
+            }
+        }
+        if !pts.mid.is_empty() {
+            for i in 0..m - 1 {
+                let ym = ev.y_mid(i);
+                local[pts.mid[i]] = (ym[R], ym[THETA], quad.z_mid(i, disc.mesh.step(i)), ev.mid(i).alpha_s);
+            }
+        }
+        // The retina (inner face) and the depth of the blue surface behind it.
+        let blue = self.growth.blue;
+        let mut stim: Vec<PointStimulus> = (0..n_pts)
+            .map(|k| {
+                let (r, th, z, a) = local[k];
+                let rho = p[NP * k];
+                let h = pts.zeta(k, p) / (a * r / rho);
+                let (zr, rr) = (z - 0.5 * h * th.cos(), r - 0.5 * h * th.sin());
+                PointStimulus { z_retina: zr, r_retina: rr, depth_blue: blue.depth(zr, rr), angle: blue.angle(zr, rr), ..Default::default() }
+            })
+            .collect();
+        let depth_at_max = depth_at_angle(pts, &stim, blue.phi_max);
+        for (k, s) in stim.iter_mut().enumerate() {
+            let d = if s.angle < blue.phi_max { s.depth_blue } else { depth_at_max.unwrap_or(s.depth_blue) };
+            s.g_v = growth_law::positive(d);
+            s.eta = pts.capacity[k] * s.g_v;
+            let (r, _, _, a) = local[k];
+            out[NP * k] = growth_law::rho_rate(s.eta, r, p[NP * k]);
+            out[NP * k + 1] = growth_law::gamma_rate(s.eta, p[NP * k + 1], a);
+        }
+        if let Some(d) = detail {
+            *d = stim;
+        }
+        Ok(())
+    }
+}
+
+impl GrowthSystem {
+    /// Assemble and factor F_u at the converged elastic state for `p` (a Jacobian set-up).
+    pub fn jac_setup(&mut self, p: &[f64]) -> Result<(), RhsError> {
+        self.solve_elastic(p)?;
+        self.work.jacobian_setups += 1;
+        let n = self.elastic.discretisation().len();
+        if self.factored.is_none() {
+            let spec = linear_spec(self.elastic.discretisation(), self.linear);
+            let (matrix, solver) = LinearSolver::for_spec(&self.ctx, n, &spec)?;
+            let (rhs, x) = (NVector::new(&self.ctx, n)?, NVector::new(&self.ctx, n)?);
+            self.factored = Some(Factored { matrix, solver, residual: vec![0.0; n], at: vec![], rhs, x });
+        }
+        let f = self.factored.as_mut().expect("made above");
+        let u = self.elastic.u.clone();
+        let disc = self.elastic.discretisation_mut();
+        f.matrix.zero();
+        disc.jacobian(&u, &mut f.matrix.view_mut()).map_err(RhsError::Evaluation)?;
+        f.solver.setup(&mut f.matrix)?;
+        disc.residual(&u, &mut f.residual).map_err(RhsError::Evaluation)?;
+        f.at.clear();
+        f.at.extend_from_slice(p);
+        Ok(())
+    }
+
+    /// J v = dG/dp · v at `p`, where `fy` = G(p), through the implicit-function theorem.
+    pub fn jac_times(&mut self, p: &[f64], fy: &[f64], v: &[f64], out: &mut [f64]) -> Result<(), RhsError> {
+        if self.factored.as_ref().is_none_or(|f| f.at.as_slice() != p) {
+            self.jac_setup(p)?;
+        }
+        self.work.jacobian_products += 1;
+        let v_max = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        if v_max == 0.0 {
+            out.fill(0.0);
+            return Ok(());
+        }
+        let p_max = p.iter().fold(1.0f64, |a, x| a.max(x.abs()));
+        let delta = f64::EPSILON.sqrt() * p_max / v_max;
+        let pv: Vec<f64> = p.iter().zip(v).map(|(a, b)| a + delta * b).collect();
+        // δ F_p v at fixed u*, then δ w = −F_u⁻¹ (δ F_p v).
+        self.elastic.discretisation_mut().set_data(self.points.material_data(&pv));
+        let u = self.elastic.u.clone();
+        let f = self.factored.as_mut().expect("set up above");
+        {
+            let rhs = f.rhs.as_mut_slice();
+            let disc = self.elastic.discretisation_mut();
+            disc.residual(&u, rhs).map_err(RhsError::Evaluation)?;
+            for (r, r0) in rhs.iter_mut().zip(&f.residual) {
+                *r -= r0;
+            }
+        }
+        f.solver.solve(&mut f.matrix, &mut f.x, &f.rhs)?;
+        let u1: Vec<f64> = u.iter().zip(f.x.as_slice()).map(|(a, dx)| a - dx).collect();
+        // g(u* + δw, p + δv) − g(u*, p) = δ (g_u w + g_p v).
+        let result = self.rates(&u1, &pv, out, None);
+        self.elastic.discretisation_mut().set_data(self.points.material_data(p));
+        result?;
+        for (o, g0) in out.iter_mut().zip(fy) {
+            *o = (*o - g0) / delta;
+        }
+        Ok(())
+    }
+
+    /// Every field of the shell in state `p` at time `t`, for output.
+    pub fn snapshot(&mut self, t: f64, p: &[f64]) -> Result<super::Snapshot, RhsError> {
+        self.solve_elastic(p)?;
+        let sol: Solution = self.elastic.solution()?;
+        let u = std::mem::take(&mut self.elastic.u);
+        let mut stim = vec![];
+        let mut rates = vec![0.0; p.len()];
+        let r = self.rates(&u, p, &mut rates, Some(&mut stim));
+        self.elastic.u = u;
+        r?;
+        let pts = &self.points;
+        // Node rows take the limit from below at a breakpoint, as the elastic rows do.
+        let node_point = |i: usize| if i == 0 { pts.above[0] } else { pts.below[i] };
+        let growth: Vec<GrowthRow> = (0..sol.rows.len())
+            .map(|i| {
+                let k = node_point(i);
+                let s = &stim[k];
+                GrowthRow { rho: p[NP * k], zeta: pts.zeta(k, p), eta: s.eta, g_v: s.g_v, z_retina: s.z_retina, r_retina: s.r_retina }
+            })
+            .collect();
+        let pole = &stim[node_point(0)];
+        let red: Surface = self.growth.red;
+        let depth_red = red.depth(pole.z_retina, pole.r_retina);
+        let series = SeriesRow {
+            t,
+            axial_length: pole.z_retina,
+            equatorial_radius: growth.iter().map(|g| g.r_retina).fold(f64::MIN, f64::max),
+            retina_minus_blue: -pole.depth_blue,
+            retina_minus_red: -depth_red,
+            class: Refraction::classify(pole.depth_blue, depth_red),
+        };
+        Ok(super::Snapshot { t, fields: sol.rows, growth, series })
+    }
+}
+
+/// The blue depth where the retina crosses the polar angle φ_max, interpolated linearly in
+/// φ between the two points (in Σ order) that straddle it, so the rule beyond φ_max does not
+/// hang on where the nodes fall (MODEL.md §6). None if the retina never reaches φ_max.
+fn depth_at_angle(pts: &GrowthPoints, stim: &[PointStimulus], phi_max: f64) -> Option<f64> {
+    let mut order: Vec<usize> = (0..pts.len()).collect();
+    order.sort_by(|&a, &b| pts.sigma_ref[a].partial_cmp(&pts.sigma_ref[b]).unwrap());
+    let j = order.iter().position(|&k| stim[k].angle >= phi_max)?;
+    if j == 0 {
+        return Some(stim[order[0]].depth_blue);
+    }
+    let (a, b) = (&stim[order[j - 1]], &stim[order[j]]);
+    let t = (phi_max - a.angle) / (b.angle - a.angle);
+    Some(a.depth_blue + t * (b.depth_blue - a.depth_blue))
+}
