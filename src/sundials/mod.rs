@@ -9,10 +9,12 @@
 //! and every callback runs under `catch_unwind`.
 //!
 //! The pieces ([`NVector`], [`Matrix`], [`LinearSolver`], the callback guard) are independent
-//! of KINSOL so that CVODE/IDA drivers can later sit next to [`Kinsol`] and reuse them.
+//! of KINSOL so that the integrators ([`Cvode`] now, IDA later) sit next to [`Kinsol`] and
+//! reuse them.
 
 mod callback;
 mod context;
+mod cvode;
 mod error;
 mod kinsol;
 mod klu;
@@ -22,6 +24,7 @@ mod nvector;
 
 pub use callback::{CallbackError, CallbackResult};
 pub use context::Context;
+pub use cvode::{Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem};
 pub use error::SundialsError;
 pub use kinsol::{Kinsol, KinsolOptions, KinsolStats, NonlinearSystem, Strategy};
 pub use linsol::{LinearSolver, LinearSolverSpec};
