@@ -13,12 +13,12 @@ use sundials_sys::{
     KINGetNumJacEvals, KINGetNumNonlinSolvIters, KINInit, KINSetErrHandlerFn, KINSetFuncNormTol,
     KINSetJacFn, KINSetLinearSolver, KINSetMaxNewtonStep, KINSetMaxSetupCalls,
     KINSetNumMaxIters, KINSetPrintLevel, KINSetScaledStepTol, KINSetUserData, KINSol, N_Vector,
-    SUNMatrix, KIN_LINESEARCH, KIN_NONE,
+    SUNLinSolSolve, SUNMatrix, KIN_LINESEARCH, KIN_LSETUP_FAIL, KIN_NONE,
 };
 
 use super::callback::{error_handler, CallbackError, CallbackResult, CallbackState, ErrorLog, RawBox};
 use super::context::Context;
-use super::error::{flag_error, FlagFamily, SundialsError};
+use super::error::{check, flag_error, FlagFamily, SundialsError};
 use super::linsol::{LinearSolver, LinearSolverSpec};
 use super::matrix::{JacobianMatrix, Matrix};
 use super::nvector::{self, NVector};
@@ -87,6 +87,9 @@ struct Shared<S> {
     matrix: Matrix,
     callbacks: CallbackState,
     jacobian_calls: usize,
+    /// KINSOL began a linear setup during this solve: it zeroed the matrix (for dense and
+    /// band, the old LU factors) before calling the Jacobian trampoline.
+    setup_started: bool,
 }
 
 /// KINSOL memory, freed with KINFree.
@@ -109,6 +112,11 @@ pub struct Kinsol<S: NonlinearSystem> {
     u: NVector,
     u_scale: NVector,
     f_scale: NVector,
+    /// Right-hand side and solution of [`solve_with_last_factorization`](Self::solve_with_last_factorization).
+    lin_b: NVector,
+    lin_x: NVector,
+    /// Whether the linear solver holds the factorisation of KINSOL's last Jacobian setup.
+    factored: bool,
     options: KinsolOptions,
     last_stats: KinsolStats,
     n: usize,
@@ -122,11 +130,19 @@ impl<S: NonlinearSystem> Kinsol<S> {
         }
         let ctx = Context::new()?;
         let (matrix, linsol) = LinearSolver::for_spec(&ctx, n, &linear)?;
-        let shared = RawBox::new(Shared { system, matrix, callbacks: CallbackState::default(), jacobian_calls: 0 });
+        let shared = RawBox::new(Shared {
+            system,
+            matrix,
+            callbacks: CallbackState::default(),
+            jacobian_calls: 0,
+            setup_started: false,
+        });
         let log = RawBox::new(ErrorLog::default());
         let u = NVector::new(&ctx, n)?;
         let u_scale = NVector::new(&ctx, n)?;
         let f_scale = NVector::new(&ctx, n)?;
+        let lin_b = NVector::new(&ctx, n)?;
+        let lin_x = NVector::new(&ctx, n)?;
         // SAFETY: ctx is live.
         let raw = unsafe { KINCreate(ctx.raw()) };
         if raw.is_null() {
@@ -140,6 +156,9 @@ impl<S: NonlinearSystem> Kinsol<S> {
             u,
             u_scale,
             f_scale,
+            lin_b,
+            lin_x,
+            factored: false,
             options: options.clone(),
             last_stats: KinsolStats::default(),
             n,
@@ -251,6 +270,7 @@ impl<S: NonlinearSystem> Kinsol<S> {
             let shared = self.shared.get_mut();
             shared.callbacks.reset();
             shared.jacobian_calls = 0;
+            shared.setup_started = false;
             self.log.get_mut().clear();
         }
         let strategy = match self.options.strategy {
@@ -264,10 +284,24 @@ impl<S: NonlinearSystem> Kinsol<S> {
         let stats = self.collect_stats();
         self.last_stats = stats;
         // SAFETY: KINSol has returned; no callback is running.
-        let (fatal, recoverable, logged) = unsafe {
+        let (fatal, recoverable, logged, setup_started) = unsafe {
             let shared = self.shared.get_mut();
-            (shared.callbacks.fatal.take(), shared.callbacks.last_recoverable.take(), self.log.get().last_message())
+            (
+                shared.callbacks.fatal.take(),
+                shared.callbacks.last_recoverable.take(),
+                self.log.get().last_message(),
+                shared.setup_started,
+            )
         };
+        // Every setup KINSOL begins zeroes and refills the matrix, which for dense and band
+        // held the old LU factors. KINSOL stops with KIN_LSETUP_FAIL whenever a setup fails
+        // (the Jacobian callback or SUNLinSolSetup), so any other outcome means the last
+        // setup succeeded. With no setup in this call the previous factorisation is
+        // untouched. (Not KINGetNumJacEvals: KINSOL does not reset it when the initial guess
+        // is already a root, so it can be the previous call's count.)
+        if setup_started {
+            self.factored = flag != KIN_LSETUP_FAIL;
+        }
         let name = FlagFamily::Kin.name(flag);
         match flag {
             0 | 1 => Ok(stats),
@@ -318,6 +352,42 @@ impl<S: NonlinearSystem> Kinsol<S> {
         }
     }
 
+    /// Solve J x = b with the factorisation KINSOL made at its last Jacobian setup (the
+    /// linear solver's SUNLinSolSolve on the matrix KINSOL holds), without a new setup.
+    ///
+    /// J is the Jacobian at the iterate where KINSOL last set up: never the root itself
+    /// (KINSOL stops as soon as F is small there), but with `max_setup_calls = 1` the iterate
+    /// one Newton step before it, so after a successful [`solve`](Self::solve) this applies
+    /// the inverse Jacobian at nearly the root cheaply (e.g. implicit-function-theorem
+    /// products). The system's own record of its Jacobian calls says where exactly. A solve
+    /// that makes no setup (initial guess already a root) keeps the previous factorisation.
+    /// `Invalid` if no setup has succeeded since creation, or the last one failed.
+    pub fn solve_with_last_factorization(&mut self, x: &mut [f64], b: &[f64]) -> Result<(), SundialsError> {
+        let n = self.n;
+        if x.len() != n || b.len() != n {
+            return Err(SundialsError::Invalid(format!(
+                "solve_with_last_factorization needs x and b of length {n}, got {} and {}",
+                x.len(),
+                b.len()
+            )));
+        }
+        if !self.factored {
+            return Err(SundialsError::Invalid(
+                "no factorisation to solve with: KINSOL has made no successful Jacobian setup (call solve first)".into(),
+            ));
+        }
+        self.lin_b.as_mut_slice().copy_from_slice(b);
+        // SAFETY: the matrix is only read for its handle; no callback is running.
+        let a = unsafe { self.shared.get().matrix.raw() };
+        // SAFETY: the linear solver, the matrix KINSOL factorised with it and both vectors
+        // are live; direct solvers copy b into x and solve in place, leaving the matrix and
+        // the factors as they are.
+        let flag = unsafe { SUNLinSolSolve(self.linsol.raw(), a, self.lin_x.raw(), self.lin_b.raw(), 0.0) };
+        check("SUNLinSolSolve", flag, FlagFamily::SunLs, None)?;
+        x.copy_from_slice(self.lin_x.as_slice());
+        Ok(())
+    }
+
     /// The counters of the last solve, also after a failure.
     pub fn last_stats(&self) -> KinsolStats {
         self.last_stats
@@ -357,7 +427,8 @@ unsafe extern "C" fn jacobian_trampoline<S: NonlinearSystem>(
     // SAFETY: as in residual_trampoline.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let u = unsafe { nvector::slice(uu) };
-    let Shared { system, matrix, callbacks, jacobian_calls } = shared;
+    let Shared { system, matrix, callbacks, jacobian_calls, setup_started } = shared;
+    *setup_started = true;
     if jac != matrix.raw() {
         return callbacks.fail("KINSOL passed a Jacobian matrix this layer did not create".into());
     }
