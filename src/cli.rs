@@ -1,4 +1,4 @@
-//! The command line: `eyeshell solve | check | keys`.
+//! The command line: `eyeshell solve | grow | check | keys`.
 //!
 //! Every failure is printed as one line `eyeshell: error: <message>` on stderr. Exit codes:
 //! 0 success, 2 bad input (usage, scene, validation, `--at`, an output path that may not be
@@ -14,7 +14,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use crate::output::{self, OutputDir, OutputError};
+use crate::growth::grow;
+use crate::output::{self, GrowthWriter, OutputDir, OutputError};
 use crate::scene::{Scene, SceneError, KEYS};
 
 /// Exit code for bad input: usage, scene, validation.
@@ -38,6 +39,8 @@ struct Cli {
 enum Command {
     /// Solve the loaded elastic shell of a scene; write fields.csv, summary.json (and at.csv)
     Solve(SolveArgs),
+    /// Grow the eye of a scene with [growth]; write series.csv, snapshots/ and summary.json as it goes
+    Grow(GrowArgs),
     /// Validate a scene and print its effective parameters (as TOML)
     Check(SceneArgs),
     /// List every scene key with its type, default and meaning
@@ -77,6 +80,18 @@ struct SolveArgs {
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
     /// Print nothing on success
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Args, Debug)]
+struct GrowArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output directory, written as results come (a previous eyeshell output is replaced; on failure the results so far stay)
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Print nothing on success and draw no progress bar
     #[arg(long, short)]
     quiet: bool,
 }
@@ -142,6 +157,7 @@ where
     };
     let result = match &cli.command {
         Command::Solve(a) => cmd_solve(a),
+        Command::Grow(a) => cmd_grow(a),
         Command::Check(a) => cmd_check(a),
         Command::Keys => cmd_keys(),
     };
@@ -172,7 +188,7 @@ fn usage_error(e: clap::Error) -> i32 {
             0
         }
         ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand => {
-            report("missing subcommand: one of solve, check, keys (see 'eyeshell --help')");
+            report("missing subcommand: one of solve, grow, check, keys (see 'eyeshell --help')");
             EXIT_BAD_INPUT
         }
         _ => {
@@ -267,6 +283,89 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+fn cmd_grow(a: &GrowArgs) -> Result<(), Failure> {
+    let scene = a.scene.load()?;
+    let Some(growth) = &scene.growth else {
+        return Err(Failure::bad_input(format!(
+            "{}: scene has no [growth] section: use `eyeshell solve`, or add growth keys (e.g. --set growth.eta0=70)",
+            scene.origin
+        )));
+    };
+    let mut writer = GrowthWriter::create(&a.out, &scene, output::progress_wanted(a.quiet))?;
+    let result = grow(
+        &scene.params,
+        &scene.solver,
+        growth,
+        &scene.growth_settings,
+        &mut writer,
+    );
+    match result {
+        Ok(stats) => {
+            let last = writer.last_row().copied();
+            let dir = writer.finish(&stats)?;
+            if !a.quiet {
+                let end = match last {
+                    Some(r) => format!(
+                        "t = {:.6}: axial length {:.6} mm, {} (retina − blue {:+.4} mm, retina − red {:+.4} mm)",
+                        r.t,
+                        r.axial_length,
+                        r.class.as_str(),
+                        r.retina_minus_blue,
+                        r.retina_minus_red
+                    ),
+                    None => "no snapshot was written".to_string(),
+                };
+                out(&format!(
+                    "eyeshell: grew {} ({})\n  final           {}\n  integrator      {} (rtol {:e}, atol {:e}), {} step{}\n  work            {} rhs evaluation{}, {} BVP solve{}, {} Newton iteration{}\n  time            {:.3} s\n  output          {}\n",
+                    scene.origin,
+                    scene.display_name(),
+                    end,
+                    match scene.growth_settings.integrator {
+                        crate::growth::Integrator::Cvode => "cvode",
+                        crate::growth::Integrator::Euler => "euler",
+                    },
+                    scene.growth_settings.rtol,
+                    scene.growth_settings.atol,
+                    stats.steps,
+                    plural(stats.steps),
+                    stats.rhs_evaluations,
+                    plural(stats.rhs_evaluations),
+                    stats.bvp_solves,
+                    plural(stats.bvp_solves),
+                    stats.newton_iterations,
+                    plural(stats.newton_iterations),
+                    stats.wall_seconds,
+                    dir.display(),
+                ));
+            }
+            Ok(())
+        }
+        Err(e) => {
+            let kept = match writer.last_row() {
+                Some(r) => format!("results up to t = {:.6} are in {}", r.t, a.out.display()),
+                None => format!(
+                    "no snapshot was written; see {}",
+                    a.out.join(output::SUMMARY_FILE).display()
+                ),
+            };
+            match writer.fail(&e) {
+                Ok(_) => Err(Failure::failed(format!("{e} ({kept})"))),
+                Err(w) => Err(Failure::failed(format!(
+                    "{e} (and summary.json could not be written: {w})"
+                ))),
+            }
+        }
+    }
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
 fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
     let scene = a.load()?;
     let p = &scene.params;
@@ -287,6 +386,15 @@ fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
         text.push_str(&format!("; cornea stretch α = {alpha:.12}"));
     }
     text.push('\n');
+    match &scene.growth {
+        Some(g) => text.push_str(&format!(
+            "# growth: on (η0 = {}, Γ = {}, δ = {}, t_end = {}); run it with `eyeshell grow`\n",
+            g.eta0, g.gamma, g.delta, g.t_end
+        )),
+        None => text.push_str(
+            "# growth: off (no growth.* key: a pure elastic scene; its growth keys are not shown)\n",
+        ),
+    }
     text.push_str(&scene.to_toml());
     out(&text);
     Ok(())
