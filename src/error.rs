@@ -14,6 +14,8 @@ pub enum Error {
     Sundials(#[from] crate::sundials::SundialsError),
     #[error(transparent)]
     Growth(Box<crate::growth::GrowthError>),
+    #[error(transparent)]
+    GrowthRhs(#[from] crate::growth::system::RhsError),
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
 }

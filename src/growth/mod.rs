@@ -173,7 +173,7 @@ pub fn grow(
     // Both the snapshots and the progress reports go to the one observer.
     let observer = std::cell::RefCell::new(observer);
     let mut emit = |sys: &mut system::GrowthSystem, t: f64, p: &[f64]| -> Result<(), crate::Error> {
-        let snap = sys.snapshot(t, p).map_err(|e| crate::Error::Growth(Box::new(fail(t, e.to_string(), GrowthStats::default()))))?;
+        let snap = sys.snapshot(t, p)?;
         observer.borrow_mut().snapshot(&snap)
     };
     emit(&mut sys, 0.0, &p0).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
