@@ -15,6 +15,7 @@ fn tight() -> KinsolOptions {
         max_iterations: 100,
         max_setup_calls: 1,
         max_newton_step: None,
+        reuse_factorization: false,
     }
 }
 

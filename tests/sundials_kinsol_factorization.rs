@@ -18,6 +18,7 @@ fn exact_newton() -> KinsolOptions {
         max_iterations: 50,
         max_setup_calls: 1,
         max_newton_step: None,
+        reuse_factorization: false,
     }
 }
 

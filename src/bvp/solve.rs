@@ -178,6 +178,7 @@ fn kinsol_options(s: &SolverSettings) -> KinsolOptions {
         max_iterations: s.max_newton,
         max_setup_calls: 1,
         max_newton_step: None,
+        reuse_factorization: false,
     }
 }
 
@@ -286,6 +287,19 @@ impl ElasticSolver {
     pub fn newton(&mut self) -> Result<(), BvpError> {
         let ElasticSolver { kin, u, work, params, .. } = self;
         newton(kin, u, params.r0, work)
+    }
+
+    /// For a sequence of nearby problems (growth): start each Newton solve from the previous
+    /// factorisation and refactor only every `refactor_every` iterations (modified Newton),
+    /// or go back to exact Newton with `None`.
+    pub fn set_jacobian_reuse(&mut self, refactor_every: Option<usize>) -> Result<(), BvpError> {
+        let mut options = kinsol_options(&self.settings);
+        if let Some(k) = refactor_every {
+            options.reuse_factorization = true;
+            options.max_setup_calls = k.max(1);
+        }
+        self.kin.set_options(&options)?;
+        Ok(())
     }
 
     /// Newton iterations (and residual, Jacobian evaluations) since the solver was made.

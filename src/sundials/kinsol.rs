@@ -11,7 +11,7 @@ use std::rc::Rc;
 use sundials_sys::{
     KINCreate, KINFree, KINGetFuncNorm, KINGetNumBacktrackOps, KINGetNumFuncEvals,
     KINGetNumJacEvals, KINGetNumNonlinSolvIters, KINInit, KINSetErrHandlerFn, KINSetFuncNormTol,
-    KINSetJacFn, KINSetLinearSolver, KINSetMaxNewtonStep, KINSetMaxSetupCalls,
+    KINSetJacFn, KINSetLinearSolver, KINSetMaxNewtonStep, KINSetMaxSetupCalls, KINSetNoInitSetup,
     KINSetNumMaxIters, KINSetPrintLevel, KINSetScaledStepTol, KINSetUserData, KINSol, N_Vector,
     SUNLinSolSolve, SUNMatrix, KIN_LINESEARCH, KIN_LSETUP_FAIL, KIN_NONE,
 };
@@ -51,6 +51,9 @@ pub struct KinsolOptions {
     pub max_setup_calls: usize,
     /// Largest scaled Newton step; None = KINSOL's default (1000 ‖u₀ · u_scale‖).
     pub max_newton_step: Option<f64>,
+    /// Start each solve with the factorisation of the previous one (KINSetNoInitSetup), when
+    /// there is one: modified Newton across a sequence of nearby problems.
+    pub reuse_factorization: bool,
 }
 
 impl Default for KinsolOptions {
@@ -63,6 +66,7 @@ impl Default for KinsolOptions {
             max_iterations: 200,
             max_setup_calls: 10,
             max_newton_step: None,
+            reuse_factorization: false,
         }
     }
 }
@@ -277,6 +281,11 @@ impl<S: NonlinearSystem> Kinsol<S> {
             Strategy::Newton => KIN_NONE,
             Strategy::LineSearch => KIN_LINESEARCH,
         };
+        // Skip the first setup only when a factorisation exists to start from.
+        let no_init_setup = self.options.reuse_factorization && self.factored;
+        // SAFETY: `mem` is live KINSOL memory; the argument is a plain boolean.
+        let mem = self.mem.0;
+        self.call("KINSetNoInitSetup", FlagFamily::Kin, || unsafe { KINSetNoInitSetup(mem, no_init_setup as _) })?;
         // SAFETY: every handle is live; during the call the only references to the shared
         // state and the log are the short-lived ones the trampolines create.
         let flag = unsafe { KINSol(self.mem.0, self.u.raw(), strategy, self.u_scale.raw(), self.f_scale.raw()) };
