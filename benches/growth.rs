@@ -1,0 +1,64 @@
+//! Growth timings (issue: growth in time). Run with
+//!   cargo bench --bench growth
+//! Figures go in BENCHMARKS.md.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use eyeshell::growth::system::GrowthSystem;
+use eyeshell::growth::*;
+use eyeshell::model::params::{Params, SolverSettings};
+use std::hint::black_box;
+
+struct Discard;
+impl Observer for Discard {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::Error> {
+        black_box(s.series.axial_length);
+        Ok(())
+    }
+}
+
+fn settings() -> SolverSettings {
+    SolverSettings { nodes: 501, ..SolverSettings::default() }
+}
+
+/// The paper's const scene to t = 1, N = 501: CVODE at rtol 1e-6, and Euler's 200 steps.
+fn const_scene(c: &mut Criterion) {
+    let p = Params::default();
+    let g = GrowthParams::default();
+    let mut group = c.benchmark_group("const_scene_n501_to_t1");
+    group.sample_size(10);
+    let cv = GrowthSettings { rtol: 1e-6, atol: 1e-8, ..GrowthSettings::default() };
+    group.bench_function("cvode_rtol_1e-6", |b| b.iter(|| grow(&p, &settings(), &g, &cv, &mut Discard).unwrap()));
+    let eu = GrowthSettings { integrator: Integrator::Euler, steps: 200, ..GrowthSettings::default() };
+    group.bench_function("euler_200_steps", |b| b.iter(|| grow(&p, &settings(), &g, &eu, &mut Discard).unwrap()));
+    group.finish();
+}
+
+/// The pieces: one right side (a warm elastic re-solve), one Jacobian set-up (assemble and
+/// factor F_u), one implicit-function Jacobian product.
+fn pieces(c: &mut Criterion) {
+    let mut sys = GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();
+    let p0 = sys.points.initial_state();
+    let n = p0.len();
+    let mut fy = vec![0.0; n];
+    sys.rhs(&p0, &mut fy).unwrap();
+    let v: Vec<f64> = (0..n).map(|k| p0[k] * (0.01 * k as f64).sin()).collect();
+    let mut jv = vec![0.0; n];
+    let mut group = c.benchmark_group("growth_pieces_n501");
+    // A right side at a slightly grown state: the elastic re-solve from the last solution.
+    let mut k = 0u32;
+    group.bench_function("rhs_with_elastic_resolve", |b| {
+        b.iter(|| {
+            k += 1;
+            let s = 1.0 + 1e-6 * (k % 7) as f64;
+            let q: Vec<f64> = p0.iter().map(|x| x * s).collect();
+            sys.rhs(&q, &mut fy).unwrap();
+        })
+    });
+    sys.rhs(&p0, &mut fy).unwrap();
+    group.bench_function("jacobian_setup", |b| b.iter(|| sys.jac_setup(black_box(&p0)).unwrap()));
+    group.bench_function("jacobian_product", |b| b.iter(|| sys.jac_times(&p0, &fy, black_box(&v), &mut jv).unwrap()));
+    group.finish();
+}
+
+criterion_group!(benches, const_scene, pieces);
+criterion_main!(benches);
