@@ -10,6 +10,8 @@
 //! A growth run ([`growth::GrowthWriter`]) writes in place instead, as its results come.
 
 pub mod growth;
+pub mod mat;
+pub mod npz;
 
 use std::fs;
 use std::io::{BufWriter, Write};
@@ -19,6 +21,7 @@ use crate::bvp::{FieldRow, SolveStats, COLUMNS};
 use crate::scene::Scene;
 
 pub use growth::{progress_wanted, GrowthWriter};
+pub use mat::MatValue;
 
 /// The file whose presence marks a directory as an eyeshell output.
 pub const SUMMARY_FILE: &str = "summary.json";
