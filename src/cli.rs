@@ -1,4 +1,4 @@
-//! The command line: `eyeshell solve | grow | check | keys`.
+//! The command line: `eyeshell solve | grow | check | keys | export | compare`.
 //!
 //! Every failure is printed as one line `eyeshell: error: <message>` on stderr. Exit codes:
 //! 0 success, 2 bad input (usage, scene, validation, `--at`, an output path that may not be
@@ -45,6 +45,10 @@ enum Command {
     Check(SceneArgs),
     /// List every scene key with its type, default and meaning
     Keys,
+    /// Write a run directory as MATLAB v5 .mat (bvp4c-style) and/or NumPy .npz files
+    Export(ExportArgs),
+    /// Compare a run with reference results (.mat, .npz, or another run); exit 1 beyond tolerance
+    Compare(CompareArgs),
 }
 
 /// A scene file and the overrides applied on top of it.
@@ -92,6 +96,45 @@ struct GrowArgs {
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
     /// Print nothing on success and draw no progress bar
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Args, Debug)]
+#[command(group = clap::ArgGroup::new("format").required(true).multiple(true).args(["mat", "npz"]))]
+struct ExportArgs {
+    /// The run directory (of `eyeshell solve` or `eyeshell grow`, finished or partial)
+    #[arg(value_name = "RUN_DIR")]
+    run: PathBuf,
+    /// Write .mat: a file (elastic solve: struct `sol` with x, y) or a directory (growth: one file per output time)
+    #[arg(long, value_name = "OUT")]
+    mat: Option<PathBuf>,
+    /// Write .npz: a file (elastic solve) or a directory (growth: one file per output time)
+    #[arg(long, value_name = "OUT")]
+    npz: Option<PathBuf>,
+    /// Compress every .mat variable (miCOMPRESSED, as MATLAB saves by default)
+    #[arg(long)]
+    compress: bool,
+    /// Print nothing on success
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Args, Debug)]
+struct CompareArgs {
+    /// The run: an eyeshell run directory (or a .mat / .npz file, or a directory of them)
+    #[arg(value_name = "RUN_DIR")]
+    run: PathBuf,
+    /// Reference results: .mat or .npz files, directories of them, or eyeshell run directories
+    #[arg(value_name = "REFERENCE", required = true)]
+    references: Vec<PathBuf>,
+    /// Absolute tolerance: a point fails when |run − ref| > tol + rtol·|ref|
+    #[arg(long, value_name = "TOL", default_value_t = 1e-8)]
+    tol: f64,
+    /// Relative tolerance (see --tol)
+    #[arg(long, value_name = "RTOL", default_value_t = 1e-8)]
+    rtol: f64,
+    /// Print only the error line when a field is beyond tolerance, nothing on success
     #[arg(long, short)]
     quiet: bool,
 }
@@ -160,6 +203,8 @@ where
         Command::Grow(a) => cmd_grow(a),
         Command::Check(a) => cmd_check(a),
         Command::Keys => cmd_keys(),
+        Command::Export(a) => cmd_export(a),
+        Command::Compare(a) => cmd_compare(a),
     };
     match result {
         Ok(()) => 0,
@@ -188,7 +233,7 @@ fn usage_error(e: clap::Error) -> i32 {
             0
         }
         ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand => {
-            report("missing subcommand: one of solve, grow, check, keys (see 'eyeshell --help')");
+            report("missing subcommand: one of solve, grow, check, keys, export, compare (see 'eyeshell --help')");
             EXIT_BAD_INPUT
         }
         _ => {
@@ -448,5 +493,80 @@ pub fn keys_listing() -> String {
 
 fn cmd_keys() -> Result<(), Failure> {
     out(&keys_listing());
+    Ok(())
+}
+
+impl From<output::export::ExportError> for Failure {
+    fn from(e: output::export::ExportError) -> Self {
+        if e.bad_input {
+            Failure::bad_input(e.message)
+        } else {
+            Failure::failed(e.message)
+        }
+    }
+}
+
+fn cmd_export(a: &ExportArgs) -> Result<(), Failure> {
+    use output::export::{export, Format};
+    let mut jobs = Vec::new();
+    if let Some(p) = &a.mat {
+        jobs.push((p, Format::Mat { compress: a.compress }));
+    }
+    if let Some(p) = &a.npz {
+        jobs.push((p, Format::Npz));
+    }
+    for (path, format) in jobs {
+        let done = export(&a.run, path, format)?;
+        if !a.quiet {
+            let what = if done.growth {
+                format!("{} file{} (one per output time)", done.files.len(), plural(done.files.len()))
+            } else {
+                "1 file".to_string()
+            };
+            out(&format!(
+                "eyeshell: exported {} ({} nodes) to {}: {}\n",
+                a.run.display(),
+                done.nodes,
+                done.path.display(),
+                what
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn cmd_compare(a: &CompareArgs) -> Result<(), Failure> {
+    use output::compare::{compare_paths, format_reports};
+    for (name, v) in [("--tol", a.tol), ("--rtol", a.rtol)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(Failure::bad_input(format!("{name} = {v}: must be a finite number ≥ 0")));
+        }
+    }
+    let reports =
+        compare_paths(&a.run, &a.references, a.tol, a.rtol).map_err(|e| Failure::bad_input(e.0))?;
+    let failed: Vec<_> = reports
+        .iter()
+        .flat_map(|r| r.fields.iter().filter(|f| f.failures > 0).map(move |f| (r, f)))
+        .collect();
+    if !a.quiet {
+        out(&format_reports(&reports, a.tol, a.rtol));
+    }
+    if let Some((r, worst)) = failed
+        .iter()
+        .max_by(|x, y| x.1.worst_ratio.total_cmp(&y.1.worst_ratio))
+    {
+        return Err(Failure::failed(format!(
+            "{} field comparison{} beyond |Δ| ≤ {:e} + {:e}·|ref|; worst: {} in {} (max |Δ| {:.3e} at {} = {})",
+            failed.len(),
+            plural(failed.len()),
+            a.tol,
+            a.rtol,
+            worst.field,
+            r.reference,
+            worst.max_abs,
+            r.coordinate,
+            worst.at_abs
+        )));
+    }
     Ok(())
 }

@@ -9,6 +9,8 @@
 //!
 //! A growth run ([`growth::GrowthWriter`]) writes in place instead, as its results come.
 
+pub mod compare;
+pub mod export;
 pub mod growth;
 pub mod mat;
 pub mod npz;

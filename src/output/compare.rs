@@ -1,0 +1,536 @@
+//! `eyeshell compare RUN REFERENCE...`: the largest differences, field by field, between a
+//! run and reference results (.mat files written by eyeshell, MATLAB, Octave or SciPy;
+//! .npz files; a directory of them; another eyeshell run directory).
+//!
+//! Every input becomes one or more [`Sample`]s: named vectors over the material points,
+//! and the output time if it has one.
+//! - An eyeshell run: fields.csv (one sample, no time) or each snapshot (with its time),
+//!   every column by its name.
+//! - A .mat / .npz file: the struct `sol` if there is one (bvp4c's solution), else the top
+//!   level. `x` is the material coordinate Σ (so it is renamed `Sigma`); a 5×N `y` gives the
+//!   rows kappa, alpha_s, r, theta, Q; a 1×1 `time` is the output time; every other vector
+//!   of the same length is a field by its name.
+//!
+//! Each reference sample is paired with the run's sample at the same time (within 1e-9
+//! relative), or with the run's only sample when either has no time. The coordinate is Σ
+//! (`Sigma`) when both sides have it, else the grown arclength `sigma`. The run is
+//! interpolated linearly in that coordinate to the reference's points (exactly at a node:
+//! no rounding there); reference points outside the run's range are left out. A point
+//! fails when |run − ref| > tol + rtol·|ref| (numpy.isclose); the relative difference
+//! reported is |run − ref| / |ref|.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use super::export::{is_run_dir, read_run, Run, Y_ROWS};
+use super::mat::{self, MatValue};
+use super::npz;
+
+/// A bad input of compare (exit 2): one line naming the file.
+#[derive(Debug)]
+pub struct CompareError(pub String);
+
+impl std::fmt::Display for CompareError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CompareError {}
+
+/// Named vectors over the material points of one result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    /// Where it comes from (file, and snapshot).
+    pub label: String,
+    pub time: Option<f64>,
+    /// Every vector, all of one length.
+    pub vars: BTreeMap<String, Vec<f64>>,
+}
+
+/// The coordinates, in order of preference.
+pub const COORDINATES: [&str; 2] = ["Sigma", "sigma"];
+
+/// Read every sample of `path`: a run directory, a directory of .mat/.npz files, or a file.
+pub fn load(path: &Path) -> Result<Vec<Sample>, CompareError> {
+    if path.is_dir() {
+        if is_run_dir(path) {
+            return from_run(path);
+        }
+        let mut files: Vec<PathBuf> = std::fs::read_dir(path)
+            .map_err(|e| CompareError(format!("{}: {e}", path.display())))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| {
+                p.is_file()
+                    && p.extension().is_some_and(|x| x == "mat" || x == "npz")
+                    && !p.file_name().unwrap_or_default().to_string_lossy().starts_with('.')
+            })
+            .collect();
+        files.sort();
+        if files.is_empty() {
+            return Err(CompareError(format!(
+                "{}: neither an eyeshell run directory (no summary.json) nor a directory of .mat or .npz files",
+                path.display()
+            )));
+        }
+        let mut out = Vec::new();
+        for f in files {
+            out.push(load_file(&f)?);
+        }
+        return Ok(out);
+    }
+    if !path.exists() {
+        return Err(CompareError(format!("{}: no such file or directory", path.display())));
+    }
+    Ok(vec![load_file(path)?])
+}
+
+fn from_run(dir: &Path) -> Result<Vec<Sample>, CompareError> {
+    let run = read_run(dir).map_err(|e| CompareError(e.message))?;
+    let sample = |label: String, time: Option<f64>, t: &super::export::Table| Sample {
+        label,
+        time,
+        vars: t
+            .columns
+            .iter()
+            .filter_map(|c| t.column(c).map(|v| (c.clone(), v)))
+            .collect(),
+    };
+    Ok(match run {
+        Run::Elastic { file, table } => vec![sample(file.display().to_string(), None, &table)],
+        Run::Growth(snaps) => snaps
+            .iter()
+            .map(|s| sample(s.file.display().to_string(), Some(s.t), &s.table))
+            .collect(),
+    })
+}
+
+/// A value read from a file: its shape (MATLAB dims, or NumPy shape) and values in the
+/// file's order (column-major for .mat, row-major for .npz).
+struct Raw {
+    shape: Vec<usize>,
+    data: Vec<f64>,
+    column_major: bool,
+}
+
+fn load_file(path: &Path) -> Result<Sample, CompareError> {
+    let is_npz = path.extension().is_some_and(|x| x == "npz");
+    let vars: Vec<(String, Raw)> = if is_npz {
+        npz::read(path)
+            .map_err(|e| CompareError(e.to_string()))?
+            .into_iter()
+            .map(|(n, a)| {
+                (
+                    n,
+                    Raw {
+                        shape: a.shape,
+                        data: a.data,
+                        column_major: false,
+                    },
+                )
+            })
+            .collect()
+    } else {
+        let vars = mat::read(path).map_err(|e| CompareError(e.to_string()))?;
+        // bvp4c's solution struct, if there is one; else the top level.
+        let container = vars
+            .iter()
+            .find(|(n, v)| n == "sol" && matches!(v, MatValue::Struct(_)))
+            .map(|(_, v)| match v {
+                MatValue::Struct(f) => f.clone(),
+                MatValue::Double { .. } => unreachable!(),
+            })
+            .unwrap_or(vars);
+        container
+            .into_iter()
+            .filter_map(|(n, v)| match v {
+                MatValue::Double { dims, data } => Some((
+                    n,
+                    Raw {
+                        shape: dims,
+                        data,
+                        column_major: true,
+                    },
+                )),
+                MatValue::Struct(_) => None,
+            })
+            .collect()
+    };
+    sample_from(path, vars)
+}
+
+fn sample_from(path: &Path, raw: Vec<(String, Raw)>) -> Result<Sample, CompareError> {
+    let mut time = None;
+    let mut vectors: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut y: Option<Raw> = None;
+    for (name, r) in raw {
+        let n: usize = r.shape.iter().product();
+        let non_unit = r.shape.iter().filter(|&&d| d != 1).count();
+        if name == "time" && n == 1 {
+            time = Some(r.data[0]);
+        } else if name == "y" && r.shape.len() == 2 && r.shape[0] == Y_ROWS.len() {
+            y = Some(r);
+        } else if non_unit <= 1 && n > 1 {
+            let name = if name == "x" { "Sigma".to_string() } else { name };
+            vectors.push((name, r.data));
+        }
+    }
+    if let Some(y) = y {
+        let cols = y.shape[1];
+        for (i, name) in Y_ROWS.iter().enumerate() {
+            let row: Vec<f64> = (0..cols)
+                .map(|j| {
+                    if y.column_major {
+                        y.data[j * Y_ROWS.len() + i]
+                    } else {
+                        y.data[i * cols + j]
+                    }
+                })
+                .collect();
+            vectors.push((name.to_string(), row));
+        }
+    }
+    let coord = COORDINATES
+        .iter()
+        .find_map(|c| vectors.iter().find(|(n, _)| n == c))
+        .ok_or_else(|| {
+            CompareError(format!(
+                "{}: no material coordinate (a vector named Sigma, x or sigma)",
+                path.display()
+            ))
+        })?;
+    let len = coord.1.len();
+    let vars: BTreeMap<String, Vec<f64>> = vectors.into_iter().filter(|(_, v)| v.len() == len).collect();
+    Ok(Sample {
+        label: path.display().to_string(),
+        time,
+        vars,
+    })
+}
+
+/// The differences of one field.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FieldDiff {
+    pub field: String,
+    pub max_abs: f64,
+    /// The coordinate where `max_abs` is reached.
+    pub at_abs: f64,
+    pub max_rel: f64,
+    pub at_rel: f64,
+    /// Points where |Δ| > tol + rtol·|ref|.
+    pub failures: usize,
+    /// Worst |Δ| / (tol + rtol·|ref|) (> 1 fails).
+    pub worst_ratio: f64,
+}
+
+/// One reference sample against its run sample.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairReport {
+    pub reference: String,
+    pub run: String,
+    pub time: Option<f64>,
+    pub coordinate: String,
+    /// Reference points compared (inside the run's range).
+    pub points: usize,
+    /// Reference points left out (outside the run's range).
+    pub outside: usize,
+    pub fields: Vec<FieldDiff>,
+}
+
+impl PairReport {
+    pub fn failed(&self) -> bool {
+        self.fields.iter().any(|f| f.failures > 0)
+    }
+}
+
+/// Linear interpolation of (xs, ys) at x; xs increasing; x inside [xs[0], xs[n-1]].
+/// Exactly ys[i] at x = xs[i].
+fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    let i = xs.partition_point(|&v| v < x);
+    if i < xs.len() && xs[i] == x {
+        return ys[i];
+    }
+    let i = i.clamp(1, xs.len() - 1);
+    let (x0, x1, y0, y1) = (xs[i - 1], xs[i], ys[i - 1], ys[i]);
+    if x1 == x0 {
+        return y0;
+    }
+    let w = (x - x0) / (x1 - x0);
+    y0 + w * (y1 - y0)
+}
+
+/// Compare `reference` against `run` (paired already).
+pub fn compare_pair(run: &Sample, reference: &Sample, tol: f64, rtol: f64) -> Result<PairReport, CompareError> {
+    let coordinate = COORDINATES
+        .iter()
+        .find(|c| run.vars.contains_key(**c) && reference.vars.contains_key(**c))
+        .ok_or_else(|| {
+            CompareError(format!(
+                "{} and {}: no common material coordinate (Sigma / x, or sigma)",
+                reference.label, run.label
+            ))
+        })?
+        .to_string();
+    let fields: Vec<&String> = reference
+        .vars
+        .keys()
+        .filter(|k| **k != coordinate && run.vars.contains_key(*k))
+        .collect();
+    if fields.is_empty() {
+        return Err(CompareError(format!(
+            "{} and {}: no variable in common besides {coordinate}",
+            reference.label, run.label
+        )));
+    }
+    // The run's points in increasing coordinate.
+    let xr = &run.vars[&coordinate];
+    let mut order: Vec<usize> = (0..xr.len()).collect();
+    order.sort_by(|&a, &b| xr[a].total_cmp(&xr[b]));
+    let xs: Vec<f64> = order.iter().map(|&i| xr[i]).collect();
+    let (lo, hi) = match (xs.first(), xs.last()) {
+        (Some(&a), Some(&b)) if a.is_finite() && b.is_finite() => (a, b),
+        _ => {
+            return Err(CompareError(format!(
+                "{}: the coordinate {coordinate} is empty or not finite",
+                run.label
+            )))
+        }
+    };
+    let slack = 1e-12 * (hi - lo).abs().max(1.0);
+    let xref = &reference.vars[&coordinate];
+    let inside: Vec<usize> = (0..xref.len())
+        .filter(|&j| xref[j] >= lo - slack && xref[j] <= hi + slack)
+        .collect();
+    if inside.is_empty() {
+        return Err(CompareError(format!(
+            "{}: no point of {} lies inside the run's range [{lo}, {hi}] ({})",
+            reference.label, coordinate, run.label
+        )));
+    }
+    let mut diffs = Vec::new();
+    for f in fields {
+        let ys: Vec<f64> = order.iter().map(|&i| run.vars[f][i]).collect();
+        let refv = &reference.vars[f];
+        let mut d = FieldDiff {
+            field: f.clone(),
+            max_abs: 0.0,
+            at_abs: xref[inside[0]],
+            max_rel: 0.0,
+            at_rel: xref[inside[0]],
+            failures: 0,
+            worst_ratio: 0.0,
+        };
+        for &j in &inside {
+            let x = xref[j].clamp(lo, hi);
+            let a = interpolate(&xs, &ys, x);
+            let b = refv[j];
+            let abs = if a.is_nan() && b.is_nan() {
+                0.0
+            } else if a == b {
+                0.0
+            } else {
+                let v = (a - b).abs();
+                if v.is_nan() {
+                    f64::INFINITY
+                } else {
+                    v
+                }
+            };
+            let rel = if abs == 0.0 {
+                0.0
+            } else if b == 0.0 {
+                f64::INFINITY
+            } else {
+                abs / b.abs()
+            };
+            let allowed = tol + rtol * if b.is_finite() { b.abs() } else { 0.0 };
+            let ratio = if abs == 0.0 {
+                0.0
+            } else if allowed > 0.0 {
+                abs / allowed
+            } else {
+                f64::INFINITY
+            };
+            if abs > d.max_abs {
+                d.max_abs = abs;
+                d.at_abs = xref[j];
+            }
+            if rel > d.max_rel {
+                d.max_rel = rel;
+                d.at_rel = xref[j];
+            }
+            if ratio > 1.0 {
+                d.failures += 1;
+            }
+            d.worst_ratio = d.worst_ratio.max(ratio);
+        }
+        diffs.push(d);
+    }
+    Ok(PairReport {
+        reference: reference.label.clone(),
+        run: run.label.clone(),
+        time: reference.time.or(run.time),
+        coordinate,
+        points: inside.len(),
+        outside: xref.len() - inside.len(),
+        fields: diffs,
+    })
+}
+
+/// Pair each reference sample with a run sample (see the module doc).
+pub fn pair<'a>(run: &'a [Sample], reference: &Sample) -> Result<&'a Sample, CompareError> {
+    if run.len() == 1 && (reference.time.is_none() || run[0].time.is_none()) {
+        return Ok(&run[0]);
+    }
+    let Some(t) = reference.time else {
+        return Err(CompareError(format!(
+            "{}: has no `time`, and the run has {} output times: name one snapshot or give a file with `time`",
+            reference.label,
+            run.len()
+        )));
+    };
+    run.iter()
+        .filter(|s| s.time.is_some_and(|u| (u - t).abs() <= 1e-9 * t.abs().max(1.0)))
+        .min_by(|a, b| {
+            let da = (a.time.unwrap_or(f64::NAN) - t).abs();
+            let db = (b.time.unwrap_or(f64::NAN) - t).abs();
+            da.total_cmp(&db)
+        })
+        .ok_or_else(|| {
+            let times: Vec<String> = run
+                .iter()
+                .filter_map(|s| s.time.map(|u| format!("{u}")))
+                .collect();
+            CompareError(format!(
+                "{}: time = {t}, but the run has no output at that time (it has t = {})",
+                reference.label,
+                times.join(", ")
+            ))
+        })
+}
+
+/// Load `run_path` and every reference, pair them, compare.
+pub fn compare_paths(
+    run_path: &Path,
+    references: &[PathBuf],
+    tol: f64,
+    rtol: f64,
+) -> Result<Vec<PairReport>, CompareError> {
+    let run = load(run_path)?;
+    let mut reports = Vec::new();
+    for r in references {
+        for sample in load(r)? {
+            let partner = pair(&run, &sample)?;
+            reports.push(compare_pair(partner, &sample, tol, rtol)?);
+        }
+    }
+    Ok(reports)
+}
+
+/// The reports as text: per pair a heading and a table
+/// `field  max|Δ|  at  max rel  at  status`.
+pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
+    let mut s = String::new();
+    for r in reports {
+        let time = r.time.map(|t| format!(" at t = {t}")).unwrap_or_default();
+        s.push_str(&format!(
+            "{} vs {}{}: {} points in {}{}\n",
+            r.reference,
+            r.run,
+            time,
+            r.points,
+            r.coordinate,
+            if r.outside > 0 {
+                format!(" ({} outside the run's range left out)", r.outside)
+            } else {
+                String::new()
+            }
+        ));
+        s.push_str(&format!(
+            "  {:<10} {:>12} {:>12} {:>12} {:>12}  {}\n",
+            "field",
+            "max |Δ|",
+            format!("at {}", r.coordinate),
+            "max rel",
+            format!("at {}", r.coordinate),
+            "status"
+        ));
+        for f in &r.fields {
+            s.push_str(&format!(
+                "  {:<10} {:>12.3e} {:>12.6} {:>12.3e} {:>12.6}  {}\n",
+                f.field,
+                f.max_abs,
+                f.at_abs,
+                f.max_rel,
+                f.at_rel,
+                if f.failures > 0 {
+                    format!("FAIL ({} point{})", f.failures, if f.failures == 1 { "" } else { "s" })
+                } else {
+                    "ok".to_string()
+                }
+            ));
+        }
+    }
+    let failed: usize = reports.iter().map(|r| r.fields.iter().filter(|f| f.failures > 0).count()).sum();
+    let total: usize = reports.iter().map(|r| r.fields.len()).sum();
+    s.push_str(&format!(
+        "{} of {} field comparisons within |Δ| ≤ {tol:e} + {rtol:e}·|ref|\n",
+        total - failed,
+        total
+    ));
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(xs: &[f64], f: impl Fn(f64) -> f64, time: Option<f64>) -> Sample {
+        let mut vars = BTreeMap::new();
+        vars.insert("Sigma".to_string(), xs.to_vec());
+        vars.insert("kappa".to_string(), xs.iter().map(|&x| f(x)).collect());
+        Sample {
+            label: "s".into(),
+            time,
+            vars,
+        }
+    }
+
+    #[test]
+    fn interpolation_is_exact_at_nodes_and_linear_between() {
+        let xs = [0.0, 0.1, 0.3, 1.0];
+        let ys = [1.0, 0.7, 0.123456789, -2.0];
+        for i in 0..4 {
+            assert_eq!(interpolate(&xs, &ys, xs[i]), ys[i]);
+        }
+        assert!((interpolate(&xs, &ys, 0.65) - (0.123456789 + 0.5 * (-2.0 - 0.123456789))).abs() < 1e-15);
+    }
+
+    #[test]
+    fn equal_samples_pass_and_a_perturbation_fails() {
+        let xs: Vec<f64> = (0..11).map(|i| i as f64 / 10.0).collect();
+        let run = sample(&xs, |x| x * x, None);
+        let r = compare_pair(&run, &run.clone(), 1e-8, 1e-8).unwrap();
+        assert!(!r.failed());
+        assert_eq!(r.fields[0].max_abs, 0.0);
+        let mut bad = run.clone();
+        bad.vars.get_mut("kappa").unwrap()[4] += 1e-6;
+        let r = compare_pair(&run, &bad, 1e-8, 1e-8).unwrap();
+        assert!(r.failed());
+        assert!((r.fields[0].max_abs - 1e-6).abs() < 1e-12);
+        assert_eq!(r.fields[0].at_abs, 0.4);
+        // Linear data on a finer reference grid: interpolation is exact up to round-off.
+        let fine: Vec<f64> = (0..101).map(|i| i as f64 / 100.0).collect();
+        let r = compare_pair(&sample(&xs, |x| 2.0 * x + 1.0, None), &sample(&fine, |x| 2.0 * x + 1.0, None), 1e-12, 0.0).unwrap();
+        assert!(!r.failed(), "{r:?}");
+    }
+
+    #[test]
+    fn pairing_by_time() {
+        let xs = [0.0, 1.0];
+        let run = vec![sample(&xs, |x| x, Some(0.0)), sample(&xs, |x| x, Some(0.1))];
+        assert_eq!(pair(&run, &sample(&xs, |x| x, Some(0.1))).unwrap().time, Some(0.1));
+        assert!(pair(&run, &sample(&xs, |x| x, Some(0.2))).is_err());
+        assert!(pair(&run, &sample(&xs, |x| x, None)).is_err());
+    }
+}
