@@ -13,6 +13,7 @@ pub mod growth;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod study;
 pub mod scene;
 pub mod sundials;
 

@@ -3,7 +3,7 @@
 //! sphere, warm starts from a previous solution, and pressure continuation when a cold
 //! start does not converge.
 
-use super::discretisation::{Discretisation, EvalFailure, LOWER, NY, UPPER};
+use super::discretisation::{Discretisation, EvalFailure, MaterialData, LOWER, NY, UPPER};
 use super::equations::{self, Shell, Vec5, KAPPA, QS, R, THETA, TS};
 use super::interpolant::{Interpolant, NQ};
 use super::material::{reference_data, reference_point};
@@ -27,8 +27,6 @@ pub enum BvpError {
     Sundials(#[from] SundialsError),
     #[error("Σ = {sigma} is outside the shell [{lo}, {hi}]")]
     OutOfRange { sigma: f64, lo: f64, hi: f64 },
-    #[error("Σ = {sigma} is not a node: a grown shell's fields are given at its nodes only")]
-    GrownShellBetweenNodes { sigma: f64 },
     #[error("Newton did not converge at ΔP = {dp} after {iterations} iterations (scaled residual {residual_norm:.3e}); worst equation: {equation} at node {node} (Σ = {sigma_ref:.6}): {reason}")]
     NewtonFailed {
         dp: f64,
@@ -86,9 +84,10 @@ pub struct Solution {
     pub rows: Vec<FieldRow>,
     pub interpolant: Interpolant,
     pub stats: SolveStats,
-    /// The unloaded shell has grown: its data are known at the mesh's points only, so
-    /// `at` answers at nodes only.
-    pub grown: bool,
+    /// The unloaded shell's data when it has grown (None: the reference shell, whose data
+    /// are known at every Σ). Between nodes `at` interpolates them from the node and
+    /// midpoint values (quadratic with Hermite–Simpson's midpoints, else linear).
+    pub grown: Option<MaterialData>,
 }
 
 impl Solution {
@@ -102,20 +101,44 @@ impl Solution {
         if let Some(k) = self.mesh.node_at(sigma_ref) {
             return Ok(self.rows[k]);
         }
-        if self.grown {
-            return Err(BvpError::GrownShellBetweenNodes { sigma: sigma_ref });
-        }
         let i = self.mesh.locate(sigma_ref).ok_or(BvpError::OutOfRange {
             sigma: sigma_ref,
             lo: self.mesh.nodes[0],
             hi: *self.mesh.nodes.last().unwrap(),
         })?;
         let v = self.interpolant.eval(&self.mesh, i, sigma_ref);
-        let mp = reference_point(&self.params, sigma_ref, Side::Above);
+        let mp = match &self.grown {
+            None => reference_point(&self.params, sigma_ref, Side::Above),
+            Some(data) => self.grown_point(data, i, sigma_ref),
+        };
         let shell = shell_of(&self.params);
         let (a, _, _, t) = equations::stretch(&shell, &mp, v[R], v[TS], self.rows[i].alpha_s)
             .map_err(|why| BvpError::Evaluation(EvalFailure { node: i, sigma_ref, why }))?;
         Ok(field_row(&mp, &v, a, t.tphi))
+    }
+}
+
+impl Solution {
+    /// A grown shell's data at Σ inside interval i, interpolated from its ends (and midpoint).
+    fn grown_point(&self, data: &MaterialData, i: usize, sigma_ref: f64) -> equations::MaterialPoint {
+        let (a, b) = (&data.above[i], &data.below[i + 1]);
+        let t = (sigma_ref - self.mesh.nodes[i]) / self.mesh.step(i);
+        let blend = |f: &dyn Fn(&equations::MaterialPoint) -> f64| match self.scheme {
+            // Lagrange through t = 0, 1/2, 1.
+            Scheme::HermiteSimpson => {
+                let m = &data.mid[i];
+                f(a) * (2.0 * t - 1.0) * (t - 1.0) + f(m) * 4.0 * t * (1.0 - t) + f(b) * t * (2.0 * t - 1.0)
+            }
+            Scheme::Trapezoid => f(a) * (1.0 - t) + f(b) * t,
+        };
+        equations::MaterialPoint {
+            sigma_ref,
+            sigma: blend(&|p| p.sigma),
+            rho: blend(&|p| p.rho),
+            zeta: blend(&|p| p.zeta),
+            gamma: blend(&|p| p.gamma),
+            fibre: reference_point(&self.params, sigma_ref, Side::Above).fibre,
+        }
     }
 }
 
@@ -439,7 +462,7 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
         rows,
         interpolant: Interpolant { values, slope_left, slope_right },
         stats,
-        grown: !is_reference(params, data),
+        grown: (!is_reference(params, data)).then(|| data.clone()),
     })
 }
 

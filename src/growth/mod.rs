@@ -163,6 +163,32 @@ pub fn grow(
     settings: &GrowthSettings,
     observer: &mut dyn Observer,
 ) -> Result<GrowthStats, GrowthError> {
+    // Both the snapshots and the progress reports go to the one observer.
+    let observer = std::cell::RefCell::new(observer);
+    let t_end = growth.t_end;
+    run(
+        params,
+        solver,
+        growth,
+        settings,
+        &mut |sys, t, p| {
+            let snap = sys.snapshot(t, p)?;
+            observer.borrow_mut().snapshot(&snap)
+        },
+        &mut |t| observer.borrow_mut().progress(t, t_end),
+    )
+}
+
+/// The growth run behind [`grow`], for callers that want the system itself at each output
+/// time (t = 0, the output times, t_end): `output(sys, t, p)` with p the growth state.
+pub fn run(
+    params: &crate::model::params::Params,
+    solver: &crate::model::params::SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    output: &mut dyn FnMut(&mut system::GrowthSystem, f64, &[f64]) -> Result<(), crate::Error>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<GrowthStats, GrowthError> {
     let start = std::time::Instant::now();
     let t_end = growth.t_end;
     let fail = |t: f64, reason: String, stats: GrowthStats| GrowthError { t, reason, stats };
@@ -170,24 +196,17 @@ pub fn grow(
     let p0 = sys.points.initial_state();
     let mut times: Vec<f64> = settings.output_times.iter().copied().filter(|&t| t > 0.0 && t < t_end).collect();
     times.push(t_end);
-    // Both the snapshots and the progress reports go to the one observer.
-    let observer = std::cell::RefCell::new(observer);
-    let mut emit = |sys: &mut system::GrowthSystem, t: f64, p: &[f64]| -> Result<(), crate::Error> {
-        let snap = sys.snapshot(t, p)?;
-        observer.borrow_mut().snapshot(&snap)
-    };
-    emit(&mut sys, 0.0, &p0).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
+    output(&mut sys, 0.0, &p0).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let mut stats = GrowthStats::default();
-    let mut progress = |t: f64| observer.borrow_mut().progress(t, t_end);
     let outcome = match settings.integrator {
         Integrator::Euler => {
-            let r = euler::integrate(&mut sys, &p0, t_end, settings.steps, &times, &mut emit, &mut progress);
+            let r = euler::integrate(&mut sys, &p0, t_end, settings.steps, &times, output, progress);
             stats.steps = settings.steps;
             stats.rhs_evaluations = sys.work.rhs_evaluations;
             r.map(|_| ()).map_err(|(t, e)| (t, e.to_string()))
         }
         Integrator::Cvode => {
-            let (cv, r) = cvode::integrate(&mut sys, &p0, t_end, settings, &times, &mut emit, &mut progress);
+            let (cv, r) = cvode::integrate(&mut sys, &p0, t_end, settings, &times, output, progress);
             stats.steps = cv.steps;
             stats.rhs_evaluations = cv.rhs_evaluations;
             stats.error_test_failures = cv.error_test_failures;

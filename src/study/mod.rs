@@ -1,0 +1,131 @@
+//! Measurements of the trade of speed for accuracy: convergence ladders (in N, ε and the
+//! tolerances), work-precision diagrams, and the paper's own refinement check. Each study
+//! returns plain tables; `write_csv` and the plot module turn them into files.
+
+pub mod converge;
+pub mod refinement;
+pub mod wpd;
+
+use crate::bvp::{BvpError, FieldRow, Solution};
+use crate::growth::{GrowthError, GrowthParams, GrowthSettings, GrowthStats};
+use crate::model::params::{Params, SolverSettings};
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+/// The fields compared: bvp4c's y = (κ, α_s, r, θ, Q).
+pub const FIELDS: [&str; 5] = ["kappa", "alpha_s", "r", "theta", "Q"];
+
+/// The compared fields of one row.
+pub fn five(row: &FieldRow) -> [f64; 5] {
+    [row.kappa, row.alpha_s, row.r, row.theta, row.q]
+}
+
+/// Why a study could not be completed.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    #[error("{what}: {source}")]
+    Elastic { what: String, source: BvpError },
+    #[error("{what}: {source}")]
+    Growth { what: String, source: GrowthError },
+    #[error("{0}")]
+    Invalid(String),
+    #[error("{}: {source}", path.display())]
+    Io { path: std::path::PathBuf, source: std::io::Error },
+}
+
+/// One solve, or one growth run to t_end, with what it cost.
+pub struct Run {
+    /// The elastic state (at t_end for growth).
+    pub solution: Solution,
+    /// Axial length at t_end (growth only).
+    pub axial_length: Option<f64>,
+    pub seconds: f64,
+    pub growth: Option<GrowthStats>,
+}
+
+/// Solve the elastic problem, or run the growth when `growth` is given, and time it.
+pub fn run(params: &Params, solver: &SolverSettings, growth: Option<(&GrowthParams, &GrowthSettings)>, what: &str) -> Result<Run, StudyError> {
+    let start = Instant::now();
+    match growth {
+        None => {
+            let solution = crate::bvp::solve(params, solver, None).map_err(|source| StudyError::Elastic { what: what.into(), source })?;
+            Ok(Run { solution, axial_length: None, seconds: start.elapsed().as_secs_f64(), growth: None })
+        }
+        Some((g, s)) => {
+            let t_end = g.t_end;
+            let mut last = None;
+            let stats = crate::growth::run(
+                params,
+                solver,
+                g,
+                &GrowthSettings { output_times: vec![], ..s.clone() },
+                &mut |sys, t, p| {
+                    if t == t_end {
+                        let snap = sys.snapshot(t, p)?;
+                        let sol = sys.elastic.solution().map_err(crate::growth::system::RhsError::from)?;
+                        last = Some((sol, snap.series.axial_length));
+                    }
+                    Ok(())
+                },
+                &mut |_| {},
+            )
+            .map_err(|source| StudyError::Growth { what: what.into(), source })?;
+            let seconds = start.elapsed().as_secs_f64();
+            let (solution, axial) = last.ok_or_else(|| StudyError::Invalid(format!("{what}: the run gave no state at t_end")))?;
+            Ok(Run { solution, axial_length: Some(axial), seconds, growth: Some(stats) })
+        }
+    }
+}
+
+/// The compared fields of `sol` at the material points `points`.
+pub fn sample(sol: &Solution, points: &[f64], what: &str) -> Result<Vec<[f64; 5]>, StudyError> {
+    points
+        .iter()
+        .map(|&x| sol.at(x).map(|r| five(&r)).map_err(|source| StudyError::Elastic { what: what.into(), source }))
+        .collect()
+}
+
+/// The largest absolute difference of each field between two samples.
+pub fn max_diff(a: &[[f64; 5]], b: &[[f64; 5]]) -> [f64; 5] {
+    let mut d = [0.0f64; 5];
+    for (x, y) in a.iter().zip(b) {
+        for c in 0..5 {
+            d[c] = d[c].max((x[c] - y[c]).abs());
+        }
+    }
+    d
+}
+
+/// The largest of the five.
+pub fn worst(e: &[f64; 5]) -> f64 {
+    e.iter().cloned().fold(0.0, f64::max)
+}
+
+/// `count` evenly spaced material points on [lo, hi].
+pub fn points(lo: f64, hi: f64, count: usize) -> Vec<f64> {
+    (0..count).map(|k| if k + 1 == count { hi } else { lo + (hi - lo) * k as f64 / (count - 1) as f64 }).collect()
+}
+
+/// Write a CSV table (header, then rows of already formatted cells) atomically.
+pub fn write_csv(path: &Path, header: &[String], rows: &[Vec<String>]) -> Result<(), StudyError> {
+    let io = |source| StudyError::Io { path: path.to_path_buf(), source };
+    let tmp = path.with_extension("csv.tmp");
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(io)?);
+    writeln!(f, "{}", header.join(",")).map_err(io)?;
+    for r in rows {
+        writeln!(f, "{}", r.join(",")).map_err(io)?;
+    }
+    f.flush().map_err(io)?;
+    drop(f);
+    std::fs::rename(&tmp, path).map_err(io)
+}
+
+/// A number for a CSV cell (shortest round-trip form; empty for NaN).
+pub fn cell(x: f64) -> String {
+    if x.is_nan() {
+        String::new()
+    } else {
+        crate::output::format_value(x)
+    }
+}

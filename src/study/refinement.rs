@@ -1,0 +1,1 @@
+//! The paper's refinement check (being written).
