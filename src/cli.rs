@@ -129,10 +129,10 @@ struct CompareArgs {
     #[arg(value_name = "REFERENCE", required = true)]
     references: Vec<PathBuf>,
     /// Absolute tolerance: a point fails when |run − ref| > tol + rtol·|ref|
-    #[arg(long, value_name = "TOL", default_value_t = 1e-8)]
+    #[arg(long, value_name = "TOL", default_value_t = 1e-8, allow_negative_numbers = true)]
     tol: f64,
     /// Relative tolerance (see --tol)
-    #[arg(long, value_name = "RTOL", default_value_t = 1e-8)]
+    #[arg(long, value_name = "RTOL", default_value_t = 1e-8, allow_negative_numbers = true)]
     rtol: f64,
     /// Print only the error line when a field is beyond tolerance, nothing on success
     #[arg(long, short)]
