@@ -377,7 +377,11 @@ pub fn decode(path: &Path, bytes: &[u8]) -> Result<Vec<(String, MatValue)>, MatE
             end = off;
         }
     }
-    let bytes = &bytes[..end];
+    // matrw insists on the text starting "MATLAB 5.0 MAT-file, " (SciPy writes no comma):
+    // the header is checked above, so hand it ours.
+    let mut owned = header();
+    owned.extend_from_slice(&bytes[128..end]);
+    let bytes = &owned[..];
     // matrw may panic on malformed input: turn that into an error too.
     let parsed = std::panic::catch_unwind(|| matrw::load_matfile_from_u8(bytes));
     let file = match parsed {
@@ -464,5 +468,11 @@ mod tests {
         let b = encode(&sample(), false).unwrap();
         assert!(decode(p, &b[..b.len() - 20]).is_err());
         assert!(encode(&[("1x".into(), MatValue::scalar(1.0))], false).is_err());
+        // SciPy's header text has no comma after "MAT-file"; it reads all the same.
+        let mut b = encode(&sample(), true).unwrap();
+        let text = b"MATLAB 5.0 MAT-file Platform: posix, Created on: Mon Jan  1 00:00:00 2024";
+        b[..116].fill(b' ');
+        b[..text.len()].copy_from_slice(text);
+        assert_eq!(decode(p, &b).unwrap(), sample());
     }
 }
