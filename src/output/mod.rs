@@ -14,6 +14,7 @@ pub mod export;
 pub mod growth;
 pub mod mat;
 pub mod npz;
+pub mod plot;
 
 use std::fs;
 use std::io::{BufWriter, Write};
