@@ -49,6 +49,43 @@ enum Command {
     Export(ExportArgs),
     /// Compare a run with reference results (.mat, .npz, or another run); exit 1 beyond tolerance
     Compare(CompareArgs),
+    /// Convergence ladders in N, ε and the tolerance: errors, observed orders, CSV and plots
+    Converge(ConvergeArgs),
+    /// Work-precision diagrams: error against seconds for each scheme and integrator
+    Wpd(StudyArgs),
+    /// The paper's refinement check of the const scene, for Euler and for CVODE
+    Refinement(RefinementArgs),
+}
+
+#[derive(Args, Debug)]
+struct ConvergeArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// The ladder of uniform node counts (at least two)
+    #[arg(long, value_delimiter = ',', default_value = "51,101,201,401,801")]
+    nodes: Vec<usize>,
+    /// Run the whole growth on each rung (the scene must have [growth])
+    #[arg(long)]
+    growth: bool,
+    /// Output directory (CSV tables, PNG and SVG plots)
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+struct StudyArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output directory (CSV tables, PNG and SVG plots)
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+struct RefinementArgs {
+    /// Output directory (refinement.csv)
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
 }
 
 /// A scene file and the overrides applied on top of it.
@@ -205,6 +242,9 @@ where
         Command::Keys => cmd_keys(),
         Command::Export(a) => cmd_export(a),
         Command::Compare(a) => cmd_compare(a),
+        Command::Converge(a) => cmd_converge(a),
+        Command::Wpd(a) => a.scene.load().and_then(|scene| cmd_study(&a.out, "wpd", |dir| crate::study::report::wpd(&scene, dir))),
+        Command::Refinement(a) => cmd_study(&a.out, "refinement", crate::study::report::refinement),
     };
     match result {
         Ok(()) => 0,
@@ -284,6 +324,34 @@ fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Failure> {
             Ok(x)
         })
         .collect()
+}
+
+fn cmd_converge(a: &ConvergeArgs) -> Result<(), Failure> {
+    let scene = a.scene.load()?;
+    if a.nodes.len() < 2 || a.nodes.iter().any(|&n| n < 5) {
+        return Err(Failure::bad_input(format!("--nodes {}: give at least two counts, each at least 5", a.nodes.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(","))));
+    }
+    if a.growth && scene.growth.is_none() {
+        return Err(Failure::bad_input(format!("{}: --growth needs a scene with a [growth] section", scene.origin)));
+    }
+    cmd_study(&a.out, "converge", |dir| crate::study::report::converge(&scene, &a.nodes, a.growth, dir))
+}
+
+/// Run a study into an output directory written all at once; print its summary.
+fn cmd_study(out_dir: &std::path::Path, name: &str, study: impl FnOnce(&std::path::Path) -> Result<String, crate::study::StudyError>) -> Result<(), Failure> {
+    use crate::study::StudyError;
+    output::check_target(out_dir)?;
+    let dir = OutputDir::create(out_dir)?;
+    let text = study(&dir.file("")).map_err(|e| match e {
+        StudyError::Invalid(m) => Failure::bad_input(m),
+        other => Failure::failed(other.to_string()),
+    })?;
+    let summary = serde_json::json!({ "study": name, "sundials_version": output::sundials_version(), "report": text });
+    std::fs::write(dir.file(output::SUMMARY_FILE), serde_json::to_string_pretty(&summary).unwrap_or_default())
+        .map_err(|e| Failure::failed(format!("{}: {e}", dir.file(output::SUMMARY_FILE).display())))?;
+    let target = dir.commit()?;
+    out(&format!("eyeshell: {name} written to {}\n{text}", target.display()));
+    Ok(())
 }
 
 fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {

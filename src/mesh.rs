@@ -92,6 +92,26 @@ impl Mesh {
         Some(i.saturating_sub(1).min(self.intervals() - 1))
     }
 
+    /// Every interval halved: the self-similar refinement, under which the error expansion
+    /// h⁴ C + h⁶ D + … keeps its coefficients, so Richardson extrapolation cancels h⁴ exactly
+    /// (refining by `solver.nodes` re-grades the pole and moves the breakpoints within
+    /// their intervals, which changes C).
+    pub fn halved(&self) -> Mesh {
+        let mut nodes = Vec::with_capacity(2 * self.len() - 1);
+        for w in self.nodes.windows(2) {
+            nodes.extend_from_slice(&[w[0], 0.5 * (w[0] + w[1])]);
+        }
+        nodes.push(*self.nodes.last().unwrap());
+        let breakpoint_nodes = self.breakpoint_nodes.iter().map(|&i| 2 * i).collect();
+        Mesh {
+            nodes,
+            uniform: 2 * self.uniform - 1,
+            breakpoint_nodes,
+            inserted_breakpoints: self.inserted_breakpoints,
+            pole_nodes: 2 * self.pole_nodes,
+        }
+    }
+
     /// Index of the node at exactly Σ, if any.
     pub fn node_at(&self, sigma_ref: f64) -> Option<usize> {
         self.nodes.binary_search_by(|x| x.partial_cmp(&sigma_ref).unwrap()).ok()
@@ -122,6 +142,21 @@ mod tests {
             assert!(m.step(i) <= (1.0 - POLE_RATIO) / POLE_RATIO * m.nodes[i] + 1e-15, "spacing too large at node {i}");
         }
         assert_eq!(m.len(), 501 + m.pole_nodes);
+    }
+
+    #[test]
+    fn halving_keeps_every_node_and_breakpoint() {
+        let bps = [1.5707963267948966, 15.707963267948966];
+        let m = Mesh::new(1e-3, 25.0, 51, &bps, true);
+        let h = m.halved();
+        assert_eq!(h.len(), 2 * m.len() - 1);
+        for (i, x) in m.nodes.iter().enumerate() {
+            assert_eq!(h.nodes[2 * i], *x);
+        }
+        for (k, &b) in bps.iter().enumerate() {
+            assert_eq!(h.nodes[h.breakpoint_nodes[k]], b);
+        }
+        assert!((h.step(0) - 0.5 * m.step(0)).abs() < 1e-18);
     }
 
     #[test]

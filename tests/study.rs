@@ -50,3 +50,30 @@ fn growth_node_ladder_converges_at_order_2() {
     let a = l.axial.unwrap();
     assert!((a[2] - a[3]).abs() < (a[1] - a[3]).abs() && (a[1] - a[3]).abs() < (a[0] - a[3]).abs());
 }
+
+/// `eyeshell converge` end to end: the order it reports in converge_nodes.csv is the
+/// scheme's, and it writes its tables and plots.
+#[test]
+fn converge_command_reports_the_scheme_order() {
+    for (scheme, order, nodes) in [("hermite-simpson", 4.0, "51,101,201,401,801"), ("trapezoid", 2.0, "101,201,401,801,1601")] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("study");
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+            .args(["converge", "scenes/fibres-nonuniform.toml", "--set", &format!("solver.scheme={scheme}"), "--nodes", nodes, "--out"])
+            .arg(&out)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        for f in ["converge_nodes.csv", "converge_nodes.png", "converge_nodes.svg", "converge_epsilon.csv", "converge_tolerance.csv", "summary.json"] {
+            assert!(out.join(f).is_file(), "{f} missing");
+        }
+        let text = std::fs::read_to_string(out.join("converge_nodes.csv")).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = header.iter().position(|h| *h == "max_order").unwrap();
+        let orders: Vec<f64> = lines.filter_map(|l| l.split(',').nth(col).and_then(|c| c.parse().ok())).collect();
+        println!("{scheme}: reported orders {orders:.3?}");
+        assert!(orders.len() >= 2 && orders.iter().all(|o| (o - order).abs() < 0.3), "{scheme}: {orders:?}");
+    }
+}

@@ -4,6 +4,7 @@
 
 pub mod converge;
 pub mod refinement;
+pub mod report;
 pub mod wpd;
 
 use crate::bvp::{BvpError, FieldRow, Solution};

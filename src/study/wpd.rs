@@ -1,11 +1,12 @@
 //! Work-precision diagrams (issue: measure the trade of speed for accuracy): error against
 //! CPU seconds, each error taken against a reference computed at much tighter settings.
-//! - Elastic: trapezoid and Hermite–Simpson over N, and Richardson-extrapolated
-//!   Hermite–Simpson (N and 2N − 1 combined: order 6), errors at common material points.
+//! - Elastic: trapezoid and Hermite–Simpson over a self-similar ladder of meshes (each
+//!   rung the last with every interval halved), and Richardson-extrapolated
+//!   Hermite–Simpson from consecutive rungs (order 6), errors at common material points.
 //! - Growth: explicit Euler over its step count and CVODE over rtol, errors in the axial
 //!   length and the largest field error at t_end (same mesh as the reference).
 
-use super::{max_diff, points, run, sample, worst, StudyError};
+use super::{max_diff, run, sample, worst, StudyError};
 use crate::growth::{GrowthParams, GrowthSettings, Integrator};
 use crate::model::params::{Params, Scheme, SolverSettings};
 
@@ -46,44 +47,59 @@ fn best_of<T>(mut f: impl FnMut() -> Result<(T, f64), StudyError>, repeats: usiz
     Ok((best_val, best))
 }
 
-/// The elastic diagram: both schemes over `nodes`, and Richardson-extrapolated
-/// Hermite–Simpson, against Hermite–Simpson at `reference_nodes` (Newton tol 1e-12).
-pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize], reference_nodes: usize) -> Result<Vec<Curve>, StudyError> {
-    let tight = SolverSettings { nodes: reference_nodes, scheme: Scheme::HermiteSimpson, newton_tol: 1e-12, ..*solver };
-    let reference = run(params, &tight, None, "reference")?;
-    let pts = points(solver.epsilon, params.length(), 201);
-    let ref_vals = sample(&reference.solution, &pts, "reference")?;
+/// The elastic diagram: both schemes on a ladder of as many rungs as `nodes` starting from
+/// `nodes[0]`, and Richardson-extrapolated Hermite–Simpson, against Hermite–Simpson on the
+/// last rung halved twice more (Newton tol 1e-12).
+/// Every run solves Newton to 1e-12, so that the error measured is the discretisation's (at
+/// the default 1e-10 Newton leaves about 1e-9 in Q, which would floor the finest rungs).
+pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Result<Vec<Curve>, StudyError> {
+    let solver = &SolverSettings { newton_tol: solver.newton_tol.min(1e-12), ..*solver };
+    // A self-similar ladder: the first rung's mesh, then every interval halved again and
+    // again, so that each error expansion keeps its coefficients from rung to rung (the
+    // ladder by solver.nodes re-grades the pole at every N) and orders come out clean.
+    let mut meshes = vec![crate::bvp::solve::mesh_of(params, &SolverSettings { nodes: nodes[0], ..*solver })];
+    for _ in 1..nodes.len() {
+        meshes.push(meshes.last().unwrap().halved());
+    }
+    // Errors at the first rung's nodes, which are nodes of every rung (no interpolation),
+    // against Hermite–Simpson two halvings beyond the last rung.
+    let pts = meshes[0].nodes.clone();
+    let reference_mesh = meshes.last().unwrap().halved().halved();
+    let tight = SolverSettings { scheme: Scheme::HermiteSimpson, ..*solver };
+    let reference = crate::bvp::solve::solve_on_mesh(params, &tight, reference_mesh, None)
+        .map_err(|source| StudyError::Elastic { what: "reference".into(), source })?;
+    let ref_vals = sample(&reference, &pts, "reference")?;
     let mut curves = vec![];
     let mut hs_runs = vec![];
     for scheme in [Scheme::Trapezoid, Scheme::HermiteSimpson] {
         let mut c = Curve { method: format!("{scheme:?}").to_lowercase(), knob: "nodes", points: vec![] };
-        for &n in nodes {
-            let s = SolverSettings { nodes: n, scheme, ..*solver };
-            let what = format!("{scheme:?} N = {n}");
+        let s = SolverSettings { scheme, ..*solver };
+        for mesh in &meshes {
+            let what = format!("{scheme:?} on {} nodes", mesh.len());
             let (vals, seconds) = best_of(
                 || {
-                    let r = run(params, &s, None, &what)?;
-                    Ok((sample(&r.solution, &pts, &what)?, r.seconds))
+                    let start = std::time::Instant::now();
+                    let sol = crate::bvp::solve::solve_on_mesh(params, &s, mesh.clone(), None)
+                        .map_err(|source| StudyError::Elastic { what: what.clone(), source })?;
+                    let secs = start.elapsed().as_secs_f64();
+                    Ok((sample(&sol, &pts, &what)?, secs))
                 },
                 5,
                 1.0,
             )?;
-            c.points.push(WorkPoint { value: n as f64, error: worst(&max_diff(&vals, &ref_vals)), axial_error: f64::NAN, seconds });
+            c.points.push(WorkPoint { value: mesh.len() as f64, error: worst(&max_diff(&vals, &ref_vals)), axial_error: f64::NAN, seconds });
             if scheme == Scheme::HermiteSimpson {
-                hs_runs.push((n, vals, seconds));
+                hs_runs.push((mesh.len(), vals, seconds));
             }
         }
         curves.push(c);
     }
-    // Richardson: Hermite–Simpson at N and at 2N − 1 (the next rung when the ladder doubles).
+    // Richardson: Hermite–Simpson on consecutive rungs, y_f + (y_f − y_c)/15: order 6.
     let mut rich = Curve { method: "hermite-simpson + Richardson".into(), knob: "nodes", points: vec![] };
     for w in hs_runs.windows(2) {
-        let ((n1, c, t1), (n2, f, t2)) = (&w[0], &w[1]);
-        if *n2 != 2 * n1 - 1 {
-            continue;
-        }
-        let extrapolated: Vec<[f64; 5]> = c.iter().zip(f).map(|(c, f)| std::array::from_fn(|j| f[j] + (f[j] - c[j]) / 15.0)).collect();
-        rich.points.push(WorkPoint { value: *n2 as f64, error: worst(&max_diff(&extrapolated, &ref_vals)), axial_error: f64::NAN, seconds: t1 + t2 });
+        let ((_, coarse, t1), (n, fine, t2)) = (&w[0], &w[1]);
+        let extrapolated: Vec<[f64; 5]> = coarse.iter().zip(fine).map(|(c, f)| std::array::from_fn(|j| f[j] + (f[j] - c[j]) / 15.0)).collect();
+        rich.points.push(WorkPoint { value: *n as f64, error: worst(&max_diff(&extrapolated, &ref_vals)), axial_error: f64::NAN, seconds: t1 + t2 });
     }
     curves.push(rich);
     Ok(curves)
