@@ -72,7 +72,11 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
     let mut curves = vec![];
     let mut hs_runs = vec![];
     for scheme in [Scheme::Trapezoid, Scheme::HermiteSimpson] {
-        let mut c = Curve { method: format!("{scheme:?}").to_lowercase(), knob: "nodes", points: vec![] };
+        let name = match scheme {
+            Scheme::Trapezoid => "trapezoid",
+            Scheme::HermiteSimpson => "hermite-simpson",
+        };
+        let mut c = Curve { method: name.into(), knob: "nodes", points: vec![] };
         let s = SolverSettings { scheme, ..*solver };
         for mesh in &meshes {
             let what = format!("{scheme:?} on {} nodes", mesh.len());
