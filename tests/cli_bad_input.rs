@@ -2,99 +2,15 @@
 //! `eyeshell: error: ...` naming the key, no panic, and no output directory left behind.
 //! None of these need the solver.
 
-use std::path::Path;
-use std::process::Command;
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn eyeshell(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run eyeshell");
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
-
-/// Assert a clean bad-input failure that names `needle`.
-fn assert_bad(run: &Run, needle: &str, what: &str) {
-    assert_eq!(
-        run.code,
-        Some(2),
-        "{what}: exit code, stderr: {}",
-        run.stderr
-    );
-    assert!(
-        !run.stderr.contains("panicked"),
-        "{what}: panic: {}",
-        run.stderr
-    );
-    let lines: Vec<&str> = run.stderr.lines().collect();
-    assert_eq!(
-        lines.len(),
-        1,
-        "{what}: stderr must be one line: {:?}",
-        run.stderr
-    );
-    assert!(run.stderr.ends_with('\n'), "{what}: {:?}", run.stderr);
-    assert!(
-        lines[0].starts_with("eyeshell: error: "),
-        "{what}: {}",
-        lines[0]
-    );
-    assert!(
-        lines[0].contains(needle),
-        "{what}: {needle:?} not named in: {}",
-        lines[0]
-    );
-    assert!(run.stdout.is_empty(), "{what}: stdout: {}", run.stdout);
-}
-
-/// Solve `scene` (written to a fresh directory) with `sets`; the run must fail cleanly,
-/// naming `needle` (and `origin` when given), and leave the directory as it was.
-fn solve_fails(scene: &str, sets: &[&str], needle: &str, origin: &str) {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("scene.toml"), scene).unwrap();
-    let mut args = vec!["solve", "scene.toml", "--out", "out"];
-    for s in sets {
-        args.push("--set");
-        args.push(s);
-    }
-    let what = format!("scene {scene:?} --set {sets:?}");
-    let run = eyeshell(dir.path(), &args);
-    assert_bad(&run, needle, &what);
-    assert!(
-        run.stderr
-            .starts_with(&format!("eyeshell: error: {origin}")),
-        "{what}: {}",
-        run.stderr
-    );
-    assert!(!dir.path().join("out").exists(), "{what}: out/ was created");
-    let names: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(
-        names,
-        vec![std::ffi::OsString::from("scene.toml")],
-        "{what}: leftovers"
-    );
-}
+mod support;
+use support::*;
 
 fn file_fails(scene: &str, needle: &str) {
-    solve_fails(scene, &[], needle, "scene.toml: ");
+    fails("solve", scene, &[], needle, "scene.toml: ");
 }
 
 fn set_fails(set: &str, needle: &str) {
-    solve_fails("", &[set], needle, &format!("--set {set}: "));
+    fails("solve", "", &[set], needle, &format!("--set {set}: "));
 }
 
 #[test]
@@ -211,7 +127,7 @@ fn malformed_toml_and_overrides() {
 #[test]
 fn missing_scene_file() {
     let dir = tempfile::tempdir().unwrap();
-    let run = eyeshell(dir.path(), &["solve", "nope.toml", "--out", "out"]);
+    let run = eyeshell_in(dir.path(), &["solve", "nope.toml", "--out", "out"]);
     assert_bad(&run, "nope.toml: cannot read the scene", "missing file");
     assert!(!dir.path().join("out").exists());
 }
@@ -228,13 +144,13 @@ fn at_points_are_checked_before_solving() {
         ("inf", "Σ = inf must be a finite number"),
         ("1,,2", "is not a number"),
     ] {
-        let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "out", "--at", at]);
+        let run = eyeshell_in(dir.path(), &["solve", "s.toml", "--out", "out", "--at", at]);
         assert_bad(&run, needle, at);
         assert!(run.stderr.contains("--at"), "{}", run.stderr);
         assert!(!dir.path().join("out").exists());
     }
     // ε and L follow the scene: Σ = 20 is beyond L for R0 = 5.
-    let run = eyeshell(
+    let run = eyeshell_in(
         dir.path(),
         &[
             "solve",
@@ -256,7 +172,7 @@ fn a_foreign_output_directory_is_refused_and_untouched() {
     std::fs::write(dir.path().join("s.toml"), "").unwrap();
     std::fs::create_dir(dir.path().join("data")).unwrap();
     std::fs::write(dir.path().join("data/precious.txt"), "keep").unwrap();
-    let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "data"]);
+    let run = eyeshell_in(dir.path(), &["solve", "s.toml", "--out", "data"]);
     assert_bad(
         &run,
         "data: exists and is not an eyeshell output directory",
@@ -271,13 +187,13 @@ fn a_foreign_output_directory_is_refused_and_untouched() {
         1
     );
     std::fs::write(dir.path().join("file"), "x").unwrap();
-    let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "file/inside/out"]);
+    let run = eyeshell_in(dir.path(), &["solve", "s.toml", "--out", "file/inside/out"]);
     assert_bad(
         &run,
         "file/inside/out: a parent of the output path is not a directory",
         "parent is a file",
     );
-    let run = eyeshell(dir.path(), &["solve", "s.toml", "--out", "file"]);
+    let run = eyeshell_in(dir.path(), &["solve", "s.toml", "--out", "file"]);
     assert_bad(&run, "refusing", "file as out");
 }
 
@@ -291,7 +207,7 @@ fn usage_errors_are_one_line() {
         (&["solve", "s.toml", "--out", "o", "--bogus"][..], "--bogus"),
         (&["check"][..], "SCENE.toml"),
     ] {
-        let run = eyeshell(dir.path(), args);
+        let run = eyeshell_in(dir.path(), args);
         assert_bad(&run, needle, &format!("{args:?}"));
     }
 }
@@ -300,9 +216,9 @@ fn usage_errors_are_one_line() {
 fn check_fails_like_solve() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("s.toml"), "[material]\nC = -1\n").unwrap();
-    let run = eyeshell(dir.path(), &["check", "s.toml"]);
+    let run = eyeshell_in(dir.path(), &["check", "s.toml"]);
     assert_bad(&run, "s.toml: material.C = -1 must be positive", "check");
-    let run = eyeshell(
+    let run = eyeshell_in(
         dir.path(),
         &[
             "check",

@@ -1,91 +1,8 @@
 //! `eyeshell grow`: bad input (exit 2, one line naming the key, no output directory), scenes
 //! without growth, `check` and `keys` for the growth keys, and a run end to end.
 
-use std::path::Path;
-use std::process::Command;
-
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn eyeshell(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
-        .args(args)
-        .current_dir(dir)
-        .env("CI", "1")
-        .output()
-        .expect("run eyeshell");
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
-
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Assert a clean bad-input failure: exit 2, one stderr line naming `needle`, no stdout.
-fn assert_bad(run: &Run, needle: &str, what: &str) {
-    assert_eq!(
-        run.code,
-        Some(2),
-        "{what}: exit code, stderr: {}",
-        run.stderr
-    );
-    assert!(!run.stderr.contains("panicked"), "{what}: {}", run.stderr);
-    let lines: Vec<&str> = run.stderr.lines().collect();
-    assert_eq!(
-        lines.len(),
-        1,
-        "{what}: stderr must be one line: {:?}",
-        run.stderr
-    );
-    assert!(
-        lines[0].starts_with("eyeshell: error: "),
-        "{what}: {}",
-        lines[0]
-    );
-    assert!(
-        lines[0].contains(needle),
-        "{what}: {needle:?} not in: {}",
-        lines[0]
-    );
-    assert!(run.stdout.is_empty(), "{what}: stdout: {}", run.stdout);
-}
-
-/// `eyeshell CMD scene.toml --set ... --out out` must fail cleanly naming `needle` (and
-/// `origin` first) and leave nothing behind.
-fn fails(cmd: &str, scene: &str, sets: &[&str], needle: &str, origin: &str) {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("scene.toml"), scene).unwrap();
-    let mut args = vec![cmd, "scene.toml", "--out", "out"];
-    for s in sets {
-        args.push("--set");
-        args.push(s);
-    }
-    let what = format!("{cmd} {scene:?} --set {sets:?}");
-    let run = eyeshell(dir.path(), &args);
-    assert_bad(&run, needle, &what);
-    assert!(
-        run.stderr
-            .starts_with(&format!("eyeshell: error: {origin}")),
-        "{what}: {}",
-        run.stderr
-    );
-    let names: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(
-        names,
-        vec![std::ffi::OsString::from("scene.toml")],
-        "{what}: leftovers"
-    );
-}
+mod support;
+use support::*;
 
 /// Every bad growth value, from the file and from --set, for `grow` and for `solve`.
 #[test]
@@ -144,7 +61,7 @@ fn a_scene_without_growth_is_refused_by_grow() {
         "scene has no [growth] section: use `eyeshell solve`, or add growth keys",
         "scene.toml: ",
     );
-    let run = eyeshell(
+    let run = eyeshell_in(
         repo(),
         &["grow", "scenes/default.toml", "--out", "/nonexistent/never"],
     );
@@ -157,7 +74,7 @@ fn grow_refuses_a_foreign_directory_and_leaves_it_alone() {
     std::fs::write(dir.path().join("s.toml"), "growth.eta0 = 70\n").unwrap();
     std::fs::create_dir(dir.path().join("data")).unwrap();
     std::fs::write(dir.path().join("data/precious.txt"), "keep").unwrap();
-    let run = eyeshell(dir.path(), &["grow", "s.toml", "--out", "data"]);
+    let run = eyeshell_in(dir.path(), &["grow", "s.toml", "--out", "data"]);
     assert_bad(
         &run,
         "data: exists and is not an eyeshell output directory",
@@ -167,13 +84,13 @@ fn grow_refuses_a_foreign_directory_and_leaves_it_alone() {
         std::fs::read_dir(dir.path().join("data")).unwrap().count(),
         1
     );
-    let run = eyeshell(dir.path(), &["grow", "s.toml"]);
+    let run = eyeshell_in(dir.path(), &["grow", "s.toml"]);
     assert_bad(&run, "--out", "no --out");
 }
 
 #[test]
 fn check_says_whether_growth_is_on() {
-    let run = eyeshell(repo(), &["check", "scenes/const.toml"]);
+    let run = eyeshell_in(repo(), &["check", "scenes/const.toml"]);
     assert_eq!(run.code, Some(0), "{}", run.stderr);
     assert!(run.stdout.contains("# growth: on"), "{}", run.stdout);
     for line in [
@@ -201,12 +118,12 @@ fn check_says_whether_growth_is_on() {
         "scenes/fibres-nonuniform.toml",
         "scenes/exact-sphere.toml",
     ] {
-        let run = eyeshell(repo(), &["check", s]);
+        let run = eyeshell_in(repo(), &["check", s]);
         assert_eq!(run.code, Some(0), "{}", run.stderr);
         assert!(run.stdout.contains("# growth: off"), "{s}: {}", run.stdout);
         assert!(!run.stdout.contains("growth.eta0"), "{s}: {}", run.stdout);
     }
-    let run = eyeshell(
+    let run = eyeshell_in(
         repo(),
         &["check", "scenes/default.toml", "--set", "growth.delta=2"],
     );
@@ -215,7 +132,7 @@ fn check_says_whether_growth_is_on() {
 
 #[test]
 fn keys_lists_the_growth_keys() {
-    let run = eyeshell(repo(), &["keys"]);
+    let run = eyeshell_in(repo(), &["keys"]);
     assert_eq!(run.code, Some(0));
     for key in [
         "growth.eta0",
@@ -248,9 +165,9 @@ fn keys_lists_the_growth_keys() {
         );
     }
     assert!(run.stdout.contains("[0.1, 0.2, 0.4, 1.0]"));
-    let run = eyeshell(repo(), &["--help"]);
+    let run = eyeshell_in(repo(), &["--help"]);
     assert!(run.stdout.contains("grow"), "{}", run.stdout);
-    let run = eyeshell(repo(), &["grow", "--help"]);
+    let run = eyeshell_in(repo(), &["grow", "--help"]);
     assert!(
         run.stdout.contains("--out")
             && run.stdout.contains("--quiet")
@@ -263,7 +180,7 @@ fn keys_lists_the_growth_keys() {
 fn solve_ignores_growth() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("elastic");
-    let run = eyeshell(
+    let run = eyeshell_in(
         repo(),
         &[
             "solve",
@@ -282,23 +199,13 @@ fn solve_ignores_growth() {
     assert_eq!(v["parameters"]["growth.eta0"], 70.0);
 }
 
-fn read_csv(path: &Path) -> (String, Vec<Vec<String>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().to_string();
-    let rows = lines
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect();
-    (header, rows)
-}
-
 /// The const scene end to end, on a coarse mesh with loose tolerances.
 #[test]
 fn grow_const_end_to_end() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("const");
     let out_s = out.to_str().unwrap();
-    let run = eyeshell(
+    let run = eyeshell_in(
         repo(),
         &[
             "grow",
@@ -329,9 +236,9 @@ fn grow_const_end_to_end() {
         run.stdout
     );
 
-    let (h, series) = read_csv(&out.join("series.csv"));
+    let (h, series) = csv_cells(&out.join("series.csv"));
     assert_eq!(
-        h,
+        h.join(","),
         "t,axial_length,equatorial_radius,retina_minus_blue,retina_minus_red,class"
     );
     let times: Vec<f64> = series.iter().map(|r| r[0].parse().unwrap()).collect();
@@ -361,8 +268,8 @@ fn grow_const_end_to_end() {
         .join(",");
     let mut nodes = None;
     for p in &snaps {
-        let (h, rows) = read_csv(p);
-        assert_eq!(h, header, "{}", p.display());
+        let (h, rows) = csv_cells(p);
+        assert_eq!(h.join(","), header, "{}", p.display());
         assert!(rows.len() >= 101, "{}: {} rows", p.display(), rows.len());
         assert_eq!(*nodes.get_or_insert(rows.len()), rows.len());
         for r in &rows {
@@ -384,7 +291,7 @@ fn grow_const_end_to_end() {
     assert!(v["sundials_version"].as_str().unwrap().starts_with('6'));
 
     // A second run replaces the first.
-    let run = eyeshell(
+    let run = eyeshell_in(
         repo(),
         &[
             "grow",
@@ -412,7 +319,7 @@ fn grow_const_end_to_end() {
 fn a_failed_run_keeps_its_results() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("bad");
-    let run = eyeshell(
+    let run = eyeshell_in(
         repo(),
         &[
             "grow",
@@ -438,7 +345,7 @@ fn a_failed_run_keeps_its_results() {
         "{}",
         lines[0]
     );
-    let (_, series) = read_csv(&out.join("series.csv"));
+    let (_, series) = csv_cells(&out.join("series.csv"));
     assert!(!series.is_empty());
     assert_eq!(series[0][0].parse::<f64>().unwrap(), 0.0);
     let snaps = std::fs::read_dir(out.join("snapshots")).unwrap().count();

@@ -1,30 +1,13 @@
 //! `eyeshell keys` and `eyeshell check` (no solver needed).
 
-use std::path::Path;
-use std::process::Command;
+mod support;
+use support::*;
 
 use eyeshell::scene::{Scene, KEYS};
 
-fn eyeshell(dir: &Path, args: &[&str]) -> (Option<i32>, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    (
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
 #[test]
 fn keys_lists_every_key_with_type_default_and_doc() {
-    let (code, out, err) = eyeshell(repo(), &["keys"]);
+    let Run { code, stdout: out, stderr: err } = eyeshell_in(repo(), &["keys"]);
     assert_eq!(code, Some(0), "{err}");
     assert!(err.is_empty());
     let lines: Vec<&str> = out.lines().collect();
@@ -68,7 +51,7 @@ fn keys_lists_every_key_with_type_default_and_doc() {
 
 #[test]
 fn check_prints_the_effective_scene_as_toml() {
-    let (code, out, err) = eyeshell(
+    let Run { code, stdout: out, stderr: err } = eyeshell_in(
         repo(),
         &[
             "check",
@@ -113,7 +96,7 @@ fn shipped_scenes_check() {
         "scenes/fibres-nonuniform.toml",
         "scenes/exact-sphere.toml",
     ] {
-        let (code, out, err) = eyeshell(repo(), &["check", s]);
+        let Run { code, stdout: out, stderr: err } = eyeshell_in(repo(), &["check", s]);
         assert_eq!(code, Some(0), "{s}: {err}");
         assert!(out.contains("valid scene"), "{out}");
     }
@@ -121,12 +104,12 @@ fn shipped_scenes_check() {
 
 #[test]
 fn help_and_version_succeed() {
-    let (code, out, _) = eyeshell(repo(), &["--help"]);
+    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["--help"]);
     assert_eq!(code, Some(0));
     for sub in ["solve", "check", "keys"] {
         assert!(out.contains(sub), "{out}");
     }
-    let (code, out, _) = eyeshell(repo(), &["solve", "--help"]);
+    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["solve", "--help"]);
     assert_eq!(code, Some(0));
     assert!(
         out.contains("--set")
@@ -134,7 +117,7 @@ fn help_and_version_succeed() {
             && out.contains("--out")
             && out.contains("--quiet")
     );
-    let (code, out, _) = eyeshell(repo(), &["--version"]);
+    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["--version"]);
     assert_eq!(code, Some(0));
     assert!(out.starts_with("eyeshell "));
 }

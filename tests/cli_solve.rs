@@ -1,41 +1,14 @@
 //! `eyeshell solve` end to end: the files it writes and what they hold.
 
-use std::path::Path;
-use std::process::Command;
-
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn eyeshell(args: &[&str]) -> (Option<i32>, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .unwrap();
-    (
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn read_csv(path: &Path) -> (String, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().to_string();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
-        .collect();
-    (header, rows)
-}
+mod support;
+use support::*;
 
 #[test]
 fn solve_writes_fields_summary_and_at() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let out_s = out.to_str().unwrap();
-    let (code, stdout, stderr) = eyeshell(&[
+    let Run { code, stdout, stderr } = eyeshell(&[
         "solve",
         "scenes/default.toml",
         "--set",
@@ -52,8 +25,8 @@ fn solve_writes_fields_summary_and_at() {
     );
 
     let header = eyeshell::bvp::COLUMNS.join(",");
-    let (h, fields) = read_csv(&out.join("fields.csv"));
-    assert_eq!(h, header);
+    let (h, fields) = csv(&out.join("fields.csv"));
+    assert_eq!(h.join(","), header);
     assert!(fields
         .iter()
         .all(|r| r.len() == eyeshell::bvp::COLUMNS.len() && r.iter().all(|x| x.is_finite())));
@@ -74,8 +47,8 @@ fn solve_writes_fields_summary_and_at() {
     );
     assert!((summary["cornea_alpha"].as_f64().unwrap() - 1.0136216901111).abs() < 1e-12);
 
-    let (h, at) = read_csv(&out.join("at.csv"));
-    assert_eq!(h, header);
+    let (h, at) = csv(&out.join("at.csv"));
+    assert_eq!(h.join(","), header);
     assert_eq!(at.len(), 4);
     for (row, s) in at.iter().zip([0.001, 1.0, 12.5, 25.132741228718345]) {
         assert!((row[0] - s).abs() < 1e-12, "{row:?}");
@@ -91,7 +64,7 @@ fn solve_writes_fields_summary_and_at() {
     }
 
     // Solving again into the same directory replaces the previous output (no at.csv now).
-    let (code, stdout, stderr) = eyeshell(&[
+    let Run { code, stdout, stderr } = eyeshell(&[
         "solve",
         "scenes/default.toml",
         "--set",
@@ -103,22 +76,14 @@ fn solve_writes_fields_summary_and_at() {
     assert_eq!(code, Some(0), "{stderr}");
     assert!(stdout.is_empty());
     assert!(!out.join("at.csv").exists());
-    let names: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(
-        names,
-        vec![std::ffi::OsString::from("run")],
-        "leftovers next to the output"
-    );
+    assert_only_entry(dir.path(), "run", "next to the output");
 }
 
 #[test]
 fn exact_sphere_is_reproduced() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sphere");
-    let (code, _, stderr) = eyeshell(&[
+    let Run { code, stderr, .. } = eyeshell(&[
         "solve",
         "scenes/exact-sphere.toml",
         "--out",
@@ -126,7 +91,7 @@ fn exact_sphere_is_reproduced() {
         "--quiet",
     ]);
     assert_eq!(code, Some(0), "{stderr}");
-    let (_, fields) = read_csv(&out.join("fields.csv"));
+    let (_, fields) = csv(&out.join("fields.csv"));
     let alpha = 1.0136216901111_f64;
     for row in &fields {
         let (sigma, kappa, r, theta) = (row[1], row[2], row[4], row[5]);

@@ -2,10 +2,10 @@
 //! detects one value perturbed by 1e-6 (in a .mat file, a growth snapshot and a run's CSV),
 //! interpolates to the reference's points, and refuses bad input with exit 2.
 
-mod export_support;
+mod support;
 
 use eyeshell::output::mat::{self, MatValue};
-use export_support::*;
+use support::*;
 
 fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
     std::fs::create_dir_all(to).unwrap();

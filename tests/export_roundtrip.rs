@@ -2,11 +2,11 @@
 //! .mat (plain and miCOMPRESSED) and .npz, read back with eyeshell's readers, equals the
 //! run's CSV files bit for bit; bad targets are refused cleanly.
 
-mod export_support;
+mod support;
 
 use eyeshell::output::mat::{self, MatValue};
 use eyeshell::output::npz;
-use export_support::*;
+use support::*;
 use std::path::Path;
 
 fn var<'a>(vars: &'a [(String, MatValue)], name: &str) -> &'a MatValue {

@@ -4,9 +4,9 @@
 //! writes them by default. Runs only where `python3 -c 'import scipy'` works (.ci/run
 //! installs scipy); elsewhere it prints a note and passes.
 
-mod export_support;
+mod support;
 
-use export_support::*;
+use support::*;
 use std::process::Command;
 
 fn have_scipy() -> bool {

@@ -1,4 +1,5 @@
-//! Shared by the export_* tests: run the binary, make small runs, read CSV files back.
+//! Shared by the integration tests that run the binary: run it, assert clean failures, make
+//! small runs, read CSV files back.
 
 #![allow(dead_code)]
 
@@ -11,11 +12,16 @@ pub struct Run {
     pub stderr: String,
 }
 
-/// Run `eyeshell ARGS` in the repository (so `scenes/` resolves).
-pub fn eyeshell(args: &[&str]) -> Run {
+/// The repository root (where `scenes/` lives).
+pub fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Run `eyeshell ARGS` in `dir`.
+pub fn eyeshell_in(dir: &Path, args: &[&str]) -> Run {
     let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
         .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(dir)
         .env("CI", "1")
         .output()
         .expect("run eyeshell");
@@ -24,6 +30,11 @@ pub fn eyeshell(args: &[&str]) -> Run {
         stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
         stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
     }
+}
+
+/// Run `eyeshell ARGS` in the repository (so `scenes/` resolves).
+pub fn eyeshell(args: &[&str]) -> Run {
+    eyeshell_in(repo(), args)
 }
 
 pub fn s(p: &Path) -> &str {
@@ -47,6 +58,50 @@ pub fn assert_fails(r: &Run, code: i32, needle: &str) {
     assert!(lines[0].contains(needle), "{needle:?} not in {}", lines[0]);
 }
 
+/// Assert a clean bad-input failure (`what` says which): exit 2, one newline-terminated stderr
+/// line `eyeshell: error: ...` naming `needle`, no panic, no stdout.
+pub fn assert_bad(run: &Run, needle: &str, what: &str) {
+    assert_eq!(run.code, Some(2), "{what}: exit code, stderr: {}", run.stderr);
+    assert!(!run.stderr.contains("panicked"), "{what}: panic: {}", run.stderr);
+    let lines: Vec<&str> = run.stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{what}: stderr must be one line: {:?}", run.stderr);
+    assert!(run.stderr.ends_with('\n'), "{what}: {:?}", run.stderr);
+    assert!(lines[0].starts_with("eyeshell: error: "), "{what}: {}", lines[0]);
+    assert!(lines[0].contains(needle), "{what}: {needle:?} not named in: {}", lines[0]);
+    assert!(run.stdout.is_empty(), "{what}: stdout: {}", run.stdout);
+}
+
+/// Assert that `dir` holds exactly one entry, `name`.
+pub fn assert_only_entry(dir: &Path, name: &str, what: &str) {
+    let names: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from(name)], "{what}: leftovers");
+}
+
+/// `eyeshell CMD scene.toml --set ... --out out`, with `scene` written to a fresh directory,
+/// must fail cleanly naming `needle` (and `origin` first), and leave the directory as it was.
+pub fn fails(cmd: &str, scene: &str, sets: &[&str], needle: &str, origin: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("scene.toml"), scene).unwrap();
+    let mut args = vec![cmd, "scene.toml", "--out", "out"];
+    for s in sets {
+        args.push("--set");
+        args.push(s);
+    }
+    let what = format!("{cmd} {scene:?} --set {sets:?}");
+    let run = eyeshell_in(dir.path(), &args);
+    assert_bad(&run, needle, &what);
+    assert!(
+        run.stderr.starts_with(&format!("eyeshell: error: {origin}")),
+        "{what}: {}",
+        run.stderr
+    );
+    assert!(!dir.path().join("out").exists(), "{what}: out/ was created");
+    assert_only_entry(dir.path(), "scene.toml", &what);
+}
+
 /// The small runs of the brief: an elastic solve (N = 21) and the const growth scene (N = 21,
 /// rtol 1e-3), in `dir/solve` and `dir/grow`.
 pub fn small_runs(dir: &Path) -> (PathBuf, PathBuf) {
@@ -60,13 +115,23 @@ pub fn small_runs(dir: &Path) -> (PathBuf, PathBuf) {
     (solve, grow)
 }
 
-/// A CSV file: header and rows of f64 (every value parsed exactly).
-pub fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+/// A CSV file as text: header cells and rows of cells.
+pub fn csv_cells(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
     let header = lines.next().unwrap().split(',').map(String::from).collect();
     let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+/// A CSV file: header and rows of f64 (every value parsed exactly).
+pub fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let (header, cells) = csv_cells(path);
+    let rows = cells
+        .iter()
+        .map(|r| r.iter().map(|v| v.parse().unwrap()).collect())
         .collect();
     (header, rows)
 }
