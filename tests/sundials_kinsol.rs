@@ -2,45 +2,13 @@
 //! KINSOL through the safe layer: the same roots with every linear solver, typed errors for
 //! failing and panicking callbacks, non-convergence, and many create/drop cycles.
 
+mod sundials_support;
+use sundials_support::*;
+
 use eyeshell::sundials::{
     klu_available, CallbackError, CallbackResult, JacobianMatrix, Kinsol, KinsolOptions,
     LinearSolverSpec, MatrixSink, NonlinearSystem, Strategy, SundialsError,
 };
-
-fn tight() -> KinsolOptions {
-    KinsolOptions {
-        strategy: Strategy::LineSearch,
-        fnorm_tol: 1e-11,
-        scaled_step_tol: 1e-15,
-        max_iterations: 100,
-        max_setup_calls: 1,
-        max_newton_step: None,
-        reuse_factorization: false,
-    }
-}
-
-/// Full CSR pattern of a matrix with bandwidths (upper, lower).
-fn band_pattern(n: usize, upper: usize, lower: usize) -> (Vec<usize>, Vec<usize>) {
-    let mut row_ptr = vec![0];
-    let mut col_idx = Vec::new();
-    for i in 0..n {
-        col_idx.extend(i.saturating_sub(lower)..(i + upper + 1).min(n));
-        row_ptr.push(col_idx.len());
-    }
-    (row_ptr, col_idx)
-}
-
-fn specs(n: usize, upper: usize, lower: usize) -> Vec<(&'static str, LinearSolverSpec)> {
-    let mut v = vec![
-        ("dense", LinearSolverSpec::Dense),
-        ("band", LinearSolverSpec::Band { upper, lower }),
-    ];
-    if klu_available() {
-        let (row_ptr, col_idx) = band_pattern(n, upper, lower);
-        v.push(("klu", LinearSolverSpec::Klu { row_ptr, col_idx }));
-    }
-    v
-}
 
 /// F = (10 (u1 - u0²), 1 - u0): Rosenbrock's valley as a root problem, root (1, 1).
 struct Rosenbrock;

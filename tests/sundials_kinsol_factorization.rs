@@ -3,43 +3,18 @@
 //! KINSOL's last Jacobian setup, for dense, band and KLU; Invalid before any setup and after
 //! a failed one.
 
+mod sundials_support;
+use sundials_support::*;
+
 use eyeshell::sundials::{
-    klu_available, CallbackError, CallbackResult, JacobianMatrix, Kinsol, KinsolOptions,
-    LinearSolverSpec, MatrixSink, NonlinearSystem, Strategy, SundialsError,
+    CallbackError, CallbackResult, JacobianMatrix, Kinsol, KinsolOptions, MatrixSink,
+    NonlinearSystem, Strategy, SundialsError,
 };
 use nalgebra::{DMatrix, DVector};
 
 /// Exact Newton: a fresh Jacobian (and factorisation) at every iteration.
 fn exact_newton() -> KinsolOptions {
-    KinsolOptions {
-        strategy: Strategy::Newton,
-        fnorm_tol: 1e-12,
-        scaled_step_tol: 1e-15,
-        max_iterations: 50,
-        max_setup_calls: 1,
-        max_newton_step: None,
-        reuse_factorization: false,
-    }
-}
-
-/// Full CSR pattern of a matrix with bandwidths (upper, lower).
-fn band_pattern(n: usize, upper: usize, lower: usize) -> (Vec<usize>, Vec<usize>) {
-    let mut row_ptr = vec![0];
-    let mut col_idx = Vec::new();
-    for i in 0..n {
-        col_idx.extend(i.saturating_sub(lower)..(i + upper + 1).min(n));
-        row_ptr.push(col_idx.len());
-    }
-    (row_ptr, col_idx)
-}
-
-fn specs(n: usize, upper: usize, lower: usize) -> Vec<(&'static str, LinearSolverSpec)> {
-    let mut v = vec![("dense", LinearSolverSpec::Dense), ("band", LinearSolverSpec::Band { upper, lower })];
-    if klu_available() {
-        let (row_ptr, col_idx) = band_pattern(n, upper, lower);
-        v.push(("klu", LinearSolverSpec::Klu { row_ptr, col_idx }));
-    }
-    v
+    KinsolOptions { strategy: Strategy::Newton, fnorm_tol: 1e-12, max_iterations: 50, ..tight() }
 }
 
 /// A deterministic pseudo-random vector in [-1, 1].
