@@ -29,19 +29,21 @@ fn cold_and_warm(c: &mut Criterion) {
     g.finish();
 }
 
-/// Cost per node: a cold solve over N from 101 to 20001 (linear in N if the band holds).
+/// Cost per node: cold and warm solves over N from 101 to 20001 (linear in N if the band
+/// holds). Warm: from the solution at a 1 % higher pressure.
 fn scaling(c: &mut Criterion) {
     let p = fibre_shell();
-    let mut g = c.benchmark_group("cold_solve_by_nodes");
-    g.sample_size(10);
-    for n in [101usize, 501, 2001, 20001] {
-        g.throughput(Throughput::Elements(n as u64));
-        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, &n| {
+    for warm in [false, true] {
+        let mut g = c.benchmark_group(if warm { "warm_solve_by_nodes" } else { "cold_solve_by_nodes" });
+        g.sample_size(10);
+        for n in [101usize, 501, 2001, 20001] {
             let s = settings(n);
-            b.iter(|| bvp::solve(black_box(&p), &s, None).unwrap())
-        });
+            let near = warm.then(|| bvp::solve(&Params { dp: p.dp * 1.01, ..p }, &s, None).unwrap());
+            g.throughput(Throughput::Elements(n as u64));
+            g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| b.iter(|| bvp::solve(black_box(&p), &s, near.as_ref()).unwrap()));
+        }
+        g.finish();
     }
-    g.finish();
 }
 
 /// A sink that only touches the band entries, to time assembly without SUNDIALS.
