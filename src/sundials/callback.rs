@@ -15,6 +15,8 @@ use std::os::raw::{c_char, c_int, c_void};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::ptr::NonNull;
 
+use super::error::{flag_error, FlagFamily, SundialsError};
+
 /// How a user callback failed.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum CallbackError {
@@ -137,6 +139,27 @@ impl ErrorLog {
             .find(|(code, _)| *code < 0)
             .or_else(|| self.entries.last())
             .map(|(_, m)| m.clone())
+    }
+}
+
+impl RawBox<ErrorLog> {
+    /// Call a SUNDIALS function with this log as its error handler's data, and turn its flag
+    /// (with the captured message) into a Result.
+    pub(crate) fn call(
+        &mut self,
+        function: &'static str,
+        family: FlagFamily,
+        f: impl FnOnce() -> c_int,
+    ) -> Result<(), SundialsError> {
+        // SAFETY: no callback is running, so no other reference to the log exists.
+        unsafe { self.get_mut().clear() };
+        let flag = f();
+        if flag == 0 {
+            return Ok(());
+        }
+        // SAFETY: as above.
+        let message = unsafe { self.get().last_message() };
+        Err(flag_error(function, flag, family, message))
     }
 }
 

@@ -303,74 +303,61 @@ impl<S: OdeSystem> Cvode<S> {
         // SAFETY (all calls): `mem` is live CVODE memory; the error log, the user data, the
         // vectors, linear solver and matrix all outlive it (field order). CVODE copies y0 and
         // the absolute tolerances.
-        self.call("CVodeSetErrHandlerFn", Cv, || unsafe { CVodeSetErrHandlerFn(mem, Some(error_handler), log) })?;
-        self.call("CVodeSetUserData", Cv, || unsafe { CVodeSetUserData(mem, data) })?;
-        self.call("CVodeInit", Cv, || unsafe { CVodeInit(mem, Some(rhs_trampoline::<S>), t0, y0) })?;
+        self.log.call("CVodeSetErrHandlerFn", Cv, || unsafe { CVodeSetErrHandlerFn(mem, Some(error_handler), log) })?;
+        self.log.call("CVodeSetUserData", Cv, || unsafe { CVodeSetUserData(mem, data) })?;
+        self.log.call("CVodeInit", Cv, || unsafe { CVodeInit(mem, Some(rhs_trampoline::<S>), t0, y0) })?;
         match &options.atol_vector {
-            None => self.call("CVodeSStolerances", Cv, || unsafe { CVodeSStolerances(mem, options.rtol, options.atol) })?,
+            None => self.log.call("CVodeSStolerances", Cv, || unsafe { CVodeSStolerances(mem, options.rtol, options.atol) })?,
             Some(atol) => {
                 let atol = NVector::from_slice(&self._ctx, atol)?;
-                self.call("CVodeSVtolerances", Cv, || unsafe { CVodeSVtolerances(mem, options.rtol, atol.raw()) })?;
+                self.log.call("CVodeSVtolerances", Cv, || unsafe { CVodeSVtolerances(mem, options.rtol, atol.raw()) })?;
             }
         }
-        self.call("CVodeSetLinearSolver", CvLs, || unsafe { CVodeSetLinearSolver(mem, ls, a) })?;
+        self.log.call("CVodeSetLinearSolver", CvLs, || unsafe { CVodeSetLinearSolver(mem, ls, a) })?;
         match *linear {
             CvodeLinearSolver::Spgmr { user_product, preconditioned, .. } => {
                 if user_product {
-                    self.call("CVodeSetJacTimes", CvLs, || unsafe {
+                    self.log.call("CVodeSetJacTimes", CvLs, || unsafe {
                         CVodeSetJacTimes(mem, Some(jac_times_setup_trampoline::<S>), Some(jac_times_trampoline::<S>))
                     })?;
                 }
                 if preconditioned {
-                    self.call("CVodeSetPreconditioner", CvLs, || unsafe {
+                    self.log.call("CVodeSetPreconditioner", CvLs, || unsafe {
                         CVodeSetPreconditioner(mem, Some(precond_setup_trampoline::<S>), Some(precond_solve_trampoline::<S>))
                     })?;
                 }
             }
             CvodeLinearSolver::Dense { user_jacobian } | CvodeLinearSolver::Band { user_jacobian, .. } => {
                 if user_jacobian {
-                    self.call("CVodeSetJacFn", CvLs, || unsafe { CVodeSetJacFn(mem, Some(jacobian_trampoline::<S>)) })?;
+                    self.log.call("CVodeSetJacFn", CvLs, || unsafe { CVodeSetJacFn(mem, Some(jacobian_trampoline::<S>)) })?;
                 }
             }
         }
         let long = |n: usize| c_long::try_from(n).unwrap_or(c_long::MAX);
-        self.call("CVodeSetMaxNumSteps", Cv, || unsafe { CVodeSetMaxNumSteps(mem, long(options.max_steps)) })?;
+        self.log.call("CVodeSetMaxNumSteps", Cv, || unsafe { CVodeSetMaxNumSteps(mem, long(options.max_steps)) })?;
         let q = to_int("max_order", options.max_order)?;
-        self.call("CVodeSetMaxOrd", Cv, || unsafe { CVodeSetMaxOrd(mem, q) })?;
+        self.log.call("CVodeSetMaxOrd", Cv, || unsafe { CVodeSetMaxOrd(mem, q) })?;
         if let Some(h) = options.initial_step {
-            self.call("CVodeSetInitStep", Cv, || unsafe { CVodeSetInitStep(mem, h) })?;
+            self.log.call("CVodeSetInitStep", Cv, || unsafe { CVodeSetInitStep(mem, h) })?;
         }
         if let Some(h) = options.max_step {
-            self.call("CVodeSetMaxStep", Cv, || unsafe { CVodeSetMaxStep(mem, h) })?;
+            self.log.call("CVodeSetMaxStep", Cv, || unsafe { CVodeSetMaxStep(mem, h) })?;
         }
         if let Some(t) = options.stop_time {
-            self.call("CVodeSetStopTime", Cv, || unsafe { CVodeSetStopTime(mem, t) })?;
+            self.log.call("CVodeSetStopTime", Cv, || unsafe { CVodeSetStopTime(mem, t) })?;
         }
         if let Some(k) = options.max_error_test_failures {
             let k = to_int("max_error_test_failures", k)?;
-            self.call("CVodeSetMaxErrTestFails", Cv, || unsafe { CVodeSetMaxErrTestFails(mem, k) })?;
+            self.log.call("CVodeSetMaxErrTestFails", Cv, || unsafe { CVodeSetMaxErrTestFails(mem, k) })?;
         }
         if let Some(k) = options.max_convergence_failures {
             let k = to_int("max_convergence_failures", k)?;
-            self.call("CVodeSetMaxConvFails", Cv, || unsafe { CVodeSetMaxConvFails(mem, k) })?;
+            self.log.call("CVodeSetMaxConvFails", Cv, || unsafe { CVodeSetMaxConvFails(mem, k) })?;
         }
         if let Some(eps) = options.linear_tolerance_factor {
-            self.call("CVodeSetEpsLin", CvLs, || unsafe { CVodeSetEpsLin(mem, eps) })?;
+            self.log.call("CVodeSetEpsLin", CvLs, || unsafe { CVodeSetEpsLin(mem, eps) })?;
         }
         Ok(())
-    }
-
-    /// Call a CVODE function and turn its flag (with the captured message) into a Result.
-    fn call(&mut self, function: &'static str, family: FlagFamily, f: impl FnOnce() -> c_int) -> Result<(), SundialsError> {
-        // SAFETY: no callback is running, so no other reference to the log exists.
-        unsafe { self.log.get_mut().clear() };
-        let flag = f();
-        if flag == 0 {
-            return Ok(());
-        }
-        // SAFETY: as above.
-        let message = unsafe { self.log.get().last_message() };
-        Err(flag_error(function, flag, family, message))
     }
 
     pub fn n(&self) -> usize {
@@ -442,7 +429,7 @@ impl<S: OdeSystem> Cvode<S> {
         self.y.as_mut_slice().copy_from_slice(y0);
         let (mem, y) = (self.mem.0, self.y.raw());
         // SAFETY: mem and y are live; CVODE copies y.
-        self.call("CVodeReInit", FlagFamily::Cv, || unsafe { CVodeReInit(mem, t0, y) })
+        self.log.call("CVodeReInit", FlagFamily::Cv, || unsafe { CVodeReInit(mem, t0, y) })
     }
 
     /// Do not step past `t` (CVodeSetStopTime): [`advance_to`](Self::advance_to) and
@@ -456,7 +443,7 @@ impl<S: OdeSystem> Cvode<S> {
         }
         let mem = self.mem.0;
         // SAFETY: mem is live.
-        self.call("CVodeSetStopTime", FlagFamily::Cv, || unsafe { CVodeSetStopTime(mem, t) })
+        self.log.call("CVodeSetStopTime", FlagFamily::Cv, || unsafe { CVodeSetStopTime(mem, t) })
     }
 
     /// Dense output of the last step: y at any t within it (CVodeGetDky, k = 0).

@@ -183,28 +183,15 @@ impl<S: NonlinearSystem> Kinsol<S> {
         let a = unsafe { self.shared.get().matrix.raw() };
         // SAFETY (all calls): `mem` is live KINSOL memory; the error log, the user data, the
         // template vector, linear solver and matrix all outlive it (field order).
-        self.call("KINSetErrHandlerFn", FlagFamily::Kin, || unsafe {
+        self.log.call("KINSetErrHandlerFn", FlagFamily::Kin, || unsafe {
             KINSetErrHandlerFn(mem, Some(error_handler), log)
         })?;
-        self.call("KINSetPrintLevel", FlagFamily::Kin, || unsafe { KINSetPrintLevel(mem, 0) })?;
-        self.call("KINSetUserData", FlagFamily::Kin, || unsafe { KINSetUserData(mem, data) })?;
-        self.call("KINInit", FlagFamily::Kin, || unsafe { KINInit(mem, Some(residual_trampoline::<S>), tmpl) })?;
-        self.call("KINSetLinearSolver", FlagFamily::KinLs, || unsafe { KINSetLinearSolver(mem, ls, a) })?;
-        self.call("KINSetJacFn", FlagFamily::KinLs, || unsafe { KINSetJacFn(mem, Some(jacobian_trampoline::<S>)) })?;
+        self.log.call("KINSetPrintLevel", FlagFamily::Kin, || unsafe { KINSetPrintLevel(mem, 0) })?;
+        self.log.call("KINSetUserData", FlagFamily::Kin, || unsafe { KINSetUserData(mem, data) })?;
+        self.log.call("KINInit", FlagFamily::Kin, || unsafe { KINInit(mem, Some(residual_trampoline::<S>), tmpl) })?;
+        self.log.call("KINSetLinearSolver", FlagFamily::KinLs, || unsafe { KINSetLinearSolver(mem, ls, a) })?;
+        self.log.call("KINSetJacFn", FlagFamily::KinLs, || unsafe { KINSetJacFn(mem, Some(jacobian_trampoline::<S>)) })?;
         Ok(())
-    }
-
-    /// Call a KINSOL function and turn its flag (with the captured message) into a Result.
-    fn call(&mut self, function: &'static str, family: FlagFamily, f: impl FnOnce() -> c_int) -> Result<(), SundialsError> {
-        // SAFETY: no callback is running, so no other reference to the log exists.
-        unsafe { self.log.get_mut().clear() };
-        let flag = f();
-        if flag == 0 {
-            return Ok(());
-        }
-        // SAFETY: as above.
-        let message = unsafe { self.log.get().last_message() };
-        Err(flag_error(function, flag, family, message))
     }
 
     pub fn set_options(&mut self, options: &KinsolOptions) -> Result<(), SundialsError> {
@@ -226,13 +213,13 @@ impl<S: NonlinearSystem> Kinsol<S> {
         let mem = self.mem.0;
         let long = |n: usize| c_long::try_from(n).unwrap_or(c_long::MAX);
         // SAFETY (all calls): `mem` is live KINSOL memory; the arguments are plain numbers.
-        self.call("KINSetFuncNormTol", FlagFamily::Kin, || unsafe { KINSetFuncNormTol(mem, options.fnorm_tol) })?;
-        self.call("KINSetScaledStepTol", FlagFamily::Kin, || unsafe { KINSetScaledStepTol(mem, options.scaled_step_tol) })?;
-        self.call("KINSetNumMaxIters", FlagFamily::Kin, || unsafe { KINSetNumMaxIters(mem, long(options.max_iterations)) })?;
-        self.call("KINSetMaxSetupCalls", FlagFamily::Kin, || unsafe { KINSetMaxSetupCalls(mem, long(options.max_setup_calls)) })?;
+        self.log.call("KINSetFuncNormTol", FlagFamily::Kin, || unsafe { KINSetFuncNormTol(mem, options.fnorm_tol) })?;
+        self.log.call("KINSetScaledStepTol", FlagFamily::Kin, || unsafe { KINSetScaledStepTol(mem, options.scaled_step_tol) })?;
+        self.log.call("KINSetNumMaxIters", FlagFamily::Kin, || unsafe { KINSetNumMaxIters(mem, long(options.max_iterations)) })?;
+        self.log.call("KINSetMaxSetupCalls", FlagFamily::Kin, || unsafe { KINSetMaxSetupCalls(mem, long(options.max_setup_calls)) })?;
         // 0 asks KINSOL for its default.
         let step = options.max_newton_step.unwrap_or(0.0);
-        self.call("KINSetMaxNewtonStep", FlagFamily::Kin, || unsafe { KINSetMaxNewtonStep(mem, step) })?;
+        self.log.call("KINSetMaxNewtonStep", FlagFamily::Kin, || unsafe { KINSetMaxNewtonStep(mem, step) })?;
         self.options = options.clone();
         Ok(())
     }
@@ -285,7 +272,7 @@ impl<S: NonlinearSystem> Kinsol<S> {
         let no_init_setup = self.options.reuse_factorization && self.factored;
         // SAFETY: `mem` is live KINSOL memory; the argument is a plain boolean.
         let mem = self.mem.0;
-        self.call("KINSetNoInitSetup", FlagFamily::Kin, || unsafe { KINSetNoInitSetup(mem, no_init_setup as _) })?;
+        self.log.call("KINSetNoInitSetup", FlagFamily::Kin, || unsafe { KINSetNoInitSetup(mem, no_init_setup as _) })?;
         // SAFETY: every handle is live; during the call the only references to the shared
         // state and the log are the short-lived ones the trampolines create.
         let flag = unsafe { KINSol(self.mem.0, self.u.raw(), strategy, self.u_scale.raw(), self.f_scale.raw()) };
