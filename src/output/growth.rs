@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use super::{format_value, inspect, num, OutputError, Target, SUMMARY_FILE};
+use super::{format_value, inspect, num, write_atomic, OutputError, Target, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
 use crate::growth::{GrowthError, GrowthStats, Observer, SeriesRow, Snapshot, GROWTH_COLUMNS};
 use crate::scene::Scene;
@@ -180,22 +180,6 @@ fn one_line(s: &str) -> String {
         .collect()
 }
 
-/// Write `text` to `path` through a temporary sibling and a rename: never half-written.
-fn write_atomic(path: &Path, text: &[u8]) -> Result<(), OutputError> {
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let tmp = path.with_file_name(format!(".{name}.tmp"));
-    let write = || -> std::io::Result<()> {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(text)?;
-        f.flush()
-    };
-    if let Err(e) = write() {
-        let _ = fs::remove_file(&tmp);
-        return Err(OutputError::io(&tmp, e));
-    }
-    fs::rename(&tmp, path).map_err(|e| OutputError::io(path, e))
-}
-
 /// Writes a growth run into its output directory as the results come; an [`Observer`] of
 /// [`crate::growth::grow`].
 #[derive(Debug)]
@@ -300,7 +284,7 @@ impl GrowthWriter {
             text.push_str(&line);
             text.push('\n');
         }
-        write_atomic(&path, text.as_bytes())?;
+        write_atomic(&path, text.as_bytes()).map_err(|e| OutputError::io(&path, e))?;
         let series_path = self.dir.join(SERIES_FILE);
         writeln!(self.series, "{}", series_line(&s.series))
             .and_then(|_| self.series.flush())
@@ -324,7 +308,8 @@ impl GrowthWriter {
         let mut text = serde_json::to_string_pretty(&v)
             .map_err(|e| OutputError::io(&self.dir.join(SUMMARY_FILE), std::io::Error::other(e)))?;
         text.push('\n');
-        write_atomic(&self.dir.join(SUMMARY_FILE), text.as_bytes())
+        let path = self.dir.join(SUMMARY_FILE);
+        write_atomic(&path, text.as_bytes()).map_err(|e| OutputError::io(&path, e))
     }
 
     /// The run reached its end: write summary.json with `"status": "ok"` and `stats`.

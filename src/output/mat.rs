@@ -24,6 +24,8 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use super::write_atomic;
+
 /// `miINT8`.
 const MI_INT8: u32 = 1;
 /// `miINT32`.
@@ -274,24 +276,6 @@ pub fn encode(vars: &[(String, MatValue)], compress: bool) -> Result<Vec<u8>, Ma
         }
     }
     Ok(out)
-}
-
-/// Write `bytes` to `path` through a temporary sibling and a rename: never half-written.
-pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), std::io::Error> {
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let write = || -> std::io::Result<()> {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.flush()
-    };
-    if let Err(e) = write() {
-        let _ = fs::remove_file(&tmp);
-        return Err(e);
-    }
-    fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = fs::remove_file(&tmp);
-    })
 }
 
 /// Write `vars` to the .mat file `path` (atomically).

@@ -263,6 +263,24 @@ pub fn write_fields_csv(path: &Path, rows: &[FieldRow]) -> Result<(), OutputErro
     write().map_err(|e| OutputError::io(path, e))
 }
 
+/// Write `bytes` to `path` through a temporary sibling and a rename: never half-written.
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), std::io::Error> {
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.flush()
+    };
+    if let Err(e) = write() {
+        let _ = fs::remove_file(&tmp);
+        return Err(e);
+    }
+    fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = fs::remove_file(&tmp);
+    })
+}
+
 /// The SUNDIALS version the binary is linked against, if the sundials layer reports it.
 pub fn sundials_version() -> Option<String> {
     Some(crate::sundials::version())

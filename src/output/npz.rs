@@ -9,7 +9,7 @@
 use std::io::{Read, Write};
 use std::path::Path;
 
-use super::mat::write_atomic;
+use super::write_atomic;
 
 /// One array: its shape (`[]` for a scalar) and its values in C order.
 #[derive(Clone, Debug, PartialEq)]

@@ -10,7 +10,6 @@ pub mod wpd;
 use crate::bvp::{BvpError, FieldRow, Solution};
 use crate::growth::{GrowthError, GrowthParams, GrowthSettings, GrowthStats};
 use crate::model::params::{Params, SolverSettings};
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
@@ -110,16 +109,13 @@ pub fn points(lo: f64, hi: f64, count: usize) -> Vec<f64> {
 
 /// Write a CSV table (header, then rows of already formatted cells) atomically.
 pub fn write_csv(path: &Path, header: &[String], rows: &[Vec<String>]) -> Result<(), StudyError> {
-    let io = |source| StudyError::Io { path: path.to_path_buf(), source };
-    let tmp = path.with_extension("csv.tmp");
-    let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(io)?);
-    writeln!(f, "{}", header.join(",")).map_err(io)?;
+    let mut text = header.join(",") + "\n";
     for r in rows {
-        writeln!(f, "{}", r.join(",")).map_err(io)?;
+        text.push_str(&r.join(","));
+        text.push('\n');
     }
-    f.flush().map_err(io)?;
-    drop(f);
-    std::fs::rename(&tmp, path).map_err(io)
+    crate::output::write_atomic(path, text.as_bytes())
+        .map_err(|source| StudyError::Io { path: path.to_path_buf(), source })
 }
 
 /// A number for a CSV cell (shortest round-trip form; empty for NaN).
