@@ -168,24 +168,7 @@ fn at_points_are_checked_before_solving() {
 
 #[test]
 fn a_foreign_output_directory_is_refused_and_untouched() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("s.toml"), "").unwrap();
-    std::fs::create_dir(dir.path().join("data")).unwrap();
-    std::fs::write(dir.path().join("data/precious.txt"), "keep").unwrap();
-    let run = eyeshell_in(dir.path(), &["solve", "s.toml", "--out", "data"]);
-    assert_bad(
-        &run,
-        "data: exists and is not an eyeshell output directory",
-        "foreign dir",
-    );
-    assert_eq!(
-        std::fs::read_to_string(dir.path().join("data/precious.txt")).unwrap(),
-        "keep"
-    );
-    assert_eq!(
-        std::fs::read_dir(dir.path().join("data")).unwrap().count(),
-        1
-    );
+    let dir = foreign_dir_is_refused("solve", "");
     std::fs::write(dir.path().join("file"), "x").unwrap();
     let run = eyeshell_in(dir.path(), &["solve", "s.toml", "--out", "file/inside/out"]);
     assert_bad(

@@ -70,20 +70,7 @@ fn a_scene_without_growth_is_refused_by_grow() {
 
 #[test]
 fn grow_refuses_a_foreign_directory_and_leaves_it_alone() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("s.toml"), "growth.eta0 = 70\n").unwrap();
-    std::fs::create_dir(dir.path().join("data")).unwrap();
-    std::fs::write(dir.path().join("data/precious.txt"), "keep").unwrap();
-    let run = eyeshell_in(dir.path(), &["grow", "s.toml", "--out", "data"]);
-    assert_bad(
-        &run,
-        "data: exists and is not an eyeshell output directory",
-        "foreign",
-    );
-    assert_eq!(
-        std::fs::read_dir(dir.path().join("data")).unwrap().count(),
-        1
-    );
+    let dir = foreign_dir_is_refused("grow", "growth.eta0 = 70\n");
     let run = eyeshell_in(dir.path(), &["grow", "s.toml"]);
     assert_bad(&run, "--out", "no --out");
 }

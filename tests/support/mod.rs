@@ -102,6 +102,21 @@ pub fn fails(cmd: &str, scene: &str, sets: &[&str], needle: &str, origin: &str) 
     assert_only_entry(dir.path(), "scene.toml", &what);
 }
 
+/// In a fresh directory holding `s.toml` (with `scene`) and a foreign `data/precious.txt`,
+/// `eyeshell CMD s.toml --out data` must be refused and leave `data/` as it was. Returns the
+/// directory for further runs.
+pub fn foreign_dir_is_refused(cmd: &str, scene: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+    std::fs::create_dir(dir.path().join("data")).unwrap();
+    std::fs::write(dir.path().join("data/precious.txt"), "keep").unwrap();
+    let run = eyeshell_in(dir.path(), &[cmd, "s.toml", "--out", "data"]);
+    assert_bad(&run, "data: exists and is not an eyeshell output directory", "foreign dir");
+    assert_eq!(std::fs::read_to_string(dir.path().join("data/precious.txt")).unwrap(), "keep");
+    assert_eq!(std::fs::read_dir(dir.path().join("data")).unwrap().count(), 1);
+    dir
+}
+
 /// The small runs of the brief: an elastic solve (N = 21) and the const growth scene (N = 21,
 /// rtol 1e-3), in `dir/solve` and `dir/grow`.
 pub fn small_runs(dir: &Path) -> (PathBuf, PathBuf) {
