@@ -328,20 +328,40 @@ impl ElasticSolver {
     /// Newton from the current unknowns; on success they hold the root. A one-shot solve
     /// ends with a polishing correction; growth's re-solves (`set_jacobian_reuse`) do not,
     /// as their accuracy is far below CVODE's tolerances and their factorisations are reused.
+    /// If modified Newton fails, the solve is retried once from the same start by exact
+    /// Newton with the line search.
     pub fn newton(&mut self) -> Result<(), BvpError> {
-        let polished = !self.kin.options().reuse_factorization;
+        let reusing = self.kin.options().reuse_factorization;
+        let start = reusing.then(|| self.u.clone());
         let ElasticSolver { kin, u, work, params, .. } = self;
-        newton(kin, u, params.r0, work, polished)
+        let first = newton(kin, u, params.r0, work, !reusing);
+        let (Err(_), Some(start)) = (&first, start) else {
+            return first;
+        };
+        let reuse = self.kin.options().clone();
+        self.kin.set_options(&kinsol_options(&self.settings))?;
+        self.u = start;
+        let ElasticSolver { kin, u, work, params, .. } = self;
+        let retry = newton(kin, u, params.r0, work, false);
+        self.kin.set_options(&reuse)?;
+        retry
     }
 
     /// For a sequence of nearby problems (growth): start each Newton solve from the previous
     /// factorisation and refactor only every `refactor_every` iterations (modified Newton),
     /// or go back to exact Newton with `None`.
+    ///
+    /// Modified Newton runs without KINSOL's line search: with a factorisation carried over
+    /// (KINSetNoInitSetup) a failed line search made KINSOL 6.4 spin inside KINSol for ever
+    /// (seen with η0 = 1e4: it never called back again). Plain steps from a warm start
+    /// converge as fast (const scene: the same 597 iterations), and a failure falls back to
+    /// exact Newton with the line search (see [`Self::newton`]).
     pub fn set_jacobian_reuse(&mut self, refactor_every: Option<usize>) -> Result<(), BvpError> {
         let mut options = kinsol_options(&self.settings);
         if let Some(k) = refactor_every {
             options.reuse_factorization = true;
             options.max_setup_calls = k.max(1);
+            options.strategy = Strategy::Newton;
         }
         self.kin.set_options(&options)?;
         Ok(())
