@@ -146,7 +146,7 @@ mod tests {
 
     #[test]
     fn halving_keeps_every_node_and_breakpoint() {
-        let bps = [1.5707963267948966, 15.707963267948966];
+        let bps = [std::f64::consts::FRAC_PI_2, 5.0 * std::f64::consts::PI];
         let m = Mesh::new(1e-3, 25.0, 51, &bps, true);
         let h = m.halved();
         assert_eq!(h.len(), 2 * m.len() - 1);
@@ -161,7 +161,7 @@ mod tests {
 
     #[test]
     fn breakpoints_become_nodes() {
-        let bps = [1.5707963267948966, 3.9269908169872414, 15.707963267948966];
+        let bps = [std::f64::consts::FRAC_PI_2, 1.25 * std::f64::consts::PI, 5.0 * std::f64::consts::PI];
         let m = Mesh::new(1e-3, 8.0 * std::f64::consts::PI, 101, &bps, true);
         for (k, &b) in bps.iter().enumerate() {
             assert_eq!(m.nodes[m.breakpoint_nodes[k]], b);

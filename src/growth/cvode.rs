@@ -43,7 +43,7 @@ pub fn integrate(
     t_end: f64,
     settings: &GrowthSettings,
     times: &[f64],
-    output: &mut dyn FnMut(&mut GrowthSystem, f64, &[f64]) -> Result<(), crate::Error>,
+    output: &mut super::OutputFn<'_>,
     progress: &mut dyn FnMut(f64),
 ) -> (CvodeStats, Result<(), (f64, String)>) {
     let options = CvodeOptions {
@@ -67,7 +67,7 @@ fn run(
     n: usize,
     t_end: f64,
     times: &[f64],
-    output: &mut dyn FnMut(&mut GrowthSystem, f64, &[f64]) -> Result<(), crate::Error>,
+    output: &mut super::OutputFn<'_>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(), (f64, String)> {
     let mut y = vec![0.0; n];

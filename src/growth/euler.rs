@@ -13,7 +13,7 @@ pub fn integrate(
     t_end: f64,
     steps: usize,
     times: &[f64],
-    output: &mut dyn FnMut(&mut GrowthSystem, f64, &[f64]) -> Result<(), crate::Error>,
+    output: &mut super::OutputFn<'_>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Vec<f64>, (f64, EulerError)> {
     let dt = t_end / steps as f64;

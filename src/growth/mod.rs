@@ -179,6 +179,9 @@ pub fn grow(
     )
 }
 
+/// What receives the growth state at each output time: `output(sys, t, p)`.
+pub type OutputFn<'a> = dyn FnMut(&mut system::GrowthSystem, f64, &[f64]) -> Result<(), crate::Error> + 'a;
+
 /// The growth run behind [`grow`], for callers that want the system itself at each output
 /// time (t = 0, the output times, t_end): `output(sys, t, p)` with p the growth state.
 pub fn run(
@@ -186,7 +189,7 @@ pub fn run(
     solver: &crate::model::params::SolverSettings,
     growth: &GrowthParams,
     settings: &GrowthSettings,
-    output: &mut dyn FnMut(&mut system::GrowthSystem, f64, &[f64]) -> Result<(), crate::Error>,
+    output: &mut OutputFn<'_>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<GrowthStats, GrowthError> {
     let start = std::time::Instant::now();

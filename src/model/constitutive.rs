@@ -193,10 +193,11 @@ mod stiff_fibres {
     fn inverse_finds_roots_on_the_fibre_kink() {
         let law = Law { c: 100.0, d: Some(1e5) };
         for k in 0..400 {
-            let f = Some(FibreDirection::from_angle(0.2 + 1.2 * (k % 20) as f64 / 20.0));
+            let dir = FibreDirection::from_angle(0.2 + 1.2 * (k % 20) as f64 / 20.0);
+            let f = Some(dir);
             let phi = 0.95 + 0.1 * (k / 20) as f64 / 20.0;
             // The stretch at which the fibres come taut, and points around it.
-            let kink = ((1.0 - phi * phi * f.unwrap().cos2) / f.unwrap().sin2).max(0.0).sqrt();
+            let kink = ((1.0 - phi * phi * dir.cos2) / dir.sin2).max(0.0).sqrt();
             for a in [0.9, kink * (1.0 - 1e-12), kink, kink * (1.0 + 1e-12), 1.05] {
                 if !(a > 0.0) {
                     continue;

@@ -27,7 +27,7 @@ pub enum StudyError {
     #[error("{what}: {source}")]
     Elastic { what: String, source: BvpError },
     #[error("{what}: {source}")]
-    Growth { what: String, source: GrowthError },
+    Growth { what: String, source: Box<GrowthError> },
     #[error("{0}")]
     Invalid(String),
     #[error("{}: {source}", path.display())]
@@ -70,7 +70,7 @@ pub fn run(params: &Params, solver: &SolverSettings, growth: Option<(&GrowthPara
                 },
                 &mut |_| {},
             )
-            .map_err(|source| StudyError::Growth { what: what.into(), source })?;
+            .map_err(|source| StudyError::Growth { what: what.into(), source: Box::new(source) })?;
             let seconds = start.elapsed().as_secs_f64();
             let (solution, axial) = last.ok_or_else(|| StudyError::Invalid(format!("{what}: the run gave no state at t_end")))?;
             Ok(Run { solution, axial_length: Some(axial), seconds, growth: Some(stats) })
