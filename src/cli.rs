@@ -55,6 +55,15 @@ enum Command {
     Wpd(StudyArgs),
     /// The paper's refinement check of the const scene, for Euler and for CVODE
     Refinement(RefinementArgs),
+    /// Push every parameter to its edge; write the table of outcomes (TESTING.md)
+    Extremes(ExtremesArgs),
+}
+
+#[derive(Args, Debug)]
+struct ExtremesArgs {
+    /// The Markdown file to write (e.g. TESTING.md)
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -245,6 +254,7 @@ where
         Command::Converge(a) => cmd_converge(a),
         Command::Wpd(a) => a.scene.load().and_then(|scene| cmd_study(&a.out, "wpd", |dir| crate::study::report::wpd(&scene, dir))),
         Command::Refinement(a) => cmd_study(&a.out, "refinement", crate::study::report::refinement),
+        Command::Extremes(a) => cmd_extremes(a),
     };
     match result {
         Ok(()) => 0,
@@ -326,6 +336,18 @@ fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Failure> {
         .collect()
 }
 
+fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Failure> {
+    use crate::study::extremes;
+    let results: Vec<_> = extremes::cases().into_iter().map(|c| {
+        let o = extremes::run(&c);
+        (c, o)
+    }).collect();
+    let text = format!("{}{}", extremes::PREAMBLE, extremes::table(&results));
+    output::write_atomic(&a.out, text.as_bytes()).map_err(|e| Failure::failed(format!("{}: {e}", a.out.display())))?;
+    out(&format!("eyeshell: {} cases written to {}\n", results.len(), a.out.display()));
+    Ok(())
+}
+
 fn cmd_converge(a: &ConvergeArgs) -> Result<(), Failure> {
     let scene = a.scene.load()?;
     if a.nodes.len() < 2 || a.nodes.iter().any(|&n| n < 5) {
@@ -378,13 +400,14 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
     if !a.quiet {
         let s = &solution.stats;
         out(&format!(
-            "eyeshell: solved {} ({})\n  nodes           {} ({} uniform + {} breakpoint + {} pole)\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
+            "eyeshell: solved {} ({})\n  nodes           {} ({} uniform + {} breakpoint + {} pole + {} cornea)\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
             scene.origin,
             scene.display_name(),
             s.nodes,
             s.uniform_nodes,
             s.breakpoint_nodes,
             s.pole_nodes,
+            s.cornea_nodes,
             s.newton_iterations,
             if s.newton_iterations == 1 { "" } else { "s" },
             s.residual_norm,

@@ -23,6 +23,8 @@ pub struct Mesh {
     pub inserted_breakpoints: usize,
     /// Graded nodes added next to the pole.
     pub pole_nodes: usize,
+    /// Graded nodes added next to the cornea.
+    pub cornea_nodes: usize,
 }
 
 impl Mesh {
@@ -62,7 +64,35 @@ impl Mesh {
             .iter()
             .map(|b| nodes.iter().position(|x| x == b).unwrap())
             .collect();
-        Mesh { nodes, uniform, breakpoint_nodes, inserted_breakpoints: inserted, pole_nodes }
+        Mesh { nodes, uniform, breakpoint_nodes, inserted_breakpoints: inserted, pole_nodes, cornea_nodes: 0 }
+    }
+
+    /// Resolve a boundary layer of width `layer` at the cornea (Σ = L) inside the last
+    /// interval: uniform spacing layer/4 over the last 6 widths, then spacings doubling
+    /// back out to the interval's start. As E_b → 0 the bending stiffness matters only
+    /// within √(E_b / t_s) of the clamped edge, where κ changes by O(1) (the membrane limit).
+    pub fn grade_cornea(mut self, layer: f64) -> Mesh {
+        let m = self.len();
+        let (l, start) = (self.nodes[m - 1], self.nodes[m - 2]);
+        let fine = 0.25 * layer;
+        let mut added = vec![];
+        let mut d = fine;
+        while d < 6.0 * layer && l - d > start {
+            added.push(l - d);
+            d += fine;
+        }
+        let mut d = 12.0 * layer;
+        while l - d > start + 0.5 * fine {
+            added.push(l - d);
+            d *= 2.0;
+        }
+        self.cornea_nodes = added.len();
+        self.nodes.extend(added);
+        // The new nodes all lie in the last interval, after every breakpoint, so the
+        // breakpoints' indices do not move.
+        self.nodes.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        self.nodes.dedup();
+        self
     }
 
     pub fn len(&self) -> usize {
@@ -109,6 +139,7 @@ impl Mesh {
             breakpoint_nodes,
             inserted_breakpoints: self.inserted_breakpoints,
             pole_nodes: 2 * self.pole_nodes,
+            cornea_nodes: 2 * self.cornea_nodes,
         }
     }
 

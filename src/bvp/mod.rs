@@ -59,6 +59,8 @@ pub struct SolveStats {
     pub breakpoint_nodes: usize,
     /// Graded nodes inserted next to the pole.
     pub pole_nodes: usize,
+    /// Graded nodes inserted next to the cornea (membrane limit).
+    pub cornea_nodes: usize,
     /// Cornea stretch α from Adkins' equation.
     pub cornea_alpha: f64,
     /// Stages of pressure continuation used (0 when Newton converged directly).

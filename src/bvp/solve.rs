@@ -170,7 +170,15 @@ pub fn shell_of(p: &Params) -> Shell {
 
 /// The mesh a scene asks for: uniform nodes, breakpoints and pole grading (MODEL.md §3–4).
 pub fn mesh_of(p: &Params, s: &SolverSettings) -> Mesh {
-    Mesh::new(s.epsilon, p.length(), s.nodes, &profiles::breakpoints(p), s.pole_grading)
+    let mesh = Mesh::new(s.epsilon, p.length(), s.nodes, &profiles::breakpoints(p), s.pole_grading);
+    // The bending boundary layer at the cornea: width √(E_b / t_s), t_s ≈ ΔP R0 / 2.
+    let layer = (p.e_b / (0.5 * p.dp * p.r0).max(1e-3 * p.c * p.h0)).sqrt();
+    let h = (p.length() - s.epsilon) / (s.nodes - 1) as f64;
+    if s.cornea_grading && layer < h {
+        mesh.grade_cornea(layer)
+    } else {
+        mesh
+    }
 }
 
 /// The discrete problem for a parameter set on its mesh.
@@ -289,6 +297,9 @@ fn newton(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], r0: f64, work: &mut Wo
     }
 }
 
+/// The paper's bending stiffness E_b, the easy end of a bending continuation.
+const DEFAULT_BENDING: f64 = 18.0;
+
 /// An elastic solver that lives across solves: KINSOL, its matrix and factorisation, the
 /// discretisation and the last converged unknowns. Growth re-solves it at every change of
 /// the unloaded shell, warm-started from the last solution.
@@ -391,7 +402,40 @@ impl ElasticSolver {
             }
         }
         self.set_pressure(self.params.dp)?;
+        // Then continuation in the hard material parameters at full pressure: the fibres
+        // stiffened from D = 0, the bending stiffness brought down from the paper's E_b.
+        if self.params.d > 0.0 || self.params.e_b < DEFAULT_BENDING {
+            for count in [8usize, 32] {
+                match self.ramp_material(count, &mut stages) {
+                    Ok(()) => return Ok(stages),
+                    Err(e) => last_err = e,
+                }
+            }
+            self.set_material(1.0);
+        }
         Err(last_err)
+    }
+
+    /// The shell's D and E_b at fraction s of the way from the easy shell (D = 0,
+    /// E_b = max(E_b, 18)) to the scene's; s = 1 is the scene.
+    fn set_material(&mut self, s: f64) {
+        let (d, e_b) = (self.params.d, self.params.e_b);
+        let easy = e_b.max(DEFAULT_BENDING);
+        let shell = &mut self.discretisation_mut().shell;
+        shell.law.d = (d > 0.0).then_some(d * s);
+        shell.e_b = easy.powf(1.0 - s) * e_b.powf(s);
+        let data = self.discretisation().data.clone();
+        self.discretisation_mut().set_data(data); // drop evaluations of the old shell
+    }
+
+    fn ramp_material(&mut self, count: usize, stages: &mut usize) -> Result<(), BvpError> {
+        self.u = sphere_guess(self.discretisation(), self.params.r0);
+        for k in 0..=count {
+            self.set_material(k as f64 / count as f64);
+            *stages += 1;
+            self.newton()?;
+        }
+        Ok(())
     }
 
     fn set_pressure(&mut self, dp: f64) -> Result<(), BvpError> {
@@ -519,6 +563,7 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
         uniform_nodes: mesh.uniform,
         breakpoint_nodes: mesh.inserted_breakpoints,
         pole_nodes: mesh.pole_nodes,
+        cornea_nodes: mesh.cornea_nodes,
         cornea_alpha: disc.edge.alpha,
         ..SolveStats::default()
     };

@@ -25,7 +25,9 @@ pub fn max_pressure(c: &CorneaParams) -> f64 {
 
 /// The cornea's stretch α at pressure `dp`, to full double precision.
 ///
-/// Bisection keeps the root bracketed; Newton steps inside the bracket give the last digits.
+/// The pressure rises monotonically on (1, 7^(1/6)), so bisection on α − 1 (relative, so
+/// that tiny pressures keep their digits) brackets the root to a few ulps; two Newton steps
+/// on the same variable finish it.
 pub fn stretch(c: &CorneaParams, dp: f64) -> Result<f64, ModelError> {
     let p_max = max_pressure(c);
     if !(dp >= 0.0) {
@@ -37,30 +39,36 @@ pub fn stretch(c: &CorneaParams, dp: f64) -> Result<f64, ModelError> {
     if dp == 0.0 {
         return Ok(1.0);
     }
-    let (mut lo, mut hi) = (1.0, alpha_max());
     let k = 4.0 * c.c * c.h / c.r0;
-    let mut a = 0.5 * (lo + hi);
+    // In e = α − 1: p = k (1/α − α⁻⁷), written so that small e loses nothing to cancellation.
+    let p_of = |e: f64| {
+        let a = 1.0 + e;
+        k * (a.powi(6) - 1.0) / a.powi(7)
+    };
+    let (mut lo, mut hi) = (0.0, alpha_max() - 1.0);
     for _ in 0..200 {
-        let g = pressure(c, a) - dp;
-        if g == 0.0 {
-            return Ok(a);
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
         }
-        if g < 0.0 {
-            lo = a;
+        if p_of(mid) < dp {
+            lo = mid;
         } else {
-            hi = a;
-        }
-        let dg = k * (-a.powi(-2) + 7.0 * a.powi(-8));
-        let newton = a - g / dg;
-        a = if dg > 0.0 && newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
-        if hi - lo <= 4.0 * f64::EPSILON * hi || (a - lo).min(hi - a) == 0.0 {
-            break;
-        }
-        if (g / dg).abs() <= f64::EPSILON * a {
-            break;
+            hi = mid;
         }
     }
-    Ok(a)
+    let mut e = 0.5 * (lo + hi);
+    for _ in 0..2 {
+        let a = 1.0 + e;
+        let dp_de = k * (-a.powi(-2) + 7.0 * a.powi(-8));
+        if dp_de > 0.0 {
+            let next = e - (p_of(e) - dp) / dp_de;
+            if next > 0.0 && next < alpha_max() - 1.0 {
+                e = next;
+            }
+        }
+    }
+    Ok(1.0 + e)
 }
 
 /// Where the cornea holds the shell's front edge (MODEL.md §3).
@@ -102,6 +110,19 @@ mod tests {
         assert!((a - 1.0136216901111).abs() < 1e-12, "alpha = {a:.16}");
         // Full precision: the residual is at round-off.
         assert!((pressure(&paper(), a) - 2.0).abs() < 1e-14);
+    }
+
+    /// Tiny pressures keep their digits: α − 1 ≈ ΔP R_c / (24 C_c H_c).
+    #[test]
+    fn tiny_pressures_are_exact() {
+        for dp in [1e-12, 1e-6, 1e-3] {
+            let a = stretch(&paper(), dp).unwrap();
+            let linear = dp * 10.0 / (24.0 * 100.0 * 0.65);
+            // α is a double near 1: α − 1 is known to an ulp of 1 (2.2e-16) at best.
+            assert!((a - 1.0 - linear).abs() < 4.0 * f64::EPSILON + 1e-4 * linear, "dp {dp:e}: α − 1 = {:e}, linear {linear:e}", a - 1.0);
+            // pressure() itself cancels near α = 1: about k·ε = 6e-15 of round-off.
+            assert!((pressure(&paper(), a) - dp).abs() <= 1e-13 + 1e-12 * dp, "dp {dp:e}");
+        }
     }
 
     #[test]

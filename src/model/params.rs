@@ -129,6 +129,10 @@ pub struct SolverSettings {
     pub max_newton: usize,
     /// solver.pole_grading: insert geometrically graded nodes next to the pole (MODEL.md §3 trap).
     pub pole_grading: bool,
+    /// solver.cornea_grading: grade the nodes next to the cornea when the bending boundary
+    /// layer there, of width √(E_b / t_s), is thinner than the mesh spacing (the membrane
+    /// limit, small E_b).
+    pub cornea_grading: bool,
 }
 
 impl Default for SolverSettings {
@@ -141,6 +145,7 @@ impl Default for SolverSettings {
             newton_tol: 1e-10,
             max_newton: 50,
             pole_grading: true,
+            cornea_grading: true,
         }
     }
 }

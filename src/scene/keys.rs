@@ -455,6 +455,13 @@ pub static KEYS: &[KeySpec] = &[
         growth: false,
     },
     KeySpec {
+        key: "solver.cornea_grading",
+        access: Access::Bool { get: |s| s.solver.cornea_grading, set: |s, v| s.solver.cornea_grading = v },
+        rule: Rule::Any,
+        doc: "grade the nodes next to the cornea when the bending layer √(E_b/t_s) is thinner than the spacing (small E_b)",
+        growth: false,
+    },
+    KeySpec {
         key: "growth.eta0",
         access: Access::Float { get: |s| growth(s).eta0, set: |s, v| s.growth_mut().eta0 = v },
         rule: Rule::NonNegative,

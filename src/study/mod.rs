@@ -3,6 +3,7 @@
 //! returns plain tables; `write_csv` and the plot module turn them into files.
 
 pub mod converge;
+pub mod extremes;
 pub mod refinement;
 pub mod report;
 pub mod wpd;
