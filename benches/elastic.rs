@@ -76,5 +76,29 @@ fn assembly(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, cold_and_warm, scaling, assembly);
+/// A scene pays only for the physics it declares: the same shell with and without fibres
+/// (no ψ, no fibre terms in the residual or the Jacobian when D = 0).
+fn components(c: &mut Criterion) {
+    let mut g = c.benchmark_group("components_n501_hs");
+    let s = settings(501);
+    for (name, p) in [("nonuniform_no_fibres", Params { d: 0.0, ..fibre_shell() }), ("nonuniform_fibres_d200", fibre_shell())] {
+        let mut disc = discretise(&p, &s).unwrap();
+        let u = sphere_guess(&disc, p.r0);
+        let mut f = vec![0.0; disc.len()];
+        g.bench_function(format!("{name}/residual_and_jacobian"), |b| {
+            b.iter(|| {
+                let mut v = u.clone();
+                v[3] += 1e-9 * black_box(1.0);
+                disc.residual(&v, &mut f).unwrap();
+                let mut sink = NullSink(0.0);
+                disc.jacobian(&v, &mut sink).unwrap();
+                black_box(sink.0)
+            })
+        });
+        g.bench_function(format!("{name}/cold_solve"), |b| b.iter(|| bvp::solve(black_box(&p), &s, None).unwrap()));
+    }
+    g.finish();
+}
+
+criterion_group!(benches, cold_and_warm, scaling, assembly, components);
 criterion_main!(benches);
