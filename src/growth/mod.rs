@@ -64,6 +64,9 @@ pub struct GrowthSettings {
     pub steps: usize,
     /// output.times: when to write snapshots (sorted, in (0, t_end]); t = 0 is always written.
     pub output_times: Vec<f64>,
+    /// output.history_points: record the series row (axial length, class, ...) at this many
+    /// evenly spaced times t_end·k/n as well (history.csv), without snapshots; 0: none.
+    pub history_points: usize,
 }
 
 impl Default for GrowthSettings {
@@ -74,6 +77,7 @@ impl Default for GrowthSettings {
             atol: 1e-8,
             steps: 200,
             output_times: vec![0.1, 0.2, 0.4, 1.0],
+            history_points: 0,
         }
     }
 }
@@ -141,6 +145,11 @@ pub struct GrowthStats {
 /// Receives the results as they come, so that nothing is lost if the run fails later.
 pub trait Observer {
     fn snapshot(&mut self, s: &Snapshot) -> Result<(), crate::Error>;
+    /// The series row at every recorded time (the snapshot times and the history times)
+    /// when `output.history_points` > 0, in time order.
+    fn history(&mut self, _row: &SeriesRow) -> Result<(), crate::Error> {
+        Ok(())
+    }
     /// Called now and then with the time reached (for a progress bar).
     fn progress(&mut self, _t: f64, _t_end: f64) {}
 }
@@ -166,6 +175,8 @@ pub fn grow(
     // Both the snapshots and the progress reports go to the one observer.
     let observer = std::cell::RefCell::new(observer);
     let t_end = growth.t_end;
+    let snapshot_times = snapshot_times(settings, t_end);
+    let with_history = settings.history_points > 0;
     run(
         params,
         solver,
@@ -173,10 +184,35 @@ pub fn grow(
         settings,
         &mut |sys, t, p| {
             let snap = sys.snapshot(t, p)?;
-            observer.borrow_mut().snapshot(&snap)
+            let mut obs = observer.borrow_mut();
+            if with_history {
+                obs.history(&snap.series)?;
+            }
+            if t == 0.0 || snapshot_times.contains(&t) {
+                obs.snapshot(&snap)?;
+            }
+            Ok(())
         },
         &mut |t| observer.borrow_mut().progress(t, t_end),
     )
+}
+
+/// The snapshot times after t = 0: the output times before t_end, then t_end.
+fn snapshot_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
+    let mut times: Vec<f64> = settings.output_times.iter().copied().filter(|&t| t > 0.0 && t < t_end).collect();
+    times.push(t_end);
+    times
+}
+
+/// Every time after t = 0 at which [`run`] calls its output: the snapshot times and the
+/// history times t_end·k/n, merged in order (times closer than 1e-12·t_end are one).
+fn recorded_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
+    let n = settings.history_points;
+    let mut times = snapshot_times(settings, t_end);
+    times.extend((1..n).map(|k| t_end * k as f64 / n as f64));
+    times.sort_by(f64::total_cmp);
+    times.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t_end);
+    times
 }
 
 /// What receives the growth state at each output time: `output(sys, t, p)`.
@@ -197,8 +233,7 @@ pub fn run(
     let fail = |t: f64, reason: String, stats: GrowthStats| GrowthError { t, reason, stats };
     let mut sys = system::GrowthSystem::new(params, solver, growth).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let p0 = sys.points.initial_state();
-    let mut times: Vec<f64> = settings.output_times.iter().copied().filter(|&t| t > 0.0 && t < t_end).collect();
-    times.push(t_end);
+    let times = recorded_times(settings, t_end);
     output(&mut sys, 0.0, &p0).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let mut stats = GrowthStats::default();
     let outcome = match settings.integrator {

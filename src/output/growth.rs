@@ -4,6 +4,8 @@
 //! - `snapshots/snapshot_<k>_t<t>.csv`: every elastic and growth field on every node at
 //!   output time number k (names sort in time order), each written to a temporary file and
 //!   renamed, so a snapshot is never half-written;
+//! - `history.csv` (with `output.history_points` > 0): the same columns at every recorded
+//!   time, the history times and the snapshot times, appended and flushed at once;
 //! - `summary.json`: `"status": "running"` from the start (which marks the directory as an
 //!   eyeshell output, so a run that was killed can be replaced by the next), then `"ok"`
 //!   with every [`GrowthStats`] field, or `"failed"` with `failed_at_t`, `error` and the
@@ -27,6 +29,8 @@ use crate::scene::Scene;
 
 /// The time series at the posterior pole, one row per output time.
 pub const SERIES_FILE: &str = "series.csv";
+/// The series rows at the history times (`output.history_points`), same columns as series.csv.
+pub const HISTORY_FILE: &str = "history.csv";
 /// The directory of the snapshot files.
 pub const SNAPSHOT_DIR: &str = "snapshots";
 /// The columns of series.csv.
@@ -131,6 +135,10 @@ pub fn growth_summary_json(
     );
     map.insert("thickness_law".into(), key("growth.thickness_law"));
     map.insert("series_file".into(), SERIES_FILE.into());
+    if settings.history_points > 0 {
+        map.insert("history_file".into(), HISTORY_FILE.into());
+        map.insert("history_points".into(), settings.history_points.into());
+    }
     map.insert(
         "snapshots".into(),
         serde_json::Value::Array(
@@ -187,6 +195,7 @@ pub struct GrowthWriter {
     dir: PathBuf,
     scene: Scene,
     series: fs::File,
+    history: Option<fs::File>,
     snapshots: Vec<WrittenSnapshot>,
     last: Option<SeriesRow>,
     bar: ProgressBar,
@@ -212,11 +221,12 @@ impl GrowthWriter {
         let snapshots = target.join(SNAPSHOT_DIR);
         fs::create_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
         let series_path = target.join(SERIES_FILE);
-        let mut series =
-            fs::File::create(&series_path).map_err(|e| OutputError::io(&series_path, e))?;
-        writeln!(series, "{}", series_header())
-            .and_then(|_| series.flush())
-            .map_err(|e| OutputError::io(&series_path, e))?;
+        let series = create_with_header(&series_path)?;
+        let history = if scene.growth_settings.history_points > 0 {
+            Some(create_with_header(&target.join(HISTORY_FILE))?)
+        } else {
+            None
+        };
         let bar = if progress {
             let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
             if let Ok(style) = ProgressStyle::with_template(
@@ -232,6 +242,7 @@ impl GrowthWriter {
             dir: target.to_path_buf(),
             scene: scene.clone(),
             series,
+            history,
             snapshots: Vec::new(),
             last: None,
             bar,
@@ -328,7 +339,26 @@ impl GrowthWriter {
     }
 }
 
+/// Create `path` with the series header as its first line.
+fn create_with_header(path: &Path) -> Result<fs::File, OutputError> {
+    let mut file = fs::File::create(path).map_err(|e| OutputError::io(path, e))?;
+    writeln!(file, "{}", series_header())
+        .and_then(|_| file.flush())
+        .map_err(|e| OutputError::io(path, e))?;
+    Ok(file)
+}
+
 impl Observer for GrowthWriter {
+    fn history(&mut self, row: &SeriesRow) -> Result<(), crate::Error> {
+        let path = self.dir.join(HISTORY_FILE);
+        match &mut self.history {
+            Some(file) => writeln!(file, "{}", series_line(row))
+                .and_then(|_| file.flush())
+                .map_err(|source| crate::Error::Io { path, source }),
+            None => Ok(()),
+        }
+    }
+
     fn snapshot(&mut self, s: &Snapshot) -> Result<(), crate::Error> {
         self.write_snapshot(s).map_err(|e| match e {
             OutputError::Io { path, source } => crate::Error::Io { path, source },

@@ -550,6 +550,13 @@ pub static KEYS: &[KeySpec] = &[
         growth: true,
     },
     KeySpec {
+        key: "output.history_points",
+        access: Access::Count { get: |s| s.growth_settings.history_points, set: |s, v| s.growth_settings.history_points = v },
+        rule: Rule::AtLeast(0),
+        doc: "also record axial length, refraction and class at this many evenly spaced times (history.csv, no snapshots): curves of axial length against t; 0: no history.csv",
+        growth: true,
+    },
+    KeySpec {
         key: "stimulus.blue.P1",
         access: Access::Float { get: |s| s.blue().p1, set: |s, v| s.set_blue(|c| c.p1 = v) },
         rule: Rule::Any,
