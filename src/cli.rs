@@ -57,6 +57,26 @@ enum Command {
     Refinement(RefinementArgs),
     /// Push every parameter to its edge; write the table of outcomes (TESTING.md)
     Extremes(ExtremesArgs),
+    /// Run every run of a sweep (a scene with [sweep]) in parallel: runs/<name>/, sweep.csv, summary.json
+    Sweep(SweepArgs),
+}
+
+#[derive(Args, Debug)]
+struct SweepArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output directory: runs/<name>/ for each run, sweep.csv, summary.json (a previous eyeshell output is replaced unless --resume)
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Runs at once (default: one per core)
+    #[arg(long, short, value_name = "N")]
+    jobs: Option<usize>,
+    /// Keep the finished runs of an earlier sweep into DIR (same scene) and run only the rest
+    #[arg(long)]
+    resume: bool,
+    /// Print nothing on success
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -255,6 +275,7 @@ where
         Command::Wpd(a) => a.scene.load().and_then(|scene| cmd_study(&a.out, "wpd", |dir| crate::study::report::wpd(&scene, dir))),
         Command::Refinement(a) => cmd_study(&a.out, "refinement", crate::study::report::refinement),
         Command::Extremes(a) => cmd_extremes(a),
+        Command::Sweep(a) => cmd_sweep(a),
     };
     match result {
         Ok(()) => 0,
@@ -492,6 +513,83 @@ fn cmd_grow(a: &GrowArgs) -> Result<(), Failure> {
             }
         }
     }
+}
+
+/// Raised by the first Ctrl-C during a sweep: no new run starts.
+static CANCEL: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// A first Ctrl-C stops new runs (the running ones finish and the table is written); a
+/// second one exits at once.
+fn install_interrupt() {
+    use std::sync::atomic::Ordering;
+    let _ = ctrlc::set_handler(|| {
+        if CANCEL.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "eyeshell: interrupted: finishing the running runs (Ctrl-C again to stop at once)"
+        );
+    });
+}
+
+fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
+    use crate::study::sweep::{run_sweep, RunStatus, SweepOptions};
+    let sweep = crate::scene::sweep::Sweep::from_file(&a.scene.scene, &a.scene.set)?;
+    output::check_target(&a.out)?;
+    if a.jobs == Some(0) {
+        return Err(Failure::bad_input("--jobs 0: give at least 1 (or leave it out: one per core)"));
+    }
+    install_interrupt();
+    let options = SweepOptions { jobs: a.jobs.unwrap_or(0), resume: a.resume, cancel: &CANCEL };
+    let quiet = a.quiet;
+    let report = run_sweep(&sweep, &a.out, &options, &|r, n, total| {
+        if quiet {
+            return;
+        }
+        let what = match (&r.status, &r.result) {
+            (RunStatus::Failed(m), _) => format!("FAILED: {m}"),
+            (s, Some(x)) => format!(
+                "{}: axial length {:.4} mm, {} ({:.2} s)",
+                if *s == RunStatus::Reused { "reused" } else { "ok" },
+                x.axial_length,
+                x.class,
+                x.wall_seconds
+            ),
+            (_, None) => "not run".into(),
+        };
+        let _ = writeln!(std::io::stderr(), "eyeshell: [{n}/{total}] {} {what}", r.name);
+    })?;
+    let table = a.out.join(crate::study::sweep::TABLE_FILE);
+    let failed: Vec<String> = report
+        .failed()
+        .map(|r| match &r.status {
+            RunStatus::Failed(m) => format!("{}: {m}", r.name),
+            _ => r.name.clone(),
+        })
+        .collect();
+    let finished = report.records.iter().filter(|r| matches!(r.status, RunStatus::Ok | RunStatus::Reused)).count();
+    let total = report.records.len();
+    if report.interrupted {
+        return Err(Failure::failed(format!(
+            "sweep interrupted: {finished} of {total} runs finished (table: {}); run again with --resume to do the rest",
+            table.display()
+        )));
+    }
+    if !failed.is_empty() {
+        return Err(Failure::failed(format!(
+            "{} of {total} runs failed: {} (the other results are in {})",
+            failed.len(),
+            failed.join("; "),
+            table.display()
+        )));
+    }
+    if !a.quiet {
+        out(&format!("eyeshell: sweep {} ({}): {total} run{} ok
+  table           {}
+", sweep.origin, sweep.name, plural(total), table.display()));
+    }
+    Ok(())
 }
 
 fn plural(n: usize) -> &'static str {

@@ -48,6 +48,12 @@ impl Surface {
         (self.p1 * p2 + self.p2) * p2 + self.p3 + self.offset
     }
 
+    /// The point (z, r) of the surface on the polar ray at angle φ.
+    pub fn point(&self, phi: f64) -> (f64, f64) {
+        let radius = self.radius(phi);
+        (self.z_b + radius * phi.cos(), radius * phi.sin())
+    }
+
     /// Polar angle of a point (z, r) about the surface's centre.
     pub fn angle(&self, z: f64, r: f64) -> f64 {
         r.atan2(z - self.z_b)

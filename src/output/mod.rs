@@ -80,6 +80,15 @@ pub fn check_target(target: &Path) -> Result<(), OutputError> {
     inspect(target).map(|_| ())
 }
 
+/// Make `target` an empty directory to write into, in place: refuse it like
+/// [`check_target`], remove a previous eyeshell output there, create it (and its parents).
+pub fn fresh_dir(target: &Path) -> Result<(), OutputError> {
+    if inspect(target)? == Target::PreviousOutput {
+        fs::remove_dir_all(target).map_err(|e| OutputError::io(target, e))?;
+    }
+    fs::create_dir_all(target).map_err(|e| OutputError::io(target, e))
+}
+
 fn inspect(target: &Path) -> Result<Target, OutputError> {
     if target.file_name().is_none() {
         return Err(OutputError::NoName {

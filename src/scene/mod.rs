@@ -16,6 +16,7 @@
 //! output.times, stimulus.*) are kept but not used, shown or summarised.
 
 pub mod keys;
+pub mod sweep;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -124,6 +125,10 @@ pub enum SceneError {
     },
     #[error("{origin}: {problem}")]
     BadOverride { origin: String, problem: String },
+    #[error("{origin}: the scene declares a [sweep] of runs: run it with `eyeshell sweep {origin} --out DIR`")]
+    IsSweep { origin: String },
+    #[error("{origin}: [sweep] {problem}")]
+    BadSweep { origin: String, problem: String },
 }
 
 impl SceneError {
@@ -152,7 +157,7 @@ fn suggest_section(s: &Option<String>) -> String {
 }
 
 /// Make text safe for a one-line message: control characters are escaped.
-fn one_line(s: &str) -> String {
+pub(crate) fn one_line(s: &str) -> String {
     s.chars()
         .flat_map(|c| {
             if c.is_control() {
@@ -184,30 +189,40 @@ impl Scene {
     }
 
     /// Parse `text` (named `origin` in messages), apply `overrides` (`key=value`), validate.
+    /// A scene with a `[sweep]` table is refused: it is many scenes ([`sweep::Sweep`]).
     pub fn from_toml_str(
         text: &str,
         origin: &str,
         overrides: &[String],
     ) -> Result<Scene, SceneError> {
         let origin = one_line(origin);
-        let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            let (line, column) = line_column(text, e.span().map(|s| s.start).unwrap_or(0));
-            SceneError::Syntax {
-                origin: origin.clone(),
-                line,
-                column,
-                message: one_line(e.message()),
-            }
-        })?;
+        let table = parse_table(text, &origin)?;
+        if table.contains_key(sweep::SWEEP) {
+            return Err(SceneError::IsSweep { origin });
+        }
+        Scene::from_table(&table, &origin, &[], overrides)
+    }
+
+    /// The scene of a parsed file `table` (no `[sweep]`), then `assignments` (key, value,
+    /// origin) in order, then the `overrides`; validated.
+    pub(crate) fn from_table(
+        table: &toml::Table,
+        origin: &str,
+        assignments: &[(String, toml::Value, String)],
+        overrides: &[String],
+    ) -> Result<Scene, SceneError> {
         let mut scene = Scene {
-            origin: origin.clone(),
+            origin: origin.to_string(),
             ..Scene::default()
         };
         let mut sources = Sources::new();
         let mut leaves = Vec::new();
-        flatten(&table, "", &origin, &mut leaves)?;
+        flatten(table, "", origin, &mut leaves)?;
         for (key, value) in leaves {
-            scene.set_from(&key, &value, &origin, &mut sources)?;
+            scene.set_from(&key, &value, origin, &mut sources)?;
+        }
+        for (key, value, from) in assignments {
+            scene.set_from(key, value, from, &mut sources)?;
         }
         for text in overrides {
             scene.apply_override_from(text, &mut sources)?;
@@ -538,6 +553,19 @@ impl Scene {
     }
 }
 
+/// Parse scene text as TOML; a syntax error names the line and column.
+pub(crate) fn parse_table(text: &str, origin: &str) -> Result<toml::Table, SceneError> {
+    text.parse().map_err(|e: toml::de::Error| {
+        let (line, column) = line_column(text, e.span().map(|s| s.start).unwrap_or(0));
+        SceneError::Syntax {
+            origin: origin.to_string(),
+            line,
+            column,
+            message: one_line(e.message()),
+        }
+    })
+}
+
 /// Look a key up; a key given with the wrong case is not accepted (but is suggested).
 fn find_key(key: &str) -> Option<&'static KeySpec> {
     keys::find(key)
@@ -599,7 +627,7 @@ fn flatten(
     Ok(())
 }
 
-fn unknown_key(origin: &str, key: &str) -> SceneError {
+pub(crate) fn unknown_key(origin: &str, key: &str) -> SceneError {
     SceneError::UnknownKey {
         origin: origin.to_string(),
         key: one_line(key),
@@ -609,7 +637,7 @@ fn unknown_key(origin: &str, key: &str) -> SceneError {
 
 /// The known name closest to `name`, if it is close enough to be a likely typo: same name
 /// in another case, the same last component in another section, or a small edit distance.
-fn closest<'a>(name: &str, known: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+pub(crate) fn closest<'a>(name: &str, known: impl Iterator<Item = &'a str>) -> Option<&'a str> {
     let lower = name.to_lowercase();
     let last = lower.rsplit('.').next().unwrap_or(&lower).to_string();
     let limit = 2.max(lower.chars().count() / 3);
@@ -646,7 +674,7 @@ fn levenshtein(a: &str, b: &str) -> usize {
 }
 
 /// A value as shown in messages: like TOML, but whole numbers without ".0" (`C = -1`).
-fn show(v: &KeyValue) -> String {
+pub(crate) fn show(v: &KeyValue) -> String {
     match v {
         KeyValue::Float(x) if x.fract() == 0.0 && x.abs() < 1e15 => format!("{x}"),
         KeyValue::Floats(xs) => format!(
@@ -661,7 +689,7 @@ fn show(v: &KeyValue) -> String {
 }
 
 /// A TOML value as "type value" for messages, on one line.
-fn describe(value: &toml::Value) -> String {
+pub(crate) fn describe(value: &toml::Value) -> String {
     match value {
         toml::Value::String(s) => format!("string {}", describe_string(s)),
         toml::Value::Integer(i) => format!("integer {i}"),

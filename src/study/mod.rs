@@ -6,6 +6,7 @@ pub mod converge;
 pub mod extremes;
 pub mod refinement;
 pub mod report;
+pub mod sweep;
 pub mod wpd;
 
 use crate::bvp::{BvpError, FieldRow, Solution};
