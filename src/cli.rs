@@ -59,6 +59,39 @@ enum Command {
     Extremes(ExtremesArgs),
     /// Run every run of a sweep (a scene with [sweep]) in parallel: runs/<name>/, sweep.csv, summary.json
     Sweep(SweepArgs),
+    /// Run the paper's scenes and draw its result figures (a)–(f) as PNG and SVG, with index.html
+    Figures(FiguresArgs),
+    /// Draw the output of any run or sweep (shells, profiles, axial length) as PNG and SVG
+    Plot(PlotArgs),
+}
+
+#[derive(Args, Debug)]
+struct FiguresArgs {
+    /// Output directory: the figures, index.html, and the runs in data/
+    #[arg(long, value_name = "DIR", default_value = "figures")]
+    out: PathBuf,
+    /// Runs at once (default: one per core)
+    #[arg(long, short, value_name = "N")]
+    jobs: Option<usize>,
+    /// Draw again from the runs already in DIR/data (no computation)
+    #[arg(long)]
+    replot: bool,
+    /// Print nothing on success
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Args, Debug)]
+struct PlotArgs {
+    /// A run directory (of solve or grow) or a sweep directory
+    #[arg(value_name = "DIR")]
+    dir: PathBuf,
+    /// Where to write the pictures (default: DIR/plots)
+    #[arg(long, value_name = "OUT")]
+    out: Option<PathBuf>,
+    /// Print nothing on success
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -276,6 +309,8 @@ where
         Command::Refinement(a) => cmd_study(&a.out, "refinement", crate::study::report::refinement),
         Command::Extremes(a) => cmd_extremes(a),
         Command::Sweep(a) => cmd_sweep(a),
+        Command::Figures(a) => cmd_figures(a),
+        Command::Plot(a) => cmd_plot(a),
     };
     match result {
         Ok(()) => 0,
@@ -547,18 +582,7 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
         if quiet {
             return;
         }
-        let what = match (&r.status, &r.result) {
-            (RunStatus::Failed(m), _) => format!("FAILED: {m}"),
-            (s, Some(x)) => format!(
-                "{}: axial length {:.4} mm, {} ({:.2} s)",
-                if *s == RunStatus::Reused { "reused" } else { "ok" },
-                x.axial_length,
-                x.class,
-                x.wall_seconds
-            ),
-            (_, None) => "not run".into(),
-        };
-        let _ = writeln!(std::io::stderr(), "eyeshell: [{n}/{total}] {} {what}", r.name);
+        let _ = writeln!(std::io::stderr(), "eyeshell: [{n}/{total}] {} {}", r.name, r.status_text());
     })?;
     let table = a.out.join(crate::study::sweep::TABLE_FILE);
     let failed: Vec<String> = report
@@ -588,6 +612,44 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
         out(&format!("eyeshell: sweep {} ({}): {total} run{} ok
   table           {}
 ", sweep.origin, sweep.name, plural(total), table.display()));
+    }
+    Ok(())
+}
+
+fn cmd_figures(a: &FiguresArgs) -> Result<(), Failure> {
+    if a.jobs == Some(0) {
+        return Err(Failure::bad_input("--jobs 0: give at least 1 (or leave it out: one per core)"));
+    }
+    install_interrupt();
+    let quiet = a.quiet;
+    let start = std::time::Instant::now();
+    let figures = crate::study::figures::make(&a.out, a.jobs.unwrap_or(0), a.replot, &CANCEL, &|line| {
+        if !quiet {
+            let _ = writeln!(std::io::stderr(), "eyeshell: {line}");
+        }
+    })
+    .map_err(|e| if e.bad_input { Failure::bad_input(e.message) } else { Failure::failed(e.message) })?;
+    if !a.quiet {
+        let mut text = format!("eyeshell: {} figures in {:.1} s
+", figures.len(), start.elapsed().as_secs_f64());
+        for f in &figures {
+            text.push_str(&format!("  ({}) {:<50} {}\n", f.id, f.title, f.png.display()));
+        }
+        text.push_str(&format!("  index           {}\n", a.out.join(crate::study::figures::INDEX_FILE).display()));
+        out(&text);
+    }
+    Ok(())
+}
+
+fn cmd_plot(a: &PlotArgs) -> Result<(), Failure> {
+    use crate::output::figures::{plot_run, FigureError};
+    let target = a.out.clone().unwrap_or_else(|| a.dir.join("plots"));
+    let files = plot_run(&a.dir, &target).map_err(|e| match e {
+        FigureError::Read(m) => Failure::bad_input(m),
+        other => Failure::failed(other.to_string()),
+    })?;
+    if !a.quiet {
+        out(&format!("eyeshell: {} files drawn from {} into {}\n", files.len(), a.dir.display(), target.display()));
     }
     Ok(())
 }

@@ -53,7 +53,7 @@ impl std::fmt::Display for ExportError {
 
 impl std::error::Error for ExportError {}
 
-fn bad(message: impl Into<String>) -> ExportError {
+pub(crate) fn bad(message: impl Into<String>) -> ExportError {
     ExportError {
         bad_input: true,
         message: message.into(),

@@ -11,10 +11,12 @@
 
 pub mod compare;
 pub mod export;
+pub mod figures;
 pub mod growth;
 pub mod mat;
 pub mod npz;
 pub mod plot;
+pub mod rundata;
 
 use std::fs;
 use std::io::{BufWriter, Write};

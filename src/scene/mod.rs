@@ -231,6 +231,12 @@ impl Scene {
         Ok(scene)
     }
 
+    /// The scene that sets each of `assignments` (key, value, origin) on the defaults, as
+    /// written in a run's summary.json `parameters`; validated.
+    pub fn from_parameters(assignments: &[(String, toml::Value, String)], origin: &str) -> Result<Scene, SceneError> {
+        Scene::from_table(&toml::Table::new(), &one_line(origin), assignments, &[])
+    }
+
     /// Set one key from a TOML value, checking the key and the type but not the range
     /// (call [`Scene::validate`] when done). `origin` names the source in messages.
     pub fn set(&mut self, key: &str, value: &toml::Value, origin: &str) -> Result<(), SceneError> {

@@ -4,6 +4,7 @@
 
 pub mod converge;
 pub mod extremes;
+pub mod figures;
 pub mod refinement;
 pub mod report;
 pub mod sweep;

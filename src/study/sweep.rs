@@ -102,6 +102,17 @@ pub struct RunRecord {
     pub result: Option<RunResult>,
 }
 
+impl RunRecord {
+    /// "ok: axial length 23.5809 mm, emmetropic (0.41 s)", "FAILED: why", ...
+    pub fn status_text(&self) -> String {
+        match (&self.status, &self.result) {
+            (RunStatus::Failed(m), _) => format!("FAILED: {m}"),
+            (s, Some(x)) => format!("{}: axial length {:.4} mm, {} ({:.2} s)", s.as_str(), x.axial_length, x.class, x.wall_seconds),
+            (s, None) => s.as_str().to_string(),
+        }
+    }
+}
+
 /// The outcome of a sweep.
 #[derive(Clone, Debug)]
 pub struct SweepReport {
