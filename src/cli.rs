@@ -663,7 +663,10 @@ fn plural(n: usize) -> &'static str {
 }
 
 fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
-    let scene = a.load()?;
+    let scene = match a.load() {
+        Err(Failure { .. }) if is_sweep_file(a) => return check_sweep(a),
+        other => other?,
+    };
     let p = &scene.params;
     let mut text = format!(
         "# {}: valid scene '{}'\n",
@@ -692,6 +695,27 @@ fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
         ),
     }
     text.push_str(&scene.to_toml());
+    out(&text);
+    Ok(())
+}
+
+/// Is the scene of `a` a sweep (refused by the single-scene loader as such)?
+fn is_sweep_file(a: &SceneArgs) -> bool {
+    matches!(Scene::from_file(&a.scene, &[]), Err(SceneError::IsSweep { .. }))
+}
+
+/// `eyeshell check` of a sweep: its runs and the values each sets, then the first run's scene.
+fn check_sweep(a: &SceneArgs) -> Result<(), Failure> {
+    let sweep = crate::scene::sweep::Sweep::from_file(&a.scene, &a.set)?;
+    let mut text = format!("# {}: valid sweep '{}' of {} run{} over {}\n", sweep.origin, sweep.name, sweep.runs.len(), plural(sweep.runs.len()), sweep.keys.join(", "));
+    for r in &sweep.runs {
+        let values: Vec<String> = r.values.iter().map(|(k, v)| format!("{k} = {}", crate::scene::sweep::show_value(v))).collect();
+        text.push_str(&format!("#   {:<24} {}\n", r.name, values.join(", ")));
+    }
+    if let Some(first) = sweep.runs.first() {
+        text.push_str(&format!("# run it with `eyeshell sweep {} --out DIR`; the first run's effective scene:\n", sweep.origin));
+        text.push_str(&first.scene.to_toml());
+    }
     out(&text);
     Ok(())
 }

@@ -156,3 +156,14 @@ fn elastic_sweeps_solve_each_shell() {
     assert!(rows.iter().all(|r| r[col("class")] == "hyperopic"));
     assert!(dir.path().join("out/runs/D=200/fields.csv").is_file());
 }
+
+#[test]
+fn check_lists_the_runs_of_a_sweep() {
+    let r = ok(&["check", "scenes/grow.toml"]);
+    assert!(r.stdout.starts_with("# scenes/grow.toml: valid sweep 'grow' of 6 runs over growth.Gamma, growth.delta"), "{}", r.stdout);
+    assert!(r.stdout.contains("Gamma=12_delta=6          growth.Gamma = 12, growth.delta = 6"), "{}", r.stdout);
+    assert!(r.stdout.contains("fibres.D = 100.0"), "{}", r.stdout);
+    let dir = tempfile::tempdir().unwrap();
+    write_scene(dir.path(), &format!("{SMALL}[sweep.grid]\n\"fibres.D\" = [1, -1]\n"));
+    assert_bad(&eyeshell_in(dir.path(), &["check", "s.toml"]), "s.toml [sweep] run D=-1: fibres.D = -1 must be non-negative", "check");
+}

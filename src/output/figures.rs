@@ -125,11 +125,12 @@ fn shell_panel(title: String, scene: &Scene, s: &RunSnapshot, eta_top: f64) -> R
 
 /// One quantity against σ (grown unloaded arclength) for several snapshots, coloured by t.
 fn profile_panel(title: &str, field: &str, label: &str, snaps: &[&RunSnapshot]) -> Result<Figure, ExportError> {
-    let t_max = snaps.iter().map(|s| s.t).fold(0.0, f64::max).max(1e-300);
     let mut fig = Figure::new(title, "σ (mm)", label);
-    for s in snaps {
+    // Evenly spread along the colour map by order (the times themselves cluster near 0).
+    let last = snaps.len().saturating_sub(1).max(1) as f64;
+    for (k, s) in snaps.iter().enumerate() {
         let pts = column(s, "sigma")?.into_iter().zip(column(s, field)?).collect();
-        let c = colormap(0.85 * s.t / t_max);
+        let c = colormap(0.85 * k as f64 / last);
         fig = fig.with(Series::new(t_label(s.t), pts, SeriesStyle::Line).color(c));
     }
     Ok(fig)

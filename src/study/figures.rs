@@ -45,6 +45,8 @@ pub fn make(out: &Path, jobs: usize, replot: bool, cancel: &AtomicBool, progress
         }
     } else {
         output::fresh_dir(out).map_err(|e| FiguresError { bad_input: e.is_refusal(), message: e.to_string() })?;
+        // Marks the directory as eyeshell's from the start, so an interrupted run is replaced.
+        write(&out.join(output::SUMMARY_FILE), b"{\n  \"figures\": [],\n  \"status\": \"running\"\n}\n")?;
         for (name, file, text) in SCENES {
             let sweep = Sweep::from_toml_str(text, file, &[]).map_err(|e| failed(format!("built-in scene {e}")))?;
             let options = SweepOptions { jobs, resume: false, cancel };
@@ -80,6 +82,7 @@ pub fn make(out: &Path, jobs: usize, replot: bool, cancel: &AtomicBool, progress
         })).collect::<Vec<_>>(),
         "data": DATA_DIR,
         "index": INDEX_FILE,
+        "status": "ok",
     });
     write(&out.join(output::SUMMARY_FILE), serde_json::to_string_pretty(&summary).unwrap_or_default().as_bytes())?;
     Ok(figures)
