@@ -161,7 +161,7 @@ fn elastic_sweeps_solve_each_shell() {
 fn check_lists_the_runs_of_a_sweep() {
     let r = ok(&["check", "scenes/grow.toml"]);
     assert!(r.stdout.starts_with("# scenes/grow.toml: valid sweep 'grow' of 6 runs over growth.Gamma, growth.delta"), "{}", r.stdout);
-    assert!(r.stdout.contains("Gamma=12_delta=6          growth.Gamma = 12, growth.delta = 6"), "{}", r.stdout);
+    assert!(r.stdout.lines().any(|l| l.starts_with("#   Gamma=12_delta=6 ") && l.ends_with(" growth.Gamma = 12, growth.delta = 6")), "{}", r.stdout);
     assert!(r.stdout.contains("fibres.D = 100.0"), "{}", r.stdout);
     let dir = tempfile::tempdir().unwrap();
     write_scene(dir.path(), &format!("{SMALL}[sweep.grid]\n\"fibres.D\" = [1, -1]\n"));
