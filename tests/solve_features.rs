@@ -90,12 +90,16 @@ fn every_shipped_scene_solves_from_the_default_guess() {
         if path.extension().is_none_or(|e| e != "toml") {
             continue;
         }
-        let scene = eyeshell::scene::Scene::from_file(&path, &[]).unwrap();
-        let sol = bvp::solve(&scene.params, &scene.solver, None).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        println!("{}: {} Newton iterations", path.display(), sol.stats.newton_iterations);
-        assert_eq!(sol.stats.continuation_stages, 0, "{}", path.display());
-        assert!(sol.stats.newton_iterations <= 8, "{}", path.display());
-        count += 1;
+        // A sweep is many scenes: every run's shell must solve too.
+        let sweep = eyeshell::scene::sweep::Sweep::from_file(&path, &[]).unwrap();
+        for run in &sweep.runs {
+            let what = format!("{} run {}", path.display(), run.name);
+            let sol = bvp::solve(&run.scene.params, &run.scene.solver, None).unwrap_or_else(|e| panic!("{what}: {e}"));
+            println!("{what}: {} Newton iterations", sol.stats.newton_iterations);
+            assert_eq!(sol.stats.continuation_stages, 0, "{what}");
+            assert!(sol.stats.newton_iterations <= 8, "{what}");
+            count += 1;
+        }
     }
     assert!(count >= 2, "no scenes found in {}", dir.display());
 }

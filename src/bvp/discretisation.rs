@@ -9,8 +9,16 @@
 //!
 //! At a material breakpoint each interval evaluates f with the data from its own side, so
 //! α_s may jump there while t_s, κ, r, θ, Q stay continuous (MODEL.md §4).
+//!
+//! The residual and the Jacobian are built from the scene's components
+//! (`model::components`): each pass over the points resolves the membrane component once
+//! and runs a loop monomorphised for it ([`Equations<NoFibres>`] or [`Equations<Fibres>`]),
+//! so a fibre-free scene's assembly holds no fibre code. A uniform thickness has no jump
+//! node and so no second evaluation at πR0/2; no component adds thickness derivatives.
 
-use super::equations::{self, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, QS, R, THETA, TS};
+use super::equations::{self, Equations, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, QS, R, THETA, TS};
+use crate::model::components::Membrane;
+use crate::model::constitutive::Reinforcement;
 use crate::mesh::Mesh;
 use crate::model::cornea::CorneaEdge;
 use crate::model::params::Scheme;
@@ -124,16 +132,6 @@ pub struct Discretisation {
     jump_nodes: Vec<usize>,
 }
 
-/// Write `v` at index i of a buffer that is filled in order (grows on first use only).
-#[inline]
-fn store<T>(buf: &mut Vec<T>, i: usize, v: T) {
-    if i < buf.len() {
-        buf[i] = v;
-    } else {
-        buf.push(v);
-    }
-}
-
 #[inline]
 fn y_at(u: &[f64], i: usize) -> Vec5 {
     Vec5::from_column_slice(&u[NY * i..NY * i + NY])
@@ -203,13 +201,23 @@ impl Discretisation {
         self.mesh.is_empty()
     }
 
-    /// Evaluate f (and ∂f/∂y) at every point the scheme uses, unless already done at `u`.
-    /// Each α_s solve is seeded with the α_s of the previous evaluation at the same point.
+    /// Evaluate f (and ∂f/∂y) at every point the scheme uses, unless already done at `u`,
+    /// with the equations of the shell's membrane component (resolved here, once a pass).
     fn evaluate(&mut self, u: &[f64]) -> Result<(), EvalFailure> {
-        let ev = &mut self.evals;
-        if !ev.u.is_empty() && ev.u.as_slice() == u {
+        if !self.evals.u.is_empty() && self.evals.u.as_slice() == u {
             return Ok(());
         }
+        match self.shell.membrane() {
+            Membrane::NeoHookean { .. } => self.evaluate_with(&Equations::neo_hookean(&self.shell), u),
+            Membrane::Reinforced { d, .. } => self.evaluate_with(&Equations::reinforced(&self.shell, d), u),
+        }
+    }
+
+    /// The pass over the points for one membrane component R, each evaluation written in
+    /// place. Each α_s solve is seeded with the α_s of the previous evaluation at the same
+    /// point (the cornea's stretch the first time).
+    fn evaluate_with<Rf: Reinforcement>(&mut self, eq: &Equations<Rf>, u: &[f64]) -> Result<(), EvalFailure> {
+        let ev = &mut self.evals;
         ev.u.clear(); // invalid until every point is done
         let m = self.mesh.len();
         let seed = self.edge.alpha;
@@ -217,26 +225,33 @@ impl Discretisation {
             let sigma_ref = mp.sigma_ref;
             move |why| EvalFailure { node, sigma_ref, why }
         };
-        let guess = |v: &Vec<PointEval>, i: usize| v.get(i).map_or(seed, |e| e.alpha_s);
+        let guess = |e: &PointEval| if e.is_set() { e.alpha_s } else { seed };
+        ev.node.resize(m, PointEval::unset());
         for i in 0..m {
             let mp = if i < m - 1 { &self.data.above[i] } else { &self.data.below[i] };
-            let e = equations::evaluate(&self.shell, mp, &y_at(u, i), guess(&ev.node, i)).map_err(fail(i, mp))?;
-            store(&mut ev.node, i, e);
+            let e = &mut ev.node[i];
+            eq.evaluate_into(mp, &y_at(u, i), guess(e), e).map_err(fail(i, mp))?;
         }
+        ev.below.truncate(self.jump_nodes.len());
         for (k, &i) in self.jump_nodes.iter().enumerate() {
+            if k == ev.below.len() {
+                ev.below.push((i, PointEval::unset()));
+            }
             let mp = &self.data.below[i];
-            let g = ev.below.get(k).map_or(seed, |e| e.1.alpha_s);
-            let e = equations::evaluate(&self.shell, mp, &y_at(u, i), g).map_err(fail(i, mp))?;
-            store(&mut ev.below, k, (i, e));
+            let e = &mut ev.below[k];
+            e.0 = i;
+            eq.evaluate_into(mp, &y_at(u, i), guess(&e.1), &mut e.1).map_err(fail(i, mp))?;
         }
         if self.scheme == Scheme::HermiteSimpson {
+            ev.mid.resize(m - 1, PointEval::unset());
+            ev.y_mid.resize(m - 1, Vec5::zeros());
             for i in 0..m - 1 {
                 let h = self.mesh.step(i);
                 let ym = 0.5 * (y_at(u, i) + y_at(u, i + 1)) + (h / 8.0) * (ev.left(i).f - ev.right(i).f);
                 let mp = &self.data.mid[i];
-                let e = equations::evaluate(&self.shell, mp, &ym, guess(&ev.mid, i)).map_err(fail(i, mp))?;
-                store(&mut ev.mid, i, e);
-                store(&mut ev.y_mid, i, ym);
+                let e = &mut ev.mid[i];
+                eq.evaluate_into(mp, &ym, guess(e), e).map_err(fail(i, mp))?;
+                ev.y_mid[i] = ym;
             }
         }
         ev.u.extend_from_slice(u);
@@ -422,5 +437,44 @@ impl MatrixSink for DenseSink {
     }
     fn set(&mut self, i: usize, j: usize, v: f64) {
         self.data[i * self.n + j] = v;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvp::solve::{discretise, sphere_guess};
+    use crate::model::params::{Params, SolverSettings, Thickness};
+
+    /// The residual and Jacobian of a fibre-free scene, built from `Equations<NoFibres>`,
+    /// against the same scene forced through the fibre component with D = 0: the two
+    /// assemblies share no constitutive code path, and agree to round-off.
+    #[test]
+    fn fibre_free_assembly_matches_the_fibre_component_with_zero_stiffness() {
+        let p = Params { thickness: Thickness::NonUniform, d: 0.0, ..Params::default() };
+        let s = SolverSettings { nodes: 41, ..SolverSettings::default() };
+        let mut plain = discretise(&p, &s).unwrap();
+        let mut forced = discretise(&p, &s).unwrap();
+        forced.shell.law.d = Some(0.0);
+        assert_eq!(plain.shell.membrane(), Membrane::NeoHookean { c: p.c });
+        assert_eq!(forced.shell.membrane(), Membrane::Reinforced { c: p.c, d: 0.0 });
+        let mut u = sphere_guess(&plain, p.r0);
+        for (k, v) in u.iter_mut().enumerate() {
+            *v *= 1.0 + 1e-3 * ((k % 7) as f64 - 3.0); // off the sphere, so every term counts
+        }
+        let n = plain.len();
+        let (mut fa, mut fb) = (vec![0.0; n], vec![0.0; n]);
+        plain.residual(&u, &mut fa).unwrap();
+        forced.residual(&u, &mut fb).unwrap();
+        let scale = fa.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for (a, b) in fa.iter().zip(&fb) {
+            assert!((a - b).abs() <= 1e-12 * scale, "{a} vs {b}");
+        }
+        let (mut ja, mut jb) = (DenseSink::new(n), DenseSink::new(n));
+        plain.jacobian(&u, &mut ja).unwrap();
+        forced.jacobian(&u, &mut jb).unwrap();
+        for (a, b) in ja.data.iter().zip(&jb.data) {
+            assert!((a - b).abs() <= 1e-11 * (1.0 + a.abs()), "{a} vs {b}");
+        }
     }
 }

@@ -16,8 +16,20 @@
 //!   θ'   = γ α_s κ
 //!   q_s' = γ α_s [ ΔP − κ t_s − sin θ P / r − q_s cos θ / r ]      (Q' / r − Q r' / r²)
 //!   t_s' = γ α_s [ κ q_s + (P − t_s) cos θ / r ]
+//!
+//! The material enters only through the membrane law at each point (t_s, t_φ and their
+//! partials in (α_s, α_φ)) and the point's data (ρ, ζ, γ, and ψ with fibres). With t_s as
+//! the unknown, nothing differentiates the material data along Σ: no dζ/dΣ, dψ/dΣ or dρ/dσ
+//! term exists in f or ∂f/∂y (see `model::components`).
+//!
+//! [`Equations<R>`] is the shell with its membrane component R fixed at compile time
+//! (MODEL.md §2: neo-Hookean, or reinforced by fibres): the discretisation resolves the
+//! scene's component once per pass and calls [`Equations::evaluate`], so the fibre-free f
+//! and ∂f/∂y contain no fibre code. [`evaluate`] and [`stretch`] take a [`Shell`] of
+//! either kind and dispatch once per call.
 
-use crate::model::constitutive::{FibreDirection, Law, Tensions};
+use crate::model::components::Membrane;
+use crate::model::constitutive::{FibreDirection, Fibres, Law, MembraneLaw, NoFibres, Reinforcement, Tensions};
 use nalgebra::{SMatrix, SVector};
 
 pub type Vec5 = SVector<f64, 5>;
@@ -41,6 +53,37 @@ pub struct Shell {
     pub e_b: f64,
     /// Pressure difference ΔP.
     pub dp: f64,
+}
+
+impl Shell {
+    /// The scene's membrane component: neo-Hookean, or reinforced by fibres.
+    pub fn membrane(&self) -> Membrane {
+        Membrane::from(self.law)
+    }
+}
+
+/// The shell's equations with the membrane law's reinforcement R fixed at compile time.
+#[derive(Clone, Copy, Debug)]
+pub struct Equations<R: Reinforcement> {
+    law: MembraneLaw<R>,
+    /// Pressure difference ΔP.
+    dp: f64,
+    /// 1/E_b, so that a point evaluation multiplies instead of dividing.
+    inv_e_b: f64,
+}
+
+impl Equations<NoFibres> {
+    /// A fibre-free shell: `shell.law.d` is ignored.
+    pub fn neo_hookean(shell: &Shell) -> Self {
+        Equations::new(MembraneLaw::neo_hookean(shell.law.c), shell)
+    }
+}
+
+impl Equations<Fibres> {
+    /// A shell with fibres of stiffness D.
+    pub fn reinforced(shell: &Shell, d: f64) -> Self {
+        Equations::new(MembraneLaw::reinforced(shell.law.c, d), shell)
+    }
 }
 
 /// The unloaded shell's data at one material point.
@@ -73,6 +116,25 @@ pub struct PointEval {
     pub tensions: Tensions,
 }
 
+impl PointEval {
+    /// A slot not yet evaluated: zeros, and α_s = NaN, which no evaluation leaves.
+    pub fn unset() -> PointEval {
+        PointEval {
+            f: Vec5::zeros(),
+            jac: Mat5::zeros(),
+            alpha_s: f64::NAN,
+            alpha_s_r: 0.0,
+            alpha_s_ts: 0.0,
+            tensions: Tensions::default(),
+        }
+    }
+
+    /// True once an evaluation has been written here.
+    pub fn is_set(&self) -> bool {
+        !self.alpha_s.is_nan()
+    }
+}
+
 /// Why the equations cannot be evaluated at a state.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum PointError {
@@ -87,79 +149,125 @@ pub enum PointError {
     StretchNotFound,
 }
 
-/// α_s at a point from the unknowns, with the tensions and the IFT derivatives.
+/// α_s at a point from the unknowns, with the tensions and the IFT derivatives
+/// (dispatching once on the shell's membrane component; see [`Equations::stretch`]).
 #[inline]
 pub fn stretch(shell: &Shell, mp: &MaterialPoint, r: f64, ts: f64, guess: f64) -> Result<(f64, f64, f64, Tensions), PointError> {
-    if !(r > 0.0) || !r.is_finite() {
-        return Err(PointError::NonPositiveRadius);
+    match shell.membrane() {
+        Membrane::NeoHookean { .. } => Equations::neo_hookean(shell).stretch(mp, r, ts, guess),
+        Membrane::Reinforced { d, .. } => Equations::reinforced(shell, d).stretch(mp, r, ts, guess),
     }
-    let phi = r / mp.rho;
-    let (a, t) = shell
-        .law
-        .alpha_s_from_ts(mp.zeta, mp.fibre, ts, phi, guess)
-        .ok_or(PointError::StretchNotFound)?;
-    let a_ts = 1.0 / t.ts_a;
-    let a_r = -t.ts_phi / (t.ts_a * mp.rho);
-    Ok((a, a_r, a_ts, t))
 }
 
-/// f and ∂f/∂y at one point. `guess` seeds the α_s solve.
+/// f and ∂f/∂y at one point. `guess` seeds the α_s solve (dispatching once on the shell's
+/// membrane component; see [`Equations::evaluate`]).
 #[inline]
 pub fn evaluate(shell: &Shell, mp: &MaterialPoint, y: &Vec5, guess: f64) -> Result<PointEval, PointError> {
-    if !y.iter().all(|v| v.is_finite()) {
-        return Err(PointError::NotFinite);
+    match shell.membrane() {
+        Membrane::NeoHookean { .. } => Equations::neo_hookean(shell).evaluate(mp, y, guess),
+        Membrane::Reinforced { d, .. } => Equations::reinforced(shell, d).evaluate(mp, y, guess),
     }
-    let (kappa, r, theta, q, ts) = (y[KAPPA], y[R], y[THETA], y[QS], y[TS]);
-    let (a, a_r, a_ts, t) = stretch(shell, mp, r, ts, guess)?;
-    let g = mp.gamma;
-    let (sn, cs) = theta.sin_cos();
-    let inv_r = 1.0 / r;
-    let eb = shell.e_b;
-    // t_φ along the solution: total derivatives through α_s(r, t_s).
-    let p = t.tphi;
-    let p_r = t.tphi_a * a_r + t.tphi_phi / mp.rho;
-    let p_ts = t.tphi_a * a_ts;
+}
 
-    // Each right side is γ α_s g(y); its row is γ (α_s ∂g/∂y + g ∂α_s/∂y), where α_s
-    // depends on r and t_s only. `grad` holds ∂g/∂(κ, r, θ, q_s, t_s).
-    let mut f = Vec5::zeros();
-    let mut j = Mat5::zeros();
-    let mut row = |k: usize, gv: f64, grad: [f64; 5]| {
-        f[k] = g * a * gv;
-        for c in 0..5 {
-            j[(k, c)] = g * a * grad[c];
+impl<R: Reinforcement> Equations<R> {
+    /// The shell's E_b and ΔP with the membrane law `law`.
+    pub fn new(law: MembraneLaw<R>, shell: &Shell) -> Self {
+        Equations { law, dp: shell.dp, inv_e_b: 1.0 / shell.e_b }
+    }
+
+    /// The membrane law.
+    pub fn law(&self) -> &MembraneLaw<R> {
+        &self.law
+    }
+
+    /// α_s at a point from the unknowns, with the tensions and the IFT derivatives
+    /// ∂α_s/∂r, ∂α_s/∂t_s. The point's fibre data are read only when R has fibres.
+    #[inline]
+    pub fn stretch(&self, mp: &MaterialPoint, r: f64, ts: f64, guess: f64) -> Result<(f64, f64, f64, Tensions), PointError> {
+        if !r.is_finite() || r <= 0.0 {
+            return Err(PointError::NonPositiveRadius);
         }
-        j[(k, R)] += g * gv * a_r;
-        j[(k, TS)] += g * gv * a_ts;
-    };
-    let u = sn * inv_r - kappa;
-    let r2 = inv_r * inv_r;
-    row(
-        KAPPA,
-        u * cs * inv_r - q / eb,
-        [-cs * inv_r, -sn * cs * r2 * inv_r - u * cs * r2, (cs * cs - sn * sn) * r2 + kappa * sn * inv_r, -1.0 / eb, 0.0],
-    );
-    row(R, cs, [0.0, 0.0, -sn, 0.0, 0.0]);
-    row(THETA, kappa, [1.0, 0.0, 0.0, 0.0, 0.0]);
-    row(
-        QS,
-        shell.dp - kappa * ts - sn * p * inv_r - q * cs * inv_r,
-        [
-            -ts,
-            -sn * p_r * inv_r + sn * p * r2 + q * cs * r2,
-            -cs * p * inv_r + q * sn * inv_r,
-            -cs * inv_r,
-            -kappa - sn * p_ts * inv_r,
-        ],
-    );
-    let d = p - ts;
-    row(
-        TS,
-        kappa * q + d * cs * inv_r,
-        [q, p_r * cs * inv_r - d * cs * r2, -d * sn * inv_r, kappa, (p_ts - 1.0) * cs * inv_r],
-    );
+        let phi = r / mp.rho;
+        let (a, t) = self
+            .law
+            .alpha_s_from_ts(mp.zeta, R::direction(&mp.fibre), ts, phi, guess)
+            .ok_or(PointError::StretchNotFound)?;
+        let a_ts = 1.0 / t.ts_a;
+        let a_r = -t.ts_phi * a_ts / mp.rho;
+        Ok((a, a_r, a_ts, t))
+    }
 
-    Ok(PointEval { f, jac: j, alpha_s: a, alpha_s_r: a_r, alpha_s_ts: a_ts, tensions: t })
+    /// f and ∂f/∂y at one point. `guess` seeds the α_s solve.
+    #[inline]
+    pub fn evaluate(&self, mp: &MaterialPoint, y: &Vec5, guess: f64) -> Result<PointEval, PointError> {
+        let mut out = PointEval::unset();
+        self.evaluate_into(mp, y, guess, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Self::evaluate`] written in place (the assembly's buffers: no 300-byte copies).
+    /// On error `out` is left as it was.
+    #[inline]
+    pub fn evaluate_into(&self, mp: &MaterialPoint, y: &Vec5, guess: f64, out: &mut PointEval) -> Result<(), PointError> {
+        if !y.iter().all(|v| v.is_finite()) {
+            return Err(PointError::NotFinite);
+        }
+        let (kappa, r, theta, q, ts) = (y[KAPPA], y[R], y[THETA], y[QS], y[TS]);
+        let (a, a_r, a_ts, t) = self.stretch(mp, r, ts, guess)?;
+        let g = mp.gamma;
+        let (sn, cs) = theta.sin_cos();
+        let inv_r = 1.0 / r;
+        let inv_eb = self.inv_e_b;
+        // t_φ along the solution: total derivatives through α_s(r, t_s).
+        let p = t.tphi;
+        let p_r = t.tphi_a * a_r + t.tphi_phi / mp.rho;
+        let p_ts = t.tphi_a * a_ts;
+
+        // Each right side is γ α_s g(y); its row is γ (α_s ∂g/∂y + g ∂α_s/∂y), where α_s
+        // depends on r and t_s only. `grad` holds ∂g/∂(κ, r, θ, q_s, t_s). Every entry of
+        // f and ∂f/∂y is written.
+        let PointEval { f, jac: j, .. } = out;
+        let mut row = |k: usize, gv: f64, grad: [f64; 5]| {
+            f[k] = g * a * gv;
+            for c in 0..5 {
+                j[(k, c)] = g * a * grad[c];
+            }
+            j[(k, R)] += g * gv * a_r;
+            j[(k, TS)] += g * gv * a_ts;
+        };
+        let u = sn * inv_r - kappa;
+        let r2 = inv_r * inv_r;
+        row(
+            KAPPA,
+            u * cs * inv_r - q * inv_eb,
+            [-cs * inv_r, -sn * cs * r2 * inv_r - u * cs * r2, (cs * cs - sn * sn) * r2 + kappa * sn * inv_r, -inv_eb, 0.0],
+        );
+        row(R, cs, [0.0, 0.0, -sn, 0.0, 0.0]);
+        row(THETA, kappa, [1.0, 0.0, 0.0, 0.0, 0.0]);
+        row(
+            QS,
+            self.dp - kappa * ts - sn * p * inv_r - q * cs * inv_r,
+            [
+                -ts,
+                -sn * p_r * inv_r + sn * p * r2 + q * cs * r2,
+                -cs * p * inv_r + q * sn * inv_r,
+                -cs * inv_r,
+                -kappa - sn * p_ts * inv_r,
+            ],
+        );
+        let d = p - ts;
+        row(
+            TS,
+            kappa * q + d * cs * inv_r,
+            [q, p_r * cs * inv_r - d * cs * r2, -d * sn * inv_r, kappa, (p_ts - 1.0) * cs * inv_r],
+        );
+
+        out.alpha_s = a;
+        out.alpha_s_r = a_r;
+        out.alpha_s_ts = a_ts;
+        out.tensions = t;
+        Ok(())
+    }
 }
 
 /// The first integral divided by r, q_s cos θ + t_s sin θ − r ΔP / 2: the pole condition.
@@ -177,6 +285,19 @@ pub fn first_integral(dp: f64, y: &Vec5) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fibre-free equations never read a point's fibre data.
+    #[test]
+    fn fibre_free_equations_ignore_fibre_data() {
+        let shell = Shell { law: Law { c: 100.0, d: None }, e_b: 18.0, dp: 2.0 };
+        let bare = MaterialPoint { sigma_ref: 3.0, sigma: 3.1, rho: 2.9, zeta: 0.6, gamma: 1.05, fibre: None };
+        let with = MaterialPoint { fibre: Some(FibreDirection::from_angle(0.2)), ..bare };
+        let y = Vec5::new(0.11, 3.2, 0.33, 0.4, 7.0);
+        let eq = Equations::neo_hookean(&shell);
+        let (a, b) = (eq.evaluate(&bare, &y, 1.0).unwrap(), eq.evaluate(&with, &y, 1.0).unwrap());
+        assert_eq!((a.f, a.jac, a.alpha_s), (b.f, b.jac, b.alpha_s));
+        assert_eq!(evaluate(&shell, &with, &y, 1.0).unwrap().f, a.f);
+    }
 
     /// ∂f/∂y against central differences, with and without fibres.
     #[test]

@@ -1,6 +1,7 @@
 //! The physics, and nothing of the solvers (MODEL.md §1–4): parameters, material
 //! profiles, the constitutive law and the cornea.
 
+pub mod components;
 pub mod constitutive;
 pub mod cornea;
 pub mod growth_law;

@@ -491,7 +491,8 @@ use crate::model::stimulus::{Surface, RED_OFFSET};
 fn a_scene_without_growth_keys_is_elastic() {
     let s = parse("[pressure]\ndP = 2").unwrap();
     assert_eq!(s.growth, None);
-    assert_eq!(s.growth_settings, GrowthSettings::default());
+    // The defaults, with the axial-length history its figure draws.
+    assert_eq!(s.growth_settings, GrowthSettings { history_points: 100, ..GrowthSettings::default() });
     // Growth numerics and surfaces alone do not turn growth on.
     let s = parse_set(
         "[solver]\nrtol = 1e-4\nintegrator = \"euler\"\n[output]\ntimes = [0.5]\n[stimulus.blue]\nP3 = 24",
@@ -830,7 +831,8 @@ fn shipped_const_scene_grows_with_the_defaults() {
     let s =
         Scene::from_toml_str(include_str!("../../scenes/const.toml"), "const.toml", &[]).unwrap();
     assert_eq!(s.growth, Some(GrowthParams::default()));
-    assert_eq!(s.growth_settings, GrowthSettings::default());
+    // The defaults, with the axial-length history its figure draws.
+    assert_eq!(s.growth_settings, GrowthSettings { history_points: 100, ..GrowthSettings::default() });
     assert_eq!(s.params.thickness, Thickness::Uniform);
     assert_eq!(s.params.d, 0.0);
     assert_eq!(s.solver.nodes, 501);
