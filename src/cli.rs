@@ -685,6 +685,7 @@ fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
         text.push_str(&format!("; cornea stretch α = {alpha:.12}"));
     }
     text.push('\n');
+    text.push_str(&format!("# model: {}\n", scene.components()));
     match &scene.growth {
         Some(g) => text.push_str(&format!(
             "# growth: on (η0 = {}, Γ = {}, δ = {}, t_end = {}); run it with `eyeshell grow`\n",

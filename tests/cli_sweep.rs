@@ -155,6 +155,16 @@ fn elastic_sweeps_solve_each_shell() {
     assert!(l[1] < l[0], "{l:?}");
     assert!(rows.iter().all(|r| r[col("class")] == "hyperopic"));
     assert!(dir.path().join("out/runs/D=200/fields.csv").is_file());
+    // Each run's summary names the physics its model contains: fibres only where D > 0.
+    let summary = |run: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join(format!("out/runs/{run}/summary.json"))).unwrap()).unwrap()
+    };
+    let (free, fibres) = (summary("D=0"), summary("D=200"));
+    assert_eq!(free["components"]["membrane"]["kind"], "neo_hookean");
+    assert_eq!(fibres["components"]["membrane"]["kind"], "reinforced");
+    assert_eq!(fibres["components"]["thickness"]["kind"], "profile");
+    assert_eq!(free["components"]["growth"], false);
+    assert!(free["model"].as_str().unwrap().contains("no fibres"), "{}", free["model"]);
 }
 
 #[test]

@@ -9,7 +9,6 @@ use super::interpolant::{Interpolant, NQ};
 use super::material::{reference_data, reference_point};
 use super::{FieldRow, SolveStats};
 use crate::mesh::Mesh;
-use crate::model::constitutive::Law;
 use crate::model::cornea;
 use crate::model::params::{LinearSolverKind, Params, Scheme, SolverSettings};
 use crate::model::profiles::{self, Side};
@@ -165,7 +164,7 @@ fn field_row(mp: &equations::MaterialPoint, v: &[f64; NQ], alpha_s: f64, t_phi: 
 
 /// The constants of the equations for a parameter set; fibre terms only when D > 0.
 pub fn shell_of(p: &Params) -> Shell {
-    Shell { law: Law { c: p.c, d: p.has_fibres().then_some(p.d) }, e_b: p.e_b, dp: p.dp }
+    Shell { law: crate::model::components::Membrane::of(p).law(), e_b: p.e_b, dp: p.dp }
 }
 
 /// The mesh a scene asks for: uniform nodes, breakpoints and pole grading (MODEL.md §3–4).

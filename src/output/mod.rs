@@ -325,6 +325,8 @@ fn run_json(scene: &Scene) -> serde_json::Value {
         "linear_solver": name("solver.linear"),
         "epsilon": num(scene.solver.epsilon),
         "length": num(scene.params.length()),
+        "model": scene.components().to_string(),
+        "components": serde_json::to_value(scene.components()).unwrap_or_default(),
         "parameters": scene.parameters_json(),
     })
 }

@@ -349,6 +349,11 @@ impl Scene {
         out
     }
 
+    /// The physics this scene's model contains (MODEL.md §2–6): membrane, thickness, growth.
+    pub fn components(&self) -> crate::model::components::Components {
+        crate::model::components::Components::of(&self.params, self.growth.is_some())
+    }
+
     /// The scene's name: `name` if given, else the file stem of the origin.
     pub fn display_name(&self) -> String {
         self.name.clone().unwrap_or_else(|| {
