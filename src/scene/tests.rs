@@ -491,8 +491,7 @@ use crate::model::stimulus::{Surface, RED_OFFSET};
 fn a_scene_without_growth_keys_is_elastic() {
     let s = parse("[pressure]\ndP = 2").unwrap();
     assert_eq!(s.growth, None);
-    // The defaults, with the axial-length history its figure draws.
-    assert_eq!(s.growth_settings, GrowthSettings { history_points: 100, ..GrowthSettings::default() });
+    assert_eq!(s.growth_settings, GrowthSettings::default());
     // Growth numerics and surfaces alone do not turn growth on.
     let s = parse_set(
         "[solver]\nrtol = 1e-4\nintegrator = \"euler\"\n[output]\ntimes = [0.5]\n[stimulus.blue]\nP3 = 24",
