@@ -1,4 +1,5 @@
-//! The command line: `eyeshell solve | grow | check | keys | export | compare`.
+//! The command line: `eyeshell solve | grow | check | keys | export | compare | converge |
+//! wpd | refinement | extremes | sweep | figures | plot`.
 //!
 //! Every failure is printed as one line `eyeshell: error: <message>` on stderr. Exit codes:
 //! 0 success, 2 bad input (usage, scene, validation, `--at`, an output path that may not be
@@ -339,7 +340,9 @@ fn usage_error(e: clap::Error) -> i32 {
             0
         }
         ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand => {
-            report("missing subcommand: one of solve, grow, check, keys, export, compare (see 'eyeshell --help')");
+            use clap::CommandFactory;
+            let names: Vec<String> = Cli::command().get_subcommands().map(|c| c.get_name().to_string()).filter(|n| n != "help").collect();
+            report(&format!("missing subcommand: one of {} (see 'eyeshell --help')", names.join(", ")));
             EXIT_BAD_INPUT
         }
         _ => {
