@@ -520,7 +520,7 @@ fn check_figure(stem: &Path, fig: &Figure, prefix: &str) -> Result<(), PlotError
 
 /// One figure placed on a canvas: its top-left corner and its size, in pixels.
 struct Cell<'a> {
-    fig: &'a Figure,
+    fig: std::borrow::Cow<'a, Figure>,
     prep: Prepared,
     at: (i32, i32),
     size: (u32, u32),
@@ -528,12 +528,9 @@ struct Cell<'a> {
 
 impl<'a> Cell<'a> {
     fn new(fig: &'a Figure, at: (i32, i32), size: (u32, u32)) -> Self {
-        Cell {
-            fig,
-            prep: Prepared::new(fig),
-            at,
-            size,
-        }
+        let fig = offset_axes(fig);
+        let prep = Prepared::new(&fig);
+        Cell { fig, prep, at, size }
     }
 }
 
@@ -698,6 +695,58 @@ impl Prepared {
             shade,
         }
     }
+}
+
+/// The offset that keeps a linear axis readable when its data vary far less than their size
+/// (1.0136216901 ± 1e-9): tick labels then show the variation only, and the axis title says
+/// what was subtracted. None when the labels can show the values themselves.
+fn axis_offset(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let span = hi - lo;
+    if !(span > 0.0) || span >= 1e-4 * lo.abs().max(hi.abs()) {
+        return None;
+    }
+    // A round number near the middle, to one digit beyond the span's.
+    let unit = 10f64.powf(span.log10().floor() + 1.0);
+    Some((0.5 * (lo + hi) / unit).round() * unit)
+}
+
+/// `v` with as many decimals as `unit` needs (for the offset in an axis title).
+fn offset_text(v: f64, unit_digits: usize) -> String {
+    format!("{v:.unit_digits$}")
+}
+
+/// The figure with its data shifted by [`axis_offset`] on each linear axis that needs it (and
+/// no explicit range), the axis titles saying so; the figure itself when none does.
+fn offset_axes(fig: &Figure) -> std::borrow::Cow<'_, Figure> {
+    let points = || fig.series.iter().flat_map(|s| s.points.iter());
+    let linear_auto = |scale: Scale, range: Option<(f64, f64)>| scale == Scale::Linear && range.is_none();
+    let dx = if linear_auto(fig.x_scale, fig.x_range) { axis_offset(points().map(|p| p.0)) } else { None };
+    let dy = if linear_auto(fig.y_scale, fig.y_range) && !fig.aspect_equal { axis_offset(points().map(|p| p.1)) } else { None };
+    let dx = dx.filter(|_| !fig.aspect_equal);
+    if dx.is_none() && dy.is_none() {
+        return std::borrow::Cow::Borrowed(fig);
+    }
+    let mut out = fig.clone();
+    let title = |label: &str, offset: f64, values: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+        let digits = (-(hi - lo).log10().floor() + 1.0).clamp(0.0, 17.0) as usize;
+        let sign = if offset < 0.0 { "+" } else { "−" };
+        format!("{label} {sign} {}", offset_text(offset.abs(), digits))
+    };
+    if let Some(d) = dx {
+        out.x_label = title(&fig.x_label, d, &mut points().map(|p| p.0).filter(|v| v.is_finite()));
+    }
+    if let Some(d) = dy {
+        out.y_label = title(&fig.y_label, d, &mut points().map(|p| p.1).filter(|v| v.is_finite()));
+    }
+    for s in &mut out.series {
+        for p in &mut s.points {
+            p.0 -= dx.unwrap_or(0.0);
+            p.1 -= dy.unwrap_or(0.0);
+        }
+    }
+    std::borrow::Cow::Owned(out)
 }
 
 /// A range the figure sets, made usable: ordered, finite, positive on a log axis, and not
@@ -895,7 +944,7 @@ fn draw_canvas<DB: DrawingBackend>(
     }
     for cell in &canvas.cells {
         let area = root.clone().shrink(cell.at, cell.size);
-        draw(&area, cell.fig, &cell.prep)?;
+        draw(&area, &cell.fig, &cell.prep)?;
     }
     Ok(())
 }
@@ -1501,6 +1550,23 @@ mod tests {
         let (ux, uy) = ((x1 - x0) / 800.0, (y1 - y0) / 500.0);
         assert!((ux - uy).abs() < 1e-12 * ux);
         assert!(x0 <= 0.0 && x1 >= 1.0 && y0 <= -3.0 && y1 >= 3.0);
+    }
+
+    #[test]
+    fn tiny_variations_are_drawn_about_an_offset() {
+        assert_eq!(axis_offset([1.0, 2.0].into_iter()), None);
+        assert_eq!(axis_offset([5.0, 5.0].into_iter()), None);
+        let d = axis_offset([1.0136216901, 1.0136216911].into_iter()).unwrap();
+        assert!((d - 1.013621690).abs() < 1e-9 + 1e-12, "{d}");
+        let fig = Figure::new("", "x", "α_s").with(Series::new("a", vec![(0.0, 1.0136216901), (1.0, 1.0136216911)], SeriesStyle::Line));
+        let shifted = offset_axes(&fig);
+        assert_eq!(shifted.x_label, "x");
+        assert!(shifted.y_label.starts_with("α_s − 1.0136216"), "{}", shifted.y_label);
+        let ys: Vec<f64> = shifted.series[0].points.iter().map(|p| p.1).collect();
+        assert!(ys.iter().all(|y| y.abs() < 1e-8), "{ys:?}");
+        // An ordinary figure is drawn as it is.
+        let plain = Figure::new("", "x", "y").with(Series::new("a", vec![(0.0, 1.0), (1.0, 2.0)], SeriesStyle::Line));
+        assert!(matches!(offset_axes(&plain), std::borrow::Cow::Borrowed(_)));
     }
 
     #[test]

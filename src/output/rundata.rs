@@ -26,7 +26,7 @@ pub struct SeriesPoint {
 #[derive(Clone, Debug)]
 pub struct RunData {
     pub dir: PathBuf,
-    /// The scene's name (from summary.json), else the directory's name.
+    /// The scene's name (summary.json's `scene.name`), else the directory's name.
     pub name: String,
     /// The run's scene, rebuilt from the parameters in summary.json.
     pub scene: Scene,
@@ -80,7 +80,7 @@ pub fn read(dir: &Path) -> Result<RunData, ExportError> {
         serde_json::from_str(&text).map_err(|e| bad(format!("{}: not valid JSON: {e}", summary_path.display())))?;
     let scene = scene_of(&summary, &summary_path)?;
     let name = summary
-        .get("scene")
+        .pointer("/scene/name")
         .and_then(|s| s.as_str())
         .map(str::to_string)
         .or_else(|| dir.file_name().map(|n| n.to_string_lossy().into_owned()))
