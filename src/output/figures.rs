@@ -288,7 +288,11 @@ fn figure_a(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
 }
 
 fn describe_refraction(p: &SeriesPoint) -> String {
-    format!("{} (retina {} mm behind blue, {} mm behind red)", p.class, trim(p.retina_minus_blue), trim(p.retina_minus_red))
+    let side = |d: f64, surface: &str| {
+        let word = if d >= 0.0 { "behind" } else { "in front of" };
+        format!("{} mm {word} {surface}", trim(d.abs()))
+    };
+    format!("{} (the retina at the pole is {}, {})", p.class, side(p.retina_minus_blue, "blue"), side(p.retina_minus_red, "red"))
 }
 
 /// (b) α_s and α_φ against σ at t = 0, 0.1, 0.2, 0.4, 1 for the const shell.
