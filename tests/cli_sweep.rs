@@ -177,3 +177,45 @@ fn check_lists_the_runs_of_a_sweep() {
     write_scene(dir.path(), &format!("{SMALL}[sweep.grid]\n\"fibres.D\" = [1, -1]\n"));
     assert_bad(&eyeshell_in(dir.path(), &["check", "s.toml"]), "s.toml [sweep] run D=-1: fibres.D = -1 must be non-negative", "check");
 }
+
+/// A real Ctrl-C (SIGINT) to `eyeshell sweep`: no new run starts, the running one finishes,
+/// the table says which did not run, and the exit is 1 with one line saying how to resume.
+#[test]
+fn ctrl_c_stops_starting_runs_and_keeps_the_table() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    // Each run takes a few tenths of a second: the signal arrives while the second runs.
+    let text = SMALL.replace("nodes = 21", "nodes = 201").replace("t_end = 0.2", "t_end = 1.0").replace("times = [0.1]", "times = [0.5]").replace("rtol = 1e-3", "rtol = 1e-6");
+    write_scene(dir.path(), &format!("{text}[sweep.grid]\n\"growth.Gamma\" = [4, 5, 6, 7, 8, 9]\n"));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+        .args(["sweep", "s.toml", "--out", "out", "--jobs", "1"])
+        .current_dir(dir.path())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut first = String::new();
+    stderr.read_line(&mut first).unwrap();
+    assert!(first.starts_with("eyeshell: [1/6] "), "{first}");
+    let killed = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(killed.success());
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(1), "{first}{rest}");
+    assert!(rest.contains("interrupted: finishing the running runs"), "{rest}");
+    let last = rest.lines().last().unwrap();
+    assert!(last.starts_with("eyeshell: error: sweep interrupted: ") && last.contains("--resume"), "{last}");
+    let (_, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
+    let ok = rows.iter().filter(|r| r[1] == "ok").count();
+    let not_run = rows.iter().filter(|r| r[1] == "not run").count();
+    assert!((1..=5).contains(&ok) && ok + not_run == 6, "{rows:?}");
+    let summary = std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap();
+    assert!(summary.contains("\"status\": \"interrupted\""), "{summary}");
+    // Every finished run is whole.
+    for r in rows.iter().filter(|r| r[1] == "ok") {
+        assert!(dir.path().join("out/runs").join(&r[0]).join("result.json").is_file());
+    }
+}
