@@ -612,9 +612,15 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
         )));
     }
     if !a.quiet {
-        out(&format!("eyeshell: sweep {} ({}): {total} run{} ok
-  table           {}
-", sweep.origin, sweep.name, plural(total), table.display()));
+        let reused = report.records.iter().filter(|r| r.status == RunStatus::Reused).count();
+        let reused = if reused > 0 { format!(" ({reused} reused from the earlier sweep)") } else { String::new() };
+        out(&format!(
+            "eyeshell: sweep {} ({}): {total} run{} ok{reused}\n  table           {}\n",
+            sweep.origin,
+            sweep.name,
+            plural(total),
+            table.display()
+        ));
     }
     Ok(())
 }
