@@ -639,8 +639,7 @@ fn cmd_figures(a: &FiguresArgs) -> Result<(), Failure> {
     })
     .map_err(|e| if e.bad_input { Failure::bad_input(e.message) } else { Failure::failed(e.message) })?;
     if !a.quiet {
-        let mut text = format!("eyeshell: {} figures in {:.1} s
-", figures.len(), start.elapsed().as_secs_f64());
+        let mut text = format!("eyeshell: {} figures in {:.1} s\n", figures.len(), start.elapsed().as_secs_f64());
         for f in &figures {
             text.push_str(&format!("  ({}) {:<50} {}\n", f.id, f.title, f.png.display()));
         }
