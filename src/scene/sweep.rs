@@ -113,14 +113,21 @@ impl Sweep {
     }
 }
 
+/// A key and the value a run gives it.
+type Assignment = (String, toml::Value);
+/// A grid axis: a key and its values.
+type Axis = (String, Vec<toml::Value>);
+/// A run before its scene is built: its name if listed, and its values.
+type Combination = (Option<String>, Vec<Assignment>);
+
 /// One entry of `[[sweep.runs]]`: an optional name and the values it sets.
 struct ListEntry {
     name: Option<String>,
-    values: Vec<(String, toml::Value)>,
+    values: Vec<Assignment>,
 }
 
 /// The list entries and the grid axes (key, values) of a `[sweep]` table.
-fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<(String, Vec<toml::Value>)>), SceneError> {
+fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<Axis>), SceneError> {
     let bad = |problem: String| SceneError::BadSweep { origin: origin.to_string(), problem };
     let mut list = Vec::new();
     let mut grid = Vec::new();
@@ -209,8 +216,8 @@ fn leaves(t: &toml::Table, prefix: &str, origin: &str) -> Result<Vec<(String, to
 }
 
 /// Every run: each list entry (or one empty entry) crossed with the grid, last axis fastest.
-fn expand(list: &[ListEntry], grid: &[(String, Vec<toml::Value>)]) -> Vec<(Option<String>, Vec<(String, toml::Value)>)> {
-    let base: Vec<(Option<String>, Vec<(String, toml::Value)>)> = if list.is_empty() {
+fn expand(list: &[ListEntry], grid: &[Axis]) -> Vec<Combination> {
+    let base: Vec<Combination> = if list.is_empty() {
         vec![(None, Vec::new())]
     } else {
         list.iter().map(|e| (e.name.clone(), e.values.clone())).collect()

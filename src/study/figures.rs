@@ -3,7 +3,7 @@
 //! wrote, with an HTML index. The scenes are the files in `scenes/`, built into the binary
 //! so that the command works from anywhere.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use crate::output::figures::{index_html, paper_figures, PaperRuns, Written};
@@ -92,6 +92,6 @@ fn rel(out: &Path, p: &Path) -> String {
     p.strip_prefix(out).unwrap_or(p).display().to_string()
 }
 
-fn write(path: &PathBuf, bytes: &[u8]) -> Result<(), FiguresError> {
+fn write(path: &Path, bytes: &[u8]) -> Result<(), FiguresError> {
     write_atomic(path, bytes).map_err(|e| failed(format!("{}: {e}", path.display())))
 }

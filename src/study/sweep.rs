@@ -226,7 +226,7 @@ fn run_one(run: &SweepRun, dir: &Path) -> (RunStatus, Option<RunResult>) {
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| execute(&run.scene, dir)));
     match outcome {
         Ok(Ok(result)) => (RunStatus::Ok, Some(result)),
-        Ok(Err((message, partial))) => (RunStatus::Failed(message), partial),
+        Ok(Err((message, partial))) => (RunStatus::Failed(message), partial.map(|r| *r)),
         Err(panic) => {
             let what = panic
                 .downcast_ref::<&str>()
@@ -239,7 +239,7 @@ fn run_one(run: &SweepRun, dir: &Path) -> (RunStatus, Option<RunResult>) {
 }
 
 /// A failed run: the message and what it had reached.
-type RunFailure = (String, Option<RunResult>);
+type RunFailure = (String, Option<Box<RunResult>>);
 
 /// Solve or grow `scene` into `dir`, then write its scene.toml and result.json.
 pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
@@ -250,7 +250,7 @@ pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     let text = serde_json::to_string_pretty(&result).unwrap_or_default();
     for (file, text) in [(SCENE_FILE, scene.to_toml()), (RESULT_FILE, text)] {
         let path = dir.join(file);
-        write_atomic(&path, text.as_bytes()).map_err(|e| (io(&path, e).to_string(), Some(result.clone())))?;
+        write_atomic(&path, text.as_bytes()).map_err(|e| (io(&path, e).to_string(), Some(Box::new(result.clone()))))?;
     }
     Ok(result)
 }
@@ -270,7 +270,7 @@ fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
             Ok(growth_result(&last, &stats))
         }
         Err(e) => {
-            let partial = last.map(|r| growth_result(&r, &e.stats));
+            let partial = last.map(|r| Box::new(growth_result(&r, &e.stats)));
             let message = match writer.fail(&e) {
                 Ok(_) => e.to_string(),
                 Err(w) => format!("{e} (and summary.json could not be written: {w})"),
