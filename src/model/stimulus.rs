@@ -89,6 +89,11 @@ impl Refraction {
         }
     }
 
+    /// The class named by [`Refraction::as_str`], if `name` is one.
+    pub fn parse(name: &str) -> Option<Refraction> {
+        [Refraction::Hyperopic, Refraction::Emmetropic, Refraction::Myopic].into_iter().find(|r| r.as_str() == name)
+    }
+
     pub fn as_str(self) -> &'static str {
         match self {
             Refraction::Hyperopic => "hyperopic",

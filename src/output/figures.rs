@@ -292,7 +292,7 @@ fn describe_refraction(p: &SeriesPoint) -> String {
         let word = if d >= 0.0 { "behind" } else { "in front of" };
         format!("{} mm {word} {surface}", trim(d.abs()))
     };
-    format!("{} (the retina at the pole is {}, {})", p.class, side(p.retina_minus_blue, "blue"), side(p.retina_minus_red, "red"))
+    format!("{} (the retina at the pole is {}, {})", p.class.as_str(), side(p.retina_minus_blue, "blue"), side(p.retina_minus_red, "red"))
 }
 
 /// (b) α_s and α_φ against σ at t = 0, 0.1, 0.2, 0.4, 1 for the const shell.
@@ -555,9 +555,4 @@ fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
         files.extend([png, svg]);
     }
     Ok(files)
-}
-
-/// The final series row of a run, if it grew.
-pub fn final_point(run: &RunData) -> Option<&SeriesPoint> {
-    run.timeline().last()
 }

@@ -9,18 +9,12 @@ use super::export::{bad, read_run, Run, RunSnapshot, Table};
 use super::growth::{HISTORY_FILE, SERIES_FILE};
 use super::export::ExportError;
 use super::SUMMARY_FILE;
+use crate::growth::SeriesRow;
+use crate::model::stimulus::Refraction;
 use crate::scene::Scene;
 
 /// One row of series.csv or history.csv.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SeriesPoint {
-    pub t: f64,
-    pub axial_length: f64,
-    pub equatorial_radius: f64,
-    pub retina_minus_blue: f64,
-    pub retina_minus_red: f64,
-    pub class: String,
-}
+pub type SeriesPoint = SeriesRow;
 
 /// A run read back.
 #[derive(Clone, Debug)]
@@ -141,7 +135,7 @@ pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
                 equatorial_radius: number(2)?,
                 retina_minus_blue: number(3)?,
                 retina_minus_red: number(4)?,
-                class: fields.get(5)?.to_string(),
+                class: Refraction::parse(fields.get(5)?)?,
             })
         })();
         out.push(row.ok_or_else(|| bad(format!("{}: line {}: not a series row: {line:?}", path.display(), i + 1)))?);
