@@ -1043,14 +1043,18 @@ fn draw_color_bar<DB: DrawingBackend>(
     let (top, bottom) = (plot_y.start - base, plot_y.end - base);
     let height = (bottom - top).max(1);
     let (x0, x1) = (6, 24);
-    // One row of pixels at a time inside the outline, from exactly colormap(1) at the top
-    // to colormap(0) at the bottom: exact in the PNG, few enough elements in the SVG.
+    // Bands of the [`SHADE_LEVELS`] steps the curves are drawn in, from exactly colormap(1)
+    // at the top to colormap(0) at the bottom: one element per band in the SVG.
     let rows = (height - 1).max(1);
-    for r in 0..rows {
-        let t = 1.0 - r as f64 / (rows - 1).max(1) as f64;
-        let y = top + 1 + r;
-        let row = Rectangle::new([(x0, y), (x1, y + 1)], colormap(t).filled());
-        bar.draw(&row).map_err(e)?;
+    let level = |r: i32| (SHADE_LEVELS * (1.0 - r as f64 / (rows - 1).max(1) as f64)).round();
+    let mut start = 0;
+    for r in 1..=rows {
+        if r == rows || level(r) != level(start) {
+            let color = colormap(level(start) / SHADE_LEVELS);
+            let band = Rectangle::new([(x0, top + 1 + start), (x1, top + 1 + r)], color.filled());
+            bar.draw(&band).map_err(e)?;
+            start = r;
+        }
     }
     let outline = Rectangle::new([(x0, top), (x1, top + height)], BLACK.stroke_width(1));
     bar.draw(&outline).map_err(e)?;
@@ -1280,8 +1284,24 @@ where
     Ok(())
 }
 
-/// Draw a curve segment by segment, each in the colour of its mean value. Thick lines get
-/// round joins, or their corners would show gaps.
+/// Shades are drawn in this many steps of the colour map: fine enough to look continuous,
+/// coarse enough that neighbouring segments share a colour and are drawn as one path (an
+/// SVG holds one element per run of equal colour, not one per segment).
+const SHADE_LEVELS: f64 = 127.0;
+
+/// The colour of a segment from the mean of its end values, on [`SHADE_LEVELS`] steps.
+fn segment_color(a: f64, b: f64, shade: (f64, f64)) -> RGBColor {
+    // Halves first, so that the mean of two large values does not overflow.
+    let t = normalise(a / 2.0 + b / 2.0, shade);
+    if t.is_nan() {
+        NO_VALUE_COLOR
+    } else {
+        colormap((t * SHADE_LEVELS).round() / SHADE_LEVELS)
+    }
+}
+
+/// Draw a curve in the colours of its values: consecutive segments of one colour as one
+/// path. Thick lines get round caps where the colour changes, or the joins would show gaps.
 #[allow(clippy::too_many_arguments)]
 fn draw_shaded<DB, CT>(
     chart: &mut ChartContext<'_, DB, CT>,
@@ -1298,21 +1318,37 @@ where
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let value = |i: usize| values.get(i).copied().unwrap_or(f64::NAN);
+    let mut run: Vec<(f64, f64)> = Vec::new();
+    let mut run_color = NO_VALUE_COLOR;
+    let flush = |chart: &mut ChartContext<'_, DB, CT>, run: &mut Vec<(f64, f64)>, color: RGBColor| -> Result<(), String> {
+        if run.len() >= 2 {
+            draw_path(chart, run.clone(), ShapeStyle::from(color).stroke_width(width), dashed)?;
+            if width >= 3 && !dashed {
+                let ends = [run[0], run[run.len() - 1]].map(|p| Circle::new(p, width / 2, color.filled()));
+                chart.draw_series(ends).map_err(e)?;
+            }
+        }
+        run.clear();
+        Ok(())
+    };
     for (i, w) in points.windows(2).enumerate() {
         let Some(c) = view.clip(w[0], w[1]) else {
+            flush(chart, &mut run, run_color)?;
             continue;
         };
-        // Halves first, so that the mean of two large values does not overflow.
-        let color = shade_color(value(i) / 2.0 + value(i + 1) / 2.0, shade);
-        let style = ShapeStyle::from(color).stroke_width(width);
-        draw_path(chart, vec![c.a, c.b], style, dashed)?;
-        if width >= 3 && !dashed {
-            let r = width / 2;
-            let joins = [c.a, c.b].map(|p| Circle::new(p, r, color.filled()));
-            chart.draw_series(joins).map_err(e)?;
+        let color = segment_color(value(i), value(i + 1), shade);
+        // A new run where the colour changes or the curve left the view.
+        if color != run_color || c.cut_a || run.last() != Some(&c.a) {
+            flush(chart, &mut run, run_color)?;
+            run.push(c.a);
+            run_color = color;
+        }
+        run.push(c.b);
+        if c.cut_b {
+            flush(chart, &mut run, run_color)?;
         }
     }
-    Ok(())
+    flush(chart, &mut run, run_color)
 }
 
 /// Draw series number `k`: its line, its markers and its legend entry.
