@@ -1233,30 +1233,43 @@ impl View {
 
 /// The visible pieces of a polyline, each at least two points long.
 fn visible_runs(view: &View, points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
+    visible_runs_by(view, points, |_| ()).into_iter().map(|(_, run)| run).collect()
+}
+
+/// The visible pieces of a polyline, also split where `key(i)` of segment i changes; each
+/// piece with its key and at least two points long.
+fn visible_runs_by<K: PartialEq + Copy>(
+    view: &View,
+    points: &[(f64, f64)],
+    key: impl Fn(usize) -> K,
+) -> Vec<(K, Vec<(f64, f64)>)> {
     let mut runs = Vec::new();
     let mut run: Vec<(f64, f64)> = Vec::new();
-    let mut flush = |run: &mut Vec<(f64, f64)>| {
-        if run.len() >= 2 {
-            runs.push(std::mem::take(run));
+    let mut run_key: Option<K> = None;
+    let mut flush = |run: &mut Vec<(f64, f64)>, k: Option<K>| {
+        if let (true, Some(k)) = (run.len() >= 2, k) {
+            runs.push((k, std::mem::take(run)));
         }
         run.clear();
     };
-    for w in points.windows(2) {
+    for (i, w) in points.windows(2).enumerate() {
         let Some(c) = view.clip(w[0], w[1]) else {
-            flush(&mut run);
+            flush(&mut run, run_key);
             continue;
         };
-        // A run goes on while the previous segment ended where this one starts.
-        if run.is_empty() || c.cut_a {
-            flush(&mut run);
+        let k = key(i);
+        // A run goes on while the previous segment ended where this one starts, in its key.
+        if run.is_empty() || c.cut_a || run_key != Some(k) || run.last() != Some(&c.a) {
+            flush(&mut run, run_key);
             run.push(c.a);
+            run_key = Some(k);
         }
         run.push(c.b);
         if c.cut_b {
-            flush(&mut run);
+            flush(&mut run, run_key);
         }
     }
-    flush(&mut run);
+    flush(&mut run, run_key);
     runs
 }
 
@@ -1318,37 +1331,15 @@ where
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let value = |i: usize| values.get(i).copied().unwrap_or(f64::NAN);
-    let mut run: Vec<(f64, f64)> = Vec::new();
-    let mut run_color = NO_VALUE_COLOR;
-    let flush = |chart: &mut ChartContext<'_, DB, CT>, run: &mut Vec<(f64, f64)>, color: RGBColor| -> Result<(), String> {
-        if run.len() >= 2 {
-            draw_path(chart, run.clone(), ShapeStyle::from(color).stroke_width(width), dashed)?;
-            if width >= 3 && !dashed {
-                let ends = [run[0], run[run.len() - 1]].map(|p| Circle::new(p, width / 2, color.filled()));
-                chart.draw_series(ends).map_err(e)?;
-            }
-        }
-        run.clear();
-        Ok(())
-    };
-    for (i, w) in points.windows(2).enumerate() {
-        let Some(c) = view.clip(w[0], w[1]) else {
-            flush(chart, &mut run, run_color)?;
-            continue;
-        };
-        let color = segment_color(value(i), value(i + 1), shade);
-        // A new run where the colour changes or the curve left the view.
-        if color != run_color || c.cut_a || run.last() != Some(&c.a) {
-            flush(chart, &mut run, run_color)?;
-            run.push(c.a);
-            run_color = color;
-        }
-        run.push(c.b);
-        if c.cut_b {
-            flush(chart, &mut run, run_color)?;
+    let color = |i: usize| segment_color(value(i), value(i + 1), shade);
+    for (color, run) in visible_runs_by(view, points, color) {
+        let ends = [run[0], run[run.len() - 1]];
+        draw_path(chart, run, ShapeStyle::from(color).stroke_width(width), dashed)?;
+        if width >= 3 && !dashed {
+            chart.draw_series(ends.map(|p| Circle::new(p, width / 2, color.filled()))).map_err(e)?;
         }
     }
-    flush(chart, &mut run, run_color)
+    Ok(())
 }
 
 /// Draw series number `k`: its line, its markers and its legend entry.
