@@ -10,6 +10,7 @@ pub mod bvp;
 pub mod cli;
 pub mod error;
 pub mod growth;
+pub mod linalg;
 pub mod mesh;
 pub mod model;
 pub mod output;

@@ -30,7 +30,7 @@ pub const NY: usize = 5;
 pub const LOWER: usize = 7;
 pub const UPPER: usize = 6;
 /// Rows at the pole before the first interval's rows.
-const POLE_ROWS: usize = 3;
+pub const POLE_ROWS: usize = 3;
 
 /// Where the discrete equations could not be evaluated.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -110,6 +110,8 @@ pub struct Quadratures {
     pub z: Vec<f64>,
     pub slope_left: Vec<[f64; 2]>,
     pub slope_right: Vec<[f64; 2]>,
+    /// z(Σ_{i+1}) − z(Σ_i) by the scheme's quadrature, interval by interval.
+    pub dz: Vec<f64>,
 }
 
 impl Quadratures {
@@ -166,9 +168,9 @@ impl Discretisation {
             z: vec![0.0; m],
             slope_left: Vec::with_capacity(m - 1),
             slope_right: Vec::with_capacity(m - 1),
+            dz: vec![0.0; m - 1],
         };
         q.s[0] = data.above[0].sigma * ev.left(0).alpha_s;
-        let mut dz = vec![0.0; m - 1];
         for i in 0..m - 1 {
             let h = self.mesh.step(i);
             let a = rates(&data.above[i], ev.left(i), u[NY * i + THETA]);
@@ -181,13 +183,13 @@ impl Discretisation {
                 Scheme::Trapezoid => [0.5 * h * (a[0] + b[0]), 0.5 * h * (a[1] + b[1])],
             };
             q.s[i + 1] = q.s[i] + step[0];
-            dz[i] = step[1];
+            q.dz[i] = step[1];
             q.slope_left.push(a);
             q.slope_right.push(b);
         }
         q.z[m - 1] = self.edge.z;
         for i in (0..m - 1).rev() {
-            q.z[i] = q.z[i + 1] - dz[i];
+            q.z[i] = q.z[i + 1] - q.dz[i];
         }
         Ok(q)
     }

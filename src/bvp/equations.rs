@@ -270,6 +270,43 @@ impl<R: Reinforcement> Equations<R> {
     }
 }
 
+/// ∂f and ∂α_s with respect to a point's data (ρ, ζ, γ) at fixed y: what the coupled growth
+/// Jacobian needs of the elastic equations (issue 11).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DataPartials {
+    pub f_rho: Vec5,
+    pub f_zeta: Vec5,
+    pub f_gamma: Vec5,
+    /// ∂α_s/∂ρ and ∂α_s/∂ζ at fixed (r, t_s).
+    pub alpha_s_rho: f64,
+    pub alpha_s_zeta: f64,
+}
+
+/// The data partials from the evaluation `e` of f at (`mp`, `y`). α_s solves
+/// ζ τ_s(α_s, φ) = t_s with φ = r/ρ, so ρ enters through φ only and ζ as a factor:
+///   ∂α_s/∂ρ = −φ ∂α_s/∂r,   ∂α_s/∂ζ = −(t_s/ζ) ∂α_s/∂t_s;
+/// t_φ = ζ τ_φ(α_s, φ) follows along, and f = γ α_s g(y, t_φ) with g_QS ∋ −sin θ t_φ / r,
+/// g_TS ∋ t_φ cos θ / r.
+pub fn data_partials(mp: &MaterialPoint, y: &Vec5, e: &PointEval) -> DataPartials {
+    let (r, theta) = (y[R], y[THETA]);
+    let t = &e.tensions;
+    let (a, g) = (e.alpha_s, mp.gamma);
+    let a_rho = -e.alpha_s_r * r / mp.rho;
+    let a_zeta = -(t.ts / mp.zeta) * e.alpha_s_ts;
+    let p_rho = t.tphi_a * a_rho - t.tphi_phi * r / (mp.rho * mp.rho);
+    let p_zeta = t.tphi / mp.zeta + t.tphi_a * a_zeta;
+    let (sn, cs) = theta.sin_cos();
+    let g_of_y = e.f / (g * a);
+    let dg_dp = Vec5::new(0.0, 0.0, 0.0, -sn / r, cs / r);
+    DataPartials {
+        f_rho: g * (a_rho * g_of_y + (a * p_rho) * dg_dp),
+        f_zeta: g * (a_zeta * g_of_y + (a * p_zeta) * dg_dp),
+        f_gamma: e.f / g,
+        alpha_s_rho: a_rho,
+        alpha_s_zeta: a_zeta,
+    }
+}
+
 /// The first integral divided by r, q_s cos θ + t_s sin θ − r ΔP / 2: the pole condition.
 pub fn first_integral_over_r(dp: f64, y: &Vec5) -> f64 {
     let (sn, cs) = y[THETA].sin_cos();
@@ -297,6 +334,46 @@ mod tests {
         let (a, b) = (eq.evaluate(&bare, &y, 1.0).unwrap(), eq.evaluate(&with, &y, 1.0).unwrap());
         assert_eq!((a.f, a.jac, a.alpha_s), (b.f, b.jac, b.alpha_s));
         assert_eq!(evaluate(&shell, &with, &y, 1.0).unwrap().f, a.f);
+    }
+
+    /// ∂f/∂(ρ, ζ, γ) and ∂α_s/∂(ρ, ζ) against central differences, with and without fibres.
+    #[test]
+    fn data_partials_match_differences() {
+        for d in [None, Some(200.0)] {
+            let shell = Shell { law: Law { c: 100.0, d }, e_b: 18.0, dp: 2.0 };
+            let mp = MaterialPoint {
+                sigma_ref: 3.0,
+                sigma: 3.1,
+                rho: 2.9,
+                zeta: 0.6,
+                gamma: 1.05,
+                fibre: d.map(|_| FibreDirection::from_angle(1.1)),
+            };
+            let y = Vec5::new(0.11, 3.0, 0.33, 0.4, 7.0);
+            let e = evaluate(&shell, &mp, &y, 1.0).unwrap();
+            let dp = data_partials(&mp, &y, &e);
+            let at = |m: MaterialPoint| evaluate(&shell, &m, &y, 1.0).unwrap();
+            let h = 1e-6;
+            let cases: [(fn(&mut MaterialPoint, f64), Vec5, Option<f64>); 3] = [
+                (|m, h| m.rho += h, dp.f_rho, Some(dp.alpha_s_rho)),
+                (|m, h| m.zeta += h, dp.f_zeta, Some(dp.alpha_s_zeta)),
+                (|m, h| m.gamma += h, dp.f_gamma, None),
+            ];
+            for (k, (bump, f_x, a_x)) in cases.into_iter().enumerate() {
+                let (mut up, mut down) = (mp, mp);
+                bump(&mut up, h);
+                bump(&mut down, -h);
+                let (eu, ed) = (at(up), at(down));
+                let fd = (eu.f - ed.f) / (2.0 * h);
+                for row in 0..5 {
+                    assert!((f_x[row] - fd[row]).abs() < 1e-6 * (1.0 + fd[row].abs()), "d={d:?} data {k} row {row}: {} vs {}", f_x[row], fd[row]);
+                }
+                if let Some(a) = a_x {
+                    let fd = (eu.alpha_s - ed.alpha_s) / (2.0 * h);
+                    assert!((a - fd).abs() < 1e-7, "d={d:?} data {k}: α_s {a} vs {fd}");
+                }
+            }
+        }
     }
 
     /// ∂f/∂y against central differences, with and without fibres.

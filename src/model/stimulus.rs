@@ -66,6 +66,47 @@ impl Surface {
     }
 }
 
+/// The depth of a surface behind a point and the point's polar angle, with their gradients
+/// in the point's (z, r): what the growth Jacobian needs of the stimulus (issue 11).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DepthGradient {
+    pub depth: f64,
+    pub angle: f64,
+    /// ∂d/∂z, ∂d/∂r.
+    pub depth_z: f64,
+    pub depth_r: f64,
+    /// ∂φ/∂z, ∂φ/∂r.
+    pub angle_z: f64,
+    pub angle_r: f64,
+}
+
+impl Surface {
+    /// R'(φ) = 4 P1 φ³ + 2 P2 φ.
+    pub fn radius_slope(&self, phi: f64) -> f64 {
+        (4.0 * self.p1 * phi * phi + 2.0 * self.p2) * phi
+    }
+
+    /// [`Surface::depth`] and [`Surface::angle`] at (z, r) with their exact gradients: with
+    /// Z = z − z_B and ϱ = |(Z, r)|, φ = atan2(r, Z) has ∇φ = (−r, Z)/ϱ², ∇ϱ = (Z, r)/ϱ, and
+    /// d = R(φ) − ϱ.
+    pub fn depth_gradient(&self, z: f64, r: f64) -> DepthGradient {
+        let zz = z - self.z_b;
+        let dist = r.hypot(zz);
+        let angle = r.atan2(zz);
+        let (inv, inv2) = (1.0 / dist, 1.0 / (dist * dist));
+        let (angle_z, angle_r) = (-r * inv2, zz * inv2);
+        let slope = self.radius_slope(angle);
+        DepthGradient {
+            depth: self.radius(angle) - dist,
+            angle,
+            depth_z: slope * angle_z - zz * inv,
+            depth_r: slope * angle_r - r * inv,
+            angle_z,
+            angle_r,
+        }
+    }
+}
+
 /// Refractive state at a retina point (MODEL.md §6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Refraction {
@@ -115,6 +156,25 @@ mod tests {
         let z = b.z_b + b.p3 - 1.0;
         assert!((b.depth(z, 0.0) - 1.0).abs() < 1e-12);
         assert_eq!(b.angle(z, 0.0), 0.0);
+    }
+
+    /// The gradients of depth and angle against central differences.
+    #[test]
+    fn depth_gradient_matches_differences() {
+        let b = Surface::blue();
+        for (z, r) in [(22.5, 0.3), (18.0, 9.5), (3.0, 11.0)] {
+            let g = b.depth_gradient(z, r);
+            assert_eq!((g.depth, g.angle), (b.depth(z, r), b.angle(z, r)));
+            let h = 1e-6;
+            let fd = |f: &dyn Fn(f64, f64) -> f64| {
+                ((f(z + h, r) - f(z - h, r)) / (2.0 * h), (f(z, r + h) - f(z, r - h)) / (2.0 * h))
+            };
+            let (dz, dr) = fd(&|z, r| b.depth(z, r));
+            let (az, ar) = fd(&|z, r| b.angle(z, r));
+            for (a, e) in [(g.depth_z, dz), (g.depth_r, dr), (g.angle_z, az), (g.angle_r, ar)] {
+                assert!((a - e).abs() < 1e-8, "{a} vs {e} at ({z}, {r})");
+            }
+        }
     }
 
     #[test]

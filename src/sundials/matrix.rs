@@ -419,6 +419,15 @@ impl SparseMatrix {
         }
     }
 
+    /// Set every value at once, in the order of the pattern (`col_idx`).
+    pub fn copy_values(&mut self, values: &[f64]) -> Result<(), SundialsError> {
+        if values.len() != self.col_idx.len() {
+            return Err(SundialsError::Invalid(format!("{} values for a pattern of {}", values.len(), self.col_idx.len())));
+        }
+        self.values().copy_from_slice(values);
+        Ok(())
+    }
+
     /// Zero the values and (re)write the pattern.
     pub fn zero(&mut self) {
         self.values().fill(0.0);

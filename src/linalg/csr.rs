@@ -1,0 +1,146 @@
+//! A square sparse matrix in compressed rows with a pattern fixed at creation, assembled by
+//! adding entries (a Jacobian's pieces add up where two terms meet).
+
+/// CSR storage: row i's columns are `col_idx[row_ptr[i]..row_ptr[i + 1]]`, increasing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Csr {
+    n: usize,
+    row_ptr: Vec<usize>,
+    col_idx: Vec<usize>,
+    values: Vec<f64>,
+    /// Additions that fell outside the pattern since the last [`Csr::zero`].
+    outside: usize,
+}
+
+impl Csr {
+    /// The n×n zero matrix whose row i may hold the columns `rows[i]` (any order, repeats
+    /// allowed). Panics if a column is ≥ n: the pattern is the assembler's own.
+    pub fn from_rows(rows: Vec<Vec<usize>>) -> Csr {
+        let n = rows.len();
+        let mut row_ptr = Vec::with_capacity(n + 1);
+        let mut col_idx = Vec::new();
+        row_ptr.push(0);
+        for mut cols in rows {
+            cols.sort_unstable();
+            cols.dedup();
+            assert!(cols.last().is_none_or(|&c| c < n), "column outside a {n}×{n} pattern");
+            col_idx.extend(cols);
+            row_ptr.push(col_idx.len());
+        }
+        let values = vec![0.0; col_idx.len()];
+        Csr { n, row_ptr, col_idx, values, outside: 0 }
+    }
+
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    pub fn nnz(&self) -> usize {
+        self.col_idx.len()
+    }
+
+    pub fn row_ptr(&self) -> &[usize] {
+        &self.row_ptr
+    }
+
+    pub fn col_idx(&self) -> &[usize] {
+        &self.col_idx
+    }
+
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// Row i: its columns and values.
+    #[inline]
+    pub fn row(&self, i: usize) -> (&[usize], &[f64]) {
+        let (lo, hi) = (self.row_ptr[i], self.row_ptr[i + 1]);
+        (&self.col_idx[lo..hi], &self.values[lo..hi])
+    }
+
+    /// Zero the values (the pattern stays).
+    pub fn zero(&mut self) {
+        self.values.fill(0.0);
+        self.outside = 0;
+    }
+
+    #[inline]
+    fn position(&self, i: usize, j: usize) -> Option<usize> {
+        let (lo, hi) = (self.row_ptr[i], self.row_ptr[i + 1]);
+        self.col_idx[lo..hi].binary_search(&j).ok().map(|k| lo + k)
+    }
+
+    /// A(i, j) += v. Outside the pattern nothing is written and the miss is counted
+    /// ([`Csr::take_outside`]); debug builds panic.
+    #[inline]
+    pub fn add(&mut self, i: usize, j: usize, v: f64) {
+        match self.position(i, j) {
+            Some(k) => self.values[k] += v,
+            None => self.miss(i, j),
+        }
+    }
+
+    /// A(i, j0 + t) += v[t] for consecutive columns j0, j0 + 1, …, all in the pattern: one
+    /// search for the whole span.
+    #[inline]
+    pub fn add_span(&mut self, i: usize, j0: usize, v: &[f64]) {
+        let Some(k) = self.position(i, j0) else {
+            return self.miss(i, j0);
+        };
+        let end = k + v.len();
+        if end > self.row_ptr[i + 1] || self.col_idx[end - 1] != j0 + v.len() - 1 {
+            return self.miss(i, j0 + v.len() - 1);
+        }
+        for (a, b) in self.values[k..end].iter_mut().zip(v) {
+            *a += b;
+        }
+    }
+
+    fn miss(&mut self, i: usize, j: usize) {
+        debug_assert!(false, "({i}, {j}) is outside the pattern");
+        self.outside += 1;
+    }
+
+    /// The number of additions outside the pattern since the last zero; resets it.
+    pub fn take_outside(&mut self) -> usize {
+        std::mem::take(&mut self.outside)
+    }
+
+    /// A(i, j), zero outside the pattern.
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.position(i, j).map_or(0.0, |k| self.values[k])
+    }
+
+    /// y = A x.
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        for (i, yi) in y.iter_mut().enumerate().take(self.n) {
+            let (cols, vals) = self.row(i);
+            *yi = cols.iter().zip(vals).map(|(&j, v)| v * x[j]).sum();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adds_within_the_pattern_and_counts_misses() {
+        let mut a = Csr::from_rows(vec![vec![2, 0, 0], vec![1], vec![0, 1, 2]]);
+        assert_eq!((a.n(), a.nnz()), (3, 6));
+        a.add(0, 2, 1.5);
+        a.add(0, 2, 0.5);
+        a.add_span(2, 0, &[1.0, 2.0, 3.0]);
+        assert_eq!(a.get(0, 2), 2.0);
+        assert_eq!(a.row(2).1, &[1.0, 2.0, 3.0]);
+        let mut y = [0.0; 3];
+        a.mul(&[1.0, 1.0, 1.0], &mut y);
+        assert_eq!(y, [2.0, 0.0, 6.0]);
+        if cfg!(not(debug_assertions)) {
+            a.add(1, 0, 1.0);
+            a.add_span(0, 0, &[1.0, 1.0]); // column 1 is not in row 0
+            assert_eq!(a.take_outside(), 2);
+            assert_eq!(a.take_outside(), 0);
+        }
+    }
+}
