@@ -515,10 +515,7 @@ fn cmd_grow(a: &GrowArgs) -> Result<(), Failure> {
                     scene.origin,
                     scene.display_name(),
                     end,
-                    match scene.growth_settings.integrator {
-                        crate::growth::Integrator::Cvode => "cvode",
-                        crate::growth::Integrator::Euler => "euler",
-                    },
+                    scene.growth_settings.integrator.name(),
                     scene.growth_settings.rtol,
                     scene.growth_settings.atol,
                     stats.steps,

@@ -3,7 +3,9 @@
 //! elastic problem is solved at every right-hand-side evaluation, warm-started.
 
 pub mod cvode;
+pub mod dae;
 pub mod euler;
+pub mod ida;
 pub mod points;
 pub mod system;
 
@@ -50,6 +52,17 @@ pub enum Integrator {
     Cvode,
     /// Explicit Euler with a fixed number of steps (MODEL.md §8), for comparison.
     Euler,
+    /// IDA: BDF on the coupled DAE of growth and elastic equilibrium (one Newton per step).
+    Ida,
+}
+
+impl Integrator {
+    /// The names `solver.integrator` takes, in the order of the variants.
+    pub const NAMES: [&'static str; 3] = ["cvode", "euler", "ida"];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
 }
 
 /// Numerical settings of the time integration.
@@ -62,6 +75,8 @@ pub struct GrowthSettings {
     pub atol: f64,
     /// solver.steps: Euler's number of steps to t_end.
     pub steps: usize,
+    /// solver.dae_linear: the linear solver of IDA's Newton matrix.
+    pub dae_linear: dae::DaeLinear,
     /// output.times: when to write snapshots (sorted, in (0, t_end]); t = 0 is always written.
     pub output_times: Vec<f64>,
     /// output.history_points: record the series row (axial length, class, ...) at this many
@@ -76,6 +91,7 @@ impl Default for GrowthSettings {
             rtol: 1e-6,
             atol: 1e-8,
             steps: 200,
+            dae_linear: ida::DEFAULT_LINEAR,
             output_times: vec![0.1, 0.2, 0.4, 1.0],
             history_points: 0,
         }
@@ -138,6 +154,10 @@ pub struct GrowthStats {
     pub nonlinear_iterations: usize,
     pub nonlinear_failures: usize,
     pub linear_iterations: usize,
+    /// IDA: residual evaluations of the coupled system, and Newton-matrix evaluations
+    /// (assembly and factorisation).
+    pub residual_evaluations: usize,
+    pub jacobian_evaluations: usize,
     pub t_reached: f64,
     pub wall_seconds: f64,
 }
@@ -183,13 +203,16 @@ pub fn grow(
         growth,
         settings,
         &mut |sys, t, p| {
-            let snap = sys.snapshot(t, p)?;
             let mut obs = observer.borrow_mut();
-            if with_history {
-                obs.history(&snap.series)?;
-            }
             if t == 0.0 || snapshot_times.contains(&t) {
+                let snap = sys.snapshot(t, p)?;
+                if with_history {
+                    obs.history(&snap.series)?;
+                }
                 obs.snapshot(&snap)?;
+            } else if with_history {
+                // A history point needs the series row only, not every field.
+                obs.history(&sys.series(t, p)?)?;
             }
             Ok(())
         },
@@ -254,6 +277,11 @@ pub fn run(
             stats.t_reached = cv.current_time;
             r
         }
+        Integrator::Ida => {
+            let (back, r) = run_ida(sys, params.r0, settings, t_end, &times, output, progress, &mut stats);
+            sys = back;
+            r
+        }
     };
     stats.bvp_solves = sys.work.bvp_solves;
     stats.newton_iterations = sys.elastic.newton_iterations();
@@ -269,4 +297,59 @@ pub fn run(
             Err(fail(t, reason, stats))
         }
     }
+}
+
+/// The IDA branch of [`run`]: the coupled system built on `sys` (solved at t = 0), its
+/// consistent start, and the integration; outputs hand the interpolated state to the growth
+/// system (no re-solve). Returns the growth system for the caller's counters.
+#[allow(clippy::too_many_arguments)]
+fn run_ida(
+    sys: system::GrowthSystem,
+    r0: f64,
+    settings: &GrowthSettings,
+    t_end: f64,
+    times: &[f64],
+    output: &mut OutputFn<'_>,
+    progress: &mut dyn FnMut(f64),
+    stats: &mut GrowthStats,
+) -> (system::GrowthSystem, Result<(), (f64, String)>) {
+    if std::env::var_os("EYESHELL_FTZ").is_some() {
+        #[allow(deprecated)]
+        unsafe {
+            use std::arch::x86_64::*;
+            _mm_setcsr(_mm_getcsr() | 0x8040)
+        }
+    }
+    let mut dae = dae::CoupledDae::new(sys);
+    let start = dae
+        .set_linear(settings.dae_linear)
+        .and_then(|_| dae.initial_state())
+        .and_then(|y| dae.derivative(&y).map(|yp| (y, yp)));
+    let result = match start {
+        Err(e) => Err((0.0, format!("the consistent start of the coupled system: {e}"))),
+        Ok((y0, yp0)) => {
+            let n_p = dae.differential_len();
+            let mut out = |dae: &mut dae::CoupledDae, t: f64, y: &[f64]| {
+                dae.adopt(y);
+                output(&mut dae.sys, t, &y[..n_p]).map_err(|e| e.to_string())
+            };
+            let t0 = std::time::Instant::now();
+            let (st, r) = ida::integrate(&mut dae, &y0, &yp0, t_end, settings, r0, times, &mut out, progress);
+            if std::env::var_os("EYESHELL_DAE_PROFILE").is_some() {
+                eprintln!("integrate {:?}", t0.elapsed());
+            }
+            stats.steps = st.steps;
+            stats.residual_evaluations = st.residual_evaluations;
+            stats.jacobian_evaluations = st.jacobian_evaluations;
+            stats.error_test_failures = st.error_test_failures;
+            stats.nonlinear_iterations = st.nonlinear_iterations;
+            stats.nonlinear_failures = st.nonlinear_convergence_failures;
+            stats.t_reached = st.current_time;
+            r
+        }
+    };
+    if std::env::var_os("EYESHELL_DAE_PROFILE").is_some() {
+        eprintln!("{:?}", dae.counters);
+    }
+    (dae.sys, result)
 }

@@ -86,6 +86,21 @@ impl GrowthPoints {
         pts
     }
 
+    /// The point a node's output rows read: node 0 from above, every other node from below
+    /// (at a breakpoint, the limit from below, as the elastic rows).
+    pub fn node_point(&self, i: usize) -> usize {
+        if i == 0 {
+            self.above[0]
+        } else {
+            self.below[i]
+        }
+    }
+
+    /// The thickness law the points' ζ follows.
+    pub fn law(&self) -> ThicknessLaw {
+        self.law
+    }
+
     /// Number of points.
     pub fn len(&self) -> usize {
         self.sigma_ref.len()

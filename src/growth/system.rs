@@ -261,34 +261,71 @@ impl GrowthSystem {
     pub fn snapshot(&mut self, t: f64, p: &[f64]) -> Result<super::Snapshot, RhsError> {
         self.solve_elastic(p)?;
         let sol: Solution = self.elastic.solution()?;
+        let stim = self.stimulus(p)?;
+        let pts = &self.points;
+        let growth: Vec<GrowthRow> = (0..sol.rows.len())
+            .map(|i| {
+                let k = pts.node_point(i);
+                let s = &stim[k];
+                GrowthRow { rho: p[NP * k], zeta: pts.zeta(k, p), eta: s.eta, g_v: s.g_v, z_retina: s.z_retina, r_retina: s.r_retina }
+            })
+            .collect();
+        let series = self.series_row(t, &stim);
+        Ok(super::Snapshot { t, fields: sol.rows, growth, series })
+    }
+
+    /// The series row alone (axial length, refraction, ...) of the shell in state `p` at
+    /// time `t`: what a history point needs, without the fields of a snapshot.
+    pub fn series(&mut self, t: f64, p: &[f64]) -> Result<SeriesRow, RhsError> {
+        self.solve_elastic(p)?;
+        let stim = self.stimulus(p)?;
+        Ok(self.series_row(t, &stim))
+    }
+
+    /// What the stimulus sees at every point of the solved shell in state `p`.
+    fn stimulus(&mut self, p: &[f64]) -> Result<Vec<PointStimulus>, RhsError> {
         let u = std::mem::take(&mut self.elastic.u);
         let mut stim = vec![];
         let mut rates = vec![0.0; p.len()];
         let r = self.rates(&u, p, &mut rates, Some(&mut stim));
         self.elastic.u = u;
-        r?;
+        r.map(|_| stim)
+    }
+
+    /// The series row from the stimulus at every point: at the posterior pole, and the
+    /// largest retina radius over the nodes.
+    fn series_row(&self, t: f64, stim: &[PointStimulus]) -> SeriesRow {
         let pts = &self.points;
-        // Node rows take the limit from below at a breakpoint, as the elastic rows do.
-        let node_point = |i: usize| if i == 0 { pts.above[0] } else { pts.below[i] };
-        let growth: Vec<GrowthRow> = (0..sol.rows.len())
-            .map(|i| {
-                let k = node_point(i);
-                let s = &stim[k];
-                GrowthRow { rho: p[NP * k], zeta: pts.zeta(k, p), eta: s.eta, g_v: s.g_v, z_retina: s.z_retina, r_retina: s.r_retina }
-            })
-            .collect();
-        let pole = &stim[node_point(0)];
-        let red: Surface = self.growth.red;
-        let depth_red = red.depth(pole.z_retina, pole.r_retina);
-        let series = SeriesRow {
+        let pole = &stim[pts.node_point(0)];
+        let depth_red = self.growth.red.depth(pole.z_retina, pole.r_retina);
+        SeriesRow {
             t,
             axial_length: pole.z_retina,
-            equatorial_radius: growth.iter().map(|g| g.r_retina).fold(f64::MIN, f64::max),
+            equatorial_radius: (0..pts.above.len()).map(|i| stim[pts.node_point(i)].r_retina).fold(f64::MIN, f64::max),
             retina_minus_blue: -pole.depth_blue,
             retina_minus_red: -depth_red,
             class: Refraction::classify(pole.depth_blue, depth_red),
-        };
-        Ok(super::Snapshot { t, fields: sol.rows, growth, series })
+        }
+    }
+
+    /// Take (p, u) as the current state without solving (the coupled DAE's interpolated
+    /// state at an output time): the data become p's, the elastic unknowns u.
+    pub fn adopt(&mut self, p: &[f64], u: &[f64]) {
+        self.elastic.discretisation_mut().set_data(self.points.material_data(p));
+        self.elastic.u.clear();
+        self.elastic.u.extend_from_slice(u);
+        self.solved_at.clear();
+        self.solved_at.extend_from_slice(p);
+    }
+
+    /// The thickness law of the growth points.
+    pub fn points_law(&self) -> crate::model::growth_law::ThicknessLaw {
+        self.points.law()
+    }
+
+    /// The blue best-focus surface.
+    pub fn blue(&self) -> Surface {
+        self.growth.blue
     }
 }
 

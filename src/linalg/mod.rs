@@ -17,7 +17,7 @@ mod schur;
 
 pub use bordered::{BorderedBand, InterleavedBand, KluSolver};
 pub use csr::Csr;
-pub use schur::SchurSolver;
+pub use schur::{Reduced, SchurSolver};
 
 use crate::sundials::SundialsError;
 

@@ -12,7 +12,22 @@
 //! The elimination order is the blocks' order, so the caller numbers blocks that others
 //! read first; [`SchurSolver::new`] checks the pattern for it.
 
-use super::{BorderedBand, Csr, DirectSolver, LinalgError};
+use super::{BorderedBand, Csr, DirectSolver, KluSolver, LinalgError};
+
+/// How the reduced matrix S is factored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reduced {
+    /// SUNDIALS' band LU, the border by block elimination.
+    Band,
+    /// KLU on S as a sparse matrix (its band rows and the border).
+    Klu,
+}
+
+/// The factorisation of S.
+enum ReducedSolver {
+    Band(BorderedBand),
+    Klu { s: Csr, klu: KluSolver },
+}
 
 /// One block's rows after elimination: D_kk⁻¹, the couplings D_kj (j < k), and
 /// X_k = D⁻¹ [B e] restricted to block k (two rows over W columns lo..lo+width, and d).
@@ -34,7 +49,14 @@ pub struct SchurSolver {
     blocks: Vec<Block>,
     /// Entries of C and cᵀ kept for the solves: (row in W ∪ d, column in P, value).
     coupling: Vec<(usize, usize, f64)>,
-    bb: BorderedBand,
+    reduced: ReducedSolver,
+    /// S's bandwidths, and its rows in dense band storage (row jw holds columns
+    /// jw − lower ..= jw + upper), its border column, border row and corner.
+    widths: (usize, usize),
+    s_rows: Vec<f64>,
+    s_col: Vec<f64>,
+    s_row: Vec<f64>,
+    s_corner: f64,
     z: Vec<f64>,
     rhs: Vec<f64>,
     sol: Vec<f64>,
@@ -45,7 +67,7 @@ pub struct SchurSolver {
 impl SchurSolver {
     /// For matrices with the pattern of `pattern`, whose first `n_p` unknowns (even) are
     /// the blocks and whose last unknown is the border when `border`.
-    pub fn new(pattern: &Csr, n_p: usize, border: bool) -> Result<Self, LinalgError> {
+    pub fn new(pattern: &Csr, n_p: usize, border: bool, how: Reduced) -> Result<Self, LinalgError> {
         let n = pattern.n();
         let n_w = n - n_p - usize::from(border);
         assert!(n_p % 2 == 0 && n_p + usize::from(border) <= n, "bad partition of {n}: {n_p} block unknowns");
@@ -105,14 +127,32 @@ impl SchurSolver {
                 }
             }
         }
-        let bb = BorderedBand::new(n_w, lower, upper, border)?;
+        let reduced = match how {
+            Reduced::Band => ReducedSolver::Band(BorderedBand::new(n_w, lower, upper, border)?),
+            Reduced::Klu => {
+                let mut rows: Vec<Vec<usize>> = (0..n_w)
+                    .map(|jw| (jw.saturating_sub(lower)..(jw + upper + 1).min(n_w)).chain(border.then_some(n_w)).collect())
+                    .collect();
+                if border {
+                    rows.push((0..=n_w).collect());
+                }
+                let s = Csr::from_rows(rows);
+                let klu = KluSolver::new(&s)?;
+                ReducedSolver::Klu { s, klu }
+            }
+        };
         Ok(SchurSolver {
             n_p,
             n_w,
             border,
             blocks,
             coupling: vec![],
-            bb,
+            reduced,
+            widths: (lower, upper),
+            s_rows: vec![0.0; n_w * (lower + upper + 1)],
+            s_col: vec![0.0; n_w],
+            s_row: vec![0.0; n_w],
+            s_corner: 0.0,
             z: vec![0.0; n_p],
             rhs: vec![0.0; n_w + 1],
             sol: vec![0.0; n_w + 1],
@@ -122,7 +162,21 @@ impl SchurSolver {
 
     /// (lower, upper) bandwidths of the reduced matrix S.
     pub fn widths(&self) -> (usize, usize) {
-        self.bb.widths()
+        self.widths
+    }
+
+    /// The size of the reduced system (W and the border).
+    fn reduced_len(&self) -> usize {
+        self.n_w + usize::from(self.border)
+    }
+
+    fn reduced_solve(&mut self, b_len: usize, into_sol: bool) -> Result<(), LinalgError> {
+        let (rhs, sol) = (&self.rhs[..b_len], &mut self.sol[..b_len]);
+        let _ = into_sol;
+        match &mut self.reduced {
+            ReducedSolver::Band(bb) => bb.solve(rhs, sol),
+            ReducedSolver::Klu { klu, .. } => klu.solve(rhs, sol),
+        }
     }
 
     /// Block k's D_kk, D_kj and X_k from its two rows of `a`.
@@ -130,6 +184,11 @@ impl SchurSolver {
         let (n_p, n_w) = (self.n_p, self.n_w);
         let (done, rest) = self.blocks.split_at_mut(k);
         let b = &mut rest[0];
+        if self.algebraic_only {
+            b.x.fill(0.0);
+            b.xd = [0.0; 2];
+            return Ok(());
+        }
         let mut d = [[0.0; 2]; 2];
         b.x.fill(0.0);
         b.xd = [0.0; 2];
@@ -184,65 +243,86 @@ impl SchurSolver {
         }
         let (x0, x1) = (b.xd[0], b.xd[1]);
         b.xd = [b.inv[0][0] * x0 + b.inv[0][1] * x1, b.inv[1][0] * x0 + b.inv[1][1] * x1];
-        if self.algebraic_only {
-            b.x.fill(0.0);
-            b.xd = [0.0; 2];
-        }
         Ok(())
     }
 
-    /// S = [A a; cᵀ s] − C X into the bordered band; keeps C's entries for the solves.
+    /// S = [A a; cᵀ s] − C X in dense band rows; keeps C's entries for the solves.
     fn reduce(&mut self, a: &Csr) -> Result<(), LinalgError> {
         let (n_p, n_w, border) = (self.n_p, self.n_w, self.border);
-        let (lower, upper) = self.bb.widths();
+        let (lower, upper) = self.widths;
+        let width = lower + upper + 1;
         let (blocks, coupling) = (&self.blocks, &mut self.coupling);
         coupling.clear();
-        let mut acc = vec![0.0; lower + upper + 1];
-        self.bb.fill(|band, col, row, corner| {
-            for jw in 0..n_w + usize::from(border) {
-                let is_border = jw == n_w;
-                let base = jw.saturating_sub(lower);
-                acc.fill(0.0);
-                let mut at_d = 0.0;
-                let (cols, vals) = a.row(n_p + jw);
-                for (&c, &v) in cols.iter().zip(vals) {
-                    if c < n_p {
-                        coupling.push((jw, c, v));
-                        let (b, r) = (&blocks[c / 2], c % 2);
-                        for t in 0..b.width {
-                            let x = v * b.x[r * b.width + t];
-                            if is_border {
-                                row[b.lo + t] -= x;
-                            } else {
-                                acc[b.lo + t - base] -= x;
-                            }
+        self.s_rows.fill(0.0);
+        self.s_col.fill(0.0);
+        self.s_row.fill(0.0);
+        self.s_corner = 0.0;
+        for jw in 0..n_w + usize::from(border) {
+            let is_border = jw == n_w;
+            // Row jw's column c sits at acc[c + lower − jw].
+            let (acc, at_d): (&mut [f64], &mut f64) = if is_border {
+                (&mut self.s_row[..], &mut self.s_corner)
+            } else {
+                (&mut self.s_rows[jw * width..(jw + 1) * width], &mut self.s_col[jw])
+            };
+            let shift = |c: usize| if is_border { c } else { c + lower - jw };
+            let (cols, vals) = a.row(n_p + jw);
+            for (&c, &v) in cols.iter().zip(vals) {
+                if c < n_p {
+                    coupling.push((jw, c, v));
+                    let (b, r) = (&blocks[c / 2], c % 2);
+                    if b.width > 0 {
+                        let at = shift(b.lo);
+                        for (s, x) in acc[at..at + b.width].iter_mut().zip(&b.x[r * b.width..(r + 1) * b.width]) {
+                            *s -= v * x;
                         }
-                        at_d -= v * b.xd[r];
-                    } else if c < n_p + n_w {
-                        if is_border {
-                            row[c - n_p] += v;
-                        } else {
-                            acc[c - n_p - base] += v;
-                        }
-                    } else {
-                        at_d += v;
                     }
-                }
-                if is_border {
-                    *corner = at_d;
+                    *at_d -= v * b.xd[r];
+                } else if c < n_p + n_w {
+                    acc[shift(c - n_p)] += v;
                 } else {
-                    let end = (jw + upper + 1).min(n_w);
-                    for (col_w, &v) in (base..end).zip(&acc) {
-                        if v != 0.0 {
-                            band.set(jw, col_w, v);
-                        }
-                    }
-                    if border {
-                        col[jw] = at_d;
-                    }
+                    *at_d += v;
                 }
             }
-        })
+        }
+        let (rows, col, row, corner) = (&self.s_rows, &self.s_col, &self.s_row, self.s_corner);
+        match &mut self.reduced {
+            ReducedSolver::Band(bb) => bb.fill(|band, bc, br, bs| {
+                for jw in 0..n_w {
+                    let r = &rows[jw * width..(jw + 1) * width];
+                    for (t, &v) in r.iter().enumerate() {
+                        if v != 0.0 {
+                            band.set(jw, jw + t - lower, v);
+                        }
+                    }
+                }
+                if border {
+                    bc.copy_from_slice(col);
+                    br.copy_from_slice(row);
+                    *bs = corner;
+                }
+            }),
+            ReducedSolver::Klu { s, .. } => {
+                s.zero();
+                for jw in 0..n_w {
+                    let lo = jw.saturating_sub(lower);
+                    let hi = (jw + upper + 1).min(n_w);
+                    let r = &rows[jw * width..(jw + 1) * width];
+                    s.add_span(jw, lo, &r[lo + lower - jw..hi + lower - jw]);
+                    if border {
+                        s.add(jw, n_w, col[jw]);
+                    }
+                }
+                if border {
+                    s.add_span(n_w, 0, row);
+                    s.add(n_w, n_w, corner);
+                }
+                match s.take_outside() {
+                    0 => Ok(()),
+                    k => Err(LinalgError::OutsidePattern(k)),
+                }
+            }
+        }
     }
 
     /// Factorise only the algebraic block [A a; cᵀ s] (X taken as 0): for the algebraic
@@ -262,8 +342,10 @@ impl SchurSolver {
         for &(jw, c, v) in &self.coupling {
             self.rhs[jw] -= v * p_dot[c];
         }
-        let len = self.bb.len();
-        self.bb.solve(&self.rhs[..len], &mut w[..len])
+        let len = self.reduced_len();
+        self.reduced_solve(len, true)?;
+        w[..len].copy_from_slice(&self.sol[..len]);
+        Ok(())
     }
 
     fn factor_blocks(&mut self, a: &Csr) -> Result<(), LinalgError> {
@@ -271,7 +353,10 @@ impl SchurSolver {
             self.eliminate_block(a, k)?;
         }
         self.reduce(a)?;
-        self.bb.factor()
+        match &mut self.reduced {
+            ReducedSolver::Band(bb) => bb.factor(),
+            ReducedSolver::Klu { s, klu } => klu.factor(s),
+        }
     }
 }
 
@@ -294,12 +379,12 @@ impl DirectSolver for SchurSolver {
             self.z[2 * k + 1] = blk.inv[1][0] * t[0] + blk.inv[1][1] * t[1];
         }
         // The reduced right side, b_W − C z, and S's solve.
-        let len = self.bb.len();
+        let len = self.reduced_len();
         self.rhs[..len].copy_from_slice(&b[n_p..n_p + len]);
         for &(jw, c, v) in &self.coupling {
             self.rhs[jw] -= v * self.z[c];
         }
-        self.bb.solve(&self.rhs[..len], &mut self.sol[..len])?;
+        self.reduced_solve(len, true)?;
         x[n_p..n_p + len].copy_from_slice(&self.sol[..len]);
         let xd = if self.border { self.sol[n_w] } else { 0.0 };
         // x_P = z − X x_W − x_d x_d.
@@ -366,10 +451,16 @@ mod tests {
             }
         };
         let mut x = vec![0.0; n];
-        let mut schur = SchurSolver::new(&a, n_p, true).unwrap();
-        schur.factor(&a).unwrap();
-        schur.solve(&b, &mut x).unwrap();
-        check(&x, "schur");
+        for how in [Reduced::Band, Reduced::Klu] {
+            if how == Reduced::Klu && !crate::sundials::klu_available() {
+                continue;
+            }
+            let mut schur = SchurSolver::new(&a, n_p, true, how).unwrap();
+            schur.factor(&a).unwrap();
+            schur.solve(&b, &mut x).unwrap();
+            check(&x, "schur");
+        }
+        let mut schur = SchurSolver::new(&a, n_p, true, Reduced::Band).unwrap();
         let perm: Vec<usize> = (0..n).map(|i| if i == d { 0 } else { i }).collect();
         let mut band = super::super::InterleavedBand::new(&a, perm, Some(d)).unwrap();
         band.factor(&a).unwrap();

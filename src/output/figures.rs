@@ -182,6 +182,9 @@ fn numerics(scene: &Scene) -> String {
         (Some(_), crate::growth::Integrator::Euler) => {
             format!("{scheme}, explicit Euler, {} steps", scene.growth_settings.steps)
         }
+        (Some(_), crate::growth::Integrator::Ida) => {
+            format!("{scheme}, IDA BDF on the coupled DAE rtol {:e}", scene.growth_settings.rtol)
+        }
     }
 }
 

@@ -5,6 +5,7 @@
 //! To add a key, add one [`KeySpec`] here (and the field it sets); nothing else needs to change.
 
 use super::Scene;
+use crate::growth::dae::DaeLinear;
 use crate::growth::{GrowthParams, Integrator, ThicknessLaw};
 use crate::model::params::{LinearSolverKind, Scheme, Thickness};
 
@@ -278,7 +279,7 @@ const THICKNESS: &[&str] = &["uniform", "nonuniform"];
 const SCHEMES: &[&str] = &["trapezoid", "hermite-simpson"];
 const LINEAR: &[&str] = &["band", "klu"];
 const THICKNESS_LAWS: &[&str] = &["none", "mass"];
-const INTEGRATORS: &[&str] = &["cvode", "euler"];
+const INTEGRATORS: &[&str] = &Integrator::NAMES;
 
 /// The growth parameters of `s`, or their defaults when the scene does not grow.
 fn growth(s: &Scene) -> GrowthParams {
@@ -509,16 +510,22 @@ pub static KEYS: &[KeySpec] = &[
         key: "solver.integrator",
         access: Access::Choice {
             names: INTEGRATORS,
-            get: |s| match s.growth_settings.integrator {
-                Integrator::Cvode => 0,
-                Integrator::Euler => 1,
-            },
-            set: |s, i| {
-                s.growth_settings.integrator = if i == 0 { Integrator::Cvode } else { Integrator::Euler }
-            },
+            get: |s| s.growth_settings.integrator as usize,
+            set: |s, i| s.growth_settings.integrator = [Integrator::Cvode, Integrator::Euler, Integrator::Ida][i],
         },
         rule: Rule::Any,
-        doc: "time integrator of the growth: CVODE (BDF, error-controlled) or the published explicit Euler",
+        doc: "time integrator of the growth: IDA (BDF on the coupled DAE of growth and equilibrium, one Newton per step), CVODE (BDF on the growth alone, an elastic solve per right side) or the published explicit Euler",
+        growth: true,
+    },
+    KeySpec {
+        key: "solver.dae_linear",
+        access: Access::Choice {
+            names: &DaeLinear::NAMES,
+            get: |s| s.growth_settings.dae_linear as usize,
+            set: |s, i| s.growth_settings.dae_linear = DaeLinear::ALL[i],
+        },
+        rule: Rule::Any,
+        doc: "linear solver of IDA's Newton matrix: schur (eliminate the growth unknowns point by point, band LU of the rest), schur-klu (the same, KLU of the rest), band (band LU of the whole system, interleaved) or klu",
         growth: true,
     },
     KeySpec {

@@ -51,7 +51,7 @@ impl Refine {
         if self.time {
             match g.integrator {
                 Integrator::Euler => g.steps *= 2,
-                Integrator::Cvode => {
+                Integrator::Cvode | Integrator::Ida => {
                     g.rtol /= 100.0;
                     g.atol /= 100.0;
                 }

@@ -1,9 +1,9 @@
 //! Typed errors for the SUNDIALS layer, and the symbolic names of the return flags.
 //!
-//! Why our own flag tables: `KINGetReturnFlagName` (and CVODE's `CVodeGetReturnFlagName`)
-//! returns a malloc'd string per call, and the same integer means different things in KINSOL,
-//! KINLS, CVODE, CVLS and SUNLinSol; a static table per family gives a `&'static str` name and
-//! a fallback description when SUNDIALS sent no message.
+//! Why our own flag tables: `KINGetReturnFlagName` (and CVODE's `CVodeGetReturnFlagName`,
+//! IDA's `IDAGetReturnFlagName`) returns a malloc'd string per call, and the same integer means
+//! different things in KINSOL, KINLS, CVODE, CVLS, IDA, IDALS and SUNLinSol; a static table per
+//! family gives a `&'static str` name and a fallback description when SUNDIALS sent no message.
 
 use std::fmt;
 
@@ -59,6 +59,8 @@ pub(crate) enum FlagFamily {
     KinLs,
     Cv,
     CvLs,
+    Ida,
+    IdaLs,
     SunLs,
     /// Plain 0 / nonzero (SUNContext, N_Vector utilities).
     Generic,
@@ -72,6 +74,8 @@ impl FlagFamily {
             FlagFamily::KinLs => KINLS_FLAGS,
             FlagFamily::Cv => CV_FLAGS,
             FlagFamily::CvLs => CVLS_FLAGS,
+            FlagFamily::Ida => IDA_FLAGS,
+            FlagFamily::IdaLs => IDALS_FLAGS,
             FlagFamily::SunLs => SUNLS_FLAGS,
             FlagFamily::Generic => &[(0, "SUCCESS", "success")],
         };
@@ -171,6 +175,55 @@ const CVLS_FLAGS: &[(i32, &str, &str)] = &[
     (-7, "CVLS_JACFUNC_RECVR", "the Jacobian function failed recoverably"),
     (-8, "CVLS_SUNMAT_FAIL", "a SUNMatrix operation failed"),
     (-9, "CVLS_SUNLS_FAIL", "a SUNLinearSolver operation failed"),
+];
+
+/// ida.h; descriptions after IDA's own messages (ida_impl.h).
+const IDA_FLAGS: &[(i32, &str, &str)] = &[
+    (0, "IDA_SUCCESS", "success"),
+    (1, "IDA_TSTOP_RETURN", "the stop time was reached"),
+    (2, "IDA_ROOT_RETURN", "a root was found"),
+    (99, "IDA_WARNING", "warning"),
+    (-1, "IDA_TOO_MUCH_WORK", "the maximum number of internal steps was taken before reaching tout"),
+    (-2, "IDA_TOO_MUCH_ACC", "the requested accuracy could not be achieved"),
+    (-3, "IDA_ERR_FAIL", "error test failures occurred too many times or with |h| = hmin"),
+    (-4, "IDA_CONV_FAIL", "nonlinear convergence failures occurred too many times or with |h| = hmin"),
+    (-5, "IDA_LINIT_FAIL", "the linear solver initialisation failed"),
+    (-6, "IDA_LSETUP_FAIL", "the linear solver setup failed unrecoverably"),
+    (-7, "IDA_LSOLVE_FAIL", "the linear solve failed unrecoverably"),
+    (-8, "IDA_RES_FAIL", "the residual function failed unrecoverably"),
+    (-9, "IDA_REP_RES_ERR", "the residual function failed recoverably repeatedly"),
+    (-10, "IDA_RTFUNC_FAIL", "the root function failed"),
+    (-11, "IDA_CONSTR_FAIL", "the inequality constraints could not be met"),
+    (-12, "IDA_FIRST_RES_FAIL", "the residual function failed recoverably at the first call (IDACalcIC)"),
+    (-13, "IDA_LINESEARCH_FAIL", "the line search of IDACalcIC failed (step too small or too many backtracks)"),
+    (-14, "IDA_NO_RECOVERY", "the residual or the linear setup or solve failed recoverably and IDACalcIC could not recover"),
+    (-15, "IDA_NLS_INIT_FAIL", "the nonlinear solver initialisation failed"),
+    (-16, "IDA_NLS_SETUP_FAIL", "the nonlinear solver setup failed"),
+    (-17, "IDA_NLS_FAIL", "the nonlinear solver failed unrecoverably"),
+    (-20, "IDA_MEM_NULL", "the IDA memory is NULL"),
+    (-21, "IDA_MEM_FAIL", "a memory allocation failed"),
+    (-22, "IDA_ILL_INPUT", "an input argument is illegal"),
+    (-23, "IDA_NO_MALLOC", "IDA memory was not allocated by IDAInit"),
+    (-24, "IDA_BAD_EWT", "an error weight became zero or negative"),
+    (-25, "IDA_BAD_K", "the derivative order k is illegal"),
+    (-26, "IDA_BAD_T", "t is outside the last step"),
+    (-27, "IDA_BAD_DKY", "the output vector is NULL"),
+    (-28, "IDA_VECTOROP_ERR", "a vector operation failed"),
+    (-29, "IDA_CONTEXT_ERR", "the SUNContext is invalid"),
+    (-99, "IDA_UNRECOGNIZED_ERROR", "unrecognised error"),
+];
+
+const IDALS_FLAGS: &[(i32, &str, &str)] = &[
+    (0, "IDALS_SUCCESS", "success"),
+    (-1, "IDALS_MEM_NULL", "the IDA memory is NULL"),
+    (-2, "IDALS_LMEM_NULL", "the linear solver interface is not attached"),
+    (-3, "IDALS_ILL_INPUT", "an input argument is illegal or the linear solver is incompatible"),
+    (-4, "IDALS_MEM_FAIL", "a memory allocation failed"),
+    (-5, "IDALS_PMEM_NULL", "the preconditioner memory is NULL"),
+    (-6, "IDALS_JACFUNC_UNRECVR", "the Jacobian function failed unrecoverably"),
+    (-7, "IDALS_JACFUNC_RECVR", "the Jacobian function failed recoverably"),
+    (-8, "IDALS_SUNMAT_FAIL", "a SUNMatrix operation failed"),
+    (-9, "IDALS_SUNLS_FAIL", "a SUNLinearSolver operation failed"),
 ];
 
 const SUNLS_FLAGS: &[(i32, &str, &str)] = &[
@@ -289,6 +342,27 @@ mod tests {
         assert_eq!(sundials_sys::CV_NLS_SETUP_FAIL, -14);
         for &(flag, name, _) in CVLS_FLAGS {
             assert_eq!(their_name(sundials_sys::CVodeGetLinReturnFlagName, flag), name, "CVLS flag {flag}");
+        }
+    }
+
+    /// Our names agree with `IDAGetReturnFlagName` and `IDAGetLinReturnFlagName` wherever IDA
+    /// 6.4 has a name; it has none (says "NONE") for 99, -15, -25, -27, -28, -29 and -99.
+    #[test]
+    fn ida_names_match_ida() {
+        let mut mismatched = Vec::new();
+        let mut unnamed = Vec::new();
+        for &(flag, name, _) in IDA_FLAGS {
+            let theirs = their_name(sundials_sys::IDAGetReturnFlagName, flag);
+            match theirs.as_str() {
+                "NONE" => unnamed.push(flag),
+                t if t == name => {}
+                _ => mismatched.push((flag, name, theirs)),
+            }
+        }
+        assert!(mismatched.is_empty(), "ours vs IDA's: {mismatched:?}");
+        assert_eq!(unnamed, [99, -15, -25, -27, -28, -29, -99], "flags IDA 6.4 leaves unnamed");
+        for &(flag, name, _) in IDALS_FLAGS {
+            assert_eq!(their_name(sundials_sys::IDAGetLinReturnFlagName, flag), name, "IDALS flag {flag}");
         }
     }
 }

@@ -9,13 +9,15 @@
 //! and every callback runs under `catch_unwind`.
 //!
 //! The pieces ([`NVector`], [`Matrix`], [`LinearSolver`], the callback guard) are independent
-//! of KINSOL so that the integrators ([`Cvode`] now, IDA later) sit next to [`Kinsol`] and
-//! reuse them.
+//! of KINSOL so that the integrators ([`Cvode`], [`Ida`]) sit next to [`Kinsol`] and reuse
+//! them.
 
 mod callback;
 mod context;
 mod cvode;
 mod error;
+mod fastops;
+mod ida;
 mod kinsol;
 mod klu;
 mod linsol;
@@ -26,6 +28,7 @@ pub use callback::{CallbackError, CallbackResult};
 pub use context::Context;
 pub use cvode::{Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem};
 pub use error::SundialsError;
+pub use ida::{DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats};
 pub use kinsol::{Kinsol, KinsolOptions, KinsolStats, NonlinearSystem, Strategy};
 pub use linsol::{LinearSolver, LinearSolverSpec};
 pub use matrix::{

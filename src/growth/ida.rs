@@ -1,0 +1,105 @@
+//! Growth by IDA (issue 11): the coupled DAE of `dae.rs` (growth rates as differential
+//! rows, the elastic equations and z as algebraic rows) by variable-order BDF with one
+//! Newton iteration of the whole system per iterate. The Newton matrix is assembled
+//! analytically and factored by the system's own solver (Schur complement of the growth
+//! unknowns by default), through IDA's custom linear-solver hook; IDA decides when to
+//! refresh it. A failure inside a step (an evaluation that cannot be made, a singular
+//! matrix) is recoverable: IDA cuts the step and tries again.
+
+use super::dae::{CoupledDae, DaeLinear};
+use super::GrowthSettings;
+use crate::sundials::{CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats};
+
+/// The coupled system as IDA sees it.
+pub struct GrowthDae<'a> {
+    pub dae: &'a mut CoupledDae,
+}
+
+fn recoverable(e: impl std::fmt::Display) -> CallbackError {
+    CallbackError::Recoverable(e.to_string())
+}
+
+impl DaeSystem for GrowthDae<'_> {
+    fn residual(&mut self, _t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> CallbackResult {
+        self.dae.residual(y, yp, r).map_err(recoverable)
+    }
+
+    fn linear_setup(&mut self, _t: f64, cj: f64, y: &[f64], _yp: &[f64], _r: &[f64]) -> CallbackResult {
+        self.dae.setup(cj, y).map_err(recoverable)
+    }
+
+    fn linear_solve(&mut self, b: &[f64], x: &mut [f64]) -> CallbackResult {
+        self.dae.solve(b, x).map_err(recoverable)
+    }
+}
+
+/// Whether the local error test leaves out the algebraic unknowns (IDASetSuppressAlg).
+/// Measured on the const scene (BENCHMARKS.md): the elastic unknowns are functions of the
+/// growth state, so testing them too only adds error-test failures.
+pub const SUPPRESS_ALGEBRAIC: bool = true;
+
+/// Integrate the coupled system from its consistent state at t = 0 to `t_end`, calling
+/// `output(dae, t, y)` at each of `times` (increasing, in (0, t_end]) and `progress(t)`
+/// after every step. Returns IDA's counters and, on failure, the time reached and why.
+pub fn integrate(
+    dae: &mut CoupledDae,
+    y0: &[f64],
+    yp0: &[f64],
+    t_end: f64,
+    settings: &GrowthSettings,
+    r0: f64,
+    times: &[f64],
+    output: &mut dyn FnMut(&mut CoupledDae, f64, &[f64]) -> Result<(), String>,
+    progress: &mut dyn FnMut(f64),
+) -> (IdaStats, Result<(), (f64, String)>) {
+    let options = IdaOptions {
+        rtol: settings.rtol,
+        atol: settings.atol,
+        atol_vector: Some(dae.abs_tolerances(settings.atol, r0)),
+        stop_time: Some(t_end),
+        max_steps: 100_000,
+        id: Some(dae.id()),
+        suppress_algebraic: SUPPRESS_ALGEBRAIC,
+        ..IdaOptions::default()
+    };
+    let mut ida = match Ida::new(GrowthDae { dae }, 0.0, y0, yp0, IdaLinearSolver::Custom, &options) {
+        Ok(ida) => ida,
+        Err(e) => return (IdaStats::default(), Err((0.0, e.to_string()))),
+    };
+    let result = run(&mut ida, y0.len(), t_end, times, output, progress);
+    (ida.stats(), result)
+}
+
+fn run(
+    ida: &mut Ida<GrowthDae<'_>>,
+    n: usize,
+    t_end: f64,
+    times: &[f64],
+    output: &mut dyn FnMut(&mut CoupledDae, f64, &[f64]) -> Result<(), String>,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(), (f64, String)> {
+    let (mut y, mut yp) = (vec![0.0; n], vec![0.0; n]);
+    let mut yo = vec![0.0; n];
+    let mut next = times.iter().peekable();
+    let mut t = 0.0;
+    while t < t_end {
+        t = ida.step(t_end, &mut y, &mut yp).map_err(|e| (ida.stats().current_time, e.to_string()))?;
+        progress(t);
+        while let Some(&&tout) = next.peek() {
+            if tout > t {
+                break;
+            }
+            if tout == t {
+                yo.copy_from_slice(&y);
+            } else {
+                ida.interpolate(tout, &mut yo).map_err(|e| (t, e.to_string()))?;
+            }
+            output(ida.system_mut().dae, tout, &yo).map_err(|e| (tout, e))?;
+            next.next();
+        }
+    }
+    Ok(())
+}
+
+/// The default linear solver of the coupled system.
+pub const DEFAULT_LINEAR: DaeLinear = DaeLinear::Schur;

@@ -1,0 +1,277 @@
+//! Rust kernels for the hot operations of SUNDIALS' serial vectors, installed into a
+//! vector's operation table ([`install`]) so that an integrator's work vectors, cloned from
+//! it, use them too.
+//!
+//! Why: Debian's libsundials_nvecserial runs these loops at 3–7 ns an element (measured on
+//! 5059 elements: N_VLinearSum 17 µs, N_VWrmsNormMask 36 µs), against 0.5 ns for the same
+//! loop compiled here. IDA on the coupled growth DAE makes some forty such passes a step,
+//! which made them a quarter of its run time. The kernels compute the same expressions as
+//! SUNDIALS' (`a x + b y`, `√(Σ (x w)² / n)`, …); the norms sum in four lanes, so they
+//! differ from SUNDIALS' in the last bits.
+//!
+//! Aliasing: SUNDIALS passes the same vector as input and output (`z = a x + b z`), so the
+//! kernels work on raw pointers element by element and never form overlapping slices.
+
+use std::os::raw::c_int;
+
+use sundials_sys::{realtype, N_VGetArrayPointer_Serial, N_VGetLength_Serial, N_Vector};
+
+/// The data pointer and length of a serial vector.
+///
+/// # Safety
+/// `v` must be a live serial vector.
+#[inline]
+unsafe fn parts(v: N_Vector) -> (*mut f64, usize) {
+    (N_VGetArrayPointer_Serial(v), N_VGetLength_Serial(v).max(0) as usize)
+}
+
+/// z = a x + b y.
+unsafe extern "C" fn linear_sum(a: realtype, x: N_Vector, b: realtype, y: N_Vector, z: N_Vector) {
+    let ((xp, n), (yp, _), (zp, _)) = (parts(x), parts(y), parts(z));
+    for i in 0..n {
+        *zp.add(i) = a * *xp.add(i) + b * *yp.add(i);
+    }
+}
+
+/// z = c x.
+unsafe extern "C" fn scale(c: realtype, x: N_Vector, z: N_Vector) {
+    let ((xp, n), (zp, _)) = (parts(x), parts(z));
+    for i in 0..n {
+        *zp.add(i) = c * *xp.add(i);
+    }
+}
+
+/// z = c.
+unsafe extern "C" fn constant(c: realtype, z: N_Vector) {
+    let (zp, n) = parts(z);
+    for i in 0..n {
+        *zp.add(i) = c;
+    }
+}
+
+/// z = x y, elementwise.
+unsafe extern "C" fn prod(x: N_Vector, y: N_Vector, z: N_Vector) {
+    let ((xp, n), (yp, _), (zp, _)) = (parts(x), parts(y), parts(z));
+    for i in 0..n {
+        *zp.add(i) = *xp.add(i) * *yp.add(i);
+    }
+}
+
+/// z = x / y, elementwise.
+unsafe extern "C" fn div(x: N_Vector, y: N_Vector, z: N_Vector) {
+    let ((xp, n), (yp, _), (zp, _)) = (parts(x), parts(y), parts(z));
+    for i in 0..n {
+        *zp.add(i) = *xp.add(i) / *yp.add(i);
+    }
+}
+
+/// z = |x|.
+unsafe extern "C" fn abs(x: N_Vector, z: N_Vector) {
+    let ((xp, n), (zp, _)) = (parts(x), parts(z));
+    for i in 0..n {
+        *zp.add(i) = (*xp.add(i)).abs();
+    }
+}
+
+/// z = 1 / x.
+unsafe extern "C" fn inv(x: N_Vector, z: N_Vector) {
+    let ((xp, n), (zp, _)) = (parts(x), parts(z));
+    for i in 0..n {
+        *zp.add(i) = 1.0 / *xp.add(i);
+    }
+}
+
+/// z = x + b.
+unsafe extern "C" fn add_const(x: N_Vector, b: realtype, z: N_Vector) {
+    let ((xp, n), (zp, _)) = (parts(x), parts(z));
+    for i in 0..n {
+        *zp.add(i) = *xp.add(i) + b;
+    }
+}
+
+/// Σ (x w)² over the elements where `keep` holds, in four lanes.
+#[inline]
+unsafe fn weighted_squares(xp: *const f64, wp: *const f64, n: usize, keep: impl Fn(usize) -> bool) -> f64 {
+    let mut lanes = [0.0f64; 4];
+    let full = n / 4 * 4;
+    for i in (0..full).step_by(4) {
+        for (l, lane) in lanes.iter_mut().enumerate() {
+            let k = i + l;
+            let p = *xp.add(k) * *wp.add(k);
+            *lane += if keep(k) { p * p } else { 0.0 };
+        }
+    }
+    for k in full..n {
+        let p = *xp.add(k) * *wp.add(k);
+        lanes[0] += if keep(k) { p * p } else { 0.0 };
+    }
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
+}
+
+/// Σ (x w)².
+unsafe extern "C" fn wsqrsum(x: N_Vector, w: N_Vector) -> realtype {
+    let ((xp, n), (wp, _)) = (parts(x), parts(w));
+    weighted_squares(xp, wp, n, |_| true)
+}
+
+/// Σ (x w)² over id > 0.
+unsafe extern "C" fn wsqrsum_mask(x: N_Vector, w: N_Vector, id: N_Vector) -> realtype {
+    let ((xp, n), (wp, _), (ip, _)) = (parts(x), parts(w), parts(id));
+    weighted_squares(xp, wp, n, |k| *ip.add(k) > 0.0)
+}
+
+/// √(Σ (x w)² / n).
+unsafe extern "C" fn wrms_norm(x: N_Vector, w: N_Vector) -> realtype {
+    let n = parts(x).1.max(1);
+    (wsqrsum(x, w) / n as f64).sqrt()
+}
+
+/// √(Σ_{id > 0} (x w)² / n).
+unsafe extern "C" fn wrms_norm_mask(x: N_Vector, w: N_Vector, id: N_Vector) -> realtype {
+    let n = parts(x).1.max(1);
+    (wsqrsum_mask(x, w, id) / n as f64).sqrt()
+}
+
+/// max |x|.
+unsafe extern "C" fn max_norm(x: N_Vector) -> realtype {
+    let (xp, n) = parts(x);
+    (0..n).fold(0.0, |m, i| f64::max(m, (*xp.add(i)).abs()))
+}
+
+/// z = Σ c_j X_j. z may be X_0 (SUNDIALS allows it): then z = c_0 z + Σ_{j ≥ 1} c_j X_j,
+/// which the element-by-element loop computes correctly as well.
+unsafe extern "C" fn linear_combination(nvec: c_int, c: *mut realtype, xs: *mut N_Vector, z: N_Vector) -> c_int {
+    let nvec = nvec.max(0) as usize;
+    if nvec == 0 {
+        return -1;
+    }
+    let (zp, n) = parts(z);
+    let coeffs = std::slice::from_raw_parts(c, nvec);
+    let ptrs: Vec<*mut f64> = (0..nvec).map(|j| parts(*xs.add(j)).0).collect();
+    for i in 0..n {
+        let mut s = coeffs[0] * *ptrs[0].add(i);
+        for j in 1..nvec {
+            s += coeffs[j] * *ptrs[j].add(i);
+        }
+        *zp.add(i) = s;
+    }
+    0
+}
+
+/// Z_j = a_j x + Y_j.
+unsafe extern "C" fn scale_add_multi(nvec: c_int, a: *mut realtype, x: N_Vector, ys: *mut N_Vector, zs: *mut N_Vector) -> c_int {
+    let nvec = nvec.max(0) as usize;
+    let (xp, n) = parts(x);
+    for j in 0..nvec {
+        let aj = *a.add(j);
+        let (yp, zp) = (parts(*ys.add(j)).0, parts(*zs.add(j)).0);
+        for i in 0..n {
+            *zp.add(i) = aj * *xp.add(i) + *yp.add(i);
+        }
+    }
+    0
+}
+
+/// Install the kernels into `v`'s operation table (shared with nothing: each serial vector
+/// owns its table, and N_VClone copies it).
+///
+/// # Safety
+/// `v` must be a live serial vector with an operation table.
+pub(crate) unsafe fn install(v: N_Vector) {
+    let ops = &mut *(*v).ops;
+    ops.nvlinearsum = Some(linear_sum);
+    ops.nvscale = Some(scale);
+    ops.nvconst = Some(constant);
+    ops.nvprod = Some(prod);
+    ops.nvdiv = Some(div);
+    ops.nvabs = Some(abs);
+    ops.nvinv = Some(inv);
+    ops.nvaddconst = Some(add_const);
+    ops.nvwrmsnorm = Some(wrms_norm);
+    ops.nvwrmsnormmask = Some(wrms_norm_mask);
+    ops.nvwsqrsumlocal = Some(wsqrsum);
+    ops.nvwsqrsummasklocal = Some(wsqrsum_mask);
+    ops.nvmaxnorm = Some(max_norm);
+    ops.nvlinearcombination = Some(linear_combination);
+    ops.nvscaleaddmulti = Some(scale_add_multi);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Context, NVector};
+    use sundials_sys as s;
+
+    /// Each kernel against SUNDIALS' own serial operation, aliased output included.
+    #[test]
+    fn kernels_match_sundials() {
+        let ctx = Context::new().unwrap();
+        let n = 1013;
+        let data = |k: usize| (0..n).map(|i| ((i * 7 + k * 13) as f64 * 0.37).sin() + 0.1 * k as f64).collect::<Vec<_>>();
+        let mk = |k: usize| NVector::from_slice(&ctx, &data(k)).unwrap();
+        let fast = |v: &NVector| unsafe { super::install(v.raw()) };
+        let (x, y, w) = (mk(1), mk(2), mk(3));
+        let id = NVector::from_slice(&ctx, &(0..n).map(|i| if i % 3 == 0 { 0.0 } else { 1.0 }).collect::<Vec<_>>()).unwrap();
+        let (z_ref, z_fast) = (mk(4), mk(4));
+        fast(&z_fast);
+        let same = |a: &NVector, b: &NVector, what: &str| {
+            for (p, q) in a.as_slice().iter().zip(b.as_slice()) {
+                assert!((p - q).abs() <= 1e-15 * (1.0 + p.abs()), "{what}: {p} vs {q}");
+            }
+        };
+        unsafe {
+            s::N_VLinearSum_Serial(0.3, x.raw(), -1.7, y.raw(), z_ref.raw());
+            s::N_VLinearSum(0.3, x.raw(), -1.7, y.raw(), z_fast.raw());
+            same(&z_ref, &z_fast, "linear sum");
+            // Aliased: z = 2 x + 0.5 z.
+            s::N_VLinearSum_Serial(2.0, x.raw(), 0.5, z_ref.raw(), z_ref.raw());
+            s::N_VLinearSum(2.0, x.raw(), 0.5, z_fast.raw(), z_fast.raw());
+            same(&z_ref, &z_fast, "aliased linear sum");
+            s::N_VScale_Serial(-3.0, z_ref.raw(), z_ref.raw());
+            s::N_VScale(-3.0, z_fast.raw(), z_fast.raw());
+            same(&z_ref, &z_fast, "scale");
+            s::N_VProd_Serial(x.raw(), y.raw(), z_ref.raw());
+            s::N_VProd(x.raw(), y.raw(), z_fast.raw());
+            same(&z_ref, &z_fast, "prod");
+            s::N_VDiv_Serial(x.raw(), w.raw(), z_ref.raw());
+            s::N_VDiv(x.raw(), w.raw(), z_fast.raw());
+            same(&z_ref, &z_fast, "div");
+            s::N_VAbs_Serial(y.raw(), z_ref.raw());
+            s::N_VAbs(y.raw(), z_fast.raw());
+            same(&z_ref, &z_fast, "abs");
+            s::N_VInv_Serial(w.raw(), z_ref.raw());
+            s::N_VInv(w.raw(), z_fast.raw());
+            same(&z_ref, &z_fast, "inv");
+            s::N_VAddConst_Serial(y.raw(), 0.25, z_ref.raw());
+            s::N_VAddConst(y.raw(), 0.25, z_fast.raw());
+            same(&z_ref, &z_fast, "add const");
+            s::N_VConst_Serial(1.5, z_ref.raw());
+            s::N_VConst(1.5, z_fast.raw());
+            same(&z_ref, &z_fast, "const");
+            let xf = mk(1);
+            fast(&xf);
+            let close = |a: f64, b: f64, what: &str| assert!((a - b).abs() <= 1e-13 * a.abs(), "{what}: {a} vs {b}");
+            close(s::N_VWrmsNorm_Serial(x.raw(), w.raw()), s::N_VWrmsNorm(xf.raw(), w.raw()), "wrms norm");
+            close(s::N_VWrmsNormMask_Serial(x.raw(), w.raw(), id.raw()), s::N_VWrmsNormMask(xf.raw(), w.raw(), id.raw()), "masked wrms norm");
+            close(s::N_VMaxNorm_Serial(x.raw()), s::N_VMaxNorm(xf.raw()), "max norm");
+            // z = Σ c_j X_j with z = X_0 (aliased).
+            let mut c = [0.5, -2.0, 3.0];
+            let (a0, b0) = (mk(5), mk(5));
+            fast(&b0);
+            let mut xs_ref = [a0.raw(), y.raw(), w.raw()];
+            let mut xs_fast = [b0.raw(), y.raw(), w.raw()];
+            s::N_VLinearCombination_Serial(3, c.as_mut_ptr(), xs_ref.as_mut_ptr(), a0.raw());
+            s::N_VLinearCombination(3, c.as_mut_ptr(), xs_fast.as_mut_ptr(), b0.raw());
+            same(&a0, &b0, "linear combination");
+            // Z_j = a_j x + Y_j.
+            let mut ys = [y.raw(), w.raw()];
+            let (z1, z2, f1, f2) = (mk(6), mk(7), mk(6), mk(7));
+            let mut zs_ref = [z1.raw(), z2.raw()];
+            let mut zs_fast = [f1.raw(), f2.raw()];
+            let mut a = [1.5, -0.5];
+            s::N_VScaleAddMulti_Serial(2, a.as_mut_ptr(), x.raw(), ys.as_mut_ptr(), zs_ref.as_mut_ptr());
+            s::N_VScaleAddMulti(2, a.as_mut_ptr(), xf.raw(), ys.as_mut_ptr(), zs_fast.as_mut_ptr());
+            same(&z1, &f1, "scale add multi 0");
+            same(&z2, &f2, "scale add multi 1");
+        }
+    }
+}
