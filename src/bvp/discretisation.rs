@@ -162,7 +162,7 @@ impl Discretisation {
     pub fn quadratures(&mut self, u: &[f64]) -> Result<Quadratures, EvalFailure> {
         self.evaluate(u)?;
         let (m, ev, data) = (self.mesh.len(), &self.evals, &self.data);
-        let rates = |mp: &MaterialPoint, e: &PointEval, theta: f64| [mp.gamma * e.alpha_s, -mp.gamma * e.alpha_s * theta.sin()];
+        let rates = |mp: &MaterialPoint, e: &PointEval| [mp.gamma * e.alpha_s, -mp.gamma * e.alpha_s * e.sin_theta];
         let mut q = Quadratures {
             s: vec![0.0; m],
             z: vec![0.0; m],
@@ -173,11 +173,11 @@ impl Discretisation {
         q.s[0] = data.above[0].sigma * ev.left(0).alpha_s;
         for i in 0..m - 1 {
             let h = self.mesh.step(i);
-            let a = rates(&data.above[i], ev.left(i), u[NY * i + THETA]);
-            let b = rates(&data.below[i + 1], ev.right(i), u[NY * (i + 1) + THETA]);
+            let a = rates(&data.above[i], ev.left(i));
+            let b = rates(&data.below[i + 1], ev.right(i));
             let step = match self.scheme {
                 Scheme::HermiteSimpson => {
-                    let c = rates(&data.mid[i], ev.mid(i), ev.y_mid(i)[THETA]);
+                    let c = rates(&data.mid[i], ev.mid(i));
                     [h / 6.0 * (a[0] + 4.0 * c[0] + b[0]), h / 6.0 * (a[1] + 4.0 * c[1] + b[1])]
                 }
                 Scheme::Trapezoid => [0.5 * h * (a[0] + b[0]), 0.5 * h * (a[1] + b[1])],
@@ -192,6 +192,23 @@ impl Discretisation {
             q.z[i] = q.z[i + 1] - q.dz[i];
         }
         Ok(q)
+    }
+
+    /// z(Σ_{i+1}) − z(Σ_i) interval by interval, as [`Discretisation::quadratures`] has it,
+    /// into `dz` (length M − 1), without the rest of the quadratures.
+    pub fn z_steps(&mut self, u: &[f64], dz: &mut [f64]) -> Result<(), EvalFailure> {
+        self.evaluate(u)?;
+        let (ev, data) = (&self.evals, &self.data);
+        let slope = |mp: &MaterialPoint, e: &PointEval| -mp.gamma * e.alpha_s * e.sin_theta;
+        for (i, d) in dz.iter_mut().enumerate() {
+            let h = self.mesh.step(i);
+            let (a, b) = (slope(&data.above[i], ev.left(i)), slope(&data.below[i + 1], ev.right(i)));
+            *d = match self.scheme {
+                Scheme::HermiteSimpson => h / 6.0 * (a + 4.0 * slope(&data.mid[i], ev.mid(i)) + b),
+                Scheme::Trapezoid => 0.5 * h * (a + b),
+            };
+        }
+        Ok(())
     }
 
     /// Number of unknowns (and equations), 5 M.

@@ -114,6 +114,9 @@ pub struct PointEval {
     pub alpha_s_ts: f64,
     /// Tensions and their partials at (α_s, α_φ).
     pub tensions: Tensions,
+    /// sin θ and cos θ at the point (the quadratures and the growth rates reuse them).
+    pub sin_theta: f64,
+    pub cos_theta: f64,
 }
 
 impl PointEval {
@@ -126,6 +129,8 @@ impl PointEval {
             alpha_s_r: 0.0,
             alpha_s_ts: 0.0,
             tensions: Tensions::default(),
+            sin_theta: 0.0,
+            cos_theta: 1.0,
         }
     }
 
@@ -266,6 +271,8 @@ impl<R: Reinforcement> Equations<R> {
         out.alpha_s_r = a_r;
         out.alpha_s_ts = a_ts;
         out.tensions = t;
+        out.sin_theta = sn;
+        out.cos_theta = cs;
         Ok(())
     }
 }

@@ -121,6 +121,8 @@ struct Local {
     theta: f64,
     z: f64,
     alpha_s: f64,
+    sin_theta: f64,
+    cos_theta: f64,
 }
 
 /// The derivatives of a point's data in the window: ∂f/∂(ρ, γ_s) (5×2, through ζ too) and
@@ -186,6 +188,9 @@ pub struct CoupledDae {
     /// Scratch: the elastic unknowns, and the elastic residual.
     u: Vec<f64>,
     f: Vec<f64>,
+    dz: Vec<f64>,
+    /// Scratch of the Jacobian: each point's local state's derivatives.
+    grads: Vec<[Grad; 4]>,
     /// The (p, u) the discretisation's data and evaluations were last set for.
     at_p: Vec<f64>,
     pub counters: DaeCounters,
@@ -247,6 +252,8 @@ impl CoupledDae {
             linear: Box::new(NoSolver),
             u: vec![0.0; NY * m],
             f: vec![0.0; NY * m],
+            dz: vec![0.0; m - 1],
+            grads: vec![],
             at_p: vec![],
             counters: DaeCounters::default(),
             sys,
@@ -399,7 +406,7 @@ impl CoupledDae {
         }
         self.at_p.clear();
         self.load(&y)?;
-        let (local, _) = self.locals(&y, false);
+        let local = self.locals(&y, None);
         let rates = self.point_rates(&y, &local, None);
         let d = self.d();
         y[d] = self.crossing_depth(&rates).map_or(0.0, |c| c.value);
@@ -425,12 +432,15 @@ impl CoupledDae {
     }
 
     /// The local state of every point; with `grads`, each one's derivatives in its window.
-    fn locals(&self, y: &[f64], grads: bool) -> (Vec<Local>, Vec<[Grad; 4]>) {
+    fn locals(&self, y: &[f64], mut grad: Option<&mut Vec<[Grad; 4]>>) -> Vec<Local> {
         let disc = self.sys.elastic.discretisation();
         let ev = disc.evaluations();
         let law = self.sys.points_law();
         let mut local = vec![Local::default(); self.sites.len()];
-        let mut grad = if grads { vec![[Grad::default(); 4]; self.sites.len()] } else { vec![] };
+        if let Some(g) = grad.as_deref_mut() {
+            g.resize(self.sites.len(), [Grad::default(); 4]);
+        }
+        let grads = grad.is_some();
         for (k, &site) in self.sites.iter().enumerate() {
             let (node, slot, e, mp, off) = match site {
                 Site::Left(i) => (i, L, ev.left(i), &disc.data.above[i], 0),
@@ -440,28 +450,32 @@ impl CoupledDae {
                     let e = ev.mid(i);
                     let z = if grads {
                         let (z, gz) = self.z_mid(y, disc, ev, i);
-                        grad[k] = self.mid_grads(disc, ev, i, law, &gz);
+                        if let Some(g) = grad.as_deref_mut() {
+                            g[k] = self.mid_grads(disc, ev, i, law, &gz);
+                        }
                         z
                     } else {
                         self.z_mid_value(y, disc, ev, i)
                     };
-                    local[k] = Local { r: ym[R], theta: ym[THETA], z, alpha_s: e.alpha_s };
+                    local[k] = Local { r: ym[R], theta: ym[THETA], z, alpha_s: e.alpha_s, sin_theta: e.sin_theta, cos_theta: e.cos_theta };
                     continue;
                 }
             };
             let w = self.n_p + NW * node;
             let yv = Vec5::from_column_slice(&y[w..w + NY]);
-            local[k] = Local { r: yv[R], theta: yv[THETA], z: y[w + Z], alpha_s: e.alpha_s };
+            local[k] = Local { r: yv[R], theta: yv[THETA], z: y[w + Z], alpha_s: e.alpha_s, sin_theta: e.sin_theta, cos_theta: e.cos_theta };
             if grads {
                 let dd = data_deriv(law, mp, &yv, e);
                 let mut ga = Grad::default();
                 ga.w[off + R] = e.alpha_s_r;
                 ga.w[off + TS] = e.alpha_s_ts;
                 ga.p[slot] = dd.alpha_s;
-                grad[k] = [Grad::unit(off + R), Grad::unit(off + THETA), Grad::unit(off + Z), ga];
+                if let Some(g) = grad.as_deref_mut() {
+                    g[k] = [Grad::unit(off + R), Grad::unit(off + THETA), Grad::unit(off + Z), ga];
+                }
             }
         }
-        (local, grad)
+        local
     }
 
     /// z at interval i's midpoint, from the cubic Hermite through its ends (the slopes from
@@ -482,9 +496,9 @@ impl CoupledDae {
     /// [`CoupledDae::z_mid`]'s value alone (the residual's path).
     fn z_mid_value(&self, y: &[f64], disc: &Discretisation, ev: &Evaluations, i: usize) -> f64 {
         let h = disc.mesh.step(i);
-        let theta = |j: usize| self.u[NY * j + THETA];
-        let wl = -disc.data.above[i].gamma * ev.left(i).alpha_s * theta(i).sin();
-        let wr = -disc.data.below[i + 1].gamma * ev.right(i).alpha_s * theta(i + 1).sin();
+        let (el, er) = (ev.left(i), ev.right(i));
+        let wl = -disc.data.above[i].gamma * el.alpha_s * el.sin_theta;
+        let wr = -disc.data.below[i + 1].gamma * er.alpha_s * er.sin_theta;
         0.5 * (y[self.wcol(i, Z)] + y[self.wcol(i + 1, Z)]) + h / 8.0 * (wl - wr)
     }
 
@@ -498,7 +512,7 @@ impl CoupledDae {
             RT => (ev.right(i), &disc.data.below[i + 1], Vec5::from_column_slice(&u[NY * (i + 1)..NY * (i + 1) + NY]), Some(NW)),
             _ => (ev.mid(i), &disc.data.mid[i], *ev.y_mid(i), None),
         };
-        let (sn, cs) = yv[THETA].sin_cos();
+        let (sn, cs) = (e.sin_theta, e.cos_theta);
         let (g, a) = (mp.gamma, e.alpha_s);
         let w = -g * a * sn;
         // ∂w/∂y at the point, and ∂w/∂(ρ, γ_s) of its own data.
@@ -580,7 +594,7 @@ impl CoupledDae {
             let (rho, gam) = (y[NP * k], y[NP * k + 1]);
             let zeta = pts.zeta(k, &y[..self.n_p]);
             let ht = zeta * rho / (s.alpha_s * s.r);
-            let (sn, cs) = s.theta.sin_cos();
+            let (sn, cs) = (s.sin_theta, s.cos_theta);
             let (zr, rr) = (s.z - 0.5 * ht * cs, s.r - 0.5 * ht * sn);
             let g = blue.depth_gradient(zr, rr);
             out.push(PointRates { depth: g.depth, angle: g.angle, z_retina: zr, r_retina: rr, ..Default::default() });
@@ -655,30 +669,26 @@ impl CoupledDae {
         let start = std::time::Instant::now();
         self.counters.residuals += 1;
         self.load(y)?;
-        let (local, _) = self.locals(y, false);
+        let local = self.locals(y, None);
         let rates = self.point_rates(y, &local, None);
         for (k, pr) in rates.iter().enumerate() {
             r[NP * k] = yp[NP * k] - pr.rho;
             r[NP * k + 1] = yp[NP * k + 1] - pr.gamma;
         }
         let (n_p, m) = (self.n_p, self.m);
-        let mut f = std::mem::take(&mut self.f);
+        let (mut f, mut dz) = (std::mem::take(&mut self.f), std::mem::take(&mut self.dz));
         let disc = self.sys.elastic.discretisation_mut();
-        let res = disc.residual(&self.u, &mut f).map_err(RhsError::Evaluation);
-        let quad = res.and_then(|_| disc.quadratures(&self.u).map_err(RhsError::Evaluation));
-        let quad = match quad {
-            Ok(q) => q,
-            Err(e) => {
-                self.f = f;
-                return Err(e);
-            }
-        };
+        let res = disc.residual(&self.u, &mut f).and_then(|_| disc.z_steps(&self.u, &mut dz));
+        if let Err(e) = res {
+            (self.f, self.dz) = (f, dz);
+            return Err(RhsError::Evaluation(e));
+        }
         let z_star = disc.edge.z;
         r[n_p..n_p + POLE_ROWS].copy_from_slice(&f[..POLE_ROWS]);
         for i in 0..m - 1 {
             let row = n_p + POLE_ROWS + NW * i;
             r[row..row + NY].copy_from_slice(&f[POLE_ROWS + NY * i..POLE_ROWS + NY * i + NY]);
-            r[row + Z] = y[self.wcol(i + 1, Z)] - y[self.wcol(i, Z)] - quad.dz[i];
+            r[row + Z] = y[self.wcol(i + 1, Z)] - y[self.wcol(i, Z)] - dz[i];
         }
         let d = self.d();
         let nf = f.len();
@@ -686,7 +696,7 @@ impl CoupledDae {
         r[d - 2] = f[nf - 1];
         r[d - 1] = y[self.wcol(m - 1, Z)] - z_star;
         r[d] = y[d] - self.crossing_depth(&rates).map_or(0.0, |c| c.value);
-        self.f = f;
+        (self.f, self.dz) = (f, dz);
         self.counters.residual_seconds += start.elapsed().as_secs_f64();
         Ok(())
     }
@@ -708,11 +718,13 @@ impl CoupledDae {
         self.jac.add(d, d, 1.0);
         self.assemble_data_columns();
         self.assemble_z_rows();
-        let (local, grads) = self.locals(y, true);
+        let mut grads = std::mem::take(&mut self.grads);
+        let local = self.locals(y, Some(&mut grads));
         let mut rd = Vec::with_capacity(local.len());
         let rates = self.point_rates(y, &local, Some(&mut rd));
         self.assemble_growth_rows(c, &grads, &rd, &rates);
         self.assemble_border(&grads, &rd, &rates);
+        self.grads = grads;
         match self.jac.take_outside() {
             0 => Ok(()),
             k => Err(DaeError::Linear(LinalgError::OutsidePattern(k))),

@@ -48,7 +48,7 @@ pub struct SchurSolver {
     border: bool,
     blocks: Vec<Block>,
     /// Entries of C and cᵀ kept for the solves: (row in W ∪ d, column in P, value).
-    coupling: Vec<(usize, usize, f64)>,
+    coupling: Vec<(u32, u32, f64)>,
     reduced: ReducedSolver,
     /// S's bandwidths, and its rows in dense band storage (row jw holds columns
     /// jw − lower ..= jw + upper), its border column, border row and corner.
@@ -69,6 +69,9 @@ impl SchurSolver {
     /// the blocks and whose last unknown is the border when `border`.
     pub fn new(pattern: &Csr, n_p: usize, border: bool, how: Reduced) -> Result<Self, LinalgError> {
         let n = pattern.n();
+        if n > u32::MAX as usize {
+            return Err(LinalgError::Singular(format!("{n} unknowns are more than this solver indexes")));
+        }
         let n_w = n - n_p - usize::from(border);
         assert!(n_p % 2 == 0 && n_p + usize::from(border) <= n, "bad partition of {n}: {n_p} block unknowns");
         let mut blocks: Vec<Block> = Vec::with_capacity(n_p / 2);
@@ -269,7 +272,7 @@ impl SchurSolver {
             let (cols, vals) = a.row(n_p + jw);
             for (&c, &v) in cols.iter().zip(vals) {
                 if c < n_p {
-                    coupling.push((jw, c, v));
+                    coupling.push((jw as u32, c as u32, v));
                     let (b, r) = (&blocks[c / 2], c % 2);
                     if b.width > 0 {
                         let at = shift(b.lo);
@@ -340,7 +343,7 @@ impl SchurSolver {
     pub fn solve_algebraic(&mut self, p_dot: &[f64], w: &mut [f64]) -> Result<(), LinalgError> {
         self.rhs.fill(0.0);
         for &(jw, c, v) in &self.coupling {
-            self.rhs[jw] -= v * p_dot[c];
+            self.rhs[jw as usize] -= v * p_dot[c as usize];
         }
         let len = self.reduced_len();
         self.reduced_solve(len, true)?;
@@ -382,7 +385,7 @@ impl DirectSolver for SchurSolver {
         let len = self.reduced_len();
         self.rhs[..len].copy_from_slice(&b[n_p..n_p + len]);
         for &(jw, c, v) in &self.coupling {
-            self.rhs[jw] -= v * self.z[c];
+            self.rhs[jw as usize] -= v * self.z[c as usize];
         }
         self.reduced_solve(len, true)?;
         x[n_p..n_p + len].copy_from_slice(&self.sol[..len]);

@@ -17,6 +17,9 @@ pub enum Knob {
     Epsilon,
     /// The tolerance: solver.newton_tol for an elastic scene, solver.rtol for growth.
     Tolerance,
+    /// solver.steps: the explicit Euler's step count (growth; the order is measured in the
+    /// step t_end / steps).
+    Steps,
 }
 
 impl Knob {
@@ -25,6 +28,7 @@ impl Knob {
             Knob::Nodes => "nodes",
             Knob::Epsilon => "epsilon",
             Knob::Tolerance => "tolerance",
+            Knob::Steps => "steps",
         }
     }
 }
@@ -92,7 +96,7 @@ pub fn ladder(
     }
     let mut values = values.to_vec();
     match knob {
-        Knob::Nodes => values.sort_by(|a, b| a.partial_cmp(b).unwrap()),
+        Knob::Nodes | Knob::Steps => values.sort_by(|a, b| a.partial_cmp(b).unwrap()),
         _ => values.sort_by(|a, b| b.partial_cmp(a).unwrap()),
     }
     let l = params.length();
@@ -109,6 +113,13 @@ pub fn ladder(
                     g.atol = v * 1e-2;
                 }
                 None => s.newton_tol = v,
+            },
+            Knob::Steps => match gs.as_mut() {
+                Some(g) => {
+                    g.integrator = crate::growth::Integrator::Euler;
+                    g.steps = v as usize;
+                }
+                None => return Err(StudyError::Invalid("a steps ladder needs a growth scene".into())),
             },
         }
         let what = format!("{} = {v}", knob.name());
@@ -128,6 +139,7 @@ pub fn ladder(
     let err_finest = samples.iter().map(|s| max_diff(s, finest)).collect();
     let scale: Vec<f64> = match knob {
         Knob::Nodes => values.iter().map(|&n| (l - solver.epsilon) / (n - 1.0)).collect(),
+        Knob::Steps => values.iter().map(|&n| growth.map_or(1.0, |(g, _)| g.t_end) / n).collect(),
         _ => values.clone(),
     };
     // Richardson at the scheme's order suits the elastic problem only: a grown shell's data

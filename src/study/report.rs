@@ -4,6 +4,7 @@
 use super::converge::{self, Knob, Ladder};
 use super::{refinement, worst, write_csv, wpd, StudyError, FIELDS};
 use crate::output::plot::{self, Figure, Scale, Series, SeriesStyle};
+use crate::growth::{GrowthSettings, Integrator};
 use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -20,6 +21,7 @@ fn write_ladder(l: &Ladder, dir: &Path, stem: &str) -> Result<(), StudyError> {
         Knob::Nodes => ("mesh spacing h (mm)", &l.scale),
         Knob::Epsilon => ("pole truncation ε (mm)", &l.scale),
         Knob::Tolerance => ("tolerance", &l.scale),
+        Knob::Steps => ("time step (t_end / steps)", &l.scale),
     };
     let errors = l.errors();
     let against = if l.err_richardson.is_some() { "Richardson extrapolation" } else { "finest rung" };
@@ -52,14 +54,27 @@ pub fn converge(scene: &Scene, nodes: &[usize], growth: bool, dir: &Path) -> Res
     let nodes: Vec<f64> = nodes.iter().map(|&n| n as f64).collect();
     let eps = s.epsilon;
     let tolerances: Vec<f64> = if g.is_some() { vec![1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8] } else { vec![1e-4, 1e-6, 1e-8, 1e-10, 1e-12] };
-    for (knob, values, stem) in [
-        (Knob::Nodes, nodes, "converge_nodes"),
-        (Knob::Epsilon, vec![10.0 * eps, eps, eps / 10.0, eps / 100.0], "converge_epsilon"),
-        (Knob::Tolerance, tolerances, "converge_tolerance"),
-    ] {
-        let l = converge::ladder(p, s, g, knob, &values)?;
-        write_ladder(&l, dir, stem)?;
-        let _ = writeln!(text, "{}:", knob.name());
+    let mut ladders = vec![
+        (Knob::Nodes, nodes, "converge_nodes".to_string(), g.map(|(_, s)| s.clone())),
+        (Knob::Epsilon, vec![10.0 * eps, eps, eps / 10.0, eps / 100.0], "converge_epsilon".to_string(), g.map(|(_, s)| s.clone())),
+    ];
+    match g {
+        // Growth: each time integrator on its own knob (IDA and CVODE by tolerance, the
+        // published Euler by step count).
+        Some((_, gs)) => {
+            for integrator in [Integrator::Ida, Integrator::Cvode] {
+                let s = GrowthSettings { integrator, ..gs.clone() };
+                ladders.push((Knob::Tolerance, tolerances.clone(), format!("converge_tolerance_{}", integrator.name()), Some(s)));
+            }
+            ladders.push((Knob::Steps, vec![50.0, 100.0, 200.0, 400.0, 800.0], "converge_steps_euler".to_string(), Some(gs.clone())));
+        }
+        None => ladders.push((Knob::Tolerance, tolerances, "converge_tolerance".to_string(), None)),
+    }
+    for (knob, values, stem, settings) in ladders {
+        let growth = g.map(|(gp, _)| gp).zip(settings.as_ref());
+        let l = converge::ladder(p, s, growth, knob, &values)?;
+        write_ladder(&l, dir, &stem)?;
+        let _ = writeln!(text, "{}:", stem.trim_start_matches("converge_").replace('_', " "));
         describe_ladder(&l, &mut text);
     }
     Ok(text)

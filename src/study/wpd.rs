@@ -3,7 +3,7 @@
 //! - Elastic: trapezoid and Hermite–Simpson over a self-similar ladder of meshes (each
 //!   rung the last with every interval halved), and Richardson-extrapolated
 //!   Hermite–Simpson from consecutive rungs (order 6), errors at common material points.
-//! - Growth: explicit Euler over its step count and CVODE over rtol, errors in the axial
+//! - Growth: explicit Euler over its step count, CVODE and IDA over rtol, errors in the axial
 //!   length and the largest field error at t_end (same mesh as the reference).
 
 use super::{max_diff, run, sample, worst, StudyError};
@@ -109,7 +109,7 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
     Ok(curves)
 }
 
-/// The growth diagram: Euler over `steps` and CVODE over `rtols`, against CVODE at
+/// The growth diagram: Euler over `steps`, CVODE and IDA over `rtols`, against CVODE at
 /// `reference_rtol`, all on the scene's mesh.
 pub fn growth(
     params: &Params,
@@ -140,12 +140,16 @@ pub fn growth(
         let s = GrowthSettings { integrator: Integrator::Euler, steps: n, ..settings.clone() };
         euler.points.push(measure(&s, n as f64, &format!("Euler {n} steps"))?);
     }
-    let mut cvode = Curve { method: "cvode".into(), knob: "rtol", points: vec![] };
-    for &rtol in rtols {
-        let s = GrowthSettings { integrator: Integrator::Cvode, rtol, atol: rtol * 1e-2, ..settings.clone() };
-        cvode.points.push(measure(&s, rtol, &format!("CVODE rtol {rtol:e}"))?);
+    let mut curves = vec![euler];
+    for integrator in [Integrator::Cvode, Integrator::Ida] {
+        let mut c = Curve { method: integrator.name().into(), knob: "rtol", points: vec![] };
+        for &rtol in rtols {
+            let s = GrowthSettings { integrator, rtol, atol: rtol * 1e-2, ..settings.clone() };
+            c.points.push(measure(&s, rtol, &format!("{} rtol {rtol:e}", integrator.name()))?);
+        }
+        curves.push(c);
     }
-    Ok(vec![euler, cvode])
+    Ok(curves)
 }
 
 /// For each target accuracy, the cheapest method that reaches it (by interpolating each
