@@ -3,6 +3,7 @@
 //! Figures go in BENCHMARKS.md.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use eyeshell::growth::dae::{CoupledDae, DaeLinear};
 use eyeshell::growth::system::GrowthSystem;
 use eyeshell::growth::*;
 use eyeshell::model::params::{Params, SolverSettings};
@@ -26,8 +27,20 @@ fn const_scene(c: &mut Criterion) {
     let g = GrowthParams::default();
     let mut group = c.benchmark_group("const_scene_n501_to_t1");
     group.sample_size(10);
-    let cv = GrowthSettings { rtol: 1e-6, atol: 1e-8, ..GrowthSettings::default() };
+    let cv = GrowthSettings { integrator: Integrator::Cvode, rtol: 1e-6, atol: 1e-8, ..GrowthSettings::default() };
     group.bench_function("cvode_rtol_1e-6", |b| b.iter(|| grow(&p, &settings(), &g, &cv, &mut Discard).unwrap()));
+    // IDA on the coupled DAE at the same tolerances, with each linear solver of its Newton
+    // matrix (the default first).
+    for lin in DaeLinear::ALL {
+        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu) && !eyeshell::sundials::klu_available() {
+            continue;
+        }
+        let ida = GrowthSettings { integrator: Integrator::Ida, dae_linear: lin, rtol: 1e-6, atol: 1e-8, ..GrowthSettings::default() };
+        group.bench_function(format!("ida_rtol_1e-6_{}", lin.name()), |b| b.iter(|| grow(&p, &settings(), &g, &ida, &mut Discard).unwrap()));
+    }
+    // IDA at the rtol whose axial-length error matches CVODE's at 1e-6 (BENCHMARKS.md).
+    let ida_equal = GrowthSettings { integrator: Integrator::Ida, rtol: IDA_RTOL_EQUAL_ERROR, atol: IDA_RTOL_EQUAL_ERROR * 1e-2, ..GrowthSettings::default() };
+    group.bench_function("ida_equal_error", |b| b.iter(|| grow(&p, &settings(), &g, &ida_equal, &mut Discard).unwrap()));
     let eu = GrowthSettings { integrator: Integrator::Euler, steps: 200, ..GrowthSettings::default() };
     group.bench_function("euler_200_steps", |b| b.iter(|| grow(&p, &settings(), &g, &eu, &mut Discard).unwrap()));
     group.finish();
@@ -60,5 +73,45 @@ fn pieces(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, const_scene, pieces);
+/// The rtol at which IDA's axial-length error at t = 1 (against CVODE at rtol 1e-10) is no
+/// larger than CVODE's at rtol 1e-6 (measured: BENCHMARKS.md).
+const IDA_RTOL_EQUAL_ERROR: f64 = 1e-6;
+
+/// The coupled system's pieces at the consistent start: one residual, one Newton-matrix
+/// set-up (assembly, then factorisation), one solve with it.
+fn dae_pieces(c: &mut Criterion) {
+    let mut group = c.benchmark_group("dae_pieces_n501");
+    for lin in DaeLinear::ALL {
+        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu) && !eyeshell::sundials::klu_available() {
+            continue;
+        }
+        let sys = GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();
+        let mut dae = CoupledDae::new(sys);
+        dae.set_linear(lin).unwrap();
+        let y = dae.initial_state().unwrap();
+        let yp = dae.derivative(&y).unwrap();
+        let n = y.len();
+        let mut r = vec![0.0; n];
+        if lin == DaeLinear::ALL[0] {
+            let mut k = 0u32;
+            group.bench_function("residual", |b| {
+                b.iter(|| {
+                    // A new iterate each time, as in Newton (no evaluation cache hit).
+                    k += 1;
+                    let s = 1.0 + 1e-9 * (k % 7) as f64;
+                    let q: Vec<f64> = y.iter().map(|v| v * s).collect();
+                    dae.residual(&q, &yp, &mut r).unwrap();
+                })
+            });
+            group.bench_function("assembly", |b| b.iter(|| dae.assemble(black_box(500.0), &y).unwrap()));
+        }
+        group.bench_function(format!("setup_{}", lin.name()), |b| b.iter(|| dae.setup(black_box(500.0), &y).unwrap()));
+        let rhs: Vec<f64> = (0..n).map(|k| (0.01 * k as f64).sin()).collect();
+        let mut x = vec![0.0; n];
+        group.bench_function(format!("solve_{}", lin.name()), |b| b.iter(|| dae.solve(black_box(&rhs), &mut x).unwrap()));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, const_scene, pieces, dae_pieces);
 criterion_main!(benches);

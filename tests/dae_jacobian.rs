@@ -37,7 +37,7 @@ fn check(p: Params, solver: SolverSettings, g: GrowthParams, seed: u64) {
     let jac = dae.matrix().clone();
     let yp = vec![0.0; n];
     // Steps relative to each unknown's typical size (θ and q_s vanish at the pole).
-    let typical: Vec<f64> = dae.abs_tolerances(1.0, p.r0).iter().map(|t| t * p.r0).collect();
+    let typical: Vec<f64> = dae.abs_tolerances(1.0, 0.0, p.r0).into_iter().enumerate().map(|(k, t)| if k < n_p { y[k].abs().max(1.0) } else { t }).collect();
     let mut differences = |j: usize, h: f64| {
         let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
         let (mut yu, mut yd) = (y.clone(), y.clone());
@@ -88,4 +88,8 @@ fn newton_matrix_matches_differences() {
             }
         }
     }
+    // The rounded kinks (growth.kink_width), whose slopes are no longer 0 or 1.
+    let p = Params { thickness: Thickness::NonUniform, d: 100.0, ..Params::default() };
+    let s = SolverSettings { nodes: 21, ..SolverSettings::default() };
+    check(p, s, GrowthParams { kink_width: 0.05, ..GrowthParams::default() }, seed);
 }

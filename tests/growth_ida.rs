@@ -107,3 +107,35 @@ fn every_linear_solver_gives_the_same_run() {
         assert!(steps.abs_diff(steps0) <= 2, "{lin:?}: {steps} steps vs {steps0}");
     }
 }
+
+/// Fails at its `fail_at`-th snapshot (t = 0 is the first), keeping those before.
+struct FailAt {
+    kept: Vec<f64>,
+    fail_at: usize,
+}
+
+impl Observer for FailAt {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::Error> {
+        if self.kept.len() == self.fail_at {
+            let full = std::io::Error::other("the disk is full");
+            return Err(eyeshell::Error::Io { path: "snapshots".into(), source: full });
+        }
+        self.kept.push(s.t);
+        Ok(())
+    }
+}
+
+/// A run whose output fails at t = 0.4 stops there with t and the reason, keeps the
+/// snapshots at t = 0, 0.1 and 0.2, and reports the work done until then.
+#[test]
+fn a_failing_ida_run_says_where_and_keeps_what_it_had() {
+    let mut obs = FailAt { kept: vec![], fail_at: 3 };
+    let solver = SolverSettings { nodes: 51, ..SolverSettings::default() };
+    let s = settings(Integrator::Ida, 1e-5);
+    let err = grow(&Params::default(), &solver, &GrowthParams::default(), &s, &mut obs).unwrap_err();
+    assert_eq!(obs.kept, vec![0.0, 0.1, 0.2]);
+    assert_eq!(err.t, 0.4);
+    assert!(err.reason.contains("the disk is full"), "{}", err.reason);
+    assert!(err.to_string().starts_with("growth failed at t = 0.400000"), "{err}");
+    assert!(err.stats.steps > 0 && err.stats.residual_evaluations > 0 && err.stats.t_reached >= 0.4, "{:?}", err.stats);
+}

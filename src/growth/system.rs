@@ -75,6 +75,10 @@ pub struct GrowthSystem {
     linear: crate::model::params::LinearSolverKind,
     /// The last state the elastic problem was solved for, and its converged unknowns.
     solved_at: Vec<f64>,
+    /// Whether `elastic.u` solves the elastic problem at `solved_at` to Newton's tolerance
+    /// (false after [`GrowthSystem::adopt`]: an integrator's state, accurate to its own
+    /// tolerance).
+    exact: bool,
     last_good_u: Vec<f64>,
     ctx: Rc<Context>,
     factored: Option<Factored>,
@@ -98,6 +102,7 @@ impl GrowthSystem {
             growth: growth.clone(),
             linear: solver.linear,
             solved_at: vec![],
+            exact: false,
             last_good_u,
             ctx: Context::new()?,
             factored: None,
@@ -114,14 +119,18 @@ impl GrowthSystem {
         self.points.is_empty()
     }
 
-    /// Solve the elastic problem for the shell in state `p` (nothing to do if it was the last).
+    /// Solve the elastic problem for the shell in state `p` (nothing to do if it was the last;
+    /// from the adopted unknowns if `p` was adopted).
     pub fn solve_elastic(&mut self, p: &[f64]) -> Result<(), RhsError> {
-        if self.solved_at.as_slice() == p {
+        let same = self.solved_at.as_slice() == p;
+        if same && self.exact {
             return Ok(());
         }
+        if !same {
+            let data = self.points.material_data(p);
+            self.elastic.discretisation_mut().set_data(data);
+        }
         self.solved_at.clear();
-        let data = self.points.material_data(p);
-        self.elastic.discretisation_mut().set_data(data);
         self.work.bvp_solves += 1;
         if let Err(e) = self.elastic.newton() {
             // Start the next attempt (a shorter step) from the last converged state.
@@ -130,6 +139,7 @@ impl GrowthSystem {
         }
         self.last_good_u.clone_from(&self.elastic.u);
         self.solved_at.extend_from_slice(p);
+        self.exact = true;
         Ok(())
     }
 
@@ -182,11 +192,12 @@ impl GrowthSystem {
         let depth_at_max = depth_at_angle(pts, &stim, blue.phi_max);
         for (k, s) in stim.iter_mut().enumerate() {
             let d = if s.angle < blue.phi_max { s.depth_blue } else { depth_at_max.unwrap_or(s.depth_blue) };
-            s.g_v = growth_law::positive(d);
+            let w = self.growth.kink_width;
+            s.g_v = growth_law::positive_smooth(d, w).0;
             s.eta = pts.capacity[k] * s.g_v;
             let (r, _, _, a) = local[k];
-            out[NP * k] = growth_law::rho_rate(s.eta, r, p[NP * k]);
-            out[NP * k + 1] = growth_law::gamma_rate(s.eta, p[NP * k + 1], a);
+            out[NP * k] = growth_law::rho_rate(s.eta, r, p[NP * k], w);
+            out[NP * k + 1] = growth_law::gamma_rate(s.eta, p[NP * k + 1], a, w);
         }
         if let Some(d) = detail {
             *d = stim;
@@ -275,9 +286,12 @@ impl GrowthSystem {
     }
 
     /// The series row alone (axial length, refraction, ...) of the shell in state `p` at
-    /// time `t`: what a history point needs, without the fields of a snapshot.
+    /// time `t`: what a history point needs, without the fields of a snapshot. An adopted
+    /// state is used as it is (its error is the integrator's).
     pub fn series(&mut self, t: f64, p: &[f64]) -> Result<SeriesRow, RhsError> {
-        self.solve_elastic(p)?;
+        if self.solved_at.as_slice() != p {
+            self.solve_elastic(p)?;
+        }
         let stim = self.stimulus(p)?;
         Ok(self.series_row(t, &stim))
     }
@@ -308,14 +322,17 @@ impl GrowthSystem {
         }
     }
 
-    /// Take (p, u) as the current state without solving (the coupled DAE's interpolated
-    /// state at an output time): the data become p's, the elastic unknowns u.
+    /// Take (p, u) as the current state (the coupled DAE's state at an output time): the
+    /// data become p's, the elastic unknowns u. A history point reads it as it is; a
+    /// snapshot first polishes u into the exact elastic state of p (a warm Newton solve), so
+    /// that its fields carry only the growth state's error, as CVODE's do.
     pub fn adopt(&mut self, p: &[f64], u: &[f64]) {
         self.elastic.discretisation_mut().set_data(self.points.material_data(p));
         self.elastic.u.clear();
         self.elastic.u.extend_from_slice(u);
         self.solved_at.clear();
         self.solved_at.extend_from_slice(p);
+        self.exact = false;
     }
 
     /// The thickness law of the growth points.
@@ -326,6 +343,11 @@ impl GrowthSystem {
     /// The blue best-focus surface.
     pub fn blue(&self) -> Surface {
         self.growth.blue
+    }
+
+    /// The width the growth laws' kinks are rounded over (0: exact).
+    pub fn kink_width(&self) -> f64 {
+        self.growth.kink_width
     }
 }
 

@@ -222,9 +222,16 @@ impl KluSolver {
 }
 
 impl DirectSolver for KluSolver {
+    /// KLU refactors with the pivot order of its first factorisation, and SUNDIALS reports
+    /// a zero pivot there as a failure instead of pivoting afresh (seen in growth at rtol
+    /// 1e-2, where the steps change the matrix a lot): then factor anew from scratch.
     fn factor(&mut self, a: &Csr) -> Result<(), LinalgError> {
         let Matrix::Sparse(m) = &mut self.matrix else { unreachable!("made for KLU") };
         m.copy_values(a.values())?;
+        if self.solver.setup(&mut self.matrix).is_ok() {
+            return Ok(());
+        }
+        self.solver = LinearSolver::new(&self._ctx, &self.matrix)?;
         self.solver.setup(&mut self.matrix)?;
         Ok(())
     }

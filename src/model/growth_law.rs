@@ -19,16 +19,35 @@ pub fn positive(x: f64) -> f64 {
     x.max(0.0)
 }
 
-/// Dρ/Dt = η [r − ρ]⁺.
+/// [x]⁺ and its derivative, with the kink rounded over |x| < w when w > 0 (an explicit,
+/// off-by-default option, `growth.kink_width`, for measuring what the kinks cost the time
+/// integrators: MODEL.md §5): (x + w)²/(4w) there, C¹ with x above and 0 below. With w = 0
+/// it is max(x, 0) exactly, with the derivative of the branch taken (1 for x > 0, else 0).
 #[inline]
-pub fn rho_rate(eta: f64, r: f64, rho: f64) -> f64 {
-    eta * positive(r - rho)
+pub fn positive_smooth(x: f64, w: f64) -> (f64, f64) {
+    if x >= w {
+        if x > 0.0 {
+            (x, 1.0)
+        } else {
+            (0.0, 0.0)
+        }
+    } else if x <= -w {
+        (0.0, 0.0)
+    } else {
+        ((x + w) * (x + w) / (4.0 * w), (x + w) / (2.0 * w))
+    }
 }
 
-/// Dγ_s/Dt = η γ_s [α_s − 1]⁺.
+/// Dρ/Dt = η [r − ρ]⁺ (kink rounded over `w`).
 #[inline]
-pub fn gamma_rate(eta: f64, gamma_s: f64, alpha_s: f64) -> f64 {
-    eta * gamma_s * positive(alpha_s - 1.0)
+pub fn rho_rate(eta: f64, r: f64, rho: f64, w: f64) -> f64 {
+    eta * positive_smooth(r - rho, w).0
+}
+
+/// Dγ_s/Dt = η γ_s [α_s − 1]⁺ (kink rounded over `w`).
+#[inline]
+pub fn gamma_rate(eta: f64, gamma_s: f64, alpha_s: f64, w: f64) -> f64 {
+    eta * gamma_s * positive_smooth(alpha_s - 1.0, w).0
 }
 
 /// ζ of the grown shell with initial thickness `h`; `rho_ref` = R(Σ) = R0 sin(Σ/R0) is the
@@ -47,10 +66,27 @@ mod tests {
 
     #[test]
     fn growth_never_shrinks() {
-        assert_eq!(rho_rate(70.0, 9.0, 10.0), 0.0);
-        assert_eq!(gamma_rate(70.0, 1.2, 0.99), 0.0);
-        assert!((rho_rate(70.0, 10.1, 10.0) - 7.0).abs() < 1e-12);
-        assert!((gamma_rate(2.0, 1.5, 1.1) - 0.3).abs() < 1e-12);
+        assert_eq!(rho_rate(70.0, 9.0, 10.0, 0.0), 0.0);
+        assert_eq!(gamma_rate(70.0, 1.2, 0.99, 0.0), 0.0);
+        assert!((rho_rate(70.0, 10.1, 10.0, 0.0) - 7.0).abs() < 1e-12);
+        assert!((gamma_rate(2.0, 1.5, 1.1, 0.0) - 0.3).abs() < 1e-12);
+    }
+
+    /// The rounded [x]⁺ is C¹, exact outside |x| < w, and max(x, 0) with w = 0.
+    #[test]
+    fn rounded_kink_is_c1_and_exact_outside() {
+        let w = 0.1;
+        for x in [-0.1, 0.1] {
+            let (a, b) = (positive_smooth(x - 1e-12, w), positive_smooth(x + 1e-12, w));
+            assert!((a.0 - b.0).abs() < 1e-11 && (a.1 - b.1).abs() < 1e-10, "{x}: {a:?} {b:?}");
+        }
+        assert_eq!(positive_smooth(0.3, w), (0.3, 1.0));
+        assert_eq!(positive_smooth(-0.3, w), (0.0, 0.0));
+        assert!((positive_smooth(0.0, w).0 - 0.025).abs() < 1e-16);
+        for x in [-1.0, 0.0, 2.5] {
+            assert_eq!(positive_smooth(x, 0.0).0, positive(x));
+        }
+        assert_eq!(positive_smooth(0.0, 0.0).1, 0.0);
     }
 
     #[test]

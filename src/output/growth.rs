@@ -550,7 +550,7 @@ mod tests {
         }
         assert_eq!(v["steps"], 42);
         assert_eq!(v["rhs_evaluations"], 99);
-        assert_eq!(v["integrator"], "cvode");
+        assert_eq!(v["integrator"], "ida");
         assert_eq!(v["rtol"], 1e-6);
         assert_eq!(v["parameters"]["growth.eta0"], 70.0);
         assert_eq!(v["parameters"]["solver.nodes"], 11);

@@ -484,6 +484,13 @@ pub static KEYS: &[KeySpec] = &[
         growth: true,
     },
     KeySpec {
+        key: "growth.kink_width",
+        access: Access::Float { get: |s| growth(s).kink_width, set: |s, v| s.growth_mut().kink_width = v },
+        rule: Rule::NonNegative,
+        doc: "round the [·]⁺ kinks of the growth laws (r − ρ and the depth in mm, α_s − 1) over this width with a C¹ quadratic; 0, the default, keeps the model's exact kinks (MODEL.md §5): an option for measuring what the kinks cost the integrators",
+        growth: true,
+    },
+    KeySpec {
         key: "growth.t_end",
         access: Access::Float { get: |s| growth(s).t_end, set: |s, v| s.growth_mut().t_end = v },
         rule: Rule::Positive,

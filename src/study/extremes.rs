@@ -70,7 +70,7 @@ r²ΔP, and within 1e-5 of MODEL.md §7's exact solution where that applies (1e-
 cases use MODEL.md §7's parameters; a pushed material keeps ΔP at half the cornea's limit.\n\
 - Small E_b (the membrane limit): nodes are graded next to the cornea, where the bending \
 layer of width √(E_b / t_s) forms (`solver.cornea_grading`, on by default).\n\
-- Growth cases: the const scene at N = 101 with CVODE at rtol 1e-5 to t_end.\n\
+- Growth cases: the const scene at N = 101 with IDA (the default integrator) at rtol 1e-5 to t_end.\n\
 - Seconds are wall time on the machine that wrote the file.\n\n";
 
 /// Every case of the suite.
@@ -110,7 +110,7 @@ pub fn cases() -> Vec<Case> {
         let p = half_limit(exact(Params { h0, ..Params::default() }));
         push("thickness H0", format!("H0 = {h0}"), p, s, true);
     }
-    // Growth: the const scene at N = 101, CVODE rtol 1e-5.
+    // Growth: the const scene at N = 101, IDA (the default) at rtol 1e-5.
     let gs = GrowthSettings { rtol: 1e-5, atol: 1e-7, output_times: vec![], ..GrowthSettings::default() };
     let g0 = GrowthParams::default();
     let small = SolverSettings { nodes: 101, ..s };

@@ -120,6 +120,10 @@ pub struct IdaOptions {
     /// Safety factor of the Newton convergence test (IDASetNonlinConvCoef); None = IDA's
     /// default (0.33).
     pub nonlinear_convergence_coefficient: Option<f64>,
+    /// How far c_j may drift from the one the Newton matrix was set up with before IDA sets
+    /// it up again (IDASetDeltaCjLSetup: a new set-up when the ratio leaves
+    /// [(1 − dcj)/(1 + dcj), (1 + dcj)/(1 − dcj)]); None = IDA's default (0.25). In (0, 1).
+    pub delta_cj_setup: Option<f64>,
 }
 
 impl Default for IdaOptions {
@@ -139,6 +143,7 @@ impl Default for IdaOptions {
             max_convergence_failures: None,
             max_nonlinear_iterations: None,
             nonlinear_convergence_coefficient: None,
+            delta_cj_setup: None,
         }
     }
 }
@@ -394,6 +399,10 @@ impl<S: DaeSystem> Ida<S> {
         if let Some(c) = options.nonlinear_convergence_coefficient {
             self.log.call("IDASetNonlinConvCoef", Ida, || unsafe { IDASetNonlinConvCoef(mem, c) })?;
         }
+        if let Some(d) = options.delta_cj_setup {
+            // SAFETY: mem is live.
+            self.log.call("IDASetDeltaCjLSetup", Ida, || unsafe { sundials_sys::IDASetDeltaCjLSetup(mem, d) })?;
+        }
         Ok(())
     }
 
@@ -569,6 +578,30 @@ impl<S: DaeSystem> Ida<S> {
     /// before the first step).
     pub fn interpolate_derivative(&self, t: f64, yp: &mut [f64]) -> Result<(), SundialsError> {
         self.dky(t, 1, yp)
+    }
+
+    /// The weighted local error estimate of the last step, component by component:
+    /// |e_i| w_i (IDAGetEstLocalErrors times IDAGetErrWeights), where the step's error test
+    /// asks for the WRMS norm of these to be at most 1. What limits the step shows here.
+    pub fn weighted_local_errors(&self, out: &mut [f64]) -> Result<(), SundialsError> {
+        if out.len() != self.n {
+            return invalid(format!("output has length {}, expected {}", out.len(), self.n));
+        }
+        let ctx = &self._ctx;
+        let mut w = NVector::new(ctx, self.n)?;
+        let mut e = NVector::new(ctx, self.n)?;
+        let mem = self.mem.0;
+        // SAFETY: mem, w and e are live; the getters only copy into the vectors.
+        let flags = unsafe { (sundials_sys::IDAGetErrWeights(mem, w.raw()), sundials_sys::IDAGetEstLocalErrors(mem, e.raw())) };
+        for (name, flag) in [("IDAGetErrWeights", flags.0), ("IDAGetEstLocalErrors", flags.1)] {
+            if flag != 0 {
+                return Err(flag_error(name, flag, FlagFamily::Ida, None));
+            }
+        }
+        for ((o, ei), wi) in out.iter_mut().zip(e.as_mut_slice().iter()).zip(w.as_mut_slice().iter()) {
+            *o = (ei * wi).abs();
+        }
+        Ok(())
     }
 
     fn dky(&self, t: f64, k: c_int, out: &mut [f64]) -> Result<(), SundialsError> {
@@ -756,6 +789,11 @@ fn validate(n: usize, o: &IdaOptions) -> Result<(), SundialsError> {
     if let Some(c) = o.nonlinear_convergence_coefficient {
         if !(c > 0.0 && c.is_finite()) {
             return invalid(format!("nonlinear_convergence_coefficient must be positive, got {c}"));
+        }
+    }
+    if let Some(d) = o.delta_cj_setup {
+        if !(d > 0.0 && d < 1.0) {
+            return invalid(format!("delta_cj_setup must lie in (0, 1), got {d}"));
         }
     }
     Ok(())
