@@ -869,3 +869,16 @@ fn create_and_drop_many_times_with_every_solver() {
     }
 }
 
+
+/// The weighted local errors of the last step pass IDA's own error test (their WRMS norm
+/// is at most 1) and are not all zero.
+#[test]
+fn weighted_local_errors_pass_the_error_test() {
+    let options = robertson_options();
+    let (_, ida) = run_robertson(IdaLinearSolver::Custom, &options, 3);
+    let mut e = [0.0; 3];
+    ida.weighted_local_errors(&mut e).unwrap();
+    let wrms = (e.iter().map(|x| x * x).sum::<f64>() / 3.0).sqrt();
+    assert!(e.iter().all(|x| x.is_finite()) && wrms > 0.0 && wrms <= 1.0, "{e:?}: WRMS {wrms}");
+    assert!(ida.weighted_local_errors(&mut [0.0; 2]).is_err());
+}

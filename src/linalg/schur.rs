@@ -272,6 +272,9 @@ impl SchurSolver {
             let (cols, vals) = a.row(n_p + jw);
             for (&c, &v) in cols.iter().zip(vals) {
                 if c < n_p {
+                    if v == 0.0 {
+                        continue;
+                    }
                     coupling.push((jw as u32, c as u32, v));
                     let (b, r) = (&blocks[c / 2], c % 2);
                     if b.width > 0 {

@@ -48,8 +48,9 @@ pub struct LinearSolver {
     raw: SUNLinearSolver,
     kind: MatrixKind,
     n: usize,
-    /// KLU keeps a symbolic factorisation of this pattern.
-    pattern: Option<(Vec<usize>, Vec<usize>)>,
+    /// KLU keeps a symbolic factorisation of the pattern with this fingerprint (compared
+    /// on every setup and solve, so O(1) rather than the pattern itself).
+    pattern: Option<u64>,
     factored: bool,
     _ctx: Rc<Context>,
 }
@@ -71,7 +72,7 @@ impl LinearSolver {
                 Matrix::Sparse(a) => (
                     new_klu(template.raw(), a.raw(), ctx.raw())?,
                     "SUNLinSol_KLU",
-                    Some((a.row_ptr().to_vec(), a.col_idx().to_vec())),
+                    Some(a.fingerprint()),
                 ),
             }
         };
@@ -108,8 +109,8 @@ impl LinearSolver {
                 matrix.describe()
             )));
         }
-        if let (Some((rp, ci)), Matrix::Sparse(a)) = (&self.pattern, matrix) {
-            if a.row_ptr() != rp.as_slice() || a.col_idx() != ci.as_slice() {
+        if let (Some(fingerprint), Matrix::Sparse(a)) = (self.pattern, matrix) {
+            if a.fingerprint() != fingerprint {
                 return Err(SundialsError::Invalid(
                     "the KLU solver was created for a different sparsity pattern".into(),
                 ));

@@ -351,6 +351,9 @@ pub struct SparseMatrix {
     n: usize,
     row_ptr: Vec<usize>,
     col_idx: Vec<usize>,
+    /// A hash of the pattern (FNV-1a), so that a solver can check in O(1) that a matrix has
+    /// the pattern it was made for.
+    fingerprint: u64,
     outside: Cell<usize>,
     _ctx: Rc<Context>,
 }
@@ -367,7 +370,8 @@ impl SparseMatrix {
         if raw.is_null() {
             return Err(SundialsError::NullHandle("SUNSparseMatrix"));
         }
-        let mut a = SparseMatrix { raw, n, row_ptr, col_idx, outside: Cell::new(0), _ctx: Rc::clone(ctx) };
+        let fingerprint = pattern_fingerprint(&row_ptr, &col_idx);
+        let mut a = SparseMatrix { raw, n, row_ptr, col_idx, fingerprint, outside: Cell::new(0), _ctx: Rc::clone(ctx) };
         a.zero();
         Ok(a)
     }
@@ -386,6 +390,11 @@ impl SparseMatrix {
 
     pub fn col_idx(&self) -> &[usize] {
         &self.col_idx
+    }
+
+    /// The hash of the pattern, fixed for the matrix's life.
+    pub fn fingerprint(&self) -> u64 {
+        self.fingerprint
     }
 
     fn values(&mut self) -> &mut [f64] {
@@ -444,6 +453,16 @@ impl SparseMatrix {
     pub(crate) fn raw(&self) -> SUNMatrix {
         self.raw
     }
+}
+
+/// FNV-1a over the pattern's lengths and indices.
+fn pattern_fingerprint(row_ptr: &[usize], col_idx: &[usize]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &v in [row_ptr.len(), col_idx.len()].iter().chain(row_ptr).chain(col_idx) {
+        h ^= v as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
 }
 
 fn validate_csr(n: usize, row_ptr: &[usize], col_idx: &[usize]) -> Result<(), SundialsError> {
