@@ -58,37 +58,26 @@ pub fn integrate(
         Ok(cv) => cv,
         Err(e) => return (CvodeStats::default(), Err((0.0, e.to_string()))),
     };
-    let result = run(&mut cv, p0.len(), t_end, times, output, progress);
+    let result = super::march(&mut CvodeStepper { cv: &mut cv, output }, p0.len(), t_end, times, progress);
     (cv.stats(), result)
 }
 
-fn run(
-    cv: &mut Cvode<GrowthOde<'_>>,
-    n: usize,
-    t_end: f64,
-    times: &[f64],
-    output: &mut super::OutputFn<'_>,
-    progress: &mut dyn FnMut(f64),
-) -> Result<(), (f64, String)> {
-    let mut y = vec![0.0; n];
-    let mut yo = vec![0.0; n];
-    let mut next = times.iter().peekable();
-    let mut t = 0.0;
-    while t < t_end {
-        t = cv.step(t_end, &mut y).map_err(|e| (cv.stats().current_time, e.to_string()))?;
-        progress(t);
-        while let Some(&&tout) = next.peek() {
-            if tout > t {
-                break;
-            }
-            if tout == t {
-                yo.copy_from_slice(&y);
-            } else {
-                cv.interpolate(tout, &mut yo).map_err(|e| (t, e.to_string()))?;
-            }
-            output(cv.system_mut().sys, tout, &yo).map_err(|e| (tout, e.to_string()))?;
-            next.next();
-        }
+/// CVODE as [`super::march`] drives it.
+struct CvodeStepper<'a, 'b, 'c> {
+    cv: &'a mut Cvode<GrowthOde<'b>>,
+    output: &'a mut super::OutputFn<'c>,
+}
+
+impl super::Stepper for CvodeStepper<'_, '_, '_> {
+    fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
+        self.cv.step(t_end, y).map_err(|e| (self.cv.stats().current_time, e.to_string()))
     }
-    Ok(())
+
+    fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {
+        self.cv.interpolate(t, y).map_err(|e| e.to_string())
+    }
+
+    fn output(&mut self, t: f64, y: &[f64]) -> Result<(), String> {
+        (self.output)(self.cv.system_mut().sys, t, y).map_err(|e| e.to_string())
+    }
 }

@@ -52,7 +52,7 @@ pub fn integrate(
     settings: &GrowthSettings,
     r0: f64,
     times: &[f64],
-    output: &mut dyn FnMut(&mut CoupledDae, f64, &[f64]) -> Result<(), String>,
+    output: &mut DaeOutput<'_>,
     progress: &mut dyn FnMut(f64),
 ) -> (IdaStats, Result<(), (f64, String)>) {
     let options = IdaOptions {
@@ -69,39 +69,33 @@ pub fn integrate(
         Ok(ida) => ida,
         Err(e) => return (IdaStats::default(), Err((0.0, e.to_string()))),
     };
-    let result = run(&mut ida, y0.len(), t_end, times, output, progress);
+    let n = y0.len();
+    let result = super::march(&mut IdaStepper { ida: &mut ida, yp: vec![0.0; n], output }, n, t_end, times, progress);
     (ida.stats(), result)
 }
 
-fn run(
-    ida: &mut Ida<GrowthDae<'_>>,
-    n: usize,
-    t_end: f64,
-    times: &[f64],
-    output: &mut dyn FnMut(&mut CoupledDae, f64, &[f64]) -> Result<(), String>,
-    progress: &mut dyn FnMut(f64),
-) -> Result<(), (f64, String)> {
-    let (mut y, mut yp) = (vec![0.0; n], vec![0.0; n]);
-    let mut yo = vec![0.0; n];
-    let mut next = times.iter().peekable();
-    let mut t = 0.0;
-    while t < t_end {
-        t = ida.step(t_end, &mut y, &mut yp).map_err(|e| (ida.stats().current_time, e.to_string()))?;
-        progress(t);
-        while let Some(&&tout) = next.peek() {
-            if tout > t {
-                break;
-            }
-            if tout == t {
-                yo.copy_from_slice(&y);
-            } else {
-                ida.interpolate(tout, &mut yo).map_err(|e| (t, e.to_string()))?;
-            }
-            output(ida.system_mut().dae, tout, &yo).map_err(|e| (tout, e))?;
-            next.next();
-        }
+/// What receives the coupled system's state at an output time.
+pub type DaeOutput<'a> = dyn FnMut(&mut CoupledDae, f64, &[f64]) -> Result<(), String> + 'a;
+
+/// IDA as [`super::march`] drives it.
+struct IdaStepper<'a, 'b, 'c> {
+    ida: &'a mut Ida<GrowthDae<'b>>,
+    yp: Vec<f64>,
+    output: &'a mut DaeOutput<'c>,
+}
+
+impl super::Stepper for IdaStepper<'_, '_, '_> {
+    fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
+        self.ida.step(t_end, y, &mut self.yp).map_err(|e| (self.ida.stats().current_time, e.to_string()))
     }
-    Ok(())
+
+    fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {
+        self.ida.interpolate(t, y).map_err(|e| e.to_string())
+    }
+
+    fn output(&mut self, t: f64, y: &[f64]) -> Result<(), String> {
+        (self.output)(self.ida.system_mut().dae, t, y)
+    }
 }
 
 /// The default linear solver of the coupled system, the fastest measured (BENCHMARKS.md):

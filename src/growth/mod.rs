@@ -344,3 +344,40 @@ fn run_ida(
     };
     (dae.sys, result)
 }
+
+/// A time integrator as [`march`] drives it: one internal step at a time, its interpolant
+/// inside the last step, and where the state at an output time goes.
+trait Stepper {
+    /// One step towards `t_end`; `y` gets the state reached. On failure: (time reached, why).
+    fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)>;
+    /// The state at `t` inside the last step.
+    fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String>;
+    /// Hand the state at output time `t` on.
+    fn output(&mut self, t: f64, y: &[f64]) -> Result<(), String>;
+}
+
+/// Step to `t_end`, handing on the state at each of `times` (increasing, in (0, t_end]) from
+/// the step that contains it, and calling `progress(t)` after every step.
+fn march(s: &mut dyn Stepper, n: usize, t_end: f64, times: &[f64], progress: &mut dyn FnMut(f64)) -> Result<(), (f64, String)> {
+    let (mut y, mut yo) = (vec![0.0; n], vec![0.0; n]);
+    let mut next = times.iter().peekable();
+    let mut t = 0.0;
+    while t < t_end {
+        t = s.step(t_end, &mut y)?;
+        progress(t);
+        while let Some(&&tout) = next.peek() {
+            if tout > t {
+                break;
+            }
+            if tout == t {
+                yo.copy_from_slice(&y);
+            } else {
+                s.interpolate(tout, &mut yo).map_err(|e| (t, e))?;
+            }
+            s.output(tout, &yo).map_err(|e| (tout, e))?;
+            next.next();
+        }
+    }
+    Ok(())
+}
+

@@ -163,6 +163,38 @@ impl RawBox<ErrorLog> {
     }
 }
 
+/// A getter of a solver's counters (CVodeGetNumSteps, IDAGetNumResEvals, ...).
+pub(crate) type CountGetter = unsafe extern "C" fn(*mut c_void, *mut std::os::raw::c_long) -> c_int;
+/// A getter of a solver's real outputs (CVodeGetLastStep, ...).
+pub(crate) type RealGetter = unsafe extern "C" fn(*mut c_void, *mut f64) -> c_int;
+
+/// One counter of a solver's memory; 0 if the getter fails (the stats of every solver are
+/// read this way, also after a failure).
+///
+/// # Safety
+/// `mem` must be live memory of the solver the getter belongs to.
+pub(crate) unsafe fn counter(mem: *mut c_void, get: CountGetter) -> usize {
+    let mut v: std::os::raw::c_long = 0;
+    if get(mem, &mut v) == 0 {
+        v.max(0) as usize
+    } else {
+        0
+    }
+}
+
+/// One real output of a solver's memory; NaN if the getter fails.
+///
+/// # Safety
+/// As for [`counter`].
+pub(crate) unsafe fn real(mem: *mut c_void, get: RealGetter) -> f64 {
+    let mut v = f64::NAN;
+    if get(mem, &mut v) == 0 {
+        v
+    } else {
+        f64::NAN
+    }
+}
+
 /// The error handler for KINSOL (and CVODE/IDA, whose handler type is the same): store the
 /// message in the `ErrorLog` passed as `data` instead of printing it.
 ///

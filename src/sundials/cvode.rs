@@ -17,7 +17,7 @@ use std::os::raw::{c_int, c_long, c_void};
 use std::rc::Rc;
 
 use sundials_sys::{
-    realtype, sunindextype, CVode, CVodeCreate, CVodeFree, CVodeGetCurrentTime, CVodeGetDky,
+    realtype, CVode, CVodeCreate, CVodeFree, CVodeGetCurrentTime, CVodeGetDky,
     CVodeGetLastOrder, CVodeGetLastStep, CVodeGetNumErrTestFails, CVodeGetNumJTSetupEvals,
     CVodeGetNumJacEvals, CVodeGetNumJtimesEvals, CVodeGetNumLinConvFails, CVodeGetNumLinIters,
     CVodeGetNumLinRhsEvals, CVodeGetNumNonlinSolvConvFails, CVodeGetNumNonlinSolvIters,
@@ -26,11 +26,11 @@ use sundials_sys::{
     CVodeSetErrHandlerFn, CVodeSetInitStep, CVodeSetJacFn, CVodeSetJacTimes,
     CVodeSetLinearSolver, CVodeSetMaxConvFails, CVodeSetMaxErrTestFails, CVodeSetMaxNumSteps,
     CVodeSetMaxOrd, CVodeSetMaxStep, CVodeSetPreconditioner, CVodeSetStopTime, CVodeSetUserData,
-    N_VDestroy, N_VMake_Serial, N_Vector, SUNLinSolFree, SUNLinSol_SPGMR, SUNLinearSolver,
+    N_Vector, SUNLinSolFree, SUNLinSol_SPGMR, SUNLinearSolver,
     SUNMatrix, CV_BDF, CV_NORMAL, CV_ONE_STEP, SUN_PREC_LEFT, SUN_PREC_NONE,
 };
 
-use super::callback::{error_handler, CallbackError, CallbackResult, CallbackState, ErrorLog, RawBox};
+use super::callback::{self, counter, error_handler, CallbackError, CallbackResult, CallbackState, CountGetter, ErrorLog, RawBox, RealGetter};
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
 use super::linsol::{LinearSolver, LinearSolverSpec};
@@ -451,18 +451,11 @@ impl<S: OdeSystem> Cvode<S> {
         if y.len() != self.n {
             return invalid(format!("y has length {}, expected {}", y.len(), self.n));
         }
-        let len = self.n as sunindextype;
-        // SAFETY: the vector wraps `y` without owning it (N_VDestroy leaves the data alone)
-        // and is destroyed before `y`'s borrow ends; the context is live.
-        let v = unsafe { N_VMake_Serial(len, y.as_mut_ptr(), self._ctx.raw()) };
-        if v.is_null() {
-            return Err(SundialsError::NullHandle("N_VMake_Serial"));
-        }
-        // SAFETY: mem and v are live; CVodeGetDky calls no user callback. The error handler
-        // may write to the log through its raw pointer; no reference to the log is alive.
-        let flag = unsafe { CVodeGetDky(self.mem.0, t, 0, v) };
-        // SAFETY: v came from N_VMake_Serial and is destroyed once.
-        unsafe { N_VDestroy(v) };
+        let mem = self.mem.0;
+        // SAFETY: mem and the borrowed vector are live; CVodeGetDky calls no user callback.
+        // The error handler may write to the log through its raw pointer; no reference to
+        // the log is alive.
+        let flag = NVector::with_borrowed(&self._ctx, y, |v| unsafe { CVodeGetDky(mem, t, 0, v) })?;
         if flag == 0 {
             return Ok(());
         }
@@ -476,26 +469,9 @@ impl<S: OdeSystem> Cvode<S> {
     /// The counters so far (also after a failure).
     pub fn stats(&self) -> CvodeStats {
         let mem = self.mem.0;
-        let count = |f: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
-            let mut v: c_long = 0;
-            // SAFETY: mem is live; v is a valid out-pointer.
-            let flag = unsafe { f(mem, &mut v) };
-            if flag == 0 {
-                v.max(0) as usize
-            } else {
-                0
-            }
-        };
-        let real = |f: unsafe extern "C" fn(*mut c_void, *mut realtype) -> c_int| {
-            let mut v: realtype = f64::NAN;
-            // SAFETY: mem is live; v is a valid out-pointer.
-            let flag = unsafe { f(mem, &mut v) };
-            if flag == 0 {
-                v
-            } else {
-                f64::NAN
-            }
-        };
+        // SAFETY: mem is live CVODE memory, and the getters are CVODE's.
+        let count = |f: CountGetter| unsafe { counter(mem, f) };
+        let real = |f: RealGetter| unsafe { callback::real(mem, f) };
         let mut last_order: c_int = 0;
         // SAFETY: mem is live; last_order is a valid out-pointer.
         unsafe { CVodeGetLastOrder(mem, &mut last_order) };

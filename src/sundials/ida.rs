@@ -24,14 +24,14 @@ use std::os::raw::{c_int, c_long, c_void};
 use std::rc::Rc;
 
 use sundials_sys::{
-    realtype, sunindextype, IDACalcIC, IDACreate, IDAFree, IDAGetConsistentIC,
+    realtype, IDACalcIC, IDACreate, IDAFree, IDAGetConsistentIC,
     IDAGetCurrentStep, IDAGetCurrentTime, IDAGetDky, IDAGetLastOrder, IDAGetLastStep,
     IDAGetNumErrTestFails, IDAGetNumJacEvals, IDAGetNumLinResEvals, IDAGetNumLinSolvSetups,
     IDAGetNumNonlinSolvConvFails, IDAGetNumNonlinSolvIters, IDAGetNumResEvals, IDAGetNumSteps,
     IDAInit, IDAReInit, IDASStolerances, IDASVtolerances, IDASetErrHandlerFn, IDASetId,
     IDASetInitStep, IDASetJacFn, IDASetLinearSolver, IDASetMaxConvFails, IDASetMaxErrTestFails,
     IDASetMaxNonlinIters, IDASetMaxNumSteps, IDASetMaxOrd, IDASetMaxStep, IDASetNonlinConvCoef,
-    IDASetStopTime, IDASetSuppressAlg, IDASetUserData, IDASolve, N_VDestroy, N_VMake_Serial,
+    IDASetStopTime, IDASetSuppressAlg, IDASetUserData, IDASolve,
     N_Vector, SUNLinSolFree, SUNLinSolFreeEmpty, SUNLinSolNewEmpty, SUNLinearSolver,
     SUNLinearSolver_ID, SUNLinearSolver_ID_SUNLINEARSOLVER_CUSTOM, SUNLinearSolver_Type,
     SUNLinearSolver_Type_SUNLINEARSOLVER_DIRECT, SUNMatDestroy, SUNMatFreeEmpty, SUNMatNewEmpty,
@@ -39,7 +39,7 @@ use sundials_sys::{
     IDA_YA_YDP_INIT, SUNLS_PACKAGE_FAIL_REC, SUNLS_PACKAGE_FAIL_UNREC, SUNLS_SUCCESS,
 };
 
-use super::callback::{error_handler, CallbackError, CallbackResult, CallbackState, ErrorLog, RawBox};
+use super::callback::{self, counter, error_handler, CallbackError, CallbackResult, CallbackState, CountGetter, ErrorLog, RawBox, RealGetter};
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
 use super::linsol::{LinearSolver, LinearSolverSpec};
@@ -620,18 +620,11 @@ impl<S: DaeSystem> Ida<S> {
             );
             return Err(flag_error("IDAGetDky", sundials_sys::IDA_BAD_T, FlagFamily::Ida, Some(message)));
         }
-        let len = self.n as sunindextype;
-        // SAFETY: the vector wraps `out` without owning it (N_VDestroy leaves the data alone)
-        // and is destroyed before `out`'s borrow ends; the context is live.
-        let v = unsafe { N_VMake_Serial(len, out.as_mut_ptr(), self._ctx.raw()) };
-        if v.is_null() {
-            return Err(SundialsError::NullHandle("N_VMake_Serial"));
-        }
-        // SAFETY: mem and v are live; IDAGetDky calls no user callback. The error handler
-        // may write to the log through its raw pointer; no reference to the log is alive.
-        let flag = unsafe { IDAGetDky(self.mem.0, t, k, v) };
-        // SAFETY: v came from N_VMake_Serial and is destroyed once.
-        unsafe { N_VDestroy(v) };
+        let mem = self.mem.0;
+        // SAFETY: mem and the borrowed vector are live; IDAGetDky calls no user callback.
+        // The error handler may write to the log through its raw pointer; no reference to
+        // the log is alive.
+        let flag = NVector::with_borrowed(&self._ctx, out, |v| unsafe { IDAGetDky(mem, t, k, v) })?;
         if flag == 0 {
             return Ok(());
         }
@@ -645,26 +638,9 @@ impl<S: DaeSystem> Ida<S> {
     /// The counters so far (also after a failure).
     pub fn stats(&self) -> IdaStats {
         let mem = self.mem.0;
-        let count = |f: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
-            let mut v: c_long = 0;
-            // SAFETY: mem is live; v is a valid out-pointer.
-            let flag = unsafe { f(mem, &mut v) };
-            if flag == 0 {
-                v.max(0) as usize
-            } else {
-                0
-            }
-        };
-        let real = |f: unsafe extern "C" fn(*mut c_void, *mut realtype) -> c_int| {
-            let mut v: realtype = f64::NAN;
-            // SAFETY: mem is live; v is a valid out-pointer.
-            let flag = unsafe { f(mem, &mut v) };
-            if flag == 0 {
-                v
-            } else {
-                f64::NAN
-            }
-        };
+        // SAFETY: mem is live IDA memory, and the getters are IDA's.
+        let count = |f: CountGetter| unsafe { counter(mem, f) };
+        let real = |f: RealGetter| unsafe { callback::real(mem, f) };
         let mut last_order: c_int = 0;
         // SAFETY: mem is live; last_order is a valid out-pointer.
         unsafe { IDAGetLastOrder(mem, &mut last_order) };

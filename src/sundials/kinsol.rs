@@ -328,12 +328,8 @@ impl<S: NonlinearSystem> Kinsol<S> {
 
     fn collect_stats(&self) -> KinsolStats {
         let mem = self.mem.0;
-        let count = |f: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
-            let mut v: c_long = 0;
-            // SAFETY: mem is live; v is a valid out-pointer.
-            let flag = unsafe { f(mem, &mut v) };
-            if flag == 0 { v.max(0) as usize } else { 0 }
-        };
+        // SAFETY: mem is live KINSOL memory, and the getters are KINSOL's.
+        let count = |f: super::callback::CountGetter| unsafe { super::callback::counter(mem, f) };
         let mut fnorm = f64::NAN;
         // SAFETY: mem is live; fnorm is a valid out-pointer.
         unsafe { KINGetFuncNorm(mem, &mut fnorm) };

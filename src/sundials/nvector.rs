@@ -53,6 +53,23 @@ impl NVector {
         unsafe { slice_mut(self.raw) }
     }
 
+    /// Call `f` with a serial N_Vector that borrows `data` (N_VMake_Serial; destroyed, data
+    /// untouched, when `f` returns): for the getters that write into a caller's vector
+    /// (dense output). Returns what `f` returns.
+    pub(crate) fn with_borrowed(ctx: &Context, data: &mut [f64], f: impl FnOnce(N_Vector) -> std::os::raw::c_int) -> Result<std::os::raw::c_int, SundialsError> {
+        let len = i64::try_from(data.len()).map_err(|_| SundialsError::Invalid(format!("vector length {} too large", data.len())))?;
+        // SAFETY: the vector wraps `data` without owning it (N_VDestroy leaves the data
+        // alone) and is destroyed before `data`'s borrow ends; the context is live.
+        let v = unsafe { sundials_sys::N_VMake_Serial(len, data.as_mut_ptr(), ctx.raw()) };
+        if v.is_null() {
+            return Err(SundialsError::NullHandle("N_VMake_Serial"));
+        }
+        let flag = f(v);
+        // SAFETY: v came from N_VMake_Serial and is destroyed once.
+        unsafe { N_VDestroy(v) };
+        Ok(flag)
+    }
+
     /// Turn on SUNDIALS' fused vector operations (linear combinations of several vectors in
     /// one pass) for this vector and its clones: an integrator cloned from it then touches
     /// memory fewer times per step.
