@@ -132,7 +132,17 @@ impl GrowthSystem {
         }
         self.solved_at.clear();
         self.work.bvp_solves += 1;
-        if let Err(e) = self.elastic.newton() {
+        // An adopted state is accurate to the integrator's tolerance, and the factorisation
+        // kept for modified Newton may be from long ago: polish it by exact Newton.
+        let polishing = same;
+        if polishing {
+            self.elastic.set_jacobian_reuse(None)?;
+        }
+        let solved = self.elastic.newton();
+        if polishing {
+            self.elastic.set_jacobian_reuse(Some(REFACTOR_EVERY))?;
+        }
+        if let Err(e) = solved {
             // Start the next attempt (a shorter step) from the last converged state.
             self.elastic.u.clone_from(&self.last_good_u);
             return Err(e.into());
