@@ -172,6 +172,46 @@ unsafe extern "C" fn scale_add_multi(nvec: c_int, a: *mut realtype, x: N_Vector,
     0
 }
 
+/// Z_j = a X_j + b Y_j.
+unsafe extern "C" fn linear_sum_array(nvec: c_int, a: realtype, xs: *mut N_Vector, b: realtype, ys: *mut N_Vector, zs: *mut N_Vector) -> c_int {
+    for j in 0..nvec.max(0) as usize {
+        linear_sum(a, *xs.add(j), b, *ys.add(j), *zs.add(j));
+    }
+    0
+}
+
+/// Z_j = c_j X_j.
+unsafe extern "C" fn scale_array(nvec: c_int, c: *mut realtype, xs: *mut N_Vector, zs: *mut N_Vector) -> c_int {
+    for j in 0..nvec.max(0) as usize {
+        scale(*c.add(j), *xs.add(j), *zs.add(j));
+    }
+    0
+}
+
+/// Z_j = c.
+unsafe extern "C" fn constant_array(nvec: c_int, c: realtype, zs: *mut N_Vector) -> c_int {
+    for j in 0..nvec.max(0) as usize {
+        constant(c, *zs.add(j));
+    }
+    0
+}
+
+/// nrm_j = √(Σ (X_j W_j)² / n).
+unsafe extern "C" fn wrms_norm_array(nvec: c_int, xs: *mut N_Vector, ws: *mut N_Vector, nrm: *mut realtype) -> c_int {
+    for j in 0..nvec.max(0) as usize {
+        *nrm.add(j) = wrms_norm(*xs.add(j), *ws.add(j));
+    }
+    0
+}
+
+/// nrm_j = √(Σ_{id > 0} (X_j W_j)² / n).
+unsafe extern "C" fn wrms_norm_mask_array(nvec: c_int, xs: *mut N_Vector, ws: *mut N_Vector, id: N_Vector, nrm: *mut realtype) -> c_int {
+    for j in 0..nvec.max(0) as usize {
+        *nrm.add(j) = wrms_norm_mask(*xs.add(j), *ws.add(j), id);
+    }
+    0
+}
+
 /// Install the kernels into `v`'s operation table (shared with nothing: each serial vector
 /// owns its table, and N_VClone copies it).
 ///
@@ -194,6 +234,12 @@ pub(crate) unsafe fn install(v: N_Vector) {
     ops.nvmaxnorm = Some(max_norm);
     ops.nvlinearcombination = Some(linear_combination);
     ops.nvscaleaddmulti = Some(scale_add_multi);
+    // The vector-array forms (IDA calls them once fused operations are on).
+    ops.nvlinearsumvectorarray = Some(linear_sum_array);
+    ops.nvscalevectorarray = Some(scale_array);
+    ops.nvconstvectorarray = Some(constant_array);
+    ops.nvwrmsnormvectorarray = Some(wrms_norm_array);
+    ops.nvwrmsnormmaskvectorarray = Some(wrms_norm_mask_array);
 }
 
 #[cfg(test)]
@@ -272,6 +318,39 @@ mod tests {
             s::N_VScaleAddMulti(2, a.as_mut_ptr(), xf.raw(), ys.as_mut_ptr(), zs_fast.as_mut_ptr());
             same(&z1, &f1, "scale add multi 0");
             same(&z2, &f2, "scale add multi 1");
+            // The array forms: Z_j = c_j X_j, Z_j = a X_j + b Y_j, and the norms of the X_j.
+            // Every vector of the fast side carries the kernels (SUNDIALS dispatches some
+            // array forms on X_0, some on Z_0); the reference calls the serial ones directly.
+            let (yf, wf, g1, g2) = (mk(2), mk(3), mk(6), mk(7));
+            for v in [&yf, &wf, &g1, &g2] {
+                fast(v);
+            }
+            let mut cs = [2.0, -0.5];
+            let (mut xr, mut xq) = ([x.raw(), y.raw()], [xf.raw(), yf.raw()]);
+            let (mut zr, mut zq) = ([z1.raw(), z2.raw()], [g1.raw(), g2.raw()]);
+            s::N_VScaleVectorArray_Serial(2, cs.as_mut_ptr(), xr.as_mut_ptr(), zr.as_mut_ptr());
+            s::N_VScaleVectorArray(2, cs.as_mut_ptr(), xq.as_mut_ptr(), zq.as_mut_ptr());
+            same(&z1, &g1, "scale array 0");
+            same(&z2, &g2, "scale array 1");
+            let (mut yr, mut yq) = ([w.raw(), x.raw()], [wf.raw(), xf.raw()]);
+            s::N_VLinearSumVectorArray_Serial(2, 0.7, xr.as_mut_ptr(), -1.3, yr.as_mut_ptr(), zr.as_mut_ptr());
+            s::N_VLinearSumVectorArray(2, 0.7, xq.as_mut_ptr(), -1.3, yq.as_mut_ptr(), zq.as_mut_ptr());
+            same(&z1, &g1, "linear sum array 0");
+            same(&z2, &g2, "linear sum array 1");
+            s::N_VConstVectorArray_Serial(2, 0.25, zr.as_mut_ptr());
+            s::N_VConstVectorArray(2, 0.25, zq.as_mut_ptr());
+            same(&z1, &g1, "const array 0");
+            let (mut nr, mut nq) = ([0.0; 2], [0.0; 2]);
+            let (mut wr, mut wq) = ([w.raw(), w.raw()], [wf.raw(), wf.raw()]);
+            s::N_VWrmsNormVectorArray_Serial(2, xr.as_mut_ptr(), wr.as_mut_ptr(), nr.as_mut_ptr());
+            s::N_VWrmsNormVectorArray(2, xq.as_mut_ptr(), wq.as_mut_ptr(), nq.as_mut_ptr());
+            close(nr[0], nq[0], "wrms norm array 0");
+            close(nr[1], nq[1], "wrms norm array 1");
+            s::N_VWrmsNormMaskVectorArray_Serial(2, xr.as_mut_ptr(), wr.as_mut_ptr(), id.raw(), nr.as_mut_ptr());
+            fast(&id);
+            s::N_VWrmsNormMaskVectorArray(2, xq.as_mut_ptr(), wq.as_mut_ptr(), id.raw(), nq.as_mut_ptr());
+            close(nr[0], nq[0], "masked wrms norm array 0");
+            close(nr[1], nq[1], "masked wrms norm array 1");
         }
     }
 }
