@@ -50,7 +50,7 @@ impl Default for GrowthParams {
 }
 
 /// Which time integrator runs the growth. IDA is the default: it wins the const scene's
-/// work-precision diagram at every axial-length accuracy from 1e-2 to 1e-8 (BENCHMARKS.md).
+/// work-precision diagram at every axial-length accuracy from 1e-2 to 1e-7 (BENCHMARKS.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Integrator {
     /// CVODE: BDF, variable order and step, error-controlled.
