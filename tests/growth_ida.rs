@@ -139,3 +139,14 @@ fn a_failing_ida_run_says_where_and_keeps_what_it_had() {
     assert!(err.to_string().starts_with("growth failed at t = 0.400000"), "{err}");
     assert!(err.stats.steps > 0 && err.stats.residual_evaluations > 0 && err.stats.t_reached >= 0.4, "{:?}", err.stats);
 }
+
+/// Absurd but finite growth data: rates that overflow fail the evaluation at their point
+/// (no NaN reaches the Newton matrix), and the run says so at t = 0 instead of hanging.
+#[test]
+fn overflowing_rates_fail_cleanly() {
+    let solver = SolverSettings { nodes: 51, ..SolverSettings::default() };
+    let g = GrowthParams { eta0: 1.7e308, ..GrowthParams::default() };
+    let err = grow(&Params::default(), &solver, &g, &settings(Integrator::Ida, 1e-5), &mut Keep::default()).unwrap_err();
+    assert_eq!(err.t, 0.0);
+    assert!(err.reason.contains("the growth rates cannot be evaluated at node"), "{}", err.reason);
+}

@@ -29,8 +29,8 @@
 use super::points::NP;
 use super::system::{GrowthSystem, RhsError};
 use super::ThicknessLaw;
-use crate::bvp::discretisation::{Discretisation, Evaluations, NY, POLE_ROWS};
-use crate::bvp::equations::{data_partials, Mat5, MaterialPoint, PointEval, Vec5, R, THETA, TS};
+use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, POLE_ROWS};
+use crate::bvp::equations::{data_partials, Mat5, MaterialPoint, PointError, PointEval, Vec5, R, THETA, TS};
 use crate::linalg::{Csr, DirectSolver, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver};
 use crate::model::growth_law::positive_smooth;
 use crate::model::params::Scheme;
@@ -647,6 +647,30 @@ impl CoupledDae {
         out
     }
 
+    /// Rates (and, with `deriv`, their derivatives) that are not finite fail the evaluation
+    /// at their point, as an elastic evaluation does, so that IDA cuts the step or the run
+    /// says where; they would otherwise spread NaN through the Newton matrix.
+    fn check_finite(&self, rates: &[PointRates], deriv: Option<&[RateDeriv]>) -> Result<(), RhsError> {
+        let bad = |k: usize| {
+            let pr = &rates[k];
+            let mut values = vec![pr.rho, pr.gamma, pr.depth];
+            if let Some(rd) = deriv {
+                values.extend(rd[k].rate.iter().flatten().chain(&rd[k].rate_d).chain(&rd[k].depth).chain(&rd[k].angle));
+            }
+            values.iter().any(|v| !v.is_finite())
+        };
+        match (0..rates.len()).find(|&k| bad(k)) {
+            None => Ok(()),
+            Some(k) => {
+                let node = match self.sites[k] {
+                    Site::Left(i) | Site::Mid(i) => i,
+                    Site::Right(i) => i + 1,
+                };
+                Err(RhsError::Evaluation(EvalFailure { node, sigma_ref: self.sys.points.sigma_ref[k], why: PointError::NotFinite }))
+            }
+        }
+    }
+
     /// The depth of the blue surface where the retina crosses φ_max: linear in φ between the
     /// two points (in Σ order) that straddle it (MODEL.md §6); None if none reaches it.
     fn crossing_depth(&self, rates: &[PointRates]) -> Option<Crossing> {
@@ -669,6 +693,7 @@ impl CoupledDae {
         self.load(y)?;
         let local = self.locals(y, None);
         let rates = self.point_rates(y, &local, None);
+        self.check_finite(&rates, None)?;
         for (k, pr) in rates.iter().enumerate() {
             r[NP * k] = yp[NP * k] - pr.rho;
             r[NP * k + 1] = yp[NP * k + 1] - pr.gamma;
@@ -720,6 +745,10 @@ impl CoupledDae {
         let local = self.locals(y, Some(&mut grads));
         let mut rd = Vec::with_capacity(local.len());
         let rates = self.point_rates(y, &local, Some(&mut rd));
+        if let Err(e) = self.check_finite(&rates, Some(&rd)) {
+            self.grads = grads;
+            return Err(e.into());
+        }
         self.assemble_growth_rows(c, &grads, &rd, &rates);
         self.assemble_border(&grads, &rd, &rates);
         self.grads = grads;

@@ -59,6 +59,8 @@ pub enum Rule {
     AtLeast(usize),
     /// Strictly between 0 and 1.
     OpenUnit,
+    /// At least 0 and below 1.
+    UnitFromZero,
     /// An angle strictly between 0 and π.
     OpenHalfTurn,
     /// A non-empty list of positive numbers in strictly increasing order.
@@ -74,6 +76,7 @@ impl Rule {
             Rule::NonNegative => ">= 0".into(),
             Rule::AtLeast(n) => format!(">= {n}"),
             Rule::OpenUnit => "in (0, 1)".into(),
+            Rule::UnitFromZero => "in [0, 1)".into(),
             Rule::OpenHalfTurn => "in (0, π)".into(),
             Rule::PositiveIncreasing => "each > 0, strictly increasing".into(),
         }
@@ -92,6 +95,7 @@ impl Rule {
             Rule::OpenUnit if x <= 0.0 || x >= 1.0 => {
                 Err("must lie strictly between 0 and 1".into())
             }
+            Rule::UnitFromZero if !(0.0..1.0).contains(&x) => Err("must lie in [0, 1)".into()),
             Rule::OpenHalfTurn if x <= 0.0 || x >= std::f64::consts::PI => {
                 Err("must lie strictly between 0 and π (radians)".into())
             }
@@ -486,8 +490,8 @@ pub static KEYS: &[KeySpec] = &[
     KeySpec {
         key: "growth.kink_width",
         access: Access::Float { get: |s| growth(s).kink_width, set: |s, v| s.growth_mut().kink_width = v },
-        rule: Rule::NonNegative,
-        doc: "round the [·]⁺ kinks of the growth laws (r − ρ and the depth in mm, α_s − 1) over this width with a C¹ quadratic; 0, the default, keeps the model's exact kinks (MODEL.md §5): an option for measuring what the kinks cost the integrators",
+        rule: Rule::UnitFromZero,
+        doc: "round the [·]⁺ kinks of the growth laws (r − ρ and the depth in mm, α_s − 1) over this width (below 1: wider rounds away the laws themselves) with a C¹ quadratic; 0, the default, keeps the model's exact kinks (MODEL.md §5): an option for measuring what the kinks cost the integrators",
         growth: true,
     },
     KeySpec {
