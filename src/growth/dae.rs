@@ -186,8 +186,10 @@ pub struct CoupledDae {
     u: Vec<f64>,
     f: Vec<f64>,
     dz: Vec<f64>,
-    /// Scratch of the Jacobian: each point's local state's derivatives.
+    /// Scratch of the Jacobian: each point's local state's derivatives, and the
+    /// derivatives of its elastic right side in its data (computed once per assembly).
     grads: Vec<[Grad; 4]>,
+    derivs: Vec<DataDeriv>,
     /// The (p, u) the discretisation's data and evaluations were last set for.
     at_p: Vec<f64>,
     pub counters: DaeCounters,
@@ -251,6 +253,7 @@ impl CoupledDae {
             f: vec![0.0; NY * m],
             dz: vec![0.0; m - 1],
             grads: vec![],
+            derivs: vec![],
             at_p: vec![],
             counters: DaeCounters::default(),
             sys,
@@ -432,23 +435,22 @@ impl CoupledDae {
     fn locals(&self, y: &[f64], mut grad: Option<&mut Vec<[Grad; 4]>>) -> Vec<Local> {
         let disc = self.sys.elastic.discretisation();
         let ev = disc.evaluations();
-        let law = self.sys.points_law();
         let mut local = vec![Local::default(); self.sites.len()];
         if let Some(g) = grad.as_deref_mut() {
             g.resize(self.sites.len(), [Grad::default(); 4]);
         }
         let grads = grad.is_some();
         for (k, &site) in self.sites.iter().enumerate() {
-            let (node, slot, e, mp, off) = match site {
-                Site::Left(i) => (i, L, ev.left(i), &disc.data.above[i], 0),
-                Site::Right(i) => (i + 1, RT, ev.right(i), &disc.data.below[i + 1], NW),
+            let (node, slot, e, off) = match site {
+                Site::Left(i) => (i, L, ev.left(i), 0),
+                Site::Right(i) => (i + 1, RT, ev.right(i), NW),
                 Site::Mid(i) => {
                     let ym = ev.y_mid(i);
                     let e = ev.mid(i);
                     let z = if grads {
                         let (z, gz) = self.z_mid(y, disc, ev, i);
                         if let Some(g) = grad.as_deref_mut() {
-                            g[k] = self.mid_grads(disc, ev, i, law, &gz);
+                            g[k] = self.mid_grads(disc, ev, i, &gz);
                         }
                         z
                     } else {
@@ -462,7 +464,7 @@ impl CoupledDae {
             let yv = Vec5::from_column_slice(&y[w..w + NY]);
             local[k] = Local { r: yv[R], z: y[w + Z], alpha_s: e.alpha_s, sin_theta: e.sin_theta, cos_theta: e.cos_theta };
             if grads {
-                let dd = data_deriv(law, mp, &yv, e);
+                let dd = self.derivs[k];
                 let mut ga = Grad::default();
                 ga.w[off + R] = e.alpha_s_r;
                 ga.w[off + TS] = e.alpha_s_ts;
@@ -502,12 +504,10 @@ impl CoupledDae {
     /// dz/dΣ = −γ α_s sin θ at interval i's end `slot` (L or RT) or midpoint (M), with its
     /// derivatives in the window (for M: through y_m too).
     fn slope(&self, disc: &Discretisation, ev: &Evaluations, i: usize, slot: usize) -> (f64, Grad) {
-        let law = self.sys.points_law();
-        let u = &self.u;
-        let (e, mp, yv, off) = match slot {
-            L => (ev.left(i), &disc.data.above[i], Vec5::from_column_slice(&u[NY * i..NY * i + NY]), Some(0)),
-            RT => (ev.right(i), &disc.data.below[i + 1], Vec5::from_column_slice(&u[NY * (i + 1)..NY * (i + 1) + NY]), Some(NW)),
-            _ => (ev.mid(i), &disc.data.mid[i], *ev.y_mid(i), None),
+        let (e, mp, off) = match slot {
+            L => (ev.left(i), &disc.data.above[i], Some(0)),
+            RT => (ev.right(i), &disc.data.below[i + 1], Some(NW)),
+            _ => (ev.mid(i), &disc.data.mid[i], None),
         };
         let (sn, cs) = (e.sin_theta, e.cos_theta);
         let (g, a) = (mp.gamma, e.alpha_s);
@@ -517,7 +517,7 @@ impl CoupledDae {
         dy[R] = -g * e.alpha_s_r * sn;
         dy[THETA] = -g * a * cs;
         dy[TS] = -g * e.alpha_s_ts * sn;
-        let dd = data_deriv(law, mp, &yv, e);
+        let dd = self.derivs[self.window_points(i)[slot].expect("the slot's point exists")];
         let dp = [-g * sn * dd.alpha_s[0], -sn * (a + g * dd.alpha_s[1])];
         let mut grad = Grad::default();
         match off {
@@ -538,7 +538,6 @@ impl CoupledDae {
     /// gᵀ ∂y_m/∂(window) for a row vector g over y_m: y_m = (y_i + y_{i+1})/2 + h/8 (f_L − f_R).
     fn through_mid(&self, disc: &Discretisation, ev: &Evaluations, i: usize, g: &Vec5) -> Grad {
         let h = disc.mesh.step(i);
-        let law = self.sys.points_law();
         let id = Mat5::identity();
         let dl = 0.5 * id + (h / 8.0) * ev.left(i).jac;
         let dr = 0.5 * id - (h / 8.0) * ev.right(i).jac;
@@ -549,11 +548,8 @@ impl CoupledDae {
             out.w[c] = gl[c];
             out.w[NW + c] = gr[c];
         }
-        let u = &self.u;
-        let yl = Vec5::from_column_slice(&u[NY * i..NY * i + NY]);
-        let yr = Vec5::from_column_slice(&u[NY * (i + 1)..NY * (i + 1) + NY]);
-        let fl = data_deriv(law, &disc.data.above[i], &yl, ev.left(i));
-        let fr = data_deriv(law, &disc.data.below[i + 1], &yr, ev.right(i));
+        let pts = &self.sys.points;
+        let (fl, fr) = (&self.derivs[pts.above[i]], &self.derivs[pts.below[i + 1]]);
         for q in 0..2 {
             out.p[L][q] = (h / 8.0) * g.dot(&fl.f[q]);
             out.p[RT][q] = -(h / 8.0) * g.dot(&fr.f[q]);
@@ -562,7 +558,7 @@ impl CoupledDae {
     }
 
     /// The derivatives of a midpoint's (r, θ, z, α_s) in its window.
-    fn mid_grads(&self, disc: &Discretisation, ev: &Evaluations, i: usize, law: ThicknessLaw, gz: &Grad) -> [Grad; 4] {
+    fn mid_grads(&self, disc: &Discretisation, ev: &Evaluations, i: usize, gz: &Grad) -> [Grad; 4] {
         let e = ev.mid(i);
         let unit = |c: usize| {
             let mut v = Vec5::zeros();
@@ -575,7 +571,7 @@ impl CoupledDae {
         ga_y[R] = e.alpha_s_r;
         ga_y[TS] = e.alpha_s_ts;
         let mut ga = self.through_mid(disc, ev, i, &ga_y);
-        ga.p[M] = data_deriv(law, &disc.data.mid[i], ev.y_mid(i), e).alpha_s;
+        ga.p[M] = self.derivs[self.sys.points.mid[i]].alpha_s;
         [gr, gt, *gz, ga]
     }
 
@@ -727,6 +723,7 @@ impl CoupledDae {
     /// Assemble ∂F/∂y + c ∂F/∂y' at y into the CSR matrix.
     pub fn assemble(&mut self, c: f64, y: &[f64]) -> Result<(), DaeError> {
         self.load(y)?;
+        self.derivs = self.data_derivs();
         self.jac.zero();
         let n_p = self.n_p;
         // The elastic rows in the elastic unknowns: the discretisation's own Jacobian.
@@ -777,10 +774,25 @@ impl CoupledDae {
         }
     }
 
+    /// Each point's ∂f/∂(ρ, γ_s) and ∂α_s/∂(ρ, γ_s), from the evaluation at its site (the
+    /// interval end or midpoint it belongs to; a node shared by two intervals has one).
+    fn data_derivs(&self) -> Vec<DataDeriv> {
+        let disc = self.sys.elastic.discretisation();
+        let (ev, data, law) = (disc.evaluations(), &disc.data, self.sys.points_law());
+        let y = |j: usize| Vec5::from_column_slice(&self.u[NY * j..NY * j + NY]);
+        self.sites
+            .iter()
+            .map(|&site| match site {
+                Site::Left(i) => data_deriv(law, &data.above[i], &y(i), ev.left(i)),
+                Site::Right(i) => data_deriv(law, &data.below[i + 1], &y(i + 1), ev.right(i)),
+                Site::Mid(i) => data_deriv(law, &data.mid[i], ev.y_mid(i), ev.mid(i)),
+            })
+            .collect()
+    }
+
     /// The elastic rows' derivatives in the growth data: the pole rows in above[0]'s data
     /// (σ_ε = ε γ_s and α_s there), each interval's rows in its points' data.
     fn assemble_data_columns(&mut self) {
-        let law = self.sys.points_law();
         let disc = self.sys.elastic.discretisation();
         let ev = disc.evaluations();
         let n_p = self.n_p;
@@ -790,7 +802,7 @@ impl CoupledDae {
         let y0 = Vec5::from_column_slice(&self.u[..NY]);
         let mp0 = &disc.data.above[0];
         let e0 = ev.left(0);
-        let dd0 = data_deriv(law, mp0, &y0, e0);
+        let dd0 = self.derivs[k0];
         let eps = disc.mesh.nodes[0];
         let se = mp0.sigma;
         let d_f0 = [-se * dd0.alpha_s[0], -eps * e0.alpha_s - se * dd0.alpha_s[1]];
@@ -798,12 +810,9 @@ impl CoupledDae {
         adds.push((n_p + 1, k0, [d_f0[0] * y0[0], d_f0[1] * y0[0]]));
         for i in 0..self.m - 1 {
             let h = disc.mesh.step(i);
-            let yl = Vec5::from_column_slice(&self.u[NY * i..NY * i + NY]);
-            let yr = Vec5::from_column_slice(&self.u[NY * (i + 1)..NY * (i + 1) + NY]);
-            let fl = data_deriv(law, &disc.data.above[i], &yl, ev.left(i));
-            let fr = data_deriv(law, &disc.data.below[i + 1], &yr, ev.right(i));
             let [pl, pr, pm] = self.window_points(i);
             let (pl, pr) = (pl.expect("every interval has ends"), pr.expect("every interval has ends"));
+            let (fl, fr) = (&self.derivs[pl], &self.derivs[pr]);
             let mut cols: Vec<(usize, [Vec5; 2])> = vec![];
             match self.hermite_simpson {
                 false => {
@@ -812,7 +821,7 @@ impl CoupledDae {
                 }
                 true => {
                     let jm = &ev.mid(i).jac;
-                    let fm = data_deriv(law, &disc.data.mid[i], ev.y_mid(i), ev.mid(i));
+                    let fm = &self.derivs[pm.expect("Hermite–Simpson has midpoints")];
                     cols.push((pl, fl.f.map(|v| -(h / 6.0) * v - (h * h / 12.0) * (jm * v))));
                     cols.push((pr, fr.f.map(|v| -(h / 6.0) * v + (h * h / 12.0) * (jm * v))));
                     cols.push((pm.expect("Hermite–Simpson has midpoints"), fm.f.map(|v| -(2.0 * h / 3.0) * v)));
