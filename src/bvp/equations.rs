@@ -343,20 +343,26 @@ mod tests {
         assert_eq!(evaluate(&shell, &with, &y, 1.0).unwrap().f, a.f);
     }
 
+    /// A shell (with fibres of stiffness `d`, if any), a grown point and a state off
+    /// equilibrium, for the derivative checks.
+    fn test_point(d: Option<f64>) -> (Shell, MaterialPoint, Vec5) {
+        let shell = Shell { law: Law { c: 100.0, d }, e_b: 18.0, dp: 2.0 };
+        let mp = MaterialPoint {
+            sigma_ref: 3.0,
+            sigma: 3.1,
+            rho: 2.9,
+            zeta: 0.6,
+            gamma: 1.05,
+            fibre: d.map(|_| FibreDirection::from_angle(1.1)),
+        };
+        (shell, mp, Vec5::new(0.11, 3.0, 0.33, 0.4, 7.0))
+    }
+
     /// ∂f/∂(ρ, ζ, γ) and ∂α_s/∂(ρ, ζ) against central differences, with and without fibres.
     #[test]
     fn data_partials_match_differences() {
         for d in [None, Some(200.0)] {
-            let shell = Shell { law: Law { c: 100.0, d }, e_b: 18.0, dp: 2.0 };
-            let mp = MaterialPoint {
-                sigma_ref: 3.0,
-                sigma: 3.1,
-                rho: 2.9,
-                zeta: 0.6,
-                gamma: 1.05,
-                fibre: d.map(|_| FibreDirection::from_angle(1.1)),
-            };
-            let y = Vec5::new(0.11, 3.0, 0.33, 0.4, 7.0);
+            let (shell, mp, y) = test_point(d);
             let e = evaluate(&shell, &mp, &y, 1.0).unwrap();
             let dp = data_partials(&mp, &y, &e);
             let at = |m: MaterialPoint| evaluate(&shell, &m, &y, 1.0).unwrap();
@@ -387,16 +393,7 @@ mod tests {
     #[test]
     fn point_jacobian_matches_differences() {
         for d in [None, Some(200.0)] {
-            let shell = Shell { law: Law { c: 100.0, d }, e_b: 18.0, dp: 2.0 };
-            let mp = MaterialPoint {
-                sigma_ref: 3.0,
-                sigma: 3.1,
-                rho: 2.9,
-                zeta: 0.6,
-                gamma: 1.05,
-                fibre: d.map(|_| FibreDirection::from_angle(1.1)),
-            };
-            let y = Vec5::new(0.11, 3.0, 0.33, 0.4, 7.0);
+            let (shell, mp, y) = test_point(d);
             let e = evaluate(&shell, &mp, &y, 1.0).unwrap();
             for c in 0..5 {
                 let h = 1e-6 * y[c].abs().max(1e-2);
