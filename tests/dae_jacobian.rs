@@ -14,7 +14,9 @@ fn grown_state(dae: &mut CoupledDae, seed: u64) -> Vec<f64> {
     let n_p = dae.differential_len();
     let mut s = seed;
     let mut rnd = || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
     };
     for k in 0..n_p {
@@ -37,7 +39,12 @@ fn check(p: Params, solver: SolverSettings, g: GrowthParams, seed: u64) {
     let jac = dae.matrix().clone();
     let yp = vec![0.0; n];
     // Steps relative to each unknown's typical size (θ and q_s vanish at the pole).
-    let typical: Vec<f64> = dae.abs_tolerances(1.0, 0.0, p.r0).into_iter().enumerate().map(|(k, t)| if k < n_p { y[k].abs().max(1.0) } else { t }).collect();
+    let typical: Vec<f64> = dae
+        .abs_tolerances(1.0, 0.0, p.r0)
+        .into_iter()
+        .enumerate()
+        .map(|(k, t)| if k < n_p { y[k].abs().max(1.0) } else { t })
+        .collect();
     let mut differences = |j: usize, h: f64| {
         let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
         let (mut yu, mut yd) = (y.clone(), y.clone());
@@ -45,13 +52,20 @@ fn check(p: Params, solver: SolverSettings, g: GrowthParams, seed: u64) {
         yd[j] -= h;
         dae.residual(&yu, &yp, &mut rp).unwrap();
         dae.residual(&yd, &yp, &mut rm).unwrap();
-        (0..n).map(|i| (rp[i] - rm[i]) / (2.0 * h) + if i == j && j < n_p { c } else { 0.0 }).collect::<Vec<f64>>()
+        (0..n)
+            .map(|i| (rp[i] - rm[i]) / (2.0 * h) + if i == j && j < n_p { c } else { 0.0 })
+            .collect::<Vec<f64>>()
     };
     // The size of the terms of row i, Σ_j |J_ij| |y_j|: the scale of its round-off.
     let terms: Vec<f64> = (0..n)
         .map(|i| {
-            let (cols, vals) = (jac.row_ptr()[i]..jac.row_ptr()[i + 1], &jac.values()[jac.row_ptr()[i]..jac.row_ptr()[i + 1]]);
-            cols.zip(vals).map(|(k, v)| v.abs() * y[jac.col_idx()[k]].abs().max(typical[jac.col_idx()[k]])).sum()
+            let (cols, vals) = (
+                jac.row_ptr()[i]..jac.row_ptr()[i + 1],
+                &jac.values()[jac.row_ptr()[i]..jac.row_ptr()[i + 1]],
+            );
+            cols.zip(vals)
+                .map(|(k, v)| v.abs() * y[jac.col_idx()[k]].abs().max(typical[jac.col_idx()[k]]))
+                .sum()
         })
         .collect();
     let mut worst = (0.0f64, 0, 0, 0.0, 0.0);
@@ -78,18 +92,48 @@ fn check(p: Params, solver: SolverSettings, g: GrowthParams, seed: u64) {
 fn newton_matrix_matches_differences() {
     let mut seed = 1;
     for scheme in [Scheme::HermiteSimpson, Scheme::Trapezoid] {
-        for (thickness, d) in [(Thickness::Uniform, 0.0), (Thickness::NonUniform, 200.0), (Thickness::NonUniform, 0.0)] {
+        for (thickness, d) in [
+            (Thickness::Uniform, 0.0),
+            (Thickness::NonUniform, 200.0),
+            (Thickness::NonUniform, 0.0),
+        ] {
             for law in [ThicknessLaw::None, ThicknessLaw::Mass] {
-                let p = Params { thickness, d, ..Params::default() };
-                let s = SolverSettings { nodes: 21, scheme, ..SolverSettings::default() };
-                let g = GrowthParams { thickness_law: law, ..GrowthParams::default() };
+                let p = Params {
+                    thickness,
+                    d,
+                    ..Params::default()
+                };
+                let s = SolverSettings {
+                    nodes: 21,
+                    scheme,
+                    ..SolverSettings::default()
+                };
+                let g = GrowthParams {
+                    thickness_law: law,
+                    ..GrowthParams::default()
+                };
                 check(p, s, g, seed);
                 seed += 1;
             }
         }
     }
     // The rounded kinks (growth.kink_width), whose slopes are no longer 0 or 1.
-    let p = Params { thickness: Thickness::NonUniform, d: 100.0, ..Params::default() };
-    let s = SolverSettings { nodes: 21, ..SolverSettings::default() };
-    check(p, s, GrowthParams { kink_width: 0.05, ..GrowthParams::default() }, seed);
+    let p = Params {
+        thickness: Thickness::NonUniform,
+        d: 100.0,
+        ..Params::default()
+    };
+    let s = SolverSettings {
+        nodes: 21,
+        ..SolverSettings::default()
+    };
+    check(
+        p,
+        s,
+        GrowthParams {
+            kink_width: 0.05,
+            ..GrowthParams::default()
+        },
+        seed,
+    );
 }

@@ -30,8 +30,12 @@ use super::points::NP;
 use super::system::{GrowthSystem, RhsError};
 use super::ThicknessLaw;
 use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, POLE_ROWS};
-use crate::bvp::equations::{data_partials, Mat5, MaterialPoint, PointError, PointEval, Vec5, R, THETA, TS};
-use crate::linalg::{Csr, DirectSolver, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver};
+use crate::bvp::equations::{
+    data_partials, Mat5, MaterialPoint, PointError, PointEval, Vec5, R, THETA, TS,
+};
+use crate::linalg::{
+    Csr, DirectSolver, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
+};
 use crate::model::growth_law::positive_smooth;
 use crate::model::params::Scheme;
 use crate::sundials::MatrixSink;
@@ -56,7 +60,12 @@ pub enum DaeLinear {
 
 impl DaeLinear {
     pub const NAMES: [&'static str; 4] = ["schur", "schur-klu", "band", "klu"];
-    pub const ALL: [DaeLinear; 4] = [DaeLinear::Schur, DaeLinear::SchurKlu, DaeLinear::Band, DaeLinear::Klu];
+    pub const ALL: [DaeLinear; 4] = [
+        DaeLinear::Schur,
+        DaeLinear::SchurKlu,
+        DaeLinear::Band,
+        DaeLinear::Klu,
+    ];
 
     pub fn name(self) -> &'static str {
         Self::NAMES[self as usize]
@@ -290,7 +299,11 @@ impl CoupledDae {
     /// The interval window's points (L, R, M); M absent for the trapezoidal scheme.
     fn window_points(&self, i: usize) -> [Option<usize>; 3] {
         let pts = &self.sys.points;
-        [Some(pts.above[i]), Some(pts.below[i + 1]), self.hermite_simpson.then(|| pts.mid[i])]
+        [
+            Some(pts.above[i]),
+            Some(pts.below[i + 1]),
+            self.hermite_simpson.then(|| pts.mid[i]),
+        ]
     }
 
     /// The growth-row index of interval i's W row `a` (0..5 scheme rows, 5 the z row).
@@ -319,7 +332,13 @@ impl CoupledDae {
             rows[NP * k] = cols.clone();
             rows[NP * k + 1] = cols;
         }
-        let pole: Vec<usize> = (0..NW).map(|c| self.wcol(0, c)).chain([NP * self.sys.points.above[0], NP * self.sys.points.above[0] + 1]).collect();
+        let pole: Vec<usize> = (0..NW)
+            .map(|c| self.wcol(0, c))
+            .chain([
+                NP * self.sys.points.above[0],
+                NP * self.sys.points.above[0] + 1,
+            ])
+            .collect();
         for row in &mut rows[self.n_p..self.n_p + POLE_ROWS] {
             *row = pole.clone();
         }
@@ -339,9 +358,17 @@ impl CoupledDae {
 
     fn make_solver(&self, kind: DaeLinear) -> Result<Box<dyn DirectSolver>, LinalgError> {
         Ok(match kind {
-            DaeLinear::Schur => Box::new(SchurSolver::new(&self.jac, self.n_p, true, Reduced::Band)?),
-            DaeLinear::SchurKlu => Box::new(SchurSolver::new(&self.jac, self.n_p, true, Reduced::Klu)?),
-            DaeLinear::Band => Box::new(InterleavedBand::new(&self.jac, self.interleaving(), Some(self.d()))?),
+            DaeLinear::Schur => {
+                Box::new(SchurSolver::new(&self.jac, self.n_p, true, Reduced::Band)?)
+            }
+            DaeLinear::SchurKlu => {
+                Box::new(SchurSolver::new(&self.jac, self.n_p, true, Reduced::Klu)?)
+            }
+            DaeLinear::Band => Box::new(InterleavedBand::new(
+                &self.jac,
+                self.interleaving(),
+                Some(self.d()),
+            )?),
             DaeLinear::Klu => Box::new(KluSolver::new(&self.jac)?),
         })
     }
@@ -385,7 +412,11 @@ impl CoupledDae {
             self.at_p.clear();
             self.at_p.extend_from_slice(p);
         }
-        self.sys.elastic.discretisation_mut().evaluate_at(&self.u).map_err(RhsError::Evaluation)
+        self.sys
+            .elastic
+            .discretisation_mut()
+            .evaluate_at(&self.u)
+            .map_err(RhsError::Evaluation)
     }
 
     /// The consistent state at t = 0 from the elastic solution the system holds: y with z
@@ -456,13 +487,25 @@ impl CoupledDae {
                     } else {
                         self.z_mid_value(y, disc, ev, i)
                     };
-                    local[k] = Local { r: ym[R], z, alpha_s: e.alpha_s, sin_theta: e.sin_theta, cos_theta: e.cos_theta };
+                    local[k] = Local {
+                        r: ym[R],
+                        z,
+                        alpha_s: e.alpha_s,
+                        sin_theta: e.sin_theta,
+                        cos_theta: e.cos_theta,
+                    };
                     continue;
                 }
             };
             let w = self.n_p + NW * node;
             let yv = Vec5::from_column_slice(&y[w..w + NY]);
-            local[k] = Local { r: yv[R], z: y[w + Z], alpha_s: e.alpha_s, sin_theta: e.sin_theta, cos_theta: e.cos_theta };
+            local[k] = Local {
+                r: yv[R],
+                z: y[w + Z],
+                alpha_s: e.alpha_s,
+                sin_theta: e.sin_theta,
+                cos_theta: e.cos_theta,
+            };
             if grads {
                 let dd = self.derivs[k];
                 let mut ga = Grad::default();
@@ -470,7 +513,12 @@ impl CoupledDae {
                 ga.w[off + TS] = e.alpha_s_ts;
                 ga.p[slot] = dd.alpha_s;
                 if let Some(g) = grad.as_deref_mut() {
-                    g[k] = [Grad::unit(off + R), Grad::unit(off + THETA), Grad::unit(off + Z), ga];
+                    g[k] = [
+                        Grad::unit(off + R),
+                        Grad::unit(off + THETA),
+                        Grad::unit(off + Z),
+                        ga,
+                    ];
                 }
             }
         }
@@ -577,7 +625,12 @@ impl CoupledDae {
 
     /// The retina, the stimulus and the rates at every point; with `deriv`, their
     /// derivatives in each point's (r, θ, z, α_s, ρ, γ_s) and d.
-    fn point_rates(&self, y: &[f64], local: &[Local], mut deriv: Option<&mut Vec<RateDeriv>>) -> Vec<PointRates> {
+    fn point_rates(
+        &self,
+        y: &[f64],
+        local: &[Local],
+        mut deriv: Option<&mut Vec<RateDeriv>>,
+    ) -> Vec<PointRates> {
         let pts = &self.sys.points;
         let law = self.sys.points_law();
         let blue = self.sys.blue();
@@ -591,11 +644,22 @@ impl CoupledDae {
             let (sn, cs) = (s.sin_theta, s.cos_theta);
             let (zr, rr) = (s.z - 0.5 * ht * cs, s.r - 0.5 * ht * sn);
             let g = blue.depth_gradient(zr, rr);
-            out.push(PointRates { depth: g.depth, angle: g.angle, ..Default::default() });
+            out.push(PointRates {
+                depth: g.depth,
+                angle: g.angle,
+                ..Default::default()
+            });
             if let Some(dv) = deriv.as_deref_mut() {
                 // h_t = ζ ρ / (α_s r), ζ = ζ(ρ, γ_s): ∂h_t/∂(r, θ, z, α_s, ρ, γ_s).
                 let [z_rho, z_gam] = zeta_partials(law, rho, zeta, gam);
-                let dht = [-ht / s.r, 0.0, 0.0, -ht / s.alpha_s, ht / rho + ht / zeta * z_rho, ht / zeta * z_gam];
+                let dht = [
+                    -ht / s.r,
+                    0.0,
+                    0.0,
+                    -ht / s.alpha_s,
+                    ht / rho + ht / zeta * z_rho,
+                    ht / zeta * z_gam,
+                ];
                 let mut dz_ret = dht.map(|v| -0.5 * cs * v);
                 let mut dr_ret = dht.map(|v| -0.5 * sn * v);
                 dz_ret[2] += 1.0;
@@ -618,7 +682,11 @@ impl CoupledDae {
             pr.beyond = has_crossing && pr.angle >= blue.phi_max;
             let depth = if pr.beyond { d_unknown } else { pr.depth };
             let (dr, da) = (s.r - rho, s.alpha_s - 1.0);
-            let ((gv, gv_slope), (pr_, pr_slope), (pa, pa_slope)) = (positive_smooth(depth, w), positive_smooth(dr, w), positive_smooth(da, w));
+            let ((gv, gv_slope), (pr_, pr_slope), (pa, pa_slope)) = (
+                positive_smooth(depth, w),
+                positive_smooth(dr, w),
+                positive_smooth(da, w),
+            );
             pr.g_v = gv;
             let cap = pts.capacity[k];
             pr.eta = cap * pr.g_v;
@@ -627,7 +695,11 @@ impl CoupledDae {
             if let Some(dv) = deriv.as_deref_mut() {
                 let rd = &mut dv[k];
                 // ∂g_v/∂(local) and ∂g_v/∂d: the slope of the branch the value took.
-                let gv_local: [f64; 6] = if pr.beyond { [0.0; 6] } else { rd.depth.map(|v| gv_slope * v) };
+                let gv_local: [f64; 6] = if pr.beyond {
+                    [0.0; 6]
+                } else {
+                    rd.depth.map(|v| gv_slope * v)
+                };
                 let gv_d = if pr.beyond { gv_slope } else { 0.0 };
                 for q in 0..6 {
                     rd.rate[0][q] = cap * gv_local[q] * pr_;
@@ -646,12 +718,24 @@ impl CoupledDae {
     /// Rates (and, with `deriv`, their derivatives) that are not finite fail the evaluation
     /// at their point, as an elastic evaluation does, so that IDA cuts the step or the run
     /// says where; they would otherwise spread NaN through the Newton matrix.
-    fn check_finite(&self, rates: &[PointRates], deriv: Option<&[RateDeriv]>) -> Result<(), RhsError> {
+    fn check_finite(
+        &self,
+        rates: &[PointRates],
+        deriv: Option<&[RateDeriv]>,
+    ) -> Result<(), RhsError> {
         let bad = |k: usize| {
             let pr = &rates[k];
             let mut values = vec![pr.rho, pr.gamma, pr.depth];
             if let Some(rd) = deriv {
-                values.extend(rd[k].rate.iter().flatten().chain(&rd[k].rate_d).chain(&rd[k].depth).chain(&rd[k].angle));
+                values.extend(
+                    rd[k]
+                        .rate
+                        .iter()
+                        .flatten()
+                        .chain(&rd[k].rate_d)
+                        .chain(&rd[k].depth)
+                        .chain(&rd[k].angle),
+                );
             }
             values.iter().any(|v| !v.is_finite())
         };
@@ -662,7 +746,11 @@ impl CoupledDae {
                     Site::Left(i) | Site::Mid(i) => i,
                     Site::Right(i) => i + 1,
                 };
-                Err(RhsError::Evaluation(EvalFailure { node, sigma_ref: self.sys.points.sigma_ref[k], why: PointError::NotFinite }))
+                Err(RhsError::Evaluation(EvalFailure {
+                    node,
+                    sigma_ref: self.sys.points.sigma_ref[k],
+                    why: PointError::NotFinite,
+                }))
             }
         }
     }
@@ -674,12 +762,22 @@ impl CoupledDae {
         let j = self.order.iter().position(|&k| rates[k].angle >= phi_max)?;
         if j == 0 {
             let k = self.order[0];
-            return Some(Crossing { value: rates[k].depth, a: k, b: k, t: 1.0 });
+            return Some(Crossing {
+                value: rates[k].depth,
+                a: k,
+                b: k,
+                t: 1.0,
+            });
         }
         let (a, b) = (self.order[j - 1], self.order[j]);
         let (ra, rb) = (&rates[a], &rates[b]);
         let t = (phi_max - ra.angle) / (rb.angle - ra.angle);
-        Some(Crossing { value: ra.depth + t * (rb.depth - ra.depth), a, b, t })
+        Some(Crossing {
+            value: ra.depth + t * (rb.depth - ra.depth),
+            a,
+            b,
+            t,
+        })
     }
 
     /// F(t, y, y') into r.
@@ -697,7 +795,9 @@ impl CoupledDae {
         let (n_p, m) = (self.n_p, self.m);
         let (mut f, mut dz) = (std::mem::take(&mut self.f), std::mem::take(&mut self.dz));
         let disc = self.sys.elastic.discretisation_mut();
-        let res = disc.residual(&self.u, &mut f).and_then(|_| disc.z_steps(&self.u, &mut dz));
+        let res = disc
+            .residual(&self.u, &mut f)
+            .and_then(|_| disc.z_steps(&self.u, &mut dz));
         if let Err(e) = res {
             (self.f, self.dz) = (f, dz);
             return Err(RhsError::Evaluation(e));
@@ -729,8 +829,13 @@ impl CoupledDae {
         // The elastic rows in the elastic unknowns: the discretisation's own Jacobian.
         {
             let disc = self.sys.elastic.discretisation_mut();
-            let mut sink = WSink { csr: &mut self.jac, n_p, m: self.m };
-            disc.jacobian(&self.u, &mut sink).map_err(RhsError::Evaluation)?;
+            let mut sink = WSink {
+                csr: &mut self.jac,
+                n_p,
+                m: self.m,
+            };
+            disc.jacobian(&self.u, &mut sink)
+                .map_err(RhsError::Evaluation)?;
         }
         // The cornea's z and the border's own entry.
         let d = self.d();
@@ -762,7 +867,9 @@ impl CoupledDae {
         let span: Vec<f64> = g.w.iter().map(|v| a * v).collect();
         match half {
             None => self.jac.add_span(row, w0, &span),
-            Some(h) => self.jac.add_span(row, w0 + NW * h, &span[NW * h..NW * h + NW]),
+            Some(h) => self
+                .jac
+                .add_span(row, w0 + NW * h, &span[NW * h..NW * h + NW]),
         }
         for (slot, k) in self.window_points(i).into_iter().enumerate() {
             if let Some(k) = k {
@@ -805,13 +912,19 @@ impl CoupledDae {
         let dd0 = self.derivs[k0];
         let eps = disc.mesh.nodes[0];
         let se = mp0.sigma;
-        let d_f0 = [-se * dd0.alpha_s[0], -eps * e0.alpha_s - se * dd0.alpha_s[1]];
+        let d_f0 = [
+            -se * dd0.alpha_s[0],
+            -eps * e0.alpha_s - se * dd0.alpha_s[1],
+        ];
         adds.push((n_p, k0, d_f0));
         adds.push((n_p + 1, k0, [d_f0[0] * y0[0], d_f0[1] * y0[0]]));
         for i in 0..self.m - 1 {
             let h = disc.mesh.step(i);
             let [pl, pr, pm] = self.window_points(i);
-            let (pl, pr) = (pl.expect("every interval has ends"), pr.expect("every interval has ends"));
+            let (pl, pr) = (
+                pl.expect("every interval has ends"),
+                pr.expect("every interval has ends"),
+            );
             let (fl, fr) = (&self.derivs[pl], &self.derivs[pr]);
             let mut cols: Vec<(usize, [Vec5; 2])> = vec![];
             match self.hermite_simpson {
@@ -824,7 +937,10 @@ impl CoupledDae {
                     let fm = &self.derivs[pm.expect("Hermite–Simpson has midpoints")];
                     cols.push((pl, fl.f.map(|v| -(h / 6.0) * v - (h * h / 12.0) * (jm * v))));
                     cols.push((pr, fr.f.map(|v| -(h / 6.0) * v + (h * h / 12.0) * (jm * v))));
-                    cols.push((pm.expect("Hermite–Simpson has midpoints"), fm.f.map(|v| -(2.0 * h / 3.0) * v)));
+                    cols.push((
+                        pm.expect("Hermite–Simpson has midpoints"),
+                        fm.f.map(|v| -(2.0 * h / 3.0) * v),
+                    ));
                 }
             }
             for (k, dv) in cols {
@@ -867,7 +983,13 @@ impl CoupledDae {
     }
 
     /// The growth rows: c I − ∂rates/∂y, through each point's local state.
-    fn assemble_growth_rows(&mut self, c: f64, grads: &[[Grad; 4]], rd: &[RateDeriv], _rates: &[PointRates]) {
+    fn assemble_growth_rows(
+        &mut self,
+        c: f64,
+        grads: &[[Grad; 4]],
+        rd: &[RateDeriv],
+        _rates: &[PointRates],
+    ) {
         let d = self.d();
         for (k, &site) in self.sites.clone().iter().enumerate() {
             let i = site.interval();
@@ -896,11 +1018,17 @@ impl CoupledDae {
 
     /// The border row: d − D*(y), D* the depth interpolated at φ_max.
     fn assemble_border(&mut self, grads: &[[Grad; 4]], rd: &[RateDeriv], rates: &[PointRates]) {
-        let Some(cr) = self.crossing_depth(rates) else { return };
+        let Some(cr) = self.crossing_depth(rates) else {
+            return;
+        };
         let d = self.d();
         // ∂D* = (1 − t) ∂d_a + t ∂d_b − (d_b − d_a)/(φ_b − φ_a) ((1 − t) ∂φ_a + t ∂φ_b).
         let (a, b, t) = (cr.a, cr.b, cr.t);
-        let slope = if a == b { 0.0 } else { (rates[b].depth - rates[a].depth) / (rates[b].angle - rates[a].angle) };
+        let slope = if a == b {
+            0.0
+        } else {
+            (rates[b].depth - rates[a].depth) / (rates[b].angle - rates[a].angle)
+        };
         for (k, wgt) in [(a, 1.0 - t), (b, t)] {
             if a == b && k == a && wgt != 1.0 {
                 continue;
@@ -912,7 +1040,10 @@ impl CoupledDae {
                 Site::Mid(_) => M,
             };
             for q in 0..4 {
-                g.axpy(-wgt * (rd[k].depth[q] - slope * rd[k].angle[q]), &grads[k][q]);
+                g.axpy(
+                    -wgt * (rd[k].depth[q] - slope * rd[k].angle[q]),
+                    &grads[k][q],
+                );
             }
             for (s, q) in [(0usize, 4usize), (1, 5)] {
                 g.p[own][s] -= wgt * (rd[k].depth[q] - slope * rd[k].angle[q]);
@@ -952,7 +1083,9 @@ impl CoupledDae {
     /// data become p and its elastic unknowns y's, without a re-solve.
     pub fn adopt(&mut self, y: &[f64]) {
         let p = &y[..self.n_p];
-        let u: Vec<f64> = (0..self.m).flat_map(|i| y[self.wcol(i, 0)..self.wcol(i, NY)].to_vec()).collect();
+        let u: Vec<f64> = (0..self.m)
+            .flat_map(|i| y[self.wcol(i, 0)..self.wcol(i, NY)].to_vec())
+            .collect();
         self.sys.adopt(p, &u);
         self.at_p.clear();
     }
@@ -964,7 +1097,9 @@ impl CoupledDae {
 
     /// 1 for the differential unknowns, 0 for the algebraic ones (IDASetId).
     pub fn id(&self) -> Vec<f64> {
-        (0..self.len()).map(|k| if k < self.n_p { 1.0 } else { 0.0 }).collect()
+        (0..self.len())
+            .map(|k| if k < self.n_p { 1.0 } else { 0.0 })
+            .collect()
     }
 
     /// Absolute tolerances. The growth state and d take `atol` (mm for ρ and d, 1 for γ_s),
@@ -1046,12 +1181,18 @@ mod tests {
     /// and the pattern of the const scene at N = 501 holds 87 939 entries.
     #[test]
     fn reduced_and_interleaved_bandwidths() {
-        let s = SolverSettings { nodes: 501, ..SolverSettings::default() };
+        let s = SolverSettings {
+            nodes: 501,
+            ..SolverSettings::default()
+        };
         let sys = GrowthSystem::new(&Params::default(), &s, &GrowthParams::default()).unwrap();
         let dae = CoupledDae::new(sys);
         let schur = SchurSolver::new(&dae.jac, dae.n_p, true, Reduced::Band).unwrap();
         let band = InterleavedBand::new(&dae.jac, dae.interleaving(), Some(dae.d())).unwrap();
-        assert_eq!((dae.len(), dae.n_p, dae.n_w, dae.jac.nnz()), (5059, 2022, 3036, 87939));
+        assert_eq!(
+            (dae.len(), dae.n_p, dae.n_w, dae.jac.nnz()),
+            (5059, 2022, 3036, 87939)
+        );
         assert_eq!(schur.widths(), (8, 8));
         assert_eq!(band.widths(), (14, 12));
     }

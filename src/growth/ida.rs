@@ -8,7 +8,9 @@
 
 use super::dae::{CoupledDae, DaeLinear};
 use super::GrowthSettings;
-use crate::sundials::{CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats};
+use crate::sundials::{
+    CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats,
+};
 
 /// The coupled system as IDA sees it.
 pub struct GrowthDae<'a> {
@@ -24,7 +26,14 @@ impl DaeSystem for GrowthDae<'_> {
         self.dae.residual(y, yp, r).map_err(recoverable)
     }
 
-    fn linear_setup(&mut self, _t: f64, cj: f64, y: &[f64], _yp: &[f64], _r: &[f64]) -> CallbackResult {
+    fn linear_setup(
+        &mut self,
+        _t: f64,
+        cj: f64,
+        y: &[f64],
+        _yp: &[f64],
+        _r: &[f64],
+    ) -> CallbackResult {
         self.dae.setup(cj, y).map_err(recoverable)
     }
 
@@ -65,12 +74,29 @@ pub fn integrate(
         suppress_algebraic: SUPPRESS_ALGEBRAIC,
         ..IdaOptions::default()
     };
-    let mut ida = match Ida::new(GrowthDae { dae }, 0.0, y0, yp0, IdaLinearSolver::Custom, &options) {
+    let mut ida = match Ida::new(
+        GrowthDae { dae },
+        0.0,
+        y0,
+        yp0,
+        IdaLinearSolver::Custom,
+        &options,
+    ) {
         Ok(ida) => ida,
         Err(e) => return (IdaStats::default(), Err((0.0, e.to_string()))),
     };
     let n = y0.len();
-    let result = super::march(&mut IdaStepper { ida: &mut ida, yp: vec![0.0; n], output }, n, t_end, times, progress);
+    let result = super::march(
+        &mut IdaStepper {
+            ida: &mut ida,
+            yp: vec![0.0; n],
+            output,
+        },
+        n,
+        t_end,
+        times,
+        progress,
+    );
     (ida.stats(), result)
 }
 
@@ -86,7 +112,9 @@ struct IdaStepper<'a, 'b, 'c> {
 
 impl super::Stepper for IdaStepper<'_, '_, '_> {
     fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
-        self.ida.step(t_end, y, &mut self.yp).map_err(|e| (self.ida.stats().current_time, e.to_string()))
+        self.ida
+            .step(t_end, y, &mut self.yp)
+            .map_err(|e| (self.ida.stats().current_time, e.to_string()))
     }
 
     fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {

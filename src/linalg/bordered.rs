@@ -11,7 +11,9 @@
 use std::rc::Rc;
 
 use super::{Csr, DirectSolver, LinalgError};
-use crate::sundials::{BandMatrix, Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector};
+use crate::sundials::{
+    BandMatrix, Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector,
+};
 
 /// [A c; rᵀ s] with A an n×n band matrix; without a border, just A.
 pub struct BorderedBand {
@@ -79,12 +81,17 @@ impl BorderedBand {
 
     /// Fill the matrix: `f(a, c, r, s)` sets the band entries of A and the border, all of
     /// which start at zero.
-    pub fn fill(&mut self, f: impl FnOnce(&mut dyn MatrixSink, &mut [f64], &mut [f64], &mut f64)) -> Result<(), LinalgError> {
+    pub fn fill(
+        &mut self,
+        f: impl FnOnce(&mut dyn MatrixSink, &mut [f64], &mut [f64], &mut f64),
+    ) -> Result<(), LinalgError> {
         self.matrix.zero();
         self.col.fill(0.0);
         self.row.fill(0.0);
         self.corner = 0.0;
-        let Matrix::Band(band) = &mut self.matrix else { unreachable!("made as a band matrix") };
+        let Matrix::Band(band) = &mut self.matrix else {
+            unreachable!("made as a band matrix")
+        };
         let mut view = band.view_mut();
         f(&mut view, &mut self.col, &mut self.row, &mut self.corner);
         match self.matrix.take_outside() {
@@ -104,9 +111,18 @@ impl BorderedBand {
         self.v.copy_from_slice(self.x.as_slice());
         let rv: f64 = self.row.iter().zip(&self.v).map(|(a, b)| a * b).sum();
         self.sigma = self.corner - rv;
-        let scale = self.corner.abs() + self.row.iter().zip(&self.v).map(|(a, b)| (a * b).abs()).sum::<f64>();
+        let scale = self.corner.abs()
+            + self
+                .row
+                .iter()
+                .zip(&self.v)
+                .map(|(a, b)| (a * b).abs())
+                .sum::<f64>();
         if !(self.sigma.abs() > 1e-14 * scale) {
-            return Err(LinalgError::Singular(format!("the border's Schur complement is {:e} (scale {scale:e})", self.sigma)));
+            return Err(LinalgError::Singular(format!(
+                "the border's Schur complement is {:e} (scale {scale:e})",
+                self.sigma
+            )));
         }
         Ok(())
     }
@@ -156,11 +172,21 @@ pub struct InterleavedBand {
 impl InterleavedBand {
     /// `perm[i]`: where unknown i goes in the band (a permutation of 0..n−1 without
     /// `border`, whose own entry is ignored).
-    pub fn new(pattern: &Csr, perm: Vec<usize>, border: Option<usize>) -> Result<Self, LinalgError> {
+    pub fn new(
+        pattern: &Csr,
+        perm: Vec<usize>,
+        border: Option<usize>,
+    ) -> Result<Self, LinalgError> {
         let n = pattern.n() - usize::from(border.is_some());
         let (lower, upper) = widths_under(pattern, &perm, border);
         let bb = BorderedBand::new(n, lower, upper, border.is_some())?;
-        Ok(InterleavedBand { perm, border, bb, b: vec![0.0; n + 1], x: vec![0.0; n + 1] })
+        Ok(InterleavedBand {
+            perm,
+            border,
+            bb,
+            b: vec![0.0; n + 1],
+            x: vec![0.0; n + 1],
+        })
     }
 
     pub fn widths(&self) -> (usize, usize) {
@@ -190,13 +216,21 @@ impl DirectSolver for InterleavedBand {
     fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
         let n = self.bb.band_size();
         for (i, &bi) in b.iter().enumerate() {
-            let k = if Some(i) == self.border { n } else { self.perm[i] };
+            let k = if Some(i) == self.border {
+                n
+            } else {
+                self.perm[i]
+            };
             self.b[k] = bi;
         }
         let len = self.bb.len();
         self.bb.solve(&self.b[..len], &mut self.x[..len])?;
         for (i, xi) in x.iter_mut().enumerate() {
-            *xi = self.x[if Some(i) == self.border { n } else { self.perm[i] }];
+            *xi = self.x[if Some(i) == self.border {
+                n
+            } else {
+                self.perm[i]
+            }];
         }
         Ok(())
     }
@@ -214,10 +248,22 @@ pub struct KluSolver {
 impl KluSolver {
     pub fn new(pattern: &Csr) -> Result<Self, LinalgError> {
         let ctx = Context::new()?;
-        let spec = LinearSolverSpec::Klu { row_ptr: pattern.row_ptr().to_vec(), col_idx: pattern.col_idx().to_vec() };
+        let spec = LinearSolverSpec::Klu {
+            row_ptr: pattern.row_ptr().to_vec(),
+            col_idx: pattern.col_idx().to_vec(),
+        };
         let (matrix, solver) = LinearSolver::for_spec(&ctx, pattern.n(), &spec)?;
-        let (b, x) = (NVector::new(&ctx, pattern.n())?, NVector::new(&ctx, pattern.n())?);
-        Ok(KluSolver { matrix, solver, b, x, _ctx: ctx })
+        let (b, x) = (
+            NVector::new(&ctx, pattern.n())?,
+            NVector::new(&ctx, pattern.n())?,
+        );
+        Ok(KluSolver {
+            matrix,
+            solver,
+            b,
+            x,
+            _ctx: ctx,
+        })
     }
 }
 
@@ -226,7 +272,9 @@ impl DirectSolver for KluSolver {
     /// a zero pivot there as a failure instead of pivoting afresh (seen in growth at rtol
     /// 1e-2, where the steps change the matrix a lot): then factor anew from scratch.
     fn factor(&mut self, a: &Csr) -> Result<(), LinalgError> {
-        let Matrix::Sparse(m) = &mut self.matrix else { unreachable!("made for KLU") };
+        let Matrix::Sparse(m) = &mut self.matrix else {
+            unreachable!("made for KLU")
+        };
         m.copy_values(a.values())?;
         if self.solver.setup(&mut self.matrix).is_ok() {
             return Ok(());
@@ -253,7 +301,15 @@ mod tests {
     fn bordered_band_solves_against_dense() {
         let n = 7;
         let mut bb = BorderedBand::new(n, 1, 2, true).unwrap();
-        let a = |i: usize, j: usize| if i == j { 4.0 + i as f64 } else if (j + 1 == i) || (j == i + 1) || (j == i + 2) { 0.3 * (i + 2 * j) as f64 / 7.0 } else { 0.0 };
+        let a = |i: usize, j: usize| {
+            if i == j {
+                4.0 + i as f64
+            } else if (j + 1 == i) || (j == i + 1) || (j == i + 2) {
+                0.3 * (i + 2 * j) as f64 / 7.0
+            } else {
+                0.0
+            }
+        };
         let c = |i: usize| 0.1 * (i as f64 + 1.0);
         let r = |j: usize| 0.2 * (j as f64).sin();
         bb.fill(|m, col, row, corner| {
@@ -281,7 +337,12 @@ mod tests {
         bb.solve(&b, &mut x).unwrap();
         let expect = full.lu().solve(&nalgebra::DVector::from_vec(b)).unwrap();
         for i in 0..=n {
-            assert!((x[i] - expect[i]).abs() < 1e-13, "{i}: {} vs {}", x[i], expect[i]);
+            assert!(
+                (x[i] - expect[i]).abs() < 1e-13,
+                "{i}: {} vs {}",
+                x[i],
+                expect[i]
+            );
         }
     }
 }

@@ -23,12 +23,21 @@ impl Csr {
         for mut cols in rows {
             cols.sort_unstable();
             cols.dedup();
-            assert!(cols.last().is_none_or(|&c| c < n), "column outside a {n}×{n} pattern");
+            assert!(
+                cols.last().is_none_or(|&c| c < n),
+                "column outside a {n}×{n} pattern"
+            );
             col_idx.extend(cols);
             row_ptr.push(col_idx.len());
         }
         let values = vec![0.0; col_idx.len()];
-        Csr { n, row_ptr, col_idx, values, outside: 0 }
+        Csr {
+            n,
+            row_ptr,
+            col_idx,
+            values,
+            outside: 0,
+        }
     }
 
     pub fn n(&self) -> usize {

@@ -70,10 +70,15 @@ impl SchurSolver {
     pub fn new(pattern: &Csr, n_p: usize, border: bool, how: Reduced) -> Result<Self, LinalgError> {
         let n = pattern.n();
         if n > u32::MAX as usize {
-            return Err(LinalgError::Singular(format!("{n} unknowns are more than this solver indexes")));
+            return Err(LinalgError::Singular(format!(
+                "{n} unknowns are more than this solver indexes"
+            )));
         }
         let n_w = n - n_p - usize::from(border);
-        assert!(n_p % 2 == 0 && n_p + usize::from(border) <= n, "bad partition of {n}: {n_p} block unknowns");
+        assert!(
+            n_p % 2 == 0 && n_p + usize::from(border) <= n,
+            "bad partition of {n}: {n_p} block unknowns"
+        );
         let mut blocks: Vec<Block> = Vec::with_capacity(n_p / 2);
         for k in 0..n_p / 2 {
             let (mut lo, mut hi) = (usize::MAX, 0usize);
@@ -134,7 +139,11 @@ impl SchurSolver {
             Reduced::Band => ReducedSolver::Band(BorderedBand::new(n_w, lower, upper, border)?),
             Reduced::Klu => {
                 let mut rows: Vec<Vec<usize>> = (0..n_w)
-                    .map(|jw| (jw.saturating_sub(lower)..(jw + upper + 1).min(n_w)).chain(border.then_some(n_w)).collect())
+                    .map(|jw| {
+                        (jw.saturating_sub(lower)..(jw + upper + 1).min(n_w))
+                            .chain(border.then_some(n_w))
+                            .collect()
+                    })
                     .collect();
                 if border {
                     rows.push((0..=n_w).collect());
@@ -233,11 +242,20 @@ impl SchurSolver {
             }
         }
         let det = d[0][0] * d[1][1] - d[0][1] * d[1][0];
-        let scale = d[0][0].abs().max(d[1][1].abs()).max(d[0][1].abs()).max(d[1][0].abs());
+        let scale = d[0][0]
+            .abs()
+            .max(d[1][1].abs())
+            .max(d[0][1].abs())
+            .max(d[1][0].abs());
         if !(det.abs() > 1e-14 * scale * scale) {
-            return Err(LinalgError::Singular(format!("pivot block {k} has determinant {det:e}")));
+            return Err(LinalgError::Singular(format!(
+                "pivot block {k} has determinant {det:e}"
+            )));
         }
-        b.inv = [[d[1][1] / det, -d[0][1] / det], [-d[1][0] / det, d[0][0] / det]];
+        b.inv = [
+            [d[1][1] / det, -d[0][1] / det],
+            [-d[1][0] / det, d[0][0] / det],
+        ];
         let w = b.width;
         for t in 0..w {
             let (x0, x1) = (b.x[t], b.x[w + t]);
@@ -245,7 +263,10 @@ impl SchurSolver {
             b.x[w + t] = b.inv[1][0] * x0 + b.inv[1][1] * x1;
         }
         let (x0, x1) = (b.xd[0], b.xd[1]);
-        b.xd = [b.inv[0][0] * x0 + b.inv[0][1] * x1, b.inv[1][0] * x0 + b.inv[1][1] * x1];
+        b.xd = [
+            b.inv[0][0] * x0 + b.inv[0][1] * x1,
+            b.inv[1][0] * x0 + b.inv[1][1] * x1,
+        ];
         Ok(())
     }
 
@@ -266,7 +287,10 @@ impl SchurSolver {
             let (acc, at_d): (&mut [f64], &mut f64) = if is_border {
                 (&mut self.s_row[..], &mut self.s_corner)
             } else {
-                (&mut self.s_rows[jw * width..(jw + 1) * width], &mut self.s_col[jw])
+                (
+                    &mut self.s_rows[jw * width..(jw + 1) * width],
+                    &mut self.s_col[jw],
+                )
             };
             let shift = |c: usize| if is_border { c } else { c + lower - jw };
             let (cols, vals) = a.row(n_p + jw);
@@ -279,7 +303,10 @@ impl SchurSolver {
                     let (b, r) = (&blocks[c / 2], c % 2);
                     if b.width > 0 {
                         let at = shift(b.lo);
-                        for (s, x) in acc[at..at + b.width].iter_mut().zip(&b.x[r * b.width..(r + 1) * b.width]) {
+                        for (s, x) in acc[at..at + b.width]
+                            .iter_mut()
+                            .zip(&b.x[r * b.width..(r + 1) * b.width])
+                        {
                             *s -= v * x;
                         }
                     }
@@ -397,7 +424,11 @@ impl DirectSolver for SchurSolver {
         for (k, blk) in self.blocks.iter().enumerate() {
             for r in 0..2 {
                 let xr = &blk.x[r * blk.width..(r + 1) * blk.width];
-                let dot: f64 = xr.iter().zip(&self.sol[blk.lo..blk.lo + blk.width]).map(|(a, b)| a * b).sum();
+                let dot: f64 = xr
+                    .iter()
+                    .zip(&self.sol[blk.lo..blk.lo + blk.width])
+                    .map(|(a, b)| a * b)
+                    .sum();
                 x[2 * k + r] = self.z[2 * k + r] - dot - blk.xd[r] * xd;
             }
         }
@@ -450,10 +481,19 @@ mod tests {
             }
         }
         let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
-        let expect = dense.clone().lu().solve(&DVector::from_vec(b.clone())).unwrap();
+        let expect = dense
+            .clone()
+            .lu()
+            .solve(&DVector::from_vec(b.clone()))
+            .unwrap();
         let check = |x: &[f64], who: &str| {
             for i in 0..n {
-                assert!((x[i] - expect[i]).abs() < 1e-12, "{who} {i}: {} vs {}", x[i], expect[i]);
+                assert!(
+                    (x[i] - expect[i]).abs() < 1e-12,
+                    "{who} {i}: {} vs {}",
+                    x[i],
+                    expect[i]
+                );
             }
         };
         let mut x = vec![0.0; n];
@@ -487,7 +527,12 @@ mod tests {
         let cp = dense.view((n_p, 0), (n_w + 1, n_p)) * DVector::from_vec(p);
         let expect_w = alg.lu().solve(&(-cp)).unwrap();
         for i in 0..=n_w {
-            assert!((w[i] - expect_w[i]).abs() < 1e-12, "algebraic {i}: {} vs {}", w[i], expect_w[i]);
+            assert!(
+                (w[i] - expect_w[i]).abs() < 1e-12,
+                "algebraic {i}: {} vs {}",
+                w[i],
+                expect_w[i]
+            );
         }
     }
 }

@@ -22,7 +22,10 @@ use sundials_sys::{realtype, N_VGetArrayPointer_Serial, N_VGetLength_Serial, N_V
 /// `v` must be a live serial vector.
 #[inline]
 unsafe fn parts(v: N_Vector) -> (*mut f64, usize) {
-    (N_VGetArrayPointer_Serial(v), N_VGetLength_Serial(v).max(0) as usize)
+    (
+        N_VGetArrayPointer_Serial(v),
+        N_VGetLength_Serial(v).max(0) as usize,
+    )
 }
 
 /// z = a x + b y.
@@ -91,7 +94,12 @@ unsafe extern "C" fn add_const(x: N_Vector, b: realtype, z: N_Vector) {
 
 /// Σ (x w)² over the elements where `keep` holds, in four lanes.
 #[inline]
-unsafe fn weighted_squares(xp: *const f64, wp: *const f64, n: usize, keep: impl Fn(usize) -> bool) -> f64 {
+unsafe fn weighted_squares(
+    xp: *const f64,
+    wp: *const f64,
+    n: usize,
+    keep: impl Fn(usize) -> bool,
+) -> f64 {
     let mut lanes = [0.0f64; 4];
     let full = n / 4 * 4;
     for i in (0..full).step_by(4) {
@@ -140,7 +148,12 @@ unsafe extern "C" fn max_norm(x: N_Vector) -> realtype {
 
 /// z = Σ c_j X_j. z may be X_0 (SUNDIALS allows it): then z = c_0 z + Σ_{j ≥ 1} c_j X_j,
 /// which the element-by-element loop computes correctly as well.
-unsafe extern "C" fn linear_combination(nvec: c_int, c: *mut realtype, xs: *mut N_Vector, z: N_Vector) -> c_int {
+unsafe extern "C" fn linear_combination(
+    nvec: c_int,
+    c: *mut realtype,
+    xs: *mut N_Vector,
+    z: N_Vector,
+) -> c_int {
     let nvec = nvec.max(0) as usize;
     if nvec == 0 {
         return -1;
@@ -159,7 +172,13 @@ unsafe extern "C" fn linear_combination(nvec: c_int, c: *mut realtype, xs: *mut 
 }
 
 /// Z_j = a_j x + Y_j.
-unsafe extern "C" fn scale_add_multi(nvec: c_int, a: *mut realtype, x: N_Vector, ys: *mut N_Vector, zs: *mut N_Vector) -> c_int {
+unsafe extern "C" fn scale_add_multi(
+    nvec: c_int,
+    a: *mut realtype,
+    x: N_Vector,
+    ys: *mut N_Vector,
+    zs: *mut N_Vector,
+) -> c_int {
     let nvec = nvec.max(0) as usize;
     let (xp, n) = parts(x);
     for j in 0..nvec {
@@ -173,7 +192,14 @@ unsafe extern "C" fn scale_add_multi(nvec: c_int, a: *mut realtype, x: N_Vector,
 }
 
 /// Z_j = a X_j + b Y_j.
-unsafe extern "C" fn linear_sum_array(nvec: c_int, a: realtype, xs: *mut N_Vector, b: realtype, ys: *mut N_Vector, zs: *mut N_Vector) -> c_int {
+unsafe extern "C" fn linear_sum_array(
+    nvec: c_int,
+    a: realtype,
+    xs: *mut N_Vector,
+    b: realtype,
+    ys: *mut N_Vector,
+    zs: *mut N_Vector,
+) -> c_int {
     for j in 0..nvec.max(0) as usize {
         linear_sum(a, *xs.add(j), b, *ys.add(j), *zs.add(j));
     }
@@ -181,7 +207,12 @@ unsafe extern "C" fn linear_sum_array(nvec: c_int, a: realtype, xs: *mut N_Vecto
 }
 
 /// Z_j = c_j X_j.
-unsafe extern "C" fn scale_array(nvec: c_int, c: *mut realtype, xs: *mut N_Vector, zs: *mut N_Vector) -> c_int {
+unsafe extern "C" fn scale_array(
+    nvec: c_int,
+    c: *mut realtype,
+    xs: *mut N_Vector,
+    zs: *mut N_Vector,
+) -> c_int {
     for j in 0..nvec.max(0) as usize {
         scale(*c.add(j), *xs.add(j), *zs.add(j));
     }
@@ -197,7 +228,12 @@ unsafe extern "C" fn constant_array(nvec: c_int, c: realtype, zs: *mut N_Vector)
 }
 
 /// nrm_j = √(Σ (X_j W_j)² / n).
-unsafe extern "C" fn wrms_norm_array(nvec: c_int, xs: *mut N_Vector, ws: *mut N_Vector, nrm: *mut realtype) -> c_int {
+unsafe extern "C" fn wrms_norm_array(
+    nvec: c_int,
+    xs: *mut N_Vector,
+    ws: *mut N_Vector,
+    nrm: *mut realtype,
+) -> c_int {
     for j in 0..nvec.max(0) as usize {
         *nrm.add(j) = wrms_norm(*xs.add(j), *ws.add(j));
     }
@@ -205,7 +241,13 @@ unsafe extern "C" fn wrms_norm_array(nvec: c_int, xs: *mut N_Vector, ws: *mut N_
 }
 
 /// nrm_j = √(Σ_{id > 0} (X_j W_j)² / n).
-unsafe extern "C" fn wrms_norm_mask_array(nvec: c_int, xs: *mut N_Vector, ws: *mut N_Vector, id: N_Vector, nrm: *mut realtype) -> c_int {
+unsafe extern "C" fn wrms_norm_mask_array(
+    nvec: c_int,
+    xs: *mut N_Vector,
+    ws: *mut N_Vector,
+    id: N_Vector,
+    nrm: *mut realtype,
+) -> c_int {
     for j in 0..nvec.max(0) as usize {
         *nrm.add(j) = wrms_norm_mask(*xs.add(j), *ws.add(j), id);
     }
@@ -252,16 +294,29 @@ mod tests {
     fn kernels_match_sundials() {
         let ctx = Context::new().unwrap();
         let n = 1013;
-        let data = |k: usize| (0..n).map(|i| ((i * 7 + k * 13) as f64 * 0.37).sin() + 0.1 * k as f64).collect::<Vec<_>>();
+        let data = |k: usize| {
+            (0..n)
+                .map(|i| ((i * 7 + k * 13) as f64 * 0.37).sin() + 0.1 * k as f64)
+                .collect::<Vec<_>>()
+        };
         let mk = |k: usize| NVector::from_slice(&ctx, &data(k)).unwrap();
         let fast = |v: &NVector| unsafe { super::install(v.raw()) };
         let (x, y, w) = (mk(1), mk(2), mk(3));
-        let id = NVector::from_slice(&ctx, &(0..n).map(|i| if i % 3 == 0 { 0.0 } else { 1.0 }).collect::<Vec<_>>()).unwrap();
+        let id = NVector::from_slice(
+            &ctx,
+            &(0..n)
+                .map(|i| if i % 3 == 0 { 0.0 } else { 1.0 })
+                .collect::<Vec<_>>(),
+        )
+        .unwrap();
         let (z_ref, z_fast) = (mk(4), mk(4));
         fast(&z_fast);
         let same = |a: &NVector, b: &NVector, what: &str| {
             for (p, q) in a.as_slice().iter().zip(b.as_slice()) {
-                assert!((p - q).abs() <= 1e-15 * (1.0 + p.abs()), "{what}: {p} vs {q}");
+                assert!(
+                    (p - q).abs() <= 1e-15 * (1.0 + p.abs()),
+                    "{what}: {p} vs {q}"
+                );
             }
         };
         unsafe {
@@ -295,10 +350,24 @@ mod tests {
             same(&z_ref, &z_fast, "const");
             let xf = mk(1);
             fast(&xf);
-            let close = |a: f64, b: f64, what: &str| assert!((a - b).abs() <= 1e-13 * a.abs(), "{what}: {a} vs {b}");
-            close(s::N_VWrmsNorm_Serial(x.raw(), w.raw()), s::N_VWrmsNorm(xf.raw(), w.raw()), "wrms norm");
-            close(s::N_VWrmsNormMask_Serial(x.raw(), w.raw(), id.raw()), s::N_VWrmsNormMask(xf.raw(), w.raw(), id.raw()), "masked wrms norm");
-            close(s::N_VMaxNorm_Serial(x.raw()), s::N_VMaxNorm(xf.raw()), "max norm");
+            let close = |a: f64, b: f64, what: &str| {
+                assert!((a - b).abs() <= 1e-13 * a.abs(), "{what}: {a} vs {b}")
+            };
+            close(
+                s::N_VWrmsNorm_Serial(x.raw(), w.raw()),
+                s::N_VWrmsNorm(xf.raw(), w.raw()),
+                "wrms norm",
+            );
+            close(
+                s::N_VWrmsNormMask_Serial(x.raw(), w.raw(), id.raw()),
+                s::N_VWrmsNormMask(xf.raw(), w.raw(), id.raw()),
+                "masked wrms norm",
+            );
+            close(
+                s::N_VMaxNorm_Serial(x.raw()),
+                s::N_VMaxNorm(xf.raw()),
+                "max norm",
+            );
             // z = Σ c_j X_j with z = X_0 (aliased).
             let mut c = [0.5, -2.0, 3.0];
             let (a0, b0) = (mk(5), mk(5));
@@ -314,8 +383,20 @@ mod tests {
             let mut zs_ref = [z1.raw(), z2.raw()];
             let mut zs_fast = [f1.raw(), f2.raw()];
             let mut a = [1.5, -0.5];
-            s::N_VScaleAddMulti_Serial(2, a.as_mut_ptr(), x.raw(), ys.as_mut_ptr(), zs_ref.as_mut_ptr());
-            s::N_VScaleAddMulti(2, a.as_mut_ptr(), xf.raw(), ys.as_mut_ptr(), zs_fast.as_mut_ptr());
+            s::N_VScaleAddMulti_Serial(
+                2,
+                a.as_mut_ptr(),
+                x.raw(),
+                ys.as_mut_ptr(),
+                zs_ref.as_mut_ptr(),
+            );
+            s::N_VScaleAddMulti(
+                2,
+                a.as_mut_ptr(),
+                xf.raw(),
+                ys.as_mut_ptr(),
+                zs_fast.as_mut_ptr(),
+            );
             same(&z1, &f1, "scale add multi 0");
             same(&z2, &f2, "scale add multi 1");
             // The array forms: Z_j = c_j X_j, Z_j = a X_j + b Y_j, and the norms of the X_j.
@@ -333,8 +414,22 @@ mod tests {
             same(&z1, &g1, "scale array 0");
             same(&z2, &g2, "scale array 1");
             let (mut yr, mut yq) = ([w.raw(), x.raw()], [wf.raw(), xf.raw()]);
-            s::N_VLinearSumVectorArray_Serial(2, 0.7, xr.as_mut_ptr(), -1.3, yr.as_mut_ptr(), zr.as_mut_ptr());
-            s::N_VLinearSumVectorArray(2, 0.7, xq.as_mut_ptr(), -1.3, yq.as_mut_ptr(), zq.as_mut_ptr());
+            s::N_VLinearSumVectorArray_Serial(
+                2,
+                0.7,
+                xr.as_mut_ptr(),
+                -1.3,
+                yr.as_mut_ptr(),
+                zr.as_mut_ptr(),
+            );
+            s::N_VLinearSumVectorArray(
+                2,
+                0.7,
+                xq.as_mut_ptr(),
+                -1.3,
+                yq.as_mut_ptr(),
+                zq.as_mut_ptr(),
+            );
             same(&z1, &g1, "linear sum array 0");
             same(&z2, &g2, "linear sum array 1");
             s::N_VConstVectorArray_Serial(2, 0.25, zr.as_mut_ptr());
@@ -346,9 +441,21 @@ mod tests {
             s::N_VWrmsNormVectorArray(2, xq.as_mut_ptr(), wq.as_mut_ptr(), nq.as_mut_ptr());
             close(nr[0], nq[0], "wrms norm array 0");
             close(nr[1], nq[1], "wrms norm array 1");
-            s::N_VWrmsNormMaskVectorArray_Serial(2, xr.as_mut_ptr(), wr.as_mut_ptr(), id.raw(), nr.as_mut_ptr());
+            s::N_VWrmsNormMaskVectorArray_Serial(
+                2,
+                xr.as_mut_ptr(),
+                wr.as_mut_ptr(),
+                id.raw(),
+                nr.as_mut_ptr(),
+            );
             fast(&id);
-            s::N_VWrmsNormMaskVectorArray(2, xq.as_mut_ptr(), wq.as_mut_ptr(), id.raw(), nq.as_mut_ptr());
+            s::N_VWrmsNormMaskVectorArray(
+                2,
+                xq.as_mut_ptr(),
+                wq.as_mut_ptr(),
+                id.raw(),
+                nq.as_mut_ptr(),
+            );
             close(nr[0], nq[0], "masked wrms norm array 0");
             close(nr[1], nq[1], "masked wrms norm array 1");
         }

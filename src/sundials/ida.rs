@@ -24,22 +24,25 @@ use std::os::raw::{c_int, c_long, c_void};
 use std::rc::Rc;
 
 use sundials_sys::{
-    realtype, IDACalcIC, IDACreate, IDAFree, IDAGetConsistentIC,
-    IDAGetCurrentStep, IDAGetCurrentTime, IDAGetDky, IDAGetLastOrder, IDAGetLastStep,
-    IDAGetNumErrTestFails, IDAGetNumJacEvals, IDAGetNumLinResEvals, IDAGetNumLinSolvSetups,
-    IDAGetNumNonlinSolvConvFails, IDAGetNumNonlinSolvIters, IDAGetNumResEvals, IDAGetNumSteps,
-    IDAInit, IDAReInit, IDASStolerances, IDASVtolerances, IDASetErrHandlerFn, IDASetId,
-    IDASetInitStep, IDASetJacFn, IDASetLinearSolver, IDASetMaxConvFails, IDASetMaxErrTestFails,
-    IDASetMaxNonlinIters, IDASetMaxNumSteps, IDASetMaxOrd, IDASetMaxStep, IDASetNonlinConvCoef,
-    IDASetStopTime, IDASetSuppressAlg, IDASetUserData, IDASolve,
-    N_Vector, SUNLinSolFree, SUNLinSolFreeEmpty, SUNLinSolNewEmpty, SUNLinearSolver,
-    SUNLinearSolver_ID, SUNLinearSolver_ID_SUNLINEARSOLVER_CUSTOM, SUNLinearSolver_Type,
+    realtype, IDACalcIC, IDACreate, IDAFree, IDAGetConsistentIC, IDAGetCurrentStep,
+    IDAGetCurrentTime, IDAGetDky, IDAGetLastOrder, IDAGetLastStep, IDAGetNumErrTestFails,
+    IDAGetNumJacEvals, IDAGetNumLinResEvals, IDAGetNumLinSolvSetups, IDAGetNumNonlinSolvConvFails,
+    IDAGetNumNonlinSolvIters, IDAGetNumResEvals, IDAGetNumSteps, IDAInit, IDAReInit,
+    IDASStolerances, IDASVtolerances, IDASetErrHandlerFn, IDASetId, IDASetInitStep, IDASetJacFn,
+    IDASetLinearSolver, IDASetMaxConvFails, IDASetMaxErrTestFails, IDASetMaxNonlinIters,
+    IDASetMaxNumSteps, IDASetMaxOrd, IDASetMaxStep, IDASetNonlinConvCoef, IDASetStopTime,
+    IDASetSuppressAlg, IDASetUserData, IDASolve, N_Vector, SUNLinSolFree, SUNLinSolFreeEmpty,
+    SUNLinSolNewEmpty, SUNLinearSolver, SUNLinearSolver_ID,
+    SUNLinearSolver_ID_SUNLINEARSOLVER_CUSTOM, SUNLinearSolver_Type,
     SUNLinearSolver_Type_SUNLINEARSOLVER_DIRECT, SUNMatDestroy, SUNMatFreeEmpty, SUNMatNewEmpty,
     SUNMatrix, SUNMatrix_ID, SUNMatrix_ID_SUNMATRIX_CUSTOM, IDA_NORMAL, IDA_ONE_STEP,
     IDA_YA_YDP_INIT, SUNLS_PACKAGE_FAIL_REC, SUNLS_PACKAGE_FAIL_UNREC, SUNLS_SUCCESS,
 };
 
-use super::callback::{self, counter, error_handler, CallbackError, CallbackResult, CallbackState, CountGetter, ErrorLog, RawBox, RealGetter};
+use super::callback::{
+    self, counter, error_handler, CallbackError, CallbackResult, CallbackState, CountGetter,
+    ErrorLog, RawBox, RealGetter,
+};
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
 use super::linsol::{LinearSolver, LinearSolverSpec};
@@ -56,7 +59,14 @@ pub trait DaeSystem {
     /// M = ∂F/∂y + cj ∂F/∂y' at (t, y, y'), r = F(t, y, y'). Called from IDA's Jacobian
     /// callback when IDA decides to refresh its Newton matrix. Recoverable makes IDA retry
     /// (a smaller step, or in [`Ida::calc_ic`] a smaller cj).
-    fn linear_setup(&mut self, _t: f64, _cj: f64, _y: &[f64], _yp: &[f64], _r: &[f64]) -> CallbackResult {
+    fn linear_setup(
+        &mut self,
+        _t: f64,
+        _cj: f64,
+        _y: &[f64],
+        _yp: &[f64],
+        _r: &[f64],
+    ) -> CallbackResult {
         Err(CallbackError::Fatal("no linear setup".into()))
     }
 
@@ -71,7 +81,15 @@ pub trait DaeSystem {
     /// Dense/Band with `user_jacobian: true`: fill the structural entries of
     /// M = ∂F/∂y + cj ∂F/∂y' (IDALsJacFn); entries not set are zero (the layer zeroes the
     /// matrix first), and writes outside the band are an error.
-    fn jacobian(&mut self, _t: f64, _cj: f64, _y: &[f64], _yp: &[f64], _r: &[f64], _jac: JacobianMatrix<'_>) -> CallbackResult {
+    fn jacobian(
+        &mut self,
+        _t: f64,
+        _cj: f64,
+        _y: &[f64],
+        _yp: &[f64],
+        _r: &[f64],
+        _jac: JacobianMatrix<'_>,
+    ) -> CallbackResult {
         Err(CallbackError::Fatal("no Jacobian".into()))
     }
 }
@@ -86,7 +104,11 @@ pub enum IdaLinearSolver {
     Dense { user_jacobian: bool },
     /// Band LU (bandwidths clamped to n − 1) with the user's Jacobian or IDA's band
     /// difference quotients.
-    Band { upper: usize, lower: usize, user_jacobian: bool },
+    Band {
+        upper: usize,
+        lower: usize,
+        user_jacobian: bool,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -226,7 +248,10 @@ impl Drop for TokenMatrix {
 enum Linear {
     Direct(LinearSolver),
     // Field order = drop order: the solver, then its matrix.
-    Custom { solver: CustomSolver, token: TokenMatrix },
+    Custom {
+        solver: CustomSolver,
+        token: TokenMatrix,
+    },
 }
 
 impl Linear {
@@ -278,7 +303,10 @@ impl<S: DaeSystem> Ida<S> {
             return invalid("IDA needs at least one unknown".into());
         }
         if yp0.len() != n {
-            return invalid(format!("yp0 has length {}, expected {n} (the length of y0)", yp0.len()));
+            return invalid(format!(
+                "yp0 has length {}, expected {n} (the length of y0)",
+                yp0.len()
+            ));
         }
         if !t0.is_finite() {
             return invalid(format!("t0 = {t0} is not finite"));
@@ -303,12 +331,20 @@ impl<S: DaeSystem> Ida<S> {
                 (Some(m), Linear::Direct(ls))
             }
             IdaLinearSolver::Band { upper, lower, .. } => {
-                let spec = LinearSolverSpec::Band { upper: *upper, lower: *lower };
+                let spec = LinearSolverSpec::Band {
+                    upper: *upper,
+                    lower: *lower,
+                };
                 let (m, ls) = LinearSolver::for_spec(&ctx, n, &spec)?;
                 (Some(m), Linear::Direct(ls))
             }
         };
-        let shared = RawBox::new(Shared { system, matrix, callbacks: CallbackState::default(), scratch: vec![0.0; n] });
+        let shared = RawBox::new(Shared {
+            system,
+            matrix,
+            callbacks: CallbackState::default(),
+            scratch: vec![0.0; n],
+        });
         let log = RawBox::new(ErrorLog::default());
         // SAFETY: ctx is live.
         let raw = unsafe { IDACreate(ctx.raw()) };
@@ -316,7 +352,17 @@ impl<S: DaeSystem> Ida<S> {
             return Err(SundialsError::NullHandle("IDACreate"));
         }
         let has_id = options.id.is_some();
-        let mut ida = Ida { mem: IdaMem(raw), linsol, shared, log, y, yp, n, has_id, _ctx: ctx };
+        let mut ida = Ida {
+            mem: IdaMem(raw),
+            linsol,
+            shared,
+            log,
+            y,
+            yp,
+            n,
+            has_id,
+            _ctx: ctx,
+        };
         if let Linear::Custom { solver, .. } = &ida.linsol {
             // SAFETY: the solver is live and ours; its content is read only by
             // custom_solve_trampoline, and `shared` outlives the solver (field order of Ida).
@@ -326,7 +372,12 @@ impl<S: DaeSystem> Ida<S> {
         Ok(ida)
     }
 
-    fn init(&mut self, t0: f64, linear: &IdaLinearSolver, options: &IdaOptions) -> Result<(), SundialsError> {
+    fn init(
+        &mut self,
+        t0: f64,
+        linear: &IdaLinearSolver,
+        options: &IdaOptions,
+    ) -> Result<(), SundialsError> {
         use FlagFamily::{Ida, IdaLs};
         let mem = self.mem.0;
         let log = self.log.as_void();
@@ -336,72 +387,114 @@ impl<S: DaeSystem> Ida<S> {
         let a = match &self.linsol {
             Linear::Custom { token, .. } => token.0,
             // SAFETY: the matrix is only read for its handle.
-            Linear::Direct(_) => unsafe { self.shared.get().matrix.as_ref().map_or(std::ptr::null_mut(), |m| m.raw()) },
+            Linear::Direct(_) => unsafe {
+                self.shared
+                    .get()
+                    .matrix
+                    .as_ref()
+                    .map_or(std::ptr::null_mut(), |m| m.raw())
+            },
         };
         // SAFETY (all calls): `mem` is live IDA memory; the error log, the user data, the
         // vectors, linear solver and matrix all outlive it (field order). IDA copies y0, yp0,
         // the absolute tolerances and the id vector. The user data is set before the Jacobian
         // function, which IDASetJacFn binds to the user data current at the call.
-        self.log.call("IDASetErrHandlerFn", Ida, || unsafe { IDASetErrHandlerFn(mem, Some(error_handler), log) })?;
-        self.log.call("IDASetUserData", Ida, || unsafe { IDASetUserData(mem, data) })?;
-        self.log.call("IDAInit", Ida, || unsafe { IDAInit(mem, Some(residual_trampoline::<S>), t0, y0, yp0) })?;
+        self.log.call("IDASetErrHandlerFn", Ida, || unsafe {
+            IDASetErrHandlerFn(mem, Some(error_handler), log)
+        })?;
+        self.log.call("IDASetUserData", Ida, || unsafe {
+            IDASetUserData(mem, data)
+        })?;
+        self.log.call("IDAInit", Ida, || unsafe {
+            IDAInit(mem, Some(residual_trampoline::<S>), t0, y0, yp0)
+        })?;
         match &options.atol_vector {
-            None => self.log.call("IDASStolerances", Ida, || unsafe { IDASStolerances(mem, options.rtol, options.atol) })?,
+            None => self.log.call("IDASStolerances", Ida, || unsafe {
+                IDASStolerances(mem, options.rtol, options.atol)
+            })?,
             Some(atol) => {
                 let atol = NVector::from_slice(&self._ctx, atol)?;
-                self.log.call("IDASVtolerances", Ida, || unsafe { IDASVtolerances(mem, options.rtol, atol.raw()) })?;
+                self.log.call("IDASVtolerances", Ida, || unsafe {
+                    IDASVtolerances(mem, options.rtol, atol.raw())
+                })?;
             }
         }
-        self.log.call("IDASetLinearSolver", IdaLs, || unsafe { IDASetLinearSolver(mem, ls, a) })?;
+        self.log.call("IDASetLinearSolver", IdaLs, || unsafe {
+            IDASetLinearSolver(mem, ls, a)
+        })?;
         let jac: sundials_sys::IDALsJacFn = match *linear {
             IdaLinearSolver::Custom => Some(linear_setup_trampoline::<S>),
-            IdaLinearSolver::Dense { user_jacobian: true } | IdaLinearSolver::Band { user_jacobian: true, .. } => {
-                Some(jacobian_trampoline::<S>)
+            IdaLinearSolver::Dense {
+                user_jacobian: true,
             }
+            | IdaLinearSolver::Band {
+                user_jacobian: true,
+                ..
+            } => Some(jacobian_trampoline::<S>),
             _ => None,
         };
         if jac.is_some() {
-            self.log.call("IDASetJacFn", IdaLs, || unsafe { IDASetJacFn(mem, jac) })?;
+            self.log
+                .call("IDASetJacFn", IdaLs, || unsafe { IDASetJacFn(mem, jac) })?;
         }
         if let Some(id) = &options.id {
             let id = NVector::from_slice(&self._ctx, id)?;
-            self.log.call("IDASetId", Ida, || unsafe { IDASetId(mem, id.raw()) })?;
+            self.log
+                .call("IDASetId", Ida, || unsafe { IDASetId(mem, id.raw()) })?;
         }
         if options.suppress_algebraic {
-            self.log.call("IDASetSuppressAlg", Ida, || unsafe { IDASetSuppressAlg(mem, 1) })?;
+            self.log.call("IDASetSuppressAlg", Ida, || unsafe {
+                IDASetSuppressAlg(mem, 1)
+            })?;
         }
         let long = |n: usize| c_long::try_from(n).unwrap_or(c_long::MAX);
-        self.log.call("IDASetMaxNumSteps", Ida, || unsafe { IDASetMaxNumSteps(mem, long(options.max_steps)) })?;
+        self.log.call("IDASetMaxNumSteps", Ida, || unsafe {
+            IDASetMaxNumSteps(mem, long(options.max_steps))
+        })?;
         let q = to_int("max_order", options.max_order)?;
-        self.log.call("IDASetMaxOrd", Ida, || unsafe { IDASetMaxOrd(mem, q) })?;
+        self.log
+            .call("IDASetMaxOrd", Ida, || unsafe { IDASetMaxOrd(mem, q) })?;
         if let Some(h) = options.initial_step {
-            self.log.call("IDASetInitStep", Ida, || unsafe { IDASetInitStep(mem, h) })?;
+            self.log
+                .call("IDASetInitStep", Ida, || unsafe { IDASetInitStep(mem, h) })?;
         }
         if let Some(h) = options.max_step {
-            self.log.call("IDASetMaxStep", Ida, || unsafe { IDASetMaxStep(mem, h) })?;
+            self.log
+                .call("IDASetMaxStep", Ida, || unsafe { IDASetMaxStep(mem, h) })?;
         }
         if let Some(t) = options.stop_time {
-            self.log.call("IDASetStopTime", Ida, || unsafe { IDASetStopTime(mem, t) })?;
+            self.log
+                .call("IDASetStopTime", Ida, || unsafe { IDASetStopTime(mem, t) })?;
         }
         if let Some(k) = options.max_error_test_failures {
             let k = to_int("max_error_test_failures", k)?;
-            self.log.call("IDASetMaxErrTestFails", Ida, || unsafe { IDASetMaxErrTestFails(mem, k) })?;
+            self.log.call("IDASetMaxErrTestFails", Ida, || unsafe {
+                IDASetMaxErrTestFails(mem, k)
+            })?;
         }
         if let Some(k) = options.max_convergence_failures {
             let k = to_int("max_convergence_failures", k)?;
-            self.log.call("IDASetMaxConvFails", Ida, || unsafe { IDASetMaxConvFails(mem, k) })?;
+            self.log.call("IDASetMaxConvFails", Ida, || unsafe {
+                IDASetMaxConvFails(mem, k)
+            })?;
         }
         if let Some(k) = options.max_nonlinear_iterations {
             // Needs the nonlinear solver, which IDAInit creates.
             let k = to_int("max_nonlinear_iterations", k)?;
-            self.log.call("IDASetMaxNonlinIters", Ida, || unsafe { IDASetMaxNonlinIters(mem, k) })?;
+            self.log.call("IDASetMaxNonlinIters", Ida, || unsafe {
+                IDASetMaxNonlinIters(mem, k)
+            })?;
         }
         if let Some(c) = options.nonlinear_convergence_coefficient {
-            self.log.call("IDASetNonlinConvCoef", Ida, || unsafe { IDASetNonlinConvCoef(mem, c) })?;
+            self.log.call("IDASetNonlinConvCoef", Ida, || unsafe {
+                IDASetNonlinConvCoef(mem, c)
+            })?;
         }
         if let Some(d) = options.delta_cj_setup {
             // SAFETY: mem is live.
-            self.log.call("IDASetDeltaCjLSetup", Ida, || unsafe { sundials_sys::IDASetDeltaCjLSetup(mem, d) })?;
+            self.log.call("IDASetDeltaCjLSetup", Ida, || unsafe {
+                sundials_sys::IDASetDeltaCjLSetup(mem, d)
+            })?;
         }
         Ok(())
     }
@@ -416,7 +509,12 @@ impl<S: DaeSystem> Ida<S> {
     /// On failure `y` and `yp` hold the state at the last successful step (the initial
     /// values if there was none) and [`stats`](Self::stats)`().current_time` says where that
     /// was.
-    pub fn advance_to(&mut self, tout: f64, y: &mut [f64], yp: &mut [f64]) -> Result<f64, SundialsError> {
+    pub fn advance_to(
+        &mut self,
+        tout: f64,
+        y: &mut [f64],
+        yp: &mut [f64],
+    ) -> Result<f64, SundialsError> {
         self.run(tout, y, yp, IDA_NORMAL)
     }
 
@@ -428,12 +526,23 @@ impl<S: DaeSystem> Ida<S> {
 
     fn check_lengths(&self, y: &[f64], yp: &[f64]) -> Result<(), SundialsError> {
         if y.len() != self.n || yp.len() != self.n {
-            return invalid(format!("y and yp have lengths {} and {}, expected {}", y.len(), yp.len(), self.n));
+            return invalid(format!(
+                "y and yp have lengths {} and {}, expected {}",
+                y.len(),
+                yp.len(),
+                self.n
+            ));
         }
         Ok(())
     }
 
-    fn run(&mut self, tout: f64, y: &mut [f64], yp: &mut [f64], itask: c_int) -> Result<f64, SundialsError> {
+    fn run(
+        &mut self,
+        tout: f64,
+        y: &mut [f64],
+        yp: &mut [f64],
+        itask: c_int,
+    ) -> Result<f64, SundialsError> {
         self.check_lengths(y, yp)?;
         if !tout.is_finite() {
             return invalid(format!("tout = {tout} is not finite"));
@@ -442,7 +551,16 @@ impl<S: DaeSystem> Ida<S> {
         let mut tret: realtype = f64::NAN;
         // SAFETY: every handle is live; during the call the only references to the shared
         // state and the log are the short-lived ones the trampolines create.
-        let flag = unsafe { IDASolve(self.mem.0, tout, &mut tret, self.y.raw(), self.yp.raw(), itask) };
+        let flag = unsafe {
+            IDASolve(
+                self.mem.0,
+                tout,
+                &mut tret,
+                self.y.raw(),
+                self.yp.raw(),
+                itask,
+            )
+        };
         if flag < 0 {
             // IDA_TOO_MUCH_WORK in IDA_NORMAL mode leaves the output vectors as they were;
             // interpolate the last step's end instead (exact there: the sum stops at phi[0]).
@@ -450,7 +568,11 @@ impl<S: DaeSystem> Ida<S> {
         }
         y.copy_from_slice(self.y.as_slice());
         yp.copy_from_slice(self.yp.as_slice());
-        let function = if itask == IDA_NORMAL { "IDASolve" } else { "IDASolve (one step)" };
+        let function = if itask == IDA_NORMAL {
+            "IDASolve"
+        } else {
+            "IDASolve (one step)"
+        };
         self.finish(function, flag)?;
         Ok(tret)
     }
@@ -484,7 +606,11 @@ impl<S: DaeSystem> Ida<S> {
         // SAFETY: IDA has returned; no callback is running.
         let (fatal, recoverable, logged) = unsafe {
             let shared = self.shared.get_mut();
-            (shared.callbacks.fatal.take(), shared.callbacks.last_recoverable.take(), self.log.get().last_message())
+            (
+                shared.callbacks.fatal.take(),
+                shared.callbacks.last_recoverable.take(),
+                self.log.get().last_message(),
+            )
         };
         if flag >= 0 {
             return Ok(());
@@ -492,7 +618,9 @@ impl<S: DaeSystem> Ida<S> {
         let name = FlagFamily::Ida.name(flag);
         if let Some(m) = fatal {
             let t = self.stats().current_time;
-            return Err(SundialsError::Callback(format!("{m} ({function} stopped with {name} at t = {t:e})")));
+            return Err(SundialsError::Callback(format!(
+                "{m} ({function} stopped with {name} at t = {t:e})"
+            )));
         }
         let mut message = logged.unwrap_or_else(|| FlagFamily::Ida.describe(flag).1.to_string());
         if let Some(r) = recoverable {
@@ -512,7 +640,12 @@ impl<S: DaeSystem> Ida<S> {
     /// Only before the first step, and only with options.id. IDA's Newton iteration here
     /// stops at 0.0033 in the weighted norm, so the result is consistent to a fraction of
     /// the tolerances, not to round-off.
-    pub fn calc_ic(&mut self, tout1: f64, y: &mut [f64], yp: &mut [f64]) -> Result<(), SundialsError> {
+    pub fn calc_ic(
+        &mut self,
+        tout1: f64,
+        y: &mut [f64],
+        yp: &mut [f64],
+    ) -> Result<(), SundialsError> {
         self.check_lengths(y, yp)?;
         if !self.has_id {
             return invalid("calc_ic needs options.id (which components are differential)".into());
@@ -530,7 +663,10 @@ impl<S: DaeSystem> Ida<S> {
         self.finish("IDACalcIC", flag)?;
         let (mem, yv, ypv) = (self.mem.0, self.y.raw(), self.yp.raw());
         // SAFETY: mem, yv and ypv are live; IDAGetConsistentIC copies into them.
-        self.log.call("IDAGetConsistentIC", FlagFamily::Ida, || unsafe { IDAGetConsistentIC(mem, yv, ypv) })?;
+        self.log
+            .call("IDAGetConsistentIC", FlagFamily::Ida, || unsafe {
+                IDAGetConsistentIC(mem, yv, ypv)
+            })?;
         y.copy_from_slice(self.y.as_slice());
         yp.copy_from_slice(self.yp.as_slice());
         Ok(())
@@ -542,7 +678,12 @@ impl<S: DaeSystem> Ida<S> {
     /// [`advance_to`](Self::advance_to), [`step`](Self::step) or [`calc_ic`](Self::calc_ic).
     pub fn reinit(&mut self, t0: f64, y0: &[f64], yp0: &[f64]) -> Result<(), SundialsError> {
         if y0.len() != self.n || yp0.len() != self.n {
-            return invalid(format!("y0 and yp0 have lengths {} and {}, expected {}", y0.len(), yp0.len(), self.n));
+            return invalid(format!(
+                "y0 and yp0 have lengths {} and {}, expected {}",
+                y0.len(),
+                yp0.len(),
+                self.n
+            ));
         }
         if !t0.is_finite() {
             return invalid(format!("t0 = {t0} is not finite"));
@@ -551,7 +692,9 @@ impl<S: DaeSystem> Ida<S> {
         self.yp.as_mut_slice().copy_from_slice(yp0);
         let (mem, y, yp) = (self.mem.0, self.y.raw(), self.yp.raw());
         // SAFETY: mem, y and yp are live; IDA copies y and yp.
-        self.log.call("IDAReInit", FlagFamily::Ida, || unsafe { IDAReInit(mem, t0, y, yp) })
+        self.log.call("IDAReInit", FlagFamily::Ida, || unsafe {
+            IDAReInit(mem, t0, y, yp)
+        })
     }
 
     /// Do not step past `t` (IDASetStopTime): [`advance_to`](Self::advance_to) and
@@ -565,7 +708,9 @@ impl<S: DaeSystem> Ida<S> {
         }
         let mem = self.mem.0;
         // SAFETY: mem is live.
-        self.log.call("IDASetStopTime", FlagFamily::Ida, || unsafe { IDASetStopTime(mem, t) })
+        self.log.call("IDASetStopTime", FlagFamily::Ida, || unsafe {
+            IDASetStopTime(mem, t)
+        })
     }
 
     /// Dense output of the last step: y at any t within it (IDAGetDky, k = 0). A t outside
@@ -585,20 +730,36 @@ impl<S: DaeSystem> Ida<S> {
     /// asks for the WRMS norm of these to be at most 1. What limits the step shows here.
     pub fn weighted_local_errors(&self, out: &mut [f64]) -> Result<(), SundialsError> {
         if out.len() != self.n {
-            return invalid(format!("output has length {}, expected {}", out.len(), self.n));
+            return invalid(format!(
+                "output has length {}, expected {}",
+                out.len(),
+                self.n
+            ));
         }
         let ctx = &self._ctx;
         let mut w = NVector::new(ctx, self.n)?;
         let mut e = NVector::new(ctx, self.n)?;
         let mem = self.mem.0;
         // SAFETY: mem, w and e are live; the getters only copy into the vectors.
-        let flags = unsafe { (sundials_sys::IDAGetErrWeights(mem, w.raw()), sundials_sys::IDAGetEstLocalErrors(mem, e.raw())) };
-        for (name, flag) in [("IDAGetErrWeights", flags.0), ("IDAGetEstLocalErrors", flags.1)] {
+        let flags = unsafe {
+            (
+                sundials_sys::IDAGetErrWeights(mem, w.raw()),
+                sundials_sys::IDAGetEstLocalErrors(mem, e.raw()),
+            )
+        };
+        for (name, flag) in [
+            ("IDAGetErrWeights", flags.0),
+            ("IDAGetEstLocalErrors", flags.1),
+        ] {
             if flag != 0 {
                 return Err(flag_error(name, flag, FlagFamily::Ida, None));
             }
         }
-        for ((o, ei), wi) in out.iter_mut().zip(e.as_mut_slice().iter()).zip(w.as_mut_slice().iter()) {
+        for ((o, ei), wi) in out
+            .iter_mut()
+            .zip(e.as_mut_slice().iter())
+            .zip(w.as_mut_slice().iter())
+        {
             *o = (ei * wi).abs();
         }
         Ok(())
@@ -606,7 +767,11 @@ impl<S: DaeSystem> Ida<S> {
 
     fn dky(&self, t: f64, k: c_int, out: &mut [f64]) -> Result<(), SundialsError> {
         if out.len() != self.n {
-            return invalid(format!("output has length {}, expected {}", out.len(), self.n));
+            return invalid(format!(
+                "output has length {}, expected {}",
+                out.len(),
+                self.n
+            ));
         }
         // IDAGetDky 6.4 refuses only a t before the last step and extrapolates beyond its
         // end without complaint; refuse that too, as CVODE does, with IDA's fuzz and message.
@@ -618,7 +783,12 @@ impl<S: DaeSystem> Ida<S> {
                 "IDAGetDky: Illegal value for t. t = {t} is not between tcur - hu = {} and tcur = {tn}.",
                 tn - s.last_step
             );
-            return Err(flag_error("IDAGetDky", sundials_sys::IDA_BAD_T, FlagFamily::Ida, Some(message)));
+            return Err(flag_error(
+                "IDAGetDky",
+                sundials_sys::IDA_BAD_T,
+                FlagFamily::Ida,
+                Some(message),
+            ));
         }
         let mem = self.mem.0;
         // SAFETY: mem and the borrowed vector are live; IDAGetDky calls no user callback.
@@ -712,7 +882,10 @@ impl Linear {
 fn validate(n: usize, o: &IdaOptions) -> Result<(), SundialsError> {
     let nonneg = |x: f64| x >= 0.0 && x.is_finite();
     if !nonneg(o.rtol) || !nonneg(o.atol) {
-        return invalid(format!("rtol and atol must be finite and ≥ 0, got {} and {}", o.rtol, o.atol));
+        return invalid(format!(
+            "rtol and atol must be finite and ≥ 0, got {} and {}",
+            o.rtol, o.atol
+        ));
     }
     if let Some(v) = &o.atol_vector {
         if v.len() != n {
@@ -726,7 +899,10 @@ fn validate(n: usize, o: &IdaOptions) -> Result<(), SundialsError> {
         return invalid("max_steps must be ≥ 1".into());
     }
     if !(1..=5).contains(&o.max_order) {
-        return invalid(format!("max_order must be 1 ..= 5 for BDF, got {}", o.max_order));
+        return invalid(format!(
+            "max_order must be 1 ..= 5 for BDF, got {}",
+            o.max_order
+        ));
     }
     if let Some(h) = o.initial_step {
         if !(h.is_finite() && h != 0.0) {
@@ -751,20 +927,30 @@ fn validate(n: usize, o: &IdaOptions) -> Result<(), SundialsError> {
             // IDA itself only refuses negative entries (in IDACalcIC); anything but 0 and 1
             // would silently mean "differential" to some tests and not to others.
             if let Some(k) = id.iter().position(|&x| x != 0.0 && x != 1.0) {
-                return invalid(format!("id[{k}] = {} must be 1.0 (differential) or 0.0 (algebraic)", id[k]));
+                return invalid(format!(
+                    "id[{k}] = {} must be 1.0 (differential) or 0.0 (algebraic)",
+                    id[k]
+                ));
             }
         }
         None if o.suppress_algebraic => {
-            return invalid("suppress_algebraic needs options.id (which components are algebraic)".into());
+            return invalid(
+                "suppress_algebraic needs options.id (which components are algebraic)".into(),
+            );
         }
         None => {}
     }
-    if o.max_error_test_failures == Some(0) || o.max_convergence_failures == Some(0) || o.max_nonlinear_iterations == Some(0) {
+    if o.max_error_test_failures == Some(0)
+        || o.max_convergence_failures == Some(0)
+        || o.max_nonlinear_iterations == Some(0)
+    {
         return invalid("max_error_test_failures, max_convergence_failures and max_nonlinear_iterations must be ≥ 1".into());
     }
     if let Some(c) = o.nonlinear_convergence_coefficient {
         if !(c > 0.0 && c.is_finite()) {
-            return invalid(format!("nonlinear_convergence_coefficient must be positive, got {c}"));
+            return invalid(format!(
+                "nonlinear_convergence_coefficient must be positive, got {c}"
+            ));
         }
     }
     if let Some(d) = o.delta_cj_setup {
@@ -788,7 +974,9 @@ unsafe extern "C" fn residual_trampoline<S: DaeSystem>(
     // distinct live serial vectors of length n, y and yp only read, r only written.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let (y, yp, r) = unsafe { (nvector::slice(y), nvector::slice(yp), nvector::slice_mut(r)) };
-    let Shared { system, callbacks, .. } = shared;
+    let Shared {
+        system, callbacks, ..
+    } = shared;
     callbacks.guard("residual", || system.residual(t, y, yp, r))
 }
 
@@ -809,7 +997,12 @@ unsafe extern "C" fn jacobian_trampoline<S: DaeSystem>(
     // SAFETY: as in residual_trampoline; y, yp and r are live and only read.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let (y, yp, r) = unsafe { (nvector::slice(y), nvector::slice(yp), nvector::slice(r)) };
-    let Shared { system, matrix, callbacks, .. } = shared;
+    let Shared {
+        system,
+        matrix,
+        callbacks,
+        ..
+    } = shared;
     let Some(matrix) = matrix.as_mut().filter(|m| m.raw() == jac) else {
         return callbacks.fail("IDA passed a Jacobian matrix this layer did not create".into());
     };
@@ -844,7 +1037,9 @@ unsafe extern "C" fn linear_setup_trampoline<S: DaeSystem>(
     // SAFETY: as in jacobian_trampoline.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let (y, yp, r) = unsafe { (nvector::slice(y), nvector::slice(yp), nvector::slice(r)) };
-    let Shared { system, callbacks, .. } = shared;
+    let Shared {
+        system, callbacks, ..
+    } = shared;
     callbacks.guard("linear_setup", || system.linear_setup(t, cj, y, yp, r))
 }
 
@@ -862,7 +1057,12 @@ unsafe extern "C" fn custom_solve_trampoline<S: DaeSystem>(
     // b is only read and x only written; if they are the same vector, b is copied to the
     // scratch buffer first so the slices never alias.
     let shared = unsafe { &mut *((*ls).content as *mut Shared<S>) };
-    let Shared { system, callbacks, scratch, .. } = shared;
+    let Shared {
+        system,
+        callbacks,
+        scratch,
+        ..
+    } = shared;
     let out = unsafe { nvector::slice_mut(x) };
     let input: &[f64] = if x == b {
         scratch.copy_from_slice(out);
