@@ -3,7 +3,7 @@
 //! Data flows one way: a scene is read ([`scene`]), the physics is assembled ([`model`]),
 //! the material nodes are laid ([`mesh`]), the equations are discretised and solved
 //! ([`bvp`]) through a thin safe layer over SUNDIALS ([`sundials`]), and results are
-//! written ([`output`]). The model is described in MODEL.md, whose sections the module
+//! written ([`output`]). The model is described in docs/MODEL.md, whose sections the module
 //! comments cite.
 
 pub mod bvp;

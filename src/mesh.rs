@@ -1,4 +1,4 @@
-//! The material nodes Σ_i on [ε, L] (MODEL.md §3–4).
+//! The material nodes Σ_i on [ε, L] (docs/MODEL.md §3–4).
 //!
 //! `uniform` nodes are spread evenly, so ladders N = 101, 201, 401, … are nested. On top:
 //! - the material breakpoints (πR0/2, and a, b with fibres) become nodes, so that data

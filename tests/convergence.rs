@@ -1,6 +1,6 @@
 //! Observed orders on the non-uniform shell with fibres (D = 200): the largest nodal error,
 //! against a Richardson extrapolation of the finest pair, must fall at order 2 (trapezoid)
-//! and 4 (Hermite–Simpson), including the nodes next to the pole (MODEL.md §3, trap).
+//! and 4 (Hermite–Simpson), including the nodes next to the pole (docs/MODEL.md §3, trap).
 
 mod common;
 use common::*;
@@ -79,7 +79,7 @@ fn assert_orders(name: &str, errors: &[f64], order: f64, floor: f64) {
 
 /// The pole nodes on their own: over the rungs whose error stands above `floor`, the error
 /// falls at an average order of at least p − 0.5. Without the pole grading a uniform mesh
-/// gives order ~1 here for Hermite–Simpson (MODEL.md §3, trap), which this rejects.
+/// gives order ~1 here for Hermite–Simpson (docs/MODEL.md §3, trap), which this rejects.
 fn assert_pole_order(name: &str, errors: &[f64], order: f64, floor: f64) {
     let last = errors.iter().rposition(|&e| e > floor).expect("an error above round-off");
     assert!(last >= 1, "{name}: too few rungs above round-off ({})", sci(errors));

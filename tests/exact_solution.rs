@@ -1,4 +1,4 @@
-//! MODEL.md §7: the uniformly inflated sphere solves the continuous problem exactly, so the
+//! docs/MODEL.md §7: the uniformly inflated sphere solves the continuous problem exactly, so the
 //! discrete solutions must converge to it at the schemes' orders, down to round-off.
 
 mod common;

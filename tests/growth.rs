@@ -1,4 +1,4 @@
-//! Growth in time (MODEL.md §5–6): the implicit-function Jacobian product, CVODE against
+//! Growth in time (docs/MODEL.md §5–6): the implicit-function Jacobian product, CVODE against
 //! the published explicit Euler, monotone growth, and what a failed run keeps.
 
 use eyeshell::growth::system::GrowthSystem;

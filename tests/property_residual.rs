@@ -1,4 +1,4 @@
-//! MODEL.md §7 as a property of the discrete equations themselves: at the exact solution (the
+//! docs/MODEL.md §7 as a property of the discrete equations themselves: at the exact solution (the
 //! uniformly inflated sphere) the residual of every interval row is the scheme's local
 //! truncation error, O(h^{p+1}), for every parameter set where the exact solution applies;
 //! the pole and cornea rows vanish to O(ε³) or to round-off.
@@ -14,7 +14,7 @@ use eyeshell::model::params::{Params, Scheme, SolverSettings};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 
-/// The exact unknowns (κ, r, θ, q_s, t_s) of MODEL.md §7 at every node of `disc`'s mesh.
+/// The exact unknowns (κ, r, θ, q_s, t_s) of docs/MODEL.md §7 at every node of `disc`'s mesh.
 fn exact_state(p: &Params, disc: &Discretisation) -> Vec<f64> {
     let alpha = stretch_by_bisection(p);
     let ts = 2.0 * p.h0 * p.c * (1.0 - alpha.powi(-6));

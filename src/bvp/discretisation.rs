@@ -1,4 +1,4 @@
-//! The discrete equations on the material nodes (MODEL.md §3): trapezoidal (order 2) or
+//! The discrete equations on the material nodes (docs/MODEL.md §3): trapezoidal (order 2) or
 //! Hermite–Simpson = 3-stage Lobatto IIIA (order 4, bvp4c's scheme), the truncated pole
 //! conditions at Σ = ε and the cornea conditions at Σ = L, with the analytic Jacobian.
 //!
@@ -8,7 +8,7 @@
 //! 6 above the diagonal, so the Jacobian is a band matrix with ml = 7, mu = 6.
 //!
 //! At a material breakpoint each interval evaluates f with the data from its own side, so
-//! α_s may jump there while t_s, κ, r, θ, Q stay continuous (MODEL.md §4).
+//! α_s may jump there while t_s, κ, r, θ, Q stay continuous (docs/MODEL.md §4).
 //!
 //! The residual and the Jacobian are built from the scene's components
 //! (`model::components`): each pass over the points resolves the membrane component once
@@ -287,7 +287,7 @@ impl Discretisation {
         self.evaluate(u)?;
         let ev = &self.evals;
         let m = self.mesh.len();
-        // Pole (MODEL.md §3): r = σ_ε α_s, θ = σ_ε α_s κ, and the first integral over r.
+        // Pole (docs/MODEL.md §3): r = σ_ε α_s, θ = σ_ε α_s κ, and the first integral over r.
         let y0 = y_at(u, 0);
         let se = self.sigma_eps();
         let a0 = ev.left(0).alpha_s;

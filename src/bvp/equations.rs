@@ -1,7 +1,7 @@
-//! The equilibrium equations at one material point (MODEL.md §3), with their exact
+//! The equilibrium equations at one material point (docs/MODEL.md §3), with their exact
 //! Jacobian. The unknowns are y = (κ, r, θ, q_s, t_s):
 //! - the traction t_s instead of α_s keeps it continuous across jumps of the material data
-//!   (MODEL.md §4); α_s comes back from the constitutive law at each point (t_s is strictly
+//!   (docs/MODEL.md §4); α_s comes back from the constitutive law at each point (t_s is strictly
 //!   increasing in α_s);
 //! - the shear q_s = Q / r instead of Q: near the pole Q = O(r²) carries the information
 //!   that fixes t_s there (through the first integral) in digits far below the round-off
@@ -23,7 +23,7 @@
 //! term exists in f or ∂f/∂y (see `model::components`).
 //!
 //! [`Equations<R>`] is the shell with its membrane component R fixed at compile time
-//! (MODEL.md §2: neo-Hookean, or reinforced by fibres): the discretisation resolves the
+//! (docs/MODEL.md §2: neo-Hookean, or reinforced by fibres): the discretisation resolves the
 //! scene's component once per pass and calls [`Equations::evaluate`], so the fibre-free f
 //! and ∂f/∂y contain no fibre code. [`evaluate`] and [`stretch`] take a [`Shell`] of
 //! either kind and dispatch once per call.
@@ -321,7 +321,7 @@ pub fn first_integral_over_r(dp: f64, y: &Vec5) -> f64 {
 }
 
 /// The first integral Q cos θ + r t_s sin θ − r² ΔP / 2 (Q = r q_s), zero along a closed
-/// shell (MODEL.md §3).
+/// shell (docs/MODEL.md §3).
 pub fn first_integral(dp: f64, y: &Vec5) -> f64 {
     y[R] * first_integral_over_r(dp, y)
 }

@@ -1,4 +1,4 @@
-//! The unloaded shell's data at the points the schemes use (MODEL.md §1, §4). Before any
+//! The unloaded shell's data at the points the schemes use (docs/MODEL.md §1, §4). Before any
 //! growth the unloaded shell is the reference sphere: σ = Σ, ρ = R0 sin(Σ/R0), ζ = H(Σ),
 //! γ = 1. Fibre directions are evaluated only when the scene has fibres.
 

@@ -1,4 +1,4 @@
-//! The elastic boundary value problem in space (MODEL.md §1–4): residuals of the two
+//! The elastic boundary value problem in space (docs/MODEL.md §1–4): residuals of the two
 //! schemes on the material nodes, the analytic banded Jacobian, the KINSOL driver and a
 //! continuous interpolant of the solution.
 
@@ -49,7 +49,7 @@ pub struct SolveStats {
     pub jacobian_evaluations: usize,
     /// KINSOL's final scaled residual norm (max norm).
     pub residual_norm: f64,
-    /// max over nodes of |Q cos θ + r t_s sin θ − r² ΔP / 2| (MODEL.md §3).
+    /// max over nodes of |Q cos θ + r t_s sin θ − r² ΔP / 2| (docs/MODEL.md §3).
     pub first_integral_max: f64,
     /// All nodes of the mesh.
     pub nodes: usize,

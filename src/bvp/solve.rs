@@ -1,4 +1,4 @@
-//! The KINSOL driver for the elastic BVP (MODEL.md §3): Newton with a line search and the
+//! The KINSOL driver for the elastic BVP (docs/MODEL.md §3): Newton with a line search and the
 //! analytic Jacobian, factored by band LU (or KLU); cold starts from the inflated reference
 //! sphere, warm starts from a previous solution, and pressure continuation when a cold
 //! start does not converge.
@@ -167,7 +167,7 @@ pub fn shell_of(p: &Params) -> Shell {
     Shell { law: crate::model::components::Membrane::of(p).law(), e_b: p.e_b, dp: p.dp }
 }
 
-/// The mesh a scene asks for: uniform nodes, breakpoints and pole grading (MODEL.md §3–4).
+/// The mesh a scene asks for: uniform nodes, breakpoints and pole grading (docs/MODEL.md §3–4).
 pub fn mesh_of(p: &Params, s: &SolverSettings) -> Mesh {
     let mesh = Mesh::new(s.epsilon, p.length(), s.nodes, &profiles::breakpoints(p), s.pole_grading);
     // The bending boundary layer at the cornea: width √(E_b / t_s), t_s ≈ ΔP R0 / 2.

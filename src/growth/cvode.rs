@@ -1,4 +1,4 @@
-//! Growth by CVODE (MODEL.md §5): BDF with variable order and step, error-controlled. The
+//! Growth by CVODE (docs/MODEL.md §5): BDF with variable order and step, error-controlled. The
 //! Newton iteration inside each step uses GMRES with the implicit-function-theorem
 //! Jacobian product of [`GrowthSystem::jac_times`] (one back-substitution per product, no
 //! elastic re-solve). An elastic solve that fails inside a step is a recoverable error:

@@ -1,4 +1,4 @@
-//! Growth as one coupled DAE (issue 11; MODEL.md §3, §5–6): the growth state and the
+//! Growth as one coupled DAE (issue 11; docs/MODEL.md §3, §5–6): the growth state and the
 //! elastic state advance together, so a time step costs one Newton iteration of the whole
 //! system instead of a nested elastic solve per right-hand side.
 //!
@@ -7,7 +7,7 @@
 //! - W: per node i, (κ, r, θ, q_s, t_s, z): the elastic unknowns and z, so that the retina
 //!   at a point reads only its neighbours' unknowns (z was a quadrature over the shell);
 //! - d: the blue depth where the retina crosses φ_max, read by every point beyond it
-//!   (MODEL.md §6), as one unknown with its own equation instead of a dense coupling.
+//!   (docs/MODEL.md §6), as one unknown with its own equation instead of a dense coupling.
 //!
 //! Residual rows, in the same order:
 //! - P: ρ' − η [r − ρ]⁺ and γ_s' − η γ_s [α_s − 1]⁺ (differential);
@@ -674,7 +674,7 @@ impl CoupledDae {
                 dv.push(rd);
             }
         }
-        // Beyond φ_max the depth is the unknown d (MODEL.md §6).
+        // Beyond φ_max the depth is the unknown d (docs/MODEL.md §6).
         let has_crossing = self.crossing_depth(&out).is_some();
         for (k, pr) in out.iter_mut().enumerate() {
             let s = &local[k];
@@ -756,7 +756,7 @@ impl CoupledDae {
     }
 
     /// The depth of the blue surface where the retina crosses φ_max: linear in φ between the
-    /// two points (in Σ order) that straddle it (MODEL.md §6); None if none reaches it.
+    /// two points (in Σ order) that straddle it (docs/MODEL.md §6); None if none reaches it.
     fn crossing_depth(&self, rates: &[PointRates]) -> Option<Crossing> {
         let phi_max = self.sys.blue().phi_max;
         let j = self.order.iter().position(|&k| rates[k].angle >= phi_max)?;

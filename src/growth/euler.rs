@@ -1,4 +1,4 @@
-//! The published method (MODEL.md §8): explicit Euler with a fixed number of steps,
+//! The published method (docs/MODEL.md §8): explicit Euler with a fixed number of steps,
 //! p_{n+1} = p_n + Δt G(p_n), kept for comparison and reproduction. An output time that
 //! falls inside a step is reached by a partial Euler step from the step's start.
 

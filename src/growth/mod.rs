@@ -1,4 +1,4 @@
-//! Growth in time (MODEL.md §5–6): a method-of-lines system on the material points the
+//! Growth in time (docs/MODEL.md §5–6): a method-of-lines system on the material points the
 //! elastic scheme uses, integrated by CVODE (BDF) or by the published explicit Euler. The
 //! elastic problem is solved at every right-hand-side evaluation, warm-started.
 
@@ -12,7 +12,7 @@ pub mod system;
 pub use crate::model::growth_law::ThicknessLaw;
 use crate::model::stimulus::{Refraction, Surface};
 
-/// The growth model of one scene (MODEL.md §4–6).
+/// The growth model of one scene (docs/MODEL.md §4–6).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GrowthParams {
     /// growth.eta0: η0, the largest growth rate.
@@ -55,7 +55,7 @@ impl Default for GrowthParams {
 pub enum Integrator {
     /// CVODE: BDF, variable order and step, error-controlled.
     Cvode,
-    /// Explicit Euler with a fixed number of steps (MODEL.md §8), for comparison.
+    /// Explicit Euler with a fixed number of steps (docs/MODEL.md §8), for comparison.
     Euler,
     /// IDA: BDF on the coupled DAE of growth and elastic equilibrium (one Newton per step).
     Ida,
@@ -107,7 +107,7 @@ impl Default for GrowthSettings {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SeriesRow {
     pub t: f64,
-    /// z of the retina at the posterior pole (MODEL.md §6).
+    /// z of the retina at the posterior pole (docs/MODEL.md §6).
     pub axial_length: f64,
     /// The largest radius of the retina.
     pub equatorial_radius: f64,

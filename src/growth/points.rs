@@ -1,4 +1,4 @@
-//! Where the growth state lives (MODEL.md §5): at every material point the elastic scheme
+//! Where the growth state lives (docs/MODEL.md §5): at every material point the elastic scheme
 //! evaluates — the nodes, both sides of a node where the thickness jumps, and (for
 //! Hermite–Simpson) the interval midpoints. The growth laws are local in Σ, so carrying
 //! ρ and γ_s = ∂σ/∂Σ at exactly those points gives the elastic problem its data with no

@@ -1,4 +1,4 @@
-//! The growth system dp/dt = G(p) (MODEL.md §5–6): p holds (ρ, γ_s) at the growth points;
+//! The growth system dp/dt = G(p) (docs/MODEL.md §5–6): p holds (ρ, γ_s) at the growth points;
 //! each evaluation solves the elastic problem for the shell p describes (warm-started from
 //! the last solution) and turns its state into growth rates through the visual stimulus.
 //!
@@ -29,7 +29,7 @@ const REFACTOR_EVERY: usize = 3;
 pub struct PointStimulus {
     pub z_retina: f64,
     pub r_retina: f64,
-    /// Depth of the blue surface behind the retina (MODEL.md §6).
+    /// Depth of the blue surface behind the retina (docs/MODEL.md §6).
     pub depth_blue: f64,
     pub angle: f64,
     pub g_v: f64,
@@ -363,7 +363,7 @@ impl GrowthSystem {
 
 /// The blue depth where the retina crosses the polar angle φ_max, interpolated linearly in
 /// φ between the two points (in Σ order) that straddle it, so the rule beyond φ_max does not
-/// hang on where the nodes fall (MODEL.md §6). None if the retina never reaches φ_max.
+/// hang on where the nodes fall (docs/MODEL.md §6). None if the retina never reaches φ_max.
 fn depth_at_angle(pts: &GrowthPoints, stim: &[PointStimulus], phi_max: f64) -> Option<f64> {
     let mut order: Vec<usize> = (0..pts.len()).collect();
     order.sort_by(|&a, &b| pts.sigma_ref[a].partial_cmp(&pts.sigma_ref[b]).unwrap());

@@ -1,8 +1,8 @@
-//! Which physics a scene's model contains: its components (MODEL.md §2, §4, §5).
+//! Which physics a scene's model contains: its components (docs/MODEL.md §2, §4, §5).
 //!
 //! A scene declares what it needs, and the assembled model holds that and nothing more:
 //!
-//! - **Membrane** (MODEL.md §2). [`Membrane::NeoHookean`] when the scene has no fibres
+//! - **Membrane** (docs/MODEL.md §2). [`Membrane::NeoHookean`] when the scene has no fibres
 //!   (D = 0): ψ is never evaluated, the mesh gets no fibre breakpoints (a, b), and the
 //!   residual and the Jacobian are built from `MembraneLaw<NoFibres>`, a zero-sized
 //!   reinforcement that the compiler removes. The point evaluation and the assembly loop
@@ -10,14 +10,14 @@
 //!   the fibre-free f and ∂f/∂y contain no fibre term, branch or `Option`, and invert the
 //!   law by a cheaper iteration (t_s is concave in α_s there). [`Membrane::Reinforced`]
 //!   brings ψ(Σ) and the fibre terms `[I4 − 1]⁺` in.
-//! - **Thickness** (MODEL.md §4). Uniform H0 or the paper's non-uniform profile H(Σ). In
+//! - **Thickness** (docs/MODEL.md §4). Uniform H0 or the paper's non-uniform profile H(Σ). In
 //!   either case the thickness enters only as ζ at each material point: the discretisation
 //!   carries t_s as an unknown and the constitutive law as an algebraic equation at each
 //!   point, so no equation differentiates the material data. There are no dζ/dΣ (nor
 //!   dψ/dΣ) terms anywhere, with or without a profile. What the profile adds is data: ζ
 //!   varies from point to point, and its jump at πR0/2 puts a second evaluation (the limit
 //!   from below) at that node, across which α_s jumps and t_s stays continuous.
-//! - **Growth** (MODEL.md §5, §6). Only a scene with a `[growth]` section has growth; only
+//! - **Growth** (docs/MODEL.md §5, §6). Only a scene with a `[growth]` section has growth; only
 //!   then do the visual stimulus (the retina, the blue and red focal surfaces: the optics)
 //!   and the time integration (Euler or CVODE) exist (`scene::Scene::growth` is `None`
 //!   otherwise, and `growth::grow` is never called). Without growth one elastic solve of
@@ -30,7 +30,7 @@ use super::constitutive::Law;
 use super::params::{Params, Thickness};
 use std::fmt;
 
-/// The membrane law of the sclera (MODEL.md §2).
+/// The membrane law of the sclera (docs/MODEL.md §2).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Membrane {
@@ -40,7 +40,7 @@ pub enum Membrane {
     Reinforced { c: f64, d: f64 },
 }
 
-/// The thickness of the unloaded, ungrown shell (MODEL.md §4).
+/// The thickness of the unloaded, ungrown shell (docs/MODEL.md §4).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum ThicknessComponent {

@@ -1,4 +1,4 @@
-//! The reinforced neo-Hookean membrane law and its exact partial derivatives (MODEL.md §2).
+//! The reinforced neo-Hookean membrane law and its exact partial derivatives (docs/MODEL.md §2).
 //!
 //!   t_s = 2ζ [ C(α_s/α_φ − (α_s α_φ)⁻³) + D [I4−1]⁺ (α_s/α_φ) sin²ψ ]
 //!   t_φ = 2ζ [ C(α_φ/α_s − (α_s α_φ)⁻³) + D [I4−1]⁺ (α_φ/α_s) cos²ψ ]
@@ -66,7 +66,7 @@ pub struct Stretches {
     pub inv_phi: f64,
 }
 
-/// What reinforces the neo-Hookean matrix (MODEL.md §2): nothing, or one family of fibres.
+/// What reinforces the neo-Hookean matrix (docs/MODEL.md §2): nothing, or one family of fibres.
 pub trait Reinforcement: Copy + Debug {
     /// What the reinforcement reads at a material point: `()` without fibres.
     type Direction: Copy + Debug;

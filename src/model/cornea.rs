@@ -1,4 +1,4 @@
-//! The cornea: a neo-Hookean sphere inflated uniformly (Adkins; MODEL.md §3).
+//! The cornea: a neo-Hookean sphere inflated uniformly (Adkins; docs/MODEL.md §3).
 //!
 //! ΔP = 4 C_c H_c / (α R_c) · (1 − α⁻⁶) for α ∈ (1, 7^(1/6)). The right side peaks at
 //! α = 7^(1/6), so a larger ΔP has no inflated cornea at all: that is an error naming the
@@ -71,7 +71,7 @@ pub fn stretch(c: &CorneaParams, dp: f64) -> Result<f64, ModelError> {
     Ok(1.0 + e)
 }
 
-/// Where the cornea holds the shell's front edge (MODEL.md §3).
+/// Where the cornea holds the shell's front edge (docs/MODEL.md §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CorneaEdge {
     /// The cornea's stretch α.

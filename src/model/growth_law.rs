@@ -1,10 +1,10 @@
-//! The growth laws (MODEL.md §5): growth only relieves tension and never shrinks.
+//! The growth laws (docs/MODEL.md §5): growth only relieves tension and never shrinks.
 //!   Dρ/Dt   = η [r − ρ]⁺
 //!   Dγ_s/Dt = η γ_s [α_s − 1]⁺        (γ_s = ∂σ/∂Σ; the local form of Dσ/Dt = ∫ η [α_s − 1]⁺ dσ)
 //! with η = g_c(Σ) g_v(Σ, t). The rates are only Lipschitz: the [·]⁺ kinks are kept as they
 //! are (no smoothing).
 
-/// How the thickness of the unloaded shell follows growth (MODEL.md §5).
+/// How the thickness of the unloaded shell follows growth (docs/MODEL.md §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ThicknessLaw {
     /// ζ = H: no growth across the thickness (γ_n = 1), the paper's choice.
@@ -21,7 +21,7 @@ pub fn positive(x: f64) -> f64 {
 
 /// [x]⁺ and its derivative, with the kink rounded over |x| < w when w > 0 (an explicit,
 /// off-by-default option, `growth.kink_width`, for measuring what the kinks cost the time
-/// integrators: MODEL.md §5): (x + w)²/(4w) there, C¹ with x above and 0 below. With w = 0
+/// integrators: docs/MODEL.md §5): (x + w)²/(4w) there, C¹ with x above and 0 below. With w = 0
 /// it is max(x, 0) exactly, with the derivative of the branch taken (1 for x > 0, else 0).
 #[inline]
 pub fn positive_smooth(x: f64, w: f64) -> (f64, f64) {

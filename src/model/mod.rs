@@ -1,4 +1,4 @@
-//! The physics, and nothing of the solvers (MODEL.md §1–4): parameters, material
+//! The physics, and nothing of the solvers (docs/MODEL.md §1–4): parameters, material
 //! profiles, the constitutive law and the cornea.
 
 pub mod components;

@@ -1,8 +1,8 @@
-//! Parameters of the elastic shell and their defaults: the paper's table (MODEL.md §8).
+//! Parameters of the elastic shell and their defaults: the paper's table (docs/MODEL.md §8).
 //!
 //! Units: mm, kPa, kPa·mm³. Every field maps to one scene key (given beside it).
 
-/// Thickness profile H(Σ) of the unloaded, ungrown shell (MODEL.md §4).
+/// Thickness profile H(Σ) of the unloaded, ungrown shell (docs/MODEL.md §4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Thickness {
     /// H(Σ) = H0 everywhere.
@@ -11,7 +11,7 @@ pub enum Thickness {
     NonUniform,
 }
 
-/// The cornea: a neo-Hookean sphere inflated uniformly (Adkins; MODEL.md §3).
+/// The cornea: a neo-Hookean sphere inflated uniformly (Adkins; docs/MODEL.md §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CorneaParams {
     /// cornea.C: shear modulus C_c (kPa).
@@ -72,7 +72,7 @@ impl Params {
         self.d > 0.0
     }
 
-    /// The parameters of MODEL.md §7, whose solution is a uniformly inflated sphere:
+    /// The parameters of docs/MODEL.md §7, whose solution is a uniformly inflated sphere:
     /// uniform H0, no fibres, and a cornea of the same material and radius as the sclera.
     pub fn exact_sphere(&self) -> Params {
         Params {
@@ -84,7 +84,7 @@ impl Params {
     }
 }
 
-/// Which finite-difference scheme discretises the BVP (MODEL.md §3).
+/// Which finite-difference scheme discretises the BVP (docs/MODEL.md §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scheme {
     /// Trapezoidal rule: order 2.
@@ -127,7 +127,7 @@ pub struct SolverSettings {
     pub newton_tol: f64,
     /// solver.max_newton: the most Newton iterations per solve.
     pub max_newton: usize,
-    /// solver.pole_grading: insert geometrically graded nodes next to the pole (MODEL.md §3 trap).
+    /// solver.pole_grading: insert geometrically graded nodes next to the pole (docs/MODEL.md §3 trap).
     pub pole_grading: bool,
     /// solver.cornea_grading: grade the nodes next to the cornea when the bending boundary
     /// layer there, of width √(E_b / t_s), is thinner than the mesh spacing (the membrane

@@ -1,4 +1,4 @@
-//! Material profiles, functions of the material coordinate Σ fixed for ever (MODEL.md §4):
+//! Material profiles, functions of the material coordinate Σ fixed for ever (docs/MODEL.md §4):
 //! the thickness H(Σ), the fibre angle ψ(Σ) and the growth capacity g_c(Σ).
 //!
 //! H jumps (by 1.7e-7 mm) at Σ_e = πR0/2 and ψ has kinks at a, b and Σ_e. The mesh makes
@@ -65,7 +65,7 @@ pub fn fibre_angle(p: &Params, sigma_ref: f64, side: Side) -> f64 {
     PI * psi_over_pi
 }
 
-/// Growth capacity g_c(Σ) = (η0/2)(1 + tanh((Γ − Σ)/δ)) (MODEL.md §4).
+/// Growth capacity g_c(Σ) = (η0/2)(1 + tanh((Γ − Σ)/δ)) (docs/MODEL.md §4).
 pub fn growth_capacity(eta0: f64, gamma: f64, delta: f64, sigma_ref: f64) -> f64 {
     0.5 * eta0 * (1.0 + ((gamma - sigma_ref) / delta).tanh())
 }

@@ -1,4 +1,4 @@
-//! The visual stimulus (MODEL.md §6): best-focus surfaces for blue and red light, the
+//! The visual stimulus (docs/MODEL.md §6): best-focus surfaces for blue and red light, the
 //! growth signal g_v, and the refractive classification.
 //!
 //! A surface is given in polar form about the axis point (0, z_B):
@@ -20,7 +20,7 @@ pub struct Surface {
 }
 
 /// Longitudinal chromatic aberration between 400 and 600 nm of the Indiana chromatic eye
-/// (Thibos et al. 1992: 1.77 D), as a distance in a 60 D eye of index 1.336 (MODEL.md §6).
+/// (Thibos et al. 1992: 1.77 D), as a distance in a 60 D eye of index 1.336 (docs/MODEL.md §6).
 pub const RED_OFFSET: f64 = 0.655;
 
 impl Surface {
@@ -107,7 +107,7 @@ impl Surface {
     }
 }
 
-/// Refractive state at a retina point (MODEL.md §6).
+/// Refractive state at a retina point (docs/MODEL.md §6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Refraction {
     /// In front of the blue surface: the eye still grows there.

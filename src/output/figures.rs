@@ -1,4 +1,4 @@
-//! The paper's result figures (its section 3; MODEL.md §8) and the pictures of any run,
+//! The paper's result figures (its section 3; docs/MODEL.md §8) and the pictures of any run,
 //! drawn from run directories read back from disk ([`super::rundata`]), as PNG and SVG.
 //!
 //! Panels are built by small functions (a shell cross-section, stretch profiles, axial
@@ -153,7 +153,7 @@ pub fn parameters(scene: &Scene) -> String {
     let p = &scene.params;
     let thickness = match p.thickness {
         crate::model::params::Thickness::Uniform => format!("uniform H = {} mm", trim(p.h0)),
-        crate::model::params::Thickness::NonUniform => "non-uniform H(Σ) (MODEL.md §4)".to_string(),
+        crate::model::params::Thickness::NonUniform => "non-uniform H(Σ) (docs/MODEL.md §4)".to_string(),
     };
     let mut text = format!(
         "ΔP = {} kPa, C = {} kPa, D = {} kPa, E_b = {} kPa·mm³, {thickness}",

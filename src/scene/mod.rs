@@ -1,4 +1,4 @@
-//! Scenes: TOML files that set the parameters of one problem (MODEL.md §8 gives the defaults).
+//! Scenes: TOML files that set the parameters of one problem (docs/MODEL.md §8 gives the defaults).
 //!
 //! A scene is read in three steps, each reporting the first problem as one line that names
 //! the origin (file or `--set` text) and the key:
@@ -49,7 +49,7 @@ pub struct Scene {
     pub stimulus: Stimulus,
 }
 
-/// The visual stimulus of a scene: the blue and red best-focus surfaces (MODEL.md §6).
+/// The visual stimulus of a scene: the blue and red best-focus surfaces (docs/MODEL.md §6).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stimulus {
     pub blue: Surface,
@@ -349,7 +349,7 @@ impl Scene {
         out
     }
 
-    /// The physics this scene's model contains (MODEL.md §2–6): membrane, thickness, growth.
+    /// The physics this scene's model contains (docs/MODEL.md §2–6): membrane, thickness, growth.
     pub fn components(&self) -> crate::model::components::Components {
         crate::model::components::Components::of(&self.params, self.growth.is_some())
     }

@@ -20,7 +20,7 @@ pub struct Case {
     pub params: Params,
     pub solver: SolverSettings,
     pub growth: Option<(GrowthParams, GrowthSettings)>,
-    /// The parameters are those of MODEL.md §7, so the exact solution is known.
+    /// The parameters are those of docs/MODEL.md §7, so the exact solution is known.
     pub exact: bool,
 }
 
@@ -61,13 +61,13 @@ fn half_limit(p: Params) -> Params {
 
 /// The head of TESTING.md.
 pub const PREAMBLE: &str = "# Stability at the extremes\n\n\
-Every parameter pushed to its edge, one at a time, from the paper's shells (MODEL.md §8).\n\
+Every parameter pushed to its edge, one at a time, from the paper's shells (docs/MODEL.md §8).\n\
 Regenerate this file with `cargo run --release -- extremes --out TESTING.md`; \
 `tests/extremes.rs` runs the same cases and asserts that each one solves with finite \
 fields, a Newton residual within 10× its tolerance and a first integral within 1e-2 of \
-r²ΔP, and within 1e-5 of MODEL.md §7's exact solution where that applies (1e-1 for N < 51).\n\n\
+r²ΔP, and within 1e-5 of docs/MODEL.md §7's exact solution where that applies (1e-1 for N < 51).\n\n\
 - Elastic cases: Hermite–Simpson, N = 501, unless the case says otherwise. The sphere \
-cases use MODEL.md §7's parameters; a pushed material keeps ΔP at half the cornea's limit.\n\
+cases use docs/MODEL.md §7's parameters; a pushed material keeps ΔP at half the cornea's limit.\n\
 - Small E_b (the membrane limit): nodes are graded next to the cornea, where the bending \
 layer of width √(E_b / t_s) forms (`solver.cornea_grading`, on by default).\n\
 - Growth cases: the const scene at N = 101 with IDA (the default integrator) at rtol 1e-5 to t_end; \
@@ -132,7 +132,7 @@ pub fn cases() -> Vec<Case> {
     out
 }
 
-/// Largest error of κ, α_s, r, θ, Q against MODEL.md §7's exact solution.
+/// Largest error of κ, α_s, r, θ, Q against docs/MODEL.md §7's exact solution.
 fn exact_error(p: &Params, rows: &[FieldRow], alpha: f64) -> f64 {
     rows.iter()
         .map(|r| {

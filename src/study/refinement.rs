@@ -1,4 +1,4 @@
-//! The paper's refinement check (MODEL.md §8), reproduced. The const scene at the published
+//! The paper's refinement check (docs/MODEL.md §8), reproduced. The const scene at the published
 //! settings (N = 501, 200 Euler steps, ε = 1e-3, and our Newton tolerance 1e-10 standing in
 //! for bvp4c's 1e-6) is compared at t = 1 with the same run refined — nodes ×2, steps ×2,
 //! tolerance ÷100, ε ÷10 — together and one at a time. The paper reports relative changes
@@ -23,7 +23,7 @@ pub struct Change {
     pub refined_seconds: f64,
 }
 
-/// The published settings of the const scene (MODEL.md §8).
+/// The published settings of the const scene (docs/MODEL.md §8).
 pub fn published() -> (Params, SolverSettings, GrowthParams, GrowthSettings) {
     let solver = SolverSettings { nodes: 501, epsilon: 1e-3, newton_tol: 1e-10, ..SolverSettings::default() };
     let settings = GrowthSettings { integrator: Integrator::Euler, steps: 200, output_times: vec![], ..GrowthSettings::default() };

@@ -54,7 +54,7 @@ pub struct RunResult {
     pub kind: String,
     /// The time reached (growth), 0 for an elastic solve.
     pub t: f64,
-    /// z of the retina at the posterior pole (MODEL.md §6).
+    /// z of the retina at the posterior pole (docs/MODEL.md §6).
     pub axial_length: f64,
     pub equatorial_radius: f64,
     pub retina_minus_blue: f64,
@@ -315,7 +315,7 @@ fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     })
 }
 
-/// The retina of a loaded, ungrown shell, measured as a growth run would (MODEL.md §6).
+/// The retina of a loaded, ungrown shell, measured as a growth run would (docs/MODEL.md §6).
 fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> RunResult {
     let retina = |f: &FieldRow| (f.z - 0.5 * f.h * f.theta.cos(), f.r - 0.5 * f.h * f.theta.sin());
     let pole = rows.first().map(retina).unwrap_or((f64::NAN, f64::NAN));

@@ -1,11 +1,11 @@
-//! Canonical problems shared by the tests: the exact sphere of MODEL.md §7 and the paper's
+//! Canonical problems shared by the tests: the exact sphere of docs/MODEL.md §7 and the paper's
 //! scenes, as diffsol keeps its test models.
 #![allow(dead_code)]
 
 use eyeshell::bvp::{self, Solution};
 use eyeshell::model::params::{Params, Scheme, SolverSettings, Thickness};
 
-/// MODEL.md §7: uniform H0, D = 0, cornea of the sclera's material and radius.
+/// docs/MODEL.md §7: uniform H0, D = 0, cornea of the sclera's material and radius.
 pub fn exact_sphere() -> Params {
     Params::default().exact_sphere()
 }
