@@ -9,7 +9,7 @@ use eyeshell::bvp::discretisation::{LOWER, UPPER};
 use eyeshell::bvp::solve::{discretise, sphere_guess};
 use eyeshell::bvp::{self};
 use eyeshell::model::params::{Params, Scheme, SolverSettings, Thickness};
-use eyeshell::sundials::MatrixSink;
+use eyeshell_sundials::MatrixSink;
 use std::hint::black_box;
 
 fn fibre_shell() -> Params {

@@ -6,10 +6,10 @@
 use std::sync::atomic::AtomicBool;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use eyeshell::output::figures::{paper_figures, PaperRuns};
+use eyeshell_cli::figures::{paper_figures, PaperRuns};
 use eyeshell::scene::sweep::Sweep;
-use eyeshell::study::figures::SCENES;
-use eyeshell::study::sweep::{run_sweep, SweepOptions};
+use eyeshell_cli::study::figures::SCENES;
+use eyeshell::sweep::{run_sweep, SweepOptions};
 
 fn scene(name: &str) -> Sweep {
     let (_, file, text) = SCENES.iter().find(|s| s.0 == name).expect("a built-in scene");

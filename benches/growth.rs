@@ -32,7 +32,7 @@ fn const_scene(c: &mut Criterion) {
     // IDA on the coupled DAE at the same tolerances, with each linear solver of its Newton
     // matrix (the default first).
     for lin in DaeLinear::ALL {
-        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu) && !eyeshell::sundials::klu_available() {
+        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu) && !eyeshell_sundials::klu_available() {
             continue;
         }
         let ida = GrowthSettings { integrator: Integrator::Ida, dae_linear: lin, rtol: 1e-6, atol: 1e-8, ..GrowthSettings::default() };
@@ -82,7 +82,7 @@ const IDA_RTOL_EQUAL_ERROR: f64 = 5e-7;
 fn dae_pieces(c: &mut Criterion) {
     let mut group = c.benchmark_group("dae_pieces_n501");
     for lin in DaeLinear::ALL {
-        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu) && !eyeshell::sundials::klu_available() {
+        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu) && !eyeshell_sundials::klu_available() {
             continue;
         }
         let sys = GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();

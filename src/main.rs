@@ -1,3 +1,3 @@
 fn main() {
-    std::process::exit(eyeshell::cli::main());
+    std::process::exit(eyeshell_cli::main());
 }

@@ -5,8 +5,8 @@
 //! log(e_k / e_{k+1}) / log(h_k / h_{k+1}).
 
 use super::{max_diff, points, run, sample, worst, StudyError, FIELDS};
-use crate::growth::{GrowthParams, GrowthSettings};
-use crate::model::params::{Params, SolverSettings};
+use eyeshell::growth::{GrowthParams, GrowthSettings};
+use eyeshell::model::params::{Params, SolverSettings};
 
 /// What a ladder varies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -116,7 +116,7 @@ pub fn ladder(
             },
             Knob::Steps => match gs.as_mut() {
                 Some(g) => {
-                    g.integrator = crate::growth::Integrator::Euler;
+                    g.integrator = eyeshell::growth::Integrator::Euler;
                     g.steps = v as usize;
                 }
                 None => return Err(StudyError::Invalid("a steps ladder needs a growth scene".into())),

@@ -5,10 +5,10 @@
 //!
 //! `eyeshell extremes --out TESTING.md` runs them all and writes the table.
 
-use crate::bvp::{self, FieldRow};
-use crate::growth::{self, GrowthParams, GrowthSettings, ThicknessLaw};
-use crate::model::cornea;
-use crate::model::params::{Params, SolverSettings, Thickness};
+use eyeshell::bvp::{self, FieldRow};
+use eyeshell::growth::{self, GrowthParams, GrowthSettings, ThicknessLaw};
+use eyeshell::model::cornea;
+use eyeshell::model::params::{Params, SolverSettings, Thickness};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -95,7 +95,7 @@ pub fn cases() -> Vec<Case> {
     for c in [1.0, 1e5] {
         push("modulus C", format!("C = {c:e} (sphere)"), half_limit(exact(Params { c, ..Params::default() })), s, true);
         let p = fibre_shell();
-        let p = Params { c, cornea: crate::model::params::CorneaParams { c, ..p.cornea }, ..p };
+        let p = Params { c, cornea: eyeshell::model::params::CorneaParams { c, ..p.cornea }, ..p };
         push("modulus C", format!("C = {c:e} (fibre shell)"), half_limit(p), s, false);
     }
     for d in [0.0, 1e2, 1e3, 1e4, 1e5] {

@@ -7,12 +7,11 @@ pub mod extremes;
 pub mod figures;
 pub mod refinement;
 pub mod report;
-pub mod sweep;
 pub mod wpd;
 
-use crate::bvp::{BvpError, FieldRow, Solution};
-use crate::growth::{GrowthError, GrowthParams, GrowthSettings, GrowthStats};
-use crate::model::params::{Params, SolverSettings};
+use eyeshell::bvp::{BvpError, FieldRow, Solution};
+use eyeshell::growth::{GrowthError, GrowthParams, GrowthSettings, GrowthStats};
+use eyeshell::model::params::{Params, SolverSettings};
 use std::path::Path;
 use std::time::Instant;
 
@@ -52,13 +51,13 @@ pub fn run(params: &Params, solver: &SolverSettings, growth: Option<(&GrowthPara
     let start = Instant::now();
     match growth {
         None => {
-            let solution = crate::bvp::solve(params, solver, None).map_err(|source| StudyError::Elastic { what: what.into(), source })?;
+            let solution = eyeshell::bvp::solve(params, solver, None).map_err(|source| StudyError::Elastic { what: what.into(), source })?;
             Ok(Run { solution, axial_length: None, seconds: start.elapsed().as_secs_f64(), growth: None })
         }
         Some((g, s)) => {
             let t_end = g.t_end;
             let mut last = None;
-            let stats = crate::growth::run(
+            let stats = eyeshell::growth::run(
                 params,
                 solver,
                 g,
@@ -66,7 +65,7 @@ pub fn run(params: &Params, solver: &SolverSettings, growth: Option<(&GrowthPara
                 &mut |sys, t, p| {
                     if t == t_end {
                         let snap = sys.snapshot(t, p)?;
-                        let sol = sys.elastic.solution().map_err(crate::growth::system::RhsError::from)?;
+                        let sol = sys.elastic.solution().map_err(eyeshell::growth::system::RhsError::from)?;
                         last = Some((sol, snap.series.axial_length));
                     }
                     Ok(())
@@ -117,7 +116,7 @@ pub fn write_csv(path: &Path, header: &[String], rows: &[Vec<String>]) -> Result
         text.push_str(&r.join(","));
         text.push('\n');
     }
-    crate::output::write_atomic(path, text.as_bytes())
+    eyeshell::rundir::write_atomic(path, text.as_bytes())
         .map_err(|source| StudyError::Io { path: path.to_path_buf(), source })
 }
 
@@ -126,6 +125,6 @@ pub fn cell(x: f64) -> String {
     if x.is_nan() {
         String::new()
     } else {
-        crate::output::format_value(x)
+        eyeshell::rundir::format_value(x)
     }
 }

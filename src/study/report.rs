@@ -3,9 +3,9 @@
 
 use super::converge::{self, Knob, Ladder};
 use super::{refinement, worst, write_csv, wpd, StudyError, FIELDS};
-use crate::output::plot::{self, Figure, Scale, Series, SeriesStyle};
-use crate::growth::{GrowthSettings, Integrator};
-use crate::scene::Scene;
+use eyeshell_plot::{self as plot, Figure, Scale, Series, SeriesStyle};
+use eyeshell::growth::{GrowthSettings, Integrator};
+use eyeshell::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
 

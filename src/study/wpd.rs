@@ -7,8 +7,8 @@
 //!   length and the largest field error at t_end (same mesh as the reference).
 
 use super::{max_diff, run, sample, worst, StudyError};
-use crate::growth::{GrowthParams, GrowthSettings, Integrator};
-use crate::model::params::{Params, Scheme, SolverSettings};
+use eyeshell::growth::{GrowthParams, GrowthSettings, Integrator};
+use eyeshell::model::params::{Params, Scheme, SolverSettings};
 
 /// One method's points: (knob value, error, seconds), coarse to fine.
 #[derive(Clone, Debug)]
@@ -57,7 +57,7 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
     // A self-similar ladder: the first rung's mesh, then every interval halved again and
     // again, so that each error expansion keeps its coefficients from rung to rung (the
     // ladder by solver.nodes re-grades the pole at every N) and orders come out clean.
-    let mut meshes = vec![crate::bvp::solve::mesh_of(params, &SolverSettings { nodes: nodes[0], ..*solver })];
+    let mut meshes = vec![eyeshell::bvp::solve::mesh_of(params, &SolverSettings { nodes: nodes[0], ..*solver })];
     for _ in 1..nodes.len() {
         meshes.push(meshes.last().unwrap().halved());
     }
@@ -66,7 +66,7 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
     let pts = meshes[0].nodes.clone();
     let reference_mesh = meshes.last().unwrap().halved().halved();
     let tight = SolverSettings { scheme: Scheme::HermiteSimpson, ..*solver };
-    let reference = crate::bvp::solve::solve_on_mesh(params, &tight, reference_mesh, None)
+    let reference = eyeshell::bvp::solve::solve_on_mesh(params, &tight, reference_mesh, None)
         .map_err(|source| StudyError::Elastic { what: "reference".into(), source })?;
     let ref_vals = sample(&reference, &pts, "reference")?;
     let mut curves = vec![];
@@ -83,7 +83,7 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
             let (vals, seconds) = best_of(
                 || {
                     let start = std::time::Instant::now();
-                    let sol = crate::bvp::solve::solve_on_mesh(params, &s, mesh.clone(), None)
+                    let sol = eyeshell::bvp::solve::solve_on_mesh(params, &s, mesh.clone(), None)
                         .map_err(|source| StudyError::Elastic { what: what.clone(), source })?;
                     let secs = start.elapsed().as_secs_f64();
                     Ok((sample(&sol, &pts, &what)?, secs))

@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use eyeshell::sundials::{
+use eyeshell_sundials::{
     self, CallbackResult, Context, JacobianMatrix, Kinsol, KinsolOptions, LinearSolver,
     LinearSolverSpec, MatrixSink, NVector, NonlinearSystem,
 };
@@ -18,7 +18,7 @@ use eyeshell::sundials::{
 const A: [[f64; 3]; 3] = [[4.0, -1.0, 0.0], [-1.0, 4.0, -1.0], [0.0, -1.0, 4.0]];
 const X: [f64; 3] = [1.0, -2.0, 3.0];
 
-fn solve_3x3(spec: &LinearSolverSpec) -> Result<f64, sundials::SundialsError> {
+fn solve_3x3(spec: &LinearSolverSpec) -> Result<f64, eyeshell_sundials::SundialsError> {
     let ctx = Context::new()?;
     let (mut a, mut ls) = LinearSolver::for_spec(&ctx, 3, spec)?;
     {
@@ -68,7 +68,7 @@ fn loaded_libraries() -> Vec<String> {
 }
 
 fn vendored_builds() -> Vec<PathBuf> {
-    let Some(build) = Path::new(sundials::BUILD_OUT_DIR).parent().and_then(Path::parent) else {
+    let Some(build) = Path::new(eyeshell_sundials::BUILD_OUT_DIR).parent().and_then(Path::parent) else {
         return vec![];
     };
     let Ok(entries) = std::fs::read_dir(build) else { return vec![] };
@@ -89,20 +89,20 @@ fn vendored_builds() -> Vec<PathBuf> {
 fn main() -> ExitCode {
     let mut problems: Vec<String> = vec![];
 
-    let version = sundials::version();
+    let version = eyeshell_sundials::version();
     println!("SUNDIALS linked at run time: {version}");
     println!(
         "SUNDIALS headers at build time: {} (version {})",
-        sundials::BUILD_SUNDIALS_INCLUDE,
-        sundials::BUILD_SUNDIALS_VERSION
+        eyeshell_sundials::BUILD_SUNDIALS_INCLUDE,
+        eyeshell_sundials::BUILD_SUNDIALS_VERSION
     );
     if !version.starts_with("6.") {
         problems.push(format!("the linked SUNDIALS is {version}, not 6.x"));
     }
-    if version != sundials::BUILD_SUNDIALS_VERSION {
+    if version != eyeshell_sundials::BUILD_SUNDIALS_VERSION {
         problems.push(format!(
             "the linked SUNDIALS ({version}) differs from the headers ({})",
-            sundials::BUILD_SUNDIALS_VERSION
+            eyeshell_sundials::BUILD_SUNDIALS_VERSION
         ));
     }
 
@@ -112,7 +112,7 @@ fn main() -> ExitCode {
         ("band", LinearSolverSpec::Band { upper: 1, lower: 1 }),
     ];
     let klu_pattern = LinearSolverSpec::Klu { row_ptr: vec![0, 2, 5, 7], col_idx: vec![0, 1, 0, 1, 2, 1, 2] };
-    if sundials::klu_available() {
+    if eyeshell_sundials::klu_available() {
         specs.push(("KLU", klu_pattern));
     } else {
         println!("  KLU:   not available (built without sunlinsol_klu; apt-get install -y libsuitesparse-dev libsundials-dev, then rebuild)");

@@ -1,0 +1,83 @@
+//! Growth by CVODE (docs/MODEL.md §5): BDF with variable order and step, error-controlled. The
+//! Newton iteration inside each step uses GMRES with the implicit-function-theorem
+//! Jacobian product of [`GrowthSystem::jac_times`] (one back-substitution per product, no
+//! elastic re-solve). An elastic solve that fails inside a step is a recoverable error:
+//! CVODE cuts the step and tries again.
+
+use super::system::GrowthSystem;
+use super::GrowthSettings;
+use eyeshell_sundials::{CallbackError, CallbackResult, Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem};
+
+/// The growth system as CVODE sees it.
+pub struct GrowthOde<'a> {
+    pub sys: &'a mut GrowthSystem,
+}
+
+fn recoverable(e: impl std::fmt::Display) -> CallbackError {
+    CallbackError::Recoverable(e.to_string())
+}
+
+impl OdeSystem for GrowthOde<'_> {
+    fn rhs(&mut self, _t: f64, y: &[f64], ydot: &mut [f64]) -> CallbackResult {
+        self.sys.rhs(y, ydot).map_err(recoverable)
+    }
+
+    fn jac_times_setup(&mut self, _t: f64, y: &[f64], _fy: &[f64]) -> CallbackResult {
+        self.sys.jac_setup(y).map_err(recoverable)
+    }
+
+    fn jac_times(&mut self, _t: f64, y: &[f64], fy: &[f64], v: &[f64], jv: &mut [f64]) -> CallbackResult {
+        self.sys.jac_times(y, fy, v, jv).map_err(recoverable)
+    }
+}
+
+/// The Krylov subspace of GMRES.
+const MAX_KRYLOV: usize = 30;
+
+/// Integrate to `t_end`, calling `output(sys, t, p)` at each of `times` (increasing, in
+/// (0, t_end]) and `progress(t)` after every internal step. Returns CVODE's counters and,
+/// on failure, the time reached and why.
+pub fn integrate(
+    sys: &mut GrowthSystem,
+    p0: &[f64],
+    t_end: f64,
+    settings: &GrowthSettings,
+    times: &[f64],
+    output: &mut super::OutputFn<'_>,
+    progress: &mut dyn FnMut(f64),
+) -> (CvodeStats, Result<(), (f64, String)>) {
+    let options = CvodeOptions {
+        rtol: settings.rtol,
+        atol: settings.atol,
+        stop_time: Some(t_end),
+        max_steps: 100_000,
+        ..CvodeOptions::default()
+    };
+    let linear = CvodeLinearSolver::Spgmr { max_krylov: MAX_KRYLOV, user_product: true, preconditioned: false };
+    let mut cv = match Cvode::new(GrowthOde { sys }, 0.0, p0, linear, &options) {
+        Ok(cv) => cv,
+        Err(e) => return (CvodeStats::default(), Err((0.0, e.to_string()))),
+    };
+    let result = super::march(&mut CvodeStepper { cv: &mut cv, output }, p0.len(), t_end, times, progress);
+    (cv.stats(), result)
+}
+
+/// CVODE as [`super::march`] drives it.
+struct CvodeStepper<'a, 'b, 'c> {
+    cv: &'a mut Cvode<GrowthOde<'b>>,
+    output: &'a mut super::OutputFn<'c>,
+}
+
+impl super::Stepper for CvodeStepper<'_, '_, '_> {
+    fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
+        self.cv.step(t_end, y).map_err(|e| (self.cv.stats().current_time, e.to_string()))
+    }
+
+    fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {
+        self.cv.interpolate(t, y).map_err(|e| e.to_string())
+    }
+
+    fn output(&mut self, t: f64, y: &[f64]) -> Result<(), String> {
+        (self.output)(self.cv.system_mut().sys, t, y).map_err(|e| e.to_string())
+    }
+}

@@ -1,0 +1,1199 @@
+//! Growth as one coupled DAE (issue 11; docs/MODEL.md §3, §5–6): the growth state and the
+//! elastic state advance together, so a time step costs one Newton iteration of the whole
+//! system instead of a nested elastic solve per right-hand side.
+//!
+//! Unknowns y = [P | W | d]:
+//! - P: (ρ, γ_s) at every growth point (`GrowthPoints`), 2 per point;
+//! - W: per node i, (κ, r, θ, q_s, t_s, z): the elastic unknowns and z, so that the retina
+//!   at a point reads only its neighbours' unknowns (z was a quadrature over the shell);
+//! - d: the blue depth where the retina crosses φ_max, read by every point beyond it
+//!   (docs/MODEL.md §6), as one unknown with its own equation instead of a dense coupling.
+//!
+//! Residual rows, in the same order:
+//! - P: ρ' − η [r − ρ]⁺ and γ_s' − η γ_s [α_s − 1]⁺ (differential);
+//! - W: the three pole conditions, per interval the five scheme rows and
+//!   z_{i+1} − z_i − Δz_i (the scheme's own quadrature of dz/dΣ = −γ α_s sin θ), then the
+//!   cornea's r, θ and z (algebraic);
+//! - d: d − [the interpolated depth at φ_max] (algebraic; d = 0 when no point reaches it).
+//!
+//! This is the semi-discretisation CVODE integrates (`system.rs`), with the elastic
+//! equations held as constraints: at a consistent state the two agree exactly.
+//!
+//! The Jacobian ∂F/∂y + c ∂F/∂y' is assembled analytically into a [`Csr`] whose every row
+//! touches one interval's unknowns (and d): the elastic Jacobian the solver already has,
+//! the elastic rows' derivatives in the material data (`equations::data_partials`), and
+//! the rates' derivatives through the retina and the stimulus
+//! (`Surface::depth_gradient`). The [·]⁺ kinks take the derivative of the branch the value
+//! took.
+
+use super::points::NP;
+use super::system::{GrowthSystem, RhsError};
+use super::ThicknessLaw;
+use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, POLE_ROWS};
+use crate::bvp::equations::{
+    data_partials, Mat5, MaterialPoint, PointError, PointEval, Vec5, R, THETA, TS,
+};
+use eyeshell_sundials::linalg::{
+    Csr, DirectSolver, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
+};
+use crate::model::growth_law::positive_smooth;
+use crate::model::params::Scheme;
+use eyeshell_sundials::MatrixSink;
+
+/// W unknowns per node: the five elastic unknowns and z.
+pub const NW: usize = 6;
+/// Index of z among a node's W unknowns.
+pub const Z: usize = 5;
+
+/// Which linear solver factors the Newton matrix of the coupled system.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DaeLinear {
+    /// Eliminate the growth unknowns point by point; band LU of what is left.
+    Schur,
+    /// The same elimination; KLU of what is left.
+    SchurKlu,
+    /// Band LU of the whole system, unknowns interleaved node by node.
+    Band,
+    /// KLU on the whole sparse system.
+    Klu,
+}
+
+impl DaeLinear {
+    pub const NAMES: [&'static str; 4] = ["schur", "schur-klu", "band", "klu"];
+    pub const ALL: [DaeLinear; 4] = [
+        DaeLinear::Schur,
+        DaeLinear::SchurKlu,
+        DaeLinear::Band,
+        DaeLinear::Klu,
+    ];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
+/// Where a growth point reads its local state (r, θ, z, α_s).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Site {
+    /// Node i as the left end of interval i (its evaluation `left(i)`).
+    Left(usize),
+    /// Node i + 1 as the right end of interval i (`right(i)`).
+    Right(usize),
+    /// The Hermite–Simpson midpoint of interval i.
+    Mid(usize),
+}
+
+impl Site {
+    fn interval(self) -> usize {
+        match self {
+            Site::Left(i) | Site::Right(i) | Site::Mid(i) => i,
+        }
+    }
+}
+
+/// A scalar's derivatives with respect to one interval's unknowns: W columns 6i..6i+12
+/// (y_i, z_i, y_{i+1}, z_{i+1}) and the data (ρ, γ_s) of its points L = above[i],
+/// R = below[i+1], M = mid[i].
+#[derive(Clone, Copy, Debug, Default)]
+struct Grad {
+    w: [f64; 2 * NW],
+    p: [[f64; 2]; 3],
+}
+
+const L: usize = 0;
+const RT: usize = 1;
+const M: usize = 2;
+
+impl Grad {
+    fn axpy(&mut self, a: f64, x: &Grad) {
+        for (s, v) in self.w.iter_mut().zip(&x.w) {
+            *s += a * v;
+        }
+        for (s, v) in self.p.iter_mut().zip(&x.p) {
+            s[0] += a * v[0];
+            s[1] += a * v[1];
+        }
+    }
+
+    /// Unit derivative in W column `c` of the window.
+    fn unit(c: usize) -> Grad {
+        let mut g = Grad::default();
+        g.w[c] = 1.0;
+        g
+    }
+}
+
+/// What the rates saw at one point, with the derivatives the Jacobian needs.
+#[derive(Clone, Copy, Debug, Default)]
+struct Local {
+    r: f64,
+    z: f64,
+    alpha_s: f64,
+    sin_theta: f64,
+    cos_theta: f64,
+}
+
+/// The derivatives of a point's data in the window: ∂f/∂(ρ, γ_s) (5×2, through ζ too) and
+/// ∂α_s/∂(ρ, γ_s).
+#[derive(Clone, Copy, Debug)]
+struct DataDeriv {
+    f: [Vec5; 2],
+    alpha_s: [f64; 2],
+}
+
+/// ∂ζ/∂(ρ, γ_s) under the thickness law (mass: ζ ∝ 1/(γ_s ρ)).
+fn zeta_partials(law: ThicknessLaw, rho: f64, zeta: f64, gamma: f64) -> [f64; 2] {
+    match law {
+        ThicknessLaw::None => [0.0, 0.0],
+        ThicknessLaw::Mass => [-zeta / rho, -zeta / gamma],
+    }
+}
+
+fn data_deriv(law: ThicknessLaw, mp: &MaterialPoint, y: &Vec5, e: &PointEval) -> DataDeriv {
+    let d = data_partials(mp, y, e);
+    let [zr, zg] = zeta_partials(law, mp.rho, mp.zeta, mp.gamma);
+    DataDeriv {
+        f: [d.f_rho + zr * d.f_zeta, d.f_gamma + zg * d.f_zeta],
+        alpha_s: [d.alpha_s_rho + zr * d.alpha_s_zeta, zg * d.alpha_s_zeta],
+    }
+}
+
+/// The rates at one point and, on request, their derivatives in the point's local state.
+#[derive(Clone, Copy, Debug, Default)]
+struct PointRates {
+    rho: f64,
+    gamma: f64,
+    depth: f64,
+    angle: f64,
+    g_v: f64,
+    eta: f64,
+    beyond: bool,
+}
+
+/// Derivatives of (rate_ρ, rate_γ, depth, angle) in (r, θ, z, α_s, ρ, γ_s) and d.
+#[derive(Clone, Copy, Debug, Default)]
+struct RateDeriv {
+    rate: [[f64; 6]; 2],
+    rate_d: [f64; 2],
+    depth: [f64; 6],
+    angle: [f64; 6],
+}
+
+/// The layout of y and the fixed data of the coupled system.
+pub struct CoupledDae {
+    pub sys: GrowthSystem,
+    m: usize,
+    n_p: usize,
+    n_w: usize,
+    sites: Vec<Site>,
+    /// Points in Σ order (for the crossing of φ_max).
+    order: Vec<usize>,
+    hermite_simpson: bool,
+    jac: Csr,
+    linear: Box<dyn DirectSolver>,
+    /// Scratch: the elastic unknowns, and the elastic residual.
+    u: Vec<f64>,
+    f: Vec<f64>,
+    dz: Vec<f64>,
+    /// Scratch of the Jacobian: each point's local state's derivatives, and the
+    /// derivatives of its elastic right side in its data (computed once per assembly).
+    grads: Vec<[Grad; 4]>,
+    derivs: Vec<DataDeriv>,
+    /// The (p, u) the discretisation's data and evaluations were last set for.
+    at_p: Vec<f64>,
+    pub counters: DaeCounters,
+}
+
+/// Work done by the coupled system's callbacks.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DaeCounters {
+    pub residuals: usize,
+    pub jacobians: usize,
+    pub solves: usize,
+    pub jacobian_seconds: f64,
+    pub factor_seconds: f64,
+    pub solve_seconds: f64,
+    pub residual_seconds: f64,
+}
+
+/// Why the coupled system could not be evaluated or solved.
+#[derive(Debug, thiserror::Error)]
+pub enum DaeError {
+    #[error(transparent)]
+    Rhs(#[from] RhsError),
+    #[error("the Newton matrix of the coupled system: {0}")]
+    Linear(#[from] LinalgError),
+}
+
+impl CoupledDae {
+    /// The coupled system of a growth system whose elastic state has been solved at t = 0,
+    /// before its linear solver is chosen ([`CoupledDae::set_linear`]).
+    pub fn new(sys: GrowthSystem) -> Self {
+        let disc = sys.elastic.discretisation();
+        let m = disc.mesh.len();
+        let hermite_simpson = disc.scheme == Scheme::HermiteSimpson;
+        let pts = &sys.points;
+        let n_p = NP * pts.len();
+        let n_w = NW * m;
+        let mut sites = vec![Site::Left(0); pts.len()];
+        for i in 0..m {
+            if i > 0 {
+                sites[pts.below[i]] = Site::Right(i - 1);
+            }
+            if i < m - 1 {
+                sites[pts.above[i]] = Site::Left(i);
+            }
+        }
+        for (i, &k) in pts.mid.iter().enumerate() {
+            sites[k] = Site::Mid(i);
+        }
+        let mut order: Vec<usize> = (0..pts.len()).collect();
+        order.sort_by(|&a, &b| pts.sigma_ref[a].total_cmp(&pts.sigma_ref[b]));
+        let mut dae = CoupledDae {
+            m,
+            n_p,
+            n_w,
+            sites,
+            order,
+            hermite_simpson,
+            jac: Csr::from_rows(vec![]),
+            linear: Box::new(NoSolver),
+            u: vec![0.0; NY * m],
+            f: vec![0.0; NY * m],
+            dz: vec![0.0; m - 1],
+            grads: vec![],
+            derivs: vec![],
+            at_p: vec![],
+            counters: DaeCounters::default(),
+            sys,
+        };
+        dae.jac = Csr::from_rows(dae.pattern());
+        dae
+    }
+
+    /// Choose the linear solver of the Newton matrix.
+    pub fn set_linear(&mut self, kind: DaeLinear) -> Result<(), DaeError> {
+        self.linear = self.make_solver(kind)?;
+        Ok(())
+    }
+
+    /// The number of unknowns.
+    pub fn len(&self) -> usize {
+        self.n_p + self.n_w + 1
+    }
+
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Index of the border unknown d.
+    fn d(&self) -> usize {
+        self.n_p + self.n_w
+    }
+
+    /// Global column of W unknown c at node i.
+    fn wcol(&self, i: usize, c: usize) -> usize {
+        self.n_p + NW * i + c
+    }
+
+    /// The interval window's points (L, R, M); M absent for the trapezoidal scheme.
+    fn window_points(&self, i: usize) -> [Option<usize>; 3] {
+        let pts = &self.sys.points;
+        [
+            Some(pts.above[i]),
+            Some(pts.below[i + 1]),
+            self.hermite_simpson.then(|| pts.mid[i]),
+        ]
+    }
+
+    /// The growth-row index of interval i's W row `a` (0..5 scheme rows, 5 the z row).
+    fn interval_row(&self, i: usize, a: usize) -> usize {
+        self.n_p + POLE_ROWS + NW * i + a
+    }
+
+    fn pattern(&self) -> Vec<Vec<usize>> {
+        let n = self.len();
+        let d = self.d();
+        let mut rows: Vec<Vec<usize>> = vec![vec![]; n];
+        let window = |i: usize| -> Vec<usize> {
+            let mut cols: Vec<usize> = (0..2 * NW).map(|c| self.n_p + NW * i + c).collect();
+            for k in self.window_points(i).into_iter().flatten() {
+                cols.extend([NP * k, NP * k + 1]);
+            }
+            cols
+        };
+        for (k, &site) in self.sites.iter().enumerate() {
+            let mut cols = vec![NP * k, NP * k + 1, d];
+            match site {
+                Site::Left(i) => cols.extend((0..NW).map(|c| self.wcol(i, c))),
+                Site::Right(i) => cols.extend((0..NW).map(|c| self.wcol(i + 1, c))),
+                Site::Mid(i) => cols.extend(window(i)),
+            }
+            rows[NP * k] = cols.clone();
+            rows[NP * k + 1] = cols;
+        }
+        let pole: Vec<usize> = (0..NW)
+            .map(|c| self.wcol(0, c))
+            .chain([
+                NP * self.sys.points.above[0],
+                NP * self.sys.points.above[0] + 1,
+            ])
+            .collect();
+        for row in &mut rows[self.n_p..self.n_p + POLE_ROWS] {
+            *row = pole.clone();
+        }
+        for i in 0..self.m - 1 {
+            let cols = window(i);
+            for a in 0..NW {
+                rows[self.interval_row(i, a)] = cols.clone();
+            }
+        }
+        let last: Vec<usize> = (0..NW).map(|c| self.wcol(self.m - 1, c)).collect();
+        for row in &mut rows[d - 3..d] {
+            *row = last.clone();
+        }
+        rows[d] = (0..n).collect();
+        rows
+    }
+
+    fn make_solver(&self, kind: DaeLinear) -> Result<Box<dyn DirectSolver>, LinalgError> {
+        Ok(match kind {
+            DaeLinear::Schur => {
+                Box::new(SchurSolver::new(&self.jac, self.n_p, true, Reduced::Band)?)
+            }
+            DaeLinear::SchurKlu => {
+                Box::new(SchurSolver::new(&self.jac, self.n_p, true, Reduced::Klu)?)
+            }
+            DaeLinear::Band => Box::new(InterleavedBand::new(
+                &self.jac,
+                self.interleaving(),
+                Some(self.d()),
+            )?),
+            DaeLinear::Klu => Box::new(KluSolver::new(&self.jac)?),
+        })
+    }
+
+    /// Node by node: the node's growth points, its W unknowns, then its interval's midpoint.
+    fn interleaving(&self) -> Vec<usize> {
+        let pts = &self.sys.points;
+        let mut perm = vec![0; self.len()];
+        let mut next = 0;
+        let mut place = |perm: &mut Vec<usize>, cols: &mut dyn Iterator<Item = usize>| {
+            for c in cols {
+                perm[c] = next;
+                next += 1;
+            }
+        };
+        for i in 0..self.m {
+            let mut node_points = vec![pts.below[i], pts.above[i]];
+            node_points.dedup();
+            for k in node_points {
+                place(&mut perm, &mut (NP * k..NP * k + NP));
+            }
+            place(&mut perm, &mut (self.wcol(i, 0)..self.wcol(i, NW)));
+            if self.hermite_simpson && i < self.m - 1 {
+                let k = pts.mid[i];
+                place(&mut perm, &mut (NP * k..NP * k + NP));
+            }
+        }
+        perm
+    }
+
+    /// Set the discretisation's data to p and its evaluations to the elastic unknowns of y.
+    fn load(&mut self, y: &[f64]) -> Result<(), RhsError> {
+        let p = &y[..self.n_p];
+        for i in 0..self.m {
+            let w = &y[self.n_p + NW * i..self.n_p + NW * i + NY];
+            self.u[NY * i..NY * i + NY].copy_from_slice(w);
+        }
+        if self.at_p.as_slice() != p {
+            let data = self.sys.points.material_data(p);
+            self.sys.elastic.discretisation_mut().set_data(data);
+            self.at_p.clear();
+            self.at_p.extend_from_slice(p);
+        }
+        self.sys
+            .elastic
+            .discretisation_mut()
+            .evaluate_at(&self.u)
+            .map_err(RhsError::Evaluation)
+    }
+
+    /// The consistent state at t = 0 from the elastic solution the system holds: y with z
+    /// from the quadrature and d from the stimulus. y' comes from [`CoupledDae::derivative`].
+    pub fn initial_state(&mut self) -> Result<Vec<f64>, DaeError> {
+        let p0 = self.sys.points.initial_state();
+        let u0 = self.sys.elastic.u.clone();
+        let data = self.sys.points.material_data(&p0);
+        let disc = self.sys.elastic.discretisation_mut();
+        disc.set_data(data);
+        let quad = disc.quadratures(&u0).map_err(RhsError::Evaluation)?;
+        let mut y = vec![0.0; self.len()];
+        y[..self.n_p].copy_from_slice(&p0);
+        for i in 0..self.m {
+            let w = self.n_p + NW * i;
+            y[w..w + NY].copy_from_slice(&u0[NY * i..NY * i + NY]);
+            y[w + Z] = quad.z[i];
+        }
+        self.at_p.clear();
+        self.load(&y)?;
+        let local = self.locals(&y, None);
+        let rates = self.point_rates(&y, &local, None);
+        let d = self.d();
+        y[d] = self.crossing_depth(&rates).map_or(0.0, |c| c.value);
+        Ok(y)
+    }
+
+    /// y' at a consistent y: the rates for P, and for W and d the derivative of the
+    /// constraints, [A a; cᵀ s] w' = −[C; cᵀ] p' (one band solve of the algebraic block).
+    pub fn derivative(&mut self, y: &[f64]) -> Result<Vec<f64>, DaeError> {
+        let mut yp = vec![0.0; self.len()];
+        let mut r = vec![0.0; self.len()];
+        self.residual(y, &yp.clone(), &mut r)?;
+        for k in 0..self.n_p {
+            yp[k] = -r[k];
+        }
+        self.assemble(0.0, y)?;
+        let mut schur = SchurSolver::new(&self.jac, self.n_p, true, Reduced::Band)?;
+        schur.factor_algebraic(&self.jac)?;
+        let n_p = self.n_p;
+        let (p_dot, w_dot) = yp.split_at_mut(n_p);
+        schur.solve_algebraic(p_dot, w_dot)?;
+        Ok(yp)
+    }
+
+    /// The local state of every point; with `grads`, each one's derivatives in its window.
+    fn locals(&self, y: &[f64], mut grad: Option<&mut Vec<[Grad; 4]>>) -> Vec<Local> {
+        let disc = self.sys.elastic.discretisation();
+        let ev = disc.evaluations();
+        let mut local = vec![Local::default(); self.sites.len()];
+        if let Some(g) = grad.as_deref_mut() {
+            g.resize(self.sites.len(), [Grad::default(); 4]);
+        }
+        let grads = grad.is_some();
+        for (k, &site) in self.sites.iter().enumerate() {
+            let (node, slot, e, off) = match site {
+                Site::Left(i) => (i, L, ev.left(i), 0),
+                Site::Right(i) => (i + 1, RT, ev.right(i), NW),
+                Site::Mid(i) => {
+                    let ym = ev.y_mid(i);
+                    let e = ev.mid(i);
+                    let z = if grads {
+                        let (z, gz) = self.z_mid(y, disc, ev, i);
+                        if let Some(g) = grad.as_deref_mut() {
+                            g[k] = self.mid_grads(disc, ev, i, &gz);
+                        }
+                        z
+                    } else {
+                        self.z_mid_value(y, disc, ev, i)
+                    };
+                    local[k] = Local {
+                        r: ym[R],
+                        z,
+                        alpha_s: e.alpha_s,
+                        sin_theta: e.sin_theta,
+                        cos_theta: e.cos_theta,
+                    };
+                    continue;
+                }
+            };
+            let w = self.n_p + NW * node;
+            let yv = Vec5::from_column_slice(&y[w..w + NY]);
+            local[k] = Local {
+                r: yv[R],
+                z: y[w + Z],
+                alpha_s: e.alpha_s,
+                sin_theta: e.sin_theta,
+                cos_theta: e.cos_theta,
+            };
+            if grads {
+                let dd = self.derivs[k];
+                let mut ga = Grad::default();
+                ga.w[off + R] = e.alpha_s_r;
+                ga.w[off + TS] = e.alpha_s_ts;
+                ga.p[slot] = dd.alpha_s;
+                if let Some(g) = grad.as_deref_mut() {
+                    g[k] = [
+                        Grad::unit(off + R),
+                        Grad::unit(off + THETA),
+                        Grad::unit(off + Z),
+                        ga,
+                    ];
+                }
+            }
+        }
+        local
+    }
+
+    /// z at interval i's midpoint, from the cubic Hermite through its ends (the slopes from
+    /// inside the interval), with its derivatives in the window.
+    fn z_mid(&self, y: &[f64], disc: &Discretisation, ev: &Evaluations, i: usize) -> (f64, Grad) {
+        let h = disc.mesh.step(i);
+        let (wl, gl) = self.slope(disc, ev, i, L);
+        let (wr, gr) = self.slope(disc, ev, i, RT);
+        let (zi, zj) = (y[self.wcol(i, Z)], y[self.wcol(i + 1, Z)]);
+        let mut g = Grad::default();
+        g.w[Z] = 0.5;
+        g.w[NW + Z] = 0.5;
+        g.axpy(h / 8.0, &gl);
+        g.axpy(-h / 8.0, &gr);
+        (0.5 * (zi + zj) + h / 8.0 * (wl - wr), g)
+    }
+
+    /// [`CoupledDae::z_mid`]'s value alone (the residual's path).
+    fn z_mid_value(&self, y: &[f64], disc: &Discretisation, ev: &Evaluations, i: usize) -> f64 {
+        let h = disc.mesh.step(i);
+        let (el, er) = (ev.left(i), ev.right(i));
+        let wl = -disc.data.above[i].gamma * el.alpha_s * el.sin_theta;
+        let wr = -disc.data.below[i + 1].gamma * er.alpha_s * er.sin_theta;
+        0.5 * (y[self.wcol(i, Z)] + y[self.wcol(i + 1, Z)]) + h / 8.0 * (wl - wr)
+    }
+
+    /// dz/dΣ = −γ α_s sin θ at interval i's end `slot` (L or RT) or midpoint (M), with its
+    /// derivatives in the window (for M: through y_m too).
+    fn slope(&self, disc: &Discretisation, ev: &Evaluations, i: usize, slot: usize) -> (f64, Grad) {
+        let (e, mp, off) = match slot {
+            L => (ev.left(i), &disc.data.above[i], Some(0)),
+            RT => (ev.right(i), &disc.data.below[i + 1], Some(NW)),
+            _ => (ev.mid(i), &disc.data.mid[i], None),
+        };
+        let (sn, cs) = (e.sin_theta, e.cos_theta);
+        let (g, a) = (mp.gamma, e.alpha_s);
+        let w = -g * a * sn;
+        // ∂w/∂y at the point, and ∂w/∂(ρ, γ_s) of its own data.
+        let mut dy = Vec5::zeros();
+        dy[R] = -g * e.alpha_s_r * sn;
+        dy[THETA] = -g * a * cs;
+        dy[TS] = -g * e.alpha_s_ts * sn;
+        let dd = self.derivs[self.window_points(i)[slot].expect("the slot's point exists")];
+        let dp = [-g * sn * dd.alpha_s[0], -sn * (a + g * dd.alpha_s[1])];
+        let mut grad = Grad::default();
+        match off {
+            Some(o) => {
+                for c in 0..NY {
+                    grad.w[o + c] = dy[c];
+                }
+                grad.p[slot] = dp;
+            }
+            None => {
+                grad = self.through_mid(disc, ev, i, &dy);
+                grad.p[M] = dp;
+            }
+        }
+        (w, grad)
+    }
+
+    /// gᵀ ∂y_m/∂(window) for a row vector g over y_m: y_m = (y_i + y_{i+1})/2 + h/8 (f_L − f_R).
+    fn through_mid(&self, disc: &Discretisation, ev: &Evaluations, i: usize, g: &Vec5) -> Grad {
+        let h = disc.mesh.step(i);
+        let id = Mat5::identity();
+        let dl = 0.5 * id + (h / 8.0) * ev.left(i).jac;
+        let dr = 0.5 * id - (h / 8.0) * ev.right(i).jac;
+        let gl = dl.transpose() * g;
+        let gr = dr.transpose() * g;
+        let mut out = Grad::default();
+        for c in 0..NY {
+            out.w[c] = gl[c];
+            out.w[NW + c] = gr[c];
+        }
+        let pts = &self.sys.points;
+        let (fl, fr) = (&self.derivs[pts.above[i]], &self.derivs[pts.below[i + 1]]);
+        for q in 0..2 {
+            out.p[L][q] = (h / 8.0) * g.dot(&fl.f[q]);
+            out.p[RT][q] = -(h / 8.0) * g.dot(&fr.f[q]);
+        }
+        out
+    }
+
+    /// The derivatives of a midpoint's (r, θ, z, α_s) in its window.
+    fn mid_grads(&self, disc: &Discretisation, ev: &Evaluations, i: usize, gz: &Grad) -> [Grad; 4] {
+        let e = ev.mid(i);
+        let unit = |c: usize| {
+            let mut v = Vec5::zeros();
+            v[c] = 1.0;
+            v
+        };
+        let gr = self.through_mid(disc, ev, i, &unit(R));
+        let gt = self.through_mid(disc, ev, i, &unit(THETA));
+        let mut ga_y = Vec5::zeros();
+        ga_y[R] = e.alpha_s_r;
+        ga_y[TS] = e.alpha_s_ts;
+        let mut ga = self.through_mid(disc, ev, i, &ga_y);
+        ga.p[M] = self.derivs[self.sys.points.mid[i]].alpha_s;
+        [gr, gt, *gz, ga]
+    }
+
+    /// The retina, the stimulus and the rates at every point; with `deriv`, their
+    /// derivatives in each point's (r, θ, z, α_s, ρ, γ_s) and d.
+    fn point_rates(
+        &self,
+        y: &[f64],
+        local: &[Local],
+        mut deriv: Option<&mut Vec<RateDeriv>>,
+    ) -> Vec<PointRates> {
+        let pts = &self.sys.points;
+        let law = self.sys.points_law();
+        let blue = self.sys.blue();
+        let w = self.sys.kink_width();
+        let d_unknown = y[self.d()];
+        let mut out: Vec<PointRates> = Vec::with_capacity(local.len());
+        for (k, s) in local.iter().enumerate() {
+            let (rho, gam) = (y[NP * k], y[NP * k + 1]);
+            let zeta = pts.zeta(k, &y[..self.n_p]);
+            let ht = zeta * rho / (s.alpha_s * s.r);
+            let (sn, cs) = (s.sin_theta, s.cos_theta);
+            let (zr, rr) = (s.z - 0.5 * ht * cs, s.r - 0.5 * ht * sn);
+            let g = blue.depth_gradient(zr, rr);
+            out.push(PointRates {
+                depth: g.depth,
+                angle: g.angle,
+                ..Default::default()
+            });
+            if let Some(dv) = deriv.as_deref_mut() {
+                // h_t = ζ ρ / (α_s r), ζ = ζ(ρ, γ_s): ∂h_t/∂(r, θ, z, α_s, ρ, γ_s).
+                let [z_rho, z_gam] = zeta_partials(law, rho, zeta, gam);
+                let dht = [
+                    -ht / s.r,
+                    0.0,
+                    0.0,
+                    -ht / s.alpha_s,
+                    ht / rho + ht / zeta * z_rho,
+                    ht / zeta * z_gam,
+                ];
+                let mut dz_ret = dht.map(|v| -0.5 * cs * v);
+                let mut dr_ret = dht.map(|v| -0.5 * sn * v);
+                dz_ret[2] += 1.0;
+                dz_ret[1] += 0.5 * ht * sn;
+                dr_ret[0] += 1.0;
+                dr_ret[1] -= 0.5 * ht * cs;
+                let mut rd = RateDeriv::default();
+                for q in 0..6 {
+                    rd.depth[q] = g.depth_z * dz_ret[q] + g.depth_r * dr_ret[q];
+                    rd.angle[q] = g.angle_z * dz_ret[q] + g.angle_r * dr_ret[q];
+                }
+                dv.push(rd);
+            }
+        }
+        // Beyond φ_max the depth is the unknown d (docs/MODEL.md §6).
+        let has_crossing = self.crossing_depth(&out).is_some();
+        for (k, pr) in out.iter_mut().enumerate() {
+            let s = &local[k];
+            let (rho, gam) = (y[NP * k], y[NP * k + 1]);
+            pr.beyond = has_crossing && pr.angle >= blue.phi_max;
+            let depth = if pr.beyond { d_unknown } else { pr.depth };
+            let (dr, da) = (s.r - rho, s.alpha_s - 1.0);
+            let ((gv, gv_slope), (pr_, pr_slope), (pa, pa_slope)) = (
+                positive_smooth(depth, w),
+                positive_smooth(dr, w),
+                positive_smooth(da, w),
+            );
+            pr.g_v = gv;
+            let cap = pts.capacity[k];
+            pr.eta = cap * pr.g_v;
+            pr.rho = pr.eta * pr_;
+            pr.gamma = pr.eta * gam * pa;
+            if let Some(dv) = deriv.as_deref_mut() {
+                let rd = &mut dv[k];
+                // ∂g_v/∂(local) and ∂g_v/∂d: the slope of the branch the value took.
+                let gv_local: [f64; 6] = if pr.beyond {
+                    [0.0; 6]
+                } else {
+                    rd.depth.map(|v| gv_slope * v)
+                };
+                let gv_d = if pr.beyond { gv_slope } else { 0.0 };
+                for q in 0..6 {
+                    rd.rate[0][q] = cap * gv_local[q] * pr_;
+                    rd.rate[1][q] = cap * gv_local[q] * gam * pa;
+                }
+                rd.rate[0][0] += pr.eta * pr_slope;
+                rd.rate[0][4] -= pr.eta * pr_slope;
+                rd.rate[1][3] += pr.eta * gam * pa_slope;
+                rd.rate[1][5] += pr.eta * pa;
+                rd.rate_d = [cap * gv_d * pr_, cap * gv_d * gam * pa];
+            }
+        }
+        out
+    }
+
+    /// Rates (and, with `deriv`, their derivatives) that are not finite fail the evaluation
+    /// at their point, as an elastic evaluation does, so that IDA cuts the step or the run
+    /// says where; they would otherwise spread NaN through the Newton matrix.
+    fn check_finite(
+        &self,
+        rates: &[PointRates],
+        deriv: Option<&[RateDeriv]>,
+    ) -> Result<(), RhsError> {
+        let bad = |k: usize| {
+            let pr = &rates[k];
+            let mut values = vec![pr.rho, pr.gamma, pr.depth];
+            if let Some(rd) = deriv {
+                values.extend(
+                    rd[k]
+                        .rate
+                        .iter()
+                        .flatten()
+                        .chain(&rd[k].rate_d)
+                        .chain(&rd[k].depth)
+                        .chain(&rd[k].angle),
+                );
+            }
+            values.iter().any(|v| !v.is_finite())
+        };
+        match (0..rates.len()).find(|&k| bad(k)) {
+            None => Ok(()),
+            Some(k) => {
+                let node = match self.sites[k] {
+                    Site::Left(i) | Site::Mid(i) => i,
+                    Site::Right(i) => i + 1,
+                };
+                Err(RhsError::Evaluation(EvalFailure {
+                    node,
+                    sigma_ref: self.sys.points.sigma_ref[k],
+                    why: PointError::NotFinite,
+                }))
+            }
+        }
+    }
+
+    /// The depth of the blue surface where the retina crosses φ_max: linear in φ between the
+    /// two points (in Σ order) that straddle it (docs/MODEL.md §6); None if none reaches it.
+    fn crossing_depth(&self, rates: &[PointRates]) -> Option<Crossing> {
+        let phi_max = self.sys.blue().phi_max;
+        let j = self.order.iter().position(|&k| rates[k].angle >= phi_max)?;
+        if j == 0 {
+            let k = self.order[0];
+            return Some(Crossing {
+                value: rates[k].depth,
+                a: k,
+                b: k,
+                t: 1.0,
+            });
+        }
+        let (a, b) = (self.order[j - 1], self.order[j]);
+        let (ra, rb) = (&rates[a], &rates[b]);
+        let t = (phi_max - ra.angle) / (rb.angle - ra.angle);
+        Some(Crossing {
+            value: ra.depth + t * (rb.depth - ra.depth),
+            a,
+            b,
+            t,
+        })
+    }
+
+    /// F(t, y, y') into r.
+    pub fn residual(&mut self, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), RhsError> {
+        let start = std::time::Instant::now();
+        self.counters.residuals += 1;
+        self.load(y)?;
+        let local = self.locals(y, None);
+        let rates = self.point_rates(y, &local, None);
+        self.check_finite(&rates, None)?;
+        for (k, pr) in rates.iter().enumerate() {
+            r[NP * k] = yp[NP * k] - pr.rho;
+            r[NP * k + 1] = yp[NP * k + 1] - pr.gamma;
+        }
+        let (n_p, m) = (self.n_p, self.m);
+        let (mut f, mut dz) = (std::mem::take(&mut self.f), std::mem::take(&mut self.dz));
+        let disc = self.sys.elastic.discretisation_mut();
+        let res = disc
+            .residual(&self.u, &mut f)
+            .and_then(|_| disc.z_steps(&self.u, &mut dz));
+        if let Err(e) = res {
+            (self.f, self.dz) = (f, dz);
+            return Err(RhsError::Evaluation(e));
+        }
+        let z_star = disc.edge.z;
+        r[n_p..n_p + POLE_ROWS].copy_from_slice(&f[..POLE_ROWS]);
+        for i in 0..m - 1 {
+            let row = n_p + POLE_ROWS + NW * i;
+            r[row..row + NY].copy_from_slice(&f[POLE_ROWS + NY * i..POLE_ROWS + NY * i + NY]);
+            r[row + Z] = y[self.wcol(i + 1, Z)] - y[self.wcol(i, Z)] - dz[i];
+        }
+        let d = self.d();
+        let nf = f.len();
+        r[d - 3] = f[nf - 2];
+        r[d - 2] = f[nf - 1];
+        r[d - 1] = y[self.wcol(m - 1, Z)] - z_star;
+        r[d] = y[d] - self.crossing_depth(&rates).map_or(0.0, |c| c.value);
+        (self.f, self.dz) = (f, dz);
+        self.counters.residual_seconds += start.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Assemble ∂F/∂y + c ∂F/∂y' at y into the CSR matrix.
+    pub fn assemble(&mut self, c: f64, y: &[f64]) -> Result<(), DaeError> {
+        self.load(y)?;
+        self.derivs = self.data_derivs();
+        self.jac.zero();
+        let n_p = self.n_p;
+        // The elastic rows in the elastic unknowns: the discretisation's own Jacobian.
+        {
+            let disc = self.sys.elastic.discretisation_mut();
+            let mut sink = WSink {
+                csr: &mut self.jac,
+                n_p,
+                m: self.m,
+            };
+            disc.jacobian(&self.u, &mut sink)
+                .map_err(RhsError::Evaluation)?;
+        }
+        // The cornea's z and the border's own entry.
+        let d = self.d();
+        self.jac.add(d - 1, self.wcol(self.m - 1, Z), 1.0);
+        self.jac.add(d, d, 1.0);
+        self.assemble_data_columns();
+        self.assemble_z_rows();
+        let mut grads = std::mem::take(&mut self.grads);
+        let local = self.locals(y, Some(&mut grads));
+        let mut rd = Vec::with_capacity(local.len());
+        let rates = self.point_rates(y, &local, Some(&mut rd));
+        if let Err(e) = self.check_finite(&rates, Some(&rd)) {
+            self.grads = grads;
+            return Err(e.into());
+        }
+        self.assemble_growth_rows(c, &grads, &rd, &rates);
+        self.assemble_border(&grads, &rd, &rates);
+        self.grads = grads;
+        match self.jac.take_outside() {
+            0 => Ok(()),
+            k => Err(DaeError::Linear(LinalgError::OutsidePattern(k))),
+        }
+    }
+
+    /// Add a window gradient `g` of interval i times `a` to row `row`; `half` restricts the
+    /// W part to the nodes the row's pattern holds (0: node i, 1: node i+1, None: both).
+    fn add_grad(&mut self, row: usize, i: usize, a: f64, g: &Grad, half: Option<usize>) {
+        let w0 = self.wcol(i, 0);
+        let span: Vec<f64> = g.w.iter().map(|v| a * v).collect();
+        match half {
+            None => self.jac.add_span(row, w0, &span),
+            Some(h) => self
+                .jac
+                .add_span(row, w0 + NW * h, &span[NW * h..NW * h + NW]),
+        }
+        for (slot, k) in self.window_points(i).into_iter().enumerate() {
+            if let Some(k) = k {
+                let v = g.p[slot];
+                if v != [0.0, 0.0] {
+                    self.jac.add_span(row, NP * k, &[a * v[0], a * v[1]]);
+                }
+            }
+        }
+    }
+
+    /// Each point's ∂f/∂(ρ, γ_s) and ∂α_s/∂(ρ, γ_s), from the evaluation at its site (the
+    /// interval end or midpoint it belongs to; a node shared by two intervals has one).
+    fn data_derivs(&self) -> Vec<DataDeriv> {
+        let disc = self.sys.elastic.discretisation();
+        let (ev, data, law) = (disc.evaluations(), &disc.data, self.sys.points_law());
+        let y = |j: usize| Vec5::from_column_slice(&self.u[NY * j..NY * j + NY]);
+        self.sites
+            .iter()
+            .map(|&site| match site {
+                Site::Left(i) => data_deriv(law, &data.above[i], &y(i), ev.left(i)),
+                Site::Right(i) => data_deriv(law, &data.below[i + 1], &y(i + 1), ev.right(i)),
+                Site::Mid(i) => data_deriv(law, &data.mid[i], ev.y_mid(i), ev.mid(i)),
+            })
+            .collect()
+    }
+
+    /// The elastic rows' derivatives in the growth data: the pole rows in above[0]'s data
+    /// (σ_ε = ε γ_s and α_s there), each interval's rows in its points' data.
+    fn assemble_data_columns(&mut self) {
+        let disc = self.sys.elastic.discretisation();
+        let ev = disc.evaluations();
+        let n_p = self.n_p;
+        let mut adds: Vec<(usize, usize, [f64; 2])> = vec![];
+        // Pole: f0 = r − σ_ε α_s, f1 = θ − σ_ε α_s κ, σ_ε = ε γ_s.
+        let k0 = self.sys.points.above[0];
+        let y0 = Vec5::from_column_slice(&self.u[..NY]);
+        let mp0 = &disc.data.above[0];
+        let e0 = ev.left(0);
+        let dd0 = self.derivs[k0];
+        let eps = disc.mesh.nodes[0];
+        let se = mp0.sigma;
+        let d_f0 = [
+            -se * dd0.alpha_s[0],
+            -eps * e0.alpha_s - se * dd0.alpha_s[1],
+        ];
+        adds.push((n_p, k0, d_f0));
+        adds.push((n_p + 1, k0, [d_f0[0] * y0[0], d_f0[1] * y0[0]]));
+        for i in 0..self.m - 1 {
+            let h = disc.mesh.step(i);
+            let [pl, pr, pm] = self.window_points(i);
+            let (pl, pr) = (
+                pl.expect("every interval has ends"),
+                pr.expect("every interval has ends"),
+            );
+            let (fl, fr) = (&self.derivs[pl], &self.derivs[pr]);
+            let mut cols: Vec<(usize, [Vec5; 2])> = vec![];
+            match self.hermite_simpson {
+                false => {
+                    cols.push((pl, fl.f.map(|v| -0.5 * h * v)));
+                    cols.push((pr, fr.f.map(|v| -0.5 * h * v)));
+                }
+                true => {
+                    let jm = &ev.mid(i).jac;
+                    let fm = &self.derivs[pm.expect("Hermite–Simpson has midpoints")];
+                    cols.push((pl, fl.f.map(|v| -(h / 6.0) * v - (h * h / 12.0) * (jm * v))));
+                    cols.push((pr, fr.f.map(|v| -(h / 6.0) * v + (h * h / 12.0) * (jm * v))));
+                    cols.push((
+                        pm.expect("Hermite–Simpson has midpoints"),
+                        fm.f.map(|v| -(2.0 * h / 3.0) * v),
+                    ));
+                }
+            }
+            for (k, dv) in cols {
+                for a in 0..NY {
+                    adds.push((self.interval_row(i, a), k, [dv[0][a], dv[1][a]]));
+                }
+            }
+        }
+        for (row, k, v) in adds {
+            self.jac.add_span(row, NP * k, &v);
+        }
+    }
+
+    /// The z rows: z_{i+1} − z_i − Δz_i with Δz_i the scheme's quadrature of the slopes.
+    fn assemble_z_rows(&mut self) {
+        let disc = self.sys.elastic.discretisation();
+        let ev = disc.evaluations();
+        let mut rows: Vec<(usize, usize, Grad)> = Vec::with_capacity(self.m - 1);
+        for i in 0..self.m - 1 {
+            let h = disc.mesh.step(i);
+            let (_, gl) = self.slope(disc, ev, i, L);
+            let (_, gr) = self.slope(disc, ev, i, RT);
+            let mut g = Grad::default();
+            g.w[Z] = -1.0;
+            g.w[NW + Z] = 1.0;
+            if self.hermite_simpson {
+                let (_, gm) = self.slope(disc, ev, i, M);
+                g.axpy(-h / 6.0, &gl);
+                g.axpy(-4.0 * h / 6.0, &gm);
+                g.axpy(-h / 6.0, &gr);
+            } else {
+                g.axpy(-0.5 * h, &gl);
+                g.axpy(-0.5 * h, &gr);
+            }
+            rows.push((self.interval_row(i, Z), i, g));
+        }
+        for (row, i, g) in rows {
+            self.add_grad(row, i, 1.0, &g, None);
+        }
+    }
+
+    /// The growth rows: c I − ∂rates/∂y, through each point's local state.
+    fn assemble_growth_rows(
+        &mut self,
+        c: f64,
+        grads: &[[Grad; 4]],
+        rd: &[RateDeriv],
+        _rates: &[PointRates],
+    ) {
+        let d = self.d();
+        for (k, &site) in self.sites.clone().iter().enumerate() {
+            let i = site.interval();
+            let (half, own) = match site {
+                Site::Left(_) => (Some(0), L),
+                Site::Right(_) => (Some(1), RT),
+                Site::Mid(_) => (None, M),
+            };
+            for a in 0..2 {
+                let row = NP * k + a;
+                let dr = &rd[k].rate[a];
+                let mut g = Grad::default();
+                for q in 0..4 {
+                    g.axpy(-dr[q], &grads[k][q]);
+                }
+                g.p[own][0] -= dr[4];
+                g.p[own][1] -= dr[5];
+                g.p[own][a] += c;
+                self.add_grad(row, i, 1.0, &g, half);
+                if rd[k].rate_d[a] != 0.0 {
+                    self.jac.add(row, d, -rd[k].rate_d[a]);
+                }
+            }
+        }
+    }
+
+    /// The border row: d − D*(y), D* the depth interpolated at φ_max.
+    fn assemble_border(&mut self, grads: &[[Grad; 4]], rd: &[RateDeriv], rates: &[PointRates]) {
+        let Some(cr) = self.crossing_depth(rates) else {
+            return;
+        };
+        let d = self.d();
+        // ∂D* = (1 − t) ∂d_a + t ∂d_b − (d_b − d_a)/(φ_b − φ_a) ((1 − t) ∂φ_a + t ∂φ_b).
+        let (a, b, t) = (cr.a, cr.b, cr.t);
+        let slope = if a == b {
+            0.0
+        } else {
+            (rates[b].depth - rates[a].depth) / (rates[b].angle - rates[a].angle)
+        };
+        for (k, wgt) in [(a, 1.0 - t), (b, t)] {
+            if a == b && k == a && wgt != 1.0 {
+                continue;
+            }
+            let mut g = Grad::default();
+            let own = match self.sites[k] {
+                Site::Left(_) => L,
+                Site::Right(_) => RT,
+                Site::Mid(_) => M,
+            };
+            for q in 0..4 {
+                g.axpy(
+                    -wgt * (rd[k].depth[q] - slope * rd[k].angle[q]),
+                    &grads[k][q],
+                );
+            }
+            for (s, q) in [(0usize, 4usize), (1, 5)] {
+                g.p[own][s] -= wgt * (rd[k].depth[q] - slope * rd[k].angle[q]);
+            }
+            let i = self.sites[k].interval();
+            self.add_grad(d, i, 1.0, &g, None);
+        }
+    }
+
+    /// Assemble at (c, y) and factorise.
+    pub fn setup(&mut self, c: f64, y: &[f64]) -> Result<(), DaeError> {
+        let start = std::time::Instant::now();
+        self.counters.jacobians += 1;
+        self.assemble(c, y)?;
+        let mid = std::time::Instant::now();
+        self.counters.jacobian_seconds += (mid - start).as_secs_f64();
+        self.linear.factor(&self.jac)?;
+        self.counters.factor_seconds += mid.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// x = M⁻¹ b with the last factorisation.
+    pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), DaeError> {
+        let start = std::time::Instant::now();
+        self.counters.solves += 1;
+        self.linear.solve(b, x)?;
+        self.counters.solve_seconds += start.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The assembled matrix of the last [`CoupledDae::assemble`] (for tests).
+    pub fn matrix(&self) -> &Csr {
+        &self.jac
+    }
+
+    /// Hand the state y to the growth system (for output at an interpolated time): its
+    /// data become p and its elastic unknowns y's, without a re-solve.
+    pub fn adopt(&mut self, y: &[f64]) {
+        let p = &y[..self.n_p];
+        let u: Vec<f64> = (0..self.m)
+            .flat_map(|i| y[self.wcol(i, 0)..self.wcol(i, NY)].to_vec())
+            .collect();
+        self.sys.adopt(p, &u);
+        self.at_p.clear();
+    }
+
+    /// The number of growth unknowns (the differential part of y).
+    pub fn differential_len(&self) -> usize {
+        self.n_p
+    }
+
+    /// 1 for the differential unknowns, 0 for the algebraic ones (IDASetId).
+    pub fn id(&self) -> Vec<f64> {
+        (0..self.len())
+            .map(|k| if k < self.n_p { 1.0 } else { 0.0 })
+            .collect()
+    }
+
+    /// Absolute tolerances. The growth state and d take `atol` (mm for ρ and d, 1 for γ_s),
+    /// as CVODE's growth state does. Each elastic unknown takes the error `rtol` allows on
+    /// its typical size (κ ~ 1/R0, r and z ~ R0, θ ~ 1, q_s and t_s ~ the Laplace tension,
+    /// as KINSOL's scaling has them) plus `atol` in proportion: q_s is near zero over much
+    /// of the shell, and an error test relative to its own size there asked for 1e-9 of the
+    /// tension it balances (measured: the q_s rows limited nearly every step).
+    pub fn abs_tolerances(&self, rtol: f64, atol: f64, r0: f64) -> Vec<f64> {
+        let typ = self.sys.elastic.discretisation().typical(r0);
+        let typical = [typ[0], typ[1], typ[2], typ[3], typ[4], r0];
+        let mut v = vec![atol; self.len()];
+        for i in 0..self.m {
+            for (c, t) in typical.iter().enumerate() {
+                v[self.wcol(i, c)] = (rtol + atol / r0) * t;
+            }
+        }
+        v
+    }
+}
+
+/// The crossing of φ_max: the interpolated depth, the straddling points and the weight.
+#[derive(Clone, Copy, Debug)]
+struct Crossing {
+    value: f64,
+    a: usize,
+    b: usize,
+    t: f64,
+}
+
+/// Writes the discretisation's Jacobian (rows and columns of the 5-per-node elastic
+/// system) into the coupled matrix's W block (6 per node).
+struct WSink<'a> {
+    csr: &'a mut Csr,
+    n_p: usize,
+    m: usize,
+}
+
+impl MatrixSink for WSink<'_> {
+    fn nrows(&self) -> usize {
+        NY * self.m
+    }
+
+    fn set(&mut self, i: usize, j: usize, v: f64) {
+        let n = NY * self.m;
+        let row = if i < POLE_ROWS {
+            i
+        } else if i >= n - 2 {
+            NW * self.m - 3 + (i + 2 - n)
+        } else {
+            let k = i - POLE_ROWS;
+            POLE_ROWS + NW * (k / NY) + k % NY
+        };
+        let col = NW * (j / NY) + j % NY;
+        self.csr.add(self.n_p + row, self.n_p + col, v);
+    }
+}
+
+/// The placeholder before the real solver is made.
+struct NoSolver;
+
+impl DirectSolver for NoSolver {
+    fn factor(&mut self, _: &Csr) -> Result<(), LinalgError> {
+        Err(LinalgError::Singular("no solver".into()))
+    }
+    fn solve(&mut self, _: &[f64], _: &mut [f64]) -> Result<(), LinalgError> {
+        Err(LinalgError::Singular("no solver".into()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::growth::GrowthParams;
+    use crate::model::params::{Params, SolverSettings};
+
+    /// The structure the docs state: the Schur complement leaves the elastic band (lower 8,
+    /// upper 8, with z in it) while the interleaved whole system has lower 14, upper 12,
+    /// and the pattern of the const scene at N = 501 holds 87 939 entries.
+    #[test]
+    fn reduced_and_interleaved_bandwidths() {
+        let s = SolverSettings {
+            nodes: 501,
+            ..SolverSettings::default()
+        };
+        let sys = GrowthSystem::new(&Params::default(), &s, &GrowthParams::default()).unwrap();
+        let dae = CoupledDae::new(sys);
+        let schur = SchurSolver::new(&dae.jac, dae.n_p, true, Reduced::Band).unwrap();
+        let band = InterleavedBand::new(&dae.jac, dae.interleaving(), Some(dae.d())).unwrap();
+        assert_eq!(
+            (dae.len(), dae.n_p, dae.n_w, dae.jac.nnz()),
+            (5059, 2022, 3036, 87939)
+        );
+        assert_eq!(schur.widths(), (8, 8));
+        assert_eq!(band.widths(), (14, 12));
+    }
+}

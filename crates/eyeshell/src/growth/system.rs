@@ -1,0 +1,377 @@
+//! The growth system dp/dt = G(p) (docs/MODEL.md §5–6): p holds (ρ, γ_s) at the growth points;
+//! each evaluation solves the elastic problem for the shell p describes (warm-started from
+//! the last solution) and turns its state into growth rates through the visual stimulus.
+//!
+//! Jacobian products by the implicit-function theorem. With F(u; p) = 0 the elastic
+//! equations and g(u, p) the rates, G(p) = g(u*(p), p) and
+//!     J v = g_p v + g_u w,   w = −F_u⁻¹ F_p v.
+//! F_u is assembled and factored once per Jacobian set-up at the converged u*, so a
+//! product costs one residual evaluation (F_p v, by a directional difference at fixed u*),
+//! one back-substitution, and one evaluation of the rates at (u* + δw, p + δv), which gives
+//! g_p v + g_u w as a single directional difference. No elastic re-solve per column.
+
+use super::points::{GrowthPoints, NP};
+use super::{GrowthParams, GrowthRow, SeriesRow};
+use crate::bvp::discretisation::{EvalFailure, NY};
+use crate::bvp::equations::{R, THETA};
+use crate::bvp::solve::{linear_spec, BvpError, ElasticSolver, Solution};
+use crate::model::growth_law;
+use crate::model::params::{Params, SolverSettings};
+use crate::model::stimulus::{Refraction, Surface};
+use eyeshell_sundials::{Context, LinearSolver, Matrix, NVector, SundialsError};
+use std::rc::Rc;
+
+/// Newton iterations between refactorisations of the elastic Jacobian during growth.
+const REFACTOR_EVERY: usize = 3;
+
+/// What the rates saw at one point: the retina and the stimulus there.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointStimulus {
+    pub z_retina: f64,
+    pub r_retina: f64,
+    /// Depth of the blue surface behind the retina (docs/MODEL.md §6).
+    pub depth_blue: f64,
+    pub angle: f64,
+    pub g_v: f64,
+    pub eta: f64,
+}
+
+/// Counters of the work behind the right-hand side.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Work {
+    pub rhs_evaluations: usize,
+    pub bvp_solves: usize,
+    pub jacobian_products: usize,
+    pub jacobian_setups: usize,
+}
+
+/// Why a right-hand side could not be evaluated.
+#[derive(Debug, thiserror::Error)]
+pub enum RhsError {
+    #[error("the elastic solve failed: {0}")]
+    Elastic(#[from] BvpError),
+    #[error("the growth rates cannot be evaluated at node {} (Σ = {:.6}): {}", .0.node, .0.sigma_ref, .0.why)]
+    Evaluation(EvalFailure),
+    #[error(transparent)]
+    Sundials(#[from] SundialsError),
+}
+
+/// F_u factored at the converged state of one p, for Jacobian products.
+struct Factored {
+    matrix: Matrix,
+    solver: LinearSolver,
+    /// F(u*; p) as evaluated (≈ 0), the base of the directional difference F_p v.
+    residual: Vec<f64>,
+    /// The p it was factored for.
+    at: Vec<f64>,
+    rhs: NVector,
+    x: NVector,
+}
+
+pub struct GrowthSystem {
+    pub elastic: ElasticSolver,
+    pub points: GrowthPoints,
+    growth: GrowthParams,
+    linear: crate::model::params::LinearSolverKind,
+    /// The last state the elastic problem was solved for, and its converged unknowns.
+    solved_at: Vec<f64>,
+    /// Whether `elastic.u` solves the elastic problem at `solved_at` to Newton's tolerance
+    /// (false after [`GrowthSystem::adopt`]: an integrator's state, accurate to its own
+    /// tolerance).
+    exact: bool,
+    last_good_u: Vec<f64>,
+    ctx: Rc<Context>,
+    factored: Option<Factored>,
+    pub work: Work,
+}
+
+impl GrowthSystem {
+    pub fn new(params: &Params, solver: &SolverSettings, growth: &GrowthParams) -> Result<Self, RhsError> {
+        let mut elastic = ElasticSolver::new(params, solver)?;
+        elastic.solve_cold()?;
+        // Successive right sides change the shell a little: modified Newton from the last
+        // factorisation, refactored every 3 iterations (measured on the const scene, N = 501:
+        // 0.77 → 0.63 s; refactoring every 10 iterations is slower again).
+        elastic.set_jacobian_reuse(Some(REFACTOR_EVERY))?;
+        let disc = elastic.discretisation();
+        let points = GrowthPoints::new(params, growth, &disc.mesh, disc.scheme);
+        let last_good_u = elastic.u.clone();
+        Ok(GrowthSystem {
+            elastic,
+            points,
+            growth: growth.clone(),
+            linear: solver.linear,
+            solved_at: vec![],
+            exact: false,
+            last_good_u,
+            ctx: Context::new()?,
+            factored: None,
+            work: Work::default(),
+        })
+    }
+
+    /// The number of growth unknowns.
+    pub fn len(&self) -> usize {
+        NP * self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Solve the elastic problem for the shell in state `p` (nothing to do if it was the last;
+    /// from the adopted unknowns if `p` was adopted).
+    pub fn solve_elastic(&mut self, p: &[f64]) -> Result<(), RhsError> {
+        let same = self.solved_at.as_slice() == p;
+        if same && self.exact {
+            return Ok(());
+        }
+        if !same {
+            let data = self.points.material_data(p);
+            self.elastic.discretisation_mut().set_data(data);
+        }
+        self.solved_at.clear();
+        self.work.bvp_solves += 1;
+        // An adopted state is accurate to the integrator's tolerance, and the factorisation
+        // kept for modified Newton may be from long ago: polish it by exact Newton.
+        let polishing = same;
+        if polishing {
+            self.elastic.set_jacobian_reuse(None)?;
+        }
+        let solved = self.elastic.newton();
+        if polishing {
+            self.elastic.set_jacobian_reuse(Some(REFACTOR_EVERY))?;
+        }
+        if let Err(e) = solved {
+            // Start the next attempt (a shorter step) from the last converged state.
+            self.elastic.u.clone_from(&self.last_good_u);
+            return Err(e.into());
+        }
+        self.last_good_u.clone_from(&self.elastic.u);
+        self.solved_at.extend_from_slice(p);
+        self.exact = true;
+        Ok(())
+    }
+
+    /// G(p): solve the elastic problem, then the growth rates.
+    pub fn rhs(&mut self, p: &[f64], out: &mut [f64]) -> Result<(), RhsError> {
+        self.work.rhs_evaluations += 1;
+        self.solve_elastic(p)?;
+        let u = std::mem::take(&mut self.elastic.u);
+        let r = self.rates(&u, p, out, None);
+        self.elastic.u = u;
+        r
+    }
+
+    /// Rates g(u, p) with the discretisation's data already set to p. With `detail`, also
+    /// what the stimulus saw at each point.
+    fn rates(&mut self, u: &[f64], p: &[f64], out: &mut [f64], detail: Option<&mut Vec<PointStimulus>>) -> Result<(), RhsError> {
+        let disc = self.elastic.discretisation_mut();
+        let quad = disc.quadratures(u).map_err(RhsError::Evaluation)?;
+        let (m, pts) = (disc.mesh.len(), &self.points);
+        let ev = disc.evaluations();
+        let n_pts = pts.len();
+        // r, θ, z, α_s at every point (a point shared by two slots takes either: equal).
+        let mut local = vec![(0.0, 0.0, 0.0, 0.0); n_pts];
+        for i in 0..m {
+            let (r, th, z) = (u[NY * i + R], u[NY * i + THETA], quad.z[i]);
+            if i < m - 1 {
+                local[pts.above[i]] = (r, th, z, ev.left(i).alpha_s);
+            }
+            if i > 0 {
+                local[pts.below[i]] = (r, th, z, ev.right(i - 1).alpha_s);
+            }
+        }
+        if !pts.mid.is_empty() {
+            for i in 0..m - 1 {
+                let ym = ev.y_mid(i);
+                local[pts.mid[i]] = (ym[R], ym[THETA], quad.z_mid(i, disc.mesh.step(i)), ev.mid(i).alpha_s);
+            }
+        }
+        // The retina (inner face) and the depth of the blue surface behind it.
+        let blue = self.growth.blue;
+        let mut stim: Vec<PointStimulus> = (0..n_pts)
+            .map(|k| {
+                let (r, th, z, a) = local[k];
+                let rho = p[NP * k];
+                let h = pts.zeta(k, p) / (a * r / rho);
+                let (zr, rr) = (z - 0.5 * h * th.cos(), r - 0.5 * h * th.sin());
+                PointStimulus { z_retina: zr, r_retina: rr, depth_blue: blue.depth(zr, rr), angle: blue.angle(zr, rr), ..Default::default() }
+            })
+            .collect();
+        let depth_at_max = depth_at_angle(pts, &stim, blue.phi_max);
+        for (k, s) in stim.iter_mut().enumerate() {
+            let d = if s.angle < blue.phi_max { s.depth_blue } else { depth_at_max.unwrap_or(s.depth_blue) };
+            let w = self.growth.kink_width;
+            s.g_v = growth_law::positive_smooth(d, w).0;
+            s.eta = pts.capacity[k] * s.g_v;
+            let (r, _, _, a) = local[k];
+            out[NP * k] = growth_law::rho_rate(s.eta, r, p[NP * k], w);
+            out[NP * k + 1] = growth_law::gamma_rate(s.eta, p[NP * k + 1], a, w);
+        }
+        if let Some(d) = detail {
+            *d = stim;
+        }
+        Ok(())
+    }
+}
+
+impl GrowthSystem {
+    /// Assemble and factor F_u at the converged elastic state for `p` (a Jacobian set-up).
+    pub fn jac_setup(&mut self, p: &[f64]) -> Result<(), RhsError> {
+        self.solve_elastic(p)?;
+        self.work.jacobian_setups += 1;
+        let n = self.elastic.discretisation().len();
+        if self.factored.is_none() {
+            let spec = linear_spec(self.elastic.discretisation(), self.linear);
+            let (matrix, solver) = LinearSolver::for_spec(&self.ctx, n, &spec)?;
+            let (rhs, x) = (NVector::new(&self.ctx, n)?, NVector::new(&self.ctx, n)?);
+            self.factored = Some(Factored { matrix, solver, residual: vec![0.0; n], at: vec![], rhs, x });
+        }
+        let f = self.factored.as_mut().expect("made above");
+        let u = self.elastic.u.clone();
+        let disc = self.elastic.discretisation_mut();
+        f.matrix.zero();
+        disc.jacobian(&u, &mut f.matrix.view_mut()).map_err(RhsError::Evaluation)?;
+        f.solver.setup(&mut f.matrix)?;
+        disc.residual(&u, &mut f.residual).map_err(RhsError::Evaluation)?;
+        f.at.clear();
+        f.at.extend_from_slice(p);
+        Ok(())
+    }
+
+    /// J v = dG/dp · v at `p`, where `fy` = G(p), through the implicit-function theorem.
+    pub fn jac_times(&mut self, p: &[f64], fy: &[f64], v: &[f64], out: &mut [f64]) -> Result<(), RhsError> {
+        if self.factored.as_ref().is_none_or(|f| f.at.as_slice() != p) {
+            self.jac_setup(p)?;
+        }
+        self.work.jacobian_products += 1;
+        let v_max = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        if v_max == 0.0 {
+            out.fill(0.0);
+            return Ok(());
+        }
+        let p_max = p.iter().fold(1.0f64, |a, x| a.max(x.abs()));
+        let delta = f64::EPSILON.sqrt() * p_max / v_max;
+        let pv: Vec<f64> = p.iter().zip(v).map(|(a, b)| a + delta * b).collect();
+        // δ F_p v at fixed u*, then δ w = −F_u⁻¹ (δ F_p v).
+        self.elastic.discretisation_mut().set_data(self.points.material_data(&pv));
+        let u = self.elastic.u.clone();
+        let f = self.factored.as_mut().expect("set up above");
+        {
+            let rhs = f.rhs.as_mut_slice();
+            let disc = self.elastic.discretisation_mut();
+            disc.residual(&u, rhs).map_err(RhsError::Evaluation)?;
+            for (r, r0) in rhs.iter_mut().zip(&f.residual) {
+                *r -= r0;
+            }
+        }
+        f.solver.solve(&mut f.matrix, &mut f.x, &f.rhs)?;
+        let u1: Vec<f64> = u.iter().zip(f.x.as_slice()).map(|(a, dx)| a - dx).collect();
+        // g(u* + δw, p + δv) − g(u*, p) = δ (g_u w + g_p v).
+        let result = self.rates(&u1, &pv, out, None);
+        self.elastic.discretisation_mut().set_data(self.points.material_data(p));
+        result?;
+        for (o, g0) in out.iter_mut().zip(fy) {
+            *o = (*o - g0) / delta;
+        }
+        Ok(())
+    }
+
+    /// Every field of the shell in state `p` at time `t`, for output.
+    pub fn snapshot(&mut self, t: f64, p: &[f64]) -> Result<super::Snapshot, RhsError> {
+        self.solve_elastic(p)?;
+        let sol: Solution = self.elastic.solution()?;
+        let stim = self.stimulus(p)?;
+        let pts = &self.points;
+        let growth: Vec<GrowthRow> = (0..sol.rows.len())
+            .map(|i| {
+                let k = pts.node_point(i);
+                let s = &stim[k];
+                GrowthRow { rho: p[NP * k], zeta: pts.zeta(k, p), eta: s.eta, g_v: s.g_v, z_retina: s.z_retina, r_retina: s.r_retina }
+            })
+            .collect();
+        let series = self.series_row(t, &stim);
+        Ok(super::Snapshot { t, fields: sol.rows, growth, series })
+    }
+
+    /// The series row alone (axial length, refraction, ...) of the shell in state `p` at
+    /// time `t`: what a history point needs, without the fields of a snapshot. An adopted
+    /// state is used as it is (its error is the integrator's).
+    pub fn series(&mut self, t: f64, p: &[f64]) -> Result<SeriesRow, RhsError> {
+        if self.solved_at.as_slice() != p {
+            self.solve_elastic(p)?;
+        }
+        let stim = self.stimulus(p)?;
+        Ok(self.series_row(t, &stim))
+    }
+
+    /// What the stimulus sees at every point of the solved shell in state `p`.
+    fn stimulus(&mut self, p: &[f64]) -> Result<Vec<PointStimulus>, RhsError> {
+        let u = std::mem::take(&mut self.elastic.u);
+        let mut stim = vec![];
+        let mut rates = vec![0.0; p.len()];
+        let r = self.rates(&u, p, &mut rates, Some(&mut stim));
+        self.elastic.u = u;
+        r.map(|_| stim)
+    }
+
+    /// The series row from the stimulus at every point: at the posterior pole, and the
+    /// largest retina radius over the nodes.
+    fn series_row(&self, t: f64, stim: &[PointStimulus]) -> SeriesRow {
+        let pts = &self.points;
+        let pole = &stim[pts.node_point(0)];
+        let depth_red = self.growth.red.depth(pole.z_retina, pole.r_retina);
+        SeriesRow {
+            t,
+            axial_length: pole.z_retina,
+            equatorial_radius: (0..pts.above.len()).map(|i| stim[pts.node_point(i)].r_retina).fold(f64::MIN, f64::max),
+            retina_minus_blue: -pole.depth_blue,
+            retina_minus_red: -depth_red,
+            class: Refraction::classify(pole.depth_blue, depth_red),
+        }
+    }
+
+    /// Take (p, u) as the current state (the coupled DAE's state at an output time): the
+    /// data become p's, the elastic unknowns u. A history point reads it as it is; a
+    /// snapshot first polishes u into the exact elastic state of p (a warm Newton solve), so
+    /// that its fields carry only the growth state's error, as CVODE's do.
+    pub fn adopt(&mut self, p: &[f64], u: &[f64]) {
+        self.elastic.discretisation_mut().set_data(self.points.material_data(p));
+        self.elastic.u.clear();
+        self.elastic.u.extend_from_slice(u);
+        self.solved_at.clear();
+        self.solved_at.extend_from_slice(p);
+        self.exact = false;
+    }
+
+    /// The thickness law of the growth points.
+    pub fn points_law(&self) -> crate::model::growth_law::ThicknessLaw {
+        self.points.law()
+    }
+
+    /// The blue best-focus surface.
+    pub fn blue(&self) -> Surface {
+        self.growth.blue
+    }
+
+    /// The width the growth laws' kinks are rounded over (0: exact).
+    pub fn kink_width(&self) -> f64 {
+        self.growth.kink_width
+    }
+}
+
+/// The blue depth where the retina crosses the polar angle φ_max, interpolated linearly in
+/// φ between the two points (in Σ order) that straddle it, so the rule beyond φ_max does not
+/// hang on where the nodes fall (docs/MODEL.md §6). None if the retina never reaches φ_max.
+fn depth_at_angle(pts: &GrowthPoints, stim: &[PointStimulus], phi_max: f64) -> Option<f64> {
+    let mut order: Vec<usize> = (0..pts.len()).collect();
+    order.sort_by(|&a, &b| pts.sigma_ref[a].partial_cmp(&pts.sigma_ref[b]).unwrap());
+    let j = order.iter().position(|&k| stim[k].angle >= phi_max)?;
+    if j == 0 {
+        return Some(stim[order[0]].depth_blue);
+    }
+    let (a, b) = (&stim[order[j - 1]], &stim[order[j]]);
+    let t = (phi_max - a.angle) / (b.angle - a.angle);
+    Some(a.depth_blue + t * (b.depth_blue - a.depth_blue))
+}

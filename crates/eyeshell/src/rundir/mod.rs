@@ -1,0 +1,509 @@
+//! Writing results: `fields.csv`, `at.csv` and `summary.json` in an output directory that
+//! appears whole or not at all.
+//!
+//! A run writes into a temporary sibling of the target (`.NAME.tmp-<pid>`), then renames it
+//! into place. An existing target is replaced only if it is a previous eyeshell output (it
+//! holds `summary.json`) or an empty directory; anything else is refused. On any error, and
+//! when an [`OutputDir`] is dropped without [`OutputDir::commit`], the temporary directory
+//! is removed.
+//!
+//! A growth run ([`growth::GrowthWriter`]) writes in place instead, as its results come.
+
+pub mod growth;
+pub mod read;
+pub mod rundata;
+
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use crate::bvp::{FieldRow, SolveStats, COLUMNS};
+use crate::scene::Scene;
+
+pub use growth::{progress_wanted, GrowthWriter};
+
+/// The file whose presence marks a directory as an eyeshell output.
+pub const SUMMARY_FILE: &str = "summary.json";
+/// Every field on every node.
+pub const FIELDS_FILE: &str = "fields.csv";
+/// Every field at the material points asked for with `--at`.
+pub const AT_FILE: &str = "at.csv";
+
+/// Failure to write results. Display is one line naming the path.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: exists and is not an eyeshell output directory (no {SUMMARY_FILE}); refusing to overwrite it", path.display())]
+    Refused { path: PathBuf },
+    #[error("{}: the output path has no file name", path.display())]
+    NoName { path: PathBuf },
+    #[error("{}: a parent of the output path is not a directory", path.display())]
+    NoParent { path: PathBuf },
+}
+
+impl OutputError {
+    fn io(path: &Path, source: std::io::Error) -> Self {
+        OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    /// True when the error is the user's (a target that may not be overwritten), not I/O.
+    pub fn is_refusal(&self) -> bool {
+        matches!(
+            self,
+            OutputError::Refused { .. } | OutputError::NoName { .. } | OutputError::NoParent { .. }
+        )
+    }
+}
+
+/// What is at the target path now.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Target {
+    Absent,
+    EmptyDir,
+    PreviousOutput,
+}
+
+/// May `target` be written? Refuses files and non-empty directories that are not outputs.
+/// Call it before a long computation, so that a refusal comes first.
+pub fn check_target(target: &Path) -> Result<(), OutputError> {
+    inspect(target).map(|_| ())
+}
+
+/// Make `target` an empty directory to write into, in place: refuse it like
+/// [`check_target`], remove a previous eyeshell output there, create it (and its parents).
+pub fn fresh_dir(target: &Path) -> Result<(), OutputError> {
+    if inspect(target)? == Target::PreviousOutput {
+        fs::remove_dir_all(target).map_err(|e| OutputError::io(target, e))?;
+    }
+    fs::create_dir_all(target).map_err(|e| OutputError::io(target, e))
+}
+
+fn inspect(target: &Path) -> Result<Target, OutputError> {
+    if target.file_name().is_none() {
+        return Err(OutputError::NoName {
+            path: target.to_path_buf(),
+        });
+    }
+    let meta = match fs::symlink_metadata(target) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            // Missing parents are created on commit; one that exists must be a directory.
+            let blocked = target
+                .ancestors()
+                .skip(1)
+                .any(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir());
+            return if blocked {
+                Err(OutputError::NoParent {
+                    path: target.to_path_buf(),
+                })
+            } else {
+                Ok(Target::Absent)
+            };
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotADirectory => {
+            return Err(OutputError::NoParent {
+                path: target.to_path_buf(),
+            })
+        }
+        Err(e) => return Err(OutputError::io(target, e)),
+    };
+    if !meta.is_dir() {
+        return Err(OutputError::Refused {
+            path: target.to_path_buf(),
+        });
+    }
+    if target.join(SUMMARY_FILE).is_file() {
+        return Ok(Target::PreviousOutput);
+    }
+    let mut entries = fs::read_dir(target).map_err(|e| OutputError::io(target, e))?;
+    if entries.next().is_none() {
+        Ok(Target::EmptyDir)
+    } else {
+        Err(OutputError::Refused {
+            path: target.to_path_buf(),
+        })
+    }
+}
+
+/// An output directory being written: files go into a temporary sibling of the target,
+/// which [`OutputDir::commit`] renames into place. Dropping it uncommitted removes it.
+#[derive(Debug)]
+pub struct OutputDir {
+    target: PathBuf,
+    tmp: PathBuf,
+    committed: bool,
+    /// Parent directories this run created (outermost first), removed again if it fails.
+    created: Vec<PathBuf>,
+}
+
+impl OutputDir {
+    /// Check the target and create the temporary directory next to it.
+    pub fn create(target: &Path) -> Result<OutputDir, OutputError> {
+        inspect(target)?;
+        let name = target.file_name().ok_or_else(|| OutputError::NoName {
+            path: target.to_path_buf(),
+        })?;
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let mut created: Vec<PathBuf> = parent
+            .ancestors()
+            .filter(|a| !a.as_os_str().is_empty() && !a.exists())
+            .map(Path::to_path_buf)
+            .collect();
+        created.reverse();
+        fs::create_dir_all(&parent).map_err(|e| OutputError::io(&parent, e))?;
+        let tmp = parent.join(format!(
+            ".{}.tmp-{}",
+            name.to_string_lossy(),
+            std::process::id()
+        ));
+        if tmp.exists() {
+            // A leftover of a killed run with our pid: ours to remove.
+            fs::remove_dir_all(&tmp).map_err(|e| OutputError::io(&tmp, e))?;
+        }
+        fs::create_dir(&tmp).map_err(|e| OutputError::io(&tmp, e))?;
+        Ok(OutputDir {
+            target: target.to_path_buf(),
+            tmp,
+            committed: false,
+            created,
+        })
+    }
+
+    /// The final path of the directory.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// The path of `name` inside the temporary directory (where it must be written).
+    pub fn file(&self, name: &str) -> PathBuf {
+        self.tmp.join(name)
+    }
+
+    /// Move the finished directory into place, replacing a previous output or an empty
+    /// directory (checked again: the target may have changed during the run).
+    pub fn commit(mut self) -> Result<PathBuf, OutputError> {
+        match inspect(&self.target)? {
+            Target::Absent => {}
+            Target::EmptyDir => {
+                fs::remove_dir(&self.target).map_err(|e| OutputError::io(&self.target, e))?
+            }
+            Target::PreviousOutput => {
+                // Move the old output aside first, so the target is never half-deleted.
+                let old = self.tmp.with_file_name(format!(
+                    ".{}.old-{}",
+                    self.target
+                        .file_name()
+                        .unwrap_or_default()
+                        .to_string_lossy(),
+                    std::process::id()
+                ));
+                if old.exists() {
+                    fs::remove_dir_all(&old).map_err(|e| OutputError::io(&old, e))?;
+                }
+                fs::rename(&self.target, &old).map_err(|e| OutputError::io(&self.target, e))?;
+                if let Err(e) = fs::rename(&self.tmp, &self.target) {
+                    let _ = fs::rename(&old, &self.target);
+                    return Err(OutputError::io(&self.target, e));
+                }
+                self.committed = true;
+                fs::remove_dir_all(&old).map_err(|e| OutputError::io(&old, e))?;
+                return Ok(self.target.clone());
+            }
+        }
+        fs::rename(&self.tmp, &self.target).map_err(|e| OutputError::io(&self.target, e))?;
+        self.committed = true;
+        Ok(self.target.clone())
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_dir_all(&self.tmp);
+            for dir in self.created.iter().rev() {
+                let _ = fs::remove_dir(dir); // only if still empty
+            }
+        }
+    }
+}
+
+/// One value in the CSV files: Rust's shortest representation that reads back to the same
+/// f64, in scientific notation (`1.0136216901111e0`).
+pub fn format_value(x: f64) -> String {
+    format!("{x:e}")
+}
+
+/// The CSV header: the [`COLUMNS`] joined by commas.
+pub fn csv_header() -> String {
+    COLUMNS.join(",")
+}
+
+/// Write `rows` as CSV: the header, then one line per row, every value round-trip exact.
+pub fn write_fields_csv(path: &Path, rows: &[FieldRow]) -> Result<(), OutputError> {
+    let file = fs::File::create(path).map_err(|e| OutputError::io(path, e))?;
+    let mut w = BufWriter::new(file);
+    let mut write = || -> std::io::Result<()> {
+        writeln!(w, "{}", csv_header())?;
+        for row in rows {
+            let line = row
+                .values()
+                .iter()
+                .map(|&x| format_value(x))
+                .collect::<Vec<_>>()
+                .join(",");
+            writeln!(w, "{line}")?;
+        }
+        w.flush()
+    };
+    write().map_err(|e| OutputError::io(path, e))
+}
+
+/// Write `bytes` to `path` through a temporary sibling and a rename: never half-written.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), std::io::Error> {
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.flush()
+    };
+    if let Err(e) = write() {
+        let _ = fs::remove_file(&tmp);
+        return Err(e);
+    }
+    fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = fs::remove_file(&tmp);
+    })
+}
+
+/// The SUNDIALS version the binary is linked against, if the sundials layer reports it.
+pub fn sundials_version() -> Option<String> {
+    Some(eyeshell_sundials::version())
+}
+
+fn num(x: f64) -> serde_json::Value {
+    serde_json::Number::from_f64(x)
+        .map(serde_json::Value::Number)
+        .unwrap_or(serde_json::Value::Null)
+}
+
+/// The part of summary.json every run of `scene` shares: versions, the scene, the elastic
+/// scheme and the effective parameters.
+fn run_json(scene: &Scene) -> serde_json::Value {
+    let name = |k: &str| {
+        crate::scene::keys::find(k)
+            .map(|s| s.get(scene).to_json())
+            .unwrap_or_default()
+    };
+    serde_json::json!({
+        "eyeshell_version": env!("CARGO_PKG_VERSION"),
+        "sundials_version": sundials_version(),
+        "scene": {
+            "name": scene.display_name(),
+            "path": scene.origin,
+            "description": scene.description,
+            "overrides": scene.overrides,
+        },
+        "scheme": name("solver.scheme"),
+        "scheme_order": scene.solver.scheme.order(),
+        "linear_solver": name("solver.linear"),
+        "epsilon": num(scene.solver.epsilon),
+        "length": num(scene.params.length()),
+        "model": scene.components().to_string(),
+        "components": serde_json::to_value(scene.components()).unwrap_or_default(),
+        "parameters": scene.parameters_json(),
+    })
+}
+
+/// The content of summary.json for one solve of `scene`.
+pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
+    let mut summary = run_json(scene);
+    // Every solver statistic, by its field name (non-finite values become null).
+    if let (Some(map), Ok(serde_json::Value::Object(stats))) =
+        (summary.as_object_mut(), serde_json::to_value(stats))
+    {
+        map.extend(stats);
+    }
+    summary
+}
+
+/// Write [`summary_json`] to `path`, pretty-printed.
+pub fn write_summary_json(
+    path: &Path,
+    scene: &Scene,
+    stats: &SolveStats,
+) -> Result<(), OutputError> {
+    let mut text = serde_json::to_string_pretty(&summary_json(scene, stats))
+        .map_err(|e| OutputError::io(path, std::io::Error::other(e)))?;
+    text.push('\n');
+    fs::write(path, text).map_err(|e| OutputError::io(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(k: f64) -> FieldRow {
+        FieldRow {
+            sigma_ref: k,
+            sigma: k / 3.0,
+            kappa: 0.1 + k,
+            alpha_s: 1.0136216901111,
+            r: 1e-300,
+            theta: -2.5e17,
+            ..FieldRow::default()
+        }
+    }
+
+    #[test]
+    fn csv_has_the_header_and_round_trips() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("f.csv");
+        let rows: Vec<FieldRow> = (0..5).map(|k| row(k as f64 * 0.7)).collect();
+        write_fields_csv(&path, &rows).unwrap();
+        let text = fs::read_to_string(&path).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next().unwrap(), COLUMNS.join(","));
+        for r in &rows {
+            let back: Vec<f64> = lines
+                .next()
+                .unwrap()
+                .split(',')
+                .map(|v| v.parse().unwrap())
+                .collect();
+            assert_eq!(back, r.values().to_vec());
+        }
+        assert!(lines.next().is_none());
+    }
+
+    #[test]
+    fn summary_has_every_stat_and_parameter() {
+        let stats = SolveStats {
+            newton_iterations: 7,
+            nodes: 509,
+            residual_norm: 1e-12,
+            ..SolveStats::default()
+        };
+        let v = summary_json(&Scene::default(), &stats);
+        for k in [
+            "newton_iterations",
+            "residual_evaluations",
+            "jacobian_evaluations",
+            "residual_norm",
+            "first_integral_max",
+            "nodes",
+            "uniform_nodes",
+            "breakpoint_nodes",
+            "pole_nodes",
+            "cornea_alpha",
+            "continuation_stages",
+            "wall_seconds",
+            "scheme",
+            "linear_solver",
+            "epsilon",
+            "sundials_version",
+        ] {
+            assert!(v.get(k).is_some(), "missing {k}");
+        }
+        assert_eq!(v["newton_iterations"], 7);
+        assert_eq!(v["scheme"], "hermite-simpson");
+        assert_eq!(v["parameters"]["pressure.dP"], 2.0);
+        assert_eq!(v["parameters"]["solver.nodes"], 501);
+        // Every elastic parameter; the growth keys only when the scene grows.
+        let n = v["parameters"].as_object().unwrap().len();
+        assert_eq!(
+            n,
+            crate::scene::KEYS
+                .iter()
+                .filter(|k| k.is_parameter() && !k.growth)
+                .count()
+        );
+        assert!(v["parameters"].get("growth.eta0").is_none());
+    }
+
+    #[test]
+    fn output_appears_whole_and_replaces_previous_outputs_only() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out");
+        // Fresh target.
+        let out = OutputDir::create(&target).unwrap();
+        fs::write(out.file(SUMMARY_FILE), "{}").unwrap();
+        fs::write(out.file("old-only"), "x").unwrap();
+        assert!(!target.exists());
+        out.commit().unwrap();
+        assert!(target.join(SUMMARY_FILE).is_file());
+        // A previous output is replaced wholesale.
+        let out = OutputDir::create(&target).unwrap();
+        fs::write(out.file(SUMMARY_FILE), "{\"new\":1}").unwrap();
+        out.commit().unwrap();
+        assert!(!target.join("old-only").exists());
+        assert_eq!(
+            fs::read_to_string(target.join(SUMMARY_FILE)).unwrap(),
+            "{\"new\":1}"
+        );
+        // Nothing is left next to it.
+        let names: Vec<_> = fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("out")]);
+    }
+
+    #[test]
+    fn dropped_output_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out");
+        {
+            let out = OutputDir::create(&target).unwrap();
+            fs::write(out.file(FIELDS_FILE), "partial").unwrap();
+        }
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn foreign_directories_and_files_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("data");
+        fs::create_dir(&target).unwrap();
+        fs::write(target.join("precious.txt"), "keep").unwrap();
+        let e = OutputDir::create(&target).unwrap_err();
+        assert!(e.is_refusal());
+        assert!(
+            e.to_string().contains("data") && e.to_string().contains("refusing"),
+            "{e}"
+        );
+        assert_eq!(
+            fs::read_to_string(target.join("precious.txt")).unwrap(),
+            "keep"
+        );
+        let file = dir.path().join("file");
+        fs::write(&file, "x").unwrap();
+        assert!(OutputDir::create(&file).unwrap_err().is_refusal());
+        // A parent that is a file is refused; missing parents are created, and removed
+        // again when the run does not commit.
+        assert!(OutputDir::create(&file.join("out"))
+            .unwrap_err()
+            .is_refusal());
+        let nested = OutputDir::create(&dir.path().join("no/such/out")).unwrap();
+        assert!(dir.path().join("no/such").is_dir());
+        drop(nested);
+        assert!(!dir.path().join("no").exists());
+        // An empty directory is fine.
+        let empty = dir.path().join("empty");
+        fs::create_dir(&empty).unwrap();
+        let out = OutputDir::create(&empty).unwrap();
+        fs::write(out.file(SUMMARY_FILE), "{}").unwrap();
+        out.commit().unwrap();
+        assert!(empty.join(SUMMARY_FILE).is_file());
+    }
+}

@@ -1,0 +1,201 @@
+//! Reading a run directory back: its CSV tables, and whether it is an elastic solve or a
+//! growth run (with the output time of every snapshot).
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use super::growth::{SERIES_FILE, SNAPSHOT_DIR};
+use super::{FIELDS_FILE, SUMMARY_FILE};
+
+/// The row vectors of a growth export (the published scripts' variables, then Σ); `time`
+/// is written after `eta`.
+pub const GROWTH_VARS: [&str; 14] = [
+    "h", "s", "z", "r", "sigma", "rho", "zeta", "alpha_s", "alpha_phi", "alpha_n", "eta",
+    "z_retina", "r_retina", "Sigma",
+];
+
+
+/// A run directory that cannot be read (or, for the exporters, written): one line naming the file. `bad_input`
+/// for the user's mistakes (exit 2), otherwise a failure to write (exit 1).
+#[derive(Debug)]
+pub struct ReadError {
+    pub bad_input: bool,
+    pub message: String,
+}
+
+impl std::fmt::Display for ReadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for ReadError {}
+
+pub fn bad(message: impl Into<String>) -> ReadError {
+    ReadError {
+        bad_input: true,
+        message: message.into(),
+    }
+}
+
+
+/// A CSV file of numbers with a header line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl Table {
+    /// The values of column `name`, if there is one.
+    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
+        let j = self.columns.iter().position(|c| c == name)?;
+        Some(self.rows.iter().map(|r| r[j]).collect())
+    }
+}
+
+/// Read a CSV file of numbers (the header, then rows of as many values).
+pub fn read_csv(path: &Path) -> Result<Table, ReadError> {
+    let text =
+        fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
+    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+    let columns: Vec<String> = lines
+        .next()
+        .ok_or_else(|| bad(format!("{}: empty file (no header)", path.display())))?
+        .split(',')
+        .map(|c| c.trim().to_string())
+        .collect();
+    let mut rows = Vec::new();
+    for (i, line) in lines.enumerate() {
+        let row = line
+            .split(',')
+            .map(|v| v.trim().parse::<f64>())
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|_| {
+                bad(format!(
+                    "{}: line {}: not a row of numbers: {line:?}",
+                    path.display(),
+                    i + 2
+                ))
+            })?;
+        if row.len() != columns.len() {
+            return Err(bad(format!(
+                "{}: line {}: {} values for {} columns",
+                path.display(),
+                i + 2,
+                row.len(),
+                columns.len()
+            )));
+        }
+        rows.push(row);
+    }
+    Ok(Table { columns, rows })
+}
+
+/// One output time of a growth run, read back.
+#[derive(Clone, Debug)]
+pub struct RunSnapshot {
+    /// Output time.
+    pub t: f64,
+    /// The snapshot CSV file.
+    pub file: PathBuf,
+    pub table: Table,
+}
+
+/// A run directory read back.
+#[derive(Clone, Debug)]
+pub enum Run {
+    /// `eyeshell solve`: fields.csv.
+    Elastic { file: PathBuf, table: Table },
+    /// `eyeshell grow`: the snapshots written so far, in time order.
+    Growth(Vec<RunSnapshot>),
+}
+
+/// Does `dir` look like an eyeshell run directory (it holds summary.json)?
+pub fn is_run_dir(dir: &Path) -> bool {
+    dir.join(SUMMARY_FILE).is_file()
+}
+
+/// Read the run directory `dir`: summary.json says whether it is a growth run.
+pub fn read_run(dir: &Path) -> Result<Run, ReadError> {
+    let summary_path = dir.join(SUMMARY_FILE);
+    if !dir.is_dir() {
+        return Err(bad(format!("{}: not a directory", dir.display())));
+    }
+    let text = fs::read_to_string(&summary_path).map_err(|e| {
+        bad(format!(
+            "{}: not an eyeshell run directory ({SUMMARY_FILE}: {e})",
+            dir.display()
+        ))
+    })?;
+    let summary: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| bad(format!("{}: not valid JSON: {e}", summary_path.display())))?;
+    let growth = summary.get("status").is_some() || summary.get("snapshots").is_some();
+    if !growth {
+        let file = dir.join(FIELDS_FILE);
+        let table = read_csv(&file)?;
+        check_columns(&file, &table, &["Sigma"])?;
+        return Ok(Run::Elastic { file, table });
+    }
+    // The times: summary.json's list (exact), else series.csv row k, else the file name.
+    let mut times: BTreeMap<String, f64> = BTreeMap::new();
+    if let Some(list) = summary.get("snapshots").and_then(|s| s.as_array()) {
+        for s in list {
+            if let (Some(f), Some(t)) = (s["file"].as_str(), s["t"].as_f64()) {
+                let name = Path::new(f).file_name().unwrap_or_default().to_string_lossy();
+                times.insert(name.into_owned(), t);
+            }
+        }
+    }
+    let series: Vec<f64> = read_csv(&dir.join(SERIES_FILE))
+        .ok()
+        .and_then(|t| t.column("t"))
+        .unwrap_or_default();
+    let snap_dir = dir.join(SNAPSHOT_DIR);
+    let entries = fs::read_dir(&snap_dir).map_err(|e| bad(format!("{}: {e}", snap_dir.display())))?;
+    let mut names: Vec<String> = entries
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("snapshot_") && n.ends_with(".csv"))
+        .collect();
+    names.sort();
+    if names.is_empty() {
+        return Err(bad(format!(
+            "{}: the growth run has no snapshot yet",
+            snap_dir.display()
+        )));
+    }
+    let mut snapshots = Vec::with_capacity(names.len());
+    for name in names {
+        let file = snap_dir.join(&name);
+        let k: Option<usize> = name
+            .strip_prefix("snapshot_")
+            .and_then(|r| r.split('_').next())
+            .and_then(|k| k.parse().ok());
+        let from_name = name
+            .rsplit_once("_t")
+            .and_then(|(_, t)| t.strip_suffix(".csv"))
+            .and_then(|t| t.parse::<f64>().ok());
+        let t = times
+            .get(&name)
+            .copied()
+            .or_else(|| k.and_then(|k| series.get(k).copied()))
+            .or(from_name)
+            .ok_or_else(|| bad(format!("{}: cannot tell its output time", file.display())))?;
+        let table = read_csv(&file)?;
+        check_columns(&file, &table, &GROWTH_VARS)?;
+        snapshots.push(RunSnapshot { t, file, table });
+    }
+    Ok(Run::Growth(snapshots))
+}
+
+fn check_columns(file: &Path, table: &Table, needed: &[&str]) -> Result<(), ReadError> {
+    for c in needed {
+        if !table.columns.iter().any(|x| x == c) {
+            return Err(bad(format!("{}: no column {c:?}", file.display())));
+        }
+    }
+    Ok(())
+}
+

@@ -1,0 +1,149 @@
+//! Reading a run directory back for drawing: its scene, its snapshots (or fields) and its
+//! time series. Everything a figure shows comes from these files, never from the solver's
+//! memory, so a figure always shows what the run wrote.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use super::read::{bad, read_run, Run, RunSnapshot, Table};
+use super::growth::{HISTORY_FILE, SERIES_FILE};
+use super::read::ReadError as ExportError;
+use super::SUMMARY_FILE;
+use crate::growth::SeriesRow;
+use crate::model::stimulus::Refraction;
+use crate::scene::Scene;
+
+/// One row of series.csv or history.csv.
+pub type SeriesPoint = SeriesRow;
+
+/// A run read back.
+#[derive(Clone, Debug)]
+pub struct RunData {
+    pub dir: PathBuf,
+    /// The scene's name (summary.json's `scene.name`), else the directory's name.
+    pub name: String,
+    /// The run's scene, rebuilt from the parameters in summary.json.
+    pub scene: Scene,
+    pub kind: RunKind,
+}
+
+#[derive(Clone, Debug)]
+pub enum RunKind {
+    /// `eyeshell solve`: the fields at every node.
+    Elastic(Table),
+    /// `eyeshell grow`: the snapshots in time order, series.csv and history.csv (empty
+    /// without `output.history_points`).
+    Growth { snapshots: Vec<RunSnapshot>, series: Vec<SeriesPoint>, history: Vec<SeriesPoint>, status: String },
+}
+
+impl RunData {
+    /// The growth snapshots (empty for an elastic run).
+    pub fn snapshots(&self) -> &[RunSnapshot] {
+        match &self.kind {
+            RunKind::Growth { snapshots, .. } => snapshots,
+            RunKind::Elastic(_) => &[],
+        }
+    }
+
+    /// The densest time series written: history.csv if there is one, else series.csv.
+    pub fn timeline(&self) -> &[SeriesPoint] {
+        match &self.kind {
+            RunKind::Growth { series, history, .. } => {
+                if history.len() > series.len() {
+                    history
+                } else {
+                    series
+                }
+            }
+            RunKind::Elastic(_) => &[],
+        }
+    }
+
+    /// The snapshot nearest to time `t`.
+    pub fn snapshot_near(&self, t: f64) -> Option<&RunSnapshot> {
+        self.snapshots().iter().min_by(|a, b| (a.t - t).abs().total_cmp(&(b.t - t).abs()))
+    }
+}
+
+/// Read the run in `dir` (an `eyeshell solve` or `eyeshell grow` output, finished or not).
+pub fn read(dir: &Path) -> Result<RunData, ExportError> {
+    let summary_path = dir.join(SUMMARY_FILE);
+    let text = fs::read_to_string(&summary_path)
+        .map_err(|e| bad(format!("{}: not an eyeshell run directory ({SUMMARY_FILE}: {e})", dir.display())))?;
+    let summary: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(format!("{}: not valid JSON: {e}", summary_path.display())))?;
+    let scene = scene_of(&summary, &summary_path)?;
+    let name = summary
+        .pointer("/scene/name")
+        .and_then(|s| s.as_str())
+        .map(str::to_string)
+        .or_else(|| dir.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .unwrap_or_default();
+    let kind = match read_run(dir)? {
+        Run::Elastic { table, .. } => RunKind::Elastic(table),
+        Run::Growth(snapshots) => RunKind::Growth {
+            snapshots,
+            series: read_series(&dir.join(SERIES_FILE))?,
+            history: match dir.join(HISTORY_FILE) {
+                p if p.is_file() => read_series(&p)?,
+                _ => Vec::new(),
+            },
+            status: summary.get("status").and_then(|s| s.as_str()).unwrap_or("unknown").to_string(),
+        },
+    };
+    Ok(RunData { dir: dir.to_path_buf(), name, scene, kind })
+}
+
+/// The scene of a run: every key of summary.json's `parameters` set on the defaults.
+fn scene_of(summary: &serde_json::Value, path: &Path) -> Result<Scene, ExportError> {
+    let params = summary
+        .get("parameters")
+        .and_then(|p| p.as_object())
+        .ok_or_else(|| bad(format!("{}: no \"parameters\" object", path.display())))?;
+    let origin = path.display().to_string();
+    let assignments: Vec<(String, toml::Value, String)> = params
+        .iter()
+        .filter_map(|(k, v)| Some((k.clone(), json_to_toml(v)?, origin.clone())))
+        .collect();
+    Scene::from_parameters(&assignments, &origin).map_err(|e| bad(e.to_string()))
+}
+
+fn json_to_toml(v: &serde_json::Value) -> Option<toml::Value> {
+    Some(match v {
+        serde_json::Value::Bool(b) => toml::Value::Boolean(*b),
+        serde_json::Value::Number(n) => match n.as_i64() {
+            Some(i) => toml::Value::Integer(i),
+            None => toml::Value::Float(n.as_f64()?),
+        },
+        serde_json::Value::String(s) => toml::Value::String(s.clone()),
+        serde_json::Value::Array(items) => toml::Value::Array(items.iter().filter_map(json_to_toml).collect()),
+        _ => return None,
+    })
+}
+
+/// series.csv or history.csv: numbers, and the class as text in the last column.
+pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
+    let text = fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1).filter(|(_, l)| !l.trim().is_empty()) {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let number = |j: usize| fields.get(j).and_then(|v| v.parse::<f64>().ok());
+        let row = (|| {
+            Some(SeriesPoint {
+                t: number(0)?,
+                axial_length: number(1)?,
+                equatorial_radius: number(2)?,
+                retina_minus_blue: number(3)?,
+                retina_minus_red: number(4)?,
+                class: Refraction::parse(fields.get(5)?)?,
+            })
+        })();
+        out.push(row.ok_or_else(|| bad(format!("{}: line {}: not a series row: {line:?}", path.display(), i + 1)))?);
+    }
+    Ok(out)
+}
+
+/// A table column, or an error naming the file.
+pub fn column(s: &RunSnapshot, name: &str) -> Result<Vec<f64>, ExportError> {
+    s.table.column(name).ok_or_else(|| bad(format!("{}: no column {name:?}", s.file.display())))
+}

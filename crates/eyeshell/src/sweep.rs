@@ -1,0 +1,454 @@
+//! Running a sweep ([`crate::scene::sweep::Sweep`]): every run in parallel across the cores
+//! (rayon), each into its own directory, and a table of the results kept up to date.
+//!
+//! Layout of the output directory:
+//! - `runs/<name>/`: an ordinary run directory (`eyeshell solve` or `eyeshell grow` output),
+//!   plus `scene.toml` (the run's effective scene) and, once it has finished, `result.json`;
+//! - `sweep.csv`: one row per run (status, swept values, final axial length, class, solver
+//!   statistics, error), rewritten after every run;
+//! - `summary.json`: the same as JSON with the sweep's status (`running`, `ok`, `partial`
+//!   when some runs failed, `interrupted`).
+//!
+//! A run that fails keeps what it wrote and its error goes into the table; the others go
+//! on. When `cancel` is raised (Ctrl-C), no new run starts, the running ones finish and the
+//! table says which runs did not run. With `resume`, a run whose directory holds a
+//! `result.json` and the same `scene.toml` is not run again.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+
+use rayon::prelude::*;
+
+use crate::bvp::FieldRow;
+use crate::growth::{grow, GrowthStats, SeriesRow};
+use crate::model::stimulus::Refraction;
+use crate::rundir::{self, format_value, write_atomic, GrowthWriter, OutputDir, OutputError};
+use crate::scene::sweep::{Sweep, SweepRun};
+use crate::scene::Scene;
+
+/// The run directories, under the sweep's directory.
+pub const RUNS_DIR: &str = "runs";
+/// The results table.
+pub const TABLE_FILE: &str = "sweep.csv";
+/// A run's effective scene.
+pub const SCENE_FILE: &str = "scene.toml";
+/// A finished run's results.
+pub const RESULT_FILE: &str = "result.json";
+
+/// How the sweep is run.
+pub struct SweepOptions<'a> {
+    /// Runs at once (threads); 0: one per core.
+    pub jobs: usize,
+    /// Reuse finished runs of an earlier sweep into the same directory.
+    pub resume: bool,
+    /// Raised to stop starting runs.
+    pub cancel: &'a AtomicBool,
+}
+
+/// The final state of one run, for the table.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RunResult {
+    /// "grow" or "solve".
+    pub kind: String,
+    /// The time reached (growth), 0 for an elastic solve.
+    pub t: f64,
+    /// z of the retina at the posterior pole (docs/MODEL.md §6).
+    pub axial_length: f64,
+    pub equatorial_radius: f64,
+    pub retina_minus_blue: f64,
+    pub retina_minus_red: f64,
+    pub class: String,
+    pub newton_iterations: usize,
+    pub bvp_solves: usize,
+    pub steps: usize,
+    pub rhs_evaluations: usize,
+    pub wall_seconds: f64,
+}
+
+/// How a run ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RunStatus {
+    /// Not started yet (or never: the sweep was interrupted).
+    Pending,
+    Ok,
+    /// Finished in an earlier sweep and reused (`resume`).
+    Reused,
+    /// Stopped by an error: the message, and the results up to then if any.
+    Failed(String),
+}
+
+impl RunStatus {
+    fn as_str(&self) -> &'static str {
+        match self {
+            RunStatus::Pending => "not run",
+            RunStatus::Ok => "ok",
+            RunStatus::Reused => "reused",
+            RunStatus::Failed(_) => "failed",
+        }
+    }
+}
+
+/// One row of the table.
+#[derive(Clone, Debug)]
+pub struct RunRecord {
+    pub name: String,
+    /// The run directory, relative to the sweep's.
+    pub dir: String,
+    /// The swept values, in the order of [`Sweep::keys`].
+    pub values: Vec<String>,
+    pub status: RunStatus,
+    pub result: Option<RunResult>,
+}
+
+impl RunRecord {
+    /// "ok: axial length 23.5809 mm, emmetropic (0.41 s)", "FAILED: why", ...
+    pub fn status_text(&self) -> String {
+        match (&self.status, &self.result) {
+            (RunStatus::Failed(m), _) => format!("FAILED: {m}"),
+            (s, Some(x)) => format!("{}: axial length {:.4} mm, {} ({:.2} s)", s.as_str(), x.axial_length, x.class, x.wall_seconds),
+            (s, None) => s.as_str().to_string(),
+        }
+    }
+}
+
+/// The outcome of a sweep.
+#[derive(Clone, Debug)]
+pub struct SweepReport {
+    pub records: Vec<RunRecord>,
+    pub interrupted: bool,
+    pub dir: PathBuf,
+}
+
+impl SweepReport {
+    /// The runs that failed.
+    pub fn failed(&self) -> impl Iterator<Item = &RunRecord> {
+        self.records.iter().filter(|r| matches!(r.status, RunStatus::Failed(_)))
+    }
+
+    /// "ok", "partial", "interrupted" (or "running" while it runs).
+    pub fn status(&self) -> &'static str {
+        if self.interrupted {
+            "interrupted"
+        } else if self.failed().next().is_some() {
+            "partial"
+        } else if self.records.iter().any(|r| r.status == RunStatus::Pending) {
+            "running"
+        } else {
+            "ok"
+        }
+    }
+}
+
+/// Run every run of `sweep` into `out`; `done(record, finished, total)` is called as each
+/// run ends. Errors are only those of the sweep's own files (a run's failure is a row).
+pub fn run_sweep(
+    sweep: &Sweep,
+    out: &Path,
+    options: &SweepOptions<'_>,
+    done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
+) -> Result<SweepReport, OutputError> {
+    if !options.resume {
+        rundir::fresh_dir(out)?;
+    } else {
+        rundir::check_target(out)?;
+        fs::create_dir_all(out).map_err(|e| io(out, e))?;
+    }
+    let records: Vec<RunRecord> = sweep
+        .runs
+        .iter()
+        .map(|r| RunRecord {
+            name: r.name.clone(),
+            dir: format!("{RUNS_DIR}/{}", r.name),
+            values: sweep.keys.iter().map(|k| r.shown(k)).collect(),
+            status: RunStatus::Pending,
+            result: None,
+        })
+        .collect();
+    let report = Mutex::new(SweepReport { records, interrupted: false, dir: out.to_path_buf() });
+    write_tables(sweep, &lock(&report))?;
+    let total = sweep.runs.len();
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let table_error: Mutex<Option<OutputError>> = Mutex::new(None);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.jobs)
+        .build()
+        .map_err(|e| io(out, std::io::Error::other(e.to_string())))?;
+    pool.install(|| {
+        sweep.runs.par_iter().enumerate().for_each(|(i, run)| {
+            if options.cancel.load(Ordering::SeqCst) {
+                lock(&report).interrupted = true;
+                return;
+            }
+            let dir = out.join(RUNS_DIR).join(&run.name);
+            let (status, result) = match options.resume.then(|| reusable(run, &dir)).flatten() {
+                Some(r) => (RunStatus::Reused, Some(r)),
+                None => run_one(run, &dir),
+            };
+            let mut rep = lock(&report);
+            rep.records[i].status = status;
+            rep.records[i].result = result;
+            let n = finished.fetch_add(1, Ordering::SeqCst) + 1;
+            if let Err(e) = write_tables(sweep, &rep) {
+                lock(&table_error).get_or_insert(e);
+            }
+            done(&rep.records[i], n, total);
+        });
+    });
+    let report = report.into_inner().unwrap_or_else(|e| e.into_inner());
+    write_tables(sweep, &report)?;
+    match table_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        Some(e) => Err(e),
+        None => Ok(report),
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn io(path: &Path, e: std::io::Error) -> OutputError {
+    OutputError::Io { path: path.to_path_buf(), source: e }
+}
+
+/// The results of a run finished earlier with the same scene, if there is one.
+fn reusable(run: &SweepRun, dir: &Path) -> Option<RunResult> {
+    let scene = fs::read_to_string(dir.join(SCENE_FILE)).ok()?;
+    if scene != run.scene.to_toml() {
+        return None;
+    }
+    serde_json::from_str(&fs::read_to_string(dir.join(RESULT_FILE)).ok()?).ok()
+}
+
+/// Run one scene into `dir`; a panic inside is a failed run, not a failed sweep.
+fn run_one(run: &SweepRun, dir: &Path) -> (RunStatus, Option<RunResult>) {
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| execute(&run.scene, dir)));
+    match outcome {
+        Ok(Ok(result)) => (RunStatus::Ok, Some(result)),
+        Ok(Err((message, partial))) => (RunStatus::Failed(message), partial.map(|r| *r)),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown".into());
+            (RunStatus::Failed(format!("internal error (a bug; please report it): {what}")), None)
+        }
+    }
+}
+
+/// A failed run: the message and what it had reached.
+type RunFailure = (String, Option<Box<RunResult>>);
+
+/// Solve or grow `scene` into `dir`, then write its scene.toml and result.json.
+pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
+    let result = match &scene.growth {
+        Some(_) => execute_growth(scene, dir)?,
+        None => execute_elastic(scene, dir)?,
+    };
+    let text = serde_json::to_string_pretty(&result).unwrap_or_default();
+    for (file, text) in [(SCENE_FILE, scene.to_toml()), (RESULT_FILE, text)] {
+        let path = dir.join(file);
+        write_atomic(&path, text.as_bytes()).map_err(|e| (io(&path, e).to_string(), Some(Box::new(result.clone()))))?;
+    }
+    Ok(result)
+}
+
+fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
+    let growth = scene.growth.as_ref().expect("a growth scene");
+    let mut writer = GrowthWriter::create(dir, scene, false).map_err(|e| (e.to_string(), None))?;
+    // scene.toml first, so a failed run can still be reproduced.
+    let path = dir.join(SCENE_FILE);
+    write_atomic(&path, scene.to_toml().as_bytes()).map_err(|e| (io(&path, e).to_string(), None))?;
+    let outcome = grow(&scene.params, &scene.solver, growth, &scene.growth_settings, &mut writer);
+    let last = writer.last_row().copied();
+    match outcome {
+        Ok(stats) => {
+            writer.finish(&stats).map_err(|e| (e.to_string(), None))?;
+            let last = last.ok_or_else(|| ("no snapshot was written".to_string(), None))?;
+            Ok(growth_result(&last, &stats))
+        }
+        Err(e) => {
+            let partial = last.map(|r| Box::new(growth_result(&r, &e.stats)));
+            let message = match writer.fail(&e) {
+                Ok(_) => e.to_string(),
+                Err(w) => format!("{e} (and summary.json could not be written: {w})"),
+            };
+            Err((message, partial))
+        }
+    }
+}
+
+fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
+    RunResult {
+        kind: "grow".into(),
+        t: row.t,
+        axial_length: row.axial_length,
+        equatorial_radius: row.equatorial_radius,
+        retina_minus_blue: row.retina_minus_blue,
+        retina_minus_red: row.retina_minus_red,
+        class: row.class.as_str().into(),
+        newton_iterations: stats.newton_iterations,
+        bvp_solves: stats.bvp_solves,
+        steps: stats.steps,
+        rhs_evaluations: stats.rhs_evaluations,
+        wall_seconds: stats.wall_seconds,
+    }
+}
+
+fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
+    let fail = |e: &dyn std::fmt::Display| (e.to_string(), None);
+    let solution = crate::bvp::solve(&scene.params, &scene.solver, None).map_err(|e| fail(&e))?;
+    rundir::check_target(dir).map_err(|e| fail(&e))?;
+    let out = OutputDir::create(dir).map_err(|e| fail(&e))?;
+    rundir::write_fields_csv(&out.file(rundir::FIELDS_FILE), &solution.rows).map_err(|e| fail(&e))?;
+    rundir::write_summary_json(&out.file(rundir::SUMMARY_FILE), scene, &solution.stats).map_err(|e| fail(&e))?;
+    out.commit().map_err(|e| fail(&e))?;
+    let s = &solution.stats;
+    Ok(RunResult {
+        kind: "solve".into(),
+        newton_iterations: s.newton_iterations,
+        bvp_solves: 1,
+        wall_seconds: s.wall_seconds,
+        ..unloaded_eye(scene, &solution.rows)
+    })
+}
+
+/// The retina of a loaded, ungrown shell, measured as a growth run would (docs/MODEL.md §6).
+fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> RunResult {
+    let retina = |f: &FieldRow| (f.z - 0.5 * f.h * f.theta.cos(), f.r - 0.5 * f.h * f.theta.sin());
+    let pole = rows.first().map(retina).unwrap_or((f64::NAN, f64::NAN));
+    let (blue, red) = (scene.blue().depth(pole.0, pole.1), scene.red().depth(pole.0, pole.1));
+    RunResult {
+        kind: "solve".into(),
+        t: 0.0,
+        axial_length: pole.0,
+        equatorial_radius: rows.iter().map(|f| retina(f).1).fold(f64::MIN, f64::max),
+        retina_minus_blue: -blue,
+        retina_minus_red: -red,
+        class: Refraction::classify(blue, red).as_str().into(),
+        newton_iterations: 0,
+        bvp_solves: 0,
+        steps: 0,
+        rhs_evaluations: 0,
+        wall_seconds: 0.0,
+    }
+}
+
+/// The columns of sweep.csv after `run`, `status` and the swept keys.
+pub const RESULT_COLUMNS: [&str; 13] = [
+    "kind",
+    "t",
+    "axial_length",
+    "equatorial_radius",
+    "retina_minus_blue",
+    "retina_minus_red",
+    "class",
+    "newton_iterations",
+    "bvp_solves",
+    "steps",
+    "rhs_evaluations",
+    "wall_seconds",
+    "error",
+];
+
+/// sweep.csv and summary.json, written atomically.
+fn write_tables(sweep: &Sweep, report: &SweepReport) -> Result<(), OutputError> {
+    let csv = table_csv(sweep, report);
+    let path = report.dir.join(TABLE_FILE);
+    write_atomic(&path, csv.as_bytes()).map_err(|e| io(&path, e))?;
+    let mut json = serde_json::to_string_pretty(&summary_json(sweep, report)).unwrap_or_default();
+    json.push('\n');
+    let path = report.dir.join(rundir::SUMMARY_FILE);
+    write_atomic(&path, json.as_bytes()).map_err(|e| io(&path, e))
+}
+
+/// A CSV field: quoted when it holds a comma, a quote or a line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// The text of sweep.csv.
+pub fn table_csv(sweep: &Sweep, report: &SweepReport) -> String {
+    let header: Vec<String> = ["run", "status"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain(sweep.keys.iter().cloned())
+        .chain(RESULT_COLUMNS.iter().map(|s| s.to_string()))
+        .collect();
+    let mut text = header.iter().map(|h| csv_field(h)).collect::<Vec<_>>().join(",");
+    text.push('\n');
+    for r in &report.records {
+        let mut fields = vec![r.name.clone(), r.status.as_str().to_string()];
+        fields.extend(r.values.iter().cloned());
+        fields.extend(result_fields(r));
+        text.push_str(&fields.iter().map(|f| csv_field(f)).collect::<Vec<_>>().join(","));
+        text.push('\n');
+    }
+    text
+}
+
+fn result_fields(r: &RunRecord) -> Vec<String> {
+    let error = match &r.status {
+        RunStatus::Failed(m) => m.clone(),
+        _ => String::new(),
+    };
+    match &r.result {
+        Some(x) => vec![
+            x.kind.clone(),
+            format_value(x.t),
+            format_value(x.axial_length),
+            format_value(x.equatorial_radius),
+            format_value(x.retina_minus_blue),
+            format_value(x.retina_minus_red),
+            x.class.clone(),
+            x.newton_iterations.to_string(),
+            x.bvp_solves.to_string(),
+            x.steps.to_string(),
+            x.rhs_evaluations.to_string(),
+            format_value(x.wall_seconds),
+            error,
+        ],
+        None => {
+            let mut v = vec![String::new(); RESULT_COLUMNS.len() - 1];
+            v.push(error);
+            v
+        }
+    }
+}
+
+/// summary.json of the sweep.
+pub fn summary_json(sweep: &Sweep, report: &SweepReport) -> serde_json::Value {
+    let runs: Vec<serde_json::Value> = report
+        .records
+        .iter()
+        .map(|r| {
+            let values: serde_json::Map<String, serde_json::Value> =
+                sweep.keys.iter().cloned().zip(r.values.iter().map(|v| v.clone().into())).collect();
+            serde_json::json!({
+                "name": r.name,
+                "dir": r.dir,
+                "status": r.status.as_str(),
+                "values": values,
+                "result": r.result,
+                "error": match &r.status { RunStatus::Failed(m) => Some(m.clone()), _ => None },
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "sweep": sweep.name,
+        "scene": sweep.origin,
+        "status": report.status(),
+        "keys": sweep.keys,
+        "table": TABLE_FILE,
+        "runs_total": sweep.runs.len(),
+        "runs_failed": report.failed().count(),
+        "sundials_version": rundir::sundials_version(),
+        "runs": runs,
+    })
+}

@@ -1,0 +1,315 @@
+//! Growth by IDA on the coupled DAE (issue 11): it agrees with CVODE on the paper's scenes,
+//! survives the growth extremes of TESTING.md, and every linear solver gives the same run.
+
+use eyeshell::growth::dae::DaeLinear;
+use eyeshell::growth::*;
+use eyeshell::model::params::{Params, SolverSettings, Thickness};
+
+/// Keeps every snapshot's series row.
+#[derive(Default)]
+struct Keep(Vec<SeriesRow>);
+
+impl Observer for Keep {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::Error> {
+        self.0.push(s.series);
+        Ok(())
+    }
+}
+
+fn run(
+    p: &Params,
+    nodes: usize,
+    g: &GrowthParams,
+    s: &GrowthSettings,
+) -> (Vec<SeriesRow>, Result<GrowthStats, GrowthError>) {
+    let mut keep = Keep::default();
+    let solver = SolverSettings {
+        nodes,
+        ..SolverSettings::default()
+    };
+    let r = grow(p, &solver, g, s, &mut keep);
+    (keep.0, r)
+}
+
+fn settings(integrator: Integrator, rtol: f64) -> GrowthSettings {
+    GrowthSettings {
+        integrator,
+        rtol,
+        atol: rtol * 1e-3,
+        ..GrowthSettings::default()
+    }
+}
+
+/// IDA at rtol 1e-8 matches CVODE at rtol 1e-8 in axial length at t = 0.1, 0.2, 0.4, 1 to
+/// 1e-5 mm on the const, thick and fibre (D = 200) scenes, N = 501, both thickness laws.
+#[test]
+fn ida_agrees_with_cvode_on_the_paper_scenes() {
+    let scenes = [
+        ("const", Thickness::Uniform, 0.0),
+        ("thick", Thickness::NonUniform, 0.0),
+        ("fibre", Thickness::NonUniform, 200.0),
+    ];
+    for (name, thickness, d) in scenes {
+        for law in [ThicknessLaw::None, ThicknessLaw::Mass] {
+            let p = Params {
+                thickness,
+                d,
+                ..Params::default()
+            };
+            let g = GrowthParams {
+                thickness_law: law,
+                ..GrowthParams::default()
+            };
+            let (cv, rc) = run(&p, 501, &g, &settings(Integrator::Cvode, 1e-8));
+            let (ida, ri) = run(&p, 501, &g, &settings(Integrator::Ida, 1e-8));
+            rc.unwrap();
+            let stats = ri.unwrap();
+            assert_eq!((cv.len(), ida.len()), (5, 5));
+            for (a, b) in cv.iter().zip(&ida).skip(1) {
+                assert_eq!(a.t, b.t);
+                let diff = (a.axial_length - b.axial_length).abs();
+                println!(
+                    "{name} {law:?} t = {}: CVODE {:.9} IDA {:.9} (|Δ| {diff:.1e}); IDA steps {}",
+                    a.t, a.axial_length, b.axial_length, stats.steps
+                );
+                assert!(
+                    diff < 1e-5,
+                    "{name} {law:?} t = {}: CVODE {} vs IDA {}",
+                    a.t,
+                    a.axial_length,
+                    b.axial_length
+                );
+            }
+        }
+    }
+}
+
+/// The growth cases of TESTING.md (const scene, N = 101, rtol 1e-5) all run with IDA, and
+/// end within 1e-3 mm of CVODE's axial length.
+#[test]
+fn ida_survives_the_growth_extremes() {
+    let base = GrowthParams::default();
+    let cases: Vec<(&str, GrowthParams)> = vec![
+        (
+            "eta0 = 0",
+            GrowthParams {
+                eta0: 0.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "eta0 = 1e2",
+            GrowthParams {
+                eta0: 1e2,
+                ..base.clone()
+            },
+        ),
+        (
+            "eta0 = 1e3",
+            GrowthParams {
+                eta0: 1e3,
+                ..base.clone()
+            },
+        ),
+        (
+            "eta0 = 1e4",
+            GrowthParams {
+                eta0: 1e4,
+                ..base.clone()
+            },
+        ),
+        (
+            "delta = 0.05",
+            GrowthParams {
+                delta: 0.05,
+                ..base.clone()
+            },
+        ),
+        (
+            "delta = 50",
+            GrowthParams {
+                delta: 50.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "Gamma = -10",
+            GrowthParams {
+                gamma: -10.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "Gamma = 40",
+            GrowthParams {
+                gamma: 40.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "t_end = 10",
+            GrowthParams {
+                t_end: 10.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "mass law",
+            GrowthParams {
+                thickness_law: ThicknessLaw::Mass,
+                ..base.clone()
+            },
+        ),
+    ];
+    let p = Params::default();
+    for (name, g) in cases {
+        let (ida, ri) = run(&p, 101, &g, &settings(Integrator::Ida, 1e-5));
+        let (cv, rc) = run(&p, 101, &g, &settings(Integrator::Cvode, 1e-5));
+        let stats = ri.unwrap_or_else(|e| panic!("{name}: IDA failed: {e}"));
+        rc.unwrap();
+        let (a, b) = (cv.last().unwrap(), ida.last().unwrap());
+        assert_eq!(a.t, g.t_end);
+        assert_eq!(b.t, g.t_end);
+        assert!(b.axial_length.is_finite());
+        assert!(
+            (a.axial_length - b.axial_length).abs() < 1e-3,
+            "{name}: CVODE {} vs IDA {}",
+            a.axial_length,
+            b.axial_length
+        );
+        // The growth never shrinks the eye.
+        assert!(
+            ida.windows(2)
+                .all(|w| w[1].axial_length >= w[0].axial_length - 1e-9),
+            "{name}: axial length fell"
+        );
+        assert!(
+            stats.steps > 0
+                && stats.residual_evaluations >= stats.steps
+                && stats.jacobian_evaluations >= 1,
+            "{name}: {stats:?}"
+        );
+    }
+}
+
+/// Every linear solver of the Newton matrix gives the same run (the same steps, to
+/// round-off the same axial length).
+#[test]
+fn every_linear_solver_gives_the_same_run() {
+    let p = Params {
+        thickness: Thickness::NonUniform,
+        d: 100.0,
+        ..Params::default()
+    };
+    let g = GrowthParams::default();
+    let mut results = vec![];
+    for lin in DaeLinear::ALL {
+        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu)
+            && !eyeshell_sundials::klu_available()
+        {
+            continue;
+        }
+        let s = GrowthSettings {
+            dae_linear: lin,
+            ..settings(Integrator::Ida, 1e-6)
+        };
+        let (rows, r) = run(&p, 101, &g, &s);
+        let stats = r.unwrap();
+        results.push((lin, stats.steps, rows.last().unwrap().axial_length));
+    }
+    let (_, steps0, axial0) = results[0];
+    for (lin, steps, axial) in &results {
+        assert!(
+            (axial - axial0).abs() < 1e-9,
+            "{lin:?}: {axial} vs {axial0}"
+        );
+        assert!(
+            steps.abs_diff(steps0) <= 2,
+            "{lin:?}: {steps} steps vs {steps0}"
+        );
+    }
+}
+
+/// Fails at its `fail_at`-th snapshot (t = 0 is the first), keeping those before.
+struct FailAt {
+    kept: Vec<f64>,
+    fail_at: usize,
+}
+
+impl Observer for FailAt {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::Error> {
+        if self.kept.len() == self.fail_at {
+            let full = std::io::Error::other("the disk is full");
+            return Err(eyeshell::Error::Io {
+                path: "snapshots".into(),
+                source: full,
+            });
+        }
+        self.kept.push(s.t);
+        Ok(())
+    }
+}
+
+/// A run whose output fails at t = 0.4 stops there with t and the reason, keeps the
+/// snapshots at t = 0, 0.1 and 0.2, and reports the work done until then.
+#[test]
+fn a_failing_ida_run_says_where_and_keeps_what_it_had() {
+    let mut obs = FailAt {
+        kept: vec![],
+        fail_at: 3,
+    };
+    let solver = SolverSettings {
+        nodes: 51,
+        ..SolverSettings::default()
+    };
+    let s = settings(Integrator::Ida, 1e-5);
+    let err = grow(
+        &Params::default(),
+        &solver,
+        &GrowthParams::default(),
+        &s,
+        &mut obs,
+    )
+    .unwrap_err();
+    assert_eq!(obs.kept, vec![0.0, 0.1, 0.2]);
+    assert_eq!(err.t, 0.4);
+    assert!(err.reason.contains("the disk is full"), "{}", err.reason);
+    assert!(
+        err.to_string().starts_with("growth failed at t = 0.400000"),
+        "{err}"
+    );
+    assert!(
+        err.stats.steps > 0 && err.stats.residual_evaluations > 0 && err.stats.t_reached >= 0.4,
+        "{:?}",
+        err.stats
+    );
+}
+
+/// Absurd but finite growth data: rates that overflow fail the evaluation at their point
+/// (no NaN reaches the Newton matrix), and the run says so at t = 0 instead of hanging.
+#[test]
+fn overflowing_rates_fail_cleanly() {
+    let solver = SolverSettings {
+        nodes: 51,
+        ..SolverSettings::default()
+    };
+    let g = GrowthParams {
+        eta0: 1.7e308,
+        ..GrowthParams::default()
+    };
+    let err = grow(
+        &Params::default(),
+        &solver,
+        &g,
+        &settings(Integrator::Ida, 1e-5),
+        &mut Keep::default(),
+    )
+    .unwrap_err();
+    assert_eq!(err.t, 0.0);
+    assert!(
+        err.reason
+            .contains("the growth rates cannot be evaluated at node"),
+        "{}",
+        err.reason
+    );
+}

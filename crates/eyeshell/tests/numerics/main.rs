@@ -1,0 +1,17 @@
+//! The numerics: exact solutions, observed orders, analytic against finite-difference Jacobians, the first integral, growth by every integrator.
+//!
+//! One test binary for the group (each module was its own binary before: one link instead of
+//! many).
+
+
+mod common;
+
+mod convergence;
+mod dae_jacobian;
+mod exact_solution;
+mod growth;
+mod growth_ida;
+mod jacobian;
+mod property_jacobian;
+mod property_residual;
+mod solve_features;

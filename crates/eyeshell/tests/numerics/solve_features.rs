@@ -1,0 +1,104 @@
+//! The solve's other promises: KLU gives the band answer, warm starts save Newton work,
+//! the interpolant keeps the scheme's order between nodes, and the first integral holds to
+//! the size of the discretisation error on the fibre shell.
+
+use crate::common::*;
+use eyeshell::bvp;
+use eyeshell::model::params::{LinearSolverKind, Params, Scheme, SolverSettings};
+
+#[test]
+fn klu_and_band_give_the_same_solution() {
+    assert!(eyeshell_sundials::klu_available(), "KLU is not built in: install libsuitesparse-dev");
+    let p = fibre_shell();
+    let band = solve(&p, 401, Scheme::HermiteSimpson);
+    let s = SolverSettings { linear: LinearSolverKind::Klu, ..settings(401, Scheme::HermiteSimpson) };
+    let klu = bvp::solve(&p, &s, None).unwrap();
+    let diff = band.u.iter().zip(&klu.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    println!("KLU vs band: max difference {diff:.2e}, Newton {} vs {}", klu.stats.newton_iterations, band.stats.newton_iterations);
+    assert!(diff < 1e-11, "KLU and band differ by {diff:e}");
+}
+
+#[test]
+fn warm_start_from_a_nearby_pressure_saves_newton_work() {
+    let p = fibre_shell();
+    let s = settings(501, Scheme::HermiteSimpson);
+    let near = bvp::solve(&Params { dp: 2.02, ..p }, &s, None).unwrap();
+    let cold = bvp::solve(&p, &s, None).unwrap();
+    let warm = bvp::solve(&p, &s, Some(&near)).unwrap();
+    let diff = cold.u.iter().zip(&warm.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    println!("cold {} iterations, warm {}; difference {diff:.2e}", cold.stats.newton_iterations, warm.stats.newton_iterations);
+    assert!(warm.stats.newton_iterations < cold.stats.newton_iterations);
+    assert!(diff < 1e-10);
+    // From a different mesh the warm start interpolates and still converges to the same answer.
+    let coarse = bvp::solve(&p, &settings(201, Scheme::HermiteSimpson), None).unwrap();
+    let from_coarse = bvp::solve(&p, &s, Some(&coarse)).unwrap();
+    let diff = cold.u.iter().zip(&from_coarse.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(diff < 1e-10, "warm start from another mesh: {diff:e}");
+}
+
+/// Between nodes the interpolant's error on the exact sphere falls at order 4.
+#[test]
+fn interpolant_keeps_order_4_between_nodes() {
+    let p = exact_sphere();
+    let mut errors = vec![];
+    for n in [51, 101, 201] {
+        let sol = solve(&p, n, Scheme::HermiteSimpson);
+        let a = sol.stats.cornea_alpha;
+        let mut worst: f64 = 0.0;
+        for w in sol.mesh.nodes.windows(2).skip(sol.mesh.pole_nodes + 1) {
+            let x = 0.5 * (w[0] + w[1]);
+            let row = sol.at(x).unwrap();
+            let exact = [1.0 / (a * p.r0), a, a * p.r0 * (x / p.r0).sin(), x / p.r0, 0.0];
+            for (v, e) in five(&row).iter().zip(exact) {
+                worst = worst.max((v - e).abs());
+            }
+        }
+        errors.push(worst);
+        // At a node the interpolant returns the node's row.
+        let k = sol.mesh.len() / 2;
+        assert_eq!(sol.at(sol.mesh.nodes[k]).unwrap(), sol.rows[k]);
+    }
+    let q = orders(&errors);
+    println!("midpoint errors {} orders {q:.2?}", sci(&errors));
+    assert!(q.iter().all(|&o| (o - 4.0).abs() < 0.3), "orders {q:?}");
+    let sol = solve(&p, 51, Scheme::HermiteSimpson);
+    assert!(sol.at(0.0).is_err() && sol.at(p.length() + 1e-9).is_err());
+}
+
+/// max |Q cos θ + r t_s sin θ − r²ΔP/2| falls with the mesh at the scheme's order.
+#[test]
+fn first_integral_falls_at_the_scheme_order() {
+    let p = fibre_shell();
+    for (scheme, ladder) in [(Scheme::Trapezoid, [101, 201, 401]), (Scheme::HermiteSimpson, [101, 201, 401])] {
+        let fi: Vec<f64> = ladder.iter().map(|&n| solve(&p, n, scheme).stats.first_integral_max).collect();
+        let q = orders(&fi);
+        println!("{scheme:?}: first integral {} orders {q:.2?}", sci(&fi));
+        let p_ = scheme.order() as f64;
+        assert!(q.iter().all(|&o| (o - p_).abs() < 0.3), "{scheme:?}: orders {q:?}");
+    }
+}
+
+/// Newton converges from the inflated reference sphere on every shipped scene, with no
+/// continuation.
+#[test]
+fn every_shipped_scene_solves_from_the_default_guess() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        // A sweep is many scenes: every run's shell must solve too.
+        let sweep = eyeshell::scene::sweep::Sweep::from_file(&path, &[]).unwrap();
+        for run in &sweep.runs {
+            let what = format!("{} run {}", path.display(), run.name);
+            let sol = bvp::solve(&run.scene.params, &run.scene.solver, None).unwrap_or_else(|e| panic!("{what}: {e}"));
+            println!("{what}: {} Newton iterations", sol.stats.newton_iterations);
+            assert_eq!(sol.stats.continuation_stages, 0, "{what}");
+            assert!(sol.stats.newton_iterations <= 8, "{what}");
+            count += 1;
+        }
+    }
+    assert!(count >= 2, "no scenes found in {}", dir.display());
+}

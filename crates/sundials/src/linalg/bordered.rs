@@ -1,0 +1,348 @@
+//! A band matrix bordered by one dense row and column, [A c; rᵀ s], solved by block
+//! elimination: A = LU by SUNDIALS' band LU, v = A⁻¹c once per factorisation, the scalar
+//! Schur complement σ = s − rᵀv; then each solve is one band back-substitution:
+//!   x_A = A⁻¹ b_A,  x_s = (b_s − rᵀ x_A) / σ,  x_A ← x_A − v x_s.
+//! Why a border: in the growth DAE one unknown (the blue depth where the retina crosses
+//! φ_max) is read by every point beyond φ_max, a dense column no band can hold.
+//!
+//! Also here: [`InterleavedBand`], band LU of a whole CSR matrix in a given order with one
+//! unknown as the border, and [`KluSolver`], KLU on the CSR matrix as it is.
+
+use std::rc::Rc;
+
+use super::{Csr, DirectSolver, LinalgError};
+use crate::{
+    BandMatrix, Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector,
+};
+
+/// [A c; rᵀ s] with A an n×n band matrix; without a border, just A.
+pub struct BorderedBand {
+    n: usize,
+    lower: usize,
+    upper: usize,
+    matrix: Matrix,
+    solver: LinearSolver,
+    border: bool,
+    col: Vec<f64>,
+    row: Vec<f64>,
+    corner: f64,
+    /// A⁻¹ c and σ = s − rᵀ A⁻¹ c, from the last factorisation.
+    v: Vec<f64>,
+    sigma: f64,
+    b: NVector,
+    x: NVector,
+    _ctx: Rc<Context>,
+}
+
+impl BorderedBand {
+    /// A zero matrix of size n (+ 1 with a border) whose band has these widths.
+    pub fn new(n: usize, lower: usize, upper: usize, border: bool) -> Result<Self, LinalgError> {
+        let ctx = Context::new()?;
+        let matrix = Matrix::Band(BandMatrix::new(&ctx, n, upper, lower)?);
+        let solver = LinearSolver::new(&ctx, &matrix)?;
+        let (b, x) = (NVector::new(&ctx, n)?, NVector::new(&ctx, n)?);
+        let border_len = if border { n } else { 0 };
+        Ok(BorderedBand {
+            n,
+            lower,
+            upper,
+            matrix,
+            solver,
+            border,
+            col: vec![0.0; border_len],
+            row: vec![0.0; border_len],
+            corner: 0.0,
+            v: vec![0.0; border_len],
+            sigma: 1.0,
+            b,
+            x,
+            _ctx: ctx,
+        })
+    }
+
+    /// The size of the band part.
+    pub fn band_size(&self) -> usize {
+        self.n
+    }
+
+    /// The whole size: the band and the border.
+    pub fn len(&self) -> usize {
+        self.n + usize::from(self.border)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// (lower, upper) bandwidths of A.
+    pub fn widths(&self) -> (usize, usize) {
+        (self.lower, self.upper)
+    }
+
+    /// Fill the matrix: `f(a, c, r, s)` sets the band entries of A and the border, all of
+    /// which start at zero.
+    pub fn fill(
+        &mut self,
+        f: impl FnOnce(&mut dyn MatrixSink, &mut [f64], &mut [f64], &mut f64),
+    ) -> Result<(), LinalgError> {
+        self.matrix.zero();
+        self.col.fill(0.0);
+        self.row.fill(0.0);
+        self.corner = 0.0;
+        let Matrix::Band(band) = &mut self.matrix else {
+            unreachable!("made as a band matrix")
+        };
+        let mut view = band.view_mut();
+        f(&mut view, &mut self.col, &mut self.row, &mut self.corner);
+        match self.matrix.take_outside() {
+            0 => Ok(()),
+            k => Err(LinalgError::OutsidePattern(k)),
+        }
+    }
+
+    /// Factorise what [`BorderedBand::fill`] set.
+    pub fn factor(&mut self) -> Result<(), LinalgError> {
+        self.solver.setup(&mut self.matrix)?;
+        if !self.border {
+            return Ok(());
+        }
+        self.b.as_mut_slice().copy_from_slice(&self.col);
+        self.solver.solve(&mut self.matrix, &mut self.x, &self.b)?;
+        self.v.copy_from_slice(self.x.as_slice());
+        let rv: f64 = self.row.iter().zip(&self.v).map(|(a, b)| a * b).sum();
+        self.sigma = self.corner - rv;
+        let scale = self.corner.abs()
+            + self
+                .row
+                .iter()
+                .zip(&self.v)
+                .map(|(a, b)| (a * b).abs())
+                .sum::<f64>();
+        if !(self.sigma.abs() > 1e-14 * scale) {
+            return Err(LinalgError::Singular(format!(
+                "the border's Schur complement is {:e} (scale {scale:e})",
+                self.sigma
+            )));
+        }
+        Ok(())
+    }
+
+    /// x = M⁻¹ b, both of length [`BorderedBand::len`].
+    pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
+        let n = self.n;
+        self.b.as_mut_slice().copy_from_slice(&b[..n]);
+        self.solver.solve(&mut self.matrix, &mut self.x, &self.b)?;
+        x[..n].copy_from_slice(self.x.as_slice());
+        if self.border {
+            let rx: f64 = self.row.iter().zip(&x[..n]).map(|(a, b)| a * b).sum();
+            let xs = (b[n] - rx) / self.sigma;
+            for (xi, vi) in x[..n].iter_mut().zip(&self.v) {
+                *xi -= vi * xs;
+            }
+            x[n] = xs;
+        }
+        Ok(())
+    }
+}
+
+/// The (lower, upper) bandwidths of `a` in the order `perm` (perm[i] = new index of i),
+/// rows and columns `skip` left out.
+fn widths_under(a: &Csr, perm: &[usize], skip: Option<usize>) -> (usize, usize) {
+    let (mut lower, mut upper) = (0, 0);
+    for i in (0..a.n()).filter(|&i| Some(i) != skip) {
+        for &j in a.row(i).0.iter().filter(|&&j| Some(j) != skip) {
+            let (pi, pj) = (perm[i], perm[j]);
+            lower = lower.max(pi.saturating_sub(pj));
+            upper = upper.max(pj.saturating_sub(pi));
+        }
+    }
+    (lower, upper)
+}
+
+/// Band LU of a whole CSR matrix after the symmetric permutation `perm` (chosen to keep
+/// the band narrow), with the unknown `border` (if any) kept out of the band.
+pub struct InterleavedBand {
+    perm: Vec<usize>,
+    border: Option<usize>,
+    bb: BorderedBand,
+    b: Vec<f64>,
+    x: Vec<f64>,
+}
+
+impl InterleavedBand {
+    /// `perm[i]`: where unknown i goes in the band (a permutation of 0..n−1 without
+    /// `border`, whose own entry is ignored).
+    pub fn new(
+        pattern: &Csr,
+        perm: Vec<usize>,
+        border: Option<usize>,
+    ) -> Result<Self, LinalgError> {
+        let n = pattern.n() - usize::from(border.is_some());
+        let (lower, upper) = widths_under(pattern, &perm, border);
+        let bb = BorderedBand::new(n, lower, upper, border.is_some())?;
+        Ok(InterleavedBand {
+            perm,
+            border,
+            bb,
+            b: vec![0.0; n + 1],
+            x: vec![0.0; n + 1],
+        })
+    }
+
+    pub fn widths(&self) -> (usize, usize) {
+        self.bb.widths()
+    }
+}
+
+impl DirectSolver for InterleavedBand {
+    fn factor(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        let (perm, border) = (&self.perm, self.border);
+        self.bb.fill(|band, col, row, corner| {
+            for i in 0..a.n() {
+                let (cols, vals) = a.row(i);
+                for (&j, &v) in cols.iter().zip(vals) {
+                    match (Some(i) == border, Some(j) == border) {
+                        (false, false) => band.set(perm[i], perm[j], v),
+                        (false, true) => col[perm[i]] = v,
+                        (true, false) => row[perm[j]] = v,
+                        (true, true) => *corner = v,
+                    }
+                }
+            }
+        })?;
+        self.bb.factor()
+    }
+
+    fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
+        let n = self.bb.band_size();
+        for (i, &bi) in b.iter().enumerate() {
+            let k = if Some(i) == self.border {
+                n
+            } else {
+                self.perm[i]
+            };
+            self.b[k] = bi;
+        }
+        let len = self.bb.len();
+        self.bb.solve(&self.b[..len], &mut self.x[..len])?;
+        for (i, xi) in x.iter_mut().enumerate() {
+            *xi = self.x[if Some(i) == self.border {
+                n
+            } else {
+                self.perm[i]
+            }];
+        }
+        Ok(())
+    }
+}
+
+/// SUNDIALS' KLU on the CSR matrix in its own order (KLU orders for fill itself).
+pub struct KluSolver {
+    matrix: Matrix,
+    solver: LinearSolver,
+    b: NVector,
+    x: NVector,
+    _ctx: Rc<Context>,
+}
+
+impl KluSolver {
+    pub fn new(pattern: &Csr) -> Result<Self, LinalgError> {
+        let ctx = Context::new()?;
+        let spec = LinearSolverSpec::Klu {
+            row_ptr: pattern.row_ptr().to_vec(),
+            col_idx: pattern.col_idx().to_vec(),
+        };
+        let (matrix, solver) = LinearSolver::for_spec(&ctx, pattern.n(), &spec)?;
+        let (b, x) = (
+            NVector::new(&ctx, pattern.n())?,
+            NVector::new(&ctx, pattern.n())?,
+        );
+        Ok(KluSolver {
+            matrix,
+            solver,
+            b,
+            x,
+            _ctx: ctx,
+        })
+    }
+}
+
+impl DirectSolver for KluSolver {
+    /// KLU refactors with the pivot order of its first factorisation, and SUNDIALS reports
+    /// a zero pivot there as a failure instead of pivoting afresh (seen in growth at rtol
+    /// 1e-2, where the steps change the matrix a lot): then factor anew from scratch.
+    fn factor(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        let Matrix::Sparse(m) = &mut self.matrix else {
+            unreachable!("made for KLU")
+        };
+        m.copy_values(a.values())?;
+        if self.solver.setup(&mut self.matrix).is_ok() {
+            return Ok(());
+        }
+        self.solver = LinearSolver::new(&self._ctx, &self.matrix)?;
+        self.solver.setup(&mut self.matrix)?;
+        Ok(())
+    }
+
+    fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
+        self.b.as_mut_slice().copy_from_slice(b);
+        self.solver.solve(&mut self.matrix, &mut self.x, &self.b)?;
+        x.copy_from_slice(self.x.as_slice());
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small bordered system against a dense solve.
+    #[test]
+    fn bordered_band_solves_against_dense() {
+        let n = 7;
+        let mut bb = BorderedBand::new(n, 1, 2, true).unwrap();
+        let a = |i: usize, j: usize| {
+            if i == j {
+                4.0 + i as f64
+            } else if (j + 1 == i) || (j == i + 1) || (j == i + 2) {
+                0.3 * (i + 2 * j) as f64 / 7.0
+            } else {
+                0.0
+            }
+        };
+        let c = |i: usize| 0.1 * (i as f64 + 1.0);
+        let r = |j: usize| 0.2 * (j as f64).sin();
+        bb.fill(|m, col, row, corner| {
+            for i in 0..n {
+                for j in 0..n {
+                    if a(i, j) != 0.0 {
+                        m.set(i, j, a(i, j));
+                    }
+                }
+                col[i] = c(i);
+                row[i] = r(i);
+            }
+            *corner = 3.0;
+        })
+        .unwrap();
+        bb.factor().unwrap();
+        let full = nalgebra::DMatrix::from_fn(n + 1, n + 1, |i, j| match (i < n, j < n) {
+            (true, true) => a(i, j),
+            (true, false) => c(i),
+            (false, true) => r(j),
+            (false, false) => 3.0,
+        });
+        let b: Vec<f64> = (0..=n).map(|i| (i as f64 * 0.7).cos()).collect();
+        let mut x = vec![0.0; n + 1];
+        bb.solve(&b, &mut x).unwrap();
+        let expect = full.lu().solve(&nalgebra::DVector::from_vec(b)).unwrap();
+        for i in 0..=n {
+            assert!(
+                (x[i] - expect[i]).abs() < 1e-13,
+                "{i}: {} vs {}",
+                x[i],
+                expect[i]
+            );
+        }
+    }
+}

@@ -1,0 +1,43 @@
+//! Linear algebra for the Newton systems of the coupled growth DAE (issue 11), knowing
+//! nothing of eyes: a CSR matrix with a fixed pattern that the Jacobian is assembled into,
+//! a band matrix bordered by one dense row and column, and three direct solvers of the
+//! assembled matrix:
+//! - [`SchurSolver`]: eliminates 2×2 blocks of unknowns whose rows are local (block lower
+//!   triangular among themselves), leaving a bordered band in the other unknowns;
+//! - [`InterleavedBand`]: band LU of the whole matrix in a permuted (interleaved) order,
+//!   with one unknown kept out as the border;
+//! - [`KluSolver`]: SUNDIALS' KLU on the CSR matrix as it is.
+//!
+//! The band LU and KLU are SUNDIALS' (through the safe layer in `crate`); what is
+//! here is safe Rust.
+
+mod bordered;
+mod csr;
+mod schur;
+
+pub use bordered::{BorderedBand, InterleavedBand, KluSolver};
+pub use csr::Csr;
+pub use schur::{Reduced, SchurSolver};
+
+use crate::SundialsError;
+
+/// Why a factorisation or solve failed.
+#[derive(Debug, thiserror::Error)]
+pub enum LinalgError {
+    /// A pivot block or the border's Schur complement is (numerically) singular.
+    #[error("singular matrix: {0}")]
+    Singular(String),
+    #[error(transparent)]
+    Sundials(#[from] SundialsError),
+    /// The assembler wrote entries outside the fixed pattern (a bug in the assembler).
+    #[error("{0} entries were assembled outside the matrix's pattern")]
+    OutsidePattern(usize),
+}
+
+/// A direct solver of a matrix assembled into a [`Csr`].
+pub trait DirectSolver {
+    /// Factorise `a` (its values as assembled now; the pattern is the one given at creation).
+    fn factor(&mut self, a: &Csr) -> Result<(), LinalgError>;
+    /// x = A⁻¹ b with the last factorisation.
+    fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError>;
+}

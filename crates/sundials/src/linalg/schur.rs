@@ -1,0 +1,538 @@
+//! The Schur complement of the growth unknowns (issue 11). The unknowns are ordered
+//! [P | W | d]: P in 2×2 blocks (a growth point's ρ and γ_s), W the band unknowns (the
+//! elastic state and z, node by node), d an optional border unknown. In the Newton matrix
+//!   [D  B  e]      D: block lower triangular (each block's rows read its own block and
+//!   [C  A  0]         earlier ones: a Hermite–Simpson midpoint reads its interval's ends),
+//!   [cᵀ aᵀ s]      A: band, B and C local (a block's rows and columns touch a few nodes),
+//! eliminating P leaves S = [A − C X, −C x_d; aᵀ − cᵀX, s − cᵀ x_d] with [X x_d] = D⁻¹[B e],
+//! which has A's band (every X row spans the W columns of one interval) bordered by d.
+//! A Newton step then costs one band LU of S (at setup) and one band back-substitution
+//! (per solve), the size of the elastic problem alone.
+//!
+//! The elimination order is the blocks' order, so the caller numbers blocks that others
+//! read first; [`SchurSolver::new`] checks the pattern for it.
+
+use super::{BorderedBand, Csr, DirectSolver, KluSolver, LinalgError};
+
+/// How the reduced matrix S is factored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reduced {
+    /// SUNDIALS' band LU, the border by block elimination.
+    Band,
+    /// KLU on S as a sparse matrix (its band rows and the border).
+    Klu,
+}
+
+/// The factorisation of S.
+enum ReducedSolver {
+    Band(BorderedBand),
+    Klu { s: Csr, klu: KluSolver },
+}
+
+/// One block's rows after elimination: D_kk⁻¹, the couplings D_kj (j < k), and
+/// X_k = D⁻¹ [B e] restricted to block k (two rows over W columns lo..lo+width, and d).
+#[derive(Clone, Debug, Default)]
+struct Block {
+    inv: [[f64; 2]; 2],
+    lower: Vec<(usize, [[f64; 2]; 2])>,
+    lo: usize,
+    width: usize,
+    x: Vec<f64>,
+    xd: [f64; 2],
+}
+
+/// Solves the [P | W | d] system by eliminating P block by block.
+pub struct SchurSolver {
+    n_p: usize,
+    n_w: usize,
+    border: bool,
+    blocks: Vec<Block>,
+    /// Entries of C and cᵀ kept for the solves: (row in W ∪ d, column in P, value).
+    coupling: Vec<(u32, u32, f64)>,
+    reduced: ReducedSolver,
+    /// S's bandwidths, and its rows in dense band storage (row jw holds columns
+    /// jw − lower ..= jw + upper), its border column, border row and corner.
+    widths: (usize, usize),
+    s_rows: Vec<f64>,
+    s_col: Vec<f64>,
+    s_row: Vec<f64>,
+    s_corner: f64,
+    z: Vec<f64>,
+    rhs: Vec<f64>,
+    sol: Vec<f64>,
+    /// X = 0 in the last factorisation: S = [A a; aᵀ s], the algebraic block alone.
+    algebraic_only: bool,
+}
+
+impl SchurSolver {
+    /// For matrices with the pattern of `pattern`, whose first `n_p` unknowns (even) are
+    /// the blocks and whose last unknown is the border when `border`.
+    pub fn new(pattern: &Csr, n_p: usize, border: bool, how: Reduced) -> Result<Self, LinalgError> {
+        let n = pattern.n();
+        if n > u32::MAX as usize {
+            return Err(LinalgError::Singular(format!(
+                "{n} unknowns are more than this solver indexes"
+            )));
+        }
+        let n_w = n - n_p - usize::from(border);
+        assert!(
+            n_p % 2 == 0 && n_p + usize::from(border) <= n,
+            "bad partition of {n}: {n_p} block unknowns"
+        );
+        let mut blocks: Vec<Block> = Vec::with_capacity(n_p / 2);
+        for k in 0..n_p / 2 {
+            let (mut lo, mut hi) = (usize::MAX, 0usize);
+            let mut lower: Vec<usize> = vec![];
+            for row in [2 * k, 2 * k + 1] {
+                for &c in pattern.row(row).0 {
+                    if c < n_p && c / 2 != k {
+                        let j = c / 2;
+                        if j > k {
+                            return Err(LinalgError::Singular(format!(
+                                "block {k} reads the later block {j}: the blocks are not in elimination order"
+                            )));
+                        }
+                        lower.push(j);
+                    } else if c >= n_p && c < n_p + n_w {
+                        lo = lo.min(c - n_p);
+                        hi = hi.max(c - n_p + 1);
+                    }
+                }
+            }
+            lower.sort_unstable();
+            lower.dedup();
+            for &j in &lower {
+                let b = &blocks[j];
+                if b.width > 0 {
+                    lo = lo.min(b.lo);
+                    hi = hi.max(b.lo + b.width);
+                }
+            }
+            let (lo, width) = if hi == 0 { (0, 0) } else { (lo, hi - lo) };
+            blocks.push(Block {
+                lower: lower.into_iter().map(|j| (j, [[0.0; 2]; 2])).collect(),
+                lo,
+                width,
+                x: vec![0.0; 2 * width],
+                ..Block::default()
+            });
+        }
+        // S's band: A's entries and the fill C X, row by row.
+        let (mut lower, mut upper) = (0usize, 0usize);
+        for jw in 0..n_w {
+            for &c in pattern.row(n_p + jw).0 {
+                let span = if c < n_p {
+                    let b = &blocks[c / 2];
+                    (b.width > 0).then(|| (b.lo, b.lo + b.width - 1))
+                } else if c < n_p + n_w {
+                    Some((c - n_p, c - n_p))
+                } else {
+                    None
+                };
+                if let Some((a, b)) = span {
+                    lower = lower.max(jw.saturating_sub(a));
+                    upper = upper.max(b.saturating_sub(jw));
+                }
+            }
+        }
+        let reduced = match how {
+            Reduced::Band => ReducedSolver::Band(BorderedBand::new(n_w, lower, upper, border)?),
+            Reduced::Klu => {
+                let mut rows: Vec<Vec<usize>> = (0..n_w)
+                    .map(|jw| {
+                        (jw.saturating_sub(lower)..(jw + upper + 1).min(n_w))
+                            .chain(border.then_some(n_w))
+                            .collect()
+                    })
+                    .collect();
+                if border {
+                    rows.push((0..=n_w).collect());
+                }
+                let s = Csr::from_rows(rows);
+                let klu = KluSolver::new(&s)?;
+                ReducedSolver::Klu { s, klu }
+            }
+        };
+        Ok(SchurSolver {
+            n_p,
+            n_w,
+            border,
+            blocks,
+            coupling: vec![],
+            reduced,
+            widths: (lower, upper),
+            s_rows: vec![0.0; n_w * (lower + upper + 1)],
+            s_col: vec![0.0; n_w],
+            s_row: vec![0.0; n_w],
+            s_corner: 0.0,
+            z: vec![0.0; n_p],
+            rhs: vec![0.0; n_w + 1],
+            sol: vec![0.0; n_w + 1],
+            algebraic_only: false,
+        })
+    }
+
+    /// (lower, upper) bandwidths of the reduced matrix S.
+    pub fn widths(&self) -> (usize, usize) {
+        self.widths
+    }
+
+    /// The size of the reduced system (W and the border).
+    fn reduced_len(&self) -> usize {
+        self.n_w + usize::from(self.border)
+    }
+
+    fn reduced_solve(&mut self, b_len: usize, into_sol: bool) -> Result<(), LinalgError> {
+        let (rhs, sol) = (&self.rhs[..b_len], &mut self.sol[..b_len]);
+        let _ = into_sol;
+        match &mut self.reduced {
+            ReducedSolver::Band(bb) => bb.solve(rhs, sol),
+            ReducedSolver::Klu { klu, .. } => klu.solve(rhs, sol),
+        }
+    }
+
+    /// Block k's D_kk, D_kj and X_k from its two rows of `a`.
+    fn eliminate_block(&mut self, a: &Csr, k: usize) -> Result<(), LinalgError> {
+        let (n_p, n_w) = (self.n_p, self.n_w);
+        let (done, rest) = self.blocks.split_at_mut(k);
+        let b = &mut rest[0];
+        if self.algebraic_only {
+            b.x.fill(0.0);
+            b.xd = [0.0; 2];
+            return Ok(());
+        }
+        let mut d = [[0.0; 2]; 2];
+        b.x.fill(0.0);
+        b.xd = [0.0; 2];
+        for (_, m) in b.lower.iter_mut() {
+            *m = [[0.0; 2]; 2];
+        }
+        for r in 0..2 {
+            let (cols, vals) = a.row(2 * k + r);
+            for (&c, &v) in cols.iter().zip(vals) {
+                if c < n_p {
+                    let (j, comp) = (c / 2, c % 2);
+                    if j == k {
+                        d[r][comp] = v;
+                    } else if let Some((_, m)) = b.lower.iter_mut().find(|(i, _)| *i == j) {
+                        m[r][comp] = v;
+                    }
+                } else if c < n_p + n_w {
+                    b.x[r * b.width + c - n_p - b.lo] = v;
+                } else {
+                    b.xd[r] = v;
+                }
+            }
+        }
+        // [B e]_k − Σ_j D_kj X_j, then D_kk⁻¹ times it.
+        for (j, m) in &b.lower {
+            let xj = &done[*j];
+            let off = xj.lo.wrapping_sub(b.lo);
+            for r in 0..2 {
+                for s in 0..2 {
+                    let f = m[r][s];
+                    if f == 0.0 {
+                        continue;
+                    }
+                    for t in 0..xj.width {
+                        b.x[r * b.width + off + t] -= f * xj.x[s * xj.width + t];
+                    }
+                    b.xd[r] -= f * xj.xd[s];
+                }
+            }
+        }
+        let det = d[0][0] * d[1][1] - d[0][1] * d[1][0];
+        let scale = d[0][0]
+            .abs()
+            .max(d[1][1].abs())
+            .max(d[0][1].abs())
+            .max(d[1][0].abs());
+        if !(det.abs() > 1e-14 * scale * scale) {
+            return Err(LinalgError::Singular(format!(
+                "pivot block {k} has determinant {det:e}"
+            )));
+        }
+        b.inv = [
+            [d[1][1] / det, -d[0][1] / det],
+            [-d[1][0] / det, d[0][0] / det],
+        ];
+        let w = b.width;
+        for t in 0..w {
+            let (x0, x1) = (b.x[t], b.x[w + t]);
+            b.x[t] = b.inv[0][0] * x0 + b.inv[0][1] * x1;
+            b.x[w + t] = b.inv[1][0] * x0 + b.inv[1][1] * x1;
+        }
+        let (x0, x1) = (b.xd[0], b.xd[1]);
+        b.xd = [
+            b.inv[0][0] * x0 + b.inv[0][1] * x1,
+            b.inv[1][0] * x0 + b.inv[1][1] * x1,
+        ];
+        Ok(())
+    }
+
+    /// S = [A a; cᵀ s] − C X in dense band rows; keeps C's entries for the solves.
+    fn reduce(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        let (n_p, n_w, border) = (self.n_p, self.n_w, self.border);
+        let (lower, upper) = self.widths;
+        let width = lower + upper + 1;
+        let (blocks, coupling) = (&self.blocks, &mut self.coupling);
+        coupling.clear();
+        self.s_rows.fill(0.0);
+        self.s_col.fill(0.0);
+        self.s_row.fill(0.0);
+        self.s_corner = 0.0;
+        for jw in 0..n_w + usize::from(border) {
+            let is_border = jw == n_w;
+            // Row jw's column c sits at acc[c + lower − jw].
+            let (acc, at_d): (&mut [f64], &mut f64) = if is_border {
+                (&mut self.s_row[..], &mut self.s_corner)
+            } else {
+                (
+                    &mut self.s_rows[jw * width..(jw + 1) * width],
+                    &mut self.s_col[jw],
+                )
+            };
+            let shift = |c: usize| if is_border { c } else { c + lower - jw };
+            let (cols, vals) = a.row(n_p + jw);
+            for (&c, &v) in cols.iter().zip(vals) {
+                if c < n_p {
+                    if v == 0.0 {
+                        continue;
+                    }
+                    coupling.push((jw as u32, c as u32, v));
+                    let (b, r) = (&blocks[c / 2], c % 2);
+                    if b.width > 0 {
+                        let at = shift(b.lo);
+                        for (s, x) in acc[at..at + b.width]
+                            .iter_mut()
+                            .zip(&b.x[r * b.width..(r + 1) * b.width])
+                        {
+                            *s -= v * x;
+                        }
+                    }
+                    *at_d -= v * b.xd[r];
+                } else if c < n_p + n_w {
+                    acc[shift(c - n_p)] += v;
+                } else {
+                    *at_d += v;
+                }
+            }
+        }
+        let (rows, col, row, corner) = (&self.s_rows, &self.s_col, &self.s_row, self.s_corner);
+        match &mut self.reduced {
+            ReducedSolver::Band(bb) => bb.fill(|band, bc, br, bs| {
+                for jw in 0..n_w {
+                    let r = &rows[jw * width..(jw + 1) * width];
+                    for (t, &v) in r.iter().enumerate() {
+                        if v != 0.0 {
+                            band.set(jw, jw + t - lower, v);
+                        }
+                    }
+                }
+                if border {
+                    bc.copy_from_slice(col);
+                    br.copy_from_slice(row);
+                    *bs = corner;
+                }
+            }),
+            ReducedSolver::Klu { s, .. } => {
+                s.zero();
+                for jw in 0..n_w {
+                    let lo = jw.saturating_sub(lower);
+                    let hi = (jw + upper + 1).min(n_w);
+                    let r = &rows[jw * width..(jw + 1) * width];
+                    s.add_span(jw, lo, &r[lo + lower - jw..hi + lower - jw]);
+                    if border {
+                        s.add(jw, n_w, col[jw]);
+                    }
+                }
+                if border {
+                    s.add_span(n_w, 0, row);
+                    s.add(n_w, n_w, corner);
+                }
+                match s.take_outside() {
+                    0 => Ok(()),
+                    k => Err(LinalgError::OutsidePattern(k)),
+                }
+            }
+        }
+    }
+
+    /// Factorise only the algebraic block [A a; cᵀ s] (X taken as 0): for the algebraic
+    /// derivatives at a consistent start, [A a; cᵀ s] w' = −[C; cᵀ] p'. Solve with
+    /// [`SchurSolver::solve_algebraic`].
+    pub fn factor_algebraic(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        self.algebraic_only = true;
+        let r = self.factor_blocks(a);
+        self.algebraic_only = false;
+        r
+    }
+
+    /// w' = −[A a; cᵀ s]⁻¹ [C; cᵀ] p' after [`SchurSolver::factor_algebraic`]; `w` has the
+    /// length of W and d together.
+    pub fn solve_algebraic(&mut self, p_dot: &[f64], w: &mut [f64]) -> Result<(), LinalgError> {
+        self.rhs.fill(0.0);
+        for &(jw, c, v) in &self.coupling {
+            self.rhs[jw as usize] -= v * p_dot[c as usize];
+        }
+        let len = self.reduced_len();
+        self.reduced_solve(len, true)?;
+        w[..len].copy_from_slice(&self.sol[..len]);
+        Ok(())
+    }
+
+    fn factor_blocks(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        for k in 0..self.blocks.len() {
+            self.eliminate_block(a, k)?;
+        }
+        self.reduce(a)?;
+        match &mut self.reduced {
+            ReducedSolver::Band(bb) => bb.factor(),
+            ReducedSolver::Klu { s, klu } => klu.factor(s),
+        }
+    }
+}
+
+impl DirectSolver for SchurSolver {
+    fn factor(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        self.factor_blocks(a)
+    }
+
+    fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
+        let (n_p, n_w) = (self.n_p, self.n_w);
+        // z = D⁻¹ b_P, block by block.
+        for (k, blk) in self.blocks.iter().enumerate() {
+            let mut t = [b[2 * k], b[2 * k + 1]];
+            for (j, m) in &blk.lower {
+                let (z0, z1) = (self.z[2 * j], self.z[2 * j + 1]);
+                t[0] -= m[0][0] * z0 + m[0][1] * z1;
+                t[1] -= m[1][0] * z0 + m[1][1] * z1;
+            }
+            self.z[2 * k] = blk.inv[0][0] * t[0] + blk.inv[0][1] * t[1];
+            self.z[2 * k + 1] = blk.inv[1][0] * t[0] + blk.inv[1][1] * t[1];
+        }
+        // The reduced right side, b_W − C z, and S's solve.
+        let len = self.reduced_len();
+        self.rhs[..len].copy_from_slice(&b[n_p..n_p + len]);
+        for &(jw, c, v) in &self.coupling {
+            self.rhs[jw as usize] -= v * self.z[c as usize];
+        }
+        self.reduced_solve(len, true)?;
+        x[n_p..n_p + len].copy_from_slice(&self.sol[..len]);
+        let xd = if self.border { self.sol[n_w] } else { 0.0 };
+        // x_P = z − X x_W − x_d x_d.
+        for (k, blk) in self.blocks.iter().enumerate() {
+            for r in 0..2 {
+                let xr = &blk.x[r * blk.width..(r + 1) * blk.width];
+                let dot: f64 = xr
+                    .iter()
+                    .zip(&self.sol[blk.lo..blk.lo + blk.width])
+                    .map(|(a, b)| a * b)
+                    .sum();
+                x[2 * k + r] = self.z[2 * k + r] - dot - blk.xd[r] * xd;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+
+    /// A random matrix with the structure of the growth DAE (blocks reading a band window
+    /// and earlier blocks, band rows reading blocks, a border) against a dense LU, through
+    /// all three solvers.
+    #[test]
+    fn schur_matches_dense_on_a_structured_matrix() {
+        let (nb, n_w) = (6usize, 10usize);
+        let n_p = 2 * nb;
+        let n = n_p + n_w + 1;
+        let d = n - 1;
+        let rnd = |i: usize, j: usize| ((i * 31 + j * 17) as f64 * 0.37).sin();
+        // Block k reads W columns 2k.. 2k+3 (clipped), blocks ≥ 3 read block k − 3, and the
+        // border; W row j reads W j−2..j+2, the block j/2, and the border row reads all.
+        let mut rows: Vec<Vec<usize>> = vec![vec![]; n];
+        for k in 0..nb {
+            for r in 0..2 {
+                let row = &mut rows[2 * k + r];
+                row.extend([2 * k, 2 * k + 1, d]);
+                row.extend((2 * k..(2 * k + 4).min(n_w)).map(|c| n_p + c));
+                if k >= 3 {
+                    row.extend([2 * (k - 3), 2 * (k - 3) + 1]);
+                }
+            }
+        }
+        for j in 0..n_w {
+            rows[n_p + j].extend((j.saturating_sub(2)..(j + 3).min(n_w)).map(|c| n_p + c));
+            rows[n_p + j].extend([2 * (j / 2 % nb), 2 * (j / 2 % nb) + 1]);
+        }
+        rows[d] = (0..n).collect();
+        let mut a = Csr::from_rows(rows.clone());
+        let mut dense = DMatrix::zeros(n, n);
+        for (i, cols) in rows.iter().enumerate() {
+            for &j in cols {
+                let v = if i == j { 8.0 + rnd(i, j) } else { rnd(i, j) };
+                if a.get(i, j) == 0.0 {
+                    a.add(i, j, v);
+                    dense[(i, j)] = v;
+                }
+            }
+        }
+        let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
+        let expect = dense
+            .clone()
+            .lu()
+            .solve(&DVector::from_vec(b.clone()))
+            .unwrap();
+        let check = |x: &[f64], who: &str| {
+            for i in 0..n {
+                assert!(
+                    (x[i] - expect[i]).abs() < 1e-12,
+                    "{who} {i}: {} vs {}",
+                    x[i],
+                    expect[i]
+                );
+            }
+        };
+        let mut x = vec![0.0; n];
+        for how in [Reduced::Band, Reduced::Klu] {
+            if how == Reduced::Klu && !crate::klu_available() {
+                continue;
+            }
+            let mut schur = SchurSolver::new(&a, n_p, true, how).unwrap();
+            schur.factor(&a).unwrap();
+            schur.solve(&b, &mut x).unwrap();
+            check(&x, "schur");
+        }
+        let mut schur = SchurSolver::new(&a, n_p, true, Reduced::Band).unwrap();
+        let perm: Vec<usize> = (0..n).map(|i| if i == d { 0 } else { i }).collect();
+        let mut band = super::super::InterleavedBand::new(&a, perm, Some(d)).unwrap();
+        band.factor(&a).unwrap();
+        band.solve(&b, &mut x).unwrap();
+        check(&x, "band");
+        if crate::klu_available() {
+            let mut klu = super::super::KluSolver::new(&a).unwrap();
+            klu.factor(&a).unwrap();
+            klu.solve(&b, &mut x).unwrap();
+            check(&x, "klu");
+        }
+        // The algebraic block alone: [A a; cᵀ s] w = −C p.
+        let p: Vec<f64> = (0..n_p).map(|i| 0.1 * i as f64).collect();
+        schur.factor_algebraic(&a).unwrap();
+        let mut w = vec![0.0; n_w + 1];
+        schur.solve_algebraic(&p, &mut w).unwrap();
+        let alg = dense.view((n_p, n_p), (n_w + 1, n_w + 1)).into_owned();
+        let cp = dense.view((n_p, 0), (n_w + 1, n_p)) * DVector::from_vec(p);
+        let expect_w = alg.lu().solve(&(-cp)).unwrap();
+        for i in 0..=n_w {
+            assert!(
+                (w[i] - expect_w[i]).abs() < 1e-12,
+                "algebraic {i}: {} vs {}",
+                w[i],
+                expect_w[i]
+            );
+        }
+    }
+}

@@ -1,0 +1,15 @@
+//! The SUNDIALS layer against SUNDIALS itself: every wrapper, flag and callback path, and the linkage to Debian's 6.x.
+//!
+//! One test binary for the group (each module was its own binary before: one link instead of
+//! many).
+
+#![allow(clippy::needless_range_loop)] // index loops mirror the maths
+
+mod sundials_support;
+
+mod cvode;
+mod ida;
+mod kinsol;
+mod kinsol_factorization;
+mod linkage;
+mod linsol;

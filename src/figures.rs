@@ -1,0 +1,561 @@
+//! The paper's result figures (its section 3; docs/MODEL.md §8) and the pictures of any run,
+//! drawn from run directories read back from disk ([`eyeshell::rundir::rundata`]), as PNG and SVG.
+//!
+//! Panels are built by small functions (a shell cross-section, stretch profiles, axial
+//! length against time, retinas); [`paper_figures`] composes them into figures (a)–(f) and
+//! an HTML index, [`plot_run`] into the pictures of one run or of a sweep.
+
+use std::path::{Path, PathBuf};
+
+use plotters::style::RGBColor;
+
+use crate::interop::export::{bad, ExportError, RunSnapshot};
+use eyeshell_plot::{self as plot, colormap, Figure, PlotError, Series, SeriesStyle};
+use eyeshell::rundir::rundata::{self, column, RunData, RunKind, SeriesPoint};
+use eyeshell::model::stimulus::Surface;
+use eyeshell::scene::Scene;
+
+/// Size of one panel, in pixels.
+pub const PANEL: (u32, u32) = (820, 620);
+
+const BLUE: RGBColor = RGBColor(31, 90, 220);
+const RED: RGBColor = RGBColor(210, 40, 40);
+const GREY: RGBColor = RGBColor(150, 150, 150);
+const BLACK: RGBColor = RGBColor(0, 0, 0);
+
+/// A figure that was written: its files and its caption (for the index).
+#[derive(Clone, Debug)]
+pub struct Written {
+    pub id: String,
+    pub title: String,
+    pub caption: String,
+    pub png: PathBuf,
+    pub svg: PathBuf,
+}
+
+/// Why figures could not be drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum FigureError {
+    #[error("{0}")]
+    Read(String),
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
+
+impl From<ExportError> for FigureError {
+    fn from(e: ExportError) -> Self {
+        FigureError::Read(e.message)
+    }
+}
+
+// ---------------------------------------------------------------- geometry of a snapshot
+
+/// The curves of a shell at one snapshot: mid-surface, outer face and retina (inner face),
+/// each as (z, r) points from the pole to the cornea, and η at every node.
+struct Shell {
+    mid: Vec<(f64, f64)>,
+    outer: Vec<(f64, f64)>,
+    retina: Vec<(f64, f64)>,
+    eta: Vec<f64>,
+}
+
+fn shell(s: &RunSnapshot) -> Result<Shell, ExportError> {
+    let (z, r, theta, h) = (column(s, "z")?, column(s, "r")?, column(s, "theta")?, column(s, "h")?);
+    let (zr, rr) = (column(s, "z_retina")?, column(s, "r_retina")?);
+    let outer = (0..z.len())
+        .map(|i| (z[i] + 0.5 * h[i] * theta[i].cos(), r[i] + 0.5 * h[i] * theta[i].sin()))
+        .collect();
+    Ok(Shell {
+        mid: z.iter().copied().zip(r.iter().copied()).collect(),
+        outer,
+        retina: zr.into_iter().zip(rr).collect(),
+        eta: column(s, "eta")?,
+    })
+}
+
+/// The best-focus surface as (z, r) points for φ in [0, φ_max].
+fn surface_points(s: &Surface) -> Vec<(f64, f64)> {
+    (0..=80).map(|k| s.point(s.phi_max * k as f64 / 80.0)).collect()
+}
+
+fn surfaces(scene: &Scene) -> [Series; 2] {
+    [
+        Series::new("blue best focus", surface_points(&scene.blue()), SeriesStyle::DashedLine).color(BLUE),
+        Series::new("red best focus", surface_points(&scene.red()), SeriesStyle::DashedLine).color(RED),
+    ]
+}
+
+/// The largest η over snapshots (the common top of the colour scale).
+fn eta_max(snapshots: &[&RunSnapshot]) -> f64 {
+    snapshots
+        .iter()
+        .filter_map(|s| s.table.column("eta"))
+        .flatten()
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max)
+}
+
+fn t_label(t: f64) -> String {
+    format!("t = {}", trim(t))
+}
+
+/// A number as short as it reads: 0.1, 1, 23.58.
+fn trim(x: f64) -> String {
+    let s = format!("{x:.4}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+// ---------------------------------------------------------------- panels
+
+/// A cross-section of the shell at one snapshot: the mid-surface shaded by η, both faces,
+/// the retina, and the blue and red best-focus surfaces.
+fn shell_panel(title: String, scene: &Scene, s: &RunSnapshot, eta_top: f64) -> Result<Figure, ExportError> {
+    let sh = shell(s)?;
+    let [blue, red] = surfaces(scene);
+    let mut fig = Figure::new(title, "z (mm)", "r (mm)")
+        .with(Series::new("shell, shaded by η", sh.mid, SeriesStyle::Line).width(7).shaded(sh.eta).no_legend())
+        .with(Series::new("outer face", sh.outer, SeriesStyle::Line).color(BLACK).width(1).no_legend())
+        .with(Series::new("retina", sh.retina, SeriesStyle::Line).color(BLACK).width(2))
+        .with(blue)
+        .with(red)
+        .color_scale("η (1/mm)", 0.0, eta_top);
+    fig.aspect_equal = true;
+    Ok(fig)
+}
+
+/// One quantity against σ (grown unloaded arclength) for several snapshots, coloured by t.
+fn profile_panel(title: &str, field: &str, label: &str, snaps: &[&RunSnapshot]) -> Result<Figure, ExportError> {
+    let mut fig = Figure::new(title, "σ (mm)", label);
+    // Evenly spread along the colour map by order (the times themselves cluster near 0).
+    let last = snaps.len().saturating_sub(1).max(1) as f64;
+    for (k, s) in snaps.iter().enumerate() {
+        let pts = column(s, "sigma")?.into_iter().zip(column(s, field)?).collect();
+        let c = colormap(0.85 * k as f64 / last);
+        fig = fig.with(Series::new(t_label(s.t), pts, SeriesStyle::Line).color(c));
+    }
+    Ok(fig)
+}
+
+/// Axial length against t for several runs.
+fn axial_panel(title: &str, runs: &[(String, &RunData)]) -> Figure {
+    let mut fig = Figure::new(title, "t", "axial length (mm)");
+    for (k, (name, run)) in runs.iter().enumerate() {
+        let pts = run.timeline().iter().map(|p| (p.t, p.axial_length)).collect();
+        fig = fig.with(Series::new(name.clone(), pts, SeriesStyle::Line).color(plot::PALETTE[k % 10]));
+    }
+    fig
+}
+
+// ---------------------------------------------------------------- captions
+
+/// The parameters of a scene, as the paper's captions give them.
+pub fn parameters(scene: &Scene) -> String {
+    let p = &scene.params;
+    let thickness = match p.thickness {
+        eyeshell::model::params::Thickness::Uniform => format!("uniform H = {} mm", trim(p.h0)),
+        eyeshell::model::params::Thickness::NonUniform => "non-uniform H(Σ) (docs/MODEL.md §4)".to_string(),
+    };
+    let mut text = format!(
+        "ΔP = {} kPa, C = {} kPa, D = {} kPa, E_b = {} kPa·mm³, {thickness}",
+        trim(p.dp),
+        trim(p.c),
+        trim(p.d),
+        trim(p.e_b)
+    );
+    if let Some(g) = &scene.growth {
+        text.push_str(&format!(", η0 = {} /mm, Γ = {} mm, δ = {} mm", trim(g.eta0), trim(g.gamma), trim(g.delta)));
+    }
+    text.push_str(&format!("; {} nodes, {}", scene.solver.nodes, numerics(scene)));
+    text
+}
+
+fn numerics(scene: &Scene) -> String {
+    let scheme = match scene.solver.scheme {
+        eyeshell::model::params::Scheme::Trapezoid => "trapezoid (order 2)",
+        eyeshell::model::params::Scheme::HermiteSimpson => "Hermite–Simpson (order 4)",
+    };
+    match (&scene.growth, scene.growth_settings.integrator) {
+        (None, _) => scheme.to_string(),
+        (Some(_), eyeshell::growth::Integrator::Cvode) => {
+            format!("{scheme}, CVODE BDF rtol {:e}", scene.growth_settings.rtol)
+        }
+        (Some(_), eyeshell::growth::Integrator::Euler) => {
+            format!("{scheme}, explicit Euler, {} steps", scene.growth_settings.steps)
+        }
+        (Some(_), eyeshell::growth::Integrator::Ida) => {
+            format!("{scheme}, IDA BDF on the coupled DAE rtol {:e}", scene.growth_settings.rtol)
+        }
+    }
+}
+
+// ---------------------------------------------------------------- the paper's figures
+
+/// The run directories the paper's figures are drawn from (each a run or a sweep's run).
+pub struct PaperRuns {
+    pub constant: RunData,
+    pub thick: RunData,
+    /// (D, run), increasing D.
+    pub fibre: Vec<(f64, RunData)>,
+    /// (Γ, δ, run).
+    pub grid: Vec<(f64, f64, RunData)>,
+}
+
+impl PaperRuns {
+    /// Read the runs under `data`: `const/`, `thick/`, and the sweeps `fibre/`, `grow/`
+    /// (as `eyeshell figures` writes them).
+    pub fn read(data: &Path) -> Result<PaperRuns, FigureError> {
+        let run = |p: PathBuf| rundata::read(&p);
+        let mut fibre: Vec<(f64, RunData)> = sweep_runs(&data.join("fibre"))?
+            .into_iter()
+            .map(|r| (r.scene.params.d, r))
+            .collect();
+        fibre.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let grid = sweep_runs(&data.join("grow"))?
+            .into_iter()
+            .map(|r| {
+                let g = r.scene.growth.clone().unwrap_or_default();
+                (g.gamma, g.delta, r)
+            })
+            .collect();
+        Ok(PaperRuns {
+            constant: only_run(&data.join("const")).or_else(|_| run(data.join("const")))?,
+            thick: only_run(&data.join("thick")).or_else(|_| run(data.join("thick")))?,
+            fibre,
+            grid,
+        })
+    }
+}
+
+/// Every run of a sweep directory, in the order of its table.
+pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
+    let summary = std::fs::read_to_string(dir.join(eyeshell::rundir::SUMMARY_FILE))
+        .map_err(|e| bad(format!("{}: not a sweep output ({e})", dir.display())))?;
+    let v: serde_json::Value = serde_json::from_str(&summary).map_err(|e| bad(format!("{}: {e}", dir.display())))?;
+    let runs = v
+        .get("runs")
+        .and_then(|r| r.as_array())
+        .ok_or_else(|| bad(format!("{}: not a sweep output (no runs in summary.json)", dir.display())))?;
+    runs.iter()
+        .filter(|r| r["status"] == "ok" || r["status"] == "reused" || r["status"] == "failed")
+        .filter_map(|r| r["dir"].as_str())
+        .map(|d| rundata::read(&dir.join(d)))
+        .collect()
+}
+
+fn only_run(dir: &Path) -> Result<RunData, ExportError> {
+    sweep_runs(dir)?.into_iter().next().ok_or_else(|| bad(format!("{}: the sweep has no finished run", dir.display())))
+}
+
+fn snapshots_at<'a>(run: &'a RunData, times: &[f64]) -> Vec<&'a RunSnapshot> {
+    let mut out: Vec<&RunSnapshot> = times.iter().filter_map(|&t| run.snapshot_near(t)).collect();
+    out.dedup_by(|a, b| a.t == b.t);
+    out
+}
+
+/// Draw figures (a)–(f) from `runs` into `out`; returns them in order.
+pub fn paper_figures(runs: &PaperRuns, out: &Path) -> Result<Vec<Written>, FigureError> {
+    Ok(vec![
+        figure_a(runs, out)?,
+        figure_b(runs, out)?,
+        figure_c(runs, out)?,
+        figure_d(runs, out)?,
+        figure_e(runs, out)?,
+        figure_f(runs, out)?,
+    ])
+}
+
+fn written(id: &str, title: &str, caption: String, files: (PathBuf, PathBuf)) -> Written {
+    Written { id: id.into(), title: title.into(), caption, png: files.0, svg: files.1 }
+}
+
+/// (a) The const shell at t = 0.1, 0.2, 0.4, 1, shaded by η, with retina and surfaces.
+fn figure_a(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
+    let run = &runs.constant;
+    let snaps = snapshots_at(run, &[0.1, 0.2, 0.4, 1.0]);
+    let top = eta_max(&snaps);
+    let panels = snaps
+        .iter()
+        .zip(["(a)", "(b)", "(c)", "(d)"])
+        .map(|(s, l)| shell_panel(format!("{l} {}", t_label(s.t)), &run.scene, s, top))
+        .collect::<Result<Vec<_>, _>>()?;
+    let title = "Growth of a uniform, fibre-free sclera";
+    let files = plot::write_panels(&panels, 2, title, PANEL.0, PANEL.1, &out.join("fig_a_const_shells"))?;
+    let end = run.timeline().last();
+    let caption = format!(
+        "The shell cut at t = 0.1, 0.2, 0.4 and 1 (the paper's figure 'const' a–d), its mid-surface shaded by the growth rate η, with its outer face, the retina (inner face) and the best-focus surfaces for blue and red light (dashed; red = blue pushed back 0.655 mm). At t = 1 the axial length is {} mm, {}. Scene scenes/const.toml: {}.",
+        end.map_or("?".into(), |p| trim(p.axial_length)),
+        end.map_or("?".into(), describe_refraction),
+        parameters(&run.scene)
+    );
+    Ok(written("a", title, caption, files))
+}
+
+fn describe_refraction(p: &SeriesPoint) -> String {
+    let side = |d: f64, surface: &str| {
+        let word = if d >= 0.0 { "behind" } else { "in front of" };
+        format!("{} mm {word} {surface}", trim(d.abs()))
+    };
+    format!("{} (the retina at the pole is {}, {})", p.class.as_str(), side(p.retina_minus_blue, "blue"), side(p.retina_minus_red, "red"))
+}
+
+/// (b) α_s and α_φ against σ at t = 0, 0.1, 0.2, 0.4, 1 for the const shell.
+fn figure_b(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
+    let run = &runs.constant;
+    let snaps = snapshots_at(run, &[0.0, 0.1, 0.2, 0.4, 1.0]);
+    let panels = vec![
+        profile_panel("(f) stretch α_s", "alpha_s", "α_s", &snaps)?,
+        profile_panel("(g) stretch α_φ", "alpha_phi", "α_φ", &snaps)?,
+    ];
+    let title = "Stretches of the uniform sclera as it grows";
+    let files = plot::write_panels(&panels, 2, title, PANEL.0, PANEL.1, &out.join("fig_b_const_stretches"))?;
+    let caption = format!(
+        "The elastic stretches α_s and α_φ against σ (arclength of the grown, unloaded shell) at t = 0, 0.1, 0.2, 0.4 and 1 (the paper's figure 'const' f–g); uniform at t = 0. Scene scenes/const.toml: {}.",
+        parameters(&run.scene)
+    );
+    Ok(written("b", title, caption, files))
+}
+
+/// (c) Non-uniform against uniform thickness: shells at t = 0 and 1, and the stretches.
+fn figure_c(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
+    let (thick, constant) = (&runs.thick, &runs.constant);
+    let mut shells = Figure::new("(a) initial and final shells", "z (mm)", "r (mm)");
+    shells.aspect_equal = true;
+    let mut alpha_s = Figure::new("(b) α_s: initial (light) and final (heavy)", "σ (mm)", "α_s");
+    let mut alpha_phi = Figure::new("(c) α_φ: initial (light) and final (heavy)", "σ (mm)", "α_φ");
+    for (run, name, style) in [(thick, "non-uniform H", SeriesStyle::Line), (constant, "uniform H", SeriesStyle::DashedLine)] {
+        for (t, light) in [(0.0, true), (1.0, false)] {
+            let Some(s) = run.snapshot_near(t) else { continue };
+            let sh = shell(s)?;
+            let color = if light { GREY } else { BLACK };
+            let label = format!("{name}, {}", t_label(s.t));
+            shells = shells
+                .with(Series::new(label.clone(), sh.outer, style).color(color))
+                .with(Series::new("", sh.retina, style).color(color).no_legend());
+            let width = if light { 1 } else { 3 };
+            let sig = column(s, "sigma")?;
+            alpha_s = alpha_s.with(Series::new(label.clone(), sig.iter().copied().zip(column(s, "alpha_s")?).collect(), style).color(color).width(width));
+            alpha_phi = alpha_phi.with(Series::new(label, sig.iter().copied().zip(column(s, "alpha_phi")?).collect(), style).color(color).width(width));
+        }
+    }
+    let title = "Non-uniform against uniform reference thickness";
+    let files = plot::write_panels(&[shells, alpha_s, alpha_phi], 3, title, PANEL.0, PANEL.1, &out.join("fig_c_thick"))?;
+    let pole = |r: &RunData| r.timeline().last().map_or(f64::NAN, |p| p.axial_length);
+    let caption = format!(
+        "The paper's figure 'thick': the sclera's faces at t = 0 and t = 1, solid for the non-uniform reference thickness and dashed for the uniform one, and their stretches (light: t = 0, heavy: t = 1). Axial length at t = 1: {} mm (non-uniform) against {} mm (uniform). Scenes scenes/thick.toml: {}; and scenes/const.toml.",
+        trim(pole(thick)),
+        trim(pole(constant)),
+        parameters(&thick.scene)
+    );
+    Ok(written("c", title, caption, files))
+}
+
+/// (d) The fibre sweep: final shells, a close-up of the posterior pole, axial length
+/// against t, and the final stretches, one colour per D.
+fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
+    let mut shells = Figure::new("(a) final shells", "z (mm)", "r (mm)");
+    shells.aspect_equal = true;
+    let mut close = Figure::new("(a, inset) posterior retina at t = 1", "z (mm)", "r (mm)");
+    let mut alpha_s = Figure::new("(c) α_s at t = 1", "σ (mm)", "α_s");
+    let mut alpha_phi = Figure::new("(d) α_φ at t = 1", "σ (mm)", "α_φ");
+    let mut axial_runs = Vec::new();
+    let mut pole_z: Vec<f64> = Vec::new();
+    for (k, (d, run)) in runs.fibre.iter().enumerate() {
+        let Some(s) = run.snapshots().last() else { continue };
+        let sh = shell(s)?;
+        let c = plot::PALETTE[k % 10];
+        let name = format!("D = {}", trim(*d));
+        pole_z.extend(sh.retina.first().map(|p| p.0));
+        shells = shells
+            .with(Series::new(name.clone(), sh.outer, SeriesStyle::Line).color(c))
+            .with(Series::new("", sh.retina.clone(), SeriesStyle::Line).color(c).no_legend());
+        let near: Vec<(f64, f64)> = sh.retina.iter().copied().filter(|p| p.1 <= 3.0).collect();
+        close = close.with(Series::new(name.clone(), near, SeriesStyle::Line).color(c));
+        let sig = column(s, "sigma")?;
+        alpha_s = alpha_s.with(Series::new(name.clone(), sig.iter().copied().zip(column(s, "alpha_s")?).collect(), SeriesStyle::Line).color(c));
+        alpha_phi = alpha_phi.with(Series::new(name.clone(), sig.iter().copied().zip(column(s, "alpha_phi")?).collect(), SeriesStyle::Line).color(c));
+        axial_runs.push((name, run));
+    }
+    let axial = axial_panel("(b) axial length", &axial_runs);
+    let title = "Effects of fibre reinforcement on scleral growth";
+    let files = plot::write_panels(&[shells, close, axial, alpha_s, alpha_phi], 3, title, PANEL.0, PANEL.1, &out.join("fig_d_fibre"))?;
+    let lengths: Vec<String> = runs
+        .fibre
+        .iter()
+        .map(|(d, r)| format!("D = {}: {} mm", trim(*d), r.timeline().last().map_or("?".into(), |p| trim(p.axial_length))))
+        .collect();
+    let caption = format!(
+        "The paper's figure 'fibre' for D = {} kPa: the final shells (outer face and retina), a close-up of the posterior retina (the paper's inset), the axial length against t, and the stretches at t = 1. Axial length at t = 1: {}. Scene scenes/fibre.toml (a sweep over D): {}.",
+        runs.fibre.iter().map(|(d, _)| trim(*d)).collect::<Vec<_>>().join(", "),
+        lengths.join("; "),
+        runs.fibre.first().map_or(String::new(), |(_, r)| parameters(&r.scene))
+    );
+    Ok(written("d", title, caption, files))
+}
+
+/// (e) The retinas of the Γ × δ grid at t = 0, 0.1 and 1, shaded by η.
+fn figure_e(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
+    let mut grid: Vec<&(f64, f64, RunData)> = runs.grid.iter().collect();
+    grid.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let all: Vec<&RunSnapshot> = grid.iter().flat_map(|(_, _, r)| snapshots_at(r, &[0.0, 0.1, 1.0])).collect();
+    let top = eta_max(&all);
+    let mut panels = Vec::new();
+    for (gamma, delta, run) in &grid {
+        let mut fig = Figure::new(format!("Γ = {}, δ = {}", trim(*gamma), trim(*delta)), "z (mm)", "r (mm)")
+            .color_scale("η (1/mm)", 0.0, top);
+        fig.aspect_equal = true;
+        for s in snapshots_at(run, &[0.0, 0.1, 1.0]) {
+            let sh = shell(s)?;
+            fig = fig.with(Series::new(t_label(s.t), sh.retina, SeriesStyle::Line).width(5).shaded(sh.eta).no_legend());
+        }
+        let [blue, red] = surfaces(&run.scene);
+        fig = fig.with(blue).with(red).note("retinas at t = 0, 0.1, 1 (outward in time)");
+        panels.push(fig);
+    }
+    let columns = grid.iter().map(|g| g.1.to_bits()).collect::<std::collections::BTreeSet<_>>().len().max(1);
+    let title = "Effect of the growth zone on the retina";
+    let files = plot::write_panels(&panels, columns, title, PANEL.0, PANEL.1, &out.join("fig_e_grow_retinas"))?;
+    let caption = format!(
+        "The paper's figure 'grow': the retina at t = 0, 0.1 and 1 for each growth zone (rows Γ, columns δ, in mm), shaded by the growth rate η on one scale, with the blue and red best-focus surfaces. Scene scenes/grow.toml (a sweep over Γ × δ): {}.",
+        grid.first().map_or(String::new(), |(_, _, r)| parameters(&r.scene))
+    );
+    Ok(written("e", title, caption, files))
+}
+
+/// (f) Axial length against t for the grid, one panel per δ.
+fn figure_f(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
+    let mut deltas: Vec<f64> = runs.grid.iter().map(|g| g.1).collect();
+    deltas.sort_by(f64::total_cmp);
+    deltas.dedup();
+    let mut panels = Vec::new();
+    let mut finals = Vec::new();
+    for delta in &deltas {
+        let mut rows: Vec<&(f64, f64, RunData)> = runs.grid.iter().filter(|g| g.1 == *delta).collect();
+        rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let named: Vec<(String, &RunData)> = rows.iter().map(|(g, _, r)| (format!("Γ = {}", trim(*g)), r)).collect();
+        for (g, _, r) in &rows {
+            finals.push(format!("(Γ, δ) = ({}, {}): {} mm", trim(*g), trim(*delta), r.timeline().last().map_or("?".into(), |p| trim(p.axial_length))));
+        }
+        panels.push(axial_panel(&format!("δ = {}", trim(*delta)), &named));
+    }
+    let title = "Axial length for the growth zones";
+    let files = plot::write_panels(&panels, panels.len().max(1), title, PANEL.0, PANEL.1, &out.join("fig_f_axial"))?;
+    let caption = format!(
+        "The paper's figure 'axial': axial length (pole of the retina, from z = 0) against t for Γ = 4, 8, 12 mm, one panel per δ. At t = 1: {}. Scene scenes/grow.toml.",
+        finals.join("; ")
+    );
+    Ok(written("f", title, caption, files))
+}
+
+// ---------------------------------------------------------------- index
+
+/// index.html: every figure with its caption and links to the PNG, the SVG and the data.
+pub fn index_html(figures: &[Written], out: &Path, preamble: &str) -> String {
+    let rel = |p: &Path| p.strip_prefix(out).unwrap_or(p).display().to_string();
+    let mut html = String::from(
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>eyeshell figures</title>\n<style>body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em}figure{margin:2em 0}img{max-width:100%;border:1px solid #ccc}figcaption{margin-top:.5em;line-height:1.4}</style>\n</head>\n<body>\n<h1>eyeshell: the paper's result figures</h1>\n",
+    );
+    html.push_str(&format!("<p>{}</p>\n", escape(preamble)));
+    for f in figures {
+        html.push_str(&format!(
+            "<figure id=\"fig-{id}\">\n<h2>({id}) {title}</h2>\n<img src=\"{png}\" alt=\"({id}) {title}\">\n<figcaption>{caption} <a href=\"{png}\">PNG</a> · <a href=\"{svg}\">SVG</a></figcaption>\n</figure>\n",
+            id = escape(&f.id),
+            title = escape(&f.title),
+            png = escape(&rel(&f.png)),
+            svg = escape(&rel(&f.svg)),
+            caption = escape(&f.caption)
+        ));
+    }
+    html.push_str("</body>\n</html>\n");
+    html
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+// ---------------------------------------------------------------- any run
+
+/// Draw the run (or sweep) in `dir` into `out`: for a growth run its shells, stretches,
+/// tensions and axial length; for an elastic run its shape and fields against Σ; for a
+/// sweep, each run into `out/<run>/` and the axial lengths of all runs together.
+pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
+    if is_sweep(dir) {
+        return plot_sweep(dir, out);
+    }
+    let run = rundata::read(dir)?;
+    let stem = |name: &str| out.join(name);
+    let mut files = Vec::new();
+    let mut push = |f: (PathBuf, PathBuf)| files.extend([f.0, f.1]);
+    match &run.kind {
+        RunKind::Elastic(table) => {
+            let col = |n: &str| table.column(n).ok_or_else(|| bad(format!("{}: fields.csv has no column {n:?}", dir.display())));
+            let (z, r) = (col("z")?, col("r")?);
+            let mut shape = Figure::new(format!("{}: loaded shell", run.name), "z (mm)", "r (mm)")
+                .with(Series::new("mid-surface", z.iter().copied().zip(r.iter().copied()).collect(), SeriesStyle::Line));
+            shape.aspect_equal = true;
+            let sigma = col("Sigma")?;
+            let vs = |field: &str, label: &str| -> Result<Figure, ExportError> {
+                Ok(Figure::new(label.to_string(), "Σ (mm)", label.to_string())
+                    .with(Series::new(label.to_string(), sigma.iter().copied().zip(col(field)?).collect(), SeriesStyle::Line))
+                    .no_legend())
+            };
+            let panels = vec![shape, vs("alpha_s", "α_s")?, vs("alpha_phi", "α_φ")?, vs("kappa", "κ (1/mm)")?, vs("t_s", "t_s (kPa·mm)")?, vs("Q", "Q")?];
+            push(plot::write_panels(&panels, 3, &run.name, PANEL.0, PANEL.1, &stem("fields"))?);
+        }
+        RunKind::Growth { .. } => {
+            let snaps: Vec<&RunSnapshot> = run.snapshots().iter().collect();
+            let top = eta_max(&snaps);
+            let shells = snaps
+                .iter()
+                .map(|s| shell_panel(t_label(s.t), &run.scene, s, top))
+                .collect::<Result<Vec<_>, _>>()?;
+            let columns = shells.len().clamp(1, 3);
+            push(plot::write_panels(&shells, columns, &format!("{}: shells", run.name), PANEL.0, PANEL.1, &stem("shells"))?);
+            let profiles = vec![
+                profile_panel("α_s", "alpha_s", "α_s", &snaps)?,
+                profile_panel("α_φ", "alpha_phi", "α_φ", &snaps)?,
+                profile_panel("η", "eta", "η (1/mm)", &snaps)?,
+                profile_panel("t_s", "t_s", "t_s (kPa·mm)", &snaps)?,
+            ];
+            push(plot::write_panels(&profiles, 2, &format!("{}: profiles against σ", run.name), PANEL.0, PANEL.1, &stem("profiles"))?);
+            let tl = run.timeline();
+            let axial = axial_panel("axial length", &[(run.name.clone(), &run)]).no_legend();
+            let refraction = Figure::new("retina behind the best-focus surfaces", "t", "distance behind (mm)")
+                .with(Series::new("behind blue", tl.iter().map(|p| (p.t, p.retina_minus_blue)).collect(), SeriesStyle::Line).color(BLUE))
+                .with(Series::new("behind red", tl.iter().map(|p| (p.t, p.retina_minus_red)).collect(), SeriesStyle::Line).color(RED));
+            push(plot::write_panels(&[axial, refraction], 2, &format!("{}: the eye in time", run.name), PANEL.0, PANEL.1, &stem("timeline"))?);
+        }
+    }
+    Ok(files)
+}
+
+/// Does `dir` hold a sweep's output (summary.json with a list of runs)?
+pub fn is_sweep(dir: &Path) -> bool {
+    std::fs::read_to_string(dir.join(eyeshell::rundir::SUMMARY_FILE))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|v| v.get("sweep").is_some() && v.get("runs").is_some())
+}
+
+fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
+    let runs = sweep_runs(dir)?;
+    if runs.is_empty() {
+        return Err(FigureError::Read(format!("{}: the sweep has no run to draw", dir.display())));
+    }
+    let mut files = Vec::new();
+    for run in &runs {
+        let name = run.dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        files.extend(plot_run(&run.dir, &out.join(&name))?);
+    }
+    let growing: Vec<(String, &RunData)> = runs
+        .iter()
+        .filter(|r| !r.timeline().is_empty())
+        .map(|r| (r.dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(), r))
+        .collect();
+    if !growing.is_empty() {
+        let fig = axial_panel("axial length of every run", &growing);
+        let (png, svg) = plot::write(&fig, &out.join("axial_length"))?;
+        files.extend([png, svg]);
+    }
+    Ok(files)
+}

@@ -1,0 +1,122 @@
+//! `eyeshell keys` and `eyeshell check` (no solver needed).
+
+use crate::support::*;
+
+use eyeshell::scene::{Scene, KEYS};
+
+#[test]
+fn keys_lists_every_key_with_type_default_and_doc() {
+    let Run { code, stdout: out, stderr: err } = eyeshell_in(repo(), &["keys"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.is_empty());
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(lines[0].starts_with("KEY") && lines[0].contains("DEFAULT"));
+    assert_eq!(lines.len(), KEYS.len() + 1);
+    for (line, key) in lines[1..].iter().zip(KEYS) {
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(fields[0], key.key);
+        assert!(line.contains(&key.type_name()), "{line}");
+        assert!(line.contains(&key.default_value().to_string()), "{line}");
+        assert!(line.contains(key.doc), "{line}");
+    }
+    for key in [
+        "pressure.dP",
+        "material.C",
+        "material.bending",
+        "material.thickness",
+        "material.H0",
+        "fibres.D",
+        "cornea.C",
+        "cornea.H",
+        "cornea.R0",
+        "geometry.R0",
+        "geometry.fraction",
+        "solver.nodes",
+        "solver.epsilon",
+        "solver.scheme",
+        "solver.linear",
+        "solver.newton_tol",
+        "solver.max_newton",
+        "solver.pole_grading",
+    ] {
+        assert!(
+            lines
+                .iter()
+                .any(|l| l.split_whitespace().next() == Some(key)),
+            "{key} missing"
+        );
+    }
+}
+
+#[test]
+fn check_prints_the_effective_scene_as_toml() {
+    let Run { code, stdout: out, stderr: err } = eyeshell_in(
+        repo(),
+        &[
+            "check",
+            "scenes/fibres-nonuniform.toml",
+            "--set",
+            "pressure.dP=3",
+            "--set",
+            "solver.scheme=trapezoid",
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.is_empty(), "{err}");
+    assert!(
+        out.starts_with("# scenes/fibres-nonuniform.toml: valid scene 'fibres-nonuniform'"),
+        "{out}"
+    );
+    assert!(out.contains("pressure.dP = 3.0\n"), "{out}");
+    assert!(out.contains("fibres.D = 200.0\n"), "{out}");
+    assert!(
+        out.contains("material.thickness = \"nonuniform\"\n"),
+        "{out}"
+    );
+    assert!(out.contains("solver.scheme = \"trapezoid\"\n"), "{out}");
+    // Every parameter is printed, and the listing reads back to the same scene.
+    let back = Scene::from_toml_str(&out, "check output", &[]).unwrap();
+    let direct = Scene::from_file(
+        &repo().join("scenes/fibres-nonuniform.toml"),
+        &[
+            "pressure.dP=3".to_string(),
+            "solver.scheme=trapezoid".to_string(),
+        ],
+    )
+    .unwrap();
+    assert_eq!(back.params, direct.params);
+    assert_eq!(back.solver, direct.solver);
+}
+
+#[test]
+fn shipped_scenes_check() {
+    for s in [
+        "scenes/default.toml",
+        "scenes/fibres-nonuniform.toml",
+        "scenes/exact-sphere.toml",
+    ] {
+        let Run { code, stdout: out, stderr: err } = eyeshell_in(repo(), &["check", s]);
+        assert_eq!(code, Some(0), "{s}: {err}");
+        assert!(out.contains("valid scene"), "{out}");
+    }
+}
+
+#[test]
+fn help_and_version_succeed() {
+    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["--help"]);
+    assert_eq!(code, Some(0));
+    for sub in ["solve", "check", "keys"] {
+        assert!(out.contains(sub), "{out}");
+    }
+    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["solve", "--help"]);
+    assert_eq!(code, Some(0));
+    assert!(
+        out.contains("--set")
+            && out.contains("--at")
+            && out.contains("--out")
+            && out.contains("--quiet")
+    );
+    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["--version"]);
+    assert_eq!(code, Some(0));
+    assert!(out.starts_with("eyeshell "));
+}

@@ -1,0 +1,20 @@
+//! The command line and what it writes: exit codes, one-line errors, run directories, exports, comparisons, studies and figures.
+//!
+//! One test binary for the group (each module was its own binary before: one link instead of
+//! many).
+
+
+mod support;
+
+mod bad_input;
+mod export_compare;
+mod export_roundtrip;
+mod export_scipy;
+mod extremes;
+mod figures;
+mod fuzz_scene;
+mod grow;
+mod keys_check;
+mod solve;
+mod study;
+mod sweep;
