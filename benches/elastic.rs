@@ -13,11 +13,20 @@ use eyeshell_sundials::MatrixSink;
 use std::hint::black_box;
 
 fn fibre_shell() -> Params {
-    Params { thickness: Thickness::NonUniform, d: 200.0, ..Params::default() }
+    Params {
+        thickness: Thickness::NonUniform,
+        d: 200.0,
+        ..Params::default()
+    }
 }
 
 fn settings(nodes: usize) -> SolverSettings {
-    SolverSettings { nodes, scheme: Scheme::HermiteSimpson, newton_tol: 1e-10, ..SolverSettings::default() }
+    SolverSettings {
+        nodes,
+        scheme: Scheme::HermiteSimpson,
+        newton_tol: 1e-10,
+        ..SolverSettings::default()
+    }
 }
 
 /// One cold and one warm-started solve of the fibre shell at N = 501, order 4.
@@ -25,10 +34,22 @@ fn cold_and_warm(c: &mut Criterion) {
     let p = fibre_shell();
     let s = settings(501);
     let mut g = c.benchmark_group("fibre_shell_n501_hs");
-    g.bench_function("cold", |b| b.iter(|| bvp::solve(black_box(&p), &s, None).unwrap()));
+    g.bench_function("cold", |b| {
+        b.iter(|| bvp::solve(black_box(&p), &s, None).unwrap())
+    });
     // Warm: the previous solution at a 1 % higher pressure, as in a continuation or a growth step.
-    let near = bvp::solve(&Params { dp: p.dp * 1.01, ..p }, &s, None).unwrap();
-    g.bench_function("warm", |b| b.iter(|| bvp::solve(black_box(&p), &s, Some(&near)).unwrap()));
+    let near = bvp::solve(
+        &Params {
+            dp: p.dp * 1.01,
+            ..p
+        },
+        &s,
+        None,
+    )
+    .unwrap();
+    g.bench_function("warm", |b| {
+        b.iter(|| bvp::solve(black_box(&p), &s, Some(&near)).unwrap())
+    });
     g.finish();
 }
 
@@ -37,13 +58,29 @@ fn cold_and_warm(c: &mut Criterion) {
 fn scaling(c: &mut Criterion) {
     let p = fibre_shell();
     for warm in [false, true] {
-        let mut g = c.benchmark_group(if warm { "warm_solve_by_nodes" } else { "cold_solve_by_nodes" });
+        let mut g = c.benchmark_group(if warm {
+            "warm_solve_by_nodes"
+        } else {
+            "cold_solve_by_nodes"
+        });
         g.sample_size(10);
         for n in [101usize, 501, 2001, 20001] {
             let s = settings(n);
-            let near = warm.then(|| bvp::solve(&Params { dp: p.dp * 1.01, ..p }, &s, None).unwrap());
+            let near = warm.then(|| {
+                bvp::solve(
+                    &Params {
+                        dp: p.dp * 1.01,
+                        ..p
+                    },
+                    &s,
+                    None,
+                )
+                .unwrap()
+            });
             g.throughput(Throughput::Elements(n as u64));
-            g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| b.iter(|| bvp::solve(black_box(&p), &s, near.as_ref()).unwrap()));
+            g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+                b.iter(|| bvp::solve(black_box(&p), &s, near.as_ref()).unwrap())
+            });
         }
         g.finish();
     }
@@ -60,7 +97,10 @@ const SMU: usize = LOWER + UPPER;
 const LDIM: usize = SMU + LOWER + 1;
 impl BandSink {
     fn new(n: usize) -> Self {
-        BandSink { n, data: vec![0.0; n * LDIM] }
+        BandSink {
+            n,
+            data: vec![0.0; n * LDIM],
+        }
     }
 }
 impl MatrixSink for BandSink {
@@ -104,7 +144,15 @@ fn assembly(c: &mut Criterion) {
 fn two_states(p: &Params) -> (Vec<f64>, Vec<f64>) {
     let s = settings(501);
     let a = bvp::solve(p, &s, None).unwrap();
-    let b = bvp::solve(&Params { dp: p.dp * 1.01, ..*p }, &s, None).unwrap();
+    let b = bvp::solve(
+        &Params {
+            dp: p.dp * 1.01,
+            ..*p
+        },
+        &s,
+        None,
+    )
+    .unwrap();
     assert_eq!(a.mesh.nodes, b.mesh.nodes);
     (a.u, b.u)
 }
@@ -130,7 +178,14 @@ fn inversions(p: &Params) -> impl FnMut() -> f64 {
     let (ua, ub) = two_states(p);
     let m = disc.mesh.len();
     disc.evaluate_at(&ub).unwrap();
-    let guesses: Vec<f64> = (0..m - 1).flat_map(|i| [disc.evaluations().left(i).alpha_s, disc.evaluations().mid(i).alpha_s]).collect();
+    let guesses: Vec<f64> = (0..m - 1)
+        .flat_map(|i| {
+            [
+                disc.evaluations().left(i).alpha_s,
+                disc.evaluations().mid(i).alpha_s,
+            ]
+        })
+        .collect();
     disc.evaluate_at(&ua).unwrap();
     let ev = disc.evaluations();
     // (material point, t_s, α_φ, guess) at node i from above and at midpoint i.
@@ -138,14 +193,20 @@ fn inversions(p: &Params) -> impl FnMut() -> f64 {
         .flat_map(|i| {
             let (mp, mm) = (disc.data.above[i], disc.data.mid[i]);
             let (y, ym) = (&ua[5 * i..5 * i + 5], ev.y_mid(i));
-            [(mp, y[4], y[1] / mp.rho, guesses[2 * i]), (mm, ym[4], ym[1] / mm.rho, guesses[2 * i + 1])]
+            [
+                (mp, y[4], y[1] / mp.rho, guesses[2 * i]),
+                (mm, ym[4], ym[1] / mm.rho, guesses[2 * i + 1]),
+            ]
         })
         .collect();
     let law = disc.shell.law;
     move || {
         let mut acc = 0.0;
         for (mp, ts, phi, guess) in black_box(&points) {
-            acc += law.alpha_s_from_ts(mp.zeta, mp.fibre, *ts, *phi, *guess).unwrap().0;
+            acc += law
+                .alpha_s_from_ts(mp.zeta, mp.fibre, *ts, *phi, *guess)
+                .unwrap()
+                .0;
         }
         acc
     }
@@ -156,16 +217,39 @@ fn inversions(p: &Params) -> impl FnMut() -> f64 {
 fn components(c: &mut Criterion) {
     let mut g = c.benchmark_group("components_n501_hs");
     let s = settings(501);
-    for (name, p) in [("nonuniform_no_fibres", Params { d: 0.0, ..fibre_shell() }), ("nonuniform_fibres_d200", fibre_shell())] {
+    for (name, p) in [
+        (
+            "nonuniform_no_fibres",
+            Params {
+                d: 0.0,
+                ..fibre_shell()
+            },
+        ),
+        ("nonuniform_fibres_d200", fibre_shell()),
+    ] {
         let mut once = assemble_once(&p);
-        g.bench_function(format!("{name}/residual_and_jacobian"), |b| b.iter(&mut once));
+        g.bench_function(format!("{name}/residual_and_jacobian"), |b| {
+            b.iter(&mut once)
+        });
         let mut pass = evaluate_alternating(&p);
         g.bench_function(format!("{name}/point_evaluations"), |b| b.iter(&mut pass));
         let mut inv = inversions(&p);
         g.bench_function(format!("{name}/alpha_s_inversions"), |b| b.iter(&mut inv));
-        g.bench_function(format!("{name}/cold_solve"), |b| b.iter(|| bvp::solve(black_box(&p), &s, None).unwrap()));
-        let near = bvp::solve(&Params { dp: p.dp * 1.01, ..p }, &s, None).unwrap();
-        g.bench_function(format!("{name}/warm_solve"), |b| b.iter(|| bvp::solve(black_box(&p), &s, Some(&near)).unwrap()));
+        g.bench_function(format!("{name}/cold_solve"), |b| {
+            b.iter(|| bvp::solve(black_box(&p), &s, None).unwrap())
+        });
+        let near = bvp::solve(
+            &Params {
+                dp: p.dp * 1.01,
+                ..p
+            },
+            &s,
+            None,
+        )
+        .unwrap();
+        g.bench_function(format!("{name}/warm_solve"), |b| {
+            b.iter(|| bvp::solve(black_box(&p), &s, Some(&near)).unwrap())
+        });
     }
     g.finish();
 }
@@ -180,7 +264,19 @@ fn interleaved_components(rounds: usize, per: usize) {
     let s = settings(501);
     let fibres = fibre_shell();
     let plain = Params { d: 0.0, ..fibres };
-    let near = |p: &Params| Some(bvp::solve(&Params { dp: p.dp * 1.01, ..*p }, &s, None).unwrap());
+    let near = |p: &Params| {
+        Some(
+            bvp::solve(
+                &Params {
+                    dp: p.dp * 1.01,
+                    ..*p
+                },
+                &s,
+                None,
+            )
+            .unwrap(),
+        )
+    };
     let cases = [
         ("nonuniform_no_fibres/cold_solve", plain, None),
         ("nonuniform_fibres_d200/cold_solve", fibres, None),

@@ -6,13 +6,16 @@
 use std::sync::atomic::AtomicBool;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use eyeshell_cli::figures::{paper_figures, PaperRuns};
 use eyeshell::scene::sweep::Sweep;
-use eyeshell_cli::study::figures::SCENES;
 use eyeshell::sweep::{run_sweep, SweepOptions};
+use eyeshell_cli::figures::{paper_figures, PaperRuns};
+use eyeshell_cli::study::figures::SCENES;
 
 fn scene(name: &str) -> Sweep {
-    let (_, file, text) = SCENES.iter().find(|s| s.0 == name).expect("a built-in scene");
+    let (_, file, text) = SCENES
+        .iter()
+        .find(|s| s.0 == name)
+        .expect("a built-in scene");
     Sweep::from_toml_str(text, file, &[]).expect("the built-in scene is valid")
 }
 
@@ -25,9 +28,16 @@ fn fibre_sweep(c: &mut Criterion) {
     let mut group = c.benchmark_group("fibre_sweep_4_runs");
     group.sample_size(10);
     for jobs in [1, 2] {
-        let options = SweepOptions { jobs, resume: false, cancel: &cancel };
+        let options = SweepOptions {
+            jobs,
+            resume: false,
+            cancel: &cancel,
+        };
         group.bench_function(format!("jobs_{jobs}"), |b| {
-            b.iter(|| run_sweep(&sweep, &dir.path().join("fibre"), &options, &|_, _, _| {}).expect("the sweep runs"))
+            b.iter(|| {
+                run_sweep(&sweep, &dir.path().join("fibre"), &options, &|_, _, _| {})
+                    .expect("the sweep runs")
+            })
         });
     }
     group.finish();
@@ -38,15 +48,23 @@ fn draw(c: &mut Criterion) {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let data = dir.path().join("data");
     let cancel = AtomicBool::new(false);
-    let options = SweepOptions { jobs: 0, resume: false, cancel: &cancel };
+    let options = SweepOptions {
+        jobs: 0,
+        resume: false,
+        cancel: &cancel,
+    };
     for (name, _, _) in SCENES {
         run_sweep(&scene(name), &data.join(name), &options, &|_, _, _| {}).expect("the scene runs");
     }
     let runs = PaperRuns::read(&data).expect("the runs read back");
     let mut group = c.benchmark_group("figures");
     group.sample_size(10);
-    group.bench_function("read_runs", |b| b.iter(|| PaperRuns::read(&data).expect("the runs read back")));
-    group.bench_function("draw_a_to_f", |b| b.iter(|| paper_figures(&runs, dir.path()).expect("the figures draw")));
+    group.bench_function("read_runs", |b| {
+        b.iter(|| PaperRuns::read(&data).expect("the runs read back"))
+    });
+    group.bench_function("draw_a_to_f", |b| {
+        b.iter(|| paper_figures(&runs, dir.path()).expect("the figures draw"))
+    });
     group.finish();
 }
 

@@ -18,7 +18,10 @@ impl Observer for Discard {
 }
 
 fn settings() -> SolverSettings {
-    SolverSettings { nodes: 501, ..SolverSettings::default() }
+    SolverSettings {
+        nodes: 501,
+        ..SolverSettings::default()
+    }
 }
 
 /// The paper's const scene to t = 1, N = 501: CVODE at rtol 1e-6, and Euler's 200 steps.
@@ -27,29 +30,60 @@ fn const_scene(c: &mut Criterion) {
     let g = GrowthParams::default();
     let mut group = c.benchmark_group("const_scene_n501_to_t1");
     group.sample_size(10);
-    let cv = GrowthSettings { integrator: Integrator::Cvode, rtol: 1e-6, atol: 1e-8, ..GrowthSettings::default() };
-    group.bench_function("cvode_rtol_1e-6", |b| b.iter(|| grow(&p, &settings(), &g, &cv, &mut Discard).unwrap()));
+    let cv = GrowthSettings {
+        integrator: Integrator::Cvode,
+        rtol: 1e-6,
+        atol: 1e-8,
+        ..GrowthSettings::default()
+    };
+    group.bench_function("cvode_rtol_1e-6", |b| {
+        b.iter(|| grow(&p, &settings(), &g, &cv, &mut Discard).unwrap())
+    });
     // IDA on the coupled DAE at the same tolerances, with each linear solver of its Newton
     // matrix (the default first).
     for lin in DaeLinear::ALL {
-        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu) && !eyeshell_sundials::klu_available() {
+        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu)
+            && !eyeshell_sundials::klu_available()
+        {
             continue;
         }
-        let ida = GrowthSettings { integrator: Integrator::Ida, dae_linear: lin, rtol: 1e-6, atol: 1e-8, ..GrowthSettings::default() };
-        group.bench_function(format!("ida_rtol_1e-6_{}", lin.name()), |b| b.iter(|| grow(&p, &settings(), &g, &ida, &mut Discard).unwrap()));
+        let ida = GrowthSettings {
+            integrator: Integrator::Ida,
+            dae_linear: lin,
+            rtol: 1e-6,
+            atol: 1e-8,
+            ..GrowthSettings::default()
+        };
+        group.bench_function(format!("ida_rtol_1e-6_{}", lin.name()), |b| {
+            b.iter(|| grow(&p, &settings(), &g, &ida, &mut Discard).unwrap())
+        });
     }
     // IDA at the rtol whose axial-length error matches CVODE's at 1e-6 (BENCHMARKS.md).
-    let ida_equal = GrowthSettings { integrator: Integrator::Ida, rtol: IDA_RTOL_EQUAL_ERROR, atol: IDA_RTOL_EQUAL_ERROR * 1e-2, ..GrowthSettings::default() };
-    group.bench_function("ida_equal_error", |b| b.iter(|| grow(&p, &settings(), &g, &ida_equal, &mut Discard).unwrap()));
-    let eu = GrowthSettings { integrator: Integrator::Euler, steps: 200, ..GrowthSettings::default() };
-    group.bench_function("euler_200_steps", |b| b.iter(|| grow(&p, &settings(), &g, &eu, &mut Discard).unwrap()));
+    let ida_equal = GrowthSettings {
+        integrator: Integrator::Ida,
+        rtol: IDA_RTOL_EQUAL_ERROR,
+        atol: IDA_RTOL_EQUAL_ERROR * 1e-2,
+        ..GrowthSettings::default()
+    };
+    group.bench_function("ida_equal_error", |b| {
+        b.iter(|| grow(&p, &settings(), &g, &ida_equal, &mut Discard).unwrap())
+    });
+    let eu = GrowthSettings {
+        integrator: Integrator::Euler,
+        steps: 200,
+        ..GrowthSettings::default()
+    };
+    group.bench_function("euler_200_steps", |b| {
+        b.iter(|| grow(&p, &settings(), &g, &eu, &mut Discard).unwrap())
+    });
     group.finish();
 }
 
 /// The pieces: one right side (a warm elastic re-solve), one Jacobian set-up (assemble and
 /// factor F_u), one implicit-function Jacobian product.
 fn pieces(c: &mut Criterion) {
-    let mut sys = GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();
+    let mut sys =
+        GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();
     let p0 = sys.points.initial_state();
     let n = p0.len();
     let mut fy = vec![0.0; n];
@@ -68,8 +102,12 @@ fn pieces(c: &mut Criterion) {
         })
     });
     sys.rhs(&p0, &mut fy).unwrap();
-    group.bench_function("jacobian_setup", |b| b.iter(|| sys.jac_setup(black_box(&p0)).unwrap()));
-    group.bench_function("jacobian_product", |b| b.iter(|| sys.jac_times(&p0, &fy, black_box(&v), &mut jv).unwrap()));
+    group.bench_function("jacobian_setup", |b| {
+        b.iter(|| sys.jac_setup(black_box(&p0)).unwrap())
+    });
+    group.bench_function("jacobian_product", |b| {
+        b.iter(|| sys.jac_times(&p0, &fy, black_box(&v), &mut jv).unwrap())
+    });
     group.finish();
 }
 
@@ -82,10 +120,13 @@ const IDA_RTOL_EQUAL_ERROR: f64 = 5e-7;
 fn dae_pieces(c: &mut Criterion) {
     let mut group = c.benchmark_group("dae_pieces_n501");
     for lin in DaeLinear::ALL {
-        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu) && !eyeshell_sundials::klu_available() {
+        if matches!(lin, DaeLinear::Klu | DaeLinear::SchurKlu)
+            && !eyeshell_sundials::klu_available()
+        {
             continue;
         }
-        let sys = GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();
+        let sys =
+            GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();
         let mut dae = CoupledDae::new(sys);
         dae.set_linear(lin).unwrap();
         let y = dae.initial_state().unwrap();
@@ -103,12 +144,18 @@ fn dae_pieces(c: &mut Criterion) {
                     dae.residual(&q, &yp, &mut r).unwrap();
                 })
             });
-            group.bench_function("assembly", |b| b.iter(|| dae.assemble(black_box(500.0), &y).unwrap()));
+            group.bench_function("assembly", |b| {
+                b.iter(|| dae.assemble(black_box(500.0), &y).unwrap())
+            });
         }
-        group.bench_function(format!("setup_{}", lin.name()), |b| b.iter(|| dae.setup(black_box(500.0), &y).unwrap()));
+        group.bench_function(format!("setup_{}", lin.name()), |b| {
+            b.iter(|| dae.setup(black_box(500.0), &y).unwrap())
+        });
         let rhs: Vec<f64> = (0..n).map(|k| (0.01 * k as f64).sin()).collect();
         let mut x = vec![0.0; n];
-        group.bench_function(format!("solve_{}", lin.name()), |b| b.iter(|| dae.solve(black_box(&rhs), &mut x).unwrap()));
+        group.bench_function(format!("solve_{}", lin.name()), |b| {
+            b.iter(|| dae.solve(black_box(&rhs), &mut x).unwrap())
+        });
     }
     group.finish();
 }

@@ -10,10 +10,10 @@ use std::path::{Path, PathBuf};
 use plotters::style::RGBColor;
 
 use crate::interop::export::{bad, ExportError, RunSnapshot};
-use eyeshell_plot::{self as plot, colormap, Figure, PlotError, Series, SeriesStyle};
-use eyeshell::rundir::rundata::{self, column, RunData, RunKind, SeriesPoint};
 use eyeshell::model::stimulus::Surface;
+use eyeshell::rundir::rundata::{self, column, RunData, RunKind, SeriesPoint};
 use eyeshell::scene::Scene;
+use eyeshell_plot::{self as plot, colormap, Figure, PlotError, Series, SeriesStyle};
 
 /// Size of one panel, in pixels.
 pub const PANEL: (u32, u32) = (820, 620);
@@ -60,10 +60,20 @@ struct Shell {
 }
 
 fn shell(s: &RunSnapshot) -> Result<Shell, ExportError> {
-    let (z, r, theta, h) = (column(s, "z")?, column(s, "r")?, column(s, "theta")?, column(s, "h")?);
+    let (z, r, theta, h) = (
+        column(s, "z")?,
+        column(s, "r")?,
+        column(s, "theta")?,
+        column(s, "h")?,
+    );
     let (zr, rr) = (column(s, "z_retina")?, column(s, "r_retina")?);
     let outer = (0..z.len())
-        .map(|i| (z[i] + 0.5 * h[i] * theta[i].cos(), r[i] + 0.5 * h[i] * theta[i].sin()))
+        .map(|i| {
+            (
+                z[i] + 0.5 * h[i] * theta[i].cos(),
+                r[i] + 0.5 * h[i] * theta[i].sin(),
+            )
+        })
         .collect();
     Ok(Shell {
         mid: z.iter().copied().zip(r.iter().copied()).collect(),
@@ -75,13 +85,25 @@ fn shell(s: &RunSnapshot) -> Result<Shell, ExportError> {
 
 /// The best-focus surface as (z, r) points for φ in [0, φ_max].
 fn surface_points(s: &Surface) -> Vec<(f64, f64)> {
-    (0..=80).map(|k| s.point(s.phi_max * k as f64 / 80.0)).collect()
+    (0..=80)
+        .map(|k| s.point(s.phi_max * k as f64 / 80.0))
+        .collect()
 }
 
 fn surfaces(scene: &Scene) -> [Series; 2] {
     [
-        Series::new("blue best focus", surface_points(&scene.blue()), SeriesStyle::DashedLine).color(BLUE),
-        Series::new("red best focus", surface_points(&scene.red()), SeriesStyle::DashedLine).color(RED),
+        Series::new(
+            "blue best focus",
+            surface_points(&scene.blue()),
+            SeriesStyle::DashedLine,
+        )
+        .color(BLUE),
+        Series::new(
+            "red best focus",
+            surface_points(&scene.red()),
+            SeriesStyle::DashedLine,
+        )
+        .color(RED),
     ]
 }
 
@@ -109,13 +131,32 @@ fn trim(x: f64) -> String {
 
 /// A cross-section of the shell at one snapshot: the mid-surface shaded by η, both faces,
 /// the retina, and the blue and red best-focus surfaces.
-fn shell_panel(title: String, scene: &Scene, s: &RunSnapshot, eta_top: f64) -> Result<Figure, ExportError> {
+fn shell_panel(
+    title: String,
+    scene: &Scene,
+    s: &RunSnapshot,
+    eta_top: f64,
+) -> Result<Figure, ExportError> {
     let sh = shell(s)?;
     let [blue, red] = surfaces(scene);
     let mut fig = Figure::new(title, "z (mm)", "r (mm)")
-        .with(Series::new("shell, shaded by η", sh.mid, SeriesStyle::Line).width(7).shaded(sh.eta).no_legend())
-        .with(Series::new("outer face", sh.outer, SeriesStyle::Line).color(BLACK).width(1).no_legend())
-        .with(Series::new("retina", sh.retina, SeriesStyle::Line).color(BLACK).width(2))
+        .with(
+            Series::new("shell, shaded by η", sh.mid, SeriesStyle::Line)
+                .width(7)
+                .shaded(sh.eta)
+                .no_legend(),
+        )
+        .with(
+            Series::new("outer face", sh.outer, SeriesStyle::Line)
+                .color(BLACK)
+                .width(1)
+                .no_legend(),
+        )
+        .with(
+            Series::new("retina", sh.retina, SeriesStyle::Line)
+                .color(BLACK)
+                .width(2),
+        )
         .with(blue)
         .with(red)
         .color_scale("η (1/mm)", 0.0, eta_top);
@@ -124,12 +165,20 @@ fn shell_panel(title: String, scene: &Scene, s: &RunSnapshot, eta_top: f64) -> R
 }
 
 /// One quantity against σ (grown unloaded arclength) for several snapshots, coloured by t.
-fn profile_panel(title: &str, field: &str, label: &str, snaps: &[&RunSnapshot]) -> Result<Figure, ExportError> {
+fn profile_panel(
+    title: &str,
+    field: &str,
+    label: &str,
+    snaps: &[&RunSnapshot],
+) -> Result<Figure, ExportError> {
     let mut fig = Figure::new(title, "σ (mm)", label);
     // Evenly spread along the colour map by order (the times themselves cluster near 0).
     let last = snaps.len().saturating_sub(1).max(1) as f64;
     for (k, s) in snaps.iter().enumerate() {
-        let pts = column(s, "sigma")?.into_iter().zip(column(s, field)?).collect();
+        let pts = column(s, "sigma")?
+            .into_iter()
+            .zip(column(s, field)?)
+            .collect();
         let c = colormap(0.85 * k as f64 / last);
         fig = fig.with(Series::new(t_label(s.t), pts, SeriesStyle::Line).color(c));
     }
@@ -140,8 +189,13 @@ fn profile_panel(title: &str, field: &str, label: &str, snaps: &[&RunSnapshot]) 
 fn axial_panel(title: &str, runs: &[(String, &RunData)]) -> Figure {
     let mut fig = Figure::new(title, "t", "axial length (mm)");
     for (k, (name, run)) in runs.iter().enumerate() {
-        let pts = run.timeline().iter().map(|p| (p.t, p.axial_length)).collect();
-        fig = fig.with(Series::new(name.clone(), pts, SeriesStyle::Line).color(plot::PALETTE[k % 10]));
+        let pts = run
+            .timeline()
+            .iter()
+            .map(|p| (p.t, p.axial_length))
+            .collect();
+        fig = fig
+            .with(Series::new(name.clone(), pts, SeriesStyle::Line).color(plot::PALETTE[k % 10]));
     }
     fig
 }
@@ -153,7 +207,9 @@ pub fn parameters(scene: &Scene) -> String {
     let p = &scene.params;
     let thickness = match p.thickness {
         eyeshell::model::params::Thickness::Uniform => format!("uniform H = {} mm", trim(p.h0)),
-        eyeshell::model::params::Thickness::NonUniform => "non-uniform H(Σ) (docs/MODEL.md §4)".to_string(),
+        eyeshell::model::params::Thickness::NonUniform => {
+            "non-uniform H(Σ) (docs/MODEL.md §4)".to_string()
+        }
     };
     let mut text = format!(
         "ΔP = {} kPa, C = {} kPa, D = {} kPa, E_b = {} kPa·mm³, {thickness}",
@@ -163,9 +219,18 @@ pub fn parameters(scene: &Scene) -> String {
         trim(p.e_b)
     );
     if let Some(g) = &scene.growth {
-        text.push_str(&format!(", η0 = {} /mm, Γ = {} mm, δ = {} mm", trim(g.eta0), trim(g.gamma), trim(g.delta)));
+        text.push_str(&format!(
+            ", η0 = {} /mm, Γ = {} mm, δ = {} mm",
+            trim(g.eta0),
+            trim(g.gamma),
+            trim(g.delta)
+        ));
     }
-    text.push_str(&format!("; {} nodes, {}", scene.solver.nodes, numerics(scene)));
+    text.push_str(&format!(
+        "; {} nodes, {}",
+        scene.solver.nodes,
+        numerics(scene)
+    ));
     text
 }
 
@@ -180,10 +245,16 @@ fn numerics(scene: &Scene) -> String {
             format!("{scheme}, CVODE BDF rtol {:e}", scene.growth_settings.rtol)
         }
         (Some(_), eyeshell::growth::Integrator::Euler) => {
-            format!("{scheme}, explicit Euler, {} steps", scene.growth_settings.steps)
+            format!(
+                "{scheme}, explicit Euler, {} steps",
+                scene.growth_settings.steps
+            )
         }
         (Some(_), eyeshell::growth::Integrator::Ida) => {
-            format!("{scheme}, IDA BDF on the coupled DAE rtol {:e}", scene.growth_settings.rtol)
+            format!(
+                "{scheme}, IDA BDF on the coupled DAE rtol {:e}",
+                scene.growth_settings.rtol
+            )
         }
     }
 }
@@ -230,11 +301,14 @@ impl PaperRuns {
 pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
     let summary = std::fs::read_to_string(dir.join(eyeshell::rundir::SUMMARY_FILE))
         .map_err(|e| bad(format!("{}: not a sweep output ({e})", dir.display())))?;
-    let v: serde_json::Value = serde_json::from_str(&summary).map_err(|e| bad(format!("{}: {e}", dir.display())))?;
-    let runs = v
-        .get("runs")
-        .and_then(|r| r.as_array())
-        .ok_or_else(|| bad(format!("{}: not a sweep output (no runs in summary.json)", dir.display())))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&summary).map_err(|e| bad(format!("{}: {e}", dir.display())))?;
+    let runs = v.get("runs").and_then(|r| r.as_array()).ok_or_else(|| {
+        bad(format!(
+            "{}: not a sweep output (no runs in summary.json)",
+            dir.display()
+        ))
+    })?;
     runs.iter()
         .filter(|r| r["status"] == "ok" || r["status"] == "reused" || r["status"] == "failed")
         .filter_map(|r| r["dir"].as_str())
@@ -243,7 +317,10 @@ pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
 }
 
 fn only_run(dir: &Path) -> Result<RunData, ExportError> {
-    sweep_runs(dir)?.into_iter().next().ok_or_else(|| bad(format!("{}: the sweep has no finished run", dir.display())))
+    sweep_runs(dir)?
+        .into_iter()
+        .next()
+        .ok_or_else(|| bad(format!("{}: the sweep has no finished run", dir.display())))
 }
 
 fn snapshots_at<'a>(run: &'a RunData, times: &[f64]) -> Vec<&'a RunSnapshot> {
@@ -265,7 +342,13 @@ pub fn paper_figures(runs: &PaperRuns, out: &Path) -> Result<Vec<Written>, Figur
 }
 
 fn written(id: &str, title: &str, caption: String, files: (PathBuf, PathBuf)) -> Written {
-    Written { id: id.into(), title: title.into(), caption, png: files.0, svg: files.1 }
+    Written {
+        id: id.into(),
+        title: title.into(),
+        caption,
+        png: files.0,
+        svg: files.1,
+    }
 }
 
 /// (a) The const shell at t = 0.1, 0.2, 0.4, 1, shaded by η, with retina and surfaces.
@@ -279,7 +362,14 @@ fn figure_a(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         .map(|(s, l)| shell_panel(format!("{l} {}", t_label(s.t)), &run.scene, s, top))
         .collect::<Result<Vec<_>, _>>()?;
     let title = "Growth of a uniform, fibre-free sclera";
-    let files = plot::write_panels(&panels, 2, title, PANEL.0, PANEL.1, &out.join("fig_a_const_shells"))?;
+    let files = plot::write_panels(
+        &panels,
+        2,
+        title,
+        PANEL.0,
+        PANEL.1,
+        &out.join("fig_a_const_shells"),
+    )?;
     let end = run.timeline().last();
     let caption = format!(
         "The shell cut at t = 0.1, 0.2, 0.4 and 1 (the paper's figure 'const' a–d), its mid-surface shaded by the growth rate η, with its outer face, the retina (inner face) and the best-focus surfaces for blue and red light (dashed; red = blue pushed back 0.655 mm). At t = 1 the axial length is {} mm, {}. Scene scenes/const.toml: {}.",
@@ -295,7 +385,12 @@ fn describe_refraction(p: &SeriesPoint) -> String {
         let word = if d >= 0.0 { "behind" } else { "in front of" };
         format!("{} mm {word} {surface}", trim(d.abs()))
     };
-    format!("{} (the retina at the pole is {}, {})", p.class.as_str(), side(p.retina_minus_blue, "blue"), side(p.retina_minus_red, "red"))
+    format!(
+        "{} (the retina at the pole is {}, {})",
+        p.class.as_str(),
+        side(p.retina_minus_blue, "blue"),
+        side(p.retina_minus_red, "red")
+    )
 }
 
 /// (b) α_s and α_φ against σ at t = 0, 0.1, 0.2, 0.4, 1 for the const shell.
@@ -307,7 +402,14 @@ fn figure_b(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         profile_panel("(g) stretch α_φ", "alpha_phi", "α_φ", &snaps)?,
     ];
     let title = "Stretches of the uniform sclera as it grows";
-    let files = plot::write_panels(&panels, 2, title, PANEL.0, PANEL.1, &out.join("fig_b_const_stretches"))?;
+    let files = plot::write_panels(
+        &panels,
+        2,
+        title,
+        PANEL.0,
+        PANEL.1,
+        &out.join("fig_b_const_stretches"),
+    )?;
     let caption = format!(
         "The elastic stretches α_s and α_φ against σ (arclength of the grown, unloaded shell) at t = 0, 0.1, 0.2, 0.4 and 1 (the paper's figure 'const' f–g); uniform at t = 0. Scene scenes/const.toml: {}.",
         parameters(&run.scene)
@@ -320,11 +422,24 @@ fn figure_c(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
     let (thick, constant) = (&runs.thick, &runs.constant);
     let mut shells = Figure::new("(a) initial and final shells", "z (mm)", "r (mm)");
     shells.aspect_equal = true;
-    let mut alpha_s = Figure::new("(b) α_s: initial (light) and final (heavy)", "σ (mm)", "α_s");
-    let mut alpha_phi = Figure::new("(c) α_φ: initial (light) and final (heavy)", "σ (mm)", "α_φ");
-    for (run, name, style) in [(thick, "non-uniform H", SeriesStyle::Line), (constant, "uniform H", SeriesStyle::DashedLine)] {
+    let mut alpha_s = Figure::new(
+        "(b) α_s: initial (light) and final (heavy)",
+        "σ (mm)",
+        "α_s",
+    );
+    let mut alpha_phi = Figure::new(
+        "(c) α_φ: initial (light) and final (heavy)",
+        "σ (mm)",
+        "α_φ",
+    );
+    for (run, name, style) in [
+        (thick, "non-uniform H", SeriesStyle::Line),
+        (constant, "uniform H", SeriesStyle::DashedLine),
+    ] {
         for (t, light) in [(0.0, true), (1.0, false)] {
-            let Some(s) = run.snapshot_near(t) else { continue };
+            let Some(s) = run.snapshot_near(t) else {
+                continue;
+            };
             let sh = shell(s)?;
             let color = if light { GREY } else { BLACK };
             let label = format!("{name}, {}", t_label(s.t));
@@ -333,12 +448,35 @@ fn figure_c(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
                 .with(Series::new("", sh.retina, style).color(color).no_legend());
             let width = if light { 1 } else { 3 };
             let sig = column(s, "sigma")?;
-            alpha_s = alpha_s.with(Series::new(label.clone(), sig.iter().copied().zip(column(s, "alpha_s")?).collect(), style).color(color).width(width));
-            alpha_phi = alpha_phi.with(Series::new(label, sig.iter().copied().zip(column(s, "alpha_phi")?).collect(), style).color(color).width(width));
+            alpha_s = alpha_s.with(
+                Series::new(
+                    label.clone(),
+                    sig.iter().copied().zip(column(s, "alpha_s")?).collect(),
+                    style,
+                )
+                .color(color)
+                .width(width),
+            );
+            alpha_phi = alpha_phi.with(
+                Series::new(
+                    label,
+                    sig.iter().copied().zip(column(s, "alpha_phi")?).collect(),
+                    style,
+                )
+                .color(color)
+                .width(width),
+            );
         }
     }
     let title = "Non-uniform against uniform reference thickness";
-    let files = plot::write_panels(&[shells, alpha_s, alpha_phi], 3, title, PANEL.0, PANEL.1, &out.join("fig_c_thick"))?;
+    let files = plot::write_panels(
+        &[shells, alpha_s, alpha_phi],
+        3,
+        title,
+        PANEL.0,
+        PANEL.1,
+        &out.join("fig_c_thick"),
+    )?;
     let pole = |r: &RunData| r.timeline().last().map_or(f64::NAN, |p| p.axial_length);
     let caption = format!(
         "The paper's figure 'thick': the sclera's faces at t = 0 and t = 1, solid for the non-uniform reference thickness and dashed for the uniform one, and their stretches (light: t = 0, heavy: t = 1). Axial length at t = 1: {} mm (non-uniform) against {} mm (uniform). Scenes scenes/thick.toml: {}; and scenes/const.toml.",
@@ -360,28 +498,63 @@ fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
     let mut axial_runs = Vec::new();
     let mut pole_z: Vec<f64> = Vec::new();
     for (k, (d, run)) in runs.fibre.iter().enumerate() {
-        let Some(s) = run.snapshots().last() else { continue };
+        let Some(s) = run.snapshots().last() else {
+            continue;
+        };
         let sh = shell(s)?;
         let c = plot::PALETTE[k % 10];
         let name = format!("D = {}", trim(*d));
         pole_z.extend(sh.retina.first().map(|p| p.0));
         shells = shells
             .with(Series::new(name.clone(), sh.outer, SeriesStyle::Line).color(c))
-            .with(Series::new("", sh.retina.clone(), SeriesStyle::Line).color(c).no_legend());
+            .with(
+                Series::new("", sh.retina.clone(), SeriesStyle::Line)
+                    .color(c)
+                    .no_legend(),
+            );
         let near: Vec<(f64, f64)> = sh.retina.iter().copied().filter(|p| p.1 <= 3.0).collect();
         close = close.with(Series::new(name.clone(), near, SeriesStyle::Line).color(c));
         let sig = column(s, "sigma")?;
-        alpha_s = alpha_s.with(Series::new(name.clone(), sig.iter().copied().zip(column(s, "alpha_s")?).collect(), SeriesStyle::Line).color(c));
-        alpha_phi = alpha_phi.with(Series::new(name.clone(), sig.iter().copied().zip(column(s, "alpha_phi")?).collect(), SeriesStyle::Line).color(c));
+        alpha_s = alpha_s.with(
+            Series::new(
+                name.clone(),
+                sig.iter().copied().zip(column(s, "alpha_s")?).collect(),
+                SeriesStyle::Line,
+            )
+            .color(c),
+        );
+        alpha_phi = alpha_phi.with(
+            Series::new(
+                name.clone(),
+                sig.iter().copied().zip(column(s, "alpha_phi")?).collect(),
+                SeriesStyle::Line,
+            )
+            .color(c),
+        );
         axial_runs.push((name, run));
     }
     let axial = axial_panel("(b) axial length", &axial_runs);
     let title = "Effects of fibre reinforcement on scleral growth";
-    let files = plot::write_panels(&[shells, close, axial, alpha_s, alpha_phi], 3, title, PANEL.0, PANEL.1, &out.join("fig_d_fibre"))?;
+    let files = plot::write_panels(
+        &[shells, close, axial, alpha_s, alpha_phi],
+        3,
+        title,
+        PANEL.0,
+        PANEL.1,
+        &out.join("fig_d_fibre"),
+    )?;
     let lengths: Vec<String> = runs
         .fibre
         .iter()
-        .map(|(d, r)| format!("D = {}: {} mm", trim(*d), r.timeline().last().map_or("?".into(), |p| trim(p.axial_length))))
+        .map(|(d, r)| {
+            format!(
+                "D = {}: {} mm",
+                trim(*d),
+                r.timeline()
+                    .last()
+                    .map_or("?".into(), |p| trim(p.axial_length))
+            )
+        })
         .collect();
     let caption = format!(
         "The paper's figure 'fibre' for D = {} kPa: the final shells (outer face and retina), a close-up of the posterior retina (the paper's inset), the axial length against t, and the stretches at t = 1. Axial length at t = 1: {}. Scene scenes/fibre.toml (a sweep over D): {}.",
@@ -396,24 +569,51 @@ fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
 fn figure_e(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
     let mut grid: Vec<&(f64, f64, RunData)> = runs.grid.iter().collect();
     grid.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    let all: Vec<&RunSnapshot> = grid.iter().flat_map(|(_, _, r)| snapshots_at(r, &[0.0, 0.1, 1.0])).collect();
+    let all: Vec<&RunSnapshot> = grid
+        .iter()
+        .flat_map(|(_, _, r)| snapshots_at(r, &[0.0, 0.1, 1.0]))
+        .collect();
     let top = eta_max(&all);
     let mut panels = Vec::new();
     for (gamma, delta, run) in &grid {
-        let mut fig = Figure::new(format!("Γ = {}, δ = {}", trim(*gamma), trim(*delta)), "z (mm)", "r (mm)")
-            .color_scale("η (1/mm)", 0.0, top);
+        let mut fig = Figure::new(
+            format!("Γ = {}, δ = {}", trim(*gamma), trim(*delta)),
+            "z (mm)",
+            "r (mm)",
+        )
+        .color_scale("η (1/mm)", 0.0, top);
         fig.aspect_equal = true;
         for s in snapshots_at(run, &[0.0, 0.1, 1.0]) {
             let sh = shell(s)?;
-            fig = fig.with(Series::new(t_label(s.t), sh.retina, SeriesStyle::Line).width(5).shaded(sh.eta).no_legend());
+            fig = fig.with(
+                Series::new(t_label(s.t), sh.retina, SeriesStyle::Line)
+                    .width(5)
+                    .shaded(sh.eta)
+                    .no_legend(),
+            );
         }
         let [blue, red] = surfaces(&run.scene);
-        fig = fig.with(blue).with(red).note("retinas at t = 0, 0.1, 1 (outward in time)");
+        fig = fig
+            .with(blue)
+            .with(red)
+            .note("retinas at t = 0, 0.1, 1 (outward in time)");
         panels.push(fig);
     }
-    let columns = grid.iter().map(|g| g.1.to_bits()).collect::<std::collections::BTreeSet<_>>().len().max(1);
+    let columns = grid
+        .iter()
+        .map(|g| g.1.to_bits())
+        .collect::<std::collections::BTreeSet<_>>()
+        .len()
+        .max(1);
     let title = "Effect of the growth zone on the retina";
-    let files = plot::write_panels(&panels, columns, title, PANEL.0, PANEL.1, &out.join("fig_e_grow_retinas"))?;
+    let files = plot::write_panels(
+        &panels,
+        columns,
+        title,
+        PANEL.0,
+        PANEL.1,
+        &out.join("fig_e_grow_retinas"),
+    )?;
     let caption = format!(
         "The paper's figure 'grow': the retina at t = 0, 0.1 and 1 for each growth zone (rows Γ, columns δ, in mm), shaded by the growth rate η on one scale, with the blue and red best-focus surfaces. Scene scenes/grow.toml (a sweep over Γ × δ): {}.",
         grid.first().map_or(String::new(), |(_, _, r)| parameters(&r.scene))
@@ -429,16 +629,34 @@ fn figure_f(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
     let mut panels = Vec::new();
     let mut finals = Vec::new();
     for delta in &deltas {
-        let mut rows: Vec<&(f64, f64, RunData)> = runs.grid.iter().filter(|g| g.1 == *delta).collect();
+        let mut rows: Vec<&(f64, f64, RunData)> =
+            runs.grid.iter().filter(|g| g.1 == *delta).collect();
         rows.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let named: Vec<(String, &RunData)> = rows.iter().map(|(g, _, r)| (format!("Γ = {}", trim(*g)), r)).collect();
+        let named: Vec<(String, &RunData)> = rows
+            .iter()
+            .map(|(g, _, r)| (format!("Γ = {}", trim(*g)), r))
+            .collect();
         for (g, _, r) in &rows {
-            finals.push(format!("(Γ, δ) = ({}, {}): {} mm", trim(*g), trim(*delta), r.timeline().last().map_or("?".into(), |p| trim(p.axial_length))));
+            finals.push(format!(
+                "(Γ, δ) = ({}, {}): {} mm",
+                trim(*g),
+                trim(*delta),
+                r.timeline()
+                    .last()
+                    .map_or("?".into(), |p| trim(p.axial_length))
+            ));
         }
         panels.push(axial_panel(&format!("δ = {}", trim(*delta)), &named));
     }
     let title = "Axial length for the growth zones";
-    let files = plot::write_panels(&panels, panels.len().max(1), title, PANEL.0, PANEL.1, &out.join("fig_f_axial"))?;
+    let files = plot::write_panels(
+        &panels,
+        panels.len().max(1),
+        title,
+        PANEL.0,
+        PANEL.1,
+        &out.join("fig_f_axial"),
+    )?;
     let caption = format!(
         "The paper's figure 'axial': axial length (pole of the retina, from z = 0) against t for Γ = 4, 8, 12 mm, one panel per δ. At t = 1: {}. Scene scenes/grow.toml.",
         finals.join("; ")
@@ -470,7 +688,10 @@ pub fn index_html(figures: &[Written], out: &Path, preamble: &str) -> String {
 }
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 // ---------------------------------------------------------------- any run
@@ -488,19 +709,45 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     let mut push = |f: (PathBuf, PathBuf)| files.extend([f.0, f.1]);
     match &run.kind {
         RunKind::Elastic(table) => {
-            let col = |n: &str| table.column(n).ok_or_else(|| bad(format!("{}: fields.csv has no column {n:?}", dir.display())));
+            let col = |n: &str| {
+                table.column(n).ok_or_else(|| {
+                    bad(format!("{}: fields.csv has no column {n:?}", dir.display()))
+                })
+            };
             let (z, r) = (col("z")?, col("r")?);
             let mut shape = Figure::new(format!("{}: loaded shell", run.name), "z (mm)", "r (mm)")
-                .with(Series::new("mid-surface", z.iter().copied().zip(r.iter().copied()).collect(), SeriesStyle::Line));
+                .with(Series::new(
+                    "mid-surface",
+                    z.iter().copied().zip(r.iter().copied()).collect(),
+                    SeriesStyle::Line,
+                ));
             shape.aspect_equal = true;
             let sigma = col("Sigma")?;
             let vs = |field: &str, label: &str| -> Result<Figure, ExportError> {
                 Ok(Figure::new(label.to_string(), "Σ (mm)", label.to_string())
-                    .with(Series::new(label.to_string(), sigma.iter().copied().zip(col(field)?).collect(), SeriesStyle::Line))
+                    .with(Series::new(
+                        label.to_string(),
+                        sigma.iter().copied().zip(col(field)?).collect(),
+                        SeriesStyle::Line,
+                    ))
                     .no_legend())
             };
-            let panels = vec![shape, vs("alpha_s", "α_s")?, vs("alpha_phi", "α_φ")?, vs("kappa", "κ (1/mm)")?, vs("t_s", "t_s (kPa·mm)")?, vs("Q", "Q")?];
-            push(plot::write_panels(&panels, 3, &run.name, PANEL.0, PANEL.1, &stem("fields"))?);
+            let panels = vec![
+                shape,
+                vs("alpha_s", "α_s")?,
+                vs("alpha_phi", "α_φ")?,
+                vs("kappa", "κ (1/mm)")?,
+                vs("t_s", "t_s (kPa·mm)")?,
+                vs("Q", "Q")?,
+            ];
+            push(plot::write_panels(
+                &panels,
+                3,
+                &run.name,
+                PANEL.0,
+                PANEL.1,
+                &stem("fields"),
+            )?);
         }
         RunKind::Growth { .. } => {
             let snaps: Vec<&RunSnapshot> = run.snapshots().iter().collect();
@@ -510,20 +757,59 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 .map(|s| shell_panel(t_label(s.t), &run.scene, s, top))
                 .collect::<Result<Vec<_>, _>>()?;
             let columns = shells.len().clamp(1, 3);
-            push(plot::write_panels(&shells, columns, &format!("{}: shells", run.name), PANEL.0, PANEL.1, &stem("shells"))?);
+            push(plot::write_panels(
+                &shells,
+                columns,
+                &format!("{}: shells", run.name),
+                PANEL.0,
+                PANEL.1,
+                &stem("shells"),
+            )?);
             let profiles = vec![
                 profile_panel("α_s", "alpha_s", "α_s", &snaps)?,
                 profile_panel("α_φ", "alpha_phi", "α_φ", &snaps)?,
                 profile_panel("η", "eta", "η (1/mm)", &snaps)?,
                 profile_panel("t_s", "t_s", "t_s (kPa·mm)", &snaps)?,
             ];
-            push(plot::write_panels(&profiles, 2, &format!("{}: profiles against σ", run.name), PANEL.0, PANEL.1, &stem("profiles"))?);
+            push(plot::write_panels(
+                &profiles,
+                2,
+                &format!("{}: profiles against σ", run.name),
+                PANEL.0,
+                PANEL.1,
+                &stem("profiles"),
+            )?);
             let tl = run.timeline();
             let axial = axial_panel("axial length", &[(run.name.clone(), &run)]).no_legend();
-            let refraction = Figure::new("retina behind the best-focus surfaces", "t", "distance behind (mm)")
-                .with(Series::new("behind blue", tl.iter().map(|p| (p.t, p.retina_minus_blue)).collect(), SeriesStyle::Line).color(BLUE))
-                .with(Series::new("behind red", tl.iter().map(|p| (p.t, p.retina_minus_red)).collect(), SeriesStyle::Line).color(RED));
-            push(plot::write_panels(&[axial, refraction], 2, &format!("{}: the eye in time", run.name), PANEL.0, PANEL.1, &stem("timeline"))?);
+            let refraction = Figure::new(
+                "retina behind the best-focus surfaces",
+                "t",
+                "distance behind (mm)",
+            )
+            .with(
+                Series::new(
+                    "behind blue",
+                    tl.iter().map(|p| (p.t, p.retina_minus_blue)).collect(),
+                    SeriesStyle::Line,
+                )
+                .color(BLUE),
+            )
+            .with(
+                Series::new(
+                    "behind red",
+                    tl.iter().map(|p| (p.t, p.retina_minus_red)).collect(),
+                    SeriesStyle::Line,
+                )
+                .color(RED),
+            );
+            push(plot::write_panels(
+                &[axial, refraction],
+                2,
+                &format!("{}: the eye in time", run.name),
+                PANEL.0,
+                PANEL.1,
+                &stem("timeline"),
+            )?);
         }
     }
     Ok(files)
@@ -540,17 +826,32 @@ pub fn is_sweep(dir: &Path) -> bool {
 fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     let runs = sweep_runs(dir)?;
     if runs.is_empty() {
-        return Err(FigureError::Read(format!("{}: the sweep has no run to draw", dir.display())));
+        return Err(FigureError::Read(format!(
+            "{}: the sweep has no run to draw",
+            dir.display()
+        )));
     }
     let mut files = Vec::new();
     for run in &runs {
-        let name = run.dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = run
+            .dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         files.extend(plot_run(&run.dir, &out.join(&name))?);
     }
     let growing: Vec<(String, &RunData)> = runs
         .iter()
         .filter(|r| !r.timeline().is_empty())
-        .map(|r| (r.dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(), r))
+        .map(|r| {
+            (
+                r.dir
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                r,
+            )
+        })
         .collect();
     if !growing.is_empty() {
         let fig = axial_panel("axial length of every run", &growing);

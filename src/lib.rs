@@ -233,10 +233,20 @@ struct CompareArgs {
     #[arg(value_name = "REFERENCE", required = true)]
     references: Vec<PathBuf>,
     /// Absolute tolerance: a point fails when |run − ref| > tol + rtol·|ref|
-    #[arg(long, value_name = "TOL", default_value_t = 1e-8, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "TOL",
+        default_value_t = 1e-8,
+        allow_negative_numbers = true
+    )]
     tol: f64,
     /// Relative tolerance (see --tol)
-    #[arg(long, value_name = "RTOL", default_value_t = 1e-8, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "RTOL",
+        default_value_t = 1e-8,
+        allow_negative_numbers = true
+    )]
     rtol: f64,
     /// Print only the error line when a field is beyond tolerance, nothing on success
     #[arg(long, short)]
@@ -310,7 +320,9 @@ where
         Command::Export(a) => cmd_export(a),
         Command::Compare(a) => cmd_compare(a),
         Command::Converge(a) => cmd_converge(a),
-        Command::Wpd(a) => a.scene.load().and_then(|scene| cmd_study(&a.out, "wpd", |dir| crate::study::report::wpd(&scene, dir))),
+        Command::Wpd(a) => a.scene.load().and_then(|scene| {
+            cmd_study(&a.out, "wpd", |dir| crate::study::report::wpd(&scene, dir))
+        }),
         Command::Refinement(a) => cmd_study(&a.out, "refinement", crate::study::report::refinement),
         Command::Extremes(a) => cmd_extremes(a),
         Command::Sweep(a) => cmd_sweep(a),
@@ -345,8 +357,15 @@ fn usage_error(e: clap::Error) -> i32 {
         }
         ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand => {
             use clap::CommandFactory;
-            let names: Vec<String> = Cli::command().get_subcommands().map(|c| c.get_name().to_string()).filter(|n| n != "help").collect();
-            report(&format!("missing subcommand: one of {} (see 'eyeshell --help')", names.join(", ")));
+            let names: Vec<String> = Cli::command()
+                .get_subcommands()
+                .map(|c| c.get_name().to_string())
+                .filter(|n| n != "help")
+                .collect();
+            report(&format!(
+                "missing subcommand: one of {} (see 'eyeshell --help')",
+                names.join(", ")
+            ));
             EXIT_BAD_INPUT
         }
         _ => {
@@ -401,29 +420,53 @@ fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Failure> {
 
 fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Failure> {
     use crate::study::extremes;
-    let results: Vec<_> = extremes::cases().into_iter().map(|c| {
-        let o = extremes::run(&c);
-        (c, o)
-    }).collect();
+    let results: Vec<_> = extremes::cases()
+        .into_iter()
+        .map(|c| {
+            let o = extremes::run(&c);
+            (c, o)
+        })
+        .collect();
     let text = format!("{}{}", extremes::PREAMBLE, extremes::table(&results));
-    rundir::write_atomic(&a.out, text.as_bytes()).map_err(|e| Failure::failed(format!("{}: {e}", a.out.display())))?;
-    out(&format!("eyeshell: {} cases written to {}\n", results.len(), a.out.display()));
+    rundir::write_atomic(&a.out, text.as_bytes())
+        .map_err(|e| Failure::failed(format!("{}: {e}", a.out.display())))?;
+    out(&format!(
+        "eyeshell: {} cases written to {}\n",
+        results.len(),
+        a.out.display()
+    ));
     Ok(())
 }
 
 fn cmd_converge(a: &ConvergeArgs) -> Result<(), Failure> {
     let scene = a.scene.load()?;
     if a.nodes.len() < 2 || a.nodes.iter().any(|&n| n < 5) {
-        return Err(Failure::bad_input(format!("--nodes {}: give at least two counts, each at least 5", a.nodes.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(","))));
+        return Err(Failure::bad_input(format!(
+            "--nodes {}: give at least two counts, each at least 5",
+            a.nodes
+                .iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        )));
     }
     if a.growth && scene.growth.is_none() {
-        return Err(Failure::bad_input(format!("{}: --growth needs a scene with a [growth] section", scene.origin)));
+        return Err(Failure::bad_input(format!(
+            "{}: --growth needs a scene with a [growth] section",
+            scene.origin
+        )));
     }
-    cmd_study(&a.out, "converge", |dir| crate::study::report::converge(&scene, &a.nodes, a.growth, dir))
+    cmd_study(&a.out, "converge", |dir| {
+        crate::study::report::converge(&scene, &a.nodes, a.growth, dir)
+    })
 }
 
 /// Run a study into an output directory written all at once; print its summary.
-fn cmd_study(out_dir: &std::path::Path, name: &str, study: impl FnOnce(&std::path::Path) -> Result<String, crate::study::StudyError>) -> Result<(), Failure> {
+fn cmd_study(
+    out_dir: &std::path::Path,
+    name: &str,
+    study: impl FnOnce(&std::path::Path) -> Result<String, crate::study::StudyError>,
+) -> Result<(), Failure> {
     use crate::study::StudyError;
     rundir::check_target(out_dir)?;
     let dir = OutputDir::create(out_dir)?;
@@ -432,10 +475,16 @@ fn cmd_study(out_dir: &std::path::Path, name: &str, study: impl FnOnce(&std::pat
         other => Failure::failed(other.to_string()),
     })?;
     let summary = serde_json::json!({ "study": name, "sundials_version": rundir::sundials_version(), "report": text });
-    std::fs::write(dir.file(rundir::SUMMARY_FILE), serde_json::to_string_pretty(&summary).unwrap_or_default())
-        .map_err(|e| Failure::failed(format!("{}: {e}", dir.file(rundir::SUMMARY_FILE).display())))?;
+    std::fs::write(
+        dir.file(rundir::SUMMARY_FILE),
+        serde_json::to_string_pretty(&summary).unwrap_or_default(),
+    )
+    .map_err(|e| Failure::failed(format!("{}: {e}", dir.file(rundir::SUMMARY_FILE).display())))?;
     let target = dir.commit()?;
-    out(&format!("eyeshell: {name} written to {}\n{text}", target.display()));
+    out(&format!(
+        "eyeshell: {name} written to {}\n{text}",
+        target.display()
+    ));
     Ok(())
 }
 
@@ -577,16 +626,27 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
     let sweep = eyeshell::scene::sweep::Sweep::from_file(&a.scene.scene, &a.scene.set)?;
     rundir::check_target(&a.out)?;
     if a.jobs == Some(0) {
-        return Err(Failure::bad_input("--jobs 0: give at least 1 (or leave it out: one per core)"));
+        return Err(Failure::bad_input(
+            "--jobs 0: give at least 1 (or leave it out: one per core)",
+        ));
     }
     install_interrupt();
-    let options = SweepOptions { jobs: a.jobs.unwrap_or(0), resume: a.resume, cancel: &CANCEL };
+    let options = SweepOptions {
+        jobs: a.jobs.unwrap_or(0),
+        resume: a.resume,
+        cancel: &CANCEL,
+    };
     let quiet = a.quiet;
     let report = run_sweep(&sweep, &a.out, &options, &|r, n, total| {
         if quiet {
             return;
         }
-        let _ = writeln!(std::io::stderr(), "eyeshell: [{n}/{total}] {} {}", r.name, r.status_text());
+        let _ = writeln!(
+            std::io::stderr(),
+            "eyeshell: [{n}/{total}] {} {}",
+            r.name,
+            r.status_text()
+        );
     })?;
     let table = a.out.join(eyeshell::sweep::TABLE_FILE);
     let failed: Vec<String> = report
@@ -596,7 +656,11 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
             _ => r.name.clone(),
         })
         .collect();
-    let finished = report.records.iter().filter(|r| matches!(r.status, RunStatus::Ok | RunStatus::Reused)).count();
+    let finished = report
+        .records
+        .iter()
+        .filter(|r| matches!(r.status, RunStatus::Ok | RunStatus::Reused))
+        .count();
     let total = report.records.len();
     if report.interrupted {
         return Err(Failure::failed(format!(
@@ -613,8 +677,16 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
         )));
     }
     if !a.quiet {
-        let reused = report.records.iter().filter(|r| r.status == RunStatus::Reused).count();
-        let reused = if reused > 0 { format!(" ({reused} reused from the earlier sweep)") } else { String::new() };
+        let reused = report
+            .records
+            .iter()
+            .filter(|r| r.status == RunStatus::Reused)
+            .count();
+        let reused = if reused > 0 {
+            format!(" ({reused} reused from the earlier sweep)")
+        } else {
+            String::new()
+        };
         out(&format!(
             "eyeshell: sweep {} ({}): {total} run{} ok{reused}\n  table           {}\n",
             sweep.origin,
@@ -628,23 +700,44 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
 
 fn cmd_figures(a: &FiguresArgs) -> Result<(), Failure> {
     if a.jobs == Some(0) {
-        return Err(Failure::bad_input("--jobs 0: give at least 1 (or leave it out: one per core)"));
+        return Err(Failure::bad_input(
+            "--jobs 0: give at least 1 (or leave it out: one per core)",
+        ));
     }
     install_interrupt();
     let quiet = a.quiet;
     let start = std::time::Instant::now();
-    let figures = crate::study::figures::make(&a.out, a.jobs.unwrap_or(0), a.replot, &CANCEL, &|line| {
-        if !quiet {
-            let _ = writeln!(std::io::stderr(), "eyeshell: {line}");
-        }
-    })
-    .map_err(|e| if e.bad_input { Failure::bad_input(e.message) } else { Failure::failed(e.message) })?;
+    let figures =
+        crate::study::figures::make(&a.out, a.jobs.unwrap_or(0), a.replot, &CANCEL, &|line| {
+            if !quiet {
+                let _ = writeln!(std::io::stderr(), "eyeshell: {line}");
+            }
+        })
+        .map_err(|e| {
+            if e.bad_input {
+                Failure::bad_input(e.message)
+            } else {
+                Failure::failed(e.message)
+            }
+        })?;
     if !a.quiet {
-        let mut text = format!("eyeshell: {} figures in {:.1} s\n", figures.len(), start.elapsed().as_secs_f64());
+        let mut text = format!(
+            "eyeshell: {} figures in {:.1} s\n",
+            figures.len(),
+            start.elapsed().as_secs_f64()
+        );
         for f in &figures {
-            text.push_str(&format!("  ({}) {:<50} {}\n", f.id, f.title, f.png.display()));
+            text.push_str(&format!(
+                "  ({}) {:<50} {}\n",
+                f.id,
+                f.title,
+                f.png.display()
+            ));
         }
-        text.push_str(&format!("  index           {}\n", a.out.join(crate::study::figures::INDEX_FILE).display()));
+        text.push_str(&format!(
+            "  index           {}\n",
+            a.out.join(crate::study::figures::INDEX_FILE).display()
+        ));
         out(&text);
     }
     Ok(())
@@ -658,7 +751,12 @@ fn cmd_plot(a: &PlotArgs) -> Result<(), Failure> {
         other => Failure::failed(other.to_string()),
     })?;
     if !a.quiet {
-        out(&format!("eyeshell: {} files drawn from {} into {}\n", files.len(), a.dir.display(), target.display()));
+        out(&format!(
+            "eyeshell: {} files drawn from {} into {}\n",
+            files.len(),
+            a.dir.display(),
+            target.display()
+        ));
     }
     Ok(())
 }
@@ -711,19 +809,36 @@ fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
 
 /// Is the scene of `a` a sweep (refused by the single-scene loader as such)?
 fn is_sweep_file(a: &SceneArgs) -> bool {
-    matches!(Scene::from_file(&a.scene, &[]), Err(SceneError::IsSweep { .. }))
+    matches!(
+        Scene::from_file(&a.scene, &[]),
+        Err(SceneError::IsSweep { .. })
+    )
 }
 
 /// `eyeshell check` of a sweep: its runs and the values each sets, then the first run's scene.
 fn check_sweep(a: &SceneArgs) -> Result<(), Failure> {
     let sweep = eyeshell::scene::sweep::Sweep::from_file(&a.scene, &a.set)?;
-    let mut text = format!("# {}: valid sweep '{}' of {} run{} over {}\n", sweep.origin, sweep.name, sweep.runs.len(), plural(sweep.runs.len()), sweep.keys.join(", "));
+    let mut text = format!(
+        "# {}: valid sweep '{}' of {} run{} over {}\n",
+        sweep.origin,
+        sweep.name,
+        sweep.runs.len(),
+        plural(sweep.runs.len()),
+        sweep.keys.join(", ")
+    );
     for r in &sweep.runs {
-        let values: Vec<String> = r.values.iter().map(|(k, v)| format!("{k} = {}", eyeshell::scene::sweep::show_value(v))).collect();
+        let values: Vec<String> = r
+            .values
+            .iter()
+            .map(|(k, v)| format!("{k} = {}", eyeshell::scene::sweep::show_value(v)))
+            .collect();
         text.push_str(&format!("#   {:<24} {}\n", r.name, values.join(", ")));
     }
     if let Some(first) = sweep.runs.first() {
-        text.push_str(&format!("# run it with `eyeshell sweep {} --out DIR`; the first run's effective scene:\n", sweep.origin));
+        text.push_str(&format!(
+            "# run it with `eyeshell sweep {} --out DIR`; the first run's effective scene:\n",
+            sweep.origin
+        ));
         text.push_str(&first.scene.to_toml());
     }
     out(&text);
@@ -795,7 +910,12 @@ fn cmd_export(a: &ExportArgs) -> Result<(), Failure> {
     use crate::interop::export::{export, Format};
     let mut jobs = Vec::new();
     if let Some(p) = &a.mat {
-        jobs.push((p, Format::Mat { compress: a.compress }));
+        jobs.push((
+            p,
+            Format::Mat {
+                compress: a.compress,
+            },
+        ));
     }
     if let Some(p) = &a.npz {
         jobs.push((p, Format::Npz));
@@ -804,7 +924,11 @@ fn cmd_export(a: &ExportArgs) -> Result<(), Failure> {
         let done = export(&a.run, path, format)?;
         if !a.quiet {
             let what = if done.growth {
-                format!("{} file{} (one per output time)", done.files.len(), plural(done.files.len()))
+                format!(
+                    "{} file{} (one per output time)",
+                    done.files.len(),
+                    plural(done.files.len())
+                )
             } else {
                 "1 file".to_string()
             };
@@ -824,14 +948,21 @@ fn cmd_compare(a: &CompareArgs) -> Result<(), Failure> {
     use crate::interop::compare::{compare_paths, format_reports};
     for (name, v) in [("--tol", a.tol), ("--rtol", a.rtol)] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(Failure::bad_input(format!("{name} = {v}: must be a finite number ≥ 0")));
+            return Err(Failure::bad_input(format!(
+                "{name} = {v}: must be a finite number ≥ 0"
+            )));
         }
     }
     let reports =
         compare_paths(&a.run, &a.references, a.tol, a.rtol).map_err(|e| Failure::bad_input(e.0))?;
     let failed: Vec<_> = reports
         .iter()
-        .flat_map(|r| r.fields.iter().filter(|f| f.failures > 0).map(move |f| (r, f)))
+        .flat_map(|r| {
+            r.fields
+                .iter()
+                .filter(|f| f.failures > 0)
+                .map(move |f| (r, f))
+        })
         .collect();
     if !a.quiet {
         out(&format_reports(&reports, a.tol, a.rtol));

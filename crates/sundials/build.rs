@@ -17,7 +17,8 @@ use std::env;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-const APT_HINT: &str = "apt-get install -y libsundials-dev libclang-dev libsuitesparse-dev pkg-config";
+const APT_HINT: &str =
+    "apt-get install -y libsundials-dev libclang-dev libsuitesparse-dev pkg-config";
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
@@ -64,7 +65,10 @@ fn main() {
         );
     }
 
-    println!("cargo:rustc-env=EYESHELL_SUNDIALS_INCLUDE={}", include_dir.display());
+    println!(
+        "cargo:rustc-env=EYESHELL_SUNDIALS_INCLUDE={}",
+        include_dir.display()
+    );
     println!("cargo:rustc-env=EYESHELL_SUNDIALS_VERSION={version}");
     if let Ok(dir) = env::var("SUNDIALS_LIBRARY_DIR") {
         println!("cargo:rustc-link-search=native={dir}");
@@ -73,7 +77,10 @@ fn main() {
     // 3. Bindings sundials-sys lacks: the version query (always) and KLU (when present).
     let version_h = include_dir.join("sundials/sundials_version.h");
     let version_bindings = bindgen::Builder::default()
-        .header_contents("eyeshell_version.h", "#include <sundials/sundials_version.h>\n")
+        .header_contents(
+            "eyeshell_version.h",
+            "#include <sundials/sundials_version.h>\n",
+        )
         .clang_arg(format!("-I{}", include_dir.display()))
         .allowlist_function("SUNDIALSGetVersion.*")
         .generate()
@@ -124,7 +131,11 @@ fn vendored_sundials_sys(out_dir: &Path) -> Option<PathBuf> {
     let build_dir = out_dir.parent()?.parent()?;
     let entries = fs::read_dir(build_dir).ok()?;
     for entry in entries.flatten() {
-        if !entry.file_name().to_string_lossy().starts_with("sundials-sys-") {
+        if !entry
+            .file_name()
+            .to_string_lossy()
+            .starts_with("sundials-sys-")
+        {
             continue;
         }
         for sub in ["out/build", "out/lib"] {
@@ -170,7 +181,10 @@ fn klu(include_dir: &Path, out_dir: &Path) -> Result<(), String> {
     }
     let klu_h = include_dir.join("sunlinsol/sunlinsol_klu.h");
     if !klu_h.exists() {
-        return Err(format!("{} not found (install libsundials-dev)", klu_h.display()));
+        return Err(format!(
+            "{} not found (install libsundials-dev)",
+            klu_h.display()
+        ));
     }
     let ss_include = env::var("SUITESPARSE_INCLUDE_DIR")
         .map(PathBuf::from)
@@ -183,7 +197,9 @@ fn klu(include_dir: &Path, out_dir: &Path) -> Result<(), String> {
     }
     for lib in ["sundials_sunlinsolklu", "klu"] {
         if find_library(lib).is_none() {
-            return Err(format!("lib{lib}.so not found (install libsundials-dev libsuitesparse-dev)"));
+            return Err(format!(
+                "lib{lib}.so not found (install libsundials-dev libsuitesparse-dev)"
+            ));
         }
     }
     let bindings = bindgen::Builder::default()
@@ -196,8 +212,12 @@ fn klu(include_dir: &Path, out_dir: &Path) -> Result<(), String> {
         // Every type they use is SUNDIALS-generic and comes from sundials-sys (same types,
         // so a KLU solver is an ordinary sundials_sys::SUNLinearSolver).
         .allowlist_recursively(false)
-        .blocklist_type("SUNMatrix|SUNLinearSolver|SUNContext|N_Vector|sunindextype|realtype|sunrealtype")
-        .blocklist_type("_generic_.*|_SUNContext|SUNLinearSolver_Type|SUNLinearSolver_ID|booleantype")
+        .blocklist_type(
+            "SUNMatrix|SUNLinearSolver|SUNContext|N_Vector|sunindextype|realtype|sunrealtype",
+        )
+        .blocklist_type(
+            "_generic_.*|_SUNContext|SUNLinearSolver_Type|SUNLinearSolver_ID|booleantype",
+        )
         .raw_line("#[allow(unused_imports)]\nuse sundials_sys::*;")
         .generate()
         .map_err(|e| format!("bindgen failed on {} ({e})", klu_h.display()))?;

@@ -63,7 +63,11 @@ pub fn load(path: &Path) -> Result<Vec<Sample>, CompareError> {
             .filter(|p| {
                 p.is_file()
                     && p.extension().is_some_and(|x| x == "mat" || x == "npz")
-                    && !p.file_name().unwrap_or_default().to_string_lossy().starts_with('.')
+                    && !p
+                        .file_name()
+                        .unwrap_or_default()
+                        .to_string_lossy()
+                        .starts_with('.')
             })
             .collect();
         files.sort();
@@ -80,7 +84,10 @@ pub fn load(path: &Path) -> Result<Vec<Sample>, CompareError> {
         return Ok(out);
     }
     if !path.exists() {
-        return Err(CompareError(format!("{}: no such file or directory", path.display())));
+        return Err(CompareError(format!(
+            "{}: no such file or directory",
+            path.display()
+        )));
     }
     Ok(vec![load_file(path)?])
 }
@@ -171,7 +178,11 @@ fn sample_from(path: &Path, raw: Vec<(String, Raw)>) -> Result<Sample, CompareEr
         } else if name == "y" && r.shape.len() == 2 && r.shape[0] == Y_ROWS.len() {
             y = Some(r);
         } else if non_unit <= 1 && n > 1 {
-            let name = if name == "x" { "Sigma".to_string() } else { name };
+            let name = if name == "x" {
+                "Sigma".to_string()
+            } else {
+                name
+            };
             vectors.push((name, r.data));
         }
     }
@@ -200,7 +211,10 @@ fn sample_from(path: &Path, raw: Vec<(String, Raw)>) -> Result<Sample, CompareEr
             ))
         })?;
     let len = coord.1.len();
-    let vars: BTreeMap<String, Vec<f64>> = vectors.into_iter().filter(|(_, v)| v.len() == len).collect();
+    let vars: BTreeMap<String, Vec<f64>> = vectors
+        .into_iter()
+        .filter(|(_, v)| v.len() == len)
+        .collect();
     Ok(Sample {
         label: path.display().to_string(),
         time,
@@ -260,7 +274,12 @@ fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
 }
 
 /// Compare `reference` against `run` (paired already).
-pub fn compare_pair(run: &Sample, reference: &Sample, tol: f64, rtol: f64) -> Result<PairReport, CompareError> {
+pub fn compare_pair(
+    run: &Sample,
+    reference: &Sample,
+    tol: f64,
+    rtol: f64,
+) -> Result<PairReport, CompareError> {
     let coordinate = COORDINATES
         .iter()
         .find(|c| run.vars.contains_key(**c) && reference.vars.contains_key(**c))
@@ -390,7 +409,10 @@ pub fn pair<'a>(run: &'a [Sample], reference: &Sample) -> Result<&'a Sample, Com
         )));
     };
     run.iter()
-        .filter(|s| s.time.is_some_and(|u| (u - t).abs() <= 1e-9 * t.abs().max(1.0)))
+        .filter(|s| {
+            s.time
+                .is_some_and(|u| (u - t).abs() <= 1e-9 * t.abs().max(1.0))
+        })
         .min_by(|a, b| {
             let da = (a.time.unwrap_or(f64::NAN) - t).abs();
             let db = (b.time.unwrap_or(f64::NAN) - t).abs();
@@ -464,14 +486,21 @@ pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
                 f.max_rel,
                 f.at_rel,
                 if f.failures > 0 {
-                    format!("FAIL ({} point{})", f.failures, if f.failures == 1 { "" } else { "s" })
+                    format!(
+                        "FAIL ({} point{})",
+                        f.failures,
+                        if f.failures == 1 { "" } else { "s" }
+                    )
                 } else {
                     "ok".to_string()
                 }
             ));
         }
     }
-    let failed: usize = reports.iter().map(|r| r.fields.iter().filter(|f| f.failures > 0).count()).sum();
+    let failed: usize = reports
+        .iter()
+        .map(|r| r.fields.iter().filter(|f| f.failures > 0).count())
+        .sum();
     let total: usize = reports.iter().map(|r| r.fields.len()).sum();
     s.push_str(&format!(
         "{} of {} field comparisons within |Δ| ≤ {tol:e} + {rtol:e}·|ref|\n",
@@ -503,7 +532,10 @@ mod tests {
         for i in 0..4 {
             assert_eq!(interpolate(&xs, &ys, xs[i]), ys[i]);
         }
-        assert!((interpolate(&xs, &ys, 0.65) - (0.123456789 + 0.5 * (-2.0 - 0.123456789))).abs() < 1e-15);
+        assert!(
+            (interpolate(&xs, &ys, 0.65) - (0.123456789 + 0.5 * (-2.0 - 0.123456789))).abs()
+                < 1e-15
+        );
     }
 
     #[test]
@@ -521,7 +553,13 @@ mod tests {
         assert_eq!(r.fields[0].at_abs, 0.4);
         // Linear data on a finer reference grid: interpolation is exact up to round-off.
         let fine: Vec<f64> = (0..101).map(|i| i as f64 / 100.0).collect();
-        let r = compare_pair(&sample(&xs, |x| 2.0 * x + 1.0, None), &sample(&fine, |x| 2.0 * x + 1.0, None), 1e-12, 0.0).unwrap();
+        let r = compare_pair(
+            &sample(&xs, |x| 2.0 * x + 1.0, None),
+            &sample(&fine, |x| 2.0 * x + 1.0, None),
+            1e-12,
+            0.0,
+        )
+        .unwrap();
         assert!(!r.failed(), "{r:?}");
     }
 
@@ -529,7 +567,10 @@ mod tests {
     fn pairing_by_time() {
         let xs = [0.0, 1.0];
         let run = vec![sample(&xs, |x| x, Some(0.0)), sample(&xs, |x| x, Some(0.1))];
-        assert_eq!(pair(&run, &sample(&xs, |x| x, Some(0.1))).unwrap().time, Some(0.1));
+        assert_eq!(
+            pair(&run, &sample(&xs, |x| x, Some(0.1))).unwrap().time,
+            Some(0.1)
+        );
         assert!(pair(&run, &sample(&xs, |x| x, Some(0.2))).is_err());
         assert!(pair(&run, &sample(&xs, |x| x, None)).is_err());
     }

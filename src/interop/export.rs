@@ -22,12 +22,24 @@ use std::path::{Path, PathBuf};
 
 use super::mat::{self, MatValue};
 use super::npz::{self, NpyArray};
-pub use eyeshell::rundir::read::{bad, is_run_dir, read_csv, read_run, ReadError as ExportError, Run, RunSnapshot, Table, GROWTH_VARS};
+pub use eyeshell::rundir::read::{
+    bad, is_run_dir, read_csv, read_run, ReadError as ExportError, Run, RunSnapshot, Table,
+    GROWTH_VARS,
+};
 
 /// The rows of `sol.y`, in order (bvp4c's unknowns of the published scripts).
 pub const Y_ROWS: [&str; 5] = ["kappa", "alpha_s", "r", "theta", "Q"];
 /// The further fields of an elastic export, beside `x` and `y`.
-pub const ELASTIC_EXTRA: [&str; 8] = ["sigma", "z", "s", "alpha_phi", "alpha_n", "h", "t_s", "t_phi"];
+pub const ELASTIC_EXTRA: [&str; 8] = [
+    "sigma",
+    "z",
+    "s",
+    "alpha_phi",
+    "alpha_n",
+    "h",
+    "t_s",
+    "t_phi",
+];
 
 fn failed(message: impl Into<String>) -> ExportError {
     ExportError {
@@ -156,7 +168,10 @@ pub fn export(run_dir: &Path, out: &Path, format: Format) -> Result<Exported, Ex
                 )));
             }
             if out.file_name().is_none() {
-                return Err(bad(format!("{}: the output path has no file name", out.display())));
+                return Err(bad(format!(
+                    "{}: the output path has no file name",
+                    out.display()
+                )));
             }
             if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
                 if !parent.is_dir() {
@@ -221,9 +236,12 @@ struct ExportDir {
 
 impl ExportDir {
     fn create(target: &Path, ext: &str) -> Result<ExportDir, ExportError> {
-        let name = target
-            .file_name()
-            .ok_or_else(|| bad(format!("{}: the output path has no file name", target.display())))?;
+        let name = target.file_name().ok_or_else(|| {
+            bad(format!(
+                "{}: the output path has no file name",
+                target.display()
+            ))
+        })?;
         Self::check(target, ext)?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -236,7 +254,11 @@ impl ExportDir {
                 parent.display()
             )));
         }
-        let tmp = parent.join(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()));
+        let tmp = parent.join(format!(
+            ".{}.tmp-{}",
+            name.to_string_lossy(),
+            std::process::id()
+        ));
         if tmp.exists() {
             let _ = fs::remove_dir_all(&tmp);
         }
@@ -259,7 +281,8 @@ impl ExportDir {
                 target.display()
             )));
         }
-        let entries = fs::read_dir(target).map_err(|e| bad(format!("{}: {e}", target.display())))?;
+        let entries =
+            fs::read_dir(target).map_err(|e| bad(format!("{}: {e}", target.display())))?;
         for e in entries.filter_map(|e| e.ok()) {
             let p = e.path();
             if !(p.is_file() && p.extension().is_some_and(|x| x == ext)) {
@@ -282,14 +305,21 @@ impl ExportDir {
                 .ok()
                 .and_then(|mut d| d.next())
                 .and_then(|e| e.ok())
-                .and_then(|e| e.path().extension().map(|x| x.to_string_lossy().into_owned()))
+                .and_then(|e| {
+                    e.path()
+                        .extension()
+                        .map(|x| x.to_string_lossy().into_owned())
+                })
                 .unwrap_or_default();
             if !ext.is_empty() {
                 Self::check(&self.target, &ext)?;
             }
             let old = self.tmp.with_file_name(format!(
                 ".{}.old-{}",
-                self.target.file_name().unwrap_or_default().to_string_lossy(),
+                self.target
+                    .file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy(),
                 std::process::id()
             ));
             fs::rename(&self.target, &old).map_err(|e| io(&self.target, e))?;

@@ -338,12 +338,18 @@ pub fn decode(path: &Path, bytes: &[u8]) -> Result<Vec<(String, MatValue)>, MatE
         reason,
     };
     if bytes.len() < 128 || !bytes.starts_with(b"MATLAB") {
-        return Err(bad("no MATLAB header (the file does not start with 'MATLAB' and 128 header bytes)".into()));
+        return Err(bad(
+            "no MATLAB header (the file does not start with 'MATLAB' and 128 header bytes)".into(),
+        ));
     }
     match &bytes[126..128] {
         b"IM" => {}
         b"MI" => return Err(bad("big-endian files are not supported".into())),
-        other => return Err(bad(format!("endian indicator {other:?} is neither 'IM' nor 'MI'"))),
+        other => {
+            return Err(bad(format!(
+                "endian indicator {other:?} is neither 'IM' nor 'MI'"
+            )))
+        }
     }
     let version = u16::from_le_bytes([bytes[124], bytes[125]]);
     if version == 0x0200 {
@@ -444,11 +450,17 @@ mod tests {
     #[test]
     fn bad_files_and_names_are_refused() {
         let p = Path::new("x.mat");
-        assert!(decode(p, b"hello").unwrap_err().to_string().contains("x.mat"));
+        assert!(decode(p, b"hello")
+            .unwrap_err()
+            .to_string()
+            .contains("x.mat"));
         let mut b = encode(&sample(), false).unwrap();
         b[126] = b'M';
         b[127] = b'I';
-        assert!(decode(p, &b).unwrap_err().to_string().contains("big-endian"));
+        assert!(decode(p, &b)
+            .unwrap_err()
+            .to_string()
+            .contains("big-endian"));
         let b = encode(&sample(), false).unwrap();
         assert!(decode(p, &b[..b.len() - 20]).is_err());
         assert!(encode(&[("1x".into(), MatValue::scalar(1.0))], false).is_err());

@@ -96,7 +96,10 @@ pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
         .and_then(|h| std::str::from_utf8(h).ok())
         .ok_or("truncated .npy header")?;
     if !header.contains("'descr': '<f8'") {
-        return Err(format!("only little-endian float64 arrays are read: {}", header.trim()));
+        return Err(format!(
+            "only little-endian float64 arrays are read: {}",
+            header.trim()
+        ));
     }
     if header.contains("'fortran_order': True") {
         return Err("Fortran-order arrays are not read".into());
@@ -111,7 +114,10 @@ pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
         .split(',')
         .map(str::trim)
         .filter(|s| !s.is_empty())
-        .map(|s| s.parse::<usize>().map_err(|_| format!("bad shape {shape_text:?}")))
+        .map(|s| {
+            s.parse::<usize>()
+                .map_err(|_| format!("bad shape {shape_text:?}"))
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let n: usize = shape.iter().product();
     let body = &bytes[start + hlen..];
@@ -155,7 +161,8 @@ pub fn read(path: &Path) -> Result<Vec<(String, NpyArray)>, NpzError> {
         reason,
     };
     let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
-    let mut zip = zip::ZipArchive::new(file).map_err(|e| err(format!("not a .npz (zip) file: {e}")))?;
+    let mut zip =
+        zip::ZipArchive::new(file).map_err(|e| err(format!("not a .npz (zip) file: {e}")))?;
     let mut out = Vec::new();
     for i in 0..zip.len() {
         let mut member = zip.by_index(i).map_err(|e| err(e.to_string()))?;

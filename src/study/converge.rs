@@ -59,7 +59,11 @@ impl Ladder {
     /// Observed order of each field between consecutive rungs (NaN where an error is zero).
     pub fn orders(&self) -> Vec<[f64; 5]> {
         let e = self.errors();
-        let n = if self.err_richardson.is_some() { e.len() } else { e.len() - 1 };
+        let n = if self.err_richardson.is_some() {
+            e.len()
+        } else {
+            e.len() - 1
+        };
         (1..n)
             .map(|k| {
                 let ratio = (self.scale[k - 1] / self.scale[k]).ln();
@@ -78,8 +82,16 @@ impl Ladder {
     /// Observed order of the largest error over all fields, between consecutive rungs.
     pub fn worst_orders(&self) -> Vec<f64> {
         let e = self.errors();
-        let n = if self.err_richardson.is_some() { e.len() } else { e.len() - 1 };
-        (1..n).map(|k| (worst(&e[k - 1]) / worst(&e[k])).ln() / (self.scale[k - 1] / self.scale[k]).ln()).collect()
+        let n = if self.err_richardson.is_some() {
+            e.len()
+        } else {
+            e.len() - 1
+        };
+        (1..n)
+            .map(|k| {
+                (worst(&e[k - 1]) / worst(&e[k])).ln() / (self.scale[k - 1] / self.scale[k]).ln()
+            })
+            .collect()
     }
 }
 
@@ -92,7 +104,10 @@ pub fn ladder(
     values: &[f64],
 ) -> Result<Ladder, StudyError> {
     if values.len() < 2 {
-        return Err(StudyError::Invalid(format!("a {} ladder needs at least two values", knob.name())));
+        return Err(StudyError::Invalid(format!(
+            "a {} ladder needs at least two values",
+            knob.name()
+        )));
     }
     let mut values = values.to_vec();
     match knob {
@@ -119,11 +134,20 @@ pub fn ladder(
                     g.integrator = eyeshell::growth::Integrator::Euler;
                     g.steps = v as usize;
                 }
-                None => return Err(StudyError::Invalid("a steps ladder needs a growth scene".into())),
+                None => {
+                    return Err(StudyError::Invalid(
+                        "a steps ladder needs a growth scene".into(),
+                    ))
+                }
             },
         }
         let what = format!("{} = {v}", knob.name());
-        runs.push(run(params, &s, growth.map(|(g, _)| g).zip(gs.as_ref()), &what)?);
+        runs.push(run(
+            params,
+            &s,
+            growth.map(|(g, _)| g).zip(gs.as_ref()),
+            &what,
+        )?);
     }
     // Compare at the coarsest run's uniform nodes (nodes of every finer, nested rung), or,
     // for ε, at points inside the largest truncation.
@@ -132,14 +156,28 @@ pub fn ladder(
         Knob::Nodes => values[0] as usize,
         _ => solver.nodes.min(401),
     };
-    let lo = if knob == Knob::Epsilon { eps_max } else { solver.epsilon };
+    let lo = if knob == Knob::Epsilon {
+        eps_max
+    } else {
+        solver.epsilon
+    };
     let pts = points(lo, l, count);
-    let samples: Vec<Vec<[f64; 5]>> = runs.iter().zip(&values).map(|(r, v)| sample(&r.solution, &pts, &format!("{} = {v}", knob.name()))).collect::<Result<_, _>>()?;
+    let samples: Vec<Vec<[f64; 5]>> = runs
+        .iter()
+        .zip(&values)
+        .map(|(r, v)| sample(&r.solution, &pts, &format!("{} = {v}", knob.name())))
+        .collect::<Result<_, _>>()?;
     let finest = samples.last().unwrap();
     let err_finest = samples.iter().map(|s| max_diff(s, finest)).collect();
     let scale: Vec<f64> = match knob {
-        Knob::Nodes => values.iter().map(|&n| (l - solver.epsilon) / (n - 1.0)).collect(),
-        Knob::Steps => values.iter().map(|&n| growth.map_or(1.0, |(g, _)| g.t_end) / n).collect(),
+        Knob::Nodes => values
+            .iter()
+            .map(|&n| (l - solver.epsilon) / (n - 1.0))
+            .collect(),
+        Knob::Steps => values
+            .iter()
+            .map(|&n| growth.map_or(1.0, |(g, _)| g.t_end) / n)
+            .collect(),
         _ => values.clone(),
     };
     // Richardson at the scheme's order suits the elastic problem only: a grown shell's data
@@ -153,7 +191,10 @@ pub fn ladder(
             .zip(&samples[k - 1])
             .map(|(c, f)| std::array::from_fn(|j| f[j] + (f[j] - c[j]) / (q - 1.0)))
             .collect();
-        samples[..k - 1].iter().map(|s| max_diff(s, &reference)).collect()
+        samples[..k - 1]
+            .iter()
+            .map(|s| max_diff(s, &reference))
+            .collect()
     });
     Ok(Ladder {
         knob,
@@ -162,7 +203,11 @@ pub fn ladder(
         seconds: runs.iter().map(|r| r.seconds).collect(),
         err_finest,
         err_richardson,
-        axial: growth.map(|_| runs.iter().map(|r| r.axial_length.unwrap_or(f64::NAN)).collect()),
+        axial: growth.map(|_| {
+            runs.iter()
+                .map(|r| r.axial_length.unwrap_or(f64::NAN))
+                .collect()
+        }),
     })
 }
 
@@ -195,9 +240,17 @@ pub fn table(l: &Ladder) -> (Vec<String>, Vec<Vec<String>>) {
                     r.push(rich.get(k).map_or(String::new(), |e| cell(e[c])));
                 }
                 // The order between rung k−1 and k is listed on rung k.
-                r.push(if k >= 1 { orders.get(k - 1).map_or(String::new(), |o| cell(o[c])) } else { String::new() });
+                r.push(if k >= 1 {
+                    orders.get(k - 1).map_or(String::new(), |o| cell(o[c]))
+                } else {
+                    String::new()
+                });
             }
-            r.push(if k >= 1 { worst_orders.get(k - 1).map_or(String::new(), |&o| cell(o)) } else { String::new() });
+            r.push(if k >= 1 {
+                worst_orders.get(k - 1).map_or(String::new(), |&o| cell(o))
+            } else {
+                String::new()
+            });
             r
         })
         .collect();

@@ -47,7 +47,11 @@ pub enum Outcome {
 }
 
 fn fibre_shell() -> Params {
-    Params { thickness: Thickness::NonUniform, d: 200.0, ..Params::default() }
+    Params {
+        thickness: Thickness::NonUniform,
+        d: 200.0,
+        ..Params::default()
+    }
 }
 
 fn exact(p: Params) -> Params {
@@ -56,7 +60,10 @@ fn exact(p: Params) -> Params {
 
 /// Half the cornea's largest pressure, so that a pushed material stays admissible.
 fn half_limit(p: Params) -> Params {
-    Params { dp: 0.5 * cornea::max_pressure(&p.cornea), ..p }
+    Params {
+        dp: 0.5 * cornea::max_pressure(&p.cornea),
+        ..p
+    }
 }
 
 /// The head of TESTING.md.
@@ -78,57 +85,180 @@ their Newton iterations are the coupled system's (with the elastic solves at t =
 pub fn cases() -> Vec<Case> {
     let s = SolverSettings::default();
     let mut out = vec![];
-    let mut push = |group: &'static str, name: String, params: Params, solver: SolverSettings, is_exact: bool| {
-        out.push(Case { group, name, params, solver, growth: None, exact: is_exact });
+    let mut push = |group: &'static str,
+                    name: String,
+                    params: Params,
+                    solver: SolverSettings,
+                    is_exact: bool| {
+        out.push(Case {
+            group,
+            name,
+            params,
+            solver,
+            growth: None,
+            exact: is_exact,
+        });
     };
     let sphere = exact(Params::default());
     for eps in [1e-8, 1e-6, 1e-4, 1e-2, 1e-1] {
-        push("pole truncation ε", format!("ε = {eps:e}"), sphere, SolverSettings { epsilon: eps, ..s }, true);
+        push(
+            "pole truncation ε",
+            format!("ε = {eps:e}"),
+            sphere,
+            SolverSettings { epsilon: eps, ..s },
+            true,
+        );
     }
     for n in [5, 11, 101, 2001, 20001] {
-        push("nodes N", format!("N = {n}"), sphere, SolverSettings { nodes: n, ..s }, true);
+        push(
+            "nodes N",
+            format!("N = {n}"),
+            sphere,
+            SolverSettings { nodes: n, ..s },
+            true,
+        );
     }
     let limit = cornea::max_pressure(&sphere.cornea);
     for dp in [0.0, 1e-6, 2.0, 0.999 * limit] {
-        push("pressure ΔP", format!("ΔP = {dp:.6e}"), Params { dp, ..sphere }, s, true);
+        push(
+            "pressure ΔP",
+            format!("ΔP = {dp:.6e}"),
+            Params { dp, ..sphere },
+            s,
+            true,
+        );
     }
     for c in [1.0, 1e5] {
-        push("modulus C", format!("C = {c:e} (sphere)"), half_limit(exact(Params { c, ..Params::default() })), s, true);
+        push(
+            "modulus C",
+            format!("C = {c:e} (sphere)"),
+            half_limit(exact(Params {
+                c,
+                ..Params::default()
+            })),
+            s,
+            true,
+        );
         let p = fibre_shell();
-        let p = Params { c, cornea: eyeshell::model::params::CorneaParams { c, ..p.cornea }, ..p };
-        push("modulus C", format!("C = {c:e} (fibre shell)"), half_limit(p), s, false);
+        let p = Params {
+            c,
+            cornea: eyeshell::model::params::CorneaParams { c, ..p.cornea },
+            ..p
+        };
+        push(
+            "modulus C",
+            format!("C = {c:e} (fibre shell)"),
+            half_limit(p),
+            s,
+            false,
+        );
     }
     for d in [0.0, 1e2, 1e3, 1e4, 1e5] {
-        push("fibres D", format!("D = {d:e}"), Params { d, ..fibre_shell() }, s, false);
+        push(
+            "fibres D",
+            format!("D = {d:e}"),
+            Params { d, ..fibre_shell() },
+            s,
+            false,
+        );
     }
     for e_b in [1e-6, 1e-3, 1.0, 1e3, 1e6] {
-        push("bending E_b", format!("E_b = {e_b:e}"), Params { e_b, ..fibre_shell() }, s, false);
+        push(
+            "bending E_b",
+            format!("E_b = {e_b:e}"),
+            Params {
+                e_b,
+                ..fibre_shell()
+            },
+            s,
+            false,
+        );
     }
     // Newton allowed too few iterations for a cold start: continuation must take over.
-    push("continuation", "D = 1e5, at most 4 Newton iterations a solve".into(), Params { d: 1e5, ..fibre_shell() }, SolverSettings { max_newton: 4, ..s }, false);
-    push("continuation", "E_b = 1e-6, at most 3 Newton iterations a solve".into(), Params { e_b: 1e-6, ..fibre_shell() }, SolverSettings { max_newton: 3, ..s }, false);
+    push(
+        "continuation",
+        "D = 1e5, at most 4 Newton iterations a solve".into(),
+        Params {
+            d: 1e5,
+            ..fibre_shell()
+        },
+        SolverSettings { max_newton: 4, ..s },
+        false,
+    );
+    push(
+        "continuation",
+        "E_b = 1e-6, at most 3 Newton iterations a solve".into(),
+        Params {
+            e_b: 1e-6,
+            ..fibre_shell()
+        },
+        SolverSettings { max_newton: 3, ..s },
+        false,
+    );
     for h0 in [0.01, 3.0] {
-        let p = half_limit(exact(Params { h0, ..Params::default() }));
+        let p = half_limit(exact(Params {
+            h0,
+            ..Params::default()
+        }));
         push("thickness H0", format!("H0 = {h0}"), p, s, true);
     }
     // Growth: the const scene at N = 101, IDA (the default) at rtol 1e-5.
-    let gs = GrowthSettings { rtol: 1e-5, atol: 1e-7, output_times: vec![], ..GrowthSettings::default() };
+    let gs = GrowthSettings {
+        rtol: 1e-5,
+        atol: 1e-7,
+        output_times: vec![],
+        ..GrowthSettings::default()
+    };
     let g0 = GrowthParams::default();
     let small = SolverSettings { nodes: 101, ..s };
     let mut grow = |name: String, g: GrowthParams| {
-        out.push(Case { group: "growth", name, params: Params::default(), solver: small, growth: Some((g, gs.clone())), exact: false });
+        out.push(Case {
+            group: "growth",
+            name,
+            params: Params::default(),
+            solver: small,
+            growth: Some((g, gs.clone())),
+            exact: false,
+        });
     };
     for eta0 in [0.0, 1e2, 1e3, 1e4] {
-        grow(format!("η0 = {eta0:e}"), GrowthParams { eta0, ..g0.clone() });
+        grow(
+            format!("η0 = {eta0:e}"),
+            GrowthParams { eta0, ..g0.clone() },
+        );
     }
     for delta in [0.05, 50.0] {
-        grow(format!("δ = {delta}"), GrowthParams { delta, ..g0.clone() });
+        grow(
+            format!("δ = {delta}"),
+            GrowthParams {
+                delta,
+                ..g0.clone()
+            },
+        );
     }
     for gamma in [-10.0, 40.0] {
-        grow(format!("Γ = {gamma} (outside [0, L])"), GrowthParams { gamma, ..g0.clone() });
+        grow(
+            format!("Γ = {gamma} (outside [0, L])"),
+            GrowthParams {
+                gamma,
+                ..g0.clone()
+            },
+        );
     }
-    grow("t_end = 10".into(), GrowthParams { t_end: 10.0, ..g0.clone() });
-    grow("mass thickness law".into(), GrowthParams { thickness_law: ThicknessLaw::Mass, ..g0.clone() });
+    grow(
+        "t_end = 10".into(),
+        GrowthParams {
+            t_end: 10.0,
+            ..g0.clone()
+        },
+    );
+    grow(
+        "mass thickness law".into(),
+        GrowthParams {
+            thickness_law: ThicknessLaw::Mass,
+            ..g0.clone()
+        },
+    );
     out
 }
 
@@ -137,21 +267,34 @@ fn exact_error(p: &Params, rows: &[FieldRow], alpha: f64) -> f64 {
     rows.iter()
         .map(|r| {
             let x = r.sigma_ref;
-            let e = [1.0 / (alpha * p.r0), alpha, alpha * p.r0 * (x / p.r0).sin(), x / p.r0, 0.0];
+            let e = [
+                1.0 / (alpha * p.r0),
+                alpha,
+                alpha * p.r0 * (x / p.r0).sin(),
+                x / p.r0,
+                0.0,
+            ];
             let v = [r.kappa, r.alpha_s, r.r, r.theta, r.q];
-            v.iter().zip(e).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
+            v.iter()
+                .zip(e)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max)
         })
         .fold(0.0, f64::max)
 }
 
 fn finite(rows: &[FieldRow]) -> bool {
-    rows.iter().all(|r| r.values().iter().all(|v| v.is_finite()))
+    rows.iter()
+        .all(|r| r.values().iter().all(|v| v.is_finite()))
 }
 
 /// Run one case.
 pub fn run(case: &Case) -> Outcome {
     let start = Instant::now();
-    let failed = |e: String| Outcome::Failed { seconds: start.elapsed().as_secs_f64(), error: e };
+    let failed = |e: String| Outcome::Failed {
+        seconds: start.elapsed().as_secs_f64(),
+        error: e,
+    };
     match &case.growth {
         None => match bvp::solve(&case.params, &case.solver, None) {
             Ok(sol) => Outcome::Solved {
@@ -160,7 +303,9 @@ pub fn run(case: &Case) -> Outcome {
                 continuation_stages: sol.stats.continuation_stages,
                 residual_norm: sol.stats.residual_norm,
                 first_integral_max: sol.stats.first_integral_max,
-                exact_error: case.exact.then(|| exact_error(&case.params, &sol.rows, sol.stats.cornea_alpha)),
+                exact_error: case
+                    .exact
+                    .then(|| exact_error(&case.params, &sol.rows, sol.stats.cornea_alpha)),
                 axial_length: None,
                 finite: finite(&sol.rows),
             },
@@ -185,13 +330,18 @@ pub fn run(case: &Case) -> Outcome {
                     seconds: start.elapsed().as_secs_f64(),
                     // The Newton iterations that did the work: of the elastic solves
                     // (CVODE, Euler), or of the coupled system (IDA).
-                    newton_iterations: stats.newton_iterations + stats.nonlinear_iterations * usize::from(stats.rhs_evaluations == 0),
+                    newton_iterations: stats.newton_iterations
+                        + stats.nonlinear_iterations * usize::from(stats.rhs_evaluations == 0),
                     continuation_stages: 0,
                     residual_norm: f64::NAN,
                     first_integral_max: f64::NAN,
                     exact_error: None,
                     axial_length: Some(snap.series.axial_length),
-                    finite: finite(&snap.fields) && snap.growth.iter().all(|g| g.values().iter().all(|v| v.is_finite())),
+                    finite: finite(&snap.fields)
+                        && snap
+                            .growth
+                            .iter()
+                            .all(|g| g.values().iter().all(|v| v.is_finite())),
                 },
                 (Ok(_), None) => failed("the run gave no state".into()),
                 (Err(e), _) => failed(e.to_string()),
@@ -213,13 +363,26 @@ pub fn table(results: &[(Case, Outcome)]) -> String {
     let mut t = String::from("| group | case | outcome | seconds | Newton iterations | continuation stages | residual | first integral | error vs exact | axial length |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for (c, o) in results {
         match o {
-            Outcome::Solved { seconds, newton_iterations, continuation_stages, residual_norm, first_integral_max, exact_error, axial_length, finite } => {
+            Outcome::Solved {
+                seconds,
+                newton_iterations,
+                continuation_stages,
+                residual_norm,
+                first_integral_max,
+                exact_error,
+                axial_length,
+                finite,
+            } => {
                 let _ = writeln!(
                     t,
                     "| {} | {} | {} | {:.3} | {} | {} | {} | {} | {} | {} |",
                     c.group,
                     c.name,
-                    if *finite { "solved" } else { "solved, NOT FINITE" },
+                    if *finite {
+                        "solved"
+                    } else {
+                        "solved, NOT FINITE"
+                    },
                     seconds,
                     newton_iterations,
                     continuation_stages,
@@ -230,7 +393,14 @@ pub fn table(results: &[(Case, Outcome)]) -> String {
                 );
             }
             Outcome::Failed { seconds, error } => {
-                let _ = writeln!(t, "| {} | {} | failed: {} | {:.3} | | | | | | |", c.group, c.name, error.replace('|', "/"), seconds);
+                let _ = writeln!(
+                    t,
+                    "| {} | {} | failed: {} | {:.3} | | | | | | |",
+                    c.group,
+                    c.name,
+                    error.replace('|', "/"),
+                    seconds
+                );
             }
         }
     }

@@ -13,10 +13,26 @@ use eyeshell::sweep::{run_sweep, RunStatus, SweepOptions};
 
 /// The scenes behind the figures: (data directory, file shown in captions, text).
 pub const SCENES: [(&str, &str, &str); 4] = [
-    ("const", "scenes/const.toml", include_str!("../../scenes/const.toml")),
-    ("thick", "scenes/thick.toml", include_str!("../../scenes/thick.toml")),
-    ("fibre", "scenes/fibre.toml", include_str!("../../scenes/fibre.toml")),
-    ("grow", "scenes/grow.toml", include_str!("../../scenes/grow.toml")),
+    (
+        "const",
+        "scenes/const.toml",
+        include_str!("../../scenes/const.toml"),
+    ),
+    (
+        "thick",
+        "scenes/thick.toml",
+        include_str!("../../scenes/thick.toml"),
+    ),
+    (
+        "fibre",
+        "scenes/fibre.toml",
+        include_str!("../../scenes/fibre.toml"),
+    ),
+    (
+        "grow",
+        "scenes/grow.toml",
+        include_str!("../../scenes/grow.toml"),
+    ),
 ];
 
 /// Where the runs go, under the figures' directory.
@@ -32,26 +48,57 @@ pub struct FiguresError {
 }
 
 fn failed(message: impl Into<String>) -> FiguresError {
-    FiguresError { bad_input: false, message: message.into() }
+    FiguresError {
+        bad_input: false,
+        message: message.into(),
+    }
 }
 
 /// Run the scenes into `out/data/` (unless `replot`: then draw from the data there) and
 /// draw the figures into `out`. `progress(line)` reports each finished run.
-pub fn make(out: &Path, jobs: usize, replot: bool, cancel: &AtomicBool, progress: &(dyn Fn(&str) + Sync)) -> Result<Vec<Written>, FiguresError> {
+pub fn make(
+    out: &Path,
+    jobs: usize,
+    replot: bool,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Written>, FiguresError> {
     let data = out.join(DATA_DIR);
     if replot {
         if !data.is_dir() {
-            return Err(FiguresError { bad_input: true, message: format!("{}: no data to replot (run `eyeshell figures --out {}` first)", data.display(), out.display()) });
+            return Err(FiguresError {
+                bad_input: true,
+                message: format!(
+                    "{}: no data to replot (run `eyeshell figures --out {}` first)",
+                    data.display(),
+                    out.display()
+                ),
+            });
         }
     } else {
-        rundir::fresh_dir(out).map_err(|e| FiguresError { bad_input: e.is_refusal(), message: e.to_string() })?;
+        rundir::fresh_dir(out).map_err(|e| FiguresError {
+            bad_input: e.is_refusal(),
+            message: e.to_string(),
+        })?;
         // Marks the directory as eyeshell's from the start, so an interrupted run is replaced.
-        write(&out.join(rundir::SUMMARY_FILE), b"{\n  \"figures\": [],\n  \"status\": \"running\"\n}\n")?;
+        write(
+            &out.join(rundir::SUMMARY_FILE),
+            b"{\n  \"figures\": [],\n  \"status\": \"running\"\n}\n",
+        )?;
         for (name, file, text) in SCENES {
-            let sweep = Sweep::from_toml_str(text, file, &[]).map_err(|e| failed(format!("built-in scene {e}")))?;
-            let options = SweepOptions { jobs, resume: false, cancel };
+            let sweep = Sweep::from_toml_str(text, file, &[])
+                .map_err(|e| failed(format!("built-in scene {e}")))?;
+            let options = SweepOptions {
+                jobs,
+                resume: false,
+                cancel,
+            };
             let report = run_sweep(&sweep, &data.join(name), &options, &|r, n, total| {
-                progress(&format!("{name} [{n}/{total}] {} {}", r.name, r.status_text()));
+                progress(&format!(
+                    "{name} [{n}/{total}] {} {}",
+                    r.name,
+                    r.status_text()
+                ));
             })
             .map_err(|e| failed(e.to_string()))?;
             if let Some(r) = report.failed().next() {
@@ -59,10 +106,17 @@ pub fn make(out: &Path, jobs: usize, replot: bool, cancel: &AtomicBool, progress
                     RunStatus::Failed(m) => m.clone(),
                     _ => String::new(),
                 };
-                return Err(failed(format!("{file}: run {} failed: {why} (its output is in {})", r.name, data.join(name).join(&r.dir).display())));
+                return Err(failed(format!(
+                    "{file}: run {} failed: {why} (its output is in {})",
+                    r.name,
+                    data.join(name).join(&r.dir).display()
+                )));
             }
             if report.interrupted {
-                return Err(failed(format!("interrupted during {file}: the runs so far are in {}", data.display())));
+                return Err(failed(format!(
+                    "interrupted during {file}: the runs so far are in {}",
+                    data.display()
+                )));
             }
         }
     }
@@ -84,7 +138,12 @@ pub fn make(out: &Path, jobs: usize, replot: bool, cancel: &AtomicBool, progress
         "index": INDEX_FILE,
         "status": "ok",
     });
-    write(&out.join(rundir::SUMMARY_FILE), serde_json::to_string_pretty(&summary).unwrap_or_default().as_bytes())?;
+    write(
+        &out.join(rundir::SUMMARY_FILE),
+        serde_json::to_string_pretty(&summary)
+            .unwrap_or_default()
+            .as_bytes(),
+    )?;
     Ok(figures)
 }
 

@@ -29,11 +29,17 @@ pub enum StudyError {
     #[error("{what}: {source}")]
     Elastic { what: String, source: BvpError },
     #[error("{what}: {source}")]
-    Growth { what: String, source: Box<GrowthError> },
+    Growth {
+        what: String,
+        source: Box<GrowthError>,
+    },
     #[error("{0}")]
     Invalid(String),
     #[error("{}: {source}", path.display())]
-    Io { path: std::path::PathBuf, source: std::io::Error },
+    Io {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
 }
 
 /// One solve, or one growth run to t_end, with what it cost.
@@ -47,12 +53,27 @@ pub struct Run {
 }
 
 /// Solve the elastic problem, or run the growth when `growth` is given, and time it.
-pub fn run(params: &Params, solver: &SolverSettings, growth: Option<(&GrowthParams, &GrowthSettings)>, what: &str) -> Result<Run, StudyError> {
+pub fn run(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: Option<(&GrowthParams, &GrowthSettings)>,
+    what: &str,
+) -> Result<Run, StudyError> {
     let start = Instant::now();
     match growth {
         None => {
-            let solution = eyeshell::bvp::solve(params, solver, None).map_err(|source| StudyError::Elastic { what: what.into(), source })?;
-            Ok(Run { solution, axial_length: None, seconds: start.elapsed().as_secs_f64(), growth: None })
+            let solution = eyeshell::bvp::solve(params, solver, None).map_err(|source| {
+                StudyError::Elastic {
+                    what: what.into(),
+                    source,
+                }
+            })?;
+            Ok(Run {
+                solution,
+                axial_length: None,
+                seconds: start.elapsed().as_secs_f64(),
+                growth: None,
+            })
         }
         Some((g, s)) => {
             let t_end = g.t_end;
@@ -61,21 +82,37 @@ pub fn run(params: &Params, solver: &SolverSettings, growth: Option<(&GrowthPara
                 params,
                 solver,
                 g,
-                &GrowthSettings { output_times: vec![], ..s.clone() },
+                &GrowthSettings {
+                    output_times: vec![],
+                    ..s.clone()
+                },
                 &mut |sys, t, p| {
                     if t == t_end {
                         let snap = sys.snapshot(t, p)?;
-                        let sol = sys.elastic.solution().map_err(eyeshell::growth::system::RhsError::from)?;
+                        let sol = sys
+                            .elastic
+                            .solution()
+                            .map_err(eyeshell::growth::system::RhsError::from)?;
                         last = Some((sol, snap.series.axial_length));
                     }
                     Ok(())
                 },
                 &mut |_| {},
             )
-            .map_err(|source| StudyError::Growth { what: what.into(), source: Box::new(source) })?;
+            .map_err(|source| StudyError::Growth {
+                what: what.into(),
+                source: Box::new(source),
+            })?;
             let seconds = start.elapsed().as_secs_f64();
-            let (solution, axial) = last.ok_or_else(|| StudyError::Invalid(format!("{what}: the run gave no state at t_end")))?;
-            Ok(Run { solution, axial_length: Some(axial), seconds, growth: Some(stats) })
+            let (solution, axial) = last.ok_or_else(|| {
+                StudyError::Invalid(format!("{what}: the run gave no state at t_end"))
+            })?;
+            Ok(Run {
+                solution,
+                axial_length: Some(axial),
+                seconds,
+                growth: Some(stats),
+            })
         }
     }
 }
@@ -84,7 +121,14 @@ pub fn run(params: &Params, solver: &SolverSettings, growth: Option<(&GrowthPara
 pub fn sample(sol: &Solution, points: &[f64], what: &str) -> Result<Vec<[f64; 5]>, StudyError> {
     points
         .iter()
-        .map(|&x| sol.at(x).map(|r| five(&r)).map_err(|source| StudyError::Elastic { what: what.into(), source }))
+        .map(|&x| {
+            sol.at(x)
+                .map(|r| five(&r))
+                .map_err(|source| StudyError::Elastic {
+                    what: what.into(),
+                    source,
+                })
+        })
         .collect()
 }
 
@@ -106,7 +150,15 @@ pub fn worst(e: &[f64; 5]) -> f64 {
 
 /// `count` evenly spaced material points on [lo, hi].
 pub fn points(lo: f64, hi: f64, count: usize) -> Vec<f64> {
-    (0..count).map(|k| if k + 1 == count { hi } else { lo + (hi - lo) * k as f64 / (count - 1) as f64 }).collect()
+    (0..count)
+        .map(|k| {
+            if k + 1 == count {
+                hi
+            } else {
+                lo + (hi - lo) * k as f64 / (count - 1) as f64
+            }
+        })
+        .collect()
 }
 
 /// Write a CSV table (header, then rows of already formatted cells) atomically.
@@ -116,8 +168,10 @@ pub fn write_csv(path: &Path, header: &[String], rows: &[Vec<String>]) -> Result
         text.push_str(&r.join(","));
         text.push('\n');
     }
-    eyeshell::rundir::write_atomic(path, text.as_bytes())
-        .map_err(|source| StudyError::Io { path: path.to_path_buf(), source })
+    eyeshell::rundir::write_atomic(path, text.as_bytes()).map_err(|source| StudyError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// A number for a CSV cell (shortest round-trip form; empty for NaN).

@@ -25,8 +25,18 @@ pub struct Change {
 
 /// The published settings of the const scene (docs/MODEL.md §8).
 pub fn published() -> (Params, SolverSettings, GrowthParams, GrowthSettings) {
-    let solver = SolverSettings { nodes: 501, epsilon: 1e-3, newton_tol: 1e-10, ..SolverSettings::default() };
-    let settings = GrowthSettings { integrator: Integrator::Euler, steps: 200, output_times: vec![], ..GrowthSettings::default() };
+    let solver = SolverSettings {
+        nodes: 501,
+        epsilon: 1e-3,
+        newton_tol: 1e-10,
+        ..SolverSettings::default()
+    };
+    let settings = GrowthSettings {
+        integrator: Integrator::Euler,
+        steps: 200,
+        output_times: vec![],
+        ..GrowthSettings::default()
+    };
     (Params::default(), solver, GrowthParams::default(), settings)
 }
 
@@ -40,7 +50,12 @@ pub struct Refine {
 }
 
 impl Refine {
-    pub const ALL: Refine = Refine { nodes: true, time: true, tolerance: true, epsilon: true };
+    pub const ALL: Refine = Refine {
+        nodes: true,
+        time: true,
+        tolerance: true,
+        epsilon: true,
+    };
 
     fn apply(self, s: &SolverSettings, g: &GrowthSettings) -> (SolverSettings, GrowthSettings) {
         let mut s = *s;
@@ -68,7 +83,14 @@ impl Refine {
 }
 
 /// Relative change at t_end of κ, α_s, r, θ between `(solver, settings)` and its refinement.
-pub fn change(label: &str, p: &Params, solver: &SolverSettings, g: &GrowthParams, settings: &GrowthSettings, refine: Refine) -> Result<Change, StudyError> {
+pub fn change(
+    label: &str,
+    p: &Params,
+    solver: &SolverSettings,
+    g: &GrowthParams,
+    settings: &GrowthSettings,
+    refine: Refine,
+) -> Result<Change, StudyError> {
     let base = run(p, solver, Some((g, settings)), label)?;
     let (rs, rg) = refine.apply(solver, settings);
     let refined = run(p, &rs, Some((g, &rg)), &format!("{label}, refined"))?;
@@ -78,27 +100,80 @@ pub fn change(label: &str, p: &Params, solver: &SolverSettings, g: &GrowthParams
     // κ, α_s, r, θ are fields 0..4 of the sample.
     let relative = std::array::from_fn(|c| {
         let scale = a.iter().map(|v| v[c].abs()).fold(0.0, f64::max);
-        a.iter().zip(&b).map(|(x, y)| (x[c] - y[c]).abs()).fold(0.0, f64::max) / scale
+        a.iter()
+            .zip(&b)
+            .map(|(x, y)| (x[c] - y[c]).abs())
+            .fold(0.0, f64::max)
+            / scale
     });
-    Ok(Change { label: label.into(), relative, seconds: base.seconds, refined_seconds: refined.seconds })
+    Ok(Change {
+        label: label.into(),
+        relative,
+        seconds: base.seconds,
+        refined_seconds: refined.seconds,
+    })
 }
 
 /// The whole check: Euler at the published settings refined all at once and one knob at a
 /// time, then CVODE at each of `rtols` refined all at once.
 pub fn check(rtols: &[f64]) -> Result<Vec<Change>, StudyError> {
     let (p, s, g, e) = published();
-    let mut out = vec![change("euler 200, all refined", &p, &s, &g, &e, Refine::ALL)?];
+    let mut out = vec![change(
+        "euler 200, all refined",
+        &p,
+        &s,
+        &g,
+        &e,
+        Refine::ALL,
+    )?];
     for (label, r) in [
-        ("euler 200, nodes x2", Refine { nodes: true, ..Refine::default() }),
-        ("euler 200, steps x2", Refine { time: true, ..Refine::default() }),
-        ("euler 200, newton tol /100", Refine { tolerance: true, ..Refine::default() }),
-        ("euler 200, epsilon /10", Refine { epsilon: true, ..Refine::default() }),
+        (
+            "euler 200, nodes x2",
+            Refine {
+                nodes: true,
+                ..Refine::default()
+            },
+        ),
+        (
+            "euler 200, steps x2",
+            Refine {
+                time: true,
+                ..Refine::default()
+            },
+        ),
+        (
+            "euler 200, newton tol /100",
+            Refine {
+                tolerance: true,
+                ..Refine::default()
+            },
+        ),
+        (
+            "euler 200, epsilon /10",
+            Refine {
+                epsilon: true,
+                ..Refine::default()
+            },
+        ),
     ] {
         out.push(change(label, &p, &s, &g, &e, r)?);
     }
     for &rtol in rtols {
-        let c = GrowthSettings { integrator: Integrator::Cvode, rtol, atol: rtol * 1e-2, output_times: vec![], ..GrowthSettings::default() };
-        out.push(change(&format!("cvode rtol {rtol:e}, all refined"), &p, &s, &g, &c, Refine::ALL)?);
+        let c = GrowthSettings {
+            integrator: Integrator::Cvode,
+            rtol,
+            atol: rtol * 1e-2,
+            output_times: vec![],
+            ..GrowthSettings::default()
+        };
+        out.push(change(
+            &format!("cvode rtol {rtol:e}, all refined"),
+            &p,
+            &s,
+            &g,
+            &c,
+            Refine::ALL,
+        )?);
     }
     Ok(out)
 }
@@ -106,7 +181,17 @@ pub fn check(rtols: &[f64]) -> Result<Vec<Change>, StudyError> {
 /// The check as CSV, with the paper's figures as the first row.
 pub fn table(changes: &[Change]) -> (Vec<String>, Vec<Vec<String>>) {
     use super::cell;
-    let header = ["run", "kappa", "alpha_s", "r", "theta", "seconds", "refined_seconds"].map(String::from).to_vec();
+    let header = [
+        "run",
+        "kappa",
+        "alpha_s",
+        "r",
+        "theta",
+        "seconds",
+        "refined_seconds",
+    ]
+    .map(String::from)
+    .to_vec();
     let mut rows = vec![{
         let mut r = vec!["paper (bvp4c 1e-6, 501 nodes, Euler 200)".to_string()];
         r.extend(PAPER.iter().map(|&x| cell(x)));

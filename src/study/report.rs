@@ -2,10 +2,10 @@
 //! for the command line (`eyeshell converge`, `wpd`, `refinement`).
 
 use super::converge::{self, Knob, Ladder};
-use super::{refinement, worst, write_csv, wpd, StudyError, FIELDS};
-use eyeshell_plot::{self as plot, Figure, Scale, Series, SeriesStyle};
+use super::{refinement, worst, wpd, write_csv, StudyError, FIELDS};
 use eyeshell::growth::{GrowthSettings, Integrator};
 use eyeshell::scene::Scene;
+use eyeshell_plot::{self as plot, Figure, Scale, Series, SeriesStyle};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -24,11 +24,26 @@ fn write_ladder(l: &Ladder, dir: &Path, stem: &str) -> Result<(), StudyError> {
         Knob::Steps => ("time step (t_end / steps)", &l.scale),
     };
     let errors = l.errors();
-    let against = if l.err_richardson.is_some() { "Richardson extrapolation" } else { "finest rung" };
-    let mut fig = Figure::new(format!("Convergence in {} (error against the {against})", l.knob.name()), x_label, "largest error")
-        .scales(Scale::Log10, Scale::Log10);
+    let against = if l.err_richardson.is_some() {
+        "Richardson extrapolation"
+    } else {
+        "finest rung"
+    };
+    let mut fig = Figure::new(
+        format!(
+            "Convergence in {} (error against the {against})",
+            l.knob.name()
+        ),
+        x_label,
+        "largest error",
+    )
+    .scales(Scale::Log10, Scale::Log10);
     for (c, name) in FIELDS.iter().enumerate() {
-        let pts = errors.iter().zip(xs.iter()).map(|(e, &x)| (x, e[c])).collect();
+        let pts = errors
+            .iter()
+            .zip(xs.iter())
+            .map(|(e, &x)| (x, e[c]))
+            .collect();
         fig = fig.with(Series::new(*name, pts, SeriesStyle::LineAndMarkers));
     }
     plot::write(&fig, &dir.join(stem)).map_err(plot_error)?;
@@ -36,45 +51,113 @@ fn write_ladder(l: &Ladder, dir: &Path, stem: &str) -> Result<(), StudyError> {
 }
 
 fn describe_ladder(l: &Ladder, text: &mut String) {
-    let e: Vec<String> = l.errors().iter().map(|e| format!("{:.2e}", worst(e))).collect();
+    let e: Vec<String> = l
+        .errors()
+        .iter()
+        .map(|e| format!("{:.2e}", worst(e)))
+        .collect();
     let o: Vec<String> = l.worst_orders().iter().map(|o| format!("{o:.2}")).collect();
-    let v: Vec<String> = l.values.iter().map(|v| if l.knob == Knob::Nodes { format!("{v}") } else { format!("{v:e}") }).collect();
-    let _ = writeln!(text, "  {:<10} {}\n  {:<10} {}\n  {:<10} {}", l.knob.name(), v.join(", "), "error", e.join(", "), "order", o.join(", "));
+    let v: Vec<String> = l
+        .values
+        .iter()
+        .map(|v| {
+            if l.knob == Knob::Nodes {
+                format!("{v}")
+            } else {
+                format!("{v:e}")
+            }
+        })
+        .collect();
+    let _ = writeln!(
+        text,
+        "  {:<10} {}\n  {:<10} {}\n  {:<10} {}",
+        l.knob.name(),
+        v.join(", "),
+        "error",
+        e.join(", "),
+        "order",
+        o.join(", ")
+    );
 }
 
 /// `eyeshell converge`: ladders in N, ε and the tolerance on a scene (growth with `growth`).
-pub fn converge(scene: &Scene, nodes: &[usize], growth: bool, dir: &Path) -> Result<String, StudyError> {
+pub fn converge(
+    scene: &Scene,
+    nodes: &[usize],
+    growth: bool,
+    dir: &Path,
+) -> Result<String, StudyError> {
     let g = match (growth, &scene.growth) {
         (true, Some(g)) => Some((g, &scene.growth_settings)),
-        (true, None) => return Err(StudyError::Invalid("--growth needs a scene with a [growth] section".into())),
+        (true, None) => {
+            return Err(StudyError::Invalid(
+                "--growth needs a scene with a [growth] section".into(),
+            ))
+        }
         (false, _) => None,
     };
     let (p, s) = (&scene.params, &scene.solver);
     let mut text = String::new();
     let nodes: Vec<f64> = nodes.iter().map(|&n| n as f64).collect();
     let eps = s.epsilon;
-    let tolerances: Vec<f64> = if g.is_some() { vec![1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8] } else { vec![1e-4, 1e-6, 1e-8, 1e-10, 1e-12] };
+    let tolerances: Vec<f64> = if g.is_some() {
+        vec![1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
+    } else {
+        vec![1e-4, 1e-6, 1e-8, 1e-10, 1e-12]
+    };
     let mut ladders = vec![
-        (Knob::Nodes, nodes, "converge_nodes".to_string(), g.map(|(_, s)| s.clone())),
-        (Knob::Epsilon, vec![10.0 * eps, eps, eps / 10.0, eps / 100.0], "converge_epsilon".to_string(), g.map(|(_, s)| s.clone())),
+        (
+            Knob::Nodes,
+            nodes,
+            "converge_nodes".to_string(),
+            g.map(|(_, s)| s.clone()),
+        ),
+        (
+            Knob::Epsilon,
+            vec![10.0 * eps, eps, eps / 10.0, eps / 100.0],
+            "converge_epsilon".to_string(),
+            g.map(|(_, s)| s.clone()),
+        ),
     ];
     match g {
         // Growth: each time integrator on its own knob (IDA and CVODE by tolerance, the
         // published Euler by step count).
         Some((_, gs)) => {
             for integrator in [Integrator::Ida, Integrator::Cvode] {
-                let s = GrowthSettings { integrator, ..gs.clone() };
-                ladders.push((Knob::Tolerance, tolerances.clone(), format!("converge_tolerance_{}", integrator.name()), Some(s)));
+                let s = GrowthSettings {
+                    integrator,
+                    ..gs.clone()
+                };
+                ladders.push((
+                    Knob::Tolerance,
+                    tolerances.clone(),
+                    format!("converge_tolerance_{}", integrator.name()),
+                    Some(s),
+                ));
             }
-            ladders.push((Knob::Steps, vec![50.0, 100.0, 200.0, 400.0, 800.0], "converge_steps_euler".to_string(), Some(gs.clone())));
+            ladders.push((
+                Knob::Steps,
+                vec![50.0, 100.0, 200.0, 400.0, 800.0],
+                "converge_steps_euler".to_string(),
+                Some(gs.clone()),
+            ));
         }
-        None => ladders.push((Knob::Tolerance, tolerances, "converge_tolerance".to_string(), None)),
+        None => ladders.push((
+            Knob::Tolerance,
+            tolerances,
+            "converge_tolerance".to_string(),
+            None,
+        )),
     }
     for (knob, values, stem, settings) in ladders {
         let growth = g.map(|(gp, _)| gp).zip(settings.as_ref());
         let l = converge::ladder(p, s, growth, knob, &values)?;
         write_ladder(&l, dir, &stem)?;
-        let _ = writeln!(text, "{}:", stem.trim_start_matches("converge_").replace('_', " "));
+        let _ = writeln!(
+            text,
+            "{}:",
+            stem.trim_start_matches("converge_").replace('_', " ")
+        );
         describe_ladder(&l, &mut text);
     }
     Ok(text)
@@ -86,31 +169,101 @@ pub fn wpd(scene: &Scene, dir: &Path) -> Result<String, StudyError> {
     let mut text = String::new();
     let nodes = [26, 51, 101, 201, 401, 801, 1601];
     let curves = wpd::elastic(p, s, &nodes)?;
-    write_curves(&curves, dir, "wpd_elastic", "elastic solve: largest field error against HS on a 4× finer mesh", false)?;
-    describe_winners(&curves, &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12], false, &mut text, "elastic");
+    write_curves(
+        &curves,
+        dir,
+        "wpd_elastic",
+        "elastic solve: largest field error against HS on a 4× finer mesh",
+        false,
+    )?;
+    describe_winners(
+        &curves,
+        &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
+        false,
+        &mut text,
+        "elastic",
+    );
     if let Some(g) = &scene.growth {
-        let curves = wpd::growth(p, s, g, &scene.growth_settings, &[50, 100, 200, 400, 800], &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8], 1e-10)?;
-        write_curves(&curves, dir, "wpd_growth", "growth to t_end: largest field error against CVODE rtol 1e-10", false)?;
-        write_curves(&curves, dir, "wpd_growth_axial", "growth to t_end: axial-length error against CVODE rtol 1e-10", true)?;
-        describe_winners(&curves, &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6], true, &mut text, "growth (axial length)");
+        let curves = wpd::growth(
+            p,
+            s,
+            g,
+            &scene.growth_settings,
+            &[50, 100, 200, 400, 800],
+            &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
+            1e-10,
+        )?;
+        write_curves(
+            &curves,
+            dir,
+            "wpd_growth",
+            "growth to t_end: largest field error against CVODE rtol 1e-10",
+            false,
+        )?;
+        write_curves(
+            &curves,
+            dir,
+            "wpd_growth_axial",
+            "growth to t_end: axial-length error against CVODE rtol 1e-10",
+            true,
+        )?;
+        describe_winners(
+            &curves,
+            &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6],
+            true,
+            &mut text,
+            "growth (axial length)",
+        );
     }
     Ok(text)
 }
 
-fn write_curves(curves: &[wpd::Curve], dir: &Path, stem: &str, title: &str, axial: bool) -> Result<(), StudyError> {
+fn write_curves(
+    curves: &[wpd::Curve],
+    dir: &Path,
+    stem: &str,
+    title: &str,
+    axial: bool,
+) -> Result<(), StudyError> {
     let (header, rows) = wpd::table(curves);
     write_csv(&dir.join(format!("{stem}.csv")), &header, &rows)?;
-    let mut fig = Figure::new(title, if axial { "axial-length error (mm)" } else { "largest error" }, "seconds").scales(Scale::Log10, Scale::Log10);
+    let mut fig = Figure::new(
+        title,
+        if axial {
+            "axial-length error (mm)"
+        } else {
+            "largest error"
+        },
+        "seconds",
+    )
+    .scales(Scale::Log10, Scale::Log10);
     for c in curves {
-        let pts = c.points.iter().map(|p| (if axial { p.axial_error } else { p.error }, p.seconds)).collect();
-        fig = fig.with(Series::new(c.method.clone(), pts, SeriesStyle::LineAndMarkers));
+        let pts = c
+            .points
+            .iter()
+            .map(|p| (if axial { p.axial_error } else { p.error }, p.seconds))
+            .collect();
+        fig = fig.with(Series::new(
+            c.method.clone(),
+            pts,
+            SeriesStyle::LineAndMarkers,
+        ));
     }
     plot::write(&fig, &dir.join(stem)).map_err(plot_error)?;
     Ok(())
 }
 
-fn describe_winners(curves: &[wpd::Curve], targets: &[f64], axial: bool, text: &mut String, what: &str) {
-    let _ = writeln!(text, "{what}: the cheapest method that reaches each accuracy");
+fn describe_winners(
+    curves: &[wpd::Curve],
+    targets: &[f64],
+    axial: bool,
+    text: &mut String,
+    what: &str,
+) {
+    let _ = writeln!(
+        text,
+        "{what}: the cheapest method that reaches each accuracy"
+    );
     for (target, method, t) in wpd::winners(curves, targets, axial) {
         let _ = writeln!(text, "  error ≤ {target:.0e}: {method} ({:.4} s)", t);
     }
@@ -121,13 +274,26 @@ pub fn refinement(dir: &Path) -> Result<String, StudyError> {
     let changes = refinement::check(&[1e-4, 1e-6, 1e-8])?;
     let (header, rows) = refinement::table(&changes);
     write_csv(&dir.join("refinement.csv"), &header, &rows)?;
-    let mut text = format!("{:<34} {:>9} {:>9} {:>9} {:>9} {:>8}\n", "relative change at t = 1", "kappa", "alpha_s", "r", "theta", "seconds");
+    let mut text = format!(
+        "{:<34} {:>9} {:>9} {:>9} {:>9} {:>8}\n",
+        "relative change at t = 1", "kappa", "alpha_s", "r", "theta", "seconds"
+    );
     for r in &rows {
-        let _ = writeln!(text, "{:<34} {:>9} {:>9} {:>9} {:>9} {:>8}", r[0], short(&r[1]), short(&r[2]), short(&r[3]), short(&r[4]), short(&r[5]));
+        let _ = writeln!(
+            text,
+            "{:<34} {:>9} {:>9} {:>9} {:>9} {:>8}",
+            r[0],
+            short(&r[1]),
+            short(&r[2]),
+            short(&r[3]),
+            short(&r[4]),
+            short(&r[5])
+        );
     }
     Ok(text)
 }
 
 fn short(cell: &str) -> String {
-    cell.parse::<f64>().map_or(String::new(), |x| format!("{x:.2e}"))
+    cell.parse::<f64>()
+        .map_or(String::new(), |x| format!("{x:.2e}"))
 }

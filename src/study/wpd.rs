@@ -30,7 +30,11 @@ pub struct WorkPoint {
 
 /// Repeat short runs so that timings are not a single noisy sample: the least of up to
 /// `repeats` runs, stopping once `budget` seconds are spent.
-fn best_of<T>(mut f: impl FnMut() -> Result<(T, f64), StudyError>, repeats: usize, budget: f64) -> Result<(T, f64), StudyError> {
+fn best_of<T>(
+    mut f: impl FnMut() -> Result<(T, f64), StudyError>,
+    repeats: usize,
+    budget: f64,
+) -> Result<(T, f64), StudyError> {
     let (mut best_val, mut best) = f()?;
     let mut spent = best;
     for _ in 1..repeats {
@@ -52,12 +56,25 @@ fn best_of<T>(mut f: impl FnMut() -> Result<(T, f64), StudyError>, repeats: usiz
 /// last rung halved twice more (Newton tol 1e-12).
 /// Every run solves Newton to 1e-12, so that the error measured is the discretisation's (at
 /// the default 1e-10 Newton leaves about 1e-9 in Q, which would floor the finest rungs).
-pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Result<Vec<Curve>, StudyError> {
-    let solver = &SolverSettings { newton_tol: solver.newton_tol.min(1e-12), ..*solver };
+pub fn elastic(
+    params: &Params,
+    solver: &SolverSettings,
+    nodes: &[usize],
+) -> Result<Vec<Curve>, StudyError> {
+    let solver = &SolverSettings {
+        newton_tol: solver.newton_tol.min(1e-12),
+        ..*solver
+    };
     // A self-similar ladder: the first rung's mesh, then every interval halved again and
     // again, so that each error expansion keeps its coefficients from rung to rung (the
     // ladder by solver.nodes re-grades the pole at every N) and orders come out clean.
-    let mut meshes = vec![eyeshell::bvp::solve::mesh_of(params, &SolverSettings { nodes: nodes[0], ..*solver })];
+    let mut meshes = vec![eyeshell::bvp::solve::mesh_of(
+        params,
+        &SolverSettings {
+            nodes: nodes[0],
+            ..*solver
+        },
+    )];
     for _ in 1..nodes.len() {
         meshes.push(meshes.last().unwrap().halved());
     }
@@ -65,9 +82,15 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
     // against Hermite–Simpson two halvings beyond the last rung.
     let pts = meshes[0].nodes.clone();
     let reference_mesh = meshes.last().unwrap().halved().halved();
-    let tight = SolverSettings { scheme: Scheme::HermiteSimpson, ..*solver };
+    let tight = SolverSettings {
+        scheme: Scheme::HermiteSimpson,
+        ..*solver
+    };
     let reference = eyeshell::bvp::solve::solve_on_mesh(params, &tight, reference_mesh, None)
-        .map_err(|source| StudyError::Elastic { what: "reference".into(), source })?;
+        .map_err(|source| StudyError::Elastic {
+            what: "reference".into(),
+            source,
+        })?;
     let ref_vals = sample(&reference, &pts, "reference")?;
     let mut curves = vec![];
     let mut hs_runs = vec![];
@@ -76,7 +99,11 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
             Scheme::Trapezoid => "trapezoid",
             Scheme::HermiteSimpson => "hermite-simpson",
         };
-        let mut c = Curve { method: name.into(), knob: "nodes", points: vec![] };
+        let mut c = Curve {
+            method: name.into(),
+            knob: "nodes",
+            points: vec![],
+        };
         let s = SolverSettings { scheme, ..*solver };
         for mesh in &meshes {
             let what = format!("{scheme:?} on {} nodes", mesh.len());
@@ -84,14 +111,22 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
                 || {
                     let start = std::time::Instant::now();
                     let sol = eyeshell::bvp::solve::solve_on_mesh(params, &s, mesh.clone(), None)
-                        .map_err(|source| StudyError::Elastic { what: what.clone(), source })?;
+                        .map_err(|source| StudyError::Elastic {
+                        what: what.clone(),
+                        source,
+                    })?;
                     let secs = start.elapsed().as_secs_f64();
                     Ok((sample(&sol, &pts, &what)?, secs))
                 },
                 5,
                 1.0,
             )?;
-            c.points.push(WorkPoint { value: mesh.len() as f64, error: worst(&max_diff(&vals, &ref_vals)), axial_error: f64::NAN, seconds });
+            c.points.push(WorkPoint {
+                value: mesh.len() as f64,
+                error: worst(&max_diff(&vals, &ref_vals)),
+                axial_error: f64::NAN,
+                seconds,
+            });
             if scheme == Scheme::HermiteSimpson {
                 hs_runs.push((mesh.len(), vals, seconds));
             }
@@ -99,11 +134,24 @@ pub fn elastic(params: &Params, solver: &SolverSettings, nodes: &[usize]) -> Res
         curves.push(c);
     }
     // Richardson: Hermite–Simpson on consecutive rungs, y_f + (y_f − y_c)/15: order 6.
-    let mut rich = Curve { method: "hermite-simpson + Richardson".into(), knob: "nodes", points: vec![] };
+    let mut rich = Curve {
+        method: "hermite-simpson + Richardson".into(),
+        knob: "nodes",
+        points: vec![],
+    };
     for w in hs_runs.windows(2) {
         let ((_, coarse, t1), (n, fine, t2)) = (&w[0], &w[1]);
-        let extrapolated: Vec<[f64; 5]> = coarse.iter().zip(fine).map(|(c, f)| std::array::from_fn(|j| f[j] + (f[j] - c[j]) / 15.0)).collect();
-        rich.points.push(WorkPoint { value: *n as f64, error: worst(&max_diff(&extrapolated, &ref_vals)), axial_error: f64::NAN, seconds: t1 + t2 });
+        let extrapolated: Vec<[f64; 5]> = coarse
+            .iter()
+            .zip(fine)
+            .map(|(c, f)| std::array::from_fn(|j| f[j] + (f[j] - c[j]) / 15.0))
+            .collect();
+        rich.points.push(WorkPoint {
+            value: *n as f64,
+            error: worst(&max_diff(&extrapolated, &ref_vals)),
+            axial_error: f64::NAN,
+            seconds: t1 + t2,
+        });
     }
     curves.push(rich);
     Ok(curves)
@@ -120,7 +168,12 @@ pub fn growth(
     rtols: &[f64],
     reference_rtol: f64,
 ) -> Result<Vec<Curve>, StudyError> {
-    let tight = GrowthSettings { integrator: Integrator::Cvode, rtol: reference_rtol, atol: reference_rtol * 1e-2, ..settings.clone() };
+    let tight = GrowthSettings {
+        integrator: Integrator::Cvode,
+        rtol: reference_rtol,
+        atol: reference_rtol * 1e-2,
+        ..settings.clone()
+    };
     let reference = run(params, solver, Some((g, &tight)), "reference")?;
     let pts: Vec<f64> = reference.solution.mesh.nodes.clone();
     let ref_vals = sample(&reference.solution, &pts, "reference")?;
@@ -135,17 +188,40 @@ pub fn growth(
             seconds: r.seconds,
         })
     };
-    let mut euler = Curve { method: "euler".into(), knob: "steps", points: vec![] };
+    let mut euler = Curve {
+        method: "euler".into(),
+        knob: "steps",
+        points: vec![],
+    };
     for &n in steps {
-        let s = GrowthSettings { integrator: Integrator::Euler, steps: n, ..settings.clone() };
-        euler.points.push(measure(&s, n as f64, &format!("Euler {n} steps"))?);
+        let s = GrowthSettings {
+            integrator: Integrator::Euler,
+            steps: n,
+            ..settings.clone()
+        };
+        euler
+            .points
+            .push(measure(&s, n as f64, &format!("Euler {n} steps"))?);
     }
     let mut curves = vec![euler];
     for integrator in [Integrator::Cvode, Integrator::Ida] {
-        let mut c = Curve { method: integrator.name().into(), knob: "rtol", points: vec![] };
+        let mut c = Curve {
+            method: integrator.name().into(),
+            knob: "rtol",
+            points: vec![],
+        };
         for &rtol in rtols {
-            let s = GrowthSettings { integrator, rtol, atol: rtol * 1e-2, ..settings.clone() };
-            c.points.push(measure(&s, rtol, &format!("{} rtol {rtol:e}", integrator.name()))?);
+            let s = GrowthSettings {
+                integrator,
+                rtol,
+                atol: rtol * 1e-2,
+                ..settings.clone()
+            };
+            c.points.push(measure(
+                &s,
+                rtol,
+                &format!("{} rtol {rtol:e}", integrator.name()),
+            )?);
         }
         curves.push(c);
     }
@@ -163,7 +239,12 @@ pub fn winners(curves: &[Curve], targets: &[f64], axial: bool) -> Vec<(f64, Stri
                 .iter()
                 .filter_map(|c| {
                     // The cheapest point at or below the target.
-                    c.points.iter().filter(|p| err(p) <= target).map(|p| p.seconds).fold(None, |a: Option<f64>, t| Some(a.map_or(t, |a| a.min(t)))).map(|t| (c.method.clone(), t))
+                    c.points
+                        .iter()
+                        .filter(|p| err(p) <= target)
+                        .map(|p| p.seconds)
+                        .fold(None, |a: Option<f64>, t| Some(a.map_or(t, |a| a.min(t))))
+                        .map(|t| (c.method.clone(), t))
                 })
                 .min_by(|a, b| a.1.partial_cmp(&b.1).unwrap())
                 .map(|(m, t)| (target, m, t))
@@ -174,11 +255,22 @@ pub fn winners(curves: &[Curve], targets: &[f64], axial: bool) -> Vec<(f64, Stri
 /// All curves as one CSV table: method, knob, value, error, axial_error, seconds.
 pub fn table(curves: &[Curve]) -> (Vec<String>, Vec<Vec<String>>) {
     use super::cell;
-    let header = ["method", "knob", "value", "error", "axial_error", "seconds"].map(String::from).to_vec();
+    let header = ["method", "knob", "value", "error", "axial_error", "seconds"]
+        .map(String::from)
+        .to_vec();
     let rows = curves
         .iter()
         .flat_map(|c| {
-            c.points.iter().map(move |p| vec![c.method.clone(), c.knob.to_string(), cell(p.value), cell(p.error), cell(p.axial_error), cell(p.seconds)])
+            c.points.iter().map(move |p| {
+                vec![
+                    c.method.clone(),
+                    c.knob.to_string(),
+                    cell(p.value),
+                    cell(p.error),
+                    cell(p.axial_error),
+                    cell(p.seconds),
+                ]
+            })
         })
         .collect();
     (header, rows)

@@ -2,9 +2,8 @@
 //! detects one value perturbed by 1e-6 (in a .mat file, a growth snapshot and a run's CSV),
 //! interpolates to the reference's points, and refuses bad input with exit 2.
 
-
-use eyeshell_cli::interop::mat::{self, MatValue};
 use crate::support::*;
+use eyeshell_cli::interop::mat::{self, MatValue};
 
 fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
     std::fs::create_dir_all(to).unwrap();
@@ -31,14 +30,38 @@ fn compare_accepts_the_same_and_detects_a_perturbed_field() {
     let (solve, grow) = small_runs(dir.path());
     let solve_mat = dir.path().join("solve.mat");
     let grow_mat = dir.path().join("grow-mat");
-    ok(&["export", s(&solve), "--mat", s(&solve_mat), "--compress", "--quiet"]);
-    ok(&["export", s(&grow), "--mat", s(&grow_mat), "--npz", s(&dir.path().join("grow-npz")), "--quiet"]);
+    ok(&[
+        "export",
+        s(&solve),
+        "--mat",
+        s(&solve_mat),
+        "--compress",
+        "--quiet",
+    ]);
+    ok(&[
+        "export",
+        s(&grow),
+        "--mat",
+        s(&grow_mat),
+        "--npz",
+        s(&dir.path().join("grow-npz")),
+        "--quiet",
+    ]);
 
     // Unperturbed: every reference kind passes, with zero differences.
     let r = ok(&["compare", s(&solve), s(&solve_mat)]);
-    assert!(r.stdout.contains("kappa") && r.stdout.contains(" ok"), "{}", r.stdout);
+    assert!(
+        r.stdout.contains("kappa") && r.stdout.contains(" ok"),
+        "{}",
+        r.stdout
+    );
     assert!(!r.stdout.contains("FAIL"), "{}", r.stdout);
-    ok(&["compare", s(&grow), s(&grow_mat), s(&dir.path().join("grow-npz"))]);
+    ok(&[
+        "compare",
+        s(&grow),
+        s(&grow_mat),
+        s(&dir.path().join("grow-npz")),
+    ]);
     let copy = dir.path().join("copy");
     copy_dir(&solve, &copy);
     ok(&["compare", s(&solve), s(&copy), "--tol", "0", "--rtol", "0"]);
@@ -54,7 +77,11 @@ fn compare_accepts_the_same_and_detects_a_perturbed_field() {
     let r = eyeshell(&["compare", s(&solve), s(&bad)]);
     assert_fails(&r, 1, "kappa");
     let sigma = column(&solve.join("fields.csv"), "Sigma")[5];
-    let kappa_line = r.stdout.lines().find(|l| l.trim_start().starts_with("kappa ")).unwrap();
+    let kappa_line = r
+        .stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("kappa "))
+        .unwrap();
     assert!(kappa_line.contains("FAIL (1 point)"), "{kappa_line}");
     assert!(kappa_line.contains("1.000e-6"), "{kappa_line}");
     assert!(kappa_line.contains(&format!("{sigma:.6}")), "{kappa_line}");
@@ -66,12 +93,20 @@ fn compare_accepts_the_same_and_detects_a_perturbed_field() {
     let snaps = snapshots(&grow);
     let name = format!("{}.mat", snaps[2].0.file_stem().unwrap().to_str().unwrap());
     let mut vars = mat::read(&grow_mat.join(&name)).unwrap();
-    perturb(&mut vars.iter_mut().find(|(n, _)| n == "rho").unwrap().1, 10, 1e-6);
+    perturb(
+        &mut vars.iter_mut().find(|(n, _)| n == "rho").unwrap().1,
+        10,
+        1e-6,
+    );
     let bad = dir.path().join("bad-growth.mat");
     mat::write(&bad, &vars, false).unwrap();
     let r = eyeshell(&["compare", s(&grow), s(&bad)]);
     assert_fails(&r, 1, "rho");
-    assert!(r.stdout.contains(&format!("at t = {}", snaps[2].1)), "{}", r.stdout);
+    assert!(
+        r.stdout.contains(&format!("at t = {}", snaps[2].1)),
+        "{}",
+        r.stdout
+    );
 
     // A run against a copy of itself with one CSV value changed.
     let fields = copy.join("fields.csv");
@@ -79,11 +114,21 @@ fn compare_accepts_the_same_and_detects_a_perturbed_field() {
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let mut row: Vec<f64> = lines[3].split(',').map(|v| v.parse().unwrap()).collect();
     row[4] += 1e-6; // r
-    lines[3] = row.iter().map(|x| format!("{x:e}")).collect::<Vec<_>>().join(",");
+    lines[3] = row
+        .iter()
+        .map(|x| format!("{x:e}"))
+        .collect::<Vec<_>>()
+        .join(",");
     std::fs::write(&fields, lines.join("\n") + "\n").unwrap();
     let r = eyeshell(&["compare", s(&solve), s(&copy)]);
     assert_fails(&r, 1, "field comparison");
-    assert!(r.stdout.lines().any(|l| l.trim_start().starts_with("r ") && l.contains("FAIL")), "{}", r.stdout);
+    assert!(
+        r.stdout
+            .lines()
+            .any(|l| l.trim_start().starts_with("r ") && l.contains("FAIL")),
+        "{}",
+        r.stdout
+    );
 }
 
 #[test]
@@ -91,15 +136,35 @@ fn compare_interpolates_to_the_reference_points() {
     let dir = tempfile::tempdir().unwrap();
     let (solve, _) = small_runs(dir.path());
     let fine = dir.path().join("fine");
-    ok(&["solve", "scenes/default.toml", "--set", "solver.nodes=41", "--out", s(&fine), "--quiet"]);
+    ok(&[
+        "solve",
+        "scenes/default.toml",
+        "--set",
+        "solver.nodes=41",
+        "--out",
+        s(&fine),
+        "--quiet",
+    ]);
     let fine_mat = dir.path().join("fine.mat");
     ok(&["export", s(&fine), "--mat", s(&fine_mat), "--quiet"]);
     // N = 21 linearly interpolated to the N = 41 nodes: close, but not to 1e-8.
     let r = eyeshell(&["compare", s(&solve), s(&fine_mat)]);
     assert_eq!(r.code, Some(1), "{}", r.stderr);
-    let r = ok(&["compare", s(&solve), s(&fine_mat), "--tol", "0.02", "--rtol", "0.02"]);
+    let r = ok(&[
+        "compare",
+        s(&solve),
+        s(&fine_mat),
+        "--tol",
+        "0.02",
+        "--rtol",
+        "0.02",
+    ]);
     let n_fine = column(&fine.join("fields.csv"), "Sigma").len();
-    assert!(r.stdout.contains(&format!("{n_fine} points in Sigma")), "{}", r.stdout);
+    assert!(
+        r.stdout.contains(&format!("{n_fine} points in Sigma")),
+        "{}",
+        r.stdout
+    );
 }
 
 #[test]
@@ -112,14 +177,52 @@ fn compare_refuses_bad_input() {
     std::fs::write(&junk, "not a mat file at all").unwrap();
     assert_fails(&eyeshell(&["compare", s(&solve), s(&junk)]), 2, "junk.mat");
     let nocoord = dir.path().join("nocoord.mat");
-    mat::write(&nocoord, &[("kappa".into(), MatValue::row(&[1.0, 2.0]))], false).unwrap();
-    assert_fails(&eyeshell(&["compare", s(&solve), s(&nocoord)]), 2, "material coordinate");
+    mat::write(
+        &nocoord,
+        &[("kappa".into(), MatValue::row(&[1.0, 2.0]))],
+        false,
+    )
+    .unwrap();
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&nocoord)]),
+        2,
+        "material coordinate",
+    );
     let nocommon = dir.path().join("nocommon.mat");
-    mat::write(&nocommon, &[("x".into(), MatValue::row(&[0.5, 1.0])), ("foo".into(), MatValue::row(&[1.0, 2.0]))], false).unwrap();
-    assert_fails(&eyeshell(&["compare", s(&solve), s(&nocommon)]), 2, "no variable in common");
+    mat::write(
+        &nocommon,
+        &[
+            ("x".into(), MatValue::row(&[0.5, 1.0])),
+            ("foo".into(), MatValue::row(&[1.0, 2.0])),
+        ],
+        false,
+    )
+    .unwrap();
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&nocommon)]),
+        2,
+        "no variable in common",
+    );
     // A reference at a time the run never output.
     let odd = dir.path().join("odd.mat");
-    mat::write(&odd, &[("Sigma".into(), MatValue::row(&[0.5, 1.0])), ("rho".into(), MatValue::row(&[1.0, 2.0])), ("time".into(), MatValue::scalar(0.123))], false).unwrap();
-    assert_fails(&eyeshell(&["compare", s(&grow), s(&odd)]), 2, "time = 0.123");
-    assert_fails(&eyeshell(&["compare", s(&solve), s(&solve), "--tol", "-1"]), 2, "--tol");
+    mat::write(
+        &odd,
+        &[
+            ("Sigma".into(), MatValue::row(&[0.5, 1.0])),
+            ("rho".into(), MatValue::row(&[1.0, 2.0])),
+            ("time".into(), MatValue::scalar(0.123)),
+        ],
+        false,
+    )
+    .unwrap();
+    assert_fails(
+        &eyeshell(&["compare", s(&grow), s(&odd)]),
+        2,
+        "time = 0.123",
+    );
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&solve), "--tol", "-1"]),
+        2,
+        "--tol",
+    );
 }

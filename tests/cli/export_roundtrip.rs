@@ -2,10 +2,9 @@
 //! .mat (plain and miCOMPRESSED) and .npz, read back with eyeshell's readers, equals the
 //! run's CSV files bit for bit; bad targets are refused cleanly.
 
-
+use crate::support::*;
 use eyeshell_cli::interop::mat::{self, MatValue};
 use eyeshell_cli::interop::npz;
-use crate::support::*;
 use std::path::Path;
 
 fn var<'a>(vars: &'a [(String, MatValue)], name: &str) -> &'a MatValue {
@@ -26,7 +25,11 @@ fn check_elastic_mat(file: &Path, fields: &Path) {
     let y = sol.field("y").unwrap();
     assert_eq!(y.dims().unwrap(), &[5, n]);
     for (i, name) in Y_ROWS.iter().enumerate() {
-        assert_bits(&y.row_of(i).unwrap(), &column(fields, name), &format!("sol.y({}, :) = {name}", i + 1));
+        assert_bits(
+            &y.row_of(i).unwrap(),
+            &column(fields, name),
+            &format!("sol.y({}, :) = {name}", i + 1),
+        );
     }
     for name in ELASTIC_EXTRA {
         let v = sol.field(name).unwrap_or_else(|| panic!("no sol.{name}"));
@@ -41,7 +44,11 @@ fn check_growth_mat(file: &Path, snapshot: &Path, t: f64) {
     for name in GROWTH_VARS {
         let v = var(&vars, name);
         assert_eq!(v.dims().unwrap(), &[1, n], "{name}");
-        assert_bits(v.data().unwrap(), &column(snapshot, name), &format!("{}: {name}", file.display()));
+        assert_bits(
+            v.data().unwrap(),
+            &column(snapshot, name),
+            &format!("{}: {name}", file.display()),
+        );
     }
     let time = var(&vars, "time");
     assert_eq!(time.dims().unwrap(), &[1, 1]);
@@ -59,9 +66,27 @@ fn export_reads_back_bit_for_bit() {
     let plain = dir.path().join("solve.mat");
     let packed = dir.path().join("solve-z.mat");
     let npz_file = dir.path().join("solve.npz");
-    let r = ok(&["export", s(&solve), "--mat", s(&plain), "--npz", s(&npz_file)]);
-    assert!(r.stdout.contains("21") || r.stdout.contains("nodes"), "{}", r.stdout);
-    ok(&["export", s(&solve), "--mat", s(&packed), "--compress", "--quiet"]);
+    let r = ok(&[
+        "export",
+        s(&solve),
+        "--mat",
+        s(&plain),
+        "--npz",
+        s(&npz_file),
+    ]);
+    assert!(
+        r.stdout.contains("21") || r.stdout.contains("nodes"),
+        "{}",
+        r.stdout
+    );
+    ok(&[
+        "export",
+        s(&solve),
+        "--mat",
+        s(&packed),
+        "--compress",
+        "--quiet",
+    ]);
     check_elastic_mat(&plain, &fields);
     check_elastic_mat(&packed, &fields);
     // The compressed file really is made of miCOMPRESSED elements (type 15) and is smaller:
@@ -70,18 +95,31 @@ fn export_reads_back_bit_for_bit() {
     assert_eq!(u32::from_le_bytes(bytes[128..132].try_into().unwrap()), 15);
     assert!(bytes.len() < std::fs::read(&plain).unwrap().len());
     let plain_bytes = std::fs::read(&plain).unwrap();
-    assert_eq!(u32::from_le_bytes(plain_bytes[128..132].try_into().unwrap()), 14);
+    assert_eq!(
+        u32::from_le_bytes(plain_bytes[128..132].try_into().unwrap()),
+        14
+    );
     assert_eq!(&plain_bytes[124..128], &[0x00, 0x01, b'I', b'M']);
     assert!(plain_bytes.starts_with(b"MATLAB 5.0 MAT-file"));
 
     let arrays = npz::read(&npz_file).unwrap();
-    let get = |name: &str| arrays.iter().find(|(n, _)| n == name).map(|(_, a)| a).unwrap();
+    let get = |name: &str| {
+        arrays
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, a)| a)
+            .unwrap()
+    };
     let n = column(&fields, "Sigma").len();
     assert_eq!(get("x").shape, vec![n]);
     assert_bits(&get("x").data, &column(&fields, "Sigma"), "x");
     assert_eq!(get("y").shape, vec![5, n]);
     for (i, name) in Y_ROWS.iter().enumerate() {
-        assert_bits(&get("y").data[i * n..(i + 1) * n], &column(&fields, name), name);
+        assert_bits(
+            &get("y").data[i * n..(i + 1) * n],
+            &column(&fields, name),
+            name,
+        );
     }
     for name in ELASTIC_EXTRA {
         assert_bits(&get(name).data, &column(&fields, name), name);
@@ -91,13 +129,18 @@ fn export_reads_back_bit_for_bit() {
     let snaps = snapshots(&grow);
     assert!(snaps.len() >= 2);
     for compress in [false, true] {
-        let out = dir.path().join(if compress { "grow-z" } else { "grow-mat" });
+        let out = dir
+            .path()
+            .join(if compress { "grow-z" } else { "grow-mat" });
         let mut args = vec!["export", s(&grow), "--mat", s(&out), "--quiet"];
         if compress {
             args.push("--compress");
         }
         ok(&args);
-        let mut files: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).collect();
+        let mut files: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
         files.sort();
         assert_eq!(files.len(), snaps.len());
         for (f, (csv_file, t)) in files.iter().zip(&snaps) {
@@ -109,9 +152,18 @@ fn export_reads_back_bit_for_bit() {
     let out = dir.path().join("grow-npz");
     ok(&["export", s(&grow), "--npz", s(&out), "--quiet"]);
     for (csv_file, t) in &snaps {
-        let f = out.join(format!("{}.npz", csv_file.file_stem().unwrap().to_str().unwrap()));
+        let f = out.join(format!(
+            "{}.npz",
+            csv_file.file_stem().unwrap().to_str().unwrap()
+        ));
         let arrays = npz::read(&f).unwrap();
-        let get = |name: &str| arrays.iter().find(|(n, _)| n == name).map(|(_, a)| a).unwrap();
+        let get = |name: &str| {
+            arrays
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, a)| a)
+                .unwrap()
+        };
         for name in GROWTH_VARS {
             assert_eq!(get(name).shape.len(), 1);
             assert_bits(&get(name).data, &column(csv_file, name), name);
@@ -135,7 +187,10 @@ fn a_partial_growth_run_exports_what_it_has() {
     let out = dir.path().join("partial");
     ok(&["export", s(&grow), "--mat", s(&out), "--quiet"]);
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 2);
-    let f = out.join(format!("{}.mat", snaps[1].0.file_stem().unwrap().to_str().unwrap()));
+    let f = out.join(format!(
+        "{}.mat",
+        snaps[1].0.file_stem().unwrap().to_str().unwrap()
+    ));
     check_growth_mat(&f, &snaps[1].0, snaps[1].1);
 }
 

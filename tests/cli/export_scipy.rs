@@ -4,7 +4,6 @@
 //! writes them by default. Runs only where `python3 -c 'import scipy'` works (.ci/run
 //! installs scipy); elsewhere it prints a note and passes.
 
-
 use crate::support::*;
 use std::process::Command;
 
@@ -24,7 +23,11 @@ fn python(script: &str, args: &[&str]) -> serde_json::Value {
         .args(args)
         .output()
         .expect("python3");
-    assert!(out.status.success(), "python failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "python failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).expect("JSON from python")
 }
 
@@ -61,11 +64,21 @@ print(json.dumps(out))
 "#;
 
 fn data(v: &serde_json::Value) -> Vec<f64> {
-    v["data"].as_array().unwrap().iter().map(|x| f64::from_bits(x.as_u64().unwrap())).collect()
+    v["data"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| f64::from_bits(x.as_u64().unwrap()))
+        .collect()
 }
 
 fn shape(v: &serde_json::Value) -> Vec<usize> {
-    v["shape"].as_array().unwrap().iter().map(|x| x.as_u64().unwrap() as usize).collect()
+    v["shape"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap() as usize)
+        .collect()
 }
 
 #[test]
@@ -81,8 +94,23 @@ fn scipy_loads_what_eyeshell_writes() {
     let plain = dir.path().join("solve.mat");
     let packed = dir.path().join("solve-z.mat");
     let npz = dir.path().join("solve.npz");
-    ok(&["export", s(&solve), "--mat", s(&plain), "--npz", s(&npz), "--quiet"]);
-    ok(&["export", s(&solve), "--mat", s(&packed), "--compress", "--quiet"]);
+    ok(&[
+        "export",
+        s(&solve),
+        "--mat",
+        s(&plain),
+        "--npz",
+        s(&npz),
+        "--quiet",
+    ]);
+    ok(&[
+        "export",
+        s(&solve),
+        "--mat",
+        s(&packed),
+        "--compress",
+        "--quiet",
+    ]);
     let dump = python(DUMP, &[s(&plain), s(&packed), s(&npz)]);
     for f in [&plain, &packed] {
         let d = &dump[s(f)];
@@ -112,7 +140,16 @@ fn scipy_loads_what_eyeshell_writes() {
     // Growth: every snapshot file, .mat and .npz.
     let gm = dir.path().join("grow-mat");
     let gn = dir.path().join("grow-npz");
-    ok(&["export", s(&grow), "--mat", s(&gm), "--compress", "--npz", s(&gn), "--quiet"]);
+    ok(&[
+        "export",
+        s(&grow),
+        "--mat",
+        s(&gm),
+        "--compress",
+        "--npz",
+        s(&gn),
+        "--quiet",
+    ]);
     let snaps = snapshots(&grow);
     let mut files = Vec::new();
     for (csv_file, _) in &snaps {
@@ -167,16 +204,36 @@ print(json.dumps({}))
     let rows = dir.path().join("scipy-rows.mat");
     python(script, &[csv_path, s(&good), s(&bad), s(&rows)]);
     let bytes = std::fs::read(&good).unwrap();
-    assert_eq!(u32::from_le_bytes(bytes[128..132].try_into().unwrap()), 15, "miCOMPRESSED");
+    assert_eq!(
+        u32::from_le_bytes(bytes[128..132].try_into().unwrap()),
+        15,
+        "miCOMPRESSED"
+    );
     // Our reader: the same values.
     let vars = eyeshell_cli::interop::mat::read(&good).unwrap();
     let sol = &vars.iter().find(|(n, _)| n == "sol").unwrap().1;
-    assert_bits(sol.field("x").unwrap().data().unwrap(), &column(&fields, "Sigma"), "x");
-    assert_bits(&sol.field("y").unwrap().row_of(2).unwrap(), &column(&fields, "r"), "y(3,:)");
+    assert_bits(
+        sol.field("x").unwrap().data().unwrap(),
+        &column(&fields, "Sigma"),
+        "x",
+    );
+    assert_bits(
+        &sol.field("y").unwrap().row_of(2).unwrap(),
+        &column(&fields, "r"),
+        "y(3,:)",
+    );
     // compare: accepts the faithful file, detects the perturbed one.
     let r = ok(&["compare", s(&solve), s(&good)]);
-    assert!(r.stdout.contains("kappa") && r.stdout.contains(" z "), "{}", r.stdout);
+    assert!(
+        r.stdout.contains("kappa") && r.stdout.contains(" z "),
+        "{}",
+        r.stdout
+    );
     assert_fails(&eyeshell(&["compare", s(&solve), s(&bad)]), 1, "kappa");
     let r = ok(&["compare", s(&solve), s(&rows)]);
-    assert!(r.stdout.contains(" h ") && r.stdout.contains(" r "), "{}", r.stdout);
+    assert!(
+        r.stdout.contains(" h ") && r.stdout.contains(" r "),
+        "{}",
+        r.stdout
+    );
 }

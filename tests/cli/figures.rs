@@ -5,9 +5,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use eyeshell_cli::figures::sweep_runs;
-use eyeshell::rundir::rundata::{self, RunData};
 use crate::support::*;
+use eyeshell::rundir::rundata::{self, RunData};
+use eyeshell_cli::figures::sweep_runs;
 
 const FIGURES: [&str; 6] = [
     "fig_a_const_shells",
@@ -50,11 +50,19 @@ fn every_figure_is_a_valid_non_trivial_png_and_svg() {
         let (w, h, colours) = png_stats(&png);
         assert!(w >= 1000 && h >= 600, "{f}: {w}x{h}");
         assert!(colours > 50, "{f}: only {colours} colours");
-        assert!(std::fs::metadata(&png).unwrap().len() > 30_000, "{f}.png is small");
+        assert!(
+            std::fs::metadata(&png).unwrap().len() > 30_000,
+            "{f}.png is small"
+        );
         let svg = std::fs::read_to_string(dir.join(format!("{f}.svg"))).unwrap();
-        assert!(svg.trim_start().starts_with("<svg") || svg.trim_start().starts_with("<?xml"), "{f}.svg");
+        assert!(
+            svg.trim_start().starts_with("<svg") || svg.trim_start().starts_with("<?xml"),
+            "{f}.svg"
+        );
         assert!(svg.trim_end().ends_with("</svg>"), "{f}.svg is cut short");
-        let curves = svg.matches("<polyline").count() + svg.matches("<path").count() + svg.matches("<line").count();
+        let curves = svg.matches("<polyline").count()
+            + svg.matches("<path").count()
+            + svg.matches("<line").count();
         assert!(curves > 20, "{f}.svg: {curves} curves");
         assert!(svg.len() > 20_000, "{f}.svg is small");
     }
@@ -64,10 +72,26 @@ fn every_figure_is_a_valid_non_trivial_png_and_svg() {
     // The index lists every figure with a caption that states the parameters.
     let index = std::fs::read_to_string(dir.join("index.html")).unwrap();
     for f in FIGURES {
-        assert!(index.contains(&format!("src=\"{f}.png\"")), "{f} not in index.html");
-        assert!(index.contains(&format!("href=\"{f}.svg\"")), "{f}.svg not linked");
+        assert!(
+            index.contains(&format!("src=\"{f}.png\"")),
+            "{f} not in index.html"
+        );
+        assert!(
+            index.contains(&format!("href=\"{f}.svg\"")),
+            "{f}.svg not linked"
+        );
     }
-    for p in ["C = 100 kPa", "D = 100 kPa", "E_b = 18 kPa·mm³", "η0 = 70 /mm", "Γ = 8 mm", "δ = 4 mm", "uniform H = 0.65 mm", "non-uniform H(Σ)", "501 nodes"] {
+    for p in [
+        "C = 100 kPa",
+        "D = 100 kPa",
+        "E_b = 18 kPa·mm³",
+        "η0 = 70 /mm",
+        "Γ = 8 mm",
+        "δ = 4 mm",
+        "uniform H = 0.65 mm",
+        "non-uniform H(Σ)",
+        "501 nodes",
+    ] {
         assert!(index.contains(p), "{p} not in index.html");
     }
 }
@@ -90,7 +114,10 @@ fn the_figures_show_what_the_runs_wrote() {
     copy_dir(src, &copy);
     let before = std::fs::read_to_string(copy.join("fig_f_axial.svg")).unwrap();
     let ticks = svg_numbers(&before);
-    assert!(ticks.iter().any(|&v| (19.0..=25.0).contains(&v)), "{ticks:?}");
+    assert!(
+        ticks.iter().any(|&v| (19.0..=25.0).contains(&v)),
+        "{ticks:?}"
+    );
     for run in std::fs::read_dir(copy.join("data/grow/runs")).unwrap() {
         let history = run.unwrap().path().join("history.csv");
         let text = std::fs::read_to_string(&history).unwrap();
@@ -112,8 +139,14 @@ fn the_figures_show_what_the_runs_wrote() {
     let after = std::fs::read_to_string(copy.join("fig_f_axial.svg")).unwrap();
     assert_ne!(before, after);
     let ticks = svg_numbers(&after);
-    assert!(ticks.iter().any(|&v| (26.0..=32.0).contains(&v)), "the shifted lengths are not on the axis: {ticks:?}");
-    assert!(!ticks.iter().any(|&v| (19.0..=25.0).contains(&v)), "old lengths still on the axis: {ticks:?}");
+    assert!(
+        ticks.iter().any(|&v| (26.0..=32.0).contains(&v)),
+        "the shifted lengths are not on the axis: {ticks:?}"
+    );
+    assert!(
+        !ticks.iter().any(|&v| (19.0..=25.0).contains(&v)),
+        "old lengths still on the axis: {ticks:?}"
+    );
     // The captions are read from the data too.
     let index = std::fs::read_to_string(copy.join("index.html")).unwrap();
     let old = std::fs::read_to_string(src.join("index.html")).unwrap();
@@ -125,7 +158,11 @@ fn the_figures_show_what_the_runs_wrote() {
     );
     // --replot without data is bad input.
     let empty = dir.path().join("nothing");
-    assert_bad(&eyeshell(&["figures", "--replot", "--out", s(&empty)]), "no data to replot", "replot");
+    assert_bad(
+        &eyeshell(&["figures", "--replot", "--out", s(&empty)]),
+        "no data to replot",
+        "replot",
+    );
 }
 
 fn copy_dir(from: &Path, to: &Path) {
@@ -152,7 +189,11 @@ fn final_length(r: &RunData) -> f64 {
 }
 
 fn length_at(r: &RunData, t: f64) -> f64 {
-    r.timeline().iter().find(|p| (p.t - t).abs() < 1e-9).unwrap().axial_length
+    r.timeline()
+        .iter()
+        .find(|p| (p.t - t).abs() < 1e-9)
+        .unwrap()
+        .axial_length
 }
 
 fn col(r: &RunData, t: f64, name: &str) -> Vec<f64> {
@@ -169,7 +210,9 @@ fn const_grows_past_blue_and_its_fastest_growth_moves_to_the_equator() {
     let mut peaks = Vec::new();
     for t in [0.1, 0.2, 0.4, 1.0] {
         let (sigma, eta) = (col(run, t, "Sigma"), col(run, t, "eta"));
-        let k = (0..eta.len()).max_by(|&a, &b| eta[a].total_cmp(&eta[b])).unwrap();
+        let k = (0..eta.len())
+            .max_by(|&a, &b| eta[a].total_cmp(&eta[b]))
+            .unwrap();
         peaks.push(sigma[k]);
     }
     assert!(peaks.windows(2).all(|w| w[1] > w[0] + 0.5), "{peaks:?}");
@@ -209,19 +252,38 @@ fn the_growth_zone_grid_matches_the_account() {
     let runs = data("grow");
     let find = |g: f64, d: f64| {
         runs.iter()
-            .find(|r| r.scene.growth.as_ref().is_some_and(|x| x.gamma == g && x.delta == d))
+            .find(|r| {
+                r.scene
+                    .growth
+                    .as_ref()
+                    .is_some_and(|x| x.gamma == g && x.delta == d)
+            })
             .unwrap()
     };
     let spread = |d: f64| {
-        let l: Vec<f64> = [4.0, 8.0, 12.0].iter().map(|&g| final_length(find(g, d))).collect();
+        let l: Vec<f64> = [4.0, 8.0, 12.0]
+            .iter()
+            .map(|&g| final_length(find(g, d)))
+            .collect();
         l.iter().cloned().fold(f64::MIN, f64::max) - l.iter().cloned().fold(f64::MAX, f64::min)
     };
     assert!(spread(6.0) < 0.2, "{}", spread(6.0));
-    assert!(spread(2.0) > 3.0 * spread(6.0), "{} {}", spread(2.0), spread(6.0));
-    let longest = runs.iter().max_by(|a, b| final_length(a).total_cmp(&final_length(b))).unwrap();
+    assert!(
+        spread(2.0) > 3.0 * spread(6.0),
+        "{} {}",
+        spread(2.0),
+        spread(6.0)
+    );
+    let longest = runs
+        .iter()
+        .max_by(|a, b| final_length(a).total_cmp(&final_length(b)))
+        .unwrap();
     let g = longest.scene.growth.as_ref().unwrap();
     assert_eq!((g.gamma, g.delta), (8.0, 2.0));
-    let early: Vec<f64> = [4.0, 8.0, 12.0].iter().map(|&g| length_at(find(g, 2.0), 0.1)).collect();
+    let early: Vec<f64> = [4.0, 8.0, 12.0]
+        .iter()
+        .map(|&g| length_at(find(g, 2.0), 0.1))
+        .collect();
     assert!(early.windows(2).all(|w| w[1] > w[0]), "{early:?}");
     for gamma in [4.0, 8.0, 12.0] {
         let (a, b) = (roundness(find(gamma, 6.0)), roundness(find(gamma, 2.0)));
@@ -236,14 +298,24 @@ fn roundness(r: &RunData) -> f64 {
     let pts: Vec<(f64, f64)> = z.into_iter().zip(rr).filter(|p| p.0 > 12.0).collect();
     // (z − c)² + r² = R²  ⇔  2 c z + k = z² + r², k = R² − c²: least squares in (c, k).
     let n = pts.len() as f64;
-    let (sz, szz) = (pts.iter().map(|p| p.0).sum::<f64>(), pts.iter().map(|p| p.0 * p.0).sum::<f64>());
+    let (sz, szz) = (
+        pts.iter().map(|p| p.0).sum::<f64>(),
+        pts.iter().map(|p| p.0 * p.0).sum::<f64>(),
+    );
     let b: Vec<f64> = pts.iter().map(|p| p.0 * p.0 + p.1 * p.1).collect();
-    let (sb, szb) = (b.iter().sum::<f64>(), pts.iter().zip(&b).map(|(p, b)| p.0 * b).sum::<f64>());
+    let (sb, szb) = (
+        b.iter().sum::<f64>(),
+        pts.iter().zip(&b).map(|(p, b)| p.0 * b).sum::<f64>(),
+    );
     let det = 2.0 * szz * n - 2.0 * sz * sz;
     let c = (szb * n - sz * sb) / det;
     let k = (2.0 * szz * sb - 2.0 * sz * szb) / det;
     let radius = (k + c * c).sqrt();
-    (pts.iter().map(|p| ((p.0 - c).hypot(p.1) - radius).powi(2)).sum::<f64>() / n).sqrt()
+    (pts.iter()
+        .map(|p| ((p.0 - c).hypot(p.1) - radius).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt()
 }
 
 #[test]
@@ -256,7 +328,10 @@ fn plot_draws_an_elastic_and_a_growth_run() {
     assert!(w > 1000 && h > 600 && colours > 20);
     ok(&["plot", s(&grow), "--out", s(&dir.path().join("g")), "-q"]);
     for f in ["shells", "profiles", "timeline"] {
-        assert!(png_stats(&dir.path().join(format!("g/{f}.png"))).2 > 20, "{f}");
+        assert!(
+            png_stats(&dir.path().join(format!("g/{f}.png"))).2 > 20,
+            "{f}"
+        );
         let svg = std::fs::read_to_string(dir.path().join(format!("g/{f}.svg"))).unwrap();
         assert!(svg.trim_end().ends_with("</svg>"), "{f}.svg");
     }
@@ -267,5 +342,9 @@ fn plot_draws_an_elastic_and_a_growth_run() {
     let (_, series) = csv_cells(&grow.join("series.csv"));
     let last: f64 = series.last().unwrap()[1].parse().unwrap();
     assert_eq!(run.timeline().last().unwrap().axial_length, last);
-    assert_bad(&eyeshell(&["plot", s(&dir.path().join("none"))]), "not an eyeshell run directory", "plot none");
+    assert_bad(
+        &eyeshell(&["plot", s(&dir.path().join("none"))]),
+        "not an eyeshell run directory",
+        "plot none",
+    );
 }

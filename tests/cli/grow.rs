@@ -19,8 +19,14 @@ fn bad_growth_values() {
         ("growth.thickness_law = \"volume\"", "growth.thickness_law"),
         ("solver.integrator = \"rk4\"", "solver.integrator"),
         ("solver.dae_linear = \"lu\"", "solver.dae_linear"),
-        ("growth.kink_width = -1", "growth.kink_width = -1 must lie in [0, 1)"),
-        ("growth.kink_width = 1e300", "growth.kink_width = 1e300 must lie in [0, 1)"),
+        (
+            "growth.kink_width = -1",
+            "growth.kink_width = -1 must lie in [0, 1)",
+        ),
+        (
+            "growth.kink_width = 1e300",
+            "growth.kink_width = 1e300 must lie in [0, 1)",
+        ),
         ("solver.rtol = 0", "solver.rtol"),
         ("solver.rtol = 1.5", "solver.rtol"),
         ("solver.atol = 0", "solver.atol"),

@@ -6,7 +6,11 @@ use eyeshell::scene::{Scene, KEYS};
 
 #[test]
 fn keys_lists_every_key_with_type_default_and_doc() {
-    let Run { code, stdout: out, stderr: err } = eyeshell_in(repo(), &["keys"]);
+    let Run {
+        code,
+        stdout: out,
+        stderr: err,
+    } = eyeshell_in(repo(), &["keys"]);
     assert_eq!(code, Some(0), "{err}");
     assert!(err.is_empty());
     let lines: Vec<&str> = out.lines().collect();
@@ -50,7 +54,11 @@ fn keys_lists_every_key_with_type_default_and_doc() {
 
 #[test]
 fn check_prints_the_effective_scene_as_toml() {
-    let Run { code, stdout: out, stderr: err } = eyeshell_in(
+    let Run {
+        code,
+        stdout: out,
+        stderr: err,
+    } = eyeshell_in(
         repo(),
         &[
             "check",
@@ -95,7 +103,11 @@ fn shipped_scenes_check() {
         "scenes/fibres-nonuniform.toml",
         "scenes/exact-sphere.toml",
     ] {
-        let Run { code, stdout: out, stderr: err } = eyeshell_in(repo(), &["check", s]);
+        let Run {
+            code,
+            stdout: out,
+            stderr: err,
+        } = eyeshell_in(repo(), &["check", s]);
         assert_eq!(code, Some(0), "{s}: {err}");
         assert!(out.contains("valid scene"), "{out}");
     }
@@ -103,12 +115,16 @@ fn shipped_scenes_check() {
 
 #[test]
 fn help_and_version_succeed() {
-    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["--help"]);
+    let Run {
+        code, stdout: out, ..
+    } = eyeshell_in(repo(), &["--help"]);
     assert_eq!(code, Some(0));
     for sub in ["solve", "check", "keys"] {
         assert!(out.contains(sub), "{out}");
     }
-    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["solve", "--help"]);
+    let Run {
+        code, stdout: out, ..
+    } = eyeshell_in(repo(), &["solve", "--help"]);
     assert_eq!(code, Some(0));
     assert!(
         out.contains("--set")
@@ -116,7 +132,9 @@ fn help_and_version_succeed() {
             && out.contains("--out")
             && out.contains("--quiet")
     );
-    let Run { code, stdout: out, .. } = eyeshell_in(repo(), &["--version"]);
+    let Run {
+        code, stdout: out, ..
+    } = eyeshell_in(repo(), &["--version"]);
     assert_eq!(code, Some(0));
     assert!(out.starts_with("eyeshell "));
 }

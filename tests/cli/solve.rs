@@ -7,7 +7,11 @@ fn solve_writes_fields_summary_and_at() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let out_s = out.to_str().unwrap();
-    let Run { code, stdout, stderr } = eyeshell(&[
+    let Run {
+        code,
+        stdout,
+        stderr,
+    } = eyeshell(&[
         "solve",
         "scenes/default.toml",
         "--set",
@@ -63,7 +67,11 @@ fn solve_writes_fields_summary_and_at() {
     }
 
     // Solving again into the same directory replaces the previous output (no at.csv now).
-    let Run { code, stdout, stderr } = eyeshell(&[
+    let Run {
+        code,
+        stdout,
+        stderr,
+    } = eyeshell(&[
         "solve",
         "scenes/default.toml",
         "--set",

@@ -44,13 +44,25 @@ pub fn s(p: &Path) -> &str {
 /// Run `eyeshell ARGS` and insist that it succeeds.
 pub fn ok(args: &[&str]) -> Run {
     let r = eyeshell(args);
-    assert_eq!(r.code, Some(0), "eyeshell {args:?}: {}{}", r.stdout, r.stderr);
+    assert_eq!(
+        r.code,
+        Some(0),
+        "eyeshell {args:?}: {}{}",
+        r.stdout,
+        r.stderr
+    );
     r
 }
 
 /// Assert a clean failure: `code`, one stderr line `eyeshell: error: ...` containing `needle`.
 pub fn assert_fails(r: &Run, code: i32, needle: &str) {
-    assert_eq!(r.code, Some(code), "stdout: {} stderr: {}", r.stdout, r.stderr);
+    assert_eq!(
+        r.code,
+        Some(code),
+        "stdout: {} stderr: {}",
+        r.stdout,
+        r.stderr
+    );
     assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
     let lines: Vec<&str> = r.stderr.lines().collect();
     assert_eq!(lines.len(), 1, "one line: {:?}", r.stderr);
@@ -61,13 +73,35 @@ pub fn assert_fails(r: &Run, code: i32, needle: &str) {
 /// Assert a clean bad-input failure (`what` says which): exit 2, one newline-terminated stderr
 /// line `eyeshell: error: ...` naming `needle`, no panic, no stdout.
 pub fn assert_bad(run: &Run, needle: &str, what: &str) {
-    assert_eq!(run.code, Some(2), "{what}: exit code, stderr: {}", run.stderr);
-    assert!(!run.stderr.contains("panicked"), "{what}: panic: {}", run.stderr);
+    assert_eq!(
+        run.code,
+        Some(2),
+        "{what}: exit code, stderr: {}",
+        run.stderr
+    );
+    assert!(
+        !run.stderr.contains("panicked"),
+        "{what}: panic: {}",
+        run.stderr
+    );
     let lines: Vec<&str> = run.stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{what}: stderr must be one line: {:?}", run.stderr);
+    assert_eq!(
+        lines.len(),
+        1,
+        "{what}: stderr must be one line: {:?}",
+        run.stderr
+    );
     assert!(run.stderr.ends_with('\n'), "{what}: {:?}", run.stderr);
-    assert!(lines[0].starts_with("eyeshell: error: "), "{what}: {}", lines[0]);
-    assert!(lines[0].contains(needle), "{what}: {needle:?} not named in: {}", lines[0]);
+    assert!(
+        lines[0].starts_with("eyeshell: error: "),
+        "{what}: {}",
+        lines[0]
+    );
+    assert!(
+        lines[0].contains(needle),
+        "{what}: {needle:?} not named in: {}",
+        lines[0]
+    );
     assert!(run.stdout.is_empty(), "{what}: stdout: {}", run.stdout);
 }
 
@@ -77,7 +111,11 @@ pub fn assert_only_entry(dir: &Path, name: &str, what: &str) {
         .unwrap()
         .map(|e| e.unwrap().file_name())
         .collect();
-    assert_eq!(names, vec![std::ffi::OsString::from(name)], "{what}: leftovers");
+    assert_eq!(
+        names,
+        vec![std::ffi::OsString::from(name)],
+        "{what}: leftovers"
+    );
 }
 
 /// `eyeshell CMD scene.toml --set ... --out out`, with `scene` written to a fresh directory,
@@ -94,7 +132,8 @@ pub fn fails(cmd: &str, scene: &str, sets: &[&str], needle: &str, origin: &str) 
     let run = eyeshell_in(dir.path(), &args);
     assert_bad(&run, needle, &what);
     assert!(
-        run.stderr.starts_with(&format!("eyeshell: error: {origin}")),
+        run.stderr
+            .starts_with(&format!("eyeshell: error: {origin}")),
         "{what}: {}",
         run.stderr
     );
@@ -111,9 +150,19 @@ pub fn foreign_dir_is_refused(cmd: &str, scene: &str) -> tempfile::TempDir {
     std::fs::create_dir(dir.path().join("data")).unwrap();
     std::fs::write(dir.path().join("data/precious.txt"), "keep").unwrap();
     let run = eyeshell_in(dir.path(), &[cmd, "s.toml", "--out", "data"]);
-    assert_bad(&run, "data: exists and is not an eyeshell output directory", "foreign dir");
-    assert_eq!(std::fs::read_to_string(dir.path().join("data/precious.txt")).unwrap(), "keep");
-    assert_eq!(std::fs::read_dir(dir.path().join("data")).unwrap().count(), 1);
+    assert_bad(
+        &run,
+        "data: exists and is not an eyeshell output directory",
+        "foreign dir",
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("data/precious.txt")).unwrap(),
+        "keep"
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path().join("data")).unwrap().count(),
+        1
+    );
     dir
 }
 
@@ -122,10 +171,25 @@ pub fn foreign_dir_is_refused(cmd: &str, scene: &str) -> tempfile::TempDir {
 pub fn small_runs(dir: &Path) -> (PathBuf, PathBuf) {
     let solve = dir.join("solve");
     let grow = dir.join("grow");
-    ok(&["solve", "scenes/default.toml", "--set", "solver.nodes=21", "--out", s(&solve), "--quiet"]);
     ok(&[
-        "grow", "scenes/const.toml", "--set", "solver.nodes=21", "--set", "solver.rtol=1e-3",
-        "--out", s(&grow), "--quiet",
+        "solve",
+        "scenes/default.toml",
+        "--set",
+        "solver.nodes=21",
+        "--out",
+        s(&solve),
+        "--quiet",
+    ]);
+    ok(&[
+        "grow",
+        "scenes/const.toml",
+        "--set",
+        "solver.nodes=21",
+        "--set",
+        "solver.rtol=1e-3",
+        "--out",
+        s(&grow),
+        "--quiet",
     ]);
     (solve, grow)
 }
@@ -154,7 +218,10 @@ pub fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 /// Column `name` of a CSV file.
 pub fn column(path: &Path, name: &str) -> Vec<f64> {
     let (h, rows) = csv(path);
-    let j = h.iter().position(|c| c == name).unwrap_or_else(|| panic!("no {name} in {}", path.display()));
+    let j = h
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no {name} in {}", path.display()));
     rows.iter().map(|r| r[j]).collect()
 }
 
@@ -166,7 +233,12 @@ pub fn snapshots(run: &Path) -> Vec<(PathBuf, f64)> {
         .as_array()
         .unwrap()
         .iter()
-        .map(|s| (run.join(s["file"].as_str().unwrap()), s["t"].as_f64().unwrap()))
+        .map(|s| {
+            (
+                run.join(s["file"].as_str().unwrap()),
+                s["t"].as_f64().unwrap(),
+            )
+        })
         .collect()
 }
 
@@ -180,8 +252,29 @@ pub fn assert_bits(a: &[f64], b: &[f64], what: &str) {
 
 /// The growth variables written per snapshot (as row vectors), beside `time`.
 pub const GROWTH_VARS: [&str; 14] = [
-    "h", "s", "z", "r", "sigma", "rho", "zeta", "alpha_s", "alpha_phi", "alpha_n", "eta",
-    "z_retina", "r_retina", "Sigma",
+    "h",
+    "s",
+    "z",
+    "r",
+    "sigma",
+    "rho",
+    "zeta",
+    "alpha_s",
+    "alpha_phi",
+    "alpha_n",
+    "eta",
+    "z_retina",
+    "r_retina",
+    "Sigma",
 ];
 pub const Y_ROWS: [&str; 5] = ["kappa", "alpha_s", "r", "theta", "Q"];
-pub const ELASTIC_EXTRA: [&str; 8] = ["sigma", "z", "s", "alpha_phi", "alpha_n", "h", "t_s", "t_phi"];
+pub const ELASTIC_EXTRA: [&str; 8] = [
+    "sigma",
+    "z",
+    "s",
+    "alpha_phi",
+    "alpha_n",
+    "h",
+    "t_s",
+    "t_phi",
+];

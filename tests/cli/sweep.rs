@@ -5,9 +5,9 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use crate::support::*;
 use eyeshell::scene::sweep::Sweep;
 use eyeshell::sweep::{run_sweep, RunStatus, SweepOptions};
-use crate::support::*;
 
 /// A small growth scene (N = 21, CVODE rtol 1e-3): a run takes a few hundredths of a second.
 const SMALL: &str = "name = \"small\"\n[fibres]\nD = 0.0\n[growth]\neta0 = 70.0\nt_end = 0.2\n[solver]\nnodes = 21\nrtol = 1e-3\n[output]\ntimes = [0.1]\nhistory_points = 10\n";
@@ -19,37 +19,79 @@ fn write_scene(dir: &Path, text: &str) {
 #[test]
 fn a_grid_runs_every_combination_into_its_own_directory() {
     let dir = tempfile::tempdir().unwrap();
-    write_scene(dir.path(), &format!("{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 12]\n\"growth.delta\" = [2, 6]\n"));
-    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "--jobs", "2"]);
+    write_scene(
+        dir.path(),
+        &format!("{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 12]\n\"growth.delta\" = [2, 6]\n"),
+    );
+    let run = eyeshell_in(
+        dir.path(),
+        &["sweep", "s.toml", "--out", "out", "--jobs", "2"],
+    );
     assert_eq!(run.code, Some(0), "{}{}", run.stdout, run.stderr);
     let out = dir.path().join("out");
     let (header, rows) = csv_cells(&out.join("sweep.csv"));
-    assert_eq!(&header[..4], ["run", "status", "growth.Gamma", "growth.delta"]);
+    assert_eq!(
+        &header[..4],
+        ["run", "status", "growth.Gamma", "growth.delta"]
+    );
     let names: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
-    assert_eq!(names, ["Gamma=4_delta=2", "Gamma=4_delta=6", "Gamma=12_delta=2", "Gamma=12_delta=6"]);
+    assert_eq!(
+        names,
+        [
+            "Gamma=4_delta=2",
+            "Gamma=4_delta=6",
+            "Gamma=12_delta=2",
+            "Gamma=12_delta=6"
+        ]
+    );
     let col = |n: &str| header.iter().position(|h| h == n).unwrap();
     for r in &rows {
         assert_eq!(r[1], "ok");
         // The table's axial length is the run's own last series row.
         let (_, series) = csv_cells(&out.join("runs").join(&r[0]).join("series.csv"));
-        assert_eq!(r[col("axial_length")], series.last().unwrap()[1], "{}", r[0]);
+        assert_eq!(
+            r[col("axial_length")],
+            series.last().unwrap()[1],
+            "{}",
+            r[0]
+        );
         // Each run is the base scene with its values: the run's scene.toml says so.
-        let scene = std::fs::read_to_string(out.join("runs").join(&r[0]).join("scene.toml")).unwrap();
-        assert!(scene.contains(&format!("growth.Gamma = {}.0", r[2])), "{scene}");
-        assert!(scene.contains(&format!("growth.delta = {}.0", r[3])), "{scene}");
+        let scene =
+            std::fs::read_to_string(out.join("runs").join(&r[0]).join("scene.toml")).unwrap();
+        assert!(
+            scene.contains(&format!("growth.Gamma = {}.0", r[2])),
+            "{scene}"
+        );
+        assert!(
+            scene.contains(&format!("growth.delta = {}.0", r[3])),
+            "{scene}"
+        );
         assert!(scene.contains("solver.nodes = 21"));
         assert!(r[col("newton_iterations")].parse::<usize>().unwrap() > 0);
         assert_eq!(r[col("class")].is_empty(), false);
     }
     // Different growth zones give different eyes.
-    let lengths: Vec<f64> = rows.iter().map(|r| r[col("axial_length")].parse().unwrap()).collect();
+    let lengths: Vec<f64> = rows
+        .iter()
+        .map(|r| r[col("axial_length")].parse().unwrap())
+        .collect();
     assert!(lengths.windows(2).all(|w| w[0] != w[1]), "{lengths:?}");
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "ok");
     assert_eq!(summary["runs"].as_array().unwrap().len(), 4);
     // Each run directory is an ordinary run: export and plot read it.
-    ok(&["plot", s(&out), "--out", s(&dir.path().join("plots")), "--quiet"]);
-    assert!(dir.path().join("plots/Gamma=4_delta=2/timeline.png").is_file());
+    ok(&[
+        "plot",
+        s(&out),
+        "--out",
+        s(&dir.path().join("plots")),
+        "--quiet",
+    ]);
+    assert!(dir
+        .path()
+        .join("plots/Gamma=4_delta=2/timeline.png")
+        .is_file());
     assert!(dir.path().join("plots/axial_length.svg").is_file());
 }
 
@@ -62,13 +104,24 @@ fn a_failed_run_is_reported_and_the_others_are_kept() {
         &format!("{SMALL}[[sweep.runs]]\nname = \"good\"\n[[sweep.runs]]\nname = \"bad\"\n\"growth.eta0\" = 1e4\n\"solver.integrator\" = \"euler\"\n\"solver.steps\" = 2\n"),
     );
     let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
-    assert_fails(&run, 1, "1 of 2 runs failed: bad: growth failed at t = 0.02");
+    assert_fails(
+        &run,
+        1,
+        "1 of 2 runs failed: bad: growth failed at t = 0.02",
+    );
     let out = dir.path().join("out");
     let (header, rows) = csv_cells(&out.join("sweep.csv"));
     let col = |n: &str| header.iter().position(|h| h == n).unwrap();
     assert_eq!((rows[0][0].as_str(), rows[0][1].as_str()), ("good", "ok"));
-    assert_eq!((rows[1][0].as_str(), rows[1][1].as_str()), ("bad", "failed"));
-    assert!(rows[1][col("error")].contains("passed through its axis"), "{:?}", rows[1]);
+    assert_eq!(
+        (rows[1][0].as_str(), rows[1][1].as_str()),
+        ("bad", "failed")
+    );
+    assert!(
+        rows[1][col("error")].contains("passed through its axis"),
+        "{:?}",
+        rows[1]
+    );
     // The failed run keeps what it wrote before it failed (t = 0), and says so.
     assert_eq!(rows[1][col("t")], "0e0");
     let summary = std::fs::read_to_string(out.join("runs/bad/summary.json")).unwrap();
@@ -81,8 +134,16 @@ fn a_failed_run_is_reported_and_the_others_are_kept() {
 fn bad_sweeps_are_refused_before_anything_runs() {
     let cases = [
         ("[sweep.grid]\n\"fibres.D\" = [0, -1]\n", vec![], "run D=-1"),
-        ("[sweep.grid]\n\"fibres.DD\" = [0]\n", vec![], "unknown key 'fibres.DD'"),
-        ("[sweep.grid]\n\"fibres.D\" = [0, 1]\n", vec!["--set", "fibres.D=3"], "sweeps fibres.D"),
+        (
+            "[sweep.grid]\n\"fibres.DD\" = [0]\n",
+            vec![],
+            "unknown key 'fibres.DD'",
+        ),
+        (
+            "[sweep.grid]\n\"fibres.D\" = [0, 1]\n",
+            vec!["--set", "fibres.D=3"],
+            "sweeps fibres.D",
+        ),
         ("[sweep]\n", vec![], "[sweep] is empty"),
     ];
     for (extra, sets, needle) in cases {
@@ -96,7 +157,10 @@ fn bad_sweeps_are_refused_before_anything_runs() {
     }
     // A sweep is not a scene for solve or grow.
     let dir = tempfile::tempdir().unwrap();
-    write_scene(dir.path(), &format!("{SMALL}[sweep.grid]\n\"fibres.D\" = [0, 1]\n"));
+    write_scene(
+        dir.path(),
+        &format!("{SMALL}[sweep.grid]\n\"fibres.D\" = [0, 1]\n"),
+    );
     for cmd in ["grow", "solve"] {
         let run = eyeshell_in(dir.path(), &[cmd, "s.toml", "--out", "out"]);
         assert_bad(&run, "run it with `eyeshell sweep s.toml --out DIR`", cmd);
@@ -112,11 +176,23 @@ fn an_interrupted_sweep_keeps_its_finished_runs_and_resume_does_the_rest() {
     let sweep = Sweep::from_toml_str(&text, "s.toml", &[]).unwrap();
     // One run at a time; "Ctrl-C" as soon as the first run ends.
     let cancel = AtomicBool::new(false);
-    let options = SweepOptions { jobs: 1, resume: false, cancel: &cancel };
-    let report = run_sweep(&sweep, &out, &options, &|_, _, _| cancel.store(true, Ordering::SeqCst)).unwrap();
+    let options = SweepOptions {
+        jobs: 1,
+        resume: false,
+        cancel: &cancel,
+    };
+    let report = run_sweep(&sweep, &out, &options, &|_, _, _| {
+        cancel.store(true, Ordering::SeqCst)
+    })
+    .unwrap();
     assert!(report.interrupted);
     assert_eq!(report.status(), "interrupted");
-    let done: Vec<&str> = report.records.iter().filter(|r| r.status == RunStatus::Ok).map(|r| r.name.as_str()).collect();
+    let done: Vec<&str> = report
+        .records
+        .iter()
+        .filter(|r| r.status == RunStatus::Ok)
+        .map(|r| r.name.as_str())
+        .collect();
     assert_eq!(done.len(), 1, "{:?}", report.records);
     let (_, rows) = csv_cells(&out.join("sweep.csv"));
     assert_eq!(rows.iter().filter(|r| r[1] == "not run").count(), 3);
@@ -125,13 +201,28 @@ fn an_interrupted_sweep_keeps_its_finished_runs_and_resume_does_the_rest() {
 
     // --resume: the finished run is reused as it is, the others run.
     let cancel = AtomicBool::new(false);
-    let options = SweepOptions { jobs: 2, resume: true, cancel: &cancel };
+    let options = SweepOptions {
+        jobs: 2,
+        resume: true,
+        cancel: &cancel,
+    };
     let report = run_sweep(&sweep, &out, &options, &|_, _, _| {}).unwrap();
     assert_eq!(report.status(), "ok");
     let statuses: Vec<RunStatus> = report.records.iter().map(|r| r.status.clone()).collect();
-    assert_eq!(statuses.iter().filter(|s| **s == RunStatus::Reused).count(), 1, "{statuses:?}");
-    assert_eq!(statuses.iter().filter(|s| **s == RunStatus::Ok).count(), 3, "{statuses:?}");
-    assert_eq!(std::fs::read_to_string(first.join("series.csv")).unwrap(), written);
+    assert_eq!(
+        statuses.iter().filter(|s| **s == RunStatus::Reused).count(),
+        1,
+        "{statuses:?}"
+    );
+    assert_eq!(
+        statuses.iter().filter(|s| **s == RunStatus::Ok).count(),
+        3,
+        "{statuses:?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(first.join("series.csv")).unwrap(),
+        written
+    );
 
     // A changed scene is not reused.
     let other = Sweep::from_toml_str(&text, "s.toml", &["growth.eta0=60".into()]).unwrap();
@@ -147,34 +238,67 @@ fn elastic_sweeps_solve_each_shell() {
     assert_eq!(run.code, Some(0), "{}", run.stderr);
     let (header, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
     let col = |n: &str| header.iter().position(|h| h == n).unwrap();
-    assert!(rows.iter().all(|r| r[col("kind")] == "solve" && r[1] == "ok"));
+    assert!(rows
+        .iter()
+        .all(|r| r[col("kind")] == "solve" && r[1] == "ok"));
     // The loaded, ungrown eye: shorter than 2 R0 and hyperopic; fibres stiffen it.
-    let l: Vec<f64> = rows.iter().map(|r| r[col("axial_length")].parse().unwrap()).collect();
+    let l: Vec<f64> = rows
+        .iter()
+        .map(|r| r[col("axial_length")].parse().unwrap())
+        .collect();
     assert!(l.iter().all(|&x| x > 19.0 && x < 20.5), "{l:?}");
     assert!(l[1] < l[0], "{l:?}");
     assert!(rows.iter().all(|r| r[col("class")] == "hyperopic"));
     assert!(dir.path().join("out/runs/D=200/fields.csv").is_file());
     // Each run's summary names the physics its model contains: fibres only where D > 0.
     let summary = |run: &str| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join(format!("out/runs/{run}/summary.json"))).unwrap()).unwrap()
+        serde_json::from_str(
+            &std::fs::read_to_string(dir.path().join(format!("out/runs/{run}/summary.json")))
+                .unwrap(),
+        )
+        .unwrap()
     };
     let (free, fibres) = (summary("D=0"), summary("D=200"));
     assert_eq!(free["components"]["membrane"]["kind"], "neo_hookean");
     assert_eq!(fibres["components"]["membrane"]["kind"], "reinforced");
     assert_eq!(fibres["components"]["thickness"]["kind"], "profile");
     assert_eq!(free["components"]["growth"], false);
-    assert!(free["model"].as_str().unwrap().contains("no fibres"), "{}", free["model"]);
+    assert!(
+        free["model"].as_str().unwrap().contains("no fibres"),
+        "{}",
+        free["model"]
+    );
 }
 
 #[test]
 fn check_lists_the_runs_of_a_sweep() {
     let r = ok(&["check", "scenes/grow.toml"]);
-    assert!(r.stdout.starts_with("# scenes/grow.toml: valid sweep 'grow' of 6 runs over growth.Gamma, growth.delta"), "{}", r.stdout);
-    assert!(r.stdout.lines().any(|l| l.starts_with("#   Gamma=12_delta=6 ") && l.ends_with(" growth.Gamma = 12, growth.delta = 6")), "{}", r.stdout);
+    assert!(
+        r.stdout.starts_with(
+            "# scenes/grow.toml: valid sweep 'grow' of 6 runs over growth.Gamma, growth.delta"
+        ),
+        "{}",
+        r.stdout
+    );
+    assert!(
+        r.stdout
+            .lines()
+            .any(|l| l.starts_with("#   Gamma=12_delta=6 ")
+                && l.ends_with(" growth.Gamma = 12, growth.delta = 6")),
+        "{}",
+        r.stdout
+    );
     assert!(r.stdout.contains("fibres.D = 100.0"), "{}", r.stdout);
     let dir = tempfile::tempdir().unwrap();
-    write_scene(dir.path(), &format!("{SMALL}[sweep.grid]\n\"fibres.D\" = [1, -1]\n"));
-    assert_bad(&eyeshell_in(dir.path(), &["check", "s.toml"]), "s.toml [sweep] run D=-1: fibres.D = -1 must be non-negative", "check");
+    write_scene(
+        dir.path(),
+        &format!("{SMALL}[sweep.grid]\n\"fibres.D\" = [1, -1]\n"),
+    );
+    assert_bad(
+        &eyeshell_in(dir.path(), &["check", "s.toml"]),
+        "s.toml [sweep] run D=-1: fibres.D = -1 must be non-negative",
+        "check",
+    );
 }
 
 /// A real Ctrl-C (SIGINT) to `eyeshell sweep`: no new run starts, the running one finishes,
@@ -185,8 +309,15 @@ fn ctrl_c_stops_starting_runs_and_keeps_the_table() {
     use std::process::{Command, Stdio};
     let dir = tempfile::tempdir().unwrap();
     // Each run takes a few tenths of a second: the signal arrives while the second runs.
-    let text = SMALL.replace("nodes = 21", "nodes = 201").replace("t_end = 0.2", "t_end = 1.0").replace("times = [0.1]", "times = [0.5]").replace("rtol = 1e-3", "rtol = 1e-6");
-    write_scene(dir.path(), &format!("{text}[sweep.grid]\n\"growth.Gamma\" = [4, 5, 6, 7, 8, 9]\n"));
+    let text = SMALL
+        .replace("nodes = 21", "nodes = 201")
+        .replace("t_end = 0.2", "t_end = 1.0")
+        .replace("times = [0.1]", "times = [0.5]")
+        .replace("rtol = 1e-3", "rtol = 1e-6");
+    write_scene(
+        dir.path(),
+        &format!("{text}[sweep.grid]\n\"growth.Gamma\" = [4, 5, 6, 7, 8, 9]\n"),
+    );
     let mut child = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
         .args(["sweep", "s.toml", "--out", "out", "--jobs", "1"])
         .current_dir(dir.path())
@@ -198,15 +329,24 @@ fn ctrl_c_stops_starting_runs_and_keeps_the_table() {
     let mut first = String::new();
     stderr.read_line(&mut first).unwrap();
     assert!(first.starts_with("eyeshell: [1/6] "), "{first}");
-    let killed = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
     assert!(killed.success());
     let mut rest = String::new();
     std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
     let status = child.wait().unwrap();
     assert_eq!(status.code(), Some(1), "{first}{rest}");
-    assert!(rest.contains("interrupted: finishing the running runs"), "{rest}");
+    assert!(
+        rest.contains("interrupted: finishing the running runs"),
+        "{rest}"
+    );
     let last = rest.lines().last().unwrap();
-    assert!(last.starts_with("eyeshell: error: sweep interrupted: ") && last.contains("--resume"), "{last}");
+    assert!(
+        last.starts_with("eyeshell: error: sweep interrupted: ") && last.contains("--resume"),
+        "{last}"
+    );
     let (_, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
     let ok = rows.iter().filter(|r| r[1] == "ok").count();
     let not_run = rows.iter().filter(|r| r[1] == "not run").count();
@@ -215,6 +355,11 @@ fn ctrl_c_stops_starting_runs_and_keeps_the_table() {
     assert!(summary.contains("\"status\": \"interrupted\""), "{summary}");
     // Every finished run is whole.
     for r in rows.iter().filter(|r| r[1] == "ok") {
-        assert!(dir.path().join("out/runs").join(&r[0]).join("result.json").is_file());
+        assert!(dir
+            .path()
+            .join("out/runs")
+            .join(&r[0])
+            .join("result.json")
+            .is_file());
     }
 }

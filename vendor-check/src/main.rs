@@ -31,12 +31,19 @@ fn solve_3x3(spec: &LinearSolverSpec) -> Result<f64, eyeshell_sundials::Sundials
             }
         }
     }
-    let b: Vec<f64> = A.iter().map(|row| row.iter().zip(X).map(|(a, x)| a * x).sum()).collect();
+    let b: Vec<f64> = A
+        .iter()
+        .map(|row| row.iter().zip(X).map(|(a, x)| a * x).sum())
+        .collect();
     let b = NVector::from_slice(&ctx, &b)?;
     let mut x = NVector::new(&ctx, 3)?;
     ls.setup(&mut a)?;
     ls.solve(&mut a, &mut x, &b)?;
-    Ok(x.as_slice().iter().zip(X).map(|(g, w)| (g - w).abs()).fold(0.0, f64::max))
+    Ok(x.as_slice()
+        .iter()
+        .zip(X)
+        .map(|(g, w)| (g - w).abs())
+        .fold(0.0, f64::max))
 }
 
 /// F(u) = u - 1, to make KINSOL memory exist (and load libsundials_kinsol).
@@ -68,10 +75,15 @@ fn loaded_libraries() -> Vec<String> {
 }
 
 fn vendored_builds() -> Vec<PathBuf> {
-    let Some(build) = Path::new(eyeshell_sundials::BUILD_OUT_DIR).parent().and_then(Path::parent) else {
+    let Some(build) = Path::new(eyeshell_sundials::BUILD_OUT_DIR)
+        .parent()
+        .and_then(Path::parent)
+    else {
         return vec![];
     };
-    let Ok(entries) = std::fs::read_dir(build) else { return vec![] };
+    let Ok(entries) = std::fs::read_dir(build) else {
+        return vec![];
+    };
     let mut found = vec![];
     for e in entries.flatten() {
         if e.file_name().to_string_lossy().starts_with("sundials-sys-") {
@@ -111,7 +123,10 @@ fn main() -> ExitCode {
         ("dense", LinearSolverSpec::Dense),
         ("band", LinearSolverSpec::Band { upper: 1, lower: 1 }),
     ];
-    let klu_pattern = LinearSolverSpec::Klu { row_ptr: vec![0, 2, 5, 7], col_idx: vec![0, 1, 0, 1, 2, 1, 2] };
+    let klu_pattern = LinearSolverSpec::Klu {
+        row_ptr: vec![0, 2, 5, 7],
+        col_idx: vec![0, 1, 0, 1, 2, 1, 2],
+    };
     if eyeshell_sundials::klu_available() {
         specs.push(("KLU", klu_pattern));
     } else {
@@ -122,7 +137,9 @@ fn main() -> ExitCode {
             Ok(err) if err < 1e-12 => println!("  {name:<6} ok ({err:.1e})"),
             Ok(err) => {
                 println!("  {name:<6} WRONG ({err:.1e})");
-                problems.push(format!("the {name} solver gave a wrong solution (error {err:.1e})"));
+                problems.push(format!(
+                    "the {name} solver gave a wrong solution (error {err:.1e})"
+                ));
             }
             Err(e) => {
                 println!("  {name:<6} FAILED: {e}");
@@ -132,9 +149,19 @@ fn main() -> ExitCode {
     }
 
     // Keep objects of every kind alive while reading the memory map.
-    let kinsol = Kinsol::new(Shift, 3, LinearSolverSpec::Band { upper: 1, lower: 1 }, &KinsolOptions::default());
+    let kinsol = Kinsol::new(
+        Shift,
+        3,
+        LinearSolverSpec::Band { upper: 1, lower: 1 },
+        &KinsolOptions::default(),
+    );
     let solvers: Vec<_> = Context::new()
-        .map(|ctx| specs.iter().filter_map(|(_, s)| LinearSolver::for_spec(&ctx, 3, s).ok()).collect())
+        .map(|ctx| {
+            specs
+                .iter()
+                .filter_map(|(_, s)| LinearSolver::for_spec(&ctx, 3, s).ok())
+                .collect()
+        })
         .unwrap_or_default();
     match &kinsol {
         Ok(_) => println!("KINSOL: memory created"),
@@ -144,7 +171,14 @@ fn main() -> ExitCode {
     println!("Loaded libraries:");
     for p in &libs {
         let system = p.starts_with("/usr/lib/") || p.starts_with("/lib/");
-        println!("  {p}{}", if system { "" } else { "   <-- NOT a system library" });
+        println!(
+            "  {p}{}",
+            if system {
+                ""
+            } else {
+                "   <-- NOT a system library"
+            }
+        );
         if !system && p.contains("libsundials_") {
             problems.push(format!("{p} is not under /usr/lib or /lib"));
         }

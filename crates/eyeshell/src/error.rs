@@ -17,5 +17,8 @@ pub enum Error {
     #[error(transparent)]
     GrowthRhs(#[from] crate::growth::system::RhsError),
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 }

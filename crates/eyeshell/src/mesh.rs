@@ -30,8 +30,17 @@ pub struct Mesh {
 impl Mesh {
     /// Lay the nodes: `uniform` ≥ 2 even nodes on [ε, L], the `breakpoints` inside (ε, L),
     /// and the pole grading when `grade_pole`.
-    pub fn new(epsilon: f64, length: f64, uniform: usize, breakpoints: &[f64], grade_pole: bool) -> Mesh {
-        assert!(uniform >= 2 && epsilon < length, "mesh needs ε < L and two nodes");
+    pub fn new(
+        epsilon: f64,
+        length: f64,
+        uniform: usize,
+        breakpoints: &[f64],
+        grade_pole: bool,
+    ) -> Mesh {
+        assert!(
+            uniform >= 2 && epsilon < length,
+            "mesh needs ε < L and two nodes"
+        );
         let h = (length - epsilon) / (uniform - 1) as f64;
         let mut nodes: Vec<f64> = (0..uniform).map(|i| epsilon + i as f64 * h).collect();
         nodes[uniform - 1] = length;
@@ -64,7 +73,14 @@ impl Mesh {
             .iter()
             .map(|b| nodes.iter().position(|x| x == b).unwrap())
             .collect();
-        Mesh { nodes, uniform, breakpoint_nodes, inserted_breakpoints: inserted, pole_nodes, cornea_nodes: 0 }
+        Mesh {
+            nodes,
+            uniform,
+            breakpoint_nodes,
+            inserted_breakpoints: inserted,
+            pole_nodes,
+            cornea_nodes: 0,
+        }
     }
 
     /// Resolve a boundary layer of width `layer` at the cornea (Σ = L) inside the last
@@ -145,7 +161,9 @@ impl Mesh {
 
     /// Index of the node at exactly Σ, if any.
     pub fn node_at(&self, sigma_ref: f64) -> Option<usize> {
-        self.nodes.binary_search_by(|x| x.partial_cmp(&sigma_ref).unwrap()).ok()
+        self.nodes
+            .binary_search_by(|x| x.partial_cmp(&sigma_ref).unwrap())
+            .ok()
     }
 }
 
@@ -166,11 +184,17 @@ mod tests {
     fn pole_grading_reaches_epsilon() {
         let m = Mesh::new(1e-3, 25.0, 501, &[], true);
         let h: f64 = (25.0 - 1e-3) / 500.0;
-        assert_eq!(m.pole_nodes, ((h / 1e-3).ln() / (1.0 / POLE_RATIO).ln()).ceil() as usize);
+        assert_eq!(
+            m.pole_nodes,
+            ((h / 1e-3).ln() / (1.0 / POLE_RATIO).ln()).ceil() as usize
+        );
         assert!(m.step(0) <= 1e-3 && m.step(0) > 1e-3 * POLE_RATIO);
         // Each graded spacing is a bounded multiple, (1 − q)/q, of the distance from the pole.
         for i in 0..m.pole_nodes {
-            assert!(m.step(i) <= (1.0 - POLE_RATIO) / POLE_RATIO * m.nodes[i] + 1e-15, "spacing too large at node {i}");
+            assert!(
+                m.step(i) <= (1.0 - POLE_RATIO) / POLE_RATIO * m.nodes[i] + 1e-15,
+                "spacing too large at node {i}"
+            );
         }
         assert_eq!(m.len(), 501 + m.pole_nodes);
     }
@@ -192,7 +216,11 @@ mod tests {
 
     #[test]
     fn breakpoints_become_nodes() {
-        let bps = [std::f64::consts::FRAC_PI_2, 1.25 * std::f64::consts::PI, 5.0 * std::f64::consts::PI];
+        let bps = [
+            std::f64::consts::FRAC_PI_2,
+            1.25 * std::f64::consts::PI,
+            5.0 * std::f64::consts::PI,
+        ];
         let m = Mesh::new(1e-3, 8.0 * std::f64::consts::PI, 101, &bps, true);
         for (k, &b) in bps.iter().enumerate() {
             assert_eq!(m.nodes[m.breakpoint_nodes[k]], b);

@@ -107,7 +107,13 @@ impl RunRecord {
     pub fn status_text(&self) -> String {
         match (&self.status, &self.result) {
             (RunStatus::Failed(m), _) => format!("FAILED: {m}"),
-            (s, Some(x)) => format!("{}: axial length {:.4} mm, {} ({:.2} s)", s.as_str(), x.axial_length, x.class, x.wall_seconds),
+            (s, Some(x)) => format!(
+                "{}: axial length {:.4} mm, {} ({:.2} s)",
+                s.as_str(),
+                x.axial_length,
+                x.class,
+                x.wall_seconds
+            ),
             (s, None) => s.as_str().to_string(),
         }
     }
@@ -124,7 +130,9 @@ pub struct SweepReport {
 impl SweepReport {
     /// The runs that failed.
     pub fn failed(&self) -> impl Iterator<Item = &RunRecord> {
-        self.records.iter().filter(|r| matches!(r.status, RunStatus::Failed(_)))
+        self.records
+            .iter()
+            .filter(|r| matches!(r.status, RunStatus::Failed(_)))
     }
 
     /// "ok", "partial", "interrupted" (or "running" while it runs).
@@ -166,7 +174,11 @@ pub fn run_sweep(
             result: None,
         })
         .collect();
-    let report = Mutex::new(SweepReport { records, interrupted: false, dir: out.to_path_buf() });
+    let report = Mutex::new(SweepReport {
+        records,
+        interrupted: false,
+        dir: out.to_path_buf(),
+    });
     write_tables(sweep, &lock(&report))?;
     let total = sweep.runs.len();
     let finished = std::sync::atomic::AtomicUsize::new(0);
@@ -209,7 +221,10 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 }
 
 fn io(path: &Path, e: std::io::Error) -> OutputError {
-    OutputError::Io { path: path.to_path_buf(), source: e }
+    OutputError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    }
 }
 
 /// The results of a run finished earlier with the same scene, if there is one.
@@ -223,7 +238,8 @@ fn reusable(run: &SweepRun, dir: &Path) -> Option<RunResult> {
 
 /// Run one scene into `dir`; a panic inside is a failed run, not a failed sweep.
 fn run_one(run: &SweepRun, dir: &Path) -> (RunStatus, Option<RunResult>) {
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| execute(&run.scene, dir)));
+    let outcome =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| execute(&run.scene, dir)));
     match outcome {
         Ok(Ok(result)) => (RunStatus::Ok, Some(result)),
         Ok(Err((message, partial))) => (RunStatus::Failed(message), partial.map(|r| *r)),
@@ -233,7 +249,10 @@ fn run_one(run: &SweepRun, dir: &Path) -> (RunStatus, Option<RunResult>) {
                 .map(|s| s.to_string())
                 .or_else(|| panic.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown".into());
-            (RunStatus::Failed(format!("internal error (a bug; please report it): {what}")), None)
+            (
+                RunStatus::Failed(format!("internal error (a bug; please report it): {what}")),
+                None,
+            )
         }
     }
 }
@@ -250,7 +269,8 @@ pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     let text = serde_json::to_string_pretty(&result).unwrap_or_default();
     for (file, text) in [(SCENE_FILE, scene.to_toml()), (RESULT_FILE, text)] {
         let path = dir.join(file);
-        write_atomic(&path, text.as_bytes()).map_err(|e| (io(&path, e).to_string(), Some(Box::new(result.clone()))))?;
+        write_atomic(&path, text.as_bytes())
+            .map_err(|e| (io(&path, e).to_string(), Some(Box::new(result.clone()))))?;
     }
     Ok(result)
 }
@@ -260,8 +280,15 @@ fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     let mut writer = GrowthWriter::create(dir, scene, false).map_err(|e| (e.to_string(), None))?;
     // scene.toml first, so a failed run can still be reproduced.
     let path = dir.join(SCENE_FILE);
-    write_atomic(&path, scene.to_toml().as_bytes()).map_err(|e| (io(&path, e).to_string(), None))?;
-    let outcome = grow(&scene.params, &scene.solver, growth, &scene.growth_settings, &mut writer);
+    write_atomic(&path, scene.to_toml().as_bytes())
+        .map_err(|e| (io(&path, e).to_string(), None))?;
+    let outcome = grow(
+        &scene.params,
+        &scene.solver,
+        growth,
+        &scene.growth_settings,
+        &mut writer,
+    );
     let last = writer.last_row().copied();
     match outcome {
         Ok(stats) => {
@@ -302,8 +329,10 @@ fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     let solution = crate::bvp::solve(&scene.params, &scene.solver, None).map_err(|e| fail(&e))?;
     rundir::check_target(dir).map_err(|e| fail(&e))?;
     let out = OutputDir::create(dir).map_err(|e| fail(&e))?;
-    rundir::write_fields_csv(&out.file(rundir::FIELDS_FILE), &solution.rows).map_err(|e| fail(&e))?;
-    rundir::write_summary_json(&out.file(rundir::SUMMARY_FILE), scene, &solution.stats).map_err(|e| fail(&e))?;
+    rundir::write_fields_csv(&out.file(rundir::FIELDS_FILE), &solution.rows)
+        .map_err(|e| fail(&e))?;
+    rundir::write_summary_json(&out.file(rundir::SUMMARY_FILE), scene, &solution.stats)
+        .map_err(|e| fail(&e))?;
     out.commit().map_err(|e| fail(&e))?;
     let s = &solution.stats;
     Ok(RunResult {
@@ -317,9 +346,17 @@ fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
 
 /// The retina of a loaded, ungrown shell, measured as a growth run would (docs/MODEL.md §6).
 fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> RunResult {
-    let retina = |f: &FieldRow| (f.z - 0.5 * f.h * f.theta.cos(), f.r - 0.5 * f.h * f.theta.sin());
+    let retina = |f: &FieldRow| {
+        (
+            f.z - 0.5 * f.h * f.theta.cos(),
+            f.r - 0.5 * f.h * f.theta.sin(),
+        )
+    };
     let pole = rows.first().map(retina).unwrap_or((f64::NAN, f64::NAN));
-    let (blue, red) = (scene.blue().depth(pole.0, pole.1), scene.red().depth(pole.0, pole.1));
+    let (blue, red) = (
+        scene.blue().depth(pole.0, pole.1),
+        scene.red().depth(pole.0, pole.1),
+    );
     RunResult {
         kind: "solve".into(),
         t: 0.0,
@@ -381,13 +418,23 @@ pub fn table_csv(sweep: &Sweep, report: &SweepReport) -> String {
         .chain(sweep.keys.iter().cloned())
         .chain(RESULT_COLUMNS.iter().map(|s| s.to_string()))
         .collect();
-    let mut text = header.iter().map(|h| csv_field(h)).collect::<Vec<_>>().join(",");
+    let mut text = header
+        .iter()
+        .map(|h| csv_field(h))
+        .collect::<Vec<_>>()
+        .join(",");
     text.push('\n');
     for r in &report.records {
         let mut fields = vec![r.name.clone(), r.status.as_str().to_string()];
         fields.extend(r.values.iter().cloned());
         fields.extend(result_fields(r));
-        text.push_str(&fields.iter().map(|f| csv_field(f)).collect::<Vec<_>>().join(","));
+        text.push_str(
+            &fields
+                .iter()
+                .map(|f| csv_field(f))
+                .collect::<Vec<_>>()
+                .join(","),
+        );
         text.push('\n');
     }
     text
@@ -428,8 +475,12 @@ pub fn summary_json(sweep: &Sweep, report: &SweepReport) -> serde_json::Value {
         .records
         .iter()
         .map(|r| {
-            let values: serde_json::Map<String, serde_json::Value> =
-                sweep.keys.iter().cloned().zip(r.values.iter().map(|v| v.clone().into())).collect();
+            let values: serde_json::Map<String, serde_json::Value> = sweep
+                .keys
+                .iter()
+                .cloned()
+                .zip(r.values.iter().map(|v| v.clone().into()))
+                .collect();
             serde_json::json!({
                 "name": r.name,
                 "dir": r.dir,

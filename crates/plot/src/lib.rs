@@ -530,7 +530,12 @@ impl<'a> Cell<'a> {
     fn new(fig: &'a Figure, at: (i32, i32), size: (u32, u32)) -> Self {
         let fig = offset_axes(fig);
         let prep = Prepared::new(&fig);
-        Cell { fig, prep, at, size }
+        Cell {
+            fig,
+            prep,
+            at,
+            size,
+        }
     }
 }
 
@@ -701,7 +706,11 @@ impl Prepared {
 /// (1.0136216901 ± 1e-9): tick labels then show the variation only, and the axis title says
 /// what was subtracted. None when the labels can show the values themselves.
 fn axis_offset(values: impl Iterator<Item = f64>) -> Option<f64> {
-    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
     let span = hi - lo;
     if !(span > 0.0) || span >= 1e-4 * lo.abs().max(hi.abs()) {
         return None;
@@ -720,25 +729,44 @@ fn offset_text(v: f64, unit_digits: usize) -> String {
 /// no explicit range), the axis titles saying so; the figure itself when none does.
 fn offset_axes(fig: &Figure) -> std::borrow::Cow<'_, Figure> {
     let points = || fig.series.iter().flat_map(|s| s.points.iter());
-    let linear_auto = |scale: Scale, range: Option<(f64, f64)>| scale == Scale::Linear && range.is_none();
-    let dx = if linear_auto(fig.x_scale, fig.x_range) { axis_offset(points().map(|p| p.0)) } else { None };
-    let dy = if linear_auto(fig.y_scale, fig.y_range) && !fig.aspect_equal { axis_offset(points().map(|p| p.1)) } else { None };
+    let linear_auto =
+        |scale: Scale, range: Option<(f64, f64)>| scale == Scale::Linear && range.is_none();
+    let dx = if linear_auto(fig.x_scale, fig.x_range) {
+        axis_offset(points().map(|p| p.0))
+    } else {
+        None
+    };
+    let dy = if linear_auto(fig.y_scale, fig.y_range) && !fig.aspect_equal {
+        axis_offset(points().map(|p| p.1))
+    } else {
+        None
+    };
     let dx = dx.filter(|_| !fig.aspect_equal);
     if dx.is_none() && dy.is_none() {
         return std::borrow::Cow::Borrowed(fig);
     }
     let mut out = fig.clone();
     let title = |label: &str, offset: f64, values: &mut dyn Iterator<Item = f64>| {
-        let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+        let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
         let digits = (-(hi - lo).log10().floor() + 1.0).clamp(0.0, 17.0) as usize;
         let sign = if offset < 0.0 { "+" } else { "−" };
         format!("{label} {sign} {}", offset_text(offset.abs(), digits))
     };
     if let Some(d) = dx {
-        out.x_label = title(&fig.x_label, d, &mut points().map(|p| p.0).filter(|v| v.is_finite()));
+        out.x_label = title(
+            &fig.x_label,
+            d,
+            &mut points().map(|p| p.0).filter(|v| v.is_finite()),
+        );
     }
     if let Some(d) = dy {
-        out.y_label = title(&fig.y_label, d, &mut points().map(|p| p.1).filter(|v| v.is_finite()));
+        out.y_label = title(
+            &fig.y_label,
+            d,
+            &mut points().map(|p| p.1).filter(|v| v.is_finite()),
+        );
     }
     for s in &mut out.series {
         for p in &mut s.points {
@@ -1233,7 +1261,10 @@ impl View {
 
 /// The visible pieces of a polyline, each at least two points long.
 fn visible_runs(view: &View, points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
-    visible_runs_by(view, points, |_| ()).into_iter().map(|(_, run)| run).collect()
+    visible_runs_by(view, points, |_| ())
+        .into_iter()
+        .map(|(_, run)| run)
+        .collect()
 }
 
 /// The visible pieces of a polyline, also split where `key(i)` of segment i changes; each
@@ -1334,9 +1365,16 @@ where
     let color = |i: usize| segment_color(value(i), value(i + 1), shade);
     for (color, run) in visible_runs_by(view, points, color) {
         let ends = [run[0], run[run.len() - 1]];
-        draw_path(chart, run, ShapeStyle::from(color).stroke_width(width), dashed)?;
+        draw_path(
+            chart,
+            run,
+            ShapeStyle::from(color).stroke_width(width),
+            dashed,
+        )?;
         if width >= 3 && !dashed {
-            chart.draw_series(ends.map(|p| Circle::new(p, width / 2, color.filled()))).map_err(e)?;
+            chart
+                .draw_series(ends.map(|p| Circle::new(p, width / 2, color.filled())))
+                .map_err(e)?;
         }
     }
     Ok(())
@@ -1585,14 +1623,26 @@ mod tests {
         assert_eq!(axis_offset([5.0, 5.0].into_iter()), None);
         let d = axis_offset([1.0136216901, 1.0136216911].into_iter()).unwrap();
         assert!((d - 1.013621690).abs() < 1e-9 + 1e-12, "{d}");
-        let fig = Figure::new("", "x", "α_s").with(Series::new("a", vec![(0.0, 1.0136216901), (1.0, 1.0136216911)], SeriesStyle::Line));
+        let fig = Figure::new("", "x", "α_s").with(Series::new(
+            "a",
+            vec![(0.0, 1.0136216901), (1.0, 1.0136216911)],
+            SeriesStyle::Line,
+        ));
         let shifted = offset_axes(&fig);
         assert_eq!(shifted.x_label, "x");
-        assert!(shifted.y_label.starts_with("α_s − 1.0136216"), "{}", shifted.y_label);
+        assert!(
+            shifted.y_label.starts_with("α_s − 1.0136216"),
+            "{}",
+            shifted.y_label
+        );
         let ys: Vec<f64> = shifted.series[0].points.iter().map(|p| p.1).collect();
         assert!(ys.iter().all(|y| y.abs() < 1e-8), "{ys:?}");
         // An ordinary figure is drawn as it is.
-        let plain = Figure::new("", "x", "y").with(Series::new("a", vec![(0.0, 1.0), (1.0, 2.0)], SeriesStyle::Line));
+        let plain = Figure::new("", "x", "y").with(Series::new(
+            "a",
+            vec![(0.0, 1.0), (1.0, 2.0)],
+            SeriesStyle::Line,
+        ));
         assert!(matches!(offset_axes(&plain), std::borrow::Cow::Borrowed(_)));
     }
 

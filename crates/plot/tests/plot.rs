@@ -522,7 +522,8 @@ fn odd_input_still_draws() {
         keep_sample(fig, &format!("odd{k}"));
     }
     let (png, _) =
-        eyeshell_plot::write_panels(&figs, 2, "odd", 200, 150, &dir.path().join("odd-panels")).unwrap();
+        eyeshell_plot::write_panels(&figs, 2, "odd", 200, 150, &dir.path().join("odd-panels"))
+            .unwrap();
     assert_eq!(decode_png(&png).0, 400);
 }
 

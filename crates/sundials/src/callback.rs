@@ -54,7 +54,11 @@ impl CallbackState {
     }
 
     /// Run `f` without letting a panic escape; map its result to a SUNDIALS flag.
-    pub(crate) fn guard(&mut self, what: &'static str, f: impl FnOnce() -> CallbackResult) -> c_int {
+    pub(crate) fn guard(
+        &mut self,
+        what: &'static str,
+        f: impl FnOnce() -> CallbackResult,
+    ) -> c_int {
         match catch_unwind(AssertUnwindSafe(f)) {
             Ok(Ok(())) => 0,
             Ok(Err(CallbackError::Recoverable(m))) => {
@@ -62,7 +66,10 @@ impl CallbackState {
                 1
             }
             Ok(Err(CallbackError::Fatal(m))) => self.fail(format!("{what}: {m}")),
-            Err(payload) => self.fail(format!("{what} panicked: {}", panic_message(payload.as_ref()))),
+            Err(payload) => self.fail(format!(
+                "{what} panicked: {}",
+                panic_message(payload.as_ref())
+            )),
         }
     }
 
@@ -217,7 +224,11 @@ pub(crate) unsafe extern "C" fn error_handler(
             }
         };
         let (function, message) = (text(function), text(message));
-        let line = if function.is_empty() { message } else { format!("{function}: {message}") };
+        let line = if function.is_empty() {
+            message
+        } else {
+            format!("{function}: {message}")
+        };
         if let Some(log) = (data as *mut ErrorLog).as_mut() {
             log.entries.push((code, super::error::one_line(&line)));
         }
@@ -232,11 +243,18 @@ mod tests {
     fn guard_maps_results_and_catches_panics() {
         let mut s = CallbackState::default();
         assert_eq!(s.guard("f", || Ok(())), 0);
-        assert_eq!(s.guard("f", || Err(CallbackError::Recoverable("soft".into()))), 1);
+        assert_eq!(
+            s.guard("f", || Err(CallbackError::Recoverable("soft".into()))),
+            1
+        );
         assert_eq!(s.last_recoverable.as_deref(), Some("f: soft"));
         assert!(s.guard("residual", || panic!("boom {}", 7)) < 0);
         assert_eq!(s.fatal.as_deref(), Some("residual panicked: boom 7"));
         assert!(s.guard("g", || Err(CallbackError::Fatal("later".into()))) < 0);
-        assert_eq!(s.fatal.as_deref(), Some("residual panicked: boom 7"), "first failure wins");
+        assert_eq!(
+            s.fatal.as_deref(),
+            Some("residual panicked: boom 7"),
+            "first failure wins"
+        );
     }
 }

@@ -17,20 +17,23 @@ use std::os::raw::{c_int, c_long, c_void};
 use std::rc::Rc;
 
 use sundials_sys::{
-    realtype, CVode, CVodeCreate, CVodeFree, CVodeGetCurrentTime, CVodeGetDky,
-    CVodeGetLastOrder, CVodeGetLastStep, CVodeGetNumErrTestFails, CVodeGetNumJTSetupEvals,
-    CVodeGetNumJacEvals, CVodeGetNumJtimesEvals, CVodeGetNumLinConvFails, CVodeGetNumLinIters,
-    CVodeGetNumLinRhsEvals, CVodeGetNumNonlinSolvConvFails, CVodeGetNumNonlinSolvIters,
-    CVodeGetNumPrecEvals, CVodeGetNumPrecSolves, CVodeGetNumRhsEvals, CVodeGetNumSteps,
-    CVodeInit, CVodeReInit, CVodeSStolerances, CVodeSVtolerances, CVodeSetEpsLin,
-    CVodeSetErrHandlerFn, CVodeSetInitStep, CVodeSetJacFn, CVodeSetJacTimes,
-    CVodeSetLinearSolver, CVodeSetMaxConvFails, CVodeSetMaxErrTestFails, CVodeSetMaxNumSteps,
-    CVodeSetMaxOrd, CVodeSetMaxStep, CVodeSetPreconditioner, CVodeSetStopTime, CVodeSetUserData,
-    N_Vector, SUNLinSolFree, SUNLinSol_SPGMR, SUNLinearSolver,
-    SUNMatrix, CV_BDF, CV_NORMAL, CV_ONE_STEP, SUN_PREC_LEFT, SUN_PREC_NONE,
+    realtype, CVode, CVodeCreate, CVodeFree, CVodeGetCurrentTime, CVodeGetDky, CVodeGetLastOrder,
+    CVodeGetLastStep, CVodeGetNumErrTestFails, CVodeGetNumJTSetupEvals, CVodeGetNumJacEvals,
+    CVodeGetNumJtimesEvals, CVodeGetNumLinConvFails, CVodeGetNumLinIters, CVodeGetNumLinRhsEvals,
+    CVodeGetNumNonlinSolvConvFails, CVodeGetNumNonlinSolvIters, CVodeGetNumPrecEvals,
+    CVodeGetNumPrecSolves, CVodeGetNumRhsEvals, CVodeGetNumSteps, CVodeInit, CVodeReInit,
+    CVodeSStolerances, CVodeSVtolerances, CVodeSetEpsLin, CVodeSetErrHandlerFn, CVodeSetInitStep,
+    CVodeSetJacFn, CVodeSetJacTimes, CVodeSetLinearSolver, CVodeSetMaxConvFails,
+    CVodeSetMaxErrTestFails, CVodeSetMaxNumSteps, CVodeSetMaxOrd, CVodeSetMaxStep,
+    CVodeSetPreconditioner, CVodeSetStopTime, CVodeSetUserData, N_Vector, SUNLinSolFree,
+    SUNLinSol_SPGMR, SUNLinearSolver, SUNMatrix, CV_BDF, CV_NORMAL, CV_ONE_STEP, SUN_PREC_LEFT,
+    SUN_PREC_NONE,
 };
 
-use super::callback::{self, counter, error_handler, CallbackError, CallbackResult, CallbackState, CountGetter, ErrorLog, RawBox, RealGetter};
+use super::callback::{
+    self, counter, error_handler, CallbackError, CallbackResult, CallbackState, CountGetter,
+    ErrorLog, RawBox, RealGetter,
+};
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
 use super::linsol::{LinearSolver, LinearSolverSpec};
@@ -52,14 +55,28 @@ pub trait OdeSystem {
 
     /// jv = (∂f/∂y)(t, y) v (CVLsJacTimesVecFn). Registered only with
     /// `Spgmr { user_product: true, .. }`.
-    fn jac_times(&mut self, _t: f64, _y: &[f64], _fy: &[f64], _v: &[f64], _jv: &mut [f64]) -> CallbackResult {
+    fn jac_times(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _fy: &[f64],
+        _v: &[f64],
+        _jv: &mut [f64],
+    ) -> CallbackResult {
         Err(CallbackError::Fatal("no Jacobian product".into()))
     }
 
     /// Left preconditioner setup (CVLsPrecSetupFn) for P ≈ I − γ ∂f/∂y: `jok` says the
     /// saved Jacobian data may be reused; return whether it was recomputed (jcur).
     /// Registered only with `Spgmr { preconditioned: true, .. }`.
-    fn precond_setup(&mut self, _t: f64, _y: &[f64], _fy: &[f64], _jok: bool, _gamma: f64) -> Result<bool, CallbackError> {
+    fn precond_setup(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _fy: &[f64],
+        _jok: bool,
+        _gamma: f64,
+    ) -> Result<bool, CallbackError> {
         Ok(false)
     }
 
@@ -82,7 +99,13 @@ pub trait OdeSystem {
 
     /// Fill the structural entries of ∂f/∂y at (t, y) (CVLsJacFn); entries not set are zero
     /// (the layer zeroes the matrix first). Registered only with `user_jacobian: true`.
-    fn jacobian(&mut self, _t: f64, _y: &[f64], _fy: &[f64], _jac: JacobianMatrix<'_>) -> CallbackResult {
+    fn jacobian(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _fy: &[f64],
+        _jac: JacobianMatrix<'_>,
+    ) -> CallbackResult {
         Err(CallbackError::Fatal("no Jacobian".into()))
     }
 }
@@ -93,12 +116,20 @@ pub enum CvodeLinearSolver {
     /// Matrix-free GMRES (SUNLinSol_SPGMR, Krylov dimension `max_krylov` ≥ 1) with the user's
     /// [`OdeSystem::jac_times`] (`user_product`) or CVODE's difference quotient, and with or
     /// without the user's left preconditioner.
-    Spgmr { max_krylov: usize, user_product: bool, preconditioned: bool },
+    Spgmr {
+        max_krylov: usize,
+        user_product: bool,
+        preconditioned: bool,
+    },
     /// Dense LU with the user's [`OdeSystem::jacobian`] or CVODE's difference quotients.
     Dense { user_jacobian: bool },
     /// Band LU (bandwidths clamped to n − 1) with the user's Jacobian or CVODE's band
     /// difference quotients.
-    Band { upper: usize, lower: usize, user_jacobian: bool },
+    Band {
+        upper: usize,
+        lower: usize,
+        user_jacobian: bool,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -244,7 +275,13 @@ fn to_int(what: &str, n: usize) -> Result<c_int, SundialsError> {
 
 impl<S: OdeSystem> Cvode<S> {
     /// BDF (CV_BDF) with CVODE's Newton solver, from y(t0) = y0.
-    pub fn new(system: S, t0: f64, y0: &[f64], linear: CvodeLinearSolver, options: &CvodeOptions) -> Result<Self, SundialsError> {
+    pub fn new(
+        system: S,
+        t0: f64,
+        y0: &[f64],
+        linear: CvodeLinearSolver,
+        options: &CvodeOptions,
+    ) -> Result<Self, SundialsError> {
         let n = y0.len();
         if n == 0 {
             return invalid("CVODE needs at least one unknown".into());
@@ -256,12 +293,20 @@ impl<S: OdeSystem> Cvode<S> {
         let ctx = Context::new()?;
         let y = NVector::from_slice(&ctx, y0)?;
         let (matrix, linsol) = match &linear {
-            CvodeLinearSolver::Spgmr { max_krylov, preconditioned, .. } => {
+            CvodeLinearSolver::Spgmr {
+                max_krylov,
+                preconditioned,
+                ..
+            } => {
                 if *max_krylov == 0 {
                     return invalid("Spgmr needs max_krylov ≥ 1".into());
                 }
                 let maxl = to_int("max_krylov", *max_krylov)?;
-                let pretype = if *preconditioned { SUN_PREC_LEFT } else { SUN_PREC_NONE } as c_int;
+                let pretype = if *preconditioned {
+                    SUN_PREC_LEFT
+                } else {
+                    SUN_PREC_NONE
+                } as c_int;
                 // SAFETY: y and ctx are live; the constructor only inspects y as a template.
                 let raw = unsafe { SUNLinSol_SPGMR(y.raw(), pretype, maxl, ctx.raw()) };
                 if raw.is_null() {
@@ -274,24 +319,45 @@ impl<S: OdeSystem> Cvode<S> {
                 (Some(m), Linear::Direct(ls))
             }
             CvodeLinearSolver::Band { upper, lower, .. } => {
-                let spec = LinearSolverSpec::Band { upper: *upper, lower: *lower };
+                let spec = LinearSolverSpec::Band {
+                    upper: *upper,
+                    lower: *lower,
+                };
                 let (m, ls) = LinearSolver::for_spec(&ctx, n, &spec)?;
                 (Some(m), Linear::Direct(ls))
             }
         };
-        let shared = RawBox::new(Shared { system, matrix, callbacks: CallbackState::default(), scratch: vec![0.0; n] });
+        let shared = RawBox::new(Shared {
+            system,
+            matrix,
+            callbacks: CallbackState::default(),
+            scratch: vec![0.0; n],
+        });
         let log = RawBox::new(ErrorLog::default());
         // SAFETY: ctx is live.
         let raw = unsafe { CVodeCreate(CV_BDF, ctx.raw()) };
         if raw.is_null() {
             return Err(SundialsError::NullHandle("CVodeCreate"));
         }
-        let mut cv = Cvode { mem: CvMem(raw), linsol, shared, log, y, n, _ctx: ctx };
+        let mut cv = Cvode {
+            mem: CvMem(raw),
+            linsol,
+            shared,
+            log,
+            y,
+            n,
+            _ctx: ctx,
+        };
         cv.init(t0, &linear, options)?;
         Ok(cv)
     }
 
-    fn init(&mut self, t0: f64, linear: &CvodeLinearSolver, options: &CvodeOptions) -> Result<(), SundialsError> {
+    fn init(
+        &mut self,
+        t0: f64,
+        linear: &CvodeLinearSolver,
+        options: &CvodeOptions,
+    ) -> Result<(), SundialsError> {
         use FlagFamily::{Cv, CvLs};
         let mem = self.mem.0;
         let log = self.log.as_void();
@@ -299,63 +365,110 @@ impl<S: OdeSystem> Cvode<S> {
         let y0 = self.y.raw();
         let ls = self.linsol.raw();
         // SAFETY: the matrix is only read for its handle.
-        let a = unsafe { self.shared.get().matrix.as_ref().map_or(std::ptr::null_mut(), |m| m.raw()) };
+        let a = unsafe {
+            self.shared
+                .get()
+                .matrix
+                .as_ref()
+                .map_or(std::ptr::null_mut(), |m| m.raw())
+        };
         // SAFETY (all calls): `mem` is live CVODE memory; the error log, the user data, the
         // vectors, linear solver and matrix all outlive it (field order). CVODE copies y0 and
         // the absolute tolerances.
-        self.log.call("CVodeSetErrHandlerFn", Cv, || unsafe { CVodeSetErrHandlerFn(mem, Some(error_handler), log) })?;
-        self.log.call("CVodeSetUserData", Cv, || unsafe { CVodeSetUserData(mem, data) })?;
-        self.log.call("CVodeInit", Cv, || unsafe { CVodeInit(mem, Some(rhs_trampoline::<S>), t0, y0) })?;
+        self.log.call("CVodeSetErrHandlerFn", Cv, || unsafe {
+            CVodeSetErrHandlerFn(mem, Some(error_handler), log)
+        })?;
+        self.log.call("CVodeSetUserData", Cv, || unsafe {
+            CVodeSetUserData(mem, data)
+        })?;
+        self.log.call("CVodeInit", Cv, || unsafe {
+            CVodeInit(mem, Some(rhs_trampoline::<S>), t0, y0)
+        })?;
         match &options.atol_vector {
-            None => self.log.call("CVodeSStolerances", Cv, || unsafe { CVodeSStolerances(mem, options.rtol, options.atol) })?,
+            None => self.log.call("CVodeSStolerances", Cv, || unsafe {
+                CVodeSStolerances(mem, options.rtol, options.atol)
+            })?,
             Some(atol) => {
                 let atol = NVector::from_slice(&self._ctx, atol)?;
-                self.log.call("CVodeSVtolerances", Cv, || unsafe { CVodeSVtolerances(mem, options.rtol, atol.raw()) })?;
+                self.log.call("CVodeSVtolerances", Cv, || unsafe {
+                    CVodeSVtolerances(mem, options.rtol, atol.raw())
+                })?;
             }
         }
-        self.log.call("CVodeSetLinearSolver", CvLs, || unsafe { CVodeSetLinearSolver(mem, ls, a) })?;
+        self.log.call("CVodeSetLinearSolver", CvLs, || unsafe {
+            CVodeSetLinearSolver(mem, ls, a)
+        })?;
         match *linear {
-            CvodeLinearSolver::Spgmr { user_product, preconditioned, .. } => {
+            CvodeLinearSolver::Spgmr {
+                user_product,
+                preconditioned,
+                ..
+            } => {
                 if user_product {
                     self.log.call("CVodeSetJacTimes", CvLs, || unsafe {
-                        CVodeSetJacTimes(mem, Some(jac_times_setup_trampoline::<S>), Some(jac_times_trampoline::<S>))
+                        CVodeSetJacTimes(
+                            mem,
+                            Some(jac_times_setup_trampoline::<S>),
+                            Some(jac_times_trampoline::<S>),
+                        )
                     })?;
                 }
                 if preconditioned {
                     self.log.call("CVodeSetPreconditioner", CvLs, || unsafe {
-                        CVodeSetPreconditioner(mem, Some(precond_setup_trampoline::<S>), Some(precond_solve_trampoline::<S>))
+                        CVodeSetPreconditioner(
+                            mem,
+                            Some(precond_setup_trampoline::<S>),
+                            Some(precond_solve_trampoline::<S>),
+                        )
                     })?;
                 }
             }
-            CvodeLinearSolver::Dense { user_jacobian } | CvodeLinearSolver::Band { user_jacobian, .. } => {
+            CvodeLinearSolver::Dense { user_jacobian }
+            | CvodeLinearSolver::Band { user_jacobian, .. } => {
                 if user_jacobian {
-                    self.log.call("CVodeSetJacFn", CvLs, || unsafe { CVodeSetJacFn(mem, Some(jacobian_trampoline::<S>)) })?;
+                    self.log.call("CVodeSetJacFn", CvLs, || unsafe {
+                        CVodeSetJacFn(mem, Some(jacobian_trampoline::<S>))
+                    })?;
                 }
             }
         }
         let long = |n: usize| c_long::try_from(n).unwrap_or(c_long::MAX);
-        self.log.call("CVodeSetMaxNumSteps", Cv, || unsafe { CVodeSetMaxNumSteps(mem, long(options.max_steps)) })?;
+        self.log.call("CVodeSetMaxNumSteps", Cv, || unsafe {
+            CVodeSetMaxNumSteps(mem, long(options.max_steps))
+        })?;
         let q = to_int("max_order", options.max_order)?;
-        self.log.call("CVodeSetMaxOrd", Cv, || unsafe { CVodeSetMaxOrd(mem, q) })?;
+        self.log
+            .call("CVodeSetMaxOrd", Cv, || unsafe { CVodeSetMaxOrd(mem, q) })?;
         if let Some(h) = options.initial_step {
-            self.log.call("CVodeSetInitStep", Cv, || unsafe { CVodeSetInitStep(mem, h) })?;
+            self.log.call("CVodeSetInitStep", Cv, || unsafe {
+                CVodeSetInitStep(mem, h)
+            })?;
         }
         if let Some(h) = options.max_step {
-            self.log.call("CVodeSetMaxStep", Cv, || unsafe { CVodeSetMaxStep(mem, h) })?;
+            self.log
+                .call("CVodeSetMaxStep", Cv, || unsafe { CVodeSetMaxStep(mem, h) })?;
         }
         if let Some(t) = options.stop_time {
-            self.log.call("CVodeSetStopTime", Cv, || unsafe { CVodeSetStopTime(mem, t) })?;
+            self.log.call("CVodeSetStopTime", Cv, || unsafe {
+                CVodeSetStopTime(mem, t)
+            })?;
         }
         if let Some(k) = options.max_error_test_failures {
             let k = to_int("max_error_test_failures", k)?;
-            self.log.call("CVodeSetMaxErrTestFails", Cv, || unsafe { CVodeSetMaxErrTestFails(mem, k) })?;
+            self.log.call("CVodeSetMaxErrTestFails", Cv, || unsafe {
+                CVodeSetMaxErrTestFails(mem, k)
+            })?;
         }
         if let Some(k) = options.max_convergence_failures {
             let k = to_int("max_convergence_failures", k)?;
-            self.log.call("CVodeSetMaxConvFails", Cv, || unsafe { CVodeSetMaxConvFails(mem, k) })?;
+            self.log.call("CVodeSetMaxConvFails", Cv, || unsafe {
+                CVodeSetMaxConvFails(mem, k)
+            })?;
         }
         if let Some(eps) = options.linear_tolerance_factor {
-            self.log.call("CVodeSetEpsLin", CvLs, || unsafe { CVodeSetEpsLin(mem, eps) })?;
+            self.log.call("CVodeSetEpsLin", CvLs, || unsafe {
+                CVodeSetEpsLin(mem, eps)
+            })?;
         }
         Ok(())
     }
@@ -399,16 +512,26 @@ impl<S: OdeSystem> Cvode<S> {
         // SAFETY: CVode has returned; no callback is running.
         let (fatal, recoverable, logged) = unsafe {
             let shared = self.shared.get_mut();
-            (shared.callbacks.fatal.take(), shared.callbacks.last_recoverable.take(), self.log.get().last_message())
+            (
+                shared.callbacks.fatal.take(),
+                shared.callbacks.last_recoverable.take(),
+                self.log.get().last_message(),
+            )
         };
         if flag >= 0 {
             return Ok(tret);
         }
         let name = FlagFamily::Cv.name(flag);
-        let function = if itask == CV_NORMAL { "CVode" } else { "CVode (one step)" };
+        let function = if itask == CV_NORMAL {
+            "CVode"
+        } else {
+            "CVode (one step)"
+        };
         if let Some(m) = fatal {
             let t = self.stats().current_time;
-            return Err(SundialsError::Callback(format!("{m} ({function} stopped with {name} at t = {t:e})")));
+            return Err(SundialsError::Callback(format!(
+                "{m} ({function} stopped with {name} at t = {t:e})"
+            )));
         }
         let mut message = logged.unwrap_or_else(|| FlagFamily::Cv.describe(flag).1.to_string());
         if let Some(r) = recoverable {
@@ -429,7 +552,9 @@ impl<S: OdeSystem> Cvode<S> {
         self.y.as_mut_slice().copy_from_slice(y0);
         let (mem, y) = (self.mem.0, self.y.raw());
         // SAFETY: mem and y are live; CVODE copies y.
-        self.log.call("CVodeReInit", FlagFamily::Cv, || unsafe { CVodeReInit(mem, t0, y) })
+        self.log.call("CVodeReInit", FlagFamily::Cv, || unsafe {
+            CVodeReInit(mem, t0, y)
+        })
     }
 
     /// Do not step past `t` (CVodeSetStopTime): [`advance_to`](Self::advance_to) and
@@ -443,7 +568,10 @@ impl<S: OdeSystem> Cvode<S> {
         }
         let mem = self.mem.0;
         // SAFETY: mem is live.
-        self.log.call("CVodeSetStopTime", FlagFamily::Cv, || unsafe { CVodeSetStopTime(mem, t) })
+        self.log
+            .call("CVodeSetStopTime", FlagFamily::Cv, || unsafe {
+                CVodeSetStopTime(mem, t)
+            })
     }
 
     /// Dense output of the last step: y at any t within it (CVodeGetDky, k = 0).
@@ -511,7 +639,10 @@ impl<S: OdeSystem> Cvode<S> {
 fn validate(n: usize, o: &CvodeOptions) -> Result<(), SundialsError> {
     let nonneg = |x: f64| x >= 0.0 && x.is_finite();
     if !nonneg(o.rtol) || !nonneg(o.atol) {
-        return invalid(format!("rtol and atol must be finite and ≥ 0, got {} and {}", o.rtol, o.atol));
+        return invalid(format!(
+            "rtol and atol must be finite and ≥ 0, got {} and {}",
+            o.rtol, o.atol
+        ));
     }
     if let Some(v) = &o.atol_vector {
         if v.len() != n {
@@ -525,7 +656,10 @@ fn validate(n: usize, o: &CvodeOptions) -> Result<(), SundialsError> {
         return invalid("max_steps must be ≥ 1".into());
     }
     if !(1..=5).contains(&o.max_order) {
-        return invalid(format!("max_order must be 1 ..= 5 for BDF, got {}", o.max_order));
+        return invalid(format!(
+            "max_order must be 1 ..= 5 for BDF, got {}",
+            o.max_order
+        ));
     }
     if let Some(h) = o.initial_step {
         if !(h.is_finite() && h != 0.0) {
@@ -547,20 +681,29 @@ fn validate(n: usize, o: &CvodeOptions) -> Result<(), SundialsError> {
     }
     if let Some(eps) = o.linear_tolerance_factor {
         if !(eps > 0.0 && eps.is_finite()) {
-            return invalid(format!("linear_tolerance_factor must be positive, got {eps}"));
+            return invalid(format!(
+                "linear_tolerance_factor must be positive, got {eps}"
+            ));
         }
     }
     Ok(())
 }
 
 /// CVRhsFn: ydot = f(t, y).
-unsafe extern "C" fn rhs_trampoline<S: OdeSystem>(t: realtype, y: N_Vector, ydot: N_Vector, data: *mut c_void) -> c_int {
+unsafe extern "C" fn rhs_trampoline<S: OdeSystem>(
+    t: realtype,
+    y: N_Vector,
+    ydot: N_Vector,
+    data: *mut c_void,
+) -> c_int {
     // SAFETY: `data` is the Shared<S> registered with CVodeSetUserData; CVODE calls us from
     // inside CVode, while no other reference to it exists; y and ydot are distinct live
     // serial vectors of length n.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let (y, ydot) = unsafe { (nvector::slice(y), nvector::slice_mut(ydot)) };
-    let Shared { system, callbacks, .. } = shared;
+    let Shared {
+        system, callbacks, ..
+    } = shared;
     callbacks.guard("rhs", || system.rhs(t, y, ydot))
 }
 
@@ -578,7 +721,12 @@ unsafe extern "C" fn jacobian_trampoline<S: OdeSystem>(
     // SAFETY: as in rhs_trampoline; y and fy are live and only read.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
-    let Shared { system, matrix, callbacks, .. } = shared;
+    let Shared {
+        system,
+        matrix,
+        callbacks,
+        ..
+    } = shared;
     let Some(matrix) = matrix.as_mut().filter(|m| m.raw() == jac) else {
         return callbacks.fail("CVODE passed a Jacobian matrix this layer did not create".into());
     };
@@ -597,11 +745,18 @@ unsafe extern "C" fn jacobian_trampoline<S: OdeSystem>(
 }
 
 /// CVLsJacTimesSetupFn.
-unsafe extern "C" fn jac_times_setup_trampoline<S: OdeSystem>(t: realtype, y: N_Vector, fy: N_Vector, data: *mut c_void) -> c_int {
+unsafe extern "C" fn jac_times_setup_trampoline<S: OdeSystem>(
+    t: realtype,
+    y: N_Vector,
+    fy: N_Vector,
+    data: *mut c_void,
+) -> c_int {
     // SAFETY: as in rhs_trampoline; y and fy are only read.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
-    let Shared { system, callbacks, .. } = shared;
+    let Shared {
+        system, callbacks, ..
+    } = shared;
     callbacks.guard("jac_times_setup", || system.jac_times_setup(t, y, fy))
 }
 
@@ -618,7 +773,12 @@ unsafe extern "C" fn jac_times_trampoline<S: OdeSystem>(
     // SAFETY: as in rhs_trampoline; y, fy and v are only read, jv only written. If v and jv
     // are the same vector, v is copied to the scratch buffer first so the slices never alias.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
-    let Shared { system, callbacks, scratch, .. } = shared;
+    let Shared {
+        system,
+        callbacks,
+        scratch,
+        ..
+    } = shared;
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
     let out = unsafe { nvector::slice_mut(jv) };
     let input: &[f64] = if v == jv {
@@ -643,7 +803,9 @@ unsafe extern "C" fn precond_setup_trampoline<S: OdeSystem>(
     // SAFETY: as in rhs_trampoline; jcur is a valid out-pointer.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
-    let Shared { system, callbacks, .. } = shared;
+    let Shared {
+        system, callbacks, ..
+    } = shared;
     let mut recomputed = false;
     let flag = callbacks.guard("precond_setup", || {
         recomputed = system.precond_setup(t, y, fy, jok != 0, gamma)?;
@@ -670,7 +832,12 @@ unsafe extern "C" fn precond_solve_trampoline<S: OdeSystem>(
 ) -> c_int {
     // SAFETY: as in jac_times_trampoline, with r the input and z the output.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
-    let Shared { system, callbacks, scratch, .. } = shared;
+    let Shared {
+        system,
+        callbacks,
+        scratch,
+        ..
+    } = shared;
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
     let out = unsafe { nvector::slice_mut(z) };
     let input: &[f64] = if r == z {
@@ -679,5 +846,7 @@ unsafe extern "C" fn precond_solve_trampoline<S: OdeSystem>(
     } else {
         unsafe { nvector::slice(r) }
     };
-    callbacks.guard("precond_solve", || system.precond_solve(t, y, fy, input, out, gamma, delta))
+    callbacks.guard("precond_solve", || {
+        system.precond_solve(t, y, fy, input, out, gamma, delta)
+    })
 }

@@ -93,24 +93,76 @@ impl FlagFamily {
 
 const KIN_FLAGS: &[(i32, &str, &str)] = &[
     (0, "KIN_SUCCESS", "success"),
-    (1, "KIN_INITIAL_GUESS_OK", "the initial guess already satisfies the stopping criterion"),
-    (2, "KIN_STEP_LT_STPTOL", "the scaled step fell below the scaled step tolerance"),
+    (
+        1,
+        "KIN_INITIAL_GUESS_OK",
+        "the initial guess already satisfies the stopping criterion",
+    ),
+    (
+        2,
+        "KIN_STEP_LT_STPTOL",
+        "the scaled step fell below the scaled step tolerance",
+    ),
     (99, "KIN_WARNING", "warning"),
     (-1, "KIN_MEM_NULL", "the KINSOL memory is NULL"),
     (-2, "KIN_ILL_INPUT", "an input argument is illegal"),
-    (-3, "KIN_NO_MALLOC", "KINSOL memory was not allocated by KINInit"),
+    (
+        -3,
+        "KIN_NO_MALLOC",
+        "KINSOL memory was not allocated by KINInit",
+    ),
     (-4, "KIN_MEM_FAIL", "a memory allocation failed"),
-    (-5, "KIN_LINESEARCH_NONCONV", "the line search could not find an iterate sufficiently distinct from the current one"),
-    (-6, "KIN_MAXITER_REACHED", "the maximum number of nonlinear iterations was reached"),
-    (-7, "KIN_MXNEWT_5X_EXCEEDED", "five consecutive steps had the maximum Newton step length"),
-    (-8, "KIN_LINESEARCH_BCFAIL", "the line search could not satisfy the beta condition"),
-    (-9, "KIN_LINSOLV_NO_RECOVERY", "the linear solver failed recoverably but the Jacobian is current"),
-    (-10, "KIN_LINIT_FAIL", "the linear solver initialisation failed"),
-    (-11, "KIN_LSETUP_FAIL", "the linear solver setup (Jacobian or factorisation) failed"),
+    (
+        -5,
+        "KIN_LINESEARCH_NONCONV",
+        "the line search could not find an iterate sufficiently distinct from the current one",
+    ),
+    (
+        -6,
+        "KIN_MAXITER_REACHED",
+        "the maximum number of nonlinear iterations was reached",
+    ),
+    (
+        -7,
+        "KIN_MXNEWT_5X_EXCEEDED",
+        "five consecutive steps had the maximum Newton step length",
+    ),
+    (
+        -8,
+        "KIN_LINESEARCH_BCFAIL",
+        "the line search could not satisfy the beta condition",
+    ),
+    (
+        -9,
+        "KIN_LINSOLV_NO_RECOVERY",
+        "the linear solver failed recoverably but the Jacobian is current",
+    ),
+    (
+        -10,
+        "KIN_LINIT_FAIL",
+        "the linear solver initialisation failed",
+    ),
+    (
+        -11,
+        "KIN_LSETUP_FAIL",
+        "the linear solver setup (Jacobian or factorisation) failed",
+    ),
     (-12, "KIN_LSOLVE_FAIL", "the linear solve failed"),
-    (-13, "KIN_SYSFUNC_FAIL", "the residual function failed unrecoverably"),
-    (-14, "KIN_FIRST_SYSFUNC_ERR", "the residual function failed recoverably at the initial guess"),
-    (-15, "KIN_REPTD_SYSFUNC_ERR", "the residual function failed recoverably repeatedly"),
+    (
+        -13,
+        "KIN_SYSFUNC_FAIL",
+        "the residual function failed unrecoverably",
+    ),
+    (
+        -14,
+        "KIN_FIRST_SYSFUNC_ERR",
+        "the residual function failed recoverably at the initial guess",
+    ),
+    (
+        -15,
+        "KIN_REPTD_SYSFUNC_ERR",
+        "the residual function failed recoverably repeatedly",
+    ),
     (-16, "KIN_VECTOROP_ERR", "a vector operation failed"),
     (-17, "KIN_CONTEXT_ERR", "the SUNContext is invalid"),
 ];
@@ -118,8 +170,16 @@ const KIN_FLAGS: &[(i32, &str, &str)] = &[
 const KINLS_FLAGS: &[(i32, &str, &str)] = &[
     (0, "KINLS_SUCCESS", "success"),
     (-1, "KINLS_MEM_NULL", "the KINSOL memory is NULL"),
-    (-2, "KINLS_LMEM_NULL", "the linear solver interface is not attached"),
-    (-3, "KINLS_ILL_INPUT", "an input argument is illegal or the linear solver is incompatible"),
+    (
+        -2,
+        "KINLS_LMEM_NULL",
+        "the linear solver interface is not attached",
+    ),
+    (
+        -3,
+        "KINLS_ILL_INPUT",
+        "an input argument is illegal or the linear solver is incompatible",
+    ),
     (-4, "KINLS_MEM_FAIL", "a memory allocation failed"),
     (-5, "KINLS_PMEM_NULL", "the preconditioner memory is NULL"),
     (-6, "KINLS_JACFUNC_ERR", "the Jacobian function failed"),
@@ -132,34 +192,110 @@ const CV_FLAGS: &[(i32, &str, &str)] = &[
     (1, "CV_TSTOP_RETURN", "the stop time was reached"),
     (2, "CV_ROOT_RETURN", "a root was found"),
     (99, "CV_WARNING", "warning"),
-    (-1, "CV_TOO_MUCH_WORK", "the maximum number of internal steps was taken before reaching tout"),
-    (-2, "CV_TOO_MUCH_ACC", "the requested accuracy could not be achieved"),
-    (-3, "CV_ERR_FAILURE", "error test failures occurred too many times or with |h| = hmin"),
-    (-4, "CV_CONV_FAILURE", "nonlinear convergence failures occurred too many times or with |h| = hmin"),
-    (-5, "CV_LINIT_FAIL", "the linear solver initialisation failed"),
-    (-6, "CV_LSETUP_FAIL", "the linear solver setup failed unrecoverably"),
-    (-7, "CV_LSOLVE_FAIL", "the linear solve failed unrecoverably"),
-    (-8, "CV_RHSFUNC_FAIL", "the right-hand side function failed unrecoverably"),
-    (-9, "CV_FIRST_RHSFUNC_ERR", "the right-hand side function failed recoverably at the first call"),
-    (-10, "CV_REPTD_RHSFUNC_ERR", "the right-hand side function failed recoverably repeatedly"),
-    (-11, "CV_UNREC_RHSFUNC_ERR", "the right-hand side function failed recoverably and could not recover"),
+    (
+        -1,
+        "CV_TOO_MUCH_WORK",
+        "the maximum number of internal steps was taken before reaching tout",
+    ),
+    (
+        -2,
+        "CV_TOO_MUCH_ACC",
+        "the requested accuracy could not be achieved",
+    ),
+    (
+        -3,
+        "CV_ERR_FAILURE",
+        "error test failures occurred too many times or with |h| = hmin",
+    ),
+    (
+        -4,
+        "CV_CONV_FAILURE",
+        "nonlinear convergence failures occurred too many times or with |h| = hmin",
+    ),
+    (
+        -5,
+        "CV_LINIT_FAIL",
+        "the linear solver initialisation failed",
+    ),
+    (
+        -6,
+        "CV_LSETUP_FAIL",
+        "the linear solver setup failed unrecoverably",
+    ),
+    (
+        -7,
+        "CV_LSOLVE_FAIL",
+        "the linear solve failed unrecoverably",
+    ),
+    (
+        -8,
+        "CV_RHSFUNC_FAIL",
+        "the right-hand side function failed unrecoverably",
+    ),
+    (
+        -9,
+        "CV_FIRST_RHSFUNC_ERR",
+        "the right-hand side function failed recoverably at the first call",
+    ),
+    (
+        -10,
+        "CV_REPTD_RHSFUNC_ERR",
+        "the right-hand side function failed recoverably repeatedly",
+    ),
+    (
+        -11,
+        "CV_UNREC_RHSFUNC_ERR",
+        "the right-hand side function failed recoverably and could not recover",
+    ),
     (-12, "CV_RTFUNC_FAIL", "the root function failed"),
-    (-13, "CV_NLS_INIT_FAIL", "the nonlinear solver initialisation failed"),
-    (-14, "CV_NLS_SETUP_FAIL", "the nonlinear solver setup failed"),
-    (-15, "CV_CONSTR_FAIL", "the inequality constraints could not be met"),
-    (-16, "CV_NLS_FAIL", "the nonlinear solver failed unrecoverably"),
+    (
+        -13,
+        "CV_NLS_INIT_FAIL",
+        "the nonlinear solver initialisation failed",
+    ),
+    (
+        -14,
+        "CV_NLS_SETUP_FAIL",
+        "the nonlinear solver setup failed",
+    ),
+    (
+        -15,
+        "CV_CONSTR_FAIL",
+        "the inequality constraints could not be met",
+    ),
+    (
+        -16,
+        "CV_NLS_FAIL",
+        "the nonlinear solver failed unrecoverably",
+    ),
     (-20, "CV_MEM_FAIL", "a memory allocation failed"),
     (-21, "CV_MEM_NULL", "the CVODE memory is NULL"),
     (-22, "CV_ILL_INPUT", "an input argument is illegal"),
-    (-23, "CV_NO_MALLOC", "CVODE memory was not allocated by CVodeInit"),
+    (
+        -23,
+        "CV_NO_MALLOC",
+        "CVODE memory was not allocated by CVodeInit",
+    ),
     (-24, "CV_BAD_K", "the derivative order k is illegal"),
     (-25, "CV_BAD_T", "t is outside the last step"),
     (-26, "CV_BAD_DKY", "the output vector is NULL"),
-    (-27, "CV_TOO_CLOSE", "tout is too close to t0 to start the integration"),
+    (
+        -27,
+        "CV_TOO_CLOSE",
+        "tout is too close to t0 to start the integration",
+    ),
     (-28, "CV_VECTOROP_ERR", "a vector operation failed"),
     (-29, "CV_PROJ_MEM_NULL", "the projection memory is NULL"),
-    (-30, "CV_PROJFUNC_FAIL", "the projection function failed unrecoverably"),
-    (-31, "CV_REPTD_PROJFUNC_ERR", "the projection function failed recoverably repeatedly"),
+    (
+        -30,
+        "CV_PROJFUNC_FAIL",
+        "the projection function failed unrecoverably",
+    ),
+    (
+        -31,
+        "CV_REPTD_PROJFUNC_ERR",
+        "the projection function failed recoverably repeatedly",
+    ),
     (-32, "CV_CONTEXT_ERR", "the SUNContext is invalid"),
     (-99, "CV_UNRECOGNIZED_ERR", "unrecognised error"),
 ];
@@ -167,12 +303,28 @@ const CV_FLAGS: &[(i32, &str, &str)] = &[
 const CVLS_FLAGS: &[(i32, &str, &str)] = &[
     (0, "CVLS_SUCCESS", "success"),
     (-1, "CVLS_MEM_NULL", "the CVODE memory is NULL"),
-    (-2, "CVLS_LMEM_NULL", "the linear solver interface is not attached"),
-    (-3, "CVLS_ILL_INPUT", "an input argument is illegal or the linear solver is incompatible"),
+    (
+        -2,
+        "CVLS_LMEM_NULL",
+        "the linear solver interface is not attached",
+    ),
+    (
+        -3,
+        "CVLS_ILL_INPUT",
+        "an input argument is illegal or the linear solver is incompatible",
+    ),
     (-4, "CVLS_MEM_FAIL", "a memory allocation failed"),
     (-5, "CVLS_PMEM_NULL", "the preconditioner memory is NULL"),
-    (-6, "CVLS_JACFUNC_UNRECVR", "the Jacobian function failed unrecoverably"),
-    (-7, "CVLS_JACFUNC_RECVR", "the Jacobian function failed recoverably"),
+    (
+        -6,
+        "CVLS_JACFUNC_UNRECVR",
+        "the Jacobian function failed unrecoverably",
+    ),
+    (
+        -7,
+        "CVLS_JACFUNC_RECVR",
+        "the Jacobian function failed recoverably",
+    ),
     (-8, "CVLS_SUNMAT_FAIL", "a SUNMatrix operation failed"),
     (-9, "CVLS_SUNLS_FAIL", "a SUNLinearSolver operation failed"),
 ];
@@ -216,12 +368,28 @@ const IDA_FLAGS: &[(i32, &str, &str)] = &[
 const IDALS_FLAGS: &[(i32, &str, &str)] = &[
     (0, "IDALS_SUCCESS", "success"),
     (-1, "IDALS_MEM_NULL", "the IDA memory is NULL"),
-    (-2, "IDALS_LMEM_NULL", "the linear solver interface is not attached"),
-    (-3, "IDALS_ILL_INPUT", "an input argument is illegal or the linear solver is incompatible"),
+    (
+        -2,
+        "IDALS_LMEM_NULL",
+        "the linear solver interface is not attached",
+    ),
+    (
+        -3,
+        "IDALS_ILL_INPUT",
+        "an input argument is illegal or the linear solver is incompatible",
+    ),
     (-4, "IDALS_MEM_FAIL", "a memory allocation failed"),
     (-5, "IDALS_PMEM_NULL", "the preconditioner memory is NULL"),
-    (-6, "IDALS_JACFUNC_UNRECVR", "the Jacobian function failed unrecoverably"),
-    (-7, "IDALS_JACFUNC_RECVR", "the Jacobian function failed recoverably"),
+    (
+        -6,
+        "IDALS_JACFUNC_UNRECVR",
+        "the Jacobian function failed unrecoverably",
+    ),
+    (
+        -7,
+        "IDALS_JACFUNC_RECVR",
+        "the Jacobian function failed recoverably",
+    ),
     (-8, "IDALS_SUNMAT_FAIL", "a SUNMatrix operation failed"),
     (-9, "IDALS_SUNLS_FAIL", "a SUNLinearSolver operation failed"),
 ];
@@ -232,22 +400,74 @@ const SUNLS_FLAGS: &[(i32, &str, &str)] = &[
     (-802, "SUNLS_ILL_INPUT", "an input argument is illegal"),
     (-803, "SUNLS_MEM_FAIL", "a memory allocation failed"),
     (-804, "SUNLS_ATIMES_NULL", "the A-times function is NULL"),
-    (-805, "SUNLS_ATIMES_FAIL_UNREC", "the A-times function failed unrecoverably"),
-    (-806, "SUNLS_PSET_FAIL_UNREC", "the preconditioner setup failed unrecoverably"),
-    (-807, "SUNLS_PSOLVE_NULL", "the preconditioner solve function is NULL"),
-    (-808, "SUNLS_PSOLVE_FAIL_UNREC", "the preconditioner solve failed unrecoverably"),
-    (-809, "SUNLS_PACKAGE_FAIL_UNREC", "the external package (e.g. KLU) failed unrecoverably"),
-    (-810, "SUNLS_GS_FAIL", "Gram-Schmidt orthogonalisation failed"),
+    (
+        -805,
+        "SUNLS_ATIMES_FAIL_UNREC",
+        "the A-times function failed unrecoverably",
+    ),
+    (
+        -806,
+        "SUNLS_PSET_FAIL_UNREC",
+        "the preconditioner setup failed unrecoverably",
+    ),
+    (
+        -807,
+        "SUNLS_PSOLVE_NULL",
+        "the preconditioner solve function is NULL",
+    ),
+    (
+        -808,
+        "SUNLS_PSOLVE_FAIL_UNREC",
+        "the preconditioner solve failed unrecoverably",
+    ),
+    (
+        -809,
+        "SUNLS_PACKAGE_FAIL_UNREC",
+        "the external package (e.g. KLU) failed unrecoverably",
+    ),
+    (
+        -810,
+        "SUNLS_GS_FAIL",
+        "Gram-Schmidt orthogonalisation failed",
+    ),
     (-811, "SUNLS_QRSOL_FAIL", "QR solve found a singular R"),
     (-812, "SUNLS_VECTOROP_ERR", "a vector operation failed"),
-    (801, "SUNLS_RES_REDUCED", "nonconvergent solve, residual reduced"),
+    (
+        801,
+        "SUNLS_RES_REDUCED",
+        "nonconvergent solve, residual reduced",
+    ),
     (802, "SUNLS_CONV_FAIL", "nonconvergent solve"),
-    (803, "SUNLS_ATIMES_FAIL_REC", "the A-times function failed recoverably"),
-    (804, "SUNLS_PSET_FAIL_REC", "the preconditioner setup failed recoverably"),
-    (805, "SUNLS_PSOLVE_FAIL_REC", "the preconditioner solve failed recoverably"),
-    (806, "SUNLS_PACKAGE_FAIL_REC", "the external package (e.g. KLU: singular matrix) failed recoverably"),
-    (807, "SUNLS_QRFACT_FAIL", "QR factorisation found a singular matrix"),
-    (808, "SUNLS_LUFACT_FAIL", "LU factorisation found a singular matrix"),
+    (
+        803,
+        "SUNLS_ATIMES_FAIL_REC",
+        "the A-times function failed recoverably",
+    ),
+    (
+        804,
+        "SUNLS_PSET_FAIL_REC",
+        "the preconditioner setup failed recoverably",
+    ),
+    (
+        805,
+        "SUNLS_PSOLVE_FAIL_REC",
+        "the preconditioner solve failed recoverably",
+    ),
+    (
+        806,
+        "SUNLS_PACKAGE_FAIL_REC",
+        "the external package (e.g. KLU: singular matrix) failed recoverably",
+    ),
+    (
+        807,
+        "SUNLS_QRFACT_FAIL",
+        "QR factorisation found a singular matrix",
+    ),
+    (
+        808,
+        "SUNLS_LUFACT_FAIL",
+        "LU factorisation found a singular matrix",
+    ),
 ];
 
 /// Ok for 0, otherwise a `Flag` error named from `family` with `message` (or the flag's
@@ -275,7 +495,12 @@ pub(crate) fn flag_error(
         .map(|m| one_line(&m))
         .filter(|m| !m.is_empty())
         .unwrap_or_else(|| description.to_string());
-    SundialsError::Flag { function, flag, name, message }
+    SundialsError::Flag {
+        function,
+        flag,
+        name,
+        message,
+    }
 }
 
 #[cfg(test)]
@@ -284,10 +509,20 @@ mod tests {
 
     #[test]
     fn flag_display_is_one_line_and_names_the_flag() {
-        let e = flag_error("KINSol", -5, FlagFamily::Kin, Some("line\n\tsearch  failed".into()));
-        assert_eq!(e.to_string(), "KINSol failed with KIN_LINESEARCH_NONCONV (-5): line search failed");
+        let e = flag_error(
+            "KINSol",
+            -5,
+            FlagFamily::Kin,
+            Some("line\n\tsearch  failed".into()),
+        );
+        assert_eq!(
+            e.to_string(),
+            "KINSol failed with KIN_LINESEARCH_NONCONV (-5): line search failed"
+        );
         let e = flag_error("SUNLinSolSetup", 808, FlagFamily::SunLs, None);
-        assert!(e.to_string().contains("SUNLS_LUFACT_FAIL (808): LU factorisation"));
+        assert!(e
+            .to_string()
+            .contains("SUNLS_LUFACT_FAIL (808): LU factorisation"));
     }
 
     extern "C" {
@@ -295,7 +530,10 @@ mod tests {
     }
 
     /// Call one of SUNDIALS's `*Get*ReturnFlagName` functions, which return a malloc'd string.
-    fn their_name(f: unsafe extern "C" fn(std::os::raw::c_long) -> *mut std::os::raw::c_char, flag: i32) -> String {
+    fn their_name(
+        f: unsafe extern "C" fn(std::os::raw::c_long) -> *mut std::os::raw::c_char,
+        flag: i32,
+    ) -> String {
         // SAFETY: f returns a malloc'd NUL-terminated string (or NULL) that we free once.
         unsafe {
             let p = f(flag as std::os::raw::c_long);
@@ -338,10 +576,17 @@ mod tests {
             }
         }
         assert!(mismatched.is_empty(), "ours vs CVODE's: {mismatched:?}");
-        assert!(unnamed.len() <= 6, "CVODE 6.4 leaves unnamed only a few flags: {unnamed:?}");
+        assert!(
+            unnamed.len() <= 6,
+            "CVODE 6.4 leaves unnamed only a few flags: {unnamed:?}"
+        );
         assert_eq!(sundials_sys::CV_NLS_SETUP_FAIL, -14);
         for &(flag, name, _) in CVLS_FLAGS {
-            assert_eq!(their_name(sundials_sys::CVodeGetLinReturnFlagName, flag), name, "CVLS flag {flag}");
+            assert_eq!(
+                their_name(sundials_sys::CVodeGetLinReturnFlagName, flag),
+                name,
+                "CVLS flag {flag}"
+            );
         }
     }
 
@@ -360,9 +605,17 @@ mod tests {
             }
         }
         assert!(mismatched.is_empty(), "ours vs IDA's: {mismatched:?}");
-        assert_eq!(unnamed, [99, -15, -25, -27, -28, -29, -99], "flags IDA 6.4 leaves unnamed");
+        assert_eq!(
+            unnamed,
+            [99, -15, -25, -27, -28, -29, -99],
+            "flags IDA 6.4 leaves unnamed"
+        );
         for &(flag, name, _) in IDALS_FLAGS {
-            assert_eq!(their_name(sundials_sys::IDAGetLinReturnFlagName, flag), name, "IDALS flag {flag}");
+            assert_eq!(
+                their_name(sundials_sys::IDAGetLinReturnFlagName, flag),
+                name,
+                "IDALS flag {flag}"
+            );
         }
     }
 }

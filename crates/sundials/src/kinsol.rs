@@ -16,7 +16,9 @@ use sundials_sys::{
     SUNLinSolSolve, SUNMatrix, KIN_LINESEARCH, KIN_LSETUP_FAIL, KIN_NONE,
 };
 
-use super::callback::{error_handler, CallbackError, CallbackResult, CallbackState, ErrorLog, RawBox};
+use super::callback::{
+    error_handler, CallbackError, CallbackResult, CallbackState, ErrorLog, RawBox,
+};
 use super::context::Context;
 use super::error::{check, flag_error, FlagFamily, SundialsError};
 use super::linsol::{LinearSolver, LinearSolverSpec};
@@ -128,9 +130,16 @@ pub struct Kinsol<S: NonlinearSystem> {
 }
 
 impl<S: NonlinearSystem> Kinsol<S> {
-    pub fn new(system: S, n: usize, linear: LinearSolverSpec, options: &KinsolOptions) -> Result<Self, SundialsError> {
+    pub fn new(
+        system: S,
+        n: usize,
+        linear: LinearSolverSpec,
+        options: &KinsolOptions,
+    ) -> Result<Self, SundialsError> {
         if n == 0 {
-            return Err(SundialsError::Invalid("KINSOL needs at least one unknown".into()));
+            return Err(SundialsError::Invalid(
+                "KINSOL needs at least one unknown".into(),
+            ));
         }
         let ctx = Context::new()?;
         let (matrix, linsol) = LinearSolver::for_spec(&ctx, n, &linear)?;
@@ -183,24 +192,44 @@ impl<S: NonlinearSystem> Kinsol<S> {
         let a = unsafe { self.shared.get().matrix.raw() };
         // SAFETY (all calls): `mem` is live KINSOL memory; the error log, the user data, the
         // template vector, linear solver and matrix all outlive it (field order).
-        self.log.call("KINSetErrHandlerFn", FlagFamily::Kin, || unsafe {
-            KINSetErrHandlerFn(mem, Some(error_handler), log)
+        self.log
+            .call("KINSetErrHandlerFn", FlagFamily::Kin, || unsafe {
+                KINSetErrHandlerFn(mem, Some(error_handler), log)
+            })?;
+        self.log
+            .call("KINSetPrintLevel", FlagFamily::Kin, || unsafe {
+                KINSetPrintLevel(mem, 0)
+            })?;
+        self.log
+            .call("KINSetUserData", FlagFamily::Kin, || unsafe {
+                KINSetUserData(mem, data)
+            })?;
+        self.log.call("KINInit", FlagFamily::Kin, || unsafe {
+            KINInit(mem, Some(residual_trampoline::<S>), tmpl)
         })?;
-        self.log.call("KINSetPrintLevel", FlagFamily::Kin, || unsafe { KINSetPrintLevel(mem, 0) })?;
-        self.log.call("KINSetUserData", FlagFamily::Kin, || unsafe { KINSetUserData(mem, data) })?;
-        self.log.call("KINInit", FlagFamily::Kin, || unsafe { KINInit(mem, Some(residual_trampoline::<S>), tmpl) })?;
-        self.log.call("KINSetLinearSolver", FlagFamily::KinLs, || unsafe { KINSetLinearSolver(mem, ls, a) })?;
-        self.log.call("KINSetJacFn", FlagFamily::KinLs, || unsafe { KINSetJacFn(mem, Some(jacobian_trampoline::<S>)) })?;
+        self.log
+            .call("KINSetLinearSolver", FlagFamily::KinLs, || unsafe {
+                KINSetLinearSolver(mem, ls, a)
+            })?;
+        self.log.call("KINSetJacFn", FlagFamily::KinLs, || unsafe {
+            KINSetJacFn(mem, Some(jacobian_trampoline::<S>))
+        })?;
         Ok(())
     }
 
     pub fn set_options(&mut self, options: &KinsolOptions) -> Result<(), SundialsError> {
         let invalid = |what: String| Err(SundialsError::Invalid(what));
         if !(options.fnorm_tol > 0.0 && options.fnorm_tol.is_finite()) {
-            return invalid(format!("fnorm_tol must be positive, got {}", options.fnorm_tol));
+            return invalid(format!(
+                "fnorm_tol must be positive, got {}",
+                options.fnorm_tol
+            ));
         }
         if !(options.scaled_step_tol > 0.0 && options.scaled_step_tol.is_finite()) {
-            return invalid(format!("scaled_step_tol must be positive, got {}", options.scaled_step_tol));
+            return invalid(format!(
+                "scaled_step_tol must be positive, got {}",
+                options.scaled_step_tol
+            ));
         }
         if options.max_iterations == 0 || options.max_setup_calls == 0 {
             return invalid("max_iterations and max_setup_calls must be ≥ 1".into());
@@ -213,13 +242,28 @@ impl<S: NonlinearSystem> Kinsol<S> {
         let mem = self.mem.0;
         let long = |n: usize| c_long::try_from(n).unwrap_or(c_long::MAX);
         // SAFETY (all calls): `mem` is live KINSOL memory; the arguments are plain numbers.
-        self.log.call("KINSetFuncNormTol", FlagFamily::Kin, || unsafe { KINSetFuncNormTol(mem, options.fnorm_tol) })?;
-        self.log.call("KINSetScaledStepTol", FlagFamily::Kin, || unsafe { KINSetScaledStepTol(mem, options.scaled_step_tol) })?;
-        self.log.call("KINSetNumMaxIters", FlagFamily::Kin, || unsafe { KINSetNumMaxIters(mem, long(options.max_iterations)) })?;
-        self.log.call("KINSetMaxSetupCalls", FlagFamily::Kin, || unsafe { KINSetMaxSetupCalls(mem, long(options.max_setup_calls)) })?;
+        self.log
+            .call("KINSetFuncNormTol", FlagFamily::Kin, || unsafe {
+                KINSetFuncNormTol(mem, options.fnorm_tol)
+            })?;
+        self.log
+            .call("KINSetScaledStepTol", FlagFamily::Kin, || unsafe {
+                KINSetScaledStepTol(mem, options.scaled_step_tol)
+            })?;
+        self.log
+            .call("KINSetNumMaxIters", FlagFamily::Kin, || unsafe {
+                KINSetNumMaxIters(mem, long(options.max_iterations))
+            })?;
+        self.log
+            .call("KINSetMaxSetupCalls", FlagFamily::Kin, || unsafe {
+                KINSetMaxSetupCalls(mem, long(options.max_setup_calls))
+            })?;
         // 0 asks KINSOL for its default.
         let step = options.max_newton_step.unwrap_or(0.0);
-        self.log.call("KINSetMaxNewtonStep", FlagFamily::Kin, || unsafe { KINSetMaxNewtonStep(mem, step) })?;
+        self.log
+            .call("KINSetMaxNewtonStep", FlagFamily::Kin, || unsafe {
+                KINSetMaxNewtonStep(mem, step)
+            })?;
         self.options = options.clone();
         Ok(())
     }
@@ -238,7 +282,12 @@ impl<S: NonlinearSystem> Kinsol<S> {
     /// KIN_SUCCESS and KIN_INITIAL_GUESS_OK are success; KIN_STEP_LT_STPTOL (the step
     /// stalled) is success only if ‖F‖ ≤ 100 · fnorm_tol. On failure `u` holds KINSOL's last
     /// iterate and [`last_stats`](Self::last_stats) the counters so far.
-    pub fn solve(&mut self, u: &mut [f64], u_scale: &[f64], f_scale: &[f64]) -> Result<KinsolStats, SundialsError> {
+    pub fn solve(
+        &mut self,
+        u: &mut [f64],
+        u_scale: &[f64],
+        f_scale: &[f64],
+    ) -> Result<KinsolStats, SundialsError> {
         let n = self.n;
         if u.len() != n || u_scale.len() != n || f_scale.len() != n {
             return Err(SundialsError::Invalid(format!(
@@ -250,7 +299,10 @@ impl<S: NonlinearSystem> Kinsol<S> {
         }
         for (name, s) in [("u_scale", u_scale), ("f_scale", f_scale)] {
             if let Some(k) = s.iter().position(|&x| !(x > 0.0 && x.is_finite())) {
-                return Err(SundialsError::Invalid(format!("{name}[{k}] = {} is not positive", s[k])));
+                return Err(SundialsError::Invalid(format!(
+                    "{name}[{k}] = {} is not positive",
+                    s[k]
+                )));
             }
         }
         self.u.as_mut_slice().copy_from_slice(u);
@@ -272,10 +324,21 @@ impl<S: NonlinearSystem> Kinsol<S> {
         let no_init_setup = self.options.reuse_factorization && self.factored;
         // SAFETY: `mem` is live KINSOL memory; the argument is a plain boolean.
         let mem = self.mem.0;
-        self.log.call("KINSetNoInitSetup", FlagFamily::Kin, || unsafe { KINSetNoInitSetup(mem, no_init_setup as _) })?;
+        self.log
+            .call("KINSetNoInitSetup", FlagFamily::Kin, || unsafe {
+                KINSetNoInitSetup(mem, no_init_setup as _)
+            })?;
         // SAFETY: every handle is live; during the call the only references to the shared
         // state and the log are the short-lived ones the trampolines create.
-        let flag = unsafe { KINSol(self.mem.0, self.u.raw(), strategy, self.u_scale.raw(), self.f_scale.raw()) };
+        let flag = unsafe {
+            KINSol(
+                self.mem.0,
+                self.u.raw(),
+                strategy,
+                self.u_scale.raw(),
+                self.f_scale.raw(),
+            )
+        };
         u.copy_from_slice(self.u.as_slice());
         let stats = self.collect_stats();
         self.last_stats = stats;
@@ -354,7 +417,11 @@ impl<S: NonlinearSystem> Kinsol<S> {
     /// products). The system's own record of its Jacobian calls says where exactly. A solve
     /// that makes no setup (initial guess already a root) keeps the previous factorisation.
     /// `Invalid` if no setup has succeeded since creation, or the last one failed.
-    pub fn solve_with_last_factorization(&mut self, x: &mut [f64], b: &[f64]) -> Result<(), SundialsError> {
+    pub fn solve_with_last_factorization(
+        &mut self,
+        x: &mut [f64],
+        b: &[f64],
+    ) -> Result<(), SundialsError> {
         let n = self.n;
         if x.len() != n || b.len() != n {
             return Err(SundialsError::Invalid(format!(
@@ -374,7 +441,15 @@ impl<S: NonlinearSystem> Kinsol<S> {
         // SAFETY: the linear solver, the matrix KINSOL factorised with it and both vectors
         // are live; direct solvers copy b into x and solve in place, leaving the matrix and
         // the factors as they are.
-        let flag = unsafe { SUNLinSolSolve(self.linsol.raw(), a, self.lin_x.raw(), self.lin_b.raw(), 0.0) };
+        let flag = unsafe {
+            SUNLinSolSolve(
+                self.linsol.raw(),
+                a,
+                self.lin_x.raw(),
+                self.lin_b.raw(),
+                0.0,
+            )
+        };
         check("SUNLinSolSolve", flag, FlagFamily::SunLs, None)?;
         x.copy_from_slice(self.lin_x.as_slice());
         Ok(())
@@ -397,13 +472,19 @@ impl<S: NonlinearSystem> Kinsol<S> {
 }
 
 /// KINSysFn: F(u) into fval.
-unsafe extern "C" fn residual_trampoline<S: NonlinearSystem>(uu: N_Vector, fval: N_Vector, data: *mut c_void) -> c_int {
+unsafe extern "C" fn residual_trampoline<S: NonlinearSystem>(
+    uu: N_Vector,
+    fval: N_Vector,
+    data: *mut c_void,
+) -> c_int {
     // SAFETY: `data` is the Shared<S> registered with KINSetUserData; KINSOL calls us from
     // inside KINSol, while no other reference to it exists; uu and fval are distinct live
     // serial vectors of length n.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let (u, f) = unsafe { (nvector::slice(uu), nvector::slice_mut(fval)) };
-    let Shared { system, callbacks, .. } = shared;
+    let Shared {
+        system, callbacks, ..
+    } = shared;
     callbacks.guard("residual", || system.residual(u, f))
 }
 
@@ -419,7 +500,13 @@ unsafe extern "C" fn jacobian_trampoline<S: NonlinearSystem>(
     // SAFETY: as in residual_trampoline.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let u = unsafe { nvector::slice(uu) };
-    let Shared { system, matrix, callbacks, jacobian_calls, setup_started } = shared;
+    let Shared {
+        system,
+        matrix,
+        callbacks,
+        jacobian_calls,
+        setup_started,
+    } = shared;
     *setup_started = true;
     if jac != matrix.raw() {
         return callbacks.fail("KINSOL passed a Jacobian matrix this layer did not create".into());

@@ -20,7 +20,11 @@ mod ffi {
 /// `y` must be a live serial vector, `a` a live CSR/CSC sparse matrix and `ctx` the live
 /// context both were created in.
 #[cfg(eyeshell_klu)]
-pub(crate) unsafe fn new_klu(y: N_Vector, a: SUNMatrix, ctx: SUNContext) -> Result<SUNLinearSolver, SundialsError> {
+pub(crate) unsafe fn new_klu(
+    y: N_Vector,
+    a: SUNMatrix,
+    ctx: SUNContext,
+) -> Result<SUNLinearSolver, SundialsError> {
     let raw = ffi::SUNLinSol_KLU(y, a, ctx);
     if raw.is_null() {
         return Err(SundialsError::NullHandle("SUNLinSol_KLU"));
@@ -33,6 +37,10 @@ pub(crate) unsafe fn new_klu(y: N_Vector, a: SUNMatrix, ctx: SUNContext) -> Resu
 /// # Safety
 /// None needed; `unsafe` only to match the signature of the real constructor.
 #[cfg(not(eyeshell_klu))]
-pub(crate) unsafe fn new_klu(_y: N_Vector, _a: SUNMatrix, _ctx: SUNContext) -> Result<SUNLinearSolver, SundialsError> {
+pub(crate) unsafe fn new_klu(
+    _y: N_Vector,
+    _a: SUNMatrix,
+    _ctx: SUNContext,
+) -> Result<SUNLinearSolver, SundialsError> {
     Err(SundialsError::KluUnavailable)
 }

@@ -19,10 +19,16 @@ use super::nvector::NVector;
 pub enum LinearSolverSpec {
     Dense,
     /// Band LU with these bandwidths (clamped to n - 1).
-    Band { upper: usize, lower: usize },
+    Band {
+        upper: usize,
+        lower: usize,
+    },
     /// KLU on a CSR matrix with this pattern, fixed for the life of the solver
     /// (`row_ptr`: n + 1 offsets; `col_idx`: strictly increasing within each row).
-    Klu { row_ptr: Vec<usize>, col_idx: Vec<usize> },
+    Klu {
+        row_ptr: Vec<usize>,
+        col_idx: Vec<usize>,
+    },
 }
 
 impl LinearSolverSpec {
@@ -30,7 +36,9 @@ impl LinearSolverSpec {
     pub fn matrix(&self, ctx: &Rc<Context>, n: usize) -> Result<Matrix, SundialsError> {
         Ok(match self {
             LinearSolverSpec::Dense => Matrix::Dense(DenseMatrix::new(ctx, n, n)?),
-            LinearSolverSpec::Band { upper, lower } => Matrix::Band(BandMatrix::new(ctx, n, *upper, *lower)?),
+            LinearSolverSpec::Band { upper, lower } => {
+                Matrix::Band(BandMatrix::new(ctx, n, *upper, *lower)?)
+            }
             LinearSolverSpec::Klu { row_ptr, col_idx } => {
                 if !super::klu_available() {
                     return Err(SundialsError::KluUnavailable);
@@ -60,15 +68,26 @@ impl LinearSolver {
     pub fn new(ctx: &Rc<Context>, matrix: &Matrix) -> Result<Self, SundialsError> {
         let n = matrix.nrows();
         if matrix.ncols() != n {
-            return Err(SundialsError::Invalid(format!("linear solver needs a square matrix, got {}", matrix.describe())));
+            return Err(SundialsError::Invalid(format!(
+                "linear solver needs a square matrix, got {}",
+                matrix.describe()
+            )));
         }
         let template = NVector::new(ctx, n)?;
         // SAFETY: template, matrix and ctx are live and were created in ctx; the
         // constructors only inspect `template` (they keep no reference to it).
         let (raw, name, pattern) = unsafe {
             match matrix {
-                Matrix::Dense(a) => (SUNLinSol_Dense(template.raw(), a.raw(), ctx.raw()), "SUNLinSol_Dense", None),
-                Matrix::Band(a) => (SUNLinSol_Band(template.raw(), a.raw(), ctx.raw()), "SUNLinSol_Band", None),
+                Matrix::Dense(a) => (
+                    SUNLinSol_Dense(template.raw(), a.raw(), ctx.raw()),
+                    "SUNLinSol_Dense",
+                    None,
+                ),
+                Matrix::Band(a) => (
+                    SUNLinSol_Band(template.raw(), a.raw(), ctx.raw()),
+                    "SUNLinSol_Band",
+                    None,
+                ),
                 Matrix::Sparse(a) => (
                     new_klu(template.raw(), a.raw(), ctx.raw())?,
                     "SUNLinSol_KLU",
@@ -79,14 +98,30 @@ impl LinearSolver {
         if raw.is_null() {
             return Err(SundialsError::NullHandle(name));
         }
-        let ls = LinearSolver { raw, kind: matrix.kind(), n, pattern, factored: false, _ctx: Rc::clone(ctx) };
+        let ls = LinearSolver {
+            raw,
+            kind: matrix.kind(),
+            n,
+            pattern,
+            factored: false,
+            _ctx: Rc::clone(ctx),
+        };
         // SAFETY: raw is a live linear solver.
-        check("SUNLinSolInitialize", unsafe { SUNLinSolInitialize(raw) }, FlagFamily::SunLs, None)?;
+        check(
+            "SUNLinSolInitialize",
+            unsafe { SUNLinSolInitialize(raw) },
+            FlagFamily::SunLs,
+            None,
+        )?;
         Ok(ls)
     }
 
     /// A matrix for `spec` and its solver.
-    pub fn for_spec(ctx: &Rc<Context>, n: usize, spec: &LinearSolverSpec) -> Result<(Matrix, Self), SundialsError> {
+    pub fn for_spec(
+        ctx: &Rc<Context>,
+        n: usize,
+        spec: &LinearSolverSpec,
+    ) -> Result<(Matrix, Self), SundialsError> {
         let matrix = spec.matrix(ctx, n)?;
         let solver = Self::new(ctx, &matrix)?;
         Ok((matrix, solver))
@@ -132,7 +167,12 @@ impl LinearSolver {
     }
 
     /// Solve A x = b with the factorisation from the last [`setup`](Self::setup) of `matrix`.
-    pub fn solve(&mut self, matrix: &mut Matrix, x: &mut NVector, b: &NVector) -> Result<(), SundialsError> {
+    pub fn solve(
+        &mut self,
+        matrix: &mut Matrix,
+        x: &mut NVector,
+        b: &NVector,
+    ) -> Result<(), SundialsError> {
         self.check_matrix(matrix)?;
         if x.len() != self.n || b.len() != self.n {
             return Err(SundialsError::Invalid(format!(
@@ -143,7 +183,9 @@ impl LinearSolver {
             )));
         }
         if !self.factored {
-            return Err(SundialsError::Invalid("solve called before a successful setup".into()));
+            return Err(SundialsError::Invalid(
+                "solve called before a successful setup".into(),
+            ));
         }
         // SAFETY: all handles live and compatible; direct solvers copy b into x and solve
         // in place, they do not write b.

@@ -51,7 +51,12 @@ impl DenseMut<'_> {
     }
 
     pub fn get(&self, i: usize, j: usize) -> f64 {
-        assert!(i < self.nrows && j < self.ncols, "({i},{j}) outside a {}x{} matrix", self.nrows, self.ncols);
+        assert!(
+            i < self.nrows && j < self.ncols,
+            "({i},{j}) outside a {}x{} matrix",
+            self.nrows,
+            self.ncols
+        );
         self.data[j * self.nrows + i]
     }
 }
@@ -62,7 +67,12 @@ impl MatrixSink for DenseMut<'_> {
     }
 
     fn set(&mut self, i: usize, j: usize, v: f64) {
-        assert!(i < self.nrows && j < self.ncols, "({i},{j}) outside a {}x{} matrix", self.nrows, self.ncols);
+        assert!(
+            i < self.nrows && j < self.ncols,
+            "({i},{j}) outside a {}x{} matrix",
+            self.nrows,
+            self.ncols
+        );
         self.data[j * self.nrows + i] = v;
     }
 }
@@ -241,7 +251,12 @@ impl DenseMatrix {
         if raw.is_null() {
             return Err(SundialsError::NullHandle("SUNDenseMatrix"));
         }
-        let mut a = DenseMatrix { raw, nrows, ncols, _ctx: Rc::clone(ctx) };
+        let mut a = DenseMatrix {
+            raw,
+            nrows,
+            ncols,
+            _ctx: Rc::clone(ctx),
+        };
         a.zero();
         Ok(a)
     }
@@ -256,7 +271,9 @@ impl DenseMatrix {
 
     fn data(&mut self) -> &mut [f64] {
         // SAFETY: a dense matrix stores nrows*ncols reals contiguously; &mut self is exclusive.
-        unsafe { std::slice::from_raw_parts_mut(SUNDenseMatrix_Data(self.raw), self.nrows * self.ncols) }
+        unsafe {
+            std::slice::from_raw_parts_mut(SUNDenseMatrix_Data(self.raw), self.nrows * self.ncols)
+        }
     }
 
     pub fn zero(&mut self) {
@@ -265,7 +282,11 @@ impl DenseMatrix {
 
     pub fn view_mut(&mut self) -> DenseMut<'_> {
         let (nrows, ncols) = (self.nrows, self.ncols);
-        DenseMut { data: self.data(), nrows, ncols }
+        DenseMut {
+            data: self.data(),
+            nrows,
+            ncols,
+        }
     }
 
     pub(crate) fn raw(&self) -> SUNMatrix {
@@ -288,22 +309,40 @@ pub struct BandMatrix {
 
 impl BandMatrix {
     /// Bandwidths larger than n - 1 are clamped to n - 1.
-    pub fn new(ctx: &Rc<Context>, n: usize, upper: usize, lower: usize) -> Result<Self, SundialsError> {
+    pub fn new(
+        ctx: &Rc<Context>,
+        n: usize,
+        upper: usize,
+        lower: usize,
+    ) -> Result<Self, SundialsError> {
         if n == 0 {
             return Err(SundialsError::Invalid("a band matrix needs n ≥ 1".into()));
         }
         let (upper, lower) = (upper.min(n - 1), lower.min(n - 1));
         let nn = index_type(n, "size")?;
         // SAFETY: ctx is live; the result is checked for NULL.
-        let raw = unsafe { SUNBandMatrix(nn, upper as sunindextype, lower as sunindextype, ctx.raw()) };
+        let raw =
+            unsafe { SUNBandMatrix(nn, upper as sunindextype, lower as sunindextype, ctx.raw()) };
         if raw.is_null() {
             return Err(SundialsError::NullHandle("SUNBandMatrix"));
         }
         // SAFETY: raw is a live band matrix.
         let (smu, ldim) = unsafe {
-            (SUNBandMatrix_StoredUpperBandwidth(raw) as usize, SUNBandMatrix_LDim(raw) as usize)
+            (
+                SUNBandMatrix_StoredUpperBandwidth(raw) as usize,
+                SUNBandMatrix_LDim(raw) as usize,
+            )
         };
-        let mut a = BandMatrix { raw, n, upper, lower, smu, ldim, outside: Cell::new(0), _ctx: Rc::clone(ctx) };
+        let mut a = BandMatrix {
+            raw,
+            n,
+            upper,
+            lower,
+            smu,
+            ldim,
+            outside: Cell::new(0),
+            _ctx: Rc::clone(ctx),
+        };
         a.zero();
         Ok(a)
     }
@@ -332,8 +371,17 @@ impl BandMatrix {
     pub fn view_mut(&mut self) -> BandMut<'_> {
         let (n, upper, lower, smu, ldim) = (self.n, self.upper, self.lower, self.smu, self.ldim);
         // SAFETY: as in data(); `outside` is a separate field, not inside the slice.
-        let data = unsafe { std::slice::from_raw_parts_mut(SUNBandMatrix_Data(self.raw), n * ldim) };
-        BandMut { data, n, upper, lower, smu, ldim, outside: &self.outside }
+        let data =
+            unsafe { std::slice::from_raw_parts_mut(SUNBandMatrix_Data(self.raw), n * ldim) };
+        BandMut {
+            data,
+            n,
+            upper,
+            lower,
+            smu,
+            ldim,
+            outside: &self.outside,
+        }
     }
 
     pub(crate) fn raw(&self) -> SUNMatrix {
@@ -361,7 +409,12 @@ pub struct SparseMatrix {
 impl SparseMatrix {
     /// `row_ptr` (length n + 1, starting at 0, non-decreasing) and `col_idx` (strictly
     /// increasing within each row, < n) give the pattern, fixed for the matrix's life.
-    pub fn new(ctx: &Rc<Context>, n: usize, row_ptr: Vec<usize>, col_idx: Vec<usize>) -> Result<Self, SundialsError> {
+    pub fn new(
+        ctx: &Rc<Context>,
+        n: usize,
+        row_ptr: Vec<usize>,
+        col_idx: Vec<usize>,
+    ) -> Result<Self, SundialsError> {
         validate_csr(n, &row_ptr, &col_idx)?;
         let nn = index_type(n, "size")?;
         let nnz = index_type(col_idx.len().max(1), "nnz")?;
@@ -371,7 +424,15 @@ impl SparseMatrix {
             return Err(SundialsError::NullHandle("SUNSparseMatrix"));
         }
         let fingerprint = pattern_fingerprint(&row_ptr, &col_idx);
-        let mut a = SparseMatrix { raw, n, row_ptr, col_idx, fingerprint, outside: Cell::new(0), _ctx: Rc::clone(ctx) };
+        let mut a = SparseMatrix {
+            raw,
+            n,
+            row_ptr,
+            col_idx,
+            fingerprint,
+            outside: Cell::new(0),
+            _ctx: Rc::clone(ctx),
+        };
         a.zero();
         Ok(a)
     }
@@ -399,18 +460,24 @@ impl SparseMatrix {
 
     fn values(&mut self) -> &mut [f64] {
         // SAFETY: the matrix was allocated with max(nnz, 1) ≥ nnz values.
-        unsafe { std::slice::from_raw_parts_mut(SUNSparseMatrix_Data(self.raw), self.col_idx.len()) }
+        unsafe {
+            std::slice::from_raw_parts_mut(SUNSparseMatrix_Data(self.raw), self.col_idx.len())
+        }
     }
 
     /// Write our pattern into the SUNMatrix's index arrays.
     pub(crate) fn restore_pattern(&mut self) {
         // SAFETY: the matrix has n + 1 index pointers and ≥ nnz index values.
         unsafe {
-            let ptrs = std::slice::from_raw_parts_mut(SUNSparseMatrix_IndexPointers(self.raw), self.n + 1);
+            let ptrs =
+                std::slice::from_raw_parts_mut(SUNSparseMatrix_IndexPointers(self.raw), self.n + 1);
             for (dst, &src) in ptrs.iter_mut().zip(&self.row_ptr) {
                 *dst = src as sunindextype;
             }
-            let vals = std::slice::from_raw_parts_mut(SUNSparseMatrix_IndexValues(self.raw), self.col_idx.len());
+            let vals = std::slice::from_raw_parts_mut(
+                SUNSparseMatrix_IndexValues(self.raw),
+                self.col_idx.len(),
+            );
             for (dst, &src) in vals.iter_mut().zip(&self.col_idx) {
                 *dst = src as sunindextype;
             }
@@ -421,17 +488,30 @@ impl SparseMatrix {
     pub(crate) fn pattern_intact(&self) -> bool {
         // SAFETY: as in restore_pattern, read-only.
         unsafe {
-            let ptrs = std::slice::from_raw_parts(SUNSparseMatrix_IndexPointers(self.raw), self.n + 1);
-            let vals = std::slice::from_raw_parts(SUNSparseMatrix_IndexValues(self.raw), self.col_idx.len());
-            ptrs.iter().zip(&self.row_ptr).all(|(&a, &b)| a as usize == b)
-                && vals.iter().zip(&self.col_idx).all(|(&a, &b)| a as usize == b)
+            let ptrs =
+                std::slice::from_raw_parts(SUNSparseMatrix_IndexPointers(self.raw), self.n + 1);
+            let vals = std::slice::from_raw_parts(
+                SUNSparseMatrix_IndexValues(self.raw),
+                self.col_idx.len(),
+            );
+            ptrs.iter()
+                .zip(&self.row_ptr)
+                .all(|(&a, &b)| a as usize == b)
+                && vals
+                    .iter()
+                    .zip(&self.col_idx)
+                    .all(|(&a, &b)| a as usize == b)
         }
     }
 
     /// Set every value at once, in the order of the pattern (`col_idx`).
     pub fn copy_values(&mut self, values: &[f64]) -> Result<(), SundialsError> {
         if values.len() != self.col_idx.len() {
-            return Err(SundialsError::Invalid(format!("{} values for a pattern of {}", values.len(), self.col_idx.len())));
+            return Err(SundialsError::Invalid(format!(
+                "{} values for a pattern of {}",
+                values.len(),
+                self.col_idx.len()
+            )));
         }
         self.values().copy_from_slice(values);
         Ok(())
@@ -447,7 +527,12 @@ impl SparseMatrix {
         let nnz = self.col_idx.len();
         // SAFETY: as in values(); the pattern and `outside` are separate fields.
         let values = unsafe { std::slice::from_raw_parts_mut(SUNSparseMatrix_Data(self.raw), nnz) };
-        CsrMut { values, row_ptr: &self.row_ptr, col_idx: &self.col_idx, outside: &self.outside }
+        CsrMut {
+            values,
+            row_ptr: &self.row_ptr,
+            col_idx: &self.col_idx,
+            outside: &self.outside,
+        }
     }
 
     pub(crate) fn raw(&self) -> SUNMatrix {
@@ -458,7 +543,11 @@ impl SparseMatrix {
 /// FNV-1a over the pattern's lengths and indices.
 fn pattern_fingerprint(row_ptr: &[usize], col_idx: &[usize]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &v in [row_ptr.len(), col_idx.len()].iter().chain(row_ptr).chain(col_idx) {
+    for &v in [row_ptr.len(), col_idx.len()]
+        .iter()
+        .chain(row_ptr)
+        .chain(col_idx)
+    {
         h ^= v as u64;
         h = h.wrapping_mul(0x0000_0100_0000_01b3);
     }
@@ -471,7 +560,11 @@ fn validate_csr(n: usize, row_ptr: &[usize], col_idx: &[usize]) -> Result<(), Su
         return bad("n must be ≥ 1".into());
     }
     if row_ptr.len() != n + 1 {
-        return bad(format!("row_ptr has {} entries, expected n + 1 = {}", row_ptr.len(), n + 1));
+        return bad(format!(
+            "row_ptr has {} entries, expected n + 1 = {}",
+            row_ptr.len(),
+            n + 1
+        ));
     }
     if row_ptr[0] != 0 || row_ptr[n] != col_idx.len() {
         return bad(format!(
@@ -490,7 +583,9 @@ fn validate_csr(n: usize, row_ptr: &[usize], col_idx: &[usize]) -> Result<(), Su
             return bad(format!("row {i} has a column index ≥ n = {n}"));
         }
         if row.windows(2).any(|w| w[0] >= w[1]) {
-            return bad(format!("row {i}'s column indices are not strictly increasing"));
+            return bad(format!(
+                "row {i}'s column indices are not strictly increasing"
+            ));
         }
     }
     Ok(())
@@ -589,7 +684,12 @@ impl Matrix {
     pub fn describe(&self) -> String {
         match self {
             Matrix::Dense(m) => format!("dense {}x{}", m.nrows(), m.ncols()),
-            Matrix::Band(m) => format!("band n={} (upper {}, lower {})", m.n(), m.upper(), m.lower()),
+            Matrix::Band(m) => format!(
+                "band n={} (upper {}, lower {})",
+                m.n(),
+                m.upper(),
+                m.lower()
+            ),
             Matrix::Sparse(m) => format!("CSR n={} nnz={}", m.n(), m.nnz()),
         }
     }
@@ -636,13 +736,18 @@ mod tests {
     #[test]
     fn sparse_pattern_survives_sunmatzero() {
         let ctx = Context::new().unwrap();
-        let mut a = Matrix::Sparse(SparseMatrix::new(&ctx, 2, vec![0, 2, 3], vec![0, 1, 1]).unwrap());
+        let mut a =
+            Matrix::Sparse(SparseMatrix::new(&ctx, 2, vec![0, 2, 3], vec![0, 1, 1]).unwrap());
         // SAFETY: test-only; this is what KINSOL does before each Jacobian evaluation.
         unsafe { sundials_sys::SUNMatZero(a.raw()) };
-        let Matrix::Sparse(s) = &a else { unreachable!() };
+        let Matrix::Sparse(s) = &a else {
+            unreachable!()
+        };
         assert!(!s.pattern_intact());
         a.before_setup();
-        let Matrix::Sparse(s) = &a else { unreachable!() };
+        let Matrix::Sparse(s) = &a else {
+            unreachable!()
+        };
         assert!(s.pattern_intact());
     }
 

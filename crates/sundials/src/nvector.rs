@@ -18,13 +18,18 @@ pub struct NVector {
 impl NVector {
     /// A zero-filled vector of length `len`.
     pub fn new(ctx: &Rc<Context>, len: usize) -> Result<Self, SundialsError> {
-        let n = i64::try_from(len).map_err(|_| SundialsError::Invalid(format!("vector length {len} too large")))?;
+        let n = i64::try_from(len)
+            .map_err(|_| SundialsError::Invalid(format!("vector length {len} too large")))?;
         // SAFETY: ctx is a live context.
         let raw = unsafe { N_VNew_Serial(n, ctx.raw()) };
         if raw.is_null() {
             return Err(SundialsError::NullHandle("N_VNew_Serial"));
         }
-        let mut v = NVector { raw, len, _ctx: Rc::clone(ctx) };
+        let mut v = NVector {
+            raw,
+            len,
+            _ctx: Rc::clone(ctx),
+        };
         v.as_mut_slice().fill(0.0);
         Ok(v)
     }
@@ -56,8 +61,14 @@ impl NVector {
     /// Call `f` with a serial N_Vector that borrows `data` (N_VMake_Serial; destroyed, data
     /// untouched, when `f` returns): for the getters that write into a caller's vector
     /// (dense output). Returns what `f` returns.
-    pub(crate) fn with_borrowed(ctx: &Context, data: &mut [f64], f: impl FnOnce(N_Vector) -> std::os::raw::c_int) -> Result<std::os::raw::c_int, SundialsError> {
-        let len = i64::try_from(data.len()).map_err(|_| SundialsError::Invalid(format!("vector length {} too large", data.len())))?;
+    pub(crate) fn with_borrowed(
+        ctx: &Context,
+        data: &mut [f64],
+        f: impl FnOnce(N_Vector) -> std::os::raw::c_int,
+    ) -> Result<std::os::raw::c_int, SundialsError> {
+        let len = i64::try_from(data.len()).map_err(|_| {
+            SundialsError::Invalid(format!("vector length {} too large", data.len()))
+        })?;
         // SAFETY: the vector wraps `data` without owning it (N_VDestroy leaves the data
         // alone) and is destroyed before `data`'s borrow ends; the context is live.
         let v = unsafe { sundials_sys::N_VMake_Serial(len, data.as_mut_ptr(), ctx.raw()) };
@@ -76,7 +87,12 @@ impl NVector {
     pub fn enable_fused_ops(&mut self) -> Result<(), SundialsError> {
         // SAFETY: raw is a live serial vector owned by self.
         let flag = unsafe { sundials_sys::N_VEnableFusedOps_Serial(self.raw, 1) };
-        super::error::check("N_VEnableFusedOps_Serial", flag, super::error::FlagFamily::Generic, None)
+        super::error::check(
+            "N_VEnableFusedOps_Serial",
+            flag,
+            super::error::FlagFamily::Generic,
+            None,
+        )
     }
 
     pub(crate) fn raw(&self) -> N_Vector {

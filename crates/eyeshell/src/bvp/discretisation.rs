@@ -16,10 +16,13 @@
 //! so a fibre-free scene's assembly holds no fibre code. A uniform thickness has no jump
 //! node and so no second evaluation at πR0/2; no component adds thickness derivatives.
 
-use super::equations::{self, Equations, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, QS, R, THETA, TS};
+use super::equations::{
+    self, Equations, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, QS, R, THETA,
+    TS,
+};
+use crate::mesh::Mesh;
 use crate::model::components::Membrane;
 use crate::model::constitutive::Reinforcement;
-use crate::mesh::Mesh;
 use crate::model::cornea::CorneaEdge;
 use crate::model::params::Scheme;
 use eyeshell_sundials::MatrixSink;
@@ -117,7 +120,8 @@ pub struct Quadratures {
 impl Quadratures {
     /// z at the middle of interval i, from the cubic Hermite through its ends.
     pub fn z_mid(&self, i: usize, h: f64) -> f64 {
-        0.5 * (self.z[i] + self.z[i + 1]) + h / 8.0 * (self.slope_left[i][1] - self.slope_right[i][1])
+        0.5 * (self.z[i] + self.z[i + 1])
+            + h / 8.0 * (self.slope_left[i][1] - self.slope_right[i][1])
     }
 }
 
@@ -140,11 +144,25 @@ fn y_at(u: &[f64], i: usize) -> Vec5 {
 }
 
 impl Discretisation {
-    pub fn new(shell: Shell, scheme: Scheme, mesh: Mesh, data: MaterialData, edge: CorneaEdge) -> Self {
+    pub fn new(
+        shell: Shell,
+        scheme: Scheme,
+        mesh: Mesh,
+        data: MaterialData,
+        edge: CorneaEdge,
+    ) -> Self {
         let m = mesh.len();
         assert!(data.above.len() == m && data.below.len() == m && data.mid.len() == m - 1);
         let jump_nodes = (1..m - 1).filter(|&i| data.jumps(i)).collect();
-        Discretisation { shell, scheme, mesh, data, edge, evals: Evaluations::default(), jump_nodes }
+        Discretisation {
+            shell,
+            scheme,
+            mesh,
+            data,
+            edge,
+            evals: Evaluations::default(),
+            jump_nodes,
+        }
     }
 
     /// Replace the unloaded shell's data (after growth); evaluations at the old data are dropped.
@@ -162,7 +180,9 @@ impl Discretisation {
     pub fn quadratures(&mut self, u: &[f64]) -> Result<Quadratures, EvalFailure> {
         self.evaluate(u)?;
         let (m, ev, data) = (self.mesh.len(), &self.evals, &self.data);
-        let rates = |mp: &MaterialPoint, e: &PointEval| [mp.gamma * e.alpha_s, -mp.gamma * e.alpha_s * e.sin_theta];
+        let rates = |mp: &MaterialPoint, e: &PointEval| {
+            [mp.gamma * e.alpha_s, -mp.gamma * e.alpha_s * e.sin_theta]
+        };
         let mut q = Quadratures {
             s: vec![0.0; m],
             z: vec![0.0; m],
@@ -178,7 +198,10 @@ impl Discretisation {
             let step = match self.scheme {
                 Scheme::HermiteSimpson => {
                     let c = rates(&data.mid[i], ev.mid(i));
-                    [h / 6.0 * (a[0] + 4.0 * c[0] + b[0]), h / 6.0 * (a[1] + 4.0 * c[1] + b[1])]
+                    [
+                        h / 6.0 * (a[0] + 4.0 * c[0] + b[0]),
+                        h / 6.0 * (a[1] + 4.0 * c[1] + b[1]),
+                    ]
                 }
                 Scheme::Trapezoid => [0.5 * h * (a[0] + b[0]), 0.5 * h * (a[1] + b[1])],
             };
@@ -202,7 +225,10 @@ impl Discretisation {
         let slope = |mp: &MaterialPoint, e: &PointEval| -mp.gamma * e.alpha_s * e.sin_theta;
         for (i, d) in dz.iter_mut().enumerate() {
             let h = self.mesh.step(i);
-            let (a, b) = (slope(&data.above[i], ev.left(i)), slope(&data.below[i + 1], ev.right(i)));
+            let (a, b) = (
+                slope(&data.above[i], ev.left(i)),
+                slope(&data.below[i + 1], ev.right(i)),
+            );
             *d = match self.scheme {
                 Scheme::HermiteSimpson => h / 6.0 * (a + 4.0 * slope(&data.mid[i], ev.mid(i)) + b),
                 Scheme::Trapezoid => 0.5 * h * (a + b),
@@ -227,29 +253,46 @@ impl Discretisation {
             return Ok(());
         }
         match self.shell.membrane() {
-            Membrane::NeoHookean { .. } => self.evaluate_with(&Equations::neo_hookean(&self.shell), u),
-            Membrane::Reinforced { d, .. } => self.evaluate_with(&Equations::reinforced(&self.shell, d), u),
+            Membrane::NeoHookean { .. } => {
+                self.evaluate_with(&Equations::neo_hookean(&self.shell), u)
+            }
+            Membrane::Reinforced { d, .. } => {
+                self.evaluate_with(&Equations::reinforced(&self.shell, d), u)
+            }
         }
     }
 
     /// The pass over the points for one membrane component R, each evaluation written in
     /// place. Each α_s solve is seeded with the α_s of the previous evaluation at the same
     /// point (the cornea's stretch the first time).
-    fn evaluate_with<Rf: Reinforcement>(&mut self, eq: &Equations<Rf>, u: &[f64]) -> Result<(), EvalFailure> {
+    fn evaluate_with<Rf: Reinforcement>(
+        &mut self,
+        eq: &Equations<Rf>,
+        u: &[f64],
+    ) -> Result<(), EvalFailure> {
         let ev = &mut self.evals;
         ev.u.clear(); // invalid until every point is done
         let m = self.mesh.len();
         let seed = self.edge.alpha;
         let fail = |node: usize, mp: &MaterialPoint| {
             let sigma_ref = mp.sigma_ref;
-            move |why| EvalFailure { node, sigma_ref, why }
+            move |why| EvalFailure {
+                node,
+                sigma_ref,
+                why,
+            }
         };
         let guess = |e: &PointEval| if e.is_set() { e.alpha_s } else { seed };
         ev.node.resize(m, PointEval::unset());
         for i in 0..m {
-            let mp = if i < m - 1 { &self.data.above[i] } else { &self.data.below[i] };
+            let mp = if i < m - 1 {
+                &self.data.above[i]
+            } else {
+                &self.data.below[i]
+            };
             let e = &mut ev.node[i];
-            eq.evaluate_into(mp, &y_at(u, i), guess(e), e).map_err(fail(i, mp))?;
+            eq.evaluate_into(mp, &y_at(u, i), guess(e), e)
+                .map_err(fail(i, mp))?;
         }
         ev.below.truncate(self.jump_nodes.len());
         for (k, &i) in self.jump_nodes.iter().enumerate() {
@@ -259,17 +302,20 @@ impl Discretisation {
             let mp = &self.data.below[i];
             let e = &mut ev.below[k];
             e.0 = i;
-            eq.evaluate_into(mp, &y_at(u, i), guess(&e.1), &mut e.1).map_err(fail(i, mp))?;
+            eq.evaluate_into(mp, &y_at(u, i), guess(&e.1), &mut e.1)
+                .map_err(fail(i, mp))?;
         }
         if self.scheme == Scheme::HermiteSimpson {
             ev.mid.resize(m - 1, PointEval::unset());
             ev.y_mid.resize(m - 1, Vec5::zeros());
             for i in 0..m - 1 {
                 let h = self.mesh.step(i);
-                let ym = 0.5 * (y_at(u, i) + y_at(u, i + 1)) + (h / 8.0) * (ev.left(i).f - ev.right(i).f);
+                let ym = 0.5 * (y_at(u, i) + y_at(u, i + 1))
+                    + (h / 8.0) * (ev.left(i).f - ev.right(i).f);
                 let mp = &self.data.mid[i];
                 let e = &mut ev.mid[i];
-                eq.evaluate_into(mp, &ym, guess(e), e).map_err(fail(i, mp))?;
+                eq.evaluate_into(mp, &ym, guess(e), e)
+                    .map_err(fail(i, mp))?;
                 ev.y_mid[i] = ym;
             }
         }
@@ -299,7 +345,9 @@ impl Discretisation {
             let dy = y_at(u, i + 1) - y_at(u, i);
             let r = match self.scheme {
                 Scheme::Trapezoid => dy - (0.5 * h) * (ev.left(i).f + ev.right(i).f),
-                Scheme::HermiteSimpson => dy - (h / 6.0) * (ev.left(i).f + 4.0 * ev.mid(i).f + ev.right(i).f),
+                Scheme::HermiteSimpson => {
+                    dy - (h / 6.0) * (ev.left(i).f + 4.0 * ev.mid(i).f + ev.right(i).f)
+                }
             };
             f[POLE_ROWS + NY * i..POLE_ROWS + NY * i + NY].copy_from_slice(r.as_slice());
         }
@@ -311,7 +359,11 @@ impl Discretisation {
     }
 
     /// ∂F/∂u at `u`, every structural entry written into `jac`.
-    pub fn jacobian<S: MatrixSink + ?Sized>(&mut self, u: &[f64], jac: &mut S) -> Result<(), EvalFailure> {
+    pub fn jacobian<S: MatrixSink + ?Sized>(
+        &mut self,
+        u: &[f64],
+        jac: &mut S,
+    ) -> Result<(), EvalFailure> {
         self.evaluate(u)?;
         let ev = &self.evals;
         let m = self.mesh.len();
@@ -424,9 +476,19 @@ impl Discretisation {
     pub fn locate_row(&self, row: usize) -> (usize, &'static str) {
         let n = self.len();
         if row < POLE_ROWS {
-            (0, ["pole r = σ_ε α_s", "pole θ = σ_ε α_s κ", "pole first integral"][row])
+            (
+                0,
+                [
+                    "pole r = σ_ε α_s",
+                    "pole θ = σ_ε α_s κ",
+                    "pole first integral",
+                ][row],
+            )
         } else if row >= n - 2 {
-            (self.mesh.len() - 1, ["cornea r = r*", "cornea θ = θ*"][row + 2 - n])
+            (
+                self.mesh.len() - 1,
+                ["cornea r = r*", "cornea θ = θ*"][row + 2 - n],
+            )
         } else {
             let i = (row - POLE_ROWS) / NY;
             (i, equations::NAMES[(row - POLE_ROWS) % NY])
@@ -443,7 +505,10 @@ pub struct DenseSink {
 
 impl DenseSink {
     pub fn new(n: usize) -> Self {
-        DenseSink { n, data: vec![0.0; n * n] }
+        DenseSink {
+            n,
+            data: vec![0.0; n * n],
+        }
     }
     pub fn get(&self, i: usize, j: usize) -> f64 {
         self.data[i * self.n + j]
@@ -470,13 +535,23 @@ mod tests {
     /// assemblies share no constitutive code path, and agree to round-off.
     #[test]
     fn fibre_free_assembly_matches_the_fibre_component_with_zero_stiffness() {
-        let p = Params { thickness: Thickness::NonUniform, d: 0.0, ..Params::default() };
-        let s = SolverSettings { nodes: 41, ..SolverSettings::default() };
+        let p = Params {
+            thickness: Thickness::NonUniform,
+            d: 0.0,
+            ..Params::default()
+        };
+        let s = SolverSettings {
+            nodes: 41,
+            ..SolverSettings::default()
+        };
         let mut plain = discretise(&p, &s).unwrap();
         let mut forced = discretise(&p, &s).unwrap();
         forced.shell.law.d = Some(0.0);
         assert_eq!(plain.shell.membrane(), Membrane::NeoHookean { c: p.c });
-        assert_eq!(forced.shell.membrane(), Membrane::Reinforced { c: p.c, d: 0.0 });
+        assert_eq!(
+            forced.shell.membrane(),
+            Membrane::Reinforced { c: p.c, d: 0.0 }
+        );
         let mut u = sphere_guess(&plain, p.r0);
         for (k, v) in u.iter_mut().enumerate() {
             *v *= 1.0 + 1e-3 * ((k % 7) as f64 - 3.0); // off the sphere, so every term counts

@@ -29,7 +29,9 @@
 //! either kind and dispatch once per call.
 
 use crate::model::components::Membrane;
-use crate::model::constitutive::{FibreDirection, Fibres, Law, MembraneLaw, NoFibres, Reinforcement, Tensions};
+use crate::model::constitutive::{
+    FibreDirection, Fibres, Law, MembraneLaw, NoFibres, Reinforcement, Tensions,
+};
 use nalgebra::{SMatrix, SVector};
 
 pub type Vec5 = SVector<f64, 5>;
@@ -157,7 +159,13 @@ pub enum PointError {
 /// α_s at a point from the unknowns, with the tensions and the IFT derivatives
 /// (dispatching once on the shell's membrane component; see [`Equations::stretch`]).
 #[inline]
-pub fn stretch(shell: &Shell, mp: &MaterialPoint, r: f64, ts: f64, guess: f64) -> Result<(f64, f64, f64, Tensions), PointError> {
+pub fn stretch(
+    shell: &Shell,
+    mp: &MaterialPoint,
+    r: f64,
+    ts: f64,
+    guess: f64,
+) -> Result<(f64, f64, f64, Tensions), PointError> {
     match shell.membrane() {
         Membrane::NeoHookean { .. } => Equations::neo_hookean(shell).stretch(mp, r, ts, guess),
         Membrane::Reinforced { d, .. } => Equations::reinforced(shell, d).stretch(mp, r, ts, guess),
@@ -167,7 +175,12 @@ pub fn stretch(shell: &Shell, mp: &MaterialPoint, r: f64, ts: f64, guess: f64) -
 /// f and ∂f/∂y at one point. `guess` seeds the α_s solve (dispatching once on the shell's
 /// membrane component; see [`Equations::evaluate`]).
 #[inline]
-pub fn evaluate(shell: &Shell, mp: &MaterialPoint, y: &Vec5, guess: f64) -> Result<PointEval, PointError> {
+pub fn evaluate(
+    shell: &Shell,
+    mp: &MaterialPoint,
+    y: &Vec5,
+    guess: f64,
+) -> Result<PointEval, PointError> {
     match shell.membrane() {
         Membrane::NeoHookean { .. } => Equations::neo_hookean(shell).evaluate(mp, y, guess),
         Membrane::Reinforced { d, .. } => Equations::reinforced(shell, d).evaluate(mp, y, guess),
@@ -177,7 +190,11 @@ pub fn evaluate(shell: &Shell, mp: &MaterialPoint, y: &Vec5, guess: f64) -> Resu
 impl<R: Reinforcement> Equations<R> {
     /// The shell's E_b and ΔP with the membrane law `law`.
     pub fn new(law: MembraneLaw<R>, shell: &Shell) -> Self {
-        Equations { law, dp: shell.dp, inv_e_b: 1.0 / shell.e_b }
+        Equations {
+            law,
+            dp: shell.dp,
+            inv_e_b: 1.0 / shell.e_b,
+        }
     }
 
     /// The membrane law.
@@ -188,7 +205,13 @@ impl<R: Reinforcement> Equations<R> {
     /// α_s at a point from the unknowns, with the tensions and the IFT derivatives
     /// ∂α_s/∂r, ∂α_s/∂t_s. The point's fibre data are read only when R has fibres.
     #[inline]
-    pub fn stretch(&self, mp: &MaterialPoint, r: f64, ts: f64, guess: f64) -> Result<(f64, f64, f64, Tensions), PointError> {
+    pub fn stretch(
+        &self,
+        mp: &MaterialPoint,
+        r: f64,
+        ts: f64,
+        guess: f64,
+    ) -> Result<(f64, f64, f64, Tensions), PointError> {
         if !r.is_finite() || r <= 0.0 {
             return Err(PointError::NonPositiveRadius);
         }
@@ -204,7 +227,12 @@ impl<R: Reinforcement> Equations<R> {
 
     /// f and ∂f/∂y at one point. `guess` seeds the α_s solve.
     #[inline]
-    pub fn evaluate(&self, mp: &MaterialPoint, y: &Vec5, guess: f64) -> Result<PointEval, PointError> {
+    pub fn evaluate(
+        &self,
+        mp: &MaterialPoint,
+        y: &Vec5,
+        guess: f64,
+    ) -> Result<PointEval, PointError> {
         let mut out = PointEval::unset();
         self.evaluate_into(mp, y, guess, &mut out)?;
         Ok(out)
@@ -213,7 +241,13 @@ impl<R: Reinforcement> Equations<R> {
     /// [`Self::evaluate`] written in place (the assembly's buffers: no 300-byte copies).
     /// On error `out` is left as it was.
     #[inline]
-    pub fn evaluate_into(&self, mp: &MaterialPoint, y: &Vec5, guess: f64, out: &mut PointEval) -> Result<(), PointError> {
+    pub fn evaluate_into(
+        &self,
+        mp: &MaterialPoint,
+        y: &Vec5,
+        guess: f64,
+        out: &mut PointEval,
+    ) -> Result<(), PointError> {
         if !y.iter().all(|v| v.is_finite()) {
             return Err(PointError::NotFinite);
         }
@@ -245,7 +279,13 @@ impl<R: Reinforcement> Equations<R> {
         row(
             KAPPA,
             u * cs * inv_r - q * inv_eb,
-            [-cs * inv_r, -sn * cs * r2 * inv_r - u * cs * r2, (cs * cs - sn * sn) * r2 + kappa * sn * inv_r, -inv_eb, 0.0],
+            [
+                -cs * inv_r,
+                -sn * cs * r2 * inv_r - u * cs * r2,
+                (cs * cs - sn * sn) * r2 + kappa * sn * inv_r,
+                -inv_eb,
+                0.0,
+            ],
         );
         row(R, cs, [0.0, 0.0, -sn, 0.0, 0.0]);
         row(THETA, kappa, [1.0, 0.0, 0.0, 0.0, 0.0]);
@@ -264,7 +304,13 @@ impl<R: Reinforcement> Equations<R> {
         row(
             TS,
             kappa * q + d * cs * inv_r,
-            [q, p_r * cs * inv_r - d * cs * r2, -d * sn * inv_r, kappa, (p_ts - 1.0) * cs * inv_r],
+            [
+                q,
+                p_r * cs * inv_r - d * cs * r2,
+                -d * sn * inv_r,
+                kappa,
+                (p_ts - 1.0) * cs * inv_r,
+            ],
         );
 
         out.alpha_s = a;
@@ -333,12 +379,29 @@ mod tests {
     /// The fibre-free equations never read a point's fibre data.
     #[test]
     fn fibre_free_equations_ignore_fibre_data() {
-        let shell = Shell { law: Law { c: 100.0, d: None }, e_b: 18.0, dp: 2.0 };
-        let bare = MaterialPoint { sigma_ref: 3.0, sigma: 3.1, rho: 2.9, zeta: 0.6, gamma: 1.05, fibre: None };
-        let with = MaterialPoint { fibre: Some(FibreDirection::from_angle(0.2)), ..bare };
+        let shell = Shell {
+            law: Law { c: 100.0, d: None },
+            e_b: 18.0,
+            dp: 2.0,
+        };
+        let bare = MaterialPoint {
+            sigma_ref: 3.0,
+            sigma: 3.1,
+            rho: 2.9,
+            zeta: 0.6,
+            gamma: 1.05,
+            fibre: None,
+        };
+        let with = MaterialPoint {
+            fibre: Some(FibreDirection::from_angle(0.2)),
+            ..bare
+        };
         let y = Vec5::new(0.11, 3.2, 0.33, 0.4, 7.0);
         let eq = Equations::neo_hookean(&shell);
-        let (a, b) = (eq.evaluate(&bare, &y, 1.0).unwrap(), eq.evaluate(&with, &y, 1.0).unwrap());
+        let (a, b) = (
+            eq.evaluate(&bare, &y, 1.0).unwrap(),
+            eq.evaluate(&with, &y, 1.0).unwrap(),
+        );
         assert_eq!((a.f, a.jac, a.alpha_s), (b.f, b.jac, b.alpha_s));
         assert_eq!(evaluate(&shell, &with, &y, 1.0).unwrap().f, a.f);
     }
@@ -346,7 +409,11 @@ mod tests {
     /// A shell (with fibres of stiffness `d`, if any), a grown point and a state off
     /// equilibrium, for the derivative checks.
     fn test_point(d: Option<f64>) -> (Shell, MaterialPoint, Vec5) {
-        let shell = Shell { law: Law { c: 100.0, d }, e_b: 18.0, dp: 2.0 };
+        let shell = Shell {
+            law: Law { c: 100.0, d },
+            e_b: 18.0,
+            dp: 2.0,
+        };
         let mp = MaterialPoint {
             sigma_ref: 3.0,
             sigma: 3.1,
@@ -379,7 +446,12 @@ mod tests {
                 let (eu, ed) = (at(up), at(down));
                 let fd = (eu.f - ed.f) / (2.0 * h);
                 for row in 0..5 {
-                    assert!((f_x[row] - fd[row]).abs() < 1e-6 * (1.0 + fd[row].abs()), "d={d:?} data {k} row {row}: {} vs {}", f_x[row], fd[row]);
+                    assert!(
+                        (f_x[row] - fd[row]).abs() < 1e-6 * (1.0 + fd[row].abs()),
+                        "d={d:?} data {k} row {row}: {} vs {}",
+                        f_x[row],
+                        fd[row]
+                    );
                 }
                 if let Some(a) = a_x {
                     let fd = (eu.alpha_s - ed.alpha_s) / (2.0 * h);
@@ -401,10 +473,15 @@ mod tests {
                 let mut ym = y;
                 yp[c] += h;
                 ym[c] -= h;
-                let fd = (evaluate(&shell, &mp, &yp, 1.0).unwrap().f - evaluate(&shell, &mp, &ym, 1.0).unwrap().f) / (2.0 * h);
+                let fd = (evaluate(&shell, &mp, &yp, 1.0).unwrap().f
+                    - evaluate(&shell, &mp, &ym, 1.0).unwrap().f)
+                    / (2.0 * h);
                 for row in 0..5 {
                     let (a, b) = (e.jac[(row, c)], fd[row]);
-                    assert!((a - b).abs() < 1e-6 * (1.0 + a.abs()), "d={d:?} ({row},{c}): {a} vs {b}");
+                    assert!(
+                        (a - b).abs() < 1e-6 * (1.0 + a.abs()),
+                        "d={d:?} ({row},{c}): {a} vs {b}"
+                    );
                 }
             }
         }

@@ -48,7 +48,11 @@ mod tests {
         let values = mesh.nodes.iter().map(|&x| [p(x); NQ]).collect();
         let slope_left = mesh.nodes.windows(2).map(|w| [dp(w[0]); NQ]).collect();
         let slope_right = mesh.nodes.windows(2).map(|w| [dp(w[1]); NQ]).collect();
-        let it = Interpolant { values, slope_left, slope_right };
+        let it = Interpolant {
+            values,
+            slope_left,
+            slope_right,
+        };
         for k in 0..40 {
             let x = 1e-3 + (2.0 - 1e-3) * k as f64 / 39.0;
             let i = mesh.locate(x).unwrap();

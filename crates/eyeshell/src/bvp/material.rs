@@ -27,8 +27,17 @@ pub fn reference_point(p: &Params, sigma_ref: f64, side: Side) -> MaterialPoint 
 pub fn reference_data(p: &Params, mesh: &Mesh) -> MaterialData {
     let x = &mesh.nodes;
     MaterialData {
-        above: x.iter().map(|&s| reference_point(p, s, Side::Above)).collect(),
-        below: x.iter().map(|&s| reference_point(p, s, Side::Below)).collect(),
-        mid: x.windows(2).map(|w| reference_point(p, 0.5 * (w[0] + w[1]), Side::Above)).collect(),
+        above: x
+            .iter()
+            .map(|&s| reference_point(p, s, Side::Above))
+            .collect(),
+        below: x
+            .iter()
+            .map(|&s| reference_point(p, s, Side::Below))
+            .collect(),
+        mid: x
+            .windows(2)
+            .map(|w| reference_point(p, 0.5 * (w[0] + w[1]), Side::Above))
+            .collect(),
     }
 }

@@ -2,11 +2,22 @@
 //! schemes on the material nodes, the analytic banded Jacobian, the KINSOL driver and a
 //! continuous interpolant of the solution.
 
-
 /// The columns of `fields.csv` and `at.csv`, in order.
 pub const COLUMNS: [&str; 14] = [
-    "Sigma", "sigma", "kappa", "alpha_s", "r", "theta", "Q", "z", "s", "alpha_phi", "alpha_n",
-    "h", "t_s", "t_phi",
+    "Sigma",
+    "sigma",
+    "kappa",
+    "alpha_s",
+    "r",
+    "theta",
+    "Q",
+    "z",
+    "s",
+    "alpha_phi",
+    "alpha_n",
+    "h",
+    "t_s",
+    "t_phi",
 ];
 
 /// Every field of the loaded shell at one material point.
@@ -35,8 +46,20 @@ impl FieldRow {
     /// The values in the order of [`COLUMNS`].
     pub fn values(&self) -> [f64; 14] {
         [
-            self.sigma_ref, self.sigma, self.kappa, self.alpha_s, self.r, self.theta, self.q,
-            self.z, self.s, self.alpha_phi, self.alpha_n, self.h, self.t_s, self.t_phi,
+            self.sigma_ref,
+            self.sigma,
+            self.kappa,
+            self.alpha_s,
+            self.r,
+            self.theta,
+            self.q,
+            self.z,
+            self.s,
+            self.alpha_phi,
+            self.alpha_n,
+            self.h,
+            self.t_s,
+            self.t_phi,
         ]
     }
 }

@@ -13,8 +13,8 @@ use crate::model::cornea;
 use crate::model::params::{LinearSolverKind, Params, Scheme, SolverSettings};
 use crate::model::profiles::{self, Side};
 use eyeshell_sundials::{
-    CallbackError, CallbackResult, JacobianMatrix, Kinsol, KinsolOptions, KinsolStats, LinearSolverSpec,
-    NonlinearSystem, Strategy, SundialsError,
+    CallbackError, CallbackResult, JacobianMatrix, Kinsol, KinsolOptions, KinsolStats,
+    LinearSolverSpec, NonlinearSystem, Strategy, SundialsError,
 };
 use std::time::Instant;
 
@@ -50,7 +50,10 @@ impl ElasticSystem {
     fn record(&mut self, r: Result<(), EvalFailure>) -> CallbackResult {
         r.map_err(|e| {
             self.failure = Some(e);
-            CallbackError::Recoverable(format!("cannot evaluate at node {} (Σ = {}): {}", e.node, e.sigma_ref, e.why))
+            CallbackError::Recoverable(format!(
+                "cannot evaluate at node {} (Σ = {}): {}",
+                e.node, e.sigma_ref, e.why
+            ))
         })
     }
 }
@@ -112,21 +115,34 @@ impl Solution {
         };
         let shell = shell_of(&self.params);
         let (a, _, _, t) = equations::stretch(&shell, &mp, v[R], v[TS], self.rows[i].alpha_s)
-            .map_err(|why| BvpError::Evaluation(EvalFailure { node: i, sigma_ref, why }))?;
+            .map_err(|why| {
+                BvpError::Evaluation(EvalFailure {
+                    node: i,
+                    sigma_ref,
+                    why,
+                })
+            })?;
         Ok(field_row(&mp, &v, a, t.tphi))
     }
 }
 
 impl Solution {
     /// A grown shell's data at Σ inside interval i, interpolated from its ends (and midpoint).
-    fn grown_point(&self, data: &MaterialData, i: usize, sigma_ref: f64) -> equations::MaterialPoint {
+    fn grown_point(
+        &self,
+        data: &MaterialData,
+        i: usize,
+        sigma_ref: f64,
+    ) -> equations::MaterialPoint {
         let (a, b) = (&data.above[i], &data.below[i + 1]);
         let t = (sigma_ref - self.mesh.nodes[i]) / self.mesh.step(i);
         let blend = |f: &dyn Fn(&equations::MaterialPoint) -> f64| match self.scheme {
             // Lagrange through t = 0, 1/2, 1.
             Scheme::HermiteSimpson => {
                 let m = &data.mid[i];
-                f(a) * (2.0 * t - 1.0) * (t - 1.0) + f(m) * 4.0 * t * (1.0 - t) + f(b) * t * (2.0 * t - 1.0)
+                f(a) * (2.0 * t - 1.0) * (t - 1.0)
+                    + f(m) * 4.0 * t * (1.0 - t)
+                    + f(b) * t * (2.0 * t - 1.0)
             }
             Scheme::Trapezoid => f(a) * (1.0 - t) + f(b) * t,
         };
@@ -164,12 +180,22 @@ fn field_row(mp: &equations::MaterialPoint, v: &[f64; NQ], alpha_s: f64, t_phi: 
 
 /// The constants of the equations for a parameter set; fibre terms only when D > 0.
 pub fn shell_of(p: &Params) -> Shell {
-    Shell { law: crate::model::components::Membrane::of(p).law(), e_b: p.e_b, dp: p.dp }
+    Shell {
+        law: crate::model::components::Membrane::of(p).law(),
+        e_b: p.e_b,
+        dp: p.dp,
+    }
 }
 
 /// The mesh a scene asks for: uniform nodes, breakpoints and pole grading (docs/MODEL.md §3–4).
 pub fn mesh_of(p: &Params, s: &SolverSettings) -> Mesh {
-    let mesh = Mesh::new(s.epsilon, p.length(), s.nodes, &profiles::breakpoints(p), s.pole_grading);
+    let mesh = Mesh::new(
+        s.epsilon,
+        p.length(),
+        s.nodes,
+        &profiles::breakpoints(p),
+        s.pole_grading,
+    );
     // The bending boundary layer at the cornea: width √(E_b / t_s), t_s ≈ ΔP R0 / 2.
     let layer = (p.e_b / (0.5 * p.dp * p.r0).max(1e-3 * p.c * p.h0)).sqrt();
     let h = (p.length() - s.epsilon) / (s.nodes - 1) as f64;
@@ -186,7 +212,11 @@ pub fn discretise(p: &Params, s: &SolverSettings) -> Result<Discretisation, BvpE
 }
 
 /// The discrete problem on a given mesh (which must hold the scene's breakpoints).
-pub fn discretise_on(p: &Params, s: &SolverSettings, mesh: Mesh) -> Result<Discretisation, BvpError> {
+pub fn discretise_on(
+    p: &Params,
+    s: &SolverSettings,
+    mesh: Mesh,
+) -> Result<Discretisation, BvpError> {
     let edge = cornea::edge(&p.cornea, p.dp, p.length())?;
     let data = reference_data(p, &mesh);
     Ok(Discretisation::new(shell_of(p), s.scheme, mesh, data, edge))
@@ -219,7 +249,10 @@ fn kinsol_options(s: &SolverSettings) -> KinsolOptions {
 /// The linear solver for a discretisation: band (its bandwidths) or KLU (its pattern).
 pub fn linear_spec(disc: &Discretisation, kind: LinearSolverKind) -> LinearSolverSpec {
     match kind {
-        LinearSolverKind::Band => LinearSolverSpec::Band { upper: UPPER, lower: LOWER },
+        LinearSolverKind::Band => LinearSolverSpec::Band {
+            upper: UPPER,
+            lower: LOWER,
+        },
         LinearSolverKind::Klu => {
             let (row_ptr, col_idx) = disc.pattern();
             LinearSolverSpec::Klu { row_ptr, col_idx }
@@ -252,7 +285,13 @@ impl Work {
 /// number of intervals (measured: 8e-10 in Q at 8705 nodes and 1e-12). One more Newton
 /// correction with the factorisation KINSOL already holds removes it (a residual and a
 /// back-substitution, no new LU).
-fn newton(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], r0: f64, work: &mut Work, polished: bool) -> Result<(), BvpError> {
+fn newton(
+    kin: &mut Kinsol<ElasticSystem>,
+    u: &mut [f64],
+    r0: f64,
+    work: &mut Work,
+    polished: bool,
+) -> Result<(), BvpError> {
     let (u_scale, f_scale) = kin.system().disc.scales(r0);
     kin.system_mut().failure = None;
     match kin.solve(u, &u_scale, &f_scale) {
@@ -279,7 +318,10 @@ fn newton(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], r0: f64, work: &mut Wo
                     .zip(&f_scale)
                     .map(|(a, b)| (a * b).abs())
                     .enumerate()
-                    .fold((0, -1.0), |acc, (i, v)| if v > acc.1 { (i, v) } else { acc });
+                    .fold(
+                        (0, -1.0),
+                        |acc, (i, v)| if v > acc.1 { (i, v) } else { acc },
+                    );
                 worst = val;
                 (node, equation) = sys.disc.locate_row(row);
             }
@@ -318,13 +360,31 @@ impl ElasticSolver {
     }
 
     /// The same on a given mesh, e.g. a [`Mesh::halved`] one for Richardson extrapolation.
-    pub fn on_mesh(params: &Params, settings: &SolverSettings, mesh: Mesh) -> Result<Self, BvpError> {
+    pub fn on_mesh(
+        params: &Params,
+        settings: &SolverSettings,
+        mesh: Mesh,
+    ) -> Result<Self, BvpError> {
         let disc = discretise_on(params, settings, mesh)?;
         let spec = linear_spec(&disc, settings.linear);
         let n = disc.len();
         let u = sphere_guess(&disc, params.r0);
-        let kin = Kinsol::new(ElasticSystem { disc, failure: None }, n, spec, &kinsol_options(settings))?;
-        Ok(ElasticSolver { kin, params: *params, settings: *settings, u, work: Work::default() })
+        let kin = Kinsol::new(
+            ElasticSystem {
+                disc,
+                failure: None,
+            },
+            n,
+            spec,
+            &kinsol_options(settings),
+        )?;
+        Ok(ElasticSolver {
+            kin,
+            params: *params,
+            settings: *settings,
+            u,
+            work: Work::default(),
+        })
     }
 
     pub fn discretisation(&self) -> &Discretisation {
@@ -343,7 +403,13 @@ impl ElasticSolver {
     pub fn newton(&mut self) -> Result<(), BvpError> {
         let reusing = self.kin.options().reuse_factorization;
         let start = reusing.then(|| self.u.clone());
-        let ElasticSolver { kin, u, work, params, .. } = self;
+        let ElasticSolver {
+            kin,
+            u,
+            work,
+            params,
+            ..
+        } = self;
         let first = newton(kin, u, params.r0, work, !reusing);
         let (Err(_), Some(start)) = (&first, start) else {
             return first;
@@ -351,7 +417,13 @@ impl ElasticSolver {
         let reuse = self.kin.options().clone();
         self.kin.set_options(&kinsol_options(&self.settings))?;
         self.u = start;
-        let ElasticSolver { kin, u, work, params, .. } = self;
+        let ElasticSolver {
+            kin,
+            u,
+            work,
+            params,
+            ..
+        } = self;
         let retry = newton(kin, u, params.r0, work, false);
         self.kin.set_options(&reuse)?;
         retry
@@ -475,7 +547,11 @@ impl ElasticSolver {
 /// lowers the scaled residual (the factorisation may be from an earlier state when it is
 /// being reused); u is left as it was otherwise.
 fn polish(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], f_scale: &[f64]) {
-    let norm = |f: &[f64]| f.iter().zip(f_scale).fold(0.0f64, |a, (x, s)| a.max((x * s).abs()));
+    let norm = |f: &[f64]| {
+        f.iter()
+            .zip(f_scale)
+            .fold(0.0f64, |a, (x, s)| a.max((x * s).abs()))
+    };
     let disc = &mut kin.system_mut().disc;
     let mut f = vec![0.0; u.len()];
     if disc.residual(u, &mut f).is_err() {
@@ -493,12 +569,21 @@ fn polish(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], f_scale: &[f64]) {
 }
 
 /// Solve the elastic BVP, warm-started from `warm` when given.
-pub fn solve(params: &Params, settings: &SolverSettings, warm: Option<&Solution>) -> Result<Solution, BvpError> {
+pub fn solve(
+    params: &Params,
+    settings: &SolverSettings,
+    warm: Option<&Solution>,
+) -> Result<Solution, BvpError> {
     solve_on_mesh(params, settings, mesh_of(params, settings), warm)
 }
 
 /// Solve on a given mesh (it must hold the scene's breakpoints as nodes).
-pub fn solve_on_mesh(params: &Params, settings: &SolverSettings, mesh: Mesh, warm: Option<&Solution>) -> Result<Solution, BvpError> {
+pub fn solve_on_mesh(
+    params: &Params,
+    settings: &SolverSettings,
+    mesh: Mesh,
+    warm: Option<&Solution>,
+) -> Result<Solution, BvpError> {
     let start = Instant::now();
     let mut solver = ElasticSolver::on_mesh(params, settings, mesh)?;
     let stages = match warm {
@@ -530,7 +615,12 @@ fn resample(w: &Solution, mesh: &Mesh) -> Result<Vec<f64>, BvpError> {
 }
 
 /// Fields, quadratures (s, z) and the interpolant from the converged unknowns.
-fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Discretisation, u: &[f64]) -> Result<Solution, BvpError> {
+fn assemble_solution(
+    params: &Params,
+    settings: &SolverSettings,
+    disc: &mut Discretisation,
+    u: &[f64],
+) -> Result<Solution, BvpError> {
     let quad = disc.quadratures(u).map_err(BvpError::Evaluation)?;
     let m = disc.mesh.len();
     disc.evaluate_at(u).map_err(BvpError::Evaluation)?;
@@ -543,18 +633,28 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
         })
         .collect();
     let slope = |f: &Vec5, q: &[f64; 2]| [f[0], f[1], f[2], f[3], f[4], q[0], q[1]];
-    let slope_left = (0..m - 1).map(|i| slope(&ev.left(i).f, &quad.slope_left[i])).collect();
-    let slope_right = (0..m - 1).map(|i| slope(&ev.right(i).f, &quad.slope_right[i])).collect();
+    let slope_left = (0..m - 1)
+        .map(|i| slope(&ev.left(i).f, &quad.slope_left[i]))
+        .collect();
+    let slope_right = (0..m - 1)
+        .map(|i| slope(&ev.right(i).f, &quad.slope_right[i]))
+        .collect();
     // Node rows use the profile's own value at a breakpoint: the limit from below.
     let data = &disc.data;
     let rows: Vec<FieldRow> = (0..m)
         .map(|i| {
-            let (mp, e) = if i == 0 { (&data.above[0], ev.left(0)) } else { (&data.below[i], ev.right(i - 1)) };
+            let (mp, e) = if i == 0 {
+                (&data.above[0], ev.left(0))
+            } else {
+                (&data.below[i], ev.right(i - 1))
+            };
             field_row(mp, &values[i], e.alpha_s, e.tensions.tphi)
         })
         .collect();
     let dp = disc.shell.dp;
-    let first_integral_max = (0..m).map(|i| equations::first_integral(dp, &y(i)).abs()).fold(0.0, f64::max);
+    let first_integral_max = (0..m)
+        .map(|i| equations::first_integral(dp, &y(i)).abs())
+        .fold(0.0, f64::max);
     let mesh = disc.mesh.clone();
     let stats = SolveStats {
         first_integral_max,
@@ -572,7 +672,11 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
         mesh,
         u: u.to_vec(),
         rows,
-        interpolant: Interpolant { values, slope_left, slope_right },
+        interpolant: Interpolant {
+            values,
+            slope_left,
+            slope_right,
+        },
         stats,
         grown: (!is_reference(params, data)).then(|| data.clone()),
     })
@@ -581,5 +685,7 @@ fn assemble_solution(params: &Params, settings: &SolverSettings, disc: &mut Disc
 /// True when `data` is the ungrown reference shell of `params` (so `Solution::at` may
 /// evaluate the material data at any Σ).
 fn is_reference(params: &Params, data: &super::discretisation::MaterialData) -> bool {
-    data.above.iter().all(|mp| *mp == reference_point(params, mp.sigma_ref, Side::Above))
+    data.above
+        .iter()
+        .all(|mp| *mp == reference_point(params, mp.sigma_ref, Side::Above))
 }

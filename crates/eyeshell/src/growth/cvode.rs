@@ -6,7 +6,9 @@
 
 use super::system::GrowthSystem;
 use super::GrowthSettings;
-use eyeshell_sundials::{CallbackError, CallbackResult, Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem};
+use eyeshell_sundials::{
+    CallbackError, CallbackResult, Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem,
+};
 
 /// The growth system as CVODE sees it.
 pub struct GrowthOde<'a> {
@@ -26,7 +28,14 @@ impl OdeSystem for GrowthOde<'_> {
         self.sys.jac_setup(y).map_err(recoverable)
     }
 
-    fn jac_times(&mut self, _t: f64, y: &[f64], fy: &[f64], v: &[f64], jv: &mut [f64]) -> CallbackResult {
+    fn jac_times(
+        &mut self,
+        _t: f64,
+        y: &[f64],
+        fy: &[f64],
+        v: &[f64],
+        jv: &mut [f64],
+    ) -> CallbackResult {
         self.sys.jac_times(y, fy, v, jv).map_err(recoverable)
     }
 }
@@ -53,12 +62,25 @@ pub fn integrate(
         max_steps: 100_000,
         ..CvodeOptions::default()
     };
-    let linear = CvodeLinearSolver::Spgmr { max_krylov: MAX_KRYLOV, user_product: true, preconditioned: false };
+    let linear = CvodeLinearSolver::Spgmr {
+        max_krylov: MAX_KRYLOV,
+        user_product: true,
+        preconditioned: false,
+    };
     let mut cv = match Cvode::new(GrowthOde { sys }, 0.0, p0, linear, &options) {
         Ok(cv) => cv,
         Err(e) => return (CvodeStats::default(), Err((0.0, e.to_string()))),
     };
-    let result = super::march(&mut CvodeStepper { cv: &mut cv, output }, p0.len(), t_end, times, progress);
+    let result = super::march(
+        &mut CvodeStepper {
+            cv: &mut cv,
+            output,
+        },
+        p0.len(),
+        t_end,
+        times,
+        progress,
+    );
     (cv.stats(), result)
 }
 
@@ -70,7 +92,9 @@ struct CvodeStepper<'a, 'b, 'c> {
 
 impl super::Stepper for CvodeStepper<'_, '_, '_> {
     fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
-        self.cv.step(t_end, y).map_err(|e| (self.cv.stats().current_time, e.to_string()))
+        self.cv
+            .step(t_end, y)
+            .map_err(|e| (self.cv.stats().current_time, e.to_string()))
     }
 
     fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {

@@ -33,11 +33,11 @@ use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, P
 use crate::bvp::equations::{
     data_partials, Mat5, MaterialPoint, PointError, PointEval, Vec5, R, THETA, TS,
 };
+use crate::model::growth_law::positive_smooth;
+use crate::model::params::Scheme;
 use eyeshell_sundials::linalg::{
     Csr, DirectSolver, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
 };
-use crate::model::growth_law::positive_smooth;
-use crate::model::params::Scheme;
 use eyeshell_sundials::MatrixSink;
 
 /// W unknowns per node: the five elastic unknowns and z.

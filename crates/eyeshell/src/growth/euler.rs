@@ -22,13 +22,22 @@ pub fn integrate(
     let mut next = times.iter().peekable();
     for n in 0..steps {
         let t = n as f64 * dt;
-        let t1 = if n + 1 == steps { t_end } else { (n + 1) as f64 * dt };
-        sys.rhs(&p, &mut rate).map_err(|e| (t, EulerError::Rhs(e)))?;
+        let t1 = if n + 1 == steps {
+            t_end
+        } else {
+            (n + 1) as f64 * dt
+        };
+        sys.rhs(&p, &mut rate)
+            .map_err(|e| (t, EulerError::Rhs(e)))?;
         while let Some(&&tout) = next.peek() {
             if tout > t1 * (1.0 + 1e-12) {
                 break;
             }
-            let q: Vec<f64> = p.iter().zip(&rate).map(|(a, r)| a + (tout - t) * r).collect();
+            let q: Vec<f64> = p
+                .iter()
+                .zip(&rate)
+                .map(|(a, r)| a + (tout - t) * r)
+                .collect();
             output(sys, tout, &q).map_err(|e| (tout, EulerError::Output(e)))?;
             next.next();
         }

@@ -134,7 +134,14 @@ pub const GROWTH_COLUMNS: [&str; 6] = ["rho", "zeta", "eta", "g_v", "z_retina", 
 
 impl GrowthRow {
     pub fn values(&self) -> [f64; 6] {
-        [self.rho, self.zeta, self.eta, self.g_v, self.z_retina, self.r_retina]
+        [
+            self.rho,
+            self.zeta,
+            self.eta,
+            self.g_v,
+            self.z_retina,
+            self.r_retina,
+        ]
     }
 }
 
@@ -227,7 +234,12 @@ pub fn grow(
 
 /// The snapshot times after t = 0: the output times before t_end, then t_end.
 fn snapshot_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
-    let mut times: Vec<f64> = settings.output_times.iter().copied().filter(|&t| t > 0.0 && t < t_end).collect();
+    let mut times: Vec<f64> = settings
+        .output_times
+        .iter()
+        .copied()
+        .filter(|&t| t > 0.0 && t < t_end)
+        .collect();
     times.push(t_end);
     times
 }
@@ -244,7 +256,8 @@ fn recorded_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
 }
 
 /// What receives the growth state at each output time: `output(sys, t, p)`.
-pub type OutputFn<'a> = dyn FnMut(&mut system::GrowthSystem, f64, &[f64]) -> Result<(), crate::Error> + 'a;
+pub type OutputFn<'a> =
+    dyn FnMut(&mut system::GrowthSystem, f64, &[f64]) -> Result<(), crate::Error> + 'a;
 
 /// The growth run behind [`grow`], for callers that want the system itself at each output
 /// time (t = 0, the output times, t_end): `output(sys, t, p)` with p the growth state.
@@ -259,20 +272,30 @@ pub fn run(
     let start = std::time::Instant::now();
     let t_end = growth.t_end;
     let fail = |t: f64, reason: String, stats: GrowthStats| GrowthError { t, reason, stats };
-    let mut sys = system::GrowthSystem::new(params, solver, growth).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
+    let mut sys = system::GrowthSystem::new(params, solver, growth)
+        .map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let p0 = sys.points.initial_state();
     let times = recorded_times(settings, t_end);
     output(&mut sys, 0.0, &p0).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let mut stats = GrowthStats::default();
     let outcome = match settings.integrator {
         Integrator::Euler => {
-            let r = euler::integrate(&mut sys, &p0, t_end, settings.steps, &times, output, progress);
+            let r = euler::integrate(
+                &mut sys,
+                &p0,
+                t_end,
+                settings.steps,
+                &times,
+                output,
+                progress,
+            );
             stats.steps = settings.steps;
             stats.rhs_evaluations = sys.work.rhs_evaluations;
             r.map(|_| ()).map_err(|(t, e)| (t, e.to_string()))
         }
         Integrator::Cvode => {
-            let (cv, r) = cvode::integrate(&mut sys, &p0, t_end, settings, &times, output, progress);
+            let (cv, r) =
+                cvode::integrate(&mut sys, &p0, t_end, settings, &times, output, progress);
             stats.steps = cv.steps;
             stats.rhs_evaluations = cv.rhs_evaluations;
             stats.error_test_failures = cv.error_test_failures;
@@ -283,7 +306,9 @@ pub fn run(
             r
         }
         Integrator::Ida => {
-            let (back, r) = run_ida(sys, params.r0, settings, t_end, &times, output, progress, &mut stats);
+            let (back, r) = run_ida(
+                sys, params.r0, settings, t_end, &times, output, progress, &mut stats,
+            );
             sys = back;
             r
         }
@@ -324,14 +349,19 @@ fn run_ida(
         .and_then(|_| dae.initial_state())
         .and_then(|y| dae.derivative(&y).map(|yp| (y, yp)));
     let result = match start {
-        Err(e) => Err((0.0, format!("the consistent start of the coupled system: {e}"))),
+        Err(e) => Err((
+            0.0,
+            format!("the consistent start of the coupled system: {e}"),
+        )),
         Ok((y0, yp0)) => {
             let n_p = dae.differential_len();
             let mut out = |dae: &mut dae::CoupledDae, t: f64, y: &[f64]| {
                 dae.adopt(y);
                 output(&mut dae.sys, t, &y[..n_p]).map_err(|e| e.to_string())
             };
-            let (st, r) = ida::integrate(&mut dae, &y0, &yp0, t_end, settings, r0, times, &mut out, progress);
+            let (st, r) = ida::integrate(
+                &mut dae, &y0, &yp0, t_end, settings, r0, times, &mut out, progress,
+            );
             stats.steps = st.steps;
             stats.residual_evaluations = st.residual_evaluations;
             stats.jacobian_evaluations = st.jacobian_evaluations;
@@ -358,7 +388,13 @@ trait Stepper {
 
 /// Step to `t_end`, handing on the state at each of `times` (increasing, in (0, t_end]) from
 /// the step that contains it, and calling `progress(t)` after every step.
-fn march(s: &mut dyn Stepper, n: usize, t_end: f64, times: &[f64], progress: &mut dyn FnMut(f64)) -> Result<(), (f64, String)> {
+fn march(
+    s: &mut dyn Stepper,
+    n: usize,
+    t_end: f64,
+    times: &[f64],
+    progress: &mut dyn FnMut(f64),
+) -> Result<(), (f64, String)> {
     let (mut y, mut yo) = (vec![0.0; n], vec![0.0; n]);
     let mut next = times.iter().peekable();
     let mut t = 0.0;
@@ -380,4 +416,3 @@ fn march(s: &mut dyn Stepper, n: usize, t_end: f64, times: &[f64], progress: &mu
     }
     Ok(())
 }
-

@@ -64,14 +64,24 @@ impl GrowthPoints {
             pts.sigma_ref.push(x);
             pts.h.push(profiles::thickness(p, x, side));
             pts.rho_ref.push(p.r0 * (x / p.r0).sin());
-            pts.capacity.push(profiles::growth_capacity(g.eta0, g.gamma, g.delta, x));
-            pts.fibre.push(p.has_fibres().then(|| FibreDirection::from_angle(profiles::fibre_angle(p, x, side))));
+            pts.capacity
+                .push(profiles::growth_capacity(g.eta0, g.gamma, g.delta, x));
+            pts.fibre.push(
+                p.has_fibres()
+                    .then(|| FibreDirection::from_angle(profiles::fibre_angle(p, x, side))),
+            );
             pts.sigma_ref.len() - 1
         };
         for (i, &x) in mesh.nodes.iter().enumerate() {
-            let jumps = i > 0 && i < m - 1 && profiles::thickness(p, x, Side::Below) != profiles::thickness(p, x, Side::Above);
+            let jumps = i > 0
+                && i < m - 1
+                && profiles::thickness(p, x, Side::Below) != profiles::thickness(p, x, Side::Above);
             let below = add(&mut pts, x, Side::Below);
-            let above = if jumps { add(&mut pts, x, Side::Above) } else { below };
+            let above = if jumps {
+                add(&mut pts, x, Side::Above)
+            } else {
+                below
+            };
             pts.below.push(below);
             pts.above.push(above);
         }
@@ -117,7 +127,13 @@ impl GrowthPoints {
 
     /// ζ at point k in state `p`.
     pub fn zeta(&self, k: usize, p: &[f64]) -> f64 {
-        growth_law::thickness(self.law, self.h[k], p[NP * k + 1], p[NP * k], self.rho_ref[k])
+        growth_law::thickness(
+            self.law,
+            self.h[k],
+            p[NP * k + 1],
+            p[NP * k],
+            self.rho_ref[k],
+        )
     }
 
     /// The unloaded shell's data for the elastic scheme in state `p`. σ comes from the
@@ -131,7 +147,11 @@ impl GrowthPoints {
             let h = self.steps[i];
             let (a, b) = (gamma(self.above[i]), gamma(self.below[i + 1]));
             sigma[i + 1] = sigma[i]
-                + if self.hermite_simpson { h / 6.0 * (a + 4.0 * gamma(self.mid[i]) + b) } else { 0.5 * h * (a + b) };
+                + if self.hermite_simpson {
+                    h / 6.0 * (a + 4.0 * gamma(self.mid[i]) + b)
+                } else {
+                    0.5 * h * (a + b)
+                };
         }
         let point = |k: usize, s: f64| MaterialPoint {
             sigma_ref: self.sigma_ref[k],

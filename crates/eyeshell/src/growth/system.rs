@@ -86,7 +86,11 @@ pub struct GrowthSystem {
 }
 
 impl GrowthSystem {
-    pub fn new(params: &Params, solver: &SolverSettings, growth: &GrowthParams) -> Result<Self, RhsError> {
+    pub fn new(
+        params: &Params,
+        solver: &SolverSettings,
+        growth: &GrowthParams,
+    ) -> Result<Self, RhsError> {
         let mut elastic = ElasticSolver::new(params, solver)?;
         elastic.solve_cold()?;
         // Successive right sides change the shell a little: modified Newton from the last
@@ -165,7 +169,13 @@ impl GrowthSystem {
 
     /// Rates g(u, p) with the discretisation's data already set to p. With `detail`, also
     /// what the stimulus saw at each point.
-    fn rates(&mut self, u: &[f64], p: &[f64], out: &mut [f64], detail: Option<&mut Vec<PointStimulus>>) -> Result<(), RhsError> {
+    fn rates(
+        &mut self,
+        u: &[f64],
+        p: &[f64],
+        out: &mut [f64],
+        detail: Option<&mut Vec<PointStimulus>>,
+    ) -> Result<(), RhsError> {
         let disc = self.elastic.discretisation_mut();
         let quad = disc.quadratures(u).map_err(RhsError::Evaluation)?;
         let (m, pts) = (disc.mesh.len(), &self.points);
@@ -185,7 +195,12 @@ impl GrowthSystem {
         if !pts.mid.is_empty() {
             for i in 0..m - 1 {
                 let ym = ev.y_mid(i);
-                local[pts.mid[i]] = (ym[R], ym[THETA], quad.z_mid(i, disc.mesh.step(i)), ev.mid(i).alpha_s);
+                local[pts.mid[i]] = (
+                    ym[R],
+                    ym[THETA],
+                    quad.z_mid(i, disc.mesh.step(i)),
+                    ev.mid(i).alpha_s,
+                );
             }
         }
         // The retina (inner face) and the depth of the blue surface behind it.
@@ -196,12 +211,22 @@ impl GrowthSystem {
                 let rho = p[NP * k];
                 let h = pts.zeta(k, p) / (a * r / rho);
                 let (zr, rr) = (z - 0.5 * h * th.cos(), r - 0.5 * h * th.sin());
-                PointStimulus { z_retina: zr, r_retina: rr, depth_blue: blue.depth(zr, rr), angle: blue.angle(zr, rr), ..Default::default() }
+                PointStimulus {
+                    z_retina: zr,
+                    r_retina: rr,
+                    depth_blue: blue.depth(zr, rr),
+                    angle: blue.angle(zr, rr),
+                    ..Default::default()
+                }
             })
             .collect();
         let depth_at_max = depth_at_angle(pts, &stim, blue.phi_max);
         for (k, s) in stim.iter_mut().enumerate() {
-            let d = if s.angle < blue.phi_max { s.depth_blue } else { depth_at_max.unwrap_or(s.depth_blue) };
+            let d = if s.angle < blue.phi_max {
+                s.depth_blue
+            } else {
+                depth_at_max.unwrap_or(s.depth_blue)
+            };
             let w = self.growth.kink_width;
             s.g_v = growth_law::positive_smooth(d, w).0;
             s.eta = pts.capacity[k] * s.g_v;
@@ -226,22 +251,37 @@ impl GrowthSystem {
             let spec = linear_spec(self.elastic.discretisation(), self.linear);
             let (matrix, solver) = LinearSolver::for_spec(&self.ctx, n, &spec)?;
             let (rhs, x) = (NVector::new(&self.ctx, n)?, NVector::new(&self.ctx, n)?);
-            self.factored = Some(Factored { matrix, solver, residual: vec![0.0; n], at: vec![], rhs, x });
+            self.factored = Some(Factored {
+                matrix,
+                solver,
+                residual: vec![0.0; n],
+                at: vec![],
+                rhs,
+                x,
+            });
         }
         let f = self.factored.as_mut().expect("made above");
         let u = self.elastic.u.clone();
         let disc = self.elastic.discretisation_mut();
         f.matrix.zero();
-        disc.jacobian(&u, &mut f.matrix.view_mut()).map_err(RhsError::Evaluation)?;
+        disc.jacobian(&u, &mut f.matrix.view_mut())
+            .map_err(RhsError::Evaluation)?;
         f.solver.setup(&mut f.matrix)?;
-        disc.residual(&u, &mut f.residual).map_err(RhsError::Evaluation)?;
+        disc.residual(&u, &mut f.residual)
+            .map_err(RhsError::Evaluation)?;
         f.at.clear();
         f.at.extend_from_slice(p);
         Ok(())
     }
 
     /// J v = dG/dp · v at `p`, where `fy` = G(p), through the implicit-function theorem.
-    pub fn jac_times(&mut self, p: &[f64], fy: &[f64], v: &[f64], out: &mut [f64]) -> Result<(), RhsError> {
+    pub fn jac_times(
+        &mut self,
+        p: &[f64],
+        fy: &[f64],
+        v: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), RhsError> {
         if self.factored.as_ref().is_none_or(|f| f.at.as_slice() != p) {
             self.jac_setup(p)?;
         }
@@ -255,7 +295,9 @@ impl GrowthSystem {
         let delta = f64::EPSILON.sqrt() * p_max / v_max;
         let pv: Vec<f64> = p.iter().zip(v).map(|(a, b)| a + delta * b).collect();
         // δ F_p v at fixed u*, then δ w = −F_u⁻¹ (δ F_p v).
-        self.elastic.discretisation_mut().set_data(self.points.material_data(&pv));
+        self.elastic
+            .discretisation_mut()
+            .set_data(self.points.material_data(&pv));
         let u = self.elastic.u.clone();
         let f = self.factored.as_mut().expect("set up above");
         {
@@ -270,7 +312,9 @@ impl GrowthSystem {
         let u1: Vec<f64> = u.iter().zip(f.x.as_slice()).map(|(a, dx)| a - dx).collect();
         // g(u* + δw, p + δv) − g(u*, p) = δ (g_u w + g_p v).
         let result = self.rates(&u1, &pv, out, None);
-        self.elastic.discretisation_mut().set_data(self.points.material_data(p));
+        self.elastic
+            .discretisation_mut()
+            .set_data(self.points.material_data(p));
         result?;
         for (o, g0) in out.iter_mut().zip(fy) {
             *o = (*o - g0) / delta;
@@ -288,11 +332,23 @@ impl GrowthSystem {
             .map(|i| {
                 let k = pts.node_point(i);
                 let s = &stim[k];
-                GrowthRow { rho: p[NP * k], zeta: pts.zeta(k, p), eta: s.eta, g_v: s.g_v, z_retina: s.z_retina, r_retina: s.r_retina }
+                GrowthRow {
+                    rho: p[NP * k],
+                    zeta: pts.zeta(k, p),
+                    eta: s.eta,
+                    g_v: s.g_v,
+                    z_retina: s.z_retina,
+                    r_retina: s.r_retina,
+                }
             })
             .collect();
         let series = self.series_row(t, &stim);
-        Ok(super::Snapshot { t, fields: sol.rows, growth, series })
+        Ok(super::Snapshot {
+            t,
+            fields: sol.rows,
+            growth,
+            series,
+        })
     }
 
     /// The series row alone (axial length, refraction, ...) of the shell in state `p` at
@@ -325,7 +381,9 @@ impl GrowthSystem {
         SeriesRow {
             t,
             axial_length: pole.z_retina,
-            equatorial_radius: (0..pts.above.len()).map(|i| stim[pts.node_point(i)].r_retina).fold(f64::MIN, f64::max),
+            equatorial_radius: (0..pts.above.len())
+                .map(|i| stim[pts.node_point(i)].r_retina)
+                .fold(f64::MIN, f64::max),
             retina_minus_blue: -pole.depth_blue,
             retina_minus_red: -depth_red,
             class: Refraction::classify(pole.depth_blue, depth_red),
@@ -337,7 +395,9 @@ impl GrowthSystem {
     /// snapshot first polishes u into the exact elastic state of p (a warm Newton solve), so
     /// that its fields carry only the growth state's error, as CVODE's do.
     pub fn adopt(&mut self, p: &[f64], u: &[f64]) {
-        self.elastic.discretisation_mut().set_data(self.points.material_data(p));
+        self.elastic
+            .discretisation_mut()
+            .set_data(self.points.material_data(p));
         self.elastic.u.clear();
         self.elastic.u.extend_from_slice(u);
         self.solved_at.clear();

@@ -63,7 +63,10 @@ impl Membrane {
     /// The scene's membrane: reinforced when D > 0 (the rule of `Params::has_fibres`).
     pub fn of(params: &Params) -> Membrane {
         if params.has_fibres() {
-            Membrane::Reinforced { c: params.c, d: params.d }
+            Membrane::Reinforced {
+                c: params.c,
+                d: params.d,
+            }
         } else {
             Membrane::NeoHookean { c: params.c }
         }
@@ -112,14 +115,20 @@ impl Components {
     /// The components of the elastic problem `params`, with growth when `growth` (the scene
     /// has a `[growth]` section).
     pub fn of(params: &Params, growth: bool) -> Components {
-        Components { membrane: Membrane::of(params), thickness: ThicknessComponent::of(params), growth }
+        Components {
+            membrane: Membrane::of(params),
+            thickness: ThicknessComponent::of(params),
+            growth,
+        }
     }
 }
 
 impl fmt::Display for Membrane {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Membrane::NeoHookean { c } => write!(f, "neo-Hookean membrane (C = {c} kPa), no fibres"),
+            Membrane::NeoHookean { c } => {
+                write!(f, "neo-Hookean membrane (C = {c} kPa), no fibres")
+            }
             Membrane::Reinforced { c, d } => {
                 write!(f, "fibre-reinforced neo-Hookean membrane (C = {c} kPa, D = {d} kPa, fibre angle ψ(Σ))")
             }
@@ -130,7 +139,10 @@ impl fmt::Display for Membrane {
 impl fmt::Display for ThicknessComponent {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            ThicknessComponent::Uniform { h0 } => write!(f, "uniform thickness H0 = {h0} mm (no thickness derivatives)"),
+            ThicknessComponent::Uniform { h0 } => write!(
+                f,
+                "uniform thickness H0 = {h0} mm (no thickness derivatives)"
+            ),
             ThicknessComponent::Profile => {
                 write!(f, "non-uniform thickness profile H(Σ) (pointwise, no thickness derivatives: t_s is an unknown)")
             }
@@ -140,7 +152,11 @@ impl fmt::Display for ThicknessComponent {
 
 impl fmt::Display for Components {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let growth = if self.growth { "growth (optics, time integration)" } else { "no growth (no optics, no time integration)" };
+        let growth = if self.growth {
+            "growth (optics, time integration)"
+        } else {
+            "no growth (no optics, no time integration)"
+        };
         write!(f, "{}; {}; {}", self.membrane, self.thickness, growth)
     }
 }
@@ -150,7 +166,11 @@ mod tests {
     use super::*;
 
     fn fibre_shell() -> Params {
-        Params { thickness: Thickness::NonUniform, d: 200.0, ..Params::default() }
+        Params {
+            thickness: Thickness::NonUniform,
+            d: 200.0,
+            ..Params::default()
+        }
     }
 
     #[test]
@@ -173,16 +193,26 @@ mod tests {
         assert_eq!(c.thickness, ThicknessComponent::Profile);
         let line = c.to_string();
         assert!(!line.contains('\n'));
-        for part in
-            ["D = 200 kPa", "ψ(Σ)", "non-uniform thickness", "no thickness derivatives", "growth (optics, time integration)"]
-        {
+        for part in [
+            "D = 200 kPa",
+            "ψ(Σ)",
+            "non-uniform thickness",
+            "no thickness derivatives",
+            "growth (optics, time integration)",
+        ] {
             assert!(line.contains(part), "{part:?} missing from {line:?}");
         }
     }
 
     #[test]
     fn zero_fibre_stiffness_means_no_fibres() {
-        let c = Components::of(&Params { d: 0.0, ..fibre_shell() }, false);
+        let c = Components::of(
+            &Params {
+                d: 0.0,
+                ..fibre_shell()
+            },
+            false,
+        );
         assert_eq!(c.membrane, Membrane::NeoHookean { c: 100.0 });
     }
 
@@ -195,8 +225,17 @@ mod tests {
         ] {
             assert_eq!(Membrane::from(m.law()), m);
         }
-        assert_eq!(Membrane::of(&fibre_shell()).law(), Law { c: 100.0, d: Some(200.0) });
-        assert_eq!(Membrane::of(&Params::default()).law(), Law { c: 100.0, d: None });
+        assert_eq!(
+            Membrane::of(&fibre_shell()).law(),
+            Law {
+                c: 100.0,
+                d: Some(200.0)
+            }
+        );
+        assert_eq!(
+            Membrane::of(&Params::default()).law(),
+            Law { c: 100.0, d: None }
+        );
     }
 
     #[test]

@@ -29,12 +29,18 @@ pub struct FibreDirection {
 impl FibreDirection {
     /// A point that has no fibre direction: I4 − 1 = −1 < 0, so the fibres are slack there
     /// and add exactly nothing (the [`Fibres`] component's stand-in for "no ψ here").
-    pub const SLACK: FibreDirection = FibreDirection { sin2: 0.0, cos2: 0.0 };
+    pub const SLACK: FibreDirection = FibreDirection {
+        sin2: 0.0,
+        cos2: 0.0,
+    };
 
     pub fn from_angle(psi: f64) -> Self {
         let s = psi.sin();
         let c = psi.cos();
-        FibreDirection { sin2: s * s, cos2: c * c }
+        FibreDirection {
+            sin2: s * s,
+            cos2: c * c,
+        }
     }
 }
 
@@ -79,7 +85,14 @@ pub trait Reinforcement: Copy + Debug {
 
     /// α_s such that t_s(α_s, α_φ) = `ts`, with the tensions there (`guess` > 0 seeds the
     /// iteration). `None` for non-finite input or when the iteration does not converge.
-    fn alpha_s(law: &MembraneLaw<Self>, zeta: f64, dir: Self::Direction, ts: f64, phi: f64, guess: f64) -> Option<(f64, Tensions)>;
+    fn alpha_s(
+        law: &MembraneLaw<Self>,
+        zeta: f64,
+        dir: Self::Direction,
+        ts: f64,
+        phi: f64,
+        guess: f64,
+    ) -> Option<(f64, Tensions)>;
 }
 
 /// The neo-Hookean membrane alone (D = 0): ψ is not part of the model.
@@ -125,7 +138,14 @@ impl Reinforcement for NoFibres {
     /// step, 1e-6 to 1e-3 away two, 1e-2 to 1e-1 away three, where the safeguarded Newton
     /// iteration (with its test on the step) took 2, 3–4 and 5–6 full evaluations. The
     /// roots agree to 1 ulp.
-    fn alpha_s(law: &MembraneLaw<Self>, zeta: f64, _: (), ts: f64, phi: f64, guess: f64) -> Option<(f64, Tensions)> {
+    fn alpha_s(
+        law: &MembraneLaw<Self>,
+        zeta: f64,
+        _: (),
+        ts: f64,
+        phi: f64,
+        guess: f64,
+    ) -> Option<(f64, Tensions)> {
         if !(ts.is_finite() && phi.is_finite() && phi > 0.0) {
             return None;
         }
@@ -134,7 +154,11 @@ impl Reinforcement for NoFibres {
             return None;
         }
         let inv_phi = 1.0 / phi;
-        let mut a = if guess.is_finite() && guess > 0.0 { guess } else { 1.0 };
+        let mut a = if guess.is_finite() && guess > 0.0 {
+            guess
+        } else {
+            1.0
+        };
         for _ in 0..MAX_ITERATIONS {
             let j = (a * phi).recip(); // (aφ)⁻¹
             let inv_a = j * phi;
@@ -142,13 +166,23 @@ impl Reinforcement for NoFibres {
             let g = a * inv_phi - j3 - tau;
             let g1 = inv_phi + 3.0 * j3 * inv_a;
             let g2 = -12.0 * j3 * inv_a * inv_a;
-            let step = if (g * g2).abs() < g1 * g1 { 2.0 * g * g1 / (2.0 * g1 * g1 - g * g2) } else { g / g1 };
+            let step = if (g * g2).abs() < g1 * g1 {
+                2.0 * g * g1 / (2.0 * g1 * g1 - g * g2)
+            } else {
+                g / g1
+            };
             let next = a - step;
             // |g''|/(2g') δ² ≤ ε a / 4, without a division.
-            if g2.abs() * step * step <= 0.5 * f64::EPSILON * a * g1 || step.abs() <= 2.0 * f64::EPSILON * a {
+            if g2.abs() * step * step <= 0.5 * f64::EPSILON * a * g1
+                || step.abs() <= 2.0 * f64::EPSILON * a
+            {
                 return Some((next, law.tensions(zeta, (), next, phi)));
             }
-            a = if next > 0.0 && next.is_finite() { next } else { 0.5 * a };
+            a = if next > 0.0 && next.is_finite() {
+                next
+            } else {
+                0.5 * a
+            };
         }
         None
     }
@@ -165,7 +199,12 @@ impl Reinforcement for Fibres {
 
     #[inline(always)]
     fn add_tensions(&self, f: FibreDirection, s: &Stretches, t: &mut Tensions) {
-        let Stretches { a, phi, inv_a, inv_phi } = *s;
+        let Stretches {
+            a,
+            phi,
+            inv_a,
+            inv_phi,
+        } = *s;
         let d = self.d;
         let i4m1 = a * a * f.sin2 + phi * phi * f.cos2 - 1.0;
         if i4m1 > 0.0 {
@@ -185,11 +224,22 @@ impl Reinforcement for Fibres {
     /// Safeguarded Newton: the fibres' kink at I4 = 1 makes t_s convex on one side and
     /// concave on the other, so a bracket [lo, hi] keeps every step inside the interval
     /// known to hold the root, bisecting when Newton's step would leave it.
-    fn alpha_s(law: &MembraneLaw<Self>, zeta: f64, dir: FibreDirection, ts: f64, phi: f64, guess: f64) -> Option<(f64, Tensions)> {
+    fn alpha_s(
+        law: &MembraneLaw<Self>,
+        zeta: f64,
+        dir: FibreDirection,
+        ts: f64,
+        phi: f64,
+        guess: f64,
+    ) -> Option<(f64, Tensions)> {
         if !(ts.is_finite() && phi.is_finite() && phi > 0.0) {
             return None;
         }
-        let mut a = if guess.is_finite() && guess > 0.0 { guess } else { 1.0 };
+        let mut a = if guess.is_finite() && guess > 0.0 {
+            guess
+        } else {
+            1.0
+        };
         let (mut lo, mut hi) = (0.0_f64, f64::INFINITY);
         for _ in 0..MAX_ITERATIONS {
             let t = law.tensions(zeta, dir, a, phi);
@@ -211,7 +261,11 @@ impl Reinforcement for Fibres {
             }
             let mut next = a - step;
             if !(next > lo && next < hi) {
-                next = if hi.is_finite() { 0.5 * (lo + hi) } else { 2.0 * a.max(lo) };
+                next = if hi.is_finite() {
+                    0.5 * (lo + hi)
+                } else {
+                    2.0 * a.max(lo)
+                };
             }
             a = next;
         }
@@ -222,14 +276,20 @@ impl Reinforcement for Fibres {
 impl MembraneLaw<NoFibres> {
     /// The neo-Hookean membrane of modulus C.
     pub fn neo_hookean(c: f64) -> Self {
-        MembraneLaw { c, reinforcement: NoFibres }
+        MembraneLaw {
+            c,
+            reinforcement: NoFibres,
+        }
     }
 }
 
 impl MembraneLaw<Fibres> {
     /// The neo-Hookean membrane of modulus C reinforced by fibres of stiffness D.
     pub fn reinforced(c: f64, d: f64) -> Self {
-        MembraneLaw { c, reinforcement: Fibres { d } }
+        MembraneLaw {
+            c,
+            reinforcement: Fibres { d },
+        }
     }
 }
 
@@ -241,7 +301,12 @@ impl<R: Reinforcement> MembraneLaw<R> {
         let c = self.c;
         // One division: 1/a = φ/(aφ), 1/φ = a/(aφ).
         let j = (a * phi).recip(); // (α_s α_φ)⁻¹
-        let s = Stretches { a, phi, inv_a: j * phi, inv_phi: j * a };
+        let s = Stretches {
+            a,
+            phi,
+            inv_a: j * phi,
+            inv_phi: j * a,
+        };
         let (inv_a, inv_phi) = (s.inv_a, s.inv_phi);
         let j3 = j * j * j; // (α_s α_φ)⁻³
         let mut t = Tensions {
@@ -264,7 +329,14 @@ impl<R: Reinforcement> MembraneLaw<R> {
 
     /// α_s such that t_s(α_s, α_φ) = `ts`, with the tensions there (see [`Reinforcement::alpha_s`]).
     #[inline]
-    pub fn alpha_s_from_ts(&self, zeta: f64, dir: R::Direction, ts: f64, phi: f64, guess: f64) -> Option<(f64, Tensions)> {
+    pub fn alpha_s_from_ts(
+        &self,
+        zeta: f64,
+        dir: R::Direction,
+        ts: f64,
+        phi: f64,
+        guess: f64,
+    ) -> Option<(f64, Tensions)> {
         R::alpha_s(self, zeta, dir, ts, phi, guess)
     }
 }
@@ -283,9 +355,18 @@ impl Law {
     /// α_s such that t_s(α_s, α_φ) = `ts`, with the tensions there. `guess` > 0 seeds the
     /// iteration of the law's component (see [`Reinforcement::alpha_s`]). Returns `None`
     /// for non-finite input, or if 100 steps do not converge.
-    pub fn alpha_s_from_ts(&self, zeta: f64, fibre: Option<FibreDirection>, ts: f64, phi: f64, guess: f64) -> Option<(f64, Tensions)> {
+    pub fn alpha_s_from_ts(
+        &self,
+        zeta: f64,
+        fibre: Option<FibreDirection>,
+        ts: f64,
+        phi: f64,
+        guess: f64,
+    ) -> Option<(f64, Tensions)> {
         match (self.d, fibre) {
-            (Some(d), Some(f)) => MembraneLaw::reinforced(self.c, d).alpha_s_from_ts(zeta, f, ts, phi, guess),
+            (Some(d), Some(f)) => {
+                MembraneLaw::reinforced(self.c, d).alpha_s_from_ts(zeta, f, ts, phi, guess)
+            }
             _ => MembraneLaw::neo_hookean(self.c).alpha_s_from_ts(zeta, (), ts, phi, guess),
         }
     }
@@ -309,7 +390,10 @@ mod tests {
             (t.tphi_a, dp(&tp, h, 0.0)),
             (t.tphi_phi, dp(&tp, 0.0, h)),
         ] {
-            assert!((exact - approx).abs() < 1e-6 * (1.0 + exact.abs()), "{exact} vs {approx}");
+            assert!(
+                (exact - approx).abs() < 1e-6 * (1.0 + exact.abs()),
+                "{exact} vs {approx}"
+            );
         }
     }
 
@@ -318,14 +402,28 @@ mod tests {
         let f = Some(FibreDirection::from_angle(0.9));
         for (a, phi) in [(1.01, 1.02), (1.2, 0.95), (0.9, 1.3), (1.05, 1.05)] {
             fd_check(Law { c: 100.0, d: None }, None, a, phi);
-            fd_check(Law { c: 100.0, d: Some(200.0) }, f, a, phi);
+            fd_check(
+                Law {
+                    c: 100.0,
+                    d: Some(200.0),
+                },
+                f,
+                a,
+                phi,
+            );
         }
     }
 
     #[test]
     fn inverse_recovers_the_stretch() {
         let f = Some(FibreDirection::from_angle(1.2));
-        for law in [Law { c: 100.0, d: None }, Law { c: 100.0, d: Some(400.0) }] {
+        for law in [
+            Law { c: 100.0, d: None },
+            Law {
+                c: 100.0,
+                d: Some(400.0),
+            },
+        ] {
             for a in [0.3, 0.97, 1.0137, 1.4, 3.0] {
                 let ts = law.tensions(0.65, f, a, 1.02).ts;
                 for guess in [0.1, 1.0, 10.0] {
@@ -344,9 +442,25 @@ mod tests {
         for phi in [0.5, 0.97, 1.02, 1.5, 3.0] {
             for a in [0.05, 0.3, 0.8, 0.999, 1.0137, 1.2, 2.0, 7.0, 40.0] {
                 let ts = law.tensions(0.65, (), a, phi).ts;
-                for guess in [1e-3, 0.1, 0.9, a * (1.0 + 1e-3), 1.0, 5.0, 100.0, 1e4, f64::NAN, -1.0] {
-                    let (b, t) = law.alpha_s_from_ts(0.65, (), ts, phi, guess).expect("no root");
-                    assert!((a - b).abs() < 2e-14 * a, "φ = {phi}: {a} vs {b} from {guess}");
+                for guess in [
+                    1e-3,
+                    0.1,
+                    0.9,
+                    a * (1.0 + 1e-3),
+                    1.0,
+                    5.0,
+                    100.0,
+                    1e4,
+                    f64::NAN,
+                    -1.0,
+                ] {
+                    let (b, t) = law
+                        .alpha_s_from_ts(0.65, (), ts, phi, guess)
+                        .expect("no root");
+                    assert!(
+                        (a - b).abs() < 2e-14 * a,
+                        "φ = {phi}: {a} vs {b} from {guess}"
+                    );
                     assert_eq!(t, law.tensions(0.65, (), b, phi));
                 }
             }
@@ -363,7 +477,9 @@ mod tests {
             let ts = plain.tensions(0.5, (), a, phi).ts;
             assert_eq!(ts, slack.tensions(0.5, FibreDirection::SLACK, a, phi).ts);
             let (x, _) = plain.alpha_s_from_ts(0.5, (), ts, phi, 1.0).unwrap();
-            let (y, _) = slack.alpha_s_from_ts(0.5, FibreDirection::SLACK, ts, phi, 1.0).unwrap();
+            let (y, _) = slack
+                .alpha_s_from_ts(0.5, FibreDirection::SLACK, ts, phi, 1.0)
+                .unwrap();
             assert!((x - y).abs() <= 4.0 * f64::EPSILON * x, "{x} vs {y}");
         }
     }
@@ -373,17 +489,32 @@ mod tests {
     fn law_dispatches_to_its_component() {
         let f = FibreDirection::from_angle(0.6);
         let (a, phi) = (1.1, 1.05);
-        let with = Law { c: 100.0, d: Some(300.0) };
-        assert_eq!(with.tensions(0.6, Some(f), a, phi), MembraneLaw::reinforced(100.0, 300.0).tensions(0.6, f, a, phi));
+        let with = Law {
+            c: 100.0,
+            d: Some(300.0),
+        };
+        assert_eq!(
+            with.tensions(0.6, Some(f), a, phi),
+            MembraneLaw::reinforced(100.0, 300.0).tensions(0.6, f, a, phi)
+        );
         let plain = MembraneLaw::neo_hookean(100.0).tensions(0.6, (), a, phi);
         assert_eq!(with.tensions(0.6, None, a, phi), plain);
-        assert_eq!(Law { c: 100.0, d: None }.tensions(0.6, Some(f), a, phi), plain);
-        assert_ne!(plain, MembraneLaw::reinforced(100.0, 300.0).tensions(0.6, f, a, phi));
+        assert_eq!(
+            Law { c: 100.0, d: None }.tensions(0.6, Some(f), a, phi),
+            plain
+        );
+        assert_ne!(
+            plain,
+            MembraneLaw::reinforced(100.0, 300.0).tensions(0.6, f, a, phi)
+        );
     }
 
     #[test]
     fn fibres_do_not_resist_compression() {
-        let law = Law { c: 100.0, d: Some(400.0) };
+        let law = Law {
+            c: 100.0,
+            d: Some(400.0),
+        };
         let f = Some(FibreDirection::from_angle(0.7));
         let with = law.tensions(0.65, f, 0.95, 0.97);
         let without = Law { d: None, ..law }.tensions(0.65, None, 0.95, 0.97);
@@ -398,7 +529,10 @@ mod stiff_fibres {
     /// find them, to the last bit the kink allows.
     #[test]
     fn inverse_finds_roots_on_the_fibre_kink() {
-        let law = Law { c: 100.0, d: Some(1e5) };
+        let law = Law {
+            c: 100.0,
+            d: Some(1e5),
+        };
         for k in 0..400 {
             let dir = FibreDirection::from_angle(0.2 + 1.2 * (k % 20) as f64 / 20.0);
             let f = Some(dir);
@@ -411,7 +545,9 @@ mod stiff_fibres {
                 }
                 let ts = law.tensions(0.5, f, a, phi).ts;
                 for guess in [0.5, 1.0, 2.0] {
-                    let (b, _) = law.alpha_s_from_ts(0.5, f, ts, phi, guess).expect("no root found");
+                    let (b, _) = law
+                        .alpha_s_from_ts(0.5, f, ts, phi, guess)
+                        .expect("no root found");
                     assert!((a - b).abs() < 1e-12, "a = {a}, found {b}");
                 }
             }

@@ -101,7 +101,11 @@ mod tests {
     use super::*;
 
     fn paper() -> CorneaParams {
-        CorneaParams { c: 100.0, h: 0.65, r0: 10.0 }
+        CorneaParams {
+            c: 100.0,
+            h: 0.65,
+            r0: 10.0,
+        }
     }
 
     #[test]
@@ -119,9 +123,16 @@ mod tests {
             let a = stretch(&paper(), dp).unwrap();
             let linear = dp * 10.0 / (24.0 * 100.0 * 0.65);
             // α is a double near 1: α − 1 is known to an ulp of 1 (2.2e-16) at best.
-            assert!((a - 1.0 - linear).abs() < 4.0 * f64::EPSILON + 1e-4 * linear, "dp {dp:e}: α − 1 = {:e}, linear {linear:e}", a - 1.0);
+            assert!(
+                (a - 1.0 - linear).abs() < 4.0 * f64::EPSILON + 1e-4 * linear,
+                "dp {dp:e}: α − 1 = {:e}, linear {linear:e}",
+                a - 1.0
+            );
             // pressure() itself cancels near α = 1: about k·ε = 6e-15 of round-off.
-            assert!((pressure(&paper(), a) - dp).abs() <= 1e-13 + 1e-12 * dp, "dp {dp:e}");
+            assert!(
+                (pressure(&paper(), a) - dp).abs() <= 1e-13 + 1e-12 * dp,
+                "dp {dp:e}"
+            );
         }
     }
 

@@ -78,7 +78,10 @@ mod tests {
         let w = 0.1;
         for x in [-0.1, 0.1] {
             let (a, b) = (positive_smooth(x - 1e-12, w), positive_smooth(x + 1e-12, w));
-            assert!((a.0 - b.0).abs() < 1e-11 && (a.1 - b.1).abs() < 1e-10, "{x}: {a:?} {b:?}");
+            assert!(
+                (a.0 - b.0).abs() < 1e-11 && (a.1 - b.1).abs() < 1e-10,
+                "{x}: {a:?} {b:?}"
+            );
         }
         assert_eq!(positive_smooth(0.3, w), (0.3, 1.0));
         assert_eq!(positive_smooth(-0.3, w), (0.0, 0.0));

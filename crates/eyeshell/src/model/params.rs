@@ -54,7 +54,11 @@ impl Default for Params {
             thickness: Thickness::Uniform,
             h0: 0.65,
             d: 0.0,
-            cornea: CorneaParams { c: 100.0, h: 0.65, r0: 10.0 },
+            cornea: CorneaParams {
+                c: 100.0,
+                h: 0.65,
+                r0: 10.0,
+            },
             r0: 10.0,
             fraction: 0.8,
         }
@@ -78,7 +82,11 @@ impl Params {
         Params {
             thickness: Thickness::Uniform,
             d: 0.0,
-            cornea: CorneaParams { c: self.c, h: self.h0, r0: self.r0 },
+            cornea: CorneaParams {
+                c: self.c,
+                h: self.h0,
+                r0: self.r0,
+            },
             ..*self
         }
     }

@@ -74,7 +74,11 @@ pub fn growth_capacity(eta0: f64, gamma: f64, delta: f64, sigma_ref: f64) -> f64
 /// jumps there when non-uniform, and ψ kinks), and a, b when there are fibres.
 pub fn breakpoints(p: &Params) -> Vec<f64> {
     let (a, b, se) = fibre_breakpoints(p.r0);
-    let mut pts = if p.has_fibres() { vec![a, b, se] } else { vec![se] };
+    let mut pts = if p.has_fibres() {
+        vec![a, b, se]
+    } else {
+        vec![se]
+    };
     let l = p.length();
     pts.retain(|&x| x > 0.0 && x < l);
     pts
@@ -85,7 +89,11 @@ mod tests {
     use super::*;
 
     fn fibre_params() -> Params {
-        Params { thickness: Thickness::NonUniform, d: 200.0, ..Params::default() }
+        Params {
+            thickness: Thickness::NonUniform,
+            d: 200.0,
+            ..Params::default()
+        }
     }
 
     #[test]
@@ -108,7 +116,9 @@ mod tests {
         let se = equator(p.r0);
         let jump = thickness(&p, se, Side::Below) - thickness(&p, se, Side::Above);
         assert!((jump.abs() - 1.709e-7).abs() < 1e-9, "jump = {jump:e}");
-        assert!((thickness(&p, se, Side::Below) - thickness(&p, se - 1e-9, Side::Above)).abs() < 1e-9);
+        assert!(
+            (thickness(&p, se, Side::Below) - thickness(&p, se - 1e-9, Side::Above)).abs() < 1e-9
+        );
     }
 
     #[test]

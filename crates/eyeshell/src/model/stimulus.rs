@@ -39,7 +39,10 @@ impl Surface {
     /// The default red surface: the blue one pushed back by [`RED_OFFSET`] (the paper's own
     /// red surface is not published).
     pub fn default_red() -> Surface {
-        Surface { offset: RED_OFFSET, ..Surface::blue() }
+        Surface {
+            offset: RED_OFFSET,
+            ..Surface::blue()
+        }
     }
 
     /// Radius of the surface along the polar ray at angle φ.
@@ -132,7 +135,13 @@ impl Refraction {
 
     /// The class named by [`Refraction::as_str`], if `name` is one.
     pub fn parse(name: &str) -> Option<Refraction> {
-        [Refraction::Hyperopic, Refraction::Emmetropic, Refraction::Myopic].into_iter().find(|r| r.as_str() == name)
+        [
+            Refraction::Hyperopic,
+            Refraction::Emmetropic,
+            Refraction::Myopic,
+        ]
+        .into_iter()
+        .find(|r| r.as_str() == name)
     }
 
     pub fn as_str(self) -> &'static str {
@@ -167,11 +176,19 @@ mod tests {
             assert_eq!((g.depth, g.angle), (b.depth(z, r), b.angle(z, r)));
             let h = 1e-6;
             let fd = |f: &dyn Fn(f64, f64) -> f64| {
-                ((f(z + h, r) - f(z - h, r)) / (2.0 * h), (f(z, r + h) - f(z, r - h)) / (2.0 * h))
+                (
+                    (f(z + h, r) - f(z - h, r)) / (2.0 * h),
+                    (f(z, r + h) - f(z, r - h)) / (2.0 * h),
+                )
             };
             let (dz, dr) = fd(&|z, r| b.depth(z, r));
             let (az, ar) = fd(&|z, r| b.angle(z, r));
-            for (a, e) in [(g.depth_z, dz), (g.depth_r, dr), (g.angle_z, az), (g.angle_r, ar)] {
+            for (a, e) in [
+                (g.depth_z, dz),
+                (g.depth_r, dr),
+                (g.angle_z, az),
+                (g.angle_r, ar),
+            ] {
                 assert!((a - e).abs() < 1e-8, "{a} vs {e} at ({z}, {r})");
             }
         }

@@ -11,10 +11,21 @@ use super::{FIELDS_FILE, SUMMARY_FILE};
 /// The row vectors of a growth export (the published scripts' variables, then Σ); `time`
 /// is written after `eta`.
 pub const GROWTH_VARS: [&str; 14] = [
-    "h", "s", "z", "r", "sigma", "rho", "zeta", "alpha_s", "alpha_phi", "alpha_n", "eta",
-    "z_retina", "r_retina", "Sigma",
+    "h",
+    "s",
+    "z",
+    "r",
+    "sigma",
+    "rho",
+    "zeta",
+    "alpha_s",
+    "alpha_phi",
+    "alpha_n",
+    "eta",
+    "z_retina",
+    "r_retina",
+    "Sigma",
 ];
-
 
 /// A run directory that cannot be read (or, for the exporters, written): one line naming the file. `bad_input`
 /// for the user's mistakes (exit 2), otherwise a failure to write (exit 1).
@@ -39,7 +50,6 @@ pub fn bad(message: impl Into<String>) -> ReadError {
     }
 }
 
-
 /// A CSV file of numbers with a header line.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Table {
@@ -57,8 +67,7 @@ impl Table {
 
 /// Read a CSV file of numbers (the header, then rows of as many values).
 pub fn read_csv(path: &Path) -> Result<Table, ReadError> {
-    let text =
-        fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
+    let text = fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
     let columns: Vec<String> = lines
         .next()
@@ -143,7 +152,10 @@ pub fn read_run(dir: &Path) -> Result<Run, ReadError> {
     if let Some(list) = summary.get("snapshots").and_then(|s| s.as_array()) {
         for s in list {
             if let (Some(f), Some(t)) = (s["file"].as_str(), s["t"].as_f64()) {
-                let name = Path::new(f).file_name().unwrap_or_default().to_string_lossy();
+                let name = Path::new(f)
+                    .file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy();
                 times.insert(name.into_owned(), t);
             }
         }
@@ -153,7 +165,8 @@ pub fn read_run(dir: &Path) -> Result<Run, ReadError> {
         .and_then(|t| t.column("t"))
         .unwrap_or_default();
     let snap_dir = dir.join(SNAPSHOT_DIR);
-    let entries = fs::read_dir(&snap_dir).map_err(|e| bad(format!("{}: {e}", snap_dir.display())))?;
+    let entries =
+        fs::read_dir(&snap_dir).map_err(|e| bad(format!("{}: {e}", snap_dir.display())))?;
     let mut names: Vec<String> = entries
         .filter_map(|e| e.ok())
         .map(|e| e.file_name().to_string_lossy().into_owned())
@@ -198,4 +211,3 @@ fn check_columns(file: &Path, table: &Table, needed: &[&str]) -> Result<(), Read
     }
     Ok(())
 }
-

@@ -5,9 +5,9 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use super::read::{bad, read_run, Run, RunSnapshot, Table};
 use super::growth::{HISTORY_FILE, SERIES_FILE};
 use super::read::ReadError as ExportError;
+use super::read::{bad, read_run, Run, RunSnapshot, Table};
 use super::SUMMARY_FILE;
 use crate::growth::SeriesRow;
 use crate::model::stimulus::Refraction;
@@ -33,7 +33,12 @@ pub enum RunKind {
     Elastic(Table),
     /// `eyeshell grow`: the snapshots in time order, series.csv and history.csv (empty
     /// without `output.history_points`).
-    Growth { snapshots: Vec<RunSnapshot>, series: Vec<SeriesPoint>, history: Vec<SeriesPoint>, status: String },
+    Growth {
+        snapshots: Vec<RunSnapshot>,
+        series: Vec<SeriesPoint>,
+        history: Vec<SeriesPoint>,
+        status: String,
+    },
 }
 
 impl RunData {
@@ -48,7 +53,9 @@ impl RunData {
     /// The densest time series written: history.csv if there is one, else series.csv.
     pub fn timeline(&self) -> &[SeriesPoint] {
         match &self.kind {
-            RunKind::Growth { series, history, .. } => {
+            RunKind::Growth {
+                series, history, ..
+            } => {
                 if history.len() > series.len() {
                     history
                 } else {
@@ -61,17 +68,23 @@ impl RunData {
 
     /// The snapshot nearest to time `t`.
     pub fn snapshot_near(&self, t: f64) -> Option<&RunSnapshot> {
-        self.snapshots().iter().min_by(|a, b| (a.t - t).abs().total_cmp(&(b.t - t).abs()))
+        self.snapshots()
+            .iter()
+            .min_by(|a, b| (a.t - t).abs().total_cmp(&(b.t - t).abs()))
     }
 }
 
 /// Read the run in `dir` (an `eyeshell solve` or `eyeshell grow` output, finished or not).
 pub fn read(dir: &Path) -> Result<RunData, ExportError> {
     let summary_path = dir.join(SUMMARY_FILE);
-    let text = fs::read_to_string(&summary_path)
-        .map_err(|e| bad(format!("{}: not an eyeshell run directory ({SUMMARY_FILE}: {e})", dir.display())))?;
-    let summary: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| bad(format!("{}: not valid JSON: {e}", summary_path.display())))?;
+    let text = fs::read_to_string(&summary_path).map_err(|e| {
+        bad(format!(
+            "{}: not an eyeshell run directory ({SUMMARY_FILE}: {e})",
+            dir.display()
+        ))
+    })?;
+    let summary: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| bad(format!("{}: not valid JSON: {e}", summary_path.display())))?;
     let scene = scene_of(&summary, &summary_path)?;
     let name = summary
         .pointer("/scene/name")
@@ -88,10 +101,19 @@ pub fn read(dir: &Path) -> Result<RunData, ExportError> {
                 p if p.is_file() => read_series(&p)?,
                 _ => Vec::new(),
             },
-            status: summary.get("status").and_then(|s| s.as_str()).unwrap_or("unknown").to_string(),
+            status: summary
+                .get("status")
+                .and_then(|s| s.as_str())
+                .unwrap_or("unknown")
+                .to_string(),
         },
     };
-    Ok(RunData { dir: dir.to_path_buf(), name, scene, kind })
+    Ok(RunData {
+        dir: dir.to_path_buf(),
+        name,
+        scene,
+        kind,
+    })
 }
 
 /// The scene of a run: every key of summary.json's `parameters` set on the defaults.
@@ -116,7 +138,9 @@ fn json_to_toml(v: &serde_json::Value) -> Option<toml::Value> {
             None => toml::Value::Float(n.as_f64()?),
         },
         serde_json::Value::String(s) => toml::Value::String(s.clone()),
-        serde_json::Value::Array(items) => toml::Value::Array(items.iter().filter_map(json_to_toml).collect()),
+        serde_json::Value::Array(items) => {
+            toml::Value::Array(items.iter().filter_map(json_to_toml).collect())
+        }
         _ => return None,
     })
 }
@@ -125,7 +149,12 @@ fn json_to_toml(v: &serde_json::Value) -> Option<toml::Value> {
 pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
     let text = fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
     let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate().skip(1).filter(|(_, l)| !l.trim().is_empty()) {
+    for (i, line) in text
+        .lines()
+        .enumerate()
+        .skip(1)
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         let number = |j: usize| fields.get(j).and_then(|v| v.parse::<f64>().ok());
         let row = (|| {
@@ -138,12 +167,20 @@ pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
                 class: Refraction::parse(fields.get(5)?)?,
             })
         })();
-        out.push(row.ok_or_else(|| bad(format!("{}: line {}: not a series row: {line:?}", path.display(), i + 1)))?);
+        out.push(row.ok_or_else(|| {
+            bad(format!(
+                "{}: line {}: not a series row: {line:?}",
+                path.display(),
+                i + 1
+            ))
+        })?);
     }
     Ok(out)
 }
 
 /// A table column, or an error naming the file.
 pub fn column(s: &RunSnapshot, name: &str) -> Result<Vec<f64>, ExportError> {
-    s.table.column(name).ok_or_else(|| bad(format!("{}: no column {name:?}", s.file.display())))
+    s.table
+        .column(name)
+        .ok_or_else(|| bad(format!("{}: no column {name:?}", s.file.display())))
 }

@@ -233,7 +233,10 @@ impl Scene {
 
     /// The scene that sets each of `assignments` (key, value, origin) on the defaults, as
     /// written in a run's summary.json `parameters`; validated.
-    pub fn from_parameters(assignments: &[(String, toml::Value, String)], origin: &str) -> Result<Scene, SceneError> {
+    pub fn from_parameters(
+        assignments: &[(String, toml::Value, String)],
+        origin: &str,
+    ) -> Result<Scene, SceneError> {
         Scene::from_table(&toml::Table::new(), &one_line(origin), assignments, &[])
     }
 

@@ -18,7 +18,9 @@
 //! would be ambiguous which wins). Every run's scene is validated before anything runs, and
 //! an error names the run.
 
-use super::{closest, describe, keys, one_line, parse_table, show, unknown_key, KeyValue, Scene, SceneError};
+use super::{
+    closest, describe, keys, one_line, parse_table, show, unknown_key, KeyValue, Scene, SceneError,
+};
 
 /// The name of the sweep table.
 pub const SWEEP: &str = "sweep";
@@ -68,30 +70,51 @@ impl Sweep {
     }
 
     /// Parse a sweep (a scene without `[sweep]` is a sweep of one run, named after it).
-    pub fn from_toml_str(text: &str, origin: &str, overrides: &[String]) -> Result<Sweep, SceneError> {
+    pub fn from_toml_str(
+        text: &str,
+        origin: &str,
+        overrides: &[String],
+    ) -> Result<Sweep, SceneError> {
         let origin = one_line(origin);
         let mut table = parse_table(text, &origin)?;
         let spec = table.remove(SWEEP);
-        let bad = |problem: String| SceneError::BadSweep { origin: origin.clone(), problem };
+        let bad = |problem: String| SceneError::BadSweep {
+            origin: origin.clone(),
+            problem,
+        };
         let (list, grid) = match &spec {
             None => (Vec::new(), Vec::new()),
             Some(toml::Value::Table(t)) => parse_spec(t, &origin)?,
             Some(v) => return Err(bad(format!("must be a table, found {}", describe(v)))),
         };
         for text in overrides {
-            let key = text.split_once('=').map_or(text.as_str(), |(k, _)| k.trim());
-            if list.iter().any(|e| e.values.iter().any(|(k, _)| k == key)) || grid.iter().any(|(k, _)| k == key) {
-                return Err(bad(format!("sweeps {key}: remove `--set {}` (the sweep's values would be ambiguous)", one_line(text))));
+            let key = text
+                .split_once('=')
+                .map_or(text.as_str(), |(k, _)| k.trim());
+            if list.iter().any(|e| e.values.iter().any(|(k, _)| k == key))
+                || grid.iter().any(|(k, _)| k == key)
+            {
+                return Err(bad(format!(
+                    "sweeps {key}: remove `--set {}` (the sweep's values would be ambiguous)",
+                    one_line(text)
+                )));
             }
         }
         let base = Scene::from_table(&table, &origin, &[], overrides)?;
         let name = base.display_name();
         let combos = expand(&list, &grid);
         if combos.len() > MAX_RUNS {
-            return Err(bad(format!("declares {} runs, more than the {MAX_RUNS} allowed", combos.len())));
+            return Err(bad(format!(
+                "declares {} runs, more than the {MAX_RUNS} allowed",
+                combos.len()
+            )));
         }
         let mut keys_seen: Vec<String> = Vec::new();
-        for k in list.iter().flat_map(|e| e.values.iter().map(|(k, _)| k)).chain(grid.iter().map(|(k, _)| k)) {
+        for k in list
+            .iter()
+            .flat_map(|e| e.values.iter().map(|(k, _)| k))
+            .chain(grid.iter().map(|(k, _)| k))
+        {
             if !keys_seen.contains(k) {
                 keys_seen.push(k.clone());
             }
@@ -100,16 +123,27 @@ impl Sweep {
         for (run_name, values) in combos {
             let run_name = unique(run_name.unwrap_or_else(|| generated_name(&values)), &runs);
             let run_origin = format!("{origin} [sweep] run {run_name}");
-            let assignments: Vec<(String, toml::Value, String)> =
-                values.iter().map(|(k, v)| (k.clone(), v.clone(), run_origin.clone())).collect();
+            let assignments: Vec<(String, toml::Value, String)> = values
+                .iter()
+                .map(|(k, v)| (k.clone(), v.clone(), run_origin.clone()))
+                .collect();
             let mut scene = Scene::from_table(&table, &run_origin, &assignments, overrides)?;
             scene.origin = origin.clone();
             scene.name = Some(format!("{name}/{run_name}"));
             let mut values = values;
             values.sort_by_key(|(k, _)| keys_seen.iter().position(|s| s == k));
-            runs.push(SweepRun { name: run_name, values, scene });
+            runs.push(SweepRun {
+                name: run_name,
+                values,
+                scene,
+            });
         }
-        Ok(Sweep { origin, keys: keys_seen, runs, name })
+        Ok(Sweep {
+            origin,
+            keys: keys_seen,
+            runs,
+            name,
+        })
     }
 }
 
@@ -128,7 +162,10 @@ struct ListEntry {
 
 /// The list entries and the grid axes (key, values) of a `[sweep]` table.
 fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<Axis>), SceneError> {
-    let bad = |problem: String| SceneError::BadSweep { origin: origin.to_string(), problem };
+    let bad = |problem: String| SceneError::BadSweep {
+        origin: origin.to_string(),
+        problem,
+    };
     let mut list = Vec::new();
     let mut grid = Vec::new();
     for (name, value) in spec {
@@ -136,7 +173,11 @@ fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<A
             ("runs", toml::Value::Array(entries)) => {
                 for (i, e) in entries.iter().enumerate() {
                     let toml::Value::Table(t) = e else {
-                        return Err(bad(format!("runs[{}] must be a table of key = value, found {}", i + 1, describe(e))));
+                        return Err(bad(format!(
+                            "runs[{}] must be a table of key = value, found {}",
+                            i + 1,
+                            describe(e)
+                        )));
                     };
                     list.push(list_entry(t, i + 1, origin)?);
                 }
@@ -147,7 +188,10 @@ fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<A
             ("grid", toml::Value::Table(t)) => {
                 for (key, v) in leaves(t, "", origin)? {
                     let toml::Value::Array(values) = v else {
-                        return Err(bad(format!("grid.{key} must be a list of values, found {}", describe(&v))));
+                        return Err(bad(format!(
+                            "grid.{key} must be a list of values, found {}",
+                            describe(&v)
+                        )));
                     };
                     if values.is_empty() {
                         return Err(bad(format!("grid.{key} is an empty list")));
@@ -156,17 +200,31 @@ fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<A
                 }
             }
             ("runs" | "grid", v) => {
-                let expected = if name == "runs" { "an array of tables ([[sweep.runs]])" } else { "a table ([sweep.grid])" };
-                return Err(bad(format!("{name} must be {expected}, found {}", describe(v))));
+                let expected = if name == "runs" {
+                    "an array of tables ([[sweep.runs]])"
+                } else {
+                    "a table ([sweep.grid])"
+                };
+                return Err(bad(format!(
+                    "{name} must be {expected}, found {}",
+                    describe(v)
+                )));
             }
             (other, _) => {
-                let hint = closest(other, ["grid", "runs"].into_iter()).map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
-                return Err(bad(format!("unknown entry '{}'{hint}: a sweep has a grid and/or runs", one_line(other))));
+                let hint = closest(other, ["grid", "runs"].into_iter())
+                    .map(|s| format!(" (did you mean '{s}'?)"))
+                    .unwrap_or_default();
+                return Err(bad(format!(
+                    "unknown entry '{}'{hint}: a sweep has a grid and/or runs",
+                    one_line(other)
+                )));
             }
         }
     }
     if list.is_empty() && grid.is_empty() {
-        return Err(bad("is empty: give [sweep.grid] and/or [[sweep.runs]]".into()));
+        return Err(bad(
+            "is empty: give [sweep.grid] and/or [[sweep.runs]]".into()
+        ));
     }
     for (key, _) in &grid {
         if list.iter().any(|e| e.values.iter().any(|(k, _)| k == key)) {
@@ -178,7 +236,10 @@ fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<A
 
 /// A `[[sweep.runs]]` entry: `name` names the run, every other leaf is a scene key.
 fn list_entry(t: &toml::Table, number: usize, origin: &str) -> Result<ListEntry, SceneError> {
-    let bad = |problem: String| SceneError::BadSweep { origin: origin.to_string(), problem };
+    let bad = |problem: String| SceneError::BadSweep {
+        origin: origin.to_string(),
+        problem,
+    };
     let mut name = None;
     let mut values = Vec::new();
     for (key, v) in leaves(t, "", origin)? {
@@ -200,10 +261,18 @@ fn list_entry(t: &toml::Table, number: usize, origin: &str) -> Result<ListEntry,
 }
 
 /// The leaves of a table as (dotted key, value); every key must be a scene key (or `name`).
-fn leaves(t: &toml::Table, prefix: &str, origin: &str) -> Result<Vec<(String, toml::Value)>, SceneError> {
+fn leaves(
+    t: &toml::Table,
+    prefix: &str,
+    origin: &str,
+) -> Result<Vec<(String, toml::Value)>, SceneError> {
     let mut out = Vec::new();
     for (name, value) in t {
-        let key = if prefix.is_empty() { name.clone() } else { format!("{prefix}.{name}") };
+        let key = if prefix.is_empty() {
+            name.clone()
+        } else {
+            format!("{prefix}.{name}")
+        };
         if keys::find(&key).is_some() || key == "name" {
             out.push((key, value.clone()));
         } else if let toml::Value::Table(sub) = value {
@@ -220,7 +289,9 @@ fn expand(list: &[ListEntry], grid: &[Axis]) -> Vec<Combination> {
     let base: Vec<Combination> = if list.is_empty() {
         vec![(None, Vec::new())]
     } else {
-        list.iter().map(|e| (e.name.clone(), e.values.clone())).collect()
+        list.iter()
+            .map(|e| (e.name.clone(), e.values.clone()))
+            .collect()
     };
     let mut combos = base;
     for (key, values) in grid {
@@ -245,14 +316,24 @@ fn generated_name(values: &[(String, toml::Value)]) -> String {
     if values.is_empty() {
         return "run".into();
     }
-    values.iter().map(|(k, v)| part(k, v)).collect::<Vec<_>>().join("_")
+    values
+        .iter()
+        .map(|(k, v)| part(k, v))
+        .collect::<Vec<_>>()
+        .join("_")
 }
 
 fn part(key: &str, v: &toml::Value) -> String {
     let last = key.rsplit('.').next().unwrap_or(key);
     let text: String = format!("{last}={}", show_value(v))
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || "._=+-".contains(c) { c } else { '-' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "._=+-".contains(c) {
+                c
+            } else {
+                '-'
+            }
+        })
         .collect();
     text.chars().take(100).collect()
 }
@@ -268,7 +349,11 @@ pub fn show_value(v: &toml::Value) -> String {
 }
 
 fn valid_name(s: &str) -> bool {
-    !s.is_empty() && s.len() <= 100 && !s.starts_with('.') && s.chars().all(|c| c.is_ascii_alphanumeric() || "._=+-".contains(c))
+    !s.is_empty()
+        && s.len() <= 100
+        && !s.starts_with('.')
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "._=+-".contains(c))
 }
 
 /// `name`, or `name-2`, `name-3`, ... if a run already has it.
@@ -277,7 +362,10 @@ fn unique(name: String, runs: &[SweepRun]) -> String {
     if !taken(&name) {
         return name;
     }
-    (2..).map(|k| format!("{name}-{k}")).find(|n| !taken(n)).unwrap_or(name)
+    (2..)
+        .map(|k| format!("{name}-{k}"))
+        .find(|n| !taken(n))
+        .unwrap_or(name)
 }
 
 #[cfg(test)]
@@ -292,9 +380,20 @@ mod tests {
 
     #[test]
     fn a_grid_is_every_combination_last_key_fastest() {
-        let s = sweep("[sweep.grid]\n\"growth.Gamma\" = [4, 8, 12]\n\"growth.delta\" = [2, 6]\n").unwrap();
+        let s = sweep("[sweep.grid]\n\"growth.Gamma\" = [4, 8, 12]\n\"growth.delta\" = [2, 6]\n")
+            .unwrap();
         let names: Vec<_> = s.runs.iter().map(|r| r.name.as_str()).collect();
-        assert_eq!(names, ["Gamma=4_delta=2", "Gamma=4_delta=6", "Gamma=8_delta=2", "Gamma=8_delta=6", "Gamma=12_delta=2", "Gamma=12_delta=6"]);
+        assert_eq!(
+            names,
+            [
+                "Gamma=4_delta=2",
+                "Gamma=4_delta=6",
+                "Gamma=8_delta=2",
+                "Gamma=8_delta=6",
+                "Gamma=12_delta=2",
+                "Gamma=12_delta=6"
+            ]
+        );
         let g = s.runs[5].scene.growth.as_ref().unwrap();
         assert_eq!((g.gamma, g.delta), (12.0, 6.0));
         assert_eq!(s.runs[5].scene.params.d, 100.0);
@@ -306,7 +405,10 @@ mod tests {
     #[test]
     fn nested_grid_keys_are_dotted_keys() {
         let s = sweep("[sweep.grid.fibres]\nD = [0, 400]\n").unwrap();
-        assert_eq!(s.runs.iter().map(|r| r.scene.params.d).collect::<Vec<_>>(), [0.0, 400.0]);
+        assert_eq!(
+            s.runs.iter().map(|r| r.scene.params.d).collect::<Vec<_>>(),
+            [0.0, 400.0]
+        );
     }
 
     #[test]
@@ -316,9 +418,15 @@ mod tests {
         )
         .unwrap();
         let names: Vec<_> = s.runs.iter().map(|r| r.name.as_str()).collect();
-        assert_eq!(names, ["const_D=0", "const_D=200", "thick_D=0", "thick_D=200"]);
+        assert_eq!(
+            names,
+            ["const_D=0", "const_D=200", "thick_D=0", "thick_D=200"]
+        );
         assert_eq!(s.keys, ["material.thickness", "fibres.D"]);
-        assert_eq!(s.runs[3].scene.params.thickness, crate::model::params::Thickness::NonUniform);
+        assert_eq!(
+            s.runs[3].scene.params.thickness,
+            crate::model::params::Thickness::NonUniform
+        );
     }
 
     #[test]
@@ -333,30 +441,42 @@ mod tests {
         let cases = [
             ("[sweep]\n", "is empty"),
             ("[sweep]\ngird = {}\n", "did you mean 'grid'"),
-            ("[sweep.grid]\n\"fibres.DD\" = [1]\n", "unknown key 'fibres.DD'"),
+            (
+                "[sweep.grid]\n\"fibres.DD\" = [1]\n",
+                "unknown key 'fibres.DD'",
+            ),
             ("[sweep.grid]\n\"fibres.D\" = 3\n", "must be a list"),
             ("[sweep.grid]\n\"fibres.D\" = []\n", "empty list"),
             ("[sweep.grid]\n\"fibres.D\" = [-1]\n", "fibres.D"),
             ("[sweep.grid]\n\"fibres.D\" = [\"x\"]\n", "must be a number"),
             ("[[sweep.runs]]\nname = \"a/b\"\n", "directory name"),
-            ("[[sweep.runs]]\n\"fibres.D\" = 1\n[sweep.grid]\n\"fibres.D\" = [2]\n", "both in the grid and in the runs"),
+            (
+                "[[sweep.runs]]\n\"fibres.D\" = 1\n[sweep.grid]\n\"fibres.D\" = [2]\n",
+                "both in the grid and in the runs",
+            ),
         ];
         for (extra, expect) in cases {
             let e = sweep(extra).expect_err(extra).to_string();
             assert!(e.contains(expect), "{extra:?}: {e}");
             assert!(!e.contains('\n'), "{e}");
         }
-        let e = Sweep::from_toml_str(&format!("sweep = 3\n{BASE}"), "s.toml", &[]).unwrap_err().to_string();
+        let e = Sweep::from_toml_str(&format!("sweep = 3\n{BASE}"), "s.toml", &[])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("must be a table"), "{e}");
         // An invalid value names the run.
-        let e = sweep("[sweep.grid]\n\"fibres.D\" = [1, -1]\n").unwrap_err().to_string();
+        let e = sweep("[sweep.grid]\n\"fibres.D\" = [1, -1]\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("run D=-1"), "{e}");
     }
 
     #[test]
     fn set_may_not_touch_a_swept_key() {
         let text = format!("{BASE}[sweep.grid]\n\"fibres.D\" = [0, 1]\n");
-        let e = Sweep::from_toml_str(&text, "s.toml", &["fibres.D=3".into()]).unwrap_err().to_string();
+        let e = Sweep::from_toml_str(&text, "s.toml", &["fibres.D=3".into()])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("sweeps fibres.D"), "{e}");
         let s = Sweep::from_toml_str(&text, "s.toml", &["material.C=50".into()]).unwrap();
         assert!(s.runs.iter().all(|r| r.scene.params.c == 50.0));
@@ -364,13 +484,19 @@ mod tests {
 
     #[test]
     fn a_scene_with_a_sweep_is_refused_by_the_single_loader() {
-        let e = Scene::from_toml_str(&format!("{BASE}[sweep.grid]\n\"fibres.D\" = [0]\n"), "s.toml", &[]).unwrap_err();
+        let e = Scene::from_toml_str(
+            &format!("{BASE}[sweep.grid]\n\"fibres.D\" = [0]\n"),
+            "s.toml",
+            &[],
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("eyeshell sweep"), "{e}");
     }
 
     #[test]
     fn duplicate_generated_names_are_made_unique() {
-        let s = sweep("[[sweep.runs]]\n\"fibres.D\" = 1\n[[sweep.runs]]\n\"fibres.D\" = 1.0\n").unwrap();
+        let s = sweep("[[sweep.runs]]\n\"fibres.D\" = 1\n[[sweep.runs]]\n\"fibres.D\" = 1.0\n")
+            .unwrap();
         assert_eq!(s.runs[0].name, "D=1");
         assert_eq!(s.runs[1].name, "D=1-2");
     }

@@ -827,11 +827,21 @@ fn growth_wrong_types() {
 
 #[test]
 fn shipped_const_scene_grows_with_the_defaults() {
-    let s =
-        Scene::from_toml_str(include_str!("../../../../scenes/const.toml"), "const.toml", &[]).unwrap();
+    let s = Scene::from_toml_str(
+        include_str!("../../../../scenes/const.toml"),
+        "const.toml",
+        &[],
+    )
+    .unwrap();
     assert_eq!(s.growth, Some(GrowthParams::default()));
     // The defaults, with the axial-length history its figure draws.
-    assert_eq!(s.growth_settings, GrowthSettings { history_points: 100, ..GrowthSettings::default() });
+    assert_eq!(
+        s.growth_settings,
+        GrowthSettings {
+            history_points: 100,
+            ..GrowthSettings::default()
+        }
+    );
     assert_eq!(s.params.thickness, Thickness::Uniform);
     assert_eq!(s.params.d, 0.0);
     assert_eq!(s.solver.nodes, 501);

@@ -12,11 +12,20 @@ pub fn exact_sphere() -> Params {
 
 /// The non-uniform shell with fibres, D = 200.
 pub fn fibre_shell() -> Params {
-    Params { thickness: Thickness::NonUniform, d: 200.0, ..Params::default() }
+    Params {
+        thickness: Thickness::NonUniform,
+        d: 200.0,
+        ..Params::default()
+    }
 }
 
 pub fn settings(nodes: usize, scheme: Scheme) -> SolverSettings {
-    SolverSettings { nodes, scheme, newton_tol: 1e-12, ..SolverSettings::default() }
+    SolverSettings {
+        nodes,
+        scheme,
+        newton_tol: 1e-12,
+        ..SolverSettings::default()
+    }
 }
 
 pub fn solve(p: &Params, nodes: usize, scheme: Scheme) -> Solution {

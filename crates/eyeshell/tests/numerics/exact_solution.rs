@@ -14,7 +14,13 @@ fn max_error(nodes: usize, scheme: Scheme) -> f64 {
     let mut worst: f64 = 0.0;
     for row in &sol.rows {
         let x = row.sigma_ref;
-        let exact = [1.0 / (a * p.r0), a, a * p.r0 * (x / p.r0).sin(), x / p.r0, 0.0];
+        let exact = [
+            1.0 / (a * p.r0),
+            a,
+            a * p.r0 * (x / p.r0).sin(),
+            x / p.r0,
+            0.0,
+        ];
         for (v, e) in five(row).iter().zip(exact) {
             worst = worst.max((v - e).abs());
         }
@@ -25,10 +31,18 @@ fn max_error(nodes: usize, scheme: Scheme) -> f64 {
 fn check_order(scheme: Scheme, ladder: &[usize]) -> Vec<f64> {
     let errors: Vec<f64> = ladder.iter().map(|&n| max_error(n, scheme)).collect();
     let orders = orders(&errors);
-    println!("{scheme:?}: N = {ladder:?}\n  errors = {}\n  orders = {orders:.3?}", sci(&errors));
+    println!(
+        "{scheme:?}: N = {ladder:?}\n  errors = {}\n  orders = {orders:.3?}",
+        sci(&errors)
+    );
     for (k, q) in orders.iter().enumerate() {
         let p = scheme.order() as f64;
-        assert!((q - p).abs() <= 0.3, "{scheme:?}: order {q:.3} between N = {} and {}", ladder[k], ladder[k + 1]);
+        assert!(
+            (q - p).abs() <= 0.3,
+            "{scheme:?}: order {q:.3} between N = {} and {}",
+            ladder[k],
+            ladder[k + 1]
+        );
     }
     errors
 }
@@ -59,7 +73,9 @@ fn first_integral_holds_to_discretisation_error() {
         let fi = sol.stats.first_integral_max;
         println!("{scheme:?} N = {n}: first integral {fi:.3e}, error {e:.3e}");
         // Q cos θ + r t_s sin θ − r²ΔP/2 is O(r t_s) times the error of the fields.
-        assert!(fi < 10.0 * p.r0 * 13.0 * e.max(1e-13), "first integral {fi:e} vs error {e:e}");
+        assert!(
+            fi < 10.0 * p.r0 * 13.0 * e.max(1e-13),
+            "first integral {fi:e} vs error {e:e}"
+        );
     }
 }
-

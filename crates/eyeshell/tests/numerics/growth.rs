@@ -17,38 +17,61 @@ impl Observer for Keep {
 }
 
 fn settings(nodes: usize) -> SolverSettings {
-    SolverSettings { nodes, ..SolverSettings::default() }
+    SolverSettings {
+        nodes,
+        ..SolverSettings::default()
+    }
 }
 
-fn run(nodes: usize, g: &GrowthParams, s: &GrowthSettings) -> (Vec<Snapshot>, Result<GrowthStats, GrowthError>) {
+fn run(
+    nodes: usize,
+    g: &GrowthParams,
+    s: &GrowthSettings,
+) -> (Vec<Snapshot>, Result<GrowthStats, GrowthError>) {
     let mut keep = Keep::default();
     let r = grow(&Params::default(), &settings(nodes), g, s, &mut keep);
     (keep.0, r)
 }
 
 fn cvode(rtol: f64) -> GrowthSettings {
-    GrowthSettings { integrator: Integrator::Cvode, rtol, atol: rtol * 1e-2, ..GrowthSettings::default() }
+    GrowthSettings {
+        integrator: Integrator::Cvode,
+        rtol,
+        atol: rtol * 1e-2,
+        ..GrowthSettings::default()
+    }
 }
 
 fn euler(steps: usize) -> GrowthSettings {
-    GrowthSettings { integrator: Integrator::Euler, steps, ..GrowthSettings::default() }
+    GrowthSettings {
+        integrator: Integrator::Euler,
+        steps,
+        ..GrowthSettings::default()
+    }
 }
 
 /// The axial lengths at the output times t = 0.1, 0.2, 0.4, 1.
 fn axial(snaps: &[Snapshot]) -> Vec<f64> {
-    snaps.iter().skip(1).map(|s| s.series.axial_length).collect()
+    snaps
+        .iter()
+        .skip(1)
+        .map(|s| s.series.axial_length)
+        .collect()
 }
 
 /// J v by the implicit-function theorem equals differences of G with full elastic re-solves.
 #[test]
 fn jacobian_product_matches_resolved_differences() {
-    let mut sys = GrowthSystem::new(&Params::default(), &settings(101), &GrowthParams::default()).unwrap();
+    let mut sys =
+        GrowthSystem::new(&Params::default(), &settings(101), &GrowthParams::default()).unwrap();
     let p0 = sys.points.initial_state();
     let n = p0.len();
     let mut fy = vec![0.0; n];
     sys.rhs(&p0, &mut fy).unwrap();
     // A smooth direction, scaled like the state (ρ ~ R(Σ), γ_s ~ 1).
-    let v: Vec<f64> = (0..n).map(|k| p0[k] * (1.0 + 0.5 * (0.01 * k as f64).sin())).collect();
+    let v: Vec<f64> = (0..n)
+        .map(|k| p0[k] * (1.0 + 0.5 * (0.01 * k as f64).sin()))
+        .collect();
     let mut jv = vec![0.0; n];
     sys.jac_times(&p0, &fy, &v, &mut jv).unwrap();
     let size = jv.iter().fold(0.0f64, |a, b| a.max(b.abs()));
@@ -56,9 +79,17 @@ fn jacobian_product_matches_resolved_differences() {
     let q: Vec<f64> = p0.iter().zip(&v).map(|(a, b)| a + d * b).collect();
     let mut g1 = vec![0.0; n];
     sys.rhs(&q, &mut g1).unwrap();
-    let err = g1.iter().zip(&fy).zip(&jv).map(|((a, b), j)| ((a - b) / d - j).abs()).fold(0.0, f64::max);
+    let err = g1
+        .iter()
+        .zip(&fy)
+        .zip(&jv)
+        .map(|((a, b), j)| ((a - b) / d - j).abs())
+        .fold(0.0, f64::max);
     println!("J v: max |J v| {size:.3e}, max difference to re-solved differences {err:.3e}");
-    assert!(size > 0.0 && err < 1e-4 * size, "J v off by {err:e} of {size:e}");
+    assert!(
+        size > 0.0 && err < 1e-4 * size,
+        "J v off by {err:e} of {size:e}"
+    );
 }
 
 /// CVODE at rtol 1e-8 and Euler at 200…1600 steps converge to the same axial lengths, and
@@ -76,7 +107,10 @@ fn cvode_and_euler_agree_and_euler_is_first_order() {
         eulers.push(axial(&snaps));
     }
     let times = [0.1, 0.2, 0.4, 1.0];
-    println!("axial length, const scene, N = 501 (CVODE rtol 1e-8: {} steps, {} elastic solves)", cv_stats.steps, cv_stats.bvp_solves);
+    println!(
+        "axial length, const scene, N = 501 (CVODE rtol 1e-8: {} steps, {} elastic solves)",
+        cv_stats.steps, cv_stats.bvp_solves
+    );
     println!("   t    CVODE 1e-8     Euler 200      Euler 400      Euler 800      Euler 1600     extrapolated   orders");
     for (k, t) in times.iter().enumerate() {
         let e: Vec<f64> = eulers.iter().map(|a| a[k]).collect();
@@ -87,7 +121,11 @@ fn cvode_and_euler_agree_and_euler_is_first_order() {
             "  {t:.1}  {:.10}  {:.10}  {:.10}  {:.10}  {:.10}  {:.10}  {orders:.2?}",
             reference[k], e[0], e[1], e[2], e[3], extrapolated
         );
-        assert!((extrapolated - reference[k]).abs() < 0.05 * errs[3], "t = {t}: extrapolation {extrapolated} vs {}", reference[k]);
+        assert!(
+            (extrapolated - reference[k]).abs() < 0.05 * errs[3],
+            "t = {t}: extrapolation {extrapolated} vs {}",
+            reference[k]
+        );
         for o in &orders {
             assert!((o - 1.0).abs() < 0.2, "t = {t}: Euler order {o}");
         }
@@ -105,7 +143,10 @@ fn cvode_and_euler_agree_and_euler_is_first_order() {
     let (loose, r) = run(501, &g, &cvode(1e-3));
     let loose_stats = r.unwrap();
     let err_loose = (axial(&loose)[3] - reference[3]).abs();
-    println!("rtol 1e-3: {} elastic solves, error {err_loose:.2e}", loose_stats.bvp_solves);
+    println!(
+        "rtol 1e-3: {} elastic solves, error {err_loose:.2e}",
+        loose_stats.bvp_solves
+    );
     assert!(err_loose < 1.5 * err_eu && 3 * loose_stats.bvp_solves < e200_stats.bvp_solves);
 }
 
@@ -121,20 +162,38 @@ fn growth_never_shrinks_and_stops_behind_blue() {
         let (snaps, r) = run(101, &g, &s);
         r.unwrap();
         assert_eq!(snaps.len(), 5);
-        let slack = |x: f64| if s.integrator == Integrator::Euler { 0.0 } else { 10.0 * (s.rtol * x.abs() + s.atol) };
+        let slack = |x: f64| {
+            if s.integrator == Integrator::Euler {
+                0.0
+            } else {
+                10.0 * (s.rtol * x.abs() + s.atol)
+            }
+        };
         for w in snaps.windows(2) {
             for (a, b) in w[0].growth.iter().zip(&w[1].growth) {
-                assert!(b.rho >= a.rho - slack(a.rho), "ρ fell from {} to {} ({:?})", a.rho, b.rho, s.integrator);
+                assert!(
+                    b.rho >= a.rho - slack(a.rho),
+                    "ρ fell from {} to {} ({:?})",
+                    a.rho,
+                    b.rho,
+                    s.integrator
+                );
             }
             for (a, b) in w[0].fields.iter().zip(&w[1].fields) {
-                assert!(b.sigma >= a.sigma - slack(a.sigma), "σ fell at Σ = {} ({:?})", a.sigma_ref, s.integrator);
+                assert!(
+                    b.sigma >= a.sigma - slack(a.sigma),
+                    "σ fell at Σ = {} ({:?})",
+                    a.sigma_ref,
+                    s.integrator
+                );
             }
         }
         let last = snaps.last().unwrap();
         let blue = g.blue;
         let mut stopped = 0;
         for row in &last.growth {
-            let behind = blue.depth(row.z_retina, row.r_retina) < 0.0 && blue.angle(row.z_retina, row.r_retina) < blue.phi_max;
+            let behind = blue.depth(row.z_retina, row.r_retina) < 0.0
+                && blue.angle(row.z_retina, row.r_retina) < blue.phi_max;
             if behind {
                 assert_eq!(row.g_v, 0.0);
                 assert_eq!(row.eta, 0.0);
@@ -150,12 +209,17 @@ fn growth_never_shrinks_and_stops_behind_blue() {
 /// Every growth rate is non-negative, at the initial shell and at perturbed, grown states.
 #[test]
 fn rates_are_never_negative() {
-    let mut sys = GrowthSystem::new(&Params::default(), &settings(101), &GrowthParams::default()).unwrap();
+    let mut sys =
+        GrowthSystem::new(&Params::default(), &settings(101), &GrowthParams::default()).unwrap();
     let p0 = sys.points.initial_state();
     let mut rate = vec![0.0; p0.len()];
     for k in 0..6 {
         // Grow by up to 6 % with a wavy profile.
-        let p: Vec<f64> = p0.iter().enumerate().map(|(j, x)| x * (1.0 + 0.01 * k as f64 * (1.0 + (0.05 * j as f64).sin()))).collect();
+        let p: Vec<f64> = p0
+            .iter()
+            .enumerate()
+            .map(|(j, x)| x * (1.0 + 0.01 * k as f64 * (1.0 + (0.05 * j as f64).sin())))
+            .collect();
         sys.rhs(&p, &mut rate).unwrap();
         let min = rate.iter().cloned().fold(f64::INFINITY, f64::min);
         assert!(min >= 0.0, "a rate of {min} at state {k}");
@@ -165,8 +229,16 @@ fn rates_are_never_negative() {
 /// A run whose elastic solve breaks down says when, and keeps the snapshots it had.
 #[test]
 fn a_failed_run_says_when_and_keeps_what_it_had() {
-    let g = GrowthParams { eta0: 1e4, ..GrowthParams::default() };
-    let s = GrowthSettings { integrator: Integrator::Euler, steps: 20, output_times: vec![0.05, 0.5, 1.0], ..GrowthSettings::default() };
+    let g = GrowthParams {
+        eta0: 1e4,
+        ..GrowthParams::default()
+    };
+    let s = GrowthSettings {
+        integrator: Integrator::Euler,
+        steps: 20,
+        output_times: vec![0.05, 0.5, 1.0],
+        ..GrowthSettings::default()
+    };
     let (snaps, r) = run(51, &g, &s);
     let e = r.expect_err("explicit Euler at η0 = 1e4 with 20 steps must break down");
     println!("{e}; {} snapshots kept", snaps.len());

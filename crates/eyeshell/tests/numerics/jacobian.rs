@@ -26,7 +26,11 @@ fn check(p: &Params, scheme: Scheme, noise: &[f64]) -> Result<(), TestCaseError>
     for j in 0..n {
         // Steps relative to κ, r, t_s (never near zero) and absolute for θ and q_s, which
         // vanish at the pole.
-        let floor = if matches!(j % 5, 2 | 3) { typ[j % 5] } else { 0.0 };
+        let floor = if matches!(j % 5, 2 | 3) {
+            typ[j % 5]
+        } else {
+            0.0
+        };
         let h = 1e-6 * u[j].abs().max(floor);
         let mut up = u.clone();
         up[j] += h;
@@ -41,7 +45,12 @@ fn check(p: &Params, scheme: Scheme, noise: &[f64]) -> Result<(), TestCaseError>
             // are of the size 1 / f_scale[i] (the typical size of its unknown).
             let noise = 64.0 * f64::EPSILON / (f_scale[i] * h);
             let err = (a - fd).abs() / (1e-5 * a.abs() + noise);
-            prop_assert!(err < 1.0, "{scheme:?} D={} {:?}: J[{i}][{j}] = {a} but differences give {fd}", p.d, p.thickness);
+            prop_assert!(
+                err < 1.0,
+                "{scheme:?} D={} {:?}: J[{i}][{j}] = {a} but differences give {fd}",
+                p.d,
+                p.thickness
+            );
         }
     }
     // Entries outside the pattern are zero, so the band holds the whole Jacobian.
@@ -63,7 +72,11 @@ fn variants() -> Vec<Params> {
     let mut out = vec![];
     for d in [0.0, 200.0] {
         for thickness in [Thickness::Uniform, Thickness::NonUniform] {
-            out.push(Params { d, thickness, ..Params::default() });
+            out.push(Params {
+                d,
+                thickness,
+                ..Params::default()
+            });
         }
     }
     out

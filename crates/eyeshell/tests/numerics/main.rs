@@ -3,7 +3,6 @@
 //! One test binary for the group (each module was its own binary before: one link instead of
 //! many).
 
-
 mod common;
 
 mod convergence;

@@ -25,19 +25,19 @@ fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
 
 fn case() -> impl Strategy<Value = Case> {
     let material = (
-        log_uniform(10.0, 1e4),                                      // C
-        prop_oneof![Just(0.0), log_uniform(1.0, 1e4)],               // D
-        log_uniform(0.1, 1e3),                                       // E_b
-        0.05f64..2.0,                                                // H0
+        log_uniform(10.0, 1e4),                        // C
+        prop_oneof![Just(0.0), log_uniform(1.0, 1e4)], // D
+        log_uniform(0.1, 1e3),                         // E_b
+        0.05f64..2.0,                                  // H0
         prop_oneof![Just(Thickness::Uniform), Just(Thickness::NonUniform)],
     );
     let geometry = (
-        5.0f64..20.0,                // R0
-        0.5f64..0.9,                 // fraction
-        log_uniform(10.0, 1e4),      // cornea C_c
-        0.3f64..1.0,                 // ΔP as a fraction of the limit (see below)
-        log_uniform(1e-5, 1e-1),     // ε
-        9usize..=15,                 // N
+        5.0f64..20.0,            // R0
+        0.5f64..0.9,             // fraction
+        log_uniform(10.0, 1e4),  // cornea C_c
+        0.3f64..1.0,             // ΔP as a fraction of the limit (see below)
+        log_uniform(1e-5, 1e-1), // ε
+        9usize..=15,             // N
     );
     (material, geometry, prop::collection::vec(-1.0f64..1.0, 7)).prop_map(
         |((c, d, e_b, h0, thickness), (r0, fraction, c_c, dp_frac, epsilon, nodes), noise)| {
@@ -48,8 +48,23 @@ fn case() -> impl Strategy<Value = Case> {
             // their typical sizes (the scales of the round-off tolerance) by as much.
             let sclera = CorneaParams { c, h: h0, r0 };
             let dp = dp_frac * cornea::max_pressure(&cornea).min(cornea::max_pressure(&sclera));
-            let p = Params { dp, c, e_b, thickness, h0, d, cornea, r0, fraction };
-            Case { p, nodes, epsilon, noise }
+            let p = Params {
+                dp,
+                c,
+                e_b,
+                thickness,
+                h0,
+                d,
+                cornea,
+                r0,
+                fraction,
+            };
+            Case {
+                p,
+                nodes,
+                epsilon,
+                noise,
+            }
         },
     )
 }
@@ -57,7 +72,12 @@ fn case() -> impl Strategy<Value = Case> {
 /// tests/jacobian.rs's comparison, at the case's parameters, mesh and perturbed state.
 fn check(case: &Case, scheme: Scheme) -> Result<(), TestCaseError> {
     let p = &case.p;
-    let s = SolverSettings { nodes: case.nodes, epsilon: case.epsilon, scheme, ..SolverSettings::default() };
+    let s = SolverSettings {
+        nodes: case.nodes,
+        epsilon: case.epsilon,
+        scheme,
+        ..SolverSettings::default()
+    };
     let mut disc = discretise(p, &s).map_err(|e| TestCaseError::fail(format!("{case:?}: {e}")))?;
     let n = disc.len();
     let typ = disc.typical(p.r0);
@@ -69,7 +89,8 @@ fn check(case: &Case, scheme: Scheme) -> Result<(), TestCaseError> {
     }
     let (_, f_scale) = disc.scales(p.r0);
     let mut jac = DenseSink::new(n);
-    disc.jacobian(&u, &mut jac).map_err(|e| TestCaseError::fail(format!("{case:?}: {e:?}")))?;
+    disc.jacobian(&u, &mut jac)
+        .map_err(|e| TestCaseError::fail(format!("{case:?}: {e:?}")))?;
     let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
     let mut differences = |u: &[f64], j: usize, h: f64| -> Vec<f64> {
         let mut up = u.to_vec();
@@ -83,7 +104,11 @@ fn check(case: &Case, scheme: Scheme) -> Result<(), TestCaseError> {
     for j in 0..n {
         // Steps relative to κ, r, t_s (never near zero) and absolute for θ and q_s, which
         // vanish at the pole.
-        let floor = if matches!(j % 5, 2 | 3) { typ[j % 5] } else { 0.0 };
+        let floor = if matches!(j % 5, 2 | 3) {
+            typ[j % 5]
+        } else {
+            0.0
+        };
         let h = 1e-6 * u[j].abs().max(floor);
         let fd = differences(&u, j, h);
         let fd2 = differences(&u, j, 2.0 * h);
@@ -121,9 +146,15 @@ fn check(case: &Case, scheme: Scheme) -> Result<(), TestCaseError> {
 }
 
 fn run(scheme: Scheme) {
-    let config = Config { cases: 16, failure_persistence: None, rng_algorithm: RngAlgorithm::ChaCha, ..Config::default() };
+    let config = Config {
+        cases: 16,
+        failure_persistence: None,
+        rng_algorithm: RngAlgorithm::ChaCha,
+        ..Config::default()
+    };
     let seed = [0x1a; 32];
-    let mut runner = TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &seed));
+    let mut runner =
+        TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &seed));
     runner.run(&case(), |c| check(&c, scheme)).unwrap();
 }
 

@@ -20,7 +20,13 @@ fn exact_state(p: &Params, disc: &Discretisation) -> Vec<f64> {
     let ts = 2.0 * p.h0 * p.c * (1.0 - alpha.powi(-6));
     let mut u = Vec::with_capacity(disc.len());
     for &x in &disc.mesh.nodes {
-        u.extend_from_slice(&[1.0 / (alpha * p.r0), alpha * p.r0 * (x / p.r0).sin(), x / p.r0, 0.0, ts]);
+        u.extend_from_slice(&[
+            1.0 / (alpha * p.r0),
+            alpha * p.r0 * (x / p.r0).sin(),
+            x / p.r0,
+            0.0,
+            ts,
+        ]);
     }
     u
 }
@@ -41,11 +47,19 @@ fn stretch_by_bisection(p: &Params) -> f64 {
         }
     }
     let err = |a: f64| (cornea::pressure(&p.cornea, a) - p.dp).abs();
-    if err(lo) <= err(hi) { lo } else { hi }
+    if err(lo) <= err(hi) {
+        lo
+    } else {
+        hi
+    }
 }
 
 fn settings(nodes: usize, scheme: Scheme) -> SolverSettings {
-    SolverSettings { nodes, scheme, ..SolverSettings::default() }
+    SolverSettings {
+        nodes,
+        scheme,
+        ..SolverSettings::default()
+    }
 }
 
 /// Residual of the discretisation at the exact state.
@@ -62,7 +76,12 @@ fn at_exact(p: &Params, nodes: usize, scheme: Scheme) -> AtExact {
     let mut f = vec![0.0; disc.len()];
     disc.residual(&u, &mut f).unwrap();
     let (_, f_scale) = disc.scales(p.r0);
-    AtExact { disc, u, f, f_scale }
+    AtExact {
+        disc,
+        u,
+        f,
+        f_scale,
+    }
 }
 
 /// Largest scaled interval-row residual |F_k| f_scale[k] over the intervals i whose left
@@ -84,7 +103,15 @@ fn interval_max(a: &AtExact, sigma_min: f64) -> f64 {
 
 /// The parameters of one case: the exact-sphere family.
 fn params(dp_frac: f64, c: f64, h0: f64, e_b: f64, r0: f64, fraction: f64) -> Params {
-    let base = Params { c, h0, e_b, r0, fraction, ..Params::default() }.exact_sphere();
+    let base = Params {
+        c,
+        h0,
+        e_b,
+        r0,
+        fraction,
+        ..Params::default()
+    }
+    .exact_sphere();
     // ΔP ∈ [0.1, 15] but below the cornea's limit (which is 4 C H0 / R0 · (6/7) 7^(−1/6)).
     let max = cornea::max_pressure(&base.cornea);
     let dp = (0.1 + dp_frac * 14.9).min(0.95 * max);
@@ -106,7 +133,10 @@ fn check(p: &Params, scheme: Scheme) -> Result<(), TestCaseError> {
     let ladder = [51, 101, 201];
     // A fixed stretch of the shell, the same on every mesh of the ladder.
     let sigma_min = SIGMA_MIN_FRACTION * p.length();
-    let errors: Vec<f64> = ladder.iter().map(|&n| interval_max(&at_exact(p, n, scheme), sigma_min)).collect();
+    let errors: Vec<f64> = ladder
+        .iter()
+        .map(|&n| interval_max(&at_exact(p, n, scheme), sigma_min))
+        .collect();
     let observed: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
     println!("{scheme:?} dP={:.2} C={:.0} H0={:.2} Eb={:.1} R0={:.1} f={:.2}: {errors:?} orders {observed:.3?}", p.dp, p.c, p.h0, p.e_b, p.r0, p.fraction);
     for q in &observed {
@@ -129,7 +159,11 @@ fn check(p: &Params, scheme: Scheme) -> Result<(), TestCaseError> {
     );
     // θ − σ_ε α_s κ = ε/R0 − ε α / (α R0): zero to round-off.
     let theta0 = a.u[2];
-    prop_assert!(a.f[1].abs() <= 16.0 * f64::EPSILON * theta0, "{scheme:?} {p:?}: pole θ row {:e}", a.f[1]);
+    prop_assert!(
+        a.f[1].abs() <= 16.0 * f64::EPSILON * theta0,
+        "{scheme:?} {p:?}: pole θ row {:e}",
+        a.f[1]
+    );
     // The first integral q_s cos θ + t_s sin θ − r ΔP/2 = sin θ (t_s − α R0 ΔP / 2): zero to
     // round-off relative to its terms t_s sin θ.
     let ts = a.u[4];
@@ -141,8 +175,16 @@ fn check(p: &Params, scheme: Scheme) -> Result<(), TestCaseError> {
     );
     // Cornea: r(L) = α R0 sin(L/R0) = r*, θ(L) = L/R0 = θ*.
     let (r_l, theta_l) = (a.u[n - NY + 1], a.u[n - NY + 2]);
-    prop_assert!(a.f[n - 2].abs() <= 16.0 * f64::EPSILON * r_l.abs().max(alpha * p.r0), "cornea r row {:e}", a.f[n - 2]);
-    prop_assert!(a.f[n - 1].abs() <= 16.0 * f64::EPSILON * theta_l, "cornea θ row {:e}", a.f[n - 1]);
+    prop_assert!(
+        a.f[n - 2].abs() <= 16.0 * f64::EPSILON * r_l.abs().max(alpha * p.r0),
+        "cornea r row {:e}",
+        a.f[n - 2]
+    );
+    prop_assert!(
+        a.f[n - 1].abs() <= 16.0 * f64::EPSILON * theta_l,
+        "cornea θ row {:e}",
+        a.f[n - 1]
+    );
     Ok(())
 }
 
@@ -154,19 +196,27 @@ fn check(p: &Params, scheme: Scheme) -> Result<(), TestCaseError> {
 const SIGMA_MIN_FRACTION: f64 = 0.1;
 
 fn run(scheme: Scheme) {
-    let config = Config { cases: 12, failure_persistence: None, rng_algorithm: RngAlgorithm::ChaCha, ..Config::default() };
+    let config = Config {
+        cases: 12,
+        failure_persistence: None,
+        rng_algorithm: RngAlgorithm::ChaCha,
+        ..Config::default()
+    };
     let seed = [0x5e; 32];
-    let mut runner = TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &seed));
+    let mut runner =
+        TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &seed));
     let strategy = (
         0.0f64..1.0,
-        (1.0f64..4.0).prop_map(|e| 10f64.powf(e)),   // C ∈ [10, 1e4], log-uniform
-        0.05f64..2.0,                                // H0
+        (1.0f64..4.0).prop_map(|e| 10f64.powf(e)), // C ∈ [10, 1e4], log-uniform
+        0.05f64..2.0,                              // H0
         (-1.0f64..3.0).prop_map(|e| 10f64.powf(e)), // E_b ∈ [0.1, 1e3], log-uniform
-        5.0f64..20.0,                                // R0
-        0.5f64..0.9,                                 // fraction
+        5.0f64..20.0,                              // R0
+        0.5f64..0.9,                               // fraction
     );
     runner
-        .run(&strategy, |(dp, c, h0, e_b, r0, fraction)| check(&params(dp, c, h0, e_b, r0, fraction), scheme))
+        .run(&strategy, |(dp, c, h0, e_b, r0, fraction)| {
+            check(&params(dp, c, h0, e_b, r0, fraction), scheme)
+        })
         .unwrap();
 }
 
@@ -185,9 +235,15 @@ fn hermite_simpson_residual_at_exact_sphere_falls_at_order_5() {
 /// to round-off (bisection is the independent reference).
 #[test]
 fn cornea_stretch_solves_the_pressure_law() {
-    let config = Config { cases: 1000, failure_persistence: None, rng_algorithm: RngAlgorithm::ChaCha, ..Config::default() };
+    let config = Config {
+        cases: 1000,
+        failure_persistence: None,
+        rng_algorithm: RngAlgorithm::ChaCha,
+        ..Config::default()
+    };
     let seed = [0xc0; 32];
-    let mut runner = TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &seed));
+    let mut runner =
+        TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &seed));
     let strategy = (
         0.0f64..1.0,
         (1.0f64..4.0).prop_map(|e| 10f64.powf(e)),

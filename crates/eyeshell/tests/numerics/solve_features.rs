@@ -8,13 +8,27 @@ use eyeshell::model::params::{LinearSolverKind, Params, Scheme, SolverSettings};
 
 #[test]
 fn klu_and_band_give_the_same_solution() {
-    assert!(eyeshell_sundials::klu_available(), "KLU is not built in: install libsuitesparse-dev");
+    assert!(
+        eyeshell_sundials::klu_available(),
+        "KLU is not built in: install libsuitesparse-dev"
+    );
     let p = fibre_shell();
     let band = solve(&p, 401, Scheme::HermiteSimpson);
-    let s = SolverSettings { linear: LinearSolverKind::Klu, ..settings(401, Scheme::HermiteSimpson) };
+    let s = SolverSettings {
+        linear: LinearSolverKind::Klu,
+        ..settings(401, Scheme::HermiteSimpson)
+    };
     let klu = bvp::solve(&p, &s, None).unwrap();
-    let diff = band.u.iter().zip(&klu.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-    println!("KLU vs band: max difference {diff:.2e}, Newton {} vs {}", klu.stats.newton_iterations, band.stats.newton_iterations);
+    let diff = band
+        .u
+        .iter()
+        .zip(&klu.u)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    println!(
+        "KLU vs band: max difference {diff:.2e}, Newton {} vs {}",
+        klu.stats.newton_iterations, band.stats.newton_iterations
+    );
     assert!(diff < 1e-11, "KLU and band differ by {diff:e}");
 }
 
@@ -25,14 +39,27 @@ fn warm_start_from_a_nearby_pressure_saves_newton_work() {
     let near = bvp::solve(&Params { dp: 2.02, ..p }, &s, None).unwrap();
     let cold = bvp::solve(&p, &s, None).unwrap();
     let warm = bvp::solve(&p, &s, Some(&near)).unwrap();
-    let diff = cold.u.iter().zip(&warm.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-    println!("cold {} iterations, warm {}; difference {diff:.2e}", cold.stats.newton_iterations, warm.stats.newton_iterations);
+    let diff = cold
+        .u
+        .iter()
+        .zip(&warm.u)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    println!(
+        "cold {} iterations, warm {}; difference {diff:.2e}",
+        cold.stats.newton_iterations, warm.stats.newton_iterations
+    );
     assert!(warm.stats.newton_iterations < cold.stats.newton_iterations);
     assert!(diff < 1e-10);
     // From a different mesh the warm start interpolates and still converges to the same answer.
     let coarse = bvp::solve(&p, &settings(201, Scheme::HermiteSimpson), None).unwrap();
     let from_coarse = bvp::solve(&p, &s, Some(&coarse)).unwrap();
-    let diff = cold.u.iter().zip(&from_coarse.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let diff = cold
+        .u
+        .iter()
+        .zip(&from_coarse.u)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
     assert!(diff < 1e-10, "warm start from another mesh: {diff:e}");
 }
 
@@ -48,7 +75,13 @@ fn interpolant_keeps_order_4_between_nodes() {
         for w in sol.mesh.nodes.windows(2).skip(sol.mesh.pole_nodes + 1) {
             let x = 0.5 * (w[0] + w[1]);
             let row = sol.at(x).unwrap();
-            let exact = [1.0 / (a * p.r0), a, a * p.r0 * (x / p.r0).sin(), x / p.r0, 0.0];
+            let exact = [
+                1.0 / (a * p.r0),
+                a,
+                a * p.r0 * (x / p.r0).sin(),
+                x / p.r0,
+                0.0,
+            ];
             for (v, e) in five(&row).iter().zip(exact) {
                 worst = worst.max((v - e).abs());
             }
@@ -69,12 +102,21 @@ fn interpolant_keeps_order_4_between_nodes() {
 #[test]
 fn first_integral_falls_at_the_scheme_order() {
     let p = fibre_shell();
-    for (scheme, ladder) in [(Scheme::Trapezoid, [101, 201, 401]), (Scheme::HermiteSimpson, [101, 201, 401])] {
-        let fi: Vec<f64> = ladder.iter().map(|&n| solve(&p, n, scheme).stats.first_integral_max).collect();
+    for (scheme, ladder) in [
+        (Scheme::Trapezoid, [101, 201, 401]),
+        (Scheme::HermiteSimpson, [101, 201, 401]),
+    ] {
+        let fi: Vec<f64> = ladder
+            .iter()
+            .map(|&n| solve(&p, n, scheme).stats.first_integral_max)
+            .collect();
         let q = orders(&fi);
         println!("{scheme:?}: first integral {} orders {q:.2?}", sci(&fi));
         let p_ = scheme.order() as f64;
-        assert!(q.iter().all(|&o| (o - p_).abs() < 0.3), "{scheme:?}: orders {q:?}");
+        assert!(
+            q.iter().all(|&o| (o - p_).abs() < 0.3),
+            "{scheme:?}: orders {q:?}"
+        );
     }
 }
 
@@ -93,7 +135,8 @@ fn every_shipped_scene_solves_from_the_default_guess() {
         let sweep = eyeshell::scene::sweep::Sweep::from_file(&path, &[]).unwrap();
         for run in &sweep.runs {
             let what = format!("{} run {}", path.display(), run.name);
-            let sol = bvp::solve(&run.scene.params, &run.scene.solver, None).unwrap_or_else(|e| panic!("{what}: {e}"));
+            let sol = bvp::solve(&run.scene.params, &run.scene.solver, None)
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
             println!("{what}: {} Newton iterations", sol.stats.newton_iterations);
             assert_eq!(sol.stats.continuation_stages, 0, "{what}");
             assert!(sol.stats.newton_iterations <= 8, "{what}");

@@ -11,9 +11,7 @@
 use std::rc::Rc;
 
 use super::{Csr, DirectSolver, LinalgError};
-use crate::{
-    BandMatrix, Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector,
-};
+use crate::{BandMatrix, Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector};
 
 /// [A c; rᵀ s] with A an n×n band matrix; without a border, just A.
 pub struct BorderedBand {

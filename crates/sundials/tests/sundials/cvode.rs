@@ -41,7 +41,13 @@ impl OdeSystem for Robertson {
         Ok(())
     }
 
-    fn jacobian(&mut self, _t: f64, y: &[f64], _fy: &[f64], mut jac: JacobianMatrix<'_>) -> CallbackResult {
+    fn jacobian(
+        &mut self,
+        _t: f64,
+        y: &[f64],
+        _fy: &[f64],
+        mut jac: JacobianMatrix<'_>,
+    ) -> CallbackResult {
         self.jac_calls += 1;
         let j = Self::jac(y);
         for r in 0..3 {
@@ -57,7 +63,14 @@ impl OdeSystem for Robertson {
         Ok(())
     }
 
-    fn jac_times(&mut self, _t: f64, y: &[f64], _fy: &[f64], v: &[f64], jv: &mut [f64]) -> CallbackResult {
+    fn jac_times(
+        &mut self,
+        _t: f64,
+        y: &[f64],
+        _fy: &[f64],
+        v: &[f64],
+        jv: &mut [f64],
+    ) -> CallbackResult {
         let j = Self::jac(y);
         for r in 0..3 {
             jv[r] = (0..3).map(|c| j[r][c] * v[c]).sum();
@@ -67,7 +80,11 @@ impl OdeSystem for Robertson {
 }
 
 fn robertson_options() -> CvodeOptions {
-    CvodeOptions { rtol: 1e-8, atol_vector: Some(vec![1e-8, 1e-14, 1e-6]), ..Default::default() }
+    CvodeOptions {
+        rtol: 1e-8,
+        atol_vector: Some(vec![1e-8, 1e-14, 1e-6]),
+        ..Default::default()
+    }
 }
 
 /// Unpreconditioned GMRES with CVODE's default Krylov tolerance (0.05 of the Newton
@@ -75,7 +92,10 @@ fn robertson_options() -> CvodeOptions {
 /// y2 ~ 1e-13 is weighted by 1/atol = 1e14. A tighter linear tolerance gives ~950 steps
 /// and conservation to ~2e-10.
 fn robertson_gmres_options() -> CvodeOptions {
-    CvodeOptions { linear_tolerance_factor: Some(1e-5), ..robertson_options() }
+    CvodeOptions {
+        linear_tolerance_factor: Some(1e-5),
+        ..robertson_options()
+    }
 }
 
 /// Integrate to 0.4, 4, ..., 4e10; check y(0.4) against the reference and the conservation
@@ -85,22 +105,38 @@ fn run_robertson(linear: CvodeLinearSolver) -> ([f64; 3], Cvode<Robertson>) {
         CvodeLinearSolver::Spgmr { .. } => robertson_gmres_options(),
         _ => robertson_options(),
     };
-    let mut cv = Cvode::new(Robertson::default(), 0.0, &[1.0, 0.0, 0.0], linear.clone(), &options).unwrap();
+    let mut cv = Cvode::new(
+        Robertson::default(),
+        0.0,
+        &[1.0, 0.0, 0.0],
+        linear.clone(),
+        &options,
+    )
+    .unwrap();
     let mut y = [0.0; 3];
     let mut at_04 = [0.0; 3];
     let mut tout = 0.4;
     for k in 0..12 {
-        let t = cv.advance_to(tout, &mut y).unwrap_or_else(|e| panic!("{linear:?} at tout {tout}: {e}"));
+        let t = cv
+            .advance_to(tout, &mut y)
+            .unwrap_or_else(|e| panic!("{linear:?} at tout {tout}: {e}"));
         assert_eq!(t, tout);
         let sum = y[0] + y[1] + y[2];
-        assert!((sum - 1.0).abs() < 1e-8, "{linear:?}: y1 + y2 + y3 - 1 = {:e} at t = {t}", sum - 1.0);
+        assert!(
+            (sum - 1.0).abs() < 1e-8,
+            "{linear:?}: y1 + y2 + y3 - 1 = {:e} at t = {t}",
+            sum - 1.0
+        );
         if k == 0 {
             at_04 = y;
         }
         tout *= 10.0;
     }
     // At t = 4e10 nearly everything is y3.
-    assert!(y[0] < 1e-6 && y[0] > -1e-6 && y[2] > 0.999_99, "{linear:?}: y(4e10) = {y:?}");
+    assert!(
+        y[0] < 1e-6 && y[0] > -1e-6 && y[2] > 0.999_99,
+        "{linear:?}: y(4e10) = {y:?}"
+    );
     (at_04, cv)
 }
 
@@ -108,61 +144,141 @@ fn run_robertson(linear: CvodeLinearSolver) -> ([f64; 3], Cvode<Robertson>) {
 /// y1 = 0.98517, y2 = 3.3864e-5, y3 = 1 - y1 - y2 ≈ 0.014794 (given as 0.014796 in some
 /// sources, which breaks y1 + y2 + y3 = 1 in the 6th digit).
 fn check_robertson_04(linear: &CvodeLinearSolver, y: [f64; 3]) {
-    assert!((y[0] - 0.98517).abs() < 5e-6, "{linear:?}: y1(0.4) = {}", y[0]);
-    assert!((y[1] - 3.3864e-5).abs() < 5e-10, "{linear:?}: y2(0.4) = {:e}", y[1]);
-    assert!((y[2] - 0.014794).abs() < 5e-6, "{linear:?}: y3(0.4) = {}", y[2]);
+    assert!(
+        (y[0] - 0.98517).abs() < 5e-6,
+        "{linear:?}: y1(0.4) = {}",
+        y[0]
+    );
+    assert!(
+        (y[1] - 3.3864e-5).abs() < 5e-10,
+        "{linear:?}: y2(0.4) = {:e}",
+        y[1]
+    );
+    assert!(
+        (y[2] - 0.014794).abs() < 5e-6,
+        "{linear:?}: y3(0.4) = {}",
+        y[2]
+    );
 }
 
 #[test]
 fn robertson_dense_with_user_jacobian() {
-    let linear = CvodeLinearSolver::Dense { user_jacobian: true };
+    let linear = CvodeLinearSolver::Dense {
+        user_jacobian: true,
+    };
     let (y, cv) = run_robertson(linear.clone());
     check_robertson_04(&linear, y);
     let s = cv.stats();
     assert!(s.steps > 100 && s.jacobian_evaluations > 0, "{s:?}");
-    assert_eq!(s.jacobian_evaluations, cv.system().jac_calls, "CVodeGetNumJacEvals counts the user's calls");
-    assert_eq!(s.linear_solver_rhs_evaluations, 0, "no difference quotients with a user Jacobian");
+    assert_eq!(
+        s.jacobian_evaluations,
+        cv.system().jac_calls,
+        "CVodeGetNumJacEvals counts the user's calls"
+    );
+    assert_eq!(
+        s.linear_solver_rhs_evaluations, 0,
+        "no difference quotients with a user Jacobian"
+    );
     assert_eq!(s.rhs_evaluations, cv.system().rhs_calls);
     assert_eq!(s.linear_iterations, 0);
-    assert!(s.last_order >= 1 && s.last_step > 0.0 && s.current_time >= 4e10, "{s:?}");
+    assert!(
+        s.last_order >= 1 && s.last_step > 0.0 && s.current_time >= 4e10,
+        "{s:?}"
+    );
 }
 
 #[test]
 fn robertson_dense_with_difference_quotients() {
-    let linear = CvodeLinearSolver::Dense { user_jacobian: false };
+    let linear = CvodeLinearSolver::Dense {
+        user_jacobian: false,
+    };
     let (y, cv) = run_robertson(linear.clone());
     check_robertson_04(&linear, y);
     let s = cv.stats();
-    assert_eq!(cv.system().jac_calls, 0, "the user's Jacobian must not be called");
-    assert!(s.jacobian_evaluations > 0 && s.linear_solver_rhs_evaluations >= 3 * s.jacobian_evaluations, "{s:?}");
-    assert_eq!(s.rhs_evaluations, cv.system().rhs_calls, "rhs_evaluations includes the difference quotients");
+    assert_eq!(
+        cv.system().jac_calls,
+        0,
+        "the user's Jacobian must not be called"
+    );
+    assert!(
+        s.jacobian_evaluations > 0 && s.linear_solver_rhs_evaluations >= 3 * s.jacobian_evaluations,
+        "{s:?}"
+    );
+    assert_eq!(
+        s.rhs_evaluations,
+        cv.system().rhs_calls,
+        "rhs_evaluations includes the difference quotients"
+    );
 }
 
 #[test]
 fn robertson_gmres_with_user_jacobian_product() {
-    let linear = CvodeLinearSolver::Spgmr { max_krylov: 3, user_product: true, preconditioned: false };
+    let linear = CvodeLinearSolver::Spgmr {
+        max_krylov: 3,
+        user_product: true,
+        preconditioned: false,
+    };
     let (y, cv) = run_robertson(linear.clone());
     check_robertson_04(&linear, y);
     let s = cv.stats();
-    assert!(s.linear_iterations > 0 && s.jac_times_evaluations == s.linear_iterations, "{s:?}");
-    assert!(s.steps < 3000, "the tighter linear tolerance keeps the step count down: {s:?}");
+    assert!(
+        s.linear_iterations > 0 && s.jac_times_evaluations == s.linear_iterations,
+        "{s:?}"
+    );
+    assert!(
+        s.steps < 3000,
+        "the tighter linear tolerance keeps the step count down: {s:?}"
+    );
     assert_eq!(s.jac_times_setups, cv.system().jtimes_setups);
     assert!(s.jac_times_setups > 0);
-    assert_eq!(s.linear_solver_rhs_evaluations, 0, "a user product needs no difference quotients");
-    assert_eq!((s.jacobian_evaluations, s.preconditioner_evaluations, s.preconditioner_solves), (0, 0, 0));
+    assert_eq!(
+        s.linear_solver_rhs_evaluations, 0,
+        "a user product needs no difference quotients"
+    );
+    assert_eq!(
+        (
+            s.jacobian_evaluations,
+            s.preconditioner_evaluations,
+            s.preconditioner_solves
+        ),
+        (0, 0, 0)
+    );
     assert_eq!(s.rhs_evaluations, cv.system().rhs_calls);
 }
 
 #[test]
 fn robertson_gmres_with_difference_quotient_product() {
-    let linear = CvodeLinearSolver::Spgmr { max_krylov: 3, user_product: false, preconditioned: false };
-    let mut cv = Cvode::new(Robertson::default(), 0.0, &[1.0, 0.0, 0.0], linear, &robertson_gmres_options()).unwrap();
+    let linear = CvodeLinearSolver::Spgmr {
+        max_krylov: 3,
+        user_product: false,
+        preconditioned: false,
+    };
+    let mut cv = Cvode::new(
+        Robertson::default(),
+        0.0,
+        &[1.0, 0.0, 0.0],
+        linear,
+        &robertson_gmres_options(),
+    )
+    .unwrap();
     let mut y = [0.0; 3];
     cv.advance_to(0.4, &mut y).unwrap();
-    check_robertson_04(&CvodeLinearSolver::Dense { user_jacobian: false }, y);
+    check_robertson_04(
+        &CvodeLinearSolver::Dense {
+            user_jacobian: false,
+        },
+        y,
+    );
     let s = cv.stats();
-    assert_eq!(cv.system().jtimes_setups, 0, "the user's product must not be registered");
-    assert!(s.linear_solver_rhs_evaluations > 0 && s.jac_times_evaluations > 0, "{s:?}");
+    assert_eq!(
+        cv.system().jtimes_setups,
+        0,
+        "the user's product must not be registered"
+    );
+    assert!(
+        s.linear_solver_rhs_evaluations > 0 && s.jac_times_evaluations > 0,
+        "{s:?}"
+    );
     assert_eq!(s.rhs_evaluations, cv.system().rhs_calls);
 }
 
@@ -196,7 +312,12 @@ impl Diffusion {
             upper[i] = dr / (h * h);
             diag[i] = -(dl + dr) / (h * h);
         }
-        Diffusion { lower, diag, upper, precond_setups: 0 }
+        Diffusion {
+            lower,
+            diag,
+            upper,
+            precond_setups: 0,
+        }
     }
 
     fn apply(&self, v: &[f64], out: &mut [f64]) {
@@ -238,27 +359,56 @@ impl OdeSystem for Diffusion {
         Ok(())
     }
 
-    fn jac_times(&mut self, _t: f64, _y: &[f64], _fy: &[f64], v: &[f64], jv: &mut [f64]) -> CallbackResult {
+    fn jac_times(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _fy: &[f64],
+        v: &[f64],
+        jv: &mut [f64],
+    ) -> CallbackResult {
         self.apply(v, jv);
         Ok(())
     }
 
     /// Nothing to precompute: the diagonal is constant.
-    fn precond_setup(&mut self, _t: f64, _y: &[f64], _fy: &[f64], _jok: bool, _gamma: f64) -> Result<bool, CallbackError> {
+    fn precond_setup(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _fy: &[f64],
+        _jok: bool,
+        _gamma: f64,
+    ) -> Result<bool, CallbackError> {
         self.precond_setups += 1;
         Ok(true)
     }
 
     /// Jacobi: P = diag(I − γ A), with the γ of this solve (CVODE may pass a γ different
     /// from the one of the last setup, which it does not redo for every step).
-    fn precond_solve(&mut self, _t: f64, _y: &[f64], _fy: &[f64], r: &[f64], z: &mut [f64], gamma: f64, _delta: f64) -> CallbackResult {
+    fn precond_solve(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _fy: &[f64],
+        r: &[f64],
+        z: &mut [f64],
+        gamma: f64,
+        _delta: f64,
+    ) -> CallbackResult {
         for i in 0..N {
             z[i] = r[i] / (1.0 - gamma * self.diag[i]);
         }
         Ok(())
     }
 
-    fn jacobian(&mut self, _t: f64, _y: &[f64], _fy: &[f64], mut jac: JacobianMatrix<'_>) -> CallbackResult {
+    fn jacobian(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _fy: &[f64],
+        mut jac: JacobianMatrix<'_>,
+    ) -> CallbackResult {
         for i in 0..N {
             jac.set(i, i, self.diag[i]);
             if i > 0 {
@@ -286,17 +436,28 @@ const DIFFUSION_RTOL: f64 = 1e-6;
 
 /// Integrate to t = 0.01, 0.03, 0.1 and return the max error against the exact solution
 /// (scaled by max |y|) and the stats.
-fn run_diffusion(linear: CvodeLinearSolver) -> (f64, eyeshell_sundials::CvodeStats, Cvode<Diffusion>) {
+fn run_diffusion(
+    linear: CvodeLinearSolver,
+) -> (f64, eyeshell_sundials::CvodeStats, Cvode<Diffusion>) {
     let y0 = diffusion_y0();
-    let options = CvodeOptions { rtol: DIFFUSION_RTOL, atol: 1e-10, ..Default::default() };
+    let options = CvodeOptions {
+        rtol: DIFFUSION_RTOL,
+        atol: 1e-10,
+        ..Default::default()
+    };
     let mut cv = Cvode::new(Diffusion::new(), 0.0, &y0, linear.clone(), &options).unwrap();
     let mut y = vec![0.0; N];
     let mut worst: f64 = 0.0;
     for tout in [0.001, 0.003, 0.01] {
-        cv.advance_to(tout, &mut y).unwrap_or_else(|e| panic!("{linear:?}: {e}"));
+        cv.advance_to(tout, &mut y)
+            .unwrap_or_else(|e| panic!("{linear:?}: {e}"));
         let exact = cv.system().exact(&y0, tout);
         let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let err = y.iter().zip(&exact).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / scale;
+        let err = y
+            .iter()
+            .zip(&exact)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+            / scale;
         worst = worst.max(err);
     }
     (worst, cv.stats(), cv)
@@ -305,28 +466,61 @@ fn run_diffusion(linear: CvodeLinearSolver) -> (f64, eyeshell_sundials::CvodeSta
 #[test]
 fn diffusion_band_matches_eigenmodes() {
     for user_jacobian in [true, false] {
-        let (err, s, _) = run_diffusion(CvodeLinearSolver::Band { upper: 1, lower: 1, user_jacobian });
-        assert!(err < 10.0 * DIFFUSION_RTOL, "band (user Jacobian {user_jacobian}): relative error {err:e}");
+        let (err, s, _) = run_diffusion(CvodeLinearSolver::Band {
+            upper: 1,
+            lower: 1,
+            user_jacobian,
+        });
+        assert!(
+            err < 10.0 * DIFFUSION_RTOL,
+            "band (user Jacobian {user_jacobian}): relative error {err:e}"
+        );
         assert!(s.jacobian_evaluations > 0, "{s:?}");
         if !user_jacobian {
             // Band difference quotients need upper + lower + 1 = 3 evaluations per Jacobian.
-            assert_eq!(s.linear_solver_rhs_evaluations, 3 * s.jacobian_evaluations, "{s:?}");
+            assert_eq!(
+                s.linear_solver_rhs_evaluations,
+                3 * s.jacobian_evaluations,
+                "{s:?}"
+            );
         }
     }
 }
 
 #[test]
 fn diffusion_gmres_matches_eigenmodes_and_jacobi_saves_iterations() {
-    let plain = CvodeLinearSolver::Spgmr { max_krylov: N, user_product: true, preconditioned: false };
-    let jacobi = CvodeLinearSolver::Spgmr { max_krylov: N, user_product: true, preconditioned: true };
+    let plain = CvodeLinearSolver::Spgmr {
+        max_krylov: N,
+        user_product: true,
+        preconditioned: false,
+    };
+    let jacobi = CvodeLinearSolver::Spgmr {
+        max_krylov: N,
+        user_product: true,
+        preconditioned: true,
+    };
     let (err_plain, s_plain, _) = run_diffusion(plain);
     let (err_jacobi, s_jacobi, cv) = run_diffusion(jacobi);
-    assert!(err_plain < 10.0 * DIFFUSION_RTOL, "GMRES: relative error {err_plain:e}");
-    assert!(err_jacobi < 10.0 * DIFFUSION_RTOL, "GMRES + Jacobi: relative error {err_jacobi:e}");
-    assert_eq!(s_plain.preconditioner_evaluations + s_plain.preconditioner_solves, 0);
+    assert!(
+        err_plain < 10.0 * DIFFUSION_RTOL,
+        "GMRES: relative error {err_plain:e}"
+    );
+    assert!(
+        err_jacobi < 10.0 * DIFFUSION_RTOL,
+        "GMRES + Jacobi: relative error {err_jacobi:e}"
+    );
+    assert_eq!(
+        s_plain.preconditioner_evaluations + s_plain.preconditioner_solves,
+        0
+    );
     assert!(s_jacobi.preconditioner_solves > 0, "{s_jacobi:?}");
-    assert_eq!(s_jacobi.preconditioner_evaluations, cv.system().precond_setups);
-    let per_newton = |s: &eyeshell_sundials::CvodeStats| s.linear_iterations as f64 / s.nonlinear_iterations as f64;
+    assert_eq!(
+        s_jacobi.preconditioner_evaluations,
+        cv.system().precond_setups
+    );
+    let per_newton = |s: &eyeshell_sundials::CvodeStats| {
+        s.linear_iterations as f64 / s.nonlinear_iterations as f64
+    };
     assert!(
         per_newton(&s_jacobi) < 0.8 * per_newton(&s_plain),
         "GMRES iterations per Newton iteration: {:.2} with Jacobi, {:.2} without",
@@ -347,10 +541,17 @@ fn diffusion_gmres_matches_eigenmodes_and_jacobi_saves_iterations() {
 
 #[test]
 fn gmres_with_difference_quotient_product_and_jacobi() {
-    let linear = CvodeLinearSolver::Spgmr { max_krylov: 10, user_product: false, preconditioned: true };
+    let linear = CvodeLinearSolver::Spgmr {
+        max_krylov: 10,
+        user_product: false,
+        preconditioned: true,
+    };
     let (err, s, _) = run_diffusion(linear);
     assert!(err < 10.0 * DIFFUSION_RTOL, "relative error {err:e}");
-    assert!(s.linear_solver_rhs_evaluations > 0 && s.preconditioner_solves > 0, "{s:?}");
+    assert!(
+        s.linear_solver_rhs_evaluations > 0 && s.preconditioner_solves > 0,
+        "{s:?}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------
@@ -368,7 +569,9 @@ impl OdeSystem for Decay {
     fn rhs(&mut self, t: f64, y: &[f64], ydot: &mut [f64]) -> CallbackResult {
         if t - self.latest > self.limit {
             self.refusals += 1;
-            return Err(CallbackError::Recoverable(format!("step to t = {t} too large")));
+            return Err(CallbackError::Recoverable(format!(
+                "step to t = {t} too large"
+            )));
         }
         self.latest = self.latest.max(t);
         ydot[0] = -y[0];
@@ -378,15 +581,35 @@ impl OdeSystem for Decay {
 
 #[test]
 fn recoverable_rhs_error_cuts_the_step_and_succeeds() {
-    let options = CvodeOptions { rtol: 1e-8, atol: 1e-12, ..Default::default() };
-    let decay = Decay { limit: 0.01, latest: 0.0, refusals: 0 };
-    let mut cv = Cvode::new(decay, 0.0, &[1.0], CvodeLinearSolver::Dense { user_jacobian: false }, &options).unwrap();
+    let options = CvodeOptions {
+        rtol: 1e-8,
+        atol: 1e-12,
+        ..Default::default()
+    };
+    let decay = Decay {
+        limit: 0.01,
+        latest: 0.0,
+        refusals: 0,
+    };
+    let mut cv = Cvode::new(
+        decay,
+        0.0,
+        &[1.0],
+        CvodeLinearSolver::Dense {
+            user_jacobian: false,
+        },
+        &options,
+    )
+    .unwrap();
     let mut y = [0.0];
     assert_eq!(cv.advance_to(10.0, &mut y).unwrap(), 10.0);
     assert!((y[0] - (-10f64).exp()).abs() < 1e-8, "y(10) = {:e}", y[0]);
     let s = cv.stats();
     assert!(cv.system().refusals > 0, "the limit never bit: {s:?}");
-    assert!(s.nonlinear_convergence_failures > 0, "refusals count as convergence failures: {s:?}");
+    assert!(
+        s.nonlinear_convergence_failures > 0,
+        "refusals count as convergence failures: {s:?}"
+    );
     assert!(s.last_step <= 0.01 + 1e-12, "{s:?}");
 }
 
@@ -403,18 +626,40 @@ fn always_recoverable_rhs_gives_a_named_flag() {
             Ok(())
         }
     }
-    let mut cv = Cvode::new(Wall, 0.0, &[1.0], CvodeLinearSolver::Dense { user_jacobian: false }, &Default::default()).unwrap();
+    let mut cv = Cvode::new(
+        Wall,
+        0.0,
+        &[1.0],
+        CvodeLinearSolver::Dense {
+            user_jacobian: false,
+        },
+        &Default::default(),
+    )
+    .unwrap();
     let mut y = [0.0];
     let e = cv.advance_to(2.0, &mut y).unwrap_err();
-    let SundialsError::Flag { name, .. } = &e else { panic!("expected a flag, got {e}") };
+    let SundialsError::Flag { name, .. } = &e else {
+        panic!("expected a flag, got {e}")
+    };
     assert!(
-        ["CV_REPTD_RHSFUNC_ERR", "CV_CONV_FAILURE", "CV_ERR_FAILURE", "CV_TOO_MUCH_WORK"].contains(name),
+        [
+            "CV_REPTD_RHSFUNC_ERR",
+            "CV_CONV_FAILURE",
+            "CV_ERR_FAILURE",
+            "CV_TOO_MUCH_WORK"
+        ]
+        .contains(name),
         "{e}"
     );
     assert!(e.to_string().contains("beyond the wall"), "{e}");
     let t = cv.stats().current_time;
     assert!(t > 0.9 && t <= 1.0, "current time {t}");
-    assert!((y[0] - (-t).exp()).abs() < 1e-4, "y holds the state at the last step: {} vs {}", y[0], (-t).exp());
+    assert!(
+        (y[0] - (-t).exp()).abs() < 1e-4,
+        "y holds the state at the last step: {} vs {}",
+        y[0],
+        (-t).exp()
+    );
     assert!(!e.to_string().contains('\n'));
 }
 
@@ -439,14 +684,32 @@ impl OdeSystem for Breaks {
 #[test]
 fn fatal_rhs_error_is_a_callback_error_with_the_time() {
     for linear in [
-        CvodeLinearSolver::Dense { user_jacobian: false },
-        CvodeLinearSolver::Spgmr { max_krylov: 5, user_product: false, preconditioned: false },
+        CvodeLinearSolver::Dense {
+            user_jacobian: false,
+        },
+        CvodeLinearSolver::Spgmr {
+            max_krylov: 5,
+            user_product: false,
+            preconditioned: false,
+        },
     ] {
-        let mut cv = Cvode::new(Breaks { panic: false }, 0.0, &[1.0], linear.clone(), &Default::default()).unwrap();
+        let mut cv = Cvode::new(
+            Breaks { panic: false },
+            0.0,
+            &[1.0],
+            linear.clone(),
+            &Default::default(),
+        )
+        .unwrap();
         let mut y = [0.0];
         let e = cv.advance_to(3.0, &mut y).unwrap_err();
-        let SundialsError::Callback(m) = &e else { panic!("{linear:?}: expected a callback error, got {e}") };
-        assert!(m.starts_with("rhs: negative thickness (CVode stopped with CV_"), "{m}");
+        let SundialsError::Callback(m) = &e else {
+            panic!("{linear:?}: expected a callback error, got {e}")
+        };
+        assert!(
+            m.starts_with("rhs: negative thickness (CVode stopped with CV_"),
+            "{m}"
+        );
         assert!(m.contains("at t = "), "{m}");
         let t = cv.stats().current_time;
         assert!(t > 0.5 && t <= 1.0, "{linear:?}: current time {t}");
@@ -455,11 +718,25 @@ fn fatal_rhs_error_is_a_callback_error_with_the_time() {
 
 #[test]
 fn panicking_rhs_is_a_callback_error_not_an_abort() {
-    let mut cv = Cvode::new(Breaks { panic: true }, 0.0, &[1.0], CvodeLinearSolver::Dense { user_jacobian: false }, &Default::default()).unwrap();
+    let mut cv = Cvode::new(
+        Breaks { panic: true },
+        0.0,
+        &[1.0],
+        CvodeLinearSolver::Dense {
+            user_jacobian: false,
+        },
+        &Default::default(),
+    )
+    .unwrap();
     let mut y = [0.0];
     let e = cv.advance_to(3.0, &mut y).unwrap_err();
-    let SundialsError::Callback(m) = &e else { panic!("expected a callback error, got {e}") };
-    assert!(m.starts_with("rhs panicked: thickness went negative at t = "), "{m}");
+    let SundialsError::Callback(m) = &e else {
+        panic!("expected a callback error, got {e}")
+    };
+    assert!(
+        m.starts_with("rhs panicked: thickness went negative at t = "),
+        "{m}"
+    );
     assert!(cv.stats().current_time <= 1.0);
     // The solver is still usable after the failure.
     cv.reinit(0.0, &[1.0]).unwrap();
@@ -474,32 +751,89 @@ fn panicking_jacobian_and_preconditioner_are_callback_errors() {
             ydot[0] = -y[0];
             Ok(())
         }
-        fn jacobian(&mut self, _t: f64, _y: &[f64], _fy: &[f64], _jac: JacobianMatrix<'_>) -> CallbackResult {
+        fn jacobian(
+            &mut self,
+            _t: f64,
+            _y: &[f64],
+            _fy: &[f64],
+            _jac: JacobianMatrix<'_>,
+        ) -> CallbackResult {
             panic!("jacobian bug")
         }
-        fn precond_solve(&mut self, _t: f64, _y: &[f64], _fy: &[f64], _r: &[f64], _z: &mut [f64], _g: f64, _d: f64) -> CallbackResult {
+        fn precond_solve(
+            &mut self,
+            _t: f64,
+            _y: &[f64],
+            _fy: &[f64],
+            _r: &[f64],
+            _z: &mut [f64],
+            _g: f64,
+            _d: f64,
+        ) -> CallbackResult {
             Err(CallbackError::Fatal("singular preconditioner".into()))
         }
     }
     let mut y = [0.0];
-    let mut cv = Cvode::new(BadDerivatives, 0.0, &[1.0], CvodeLinearSolver::Dense { user_jacobian: true }, &Default::default()).unwrap();
+    let mut cv = Cvode::new(
+        BadDerivatives,
+        0.0,
+        &[1.0],
+        CvodeLinearSolver::Dense {
+            user_jacobian: true,
+        },
+        &Default::default(),
+    )
+    .unwrap();
     let e = cv.advance_to(1.0, &mut y).unwrap_err();
-    assert!(e.to_string().contains("jacobian panicked: jacobian bug") && e.to_string().contains("CV_LSETUP_FAIL"), "{e}");
-    let linear = CvodeLinearSolver::Spgmr { max_krylov: 5, user_product: false, preconditioned: true };
+    assert!(
+        e.to_string().contains("jacobian panicked: jacobian bug")
+            && e.to_string().contains("CV_LSETUP_FAIL"),
+        "{e}"
+    );
+    let linear = CvodeLinearSolver::Spgmr {
+        max_krylov: 5,
+        user_product: false,
+        preconditioned: true,
+    };
     let mut cv = Cvode::new(BadDerivatives, 0.0, &[1.0], linear, &Default::default()).unwrap();
     let e = cv.advance_to(1.0, &mut y).unwrap_err();
-    assert!(e.to_string().contains("precond_solve: singular preconditioner"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("precond_solve: singular preconditioner"),
+        "{e}"
+    );
 }
 
 #[test]
 fn too_much_work_is_a_typed_flag() {
-    let options = CvodeOptions { max_steps: 5, ..robertson_options() };
-    let mut cv = Cvode::new(Robertson::default(), 0.0, &[1.0, 0.0, 0.0], CvodeLinearSolver::Dense { user_jacobian: true }, &options).unwrap();
+    let options = CvodeOptions {
+        max_steps: 5,
+        ..robertson_options()
+    };
+    let mut cv = Cvode::new(
+        Robertson::default(),
+        0.0,
+        &[1.0, 0.0, 0.0],
+        CvodeLinearSolver::Dense {
+            user_jacobian: true,
+        },
+        &options,
+    )
+    .unwrap();
     let mut y = [0.0; 3];
     let e = cv.advance_to(4e10, &mut y).unwrap_err();
     match &e {
-        SundialsError::Flag { function, flag, name, message } => {
-            assert_eq!((*function, *flag, *name), ("CVode", -1, "CV_TOO_MUCH_WORK"), "{e}");
+        SundialsError::Flag {
+            function,
+            flag,
+            name,
+            message,
+        } => {
+            assert_eq!(
+                (*function, *flag, *name),
+                ("CVode", -1, "CV_TOO_MUCH_WORK"),
+                "{e}"
+            );
             assert!(message.contains("mxstep"), "CVODE's own message: {message}");
         }
         other => panic!("expected a flag, got {other}"),
@@ -514,16 +848,85 @@ fn too_much_work_is_a_typed_flag() {
 
 #[test]
 fn bad_arguments_are_invalid_errors() {
-    let dense = CvodeLinearSolver::Dense { user_jacobian: false };
-    let new = |y0: &[f64], linear: CvodeLinearSolver, o: CvodeOptions| Cvode::new(Decay { limit: 1.0, latest: 0.0, refusals: 0 }, 0.0, y0, linear, &o).err();
-    assert!(matches!(new(&[], dense.clone(), Default::default()), Some(SundialsError::Invalid(_))));
-    assert!(matches!(new(&[1.0], dense.clone(), CvodeOptions { rtol: -1.0, ..Default::default() }), Some(SundialsError::Invalid(_))));
-    assert!(matches!(new(&[1.0], dense.clone(), CvodeOptions { max_order: 6, ..Default::default() }), Some(SundialsError::Invalid(_))));
-    assert!(matches!(new(&[1.0], dense.clone(), CvodeOptions { atol_vector: Some(vec![1.0, 2.0]), ..Default::default() }), Some(SundialsError::Invalid(_))));
-    let gmres0 = CvodeLinearSolver::Spgmr { max_krylov: 0, user_product: false, preconditioned: false };
-    assert!(matches!(new(&[1.0], gmres0, Default::default()), Some(SundialsError::Invalid(_))));
-    let mut cv = Cvode::new(Decay { limit: 1.0, latest: 0.0, refusals: 0 }, 0.0, &[1.0], dense, &Default::default()).unwrap();
-    assert!(matches!(cv.advance_to(1.0, &mut [0.0, 0.0]), Err(SundialsError::Invalid(_))));
+    let dense = CvodeLinearSolver::Dense {
+        user_jacobian: false,
+    };
+    let new = |y0: &[f64], linear: CvodeLinearSolver, o: CvodeOptions| {
+        Cvode::new(
+            Decay {
+                limit: 1.0,
+                latest: 0.0,
+                refusals: 0,
+            },
+            0.0,
+            y0,
+            linear,
+            &o,
+        )
+        .err()
+    };
+    assert!(matches!(
+        new(&[], dense.clone(), Default::default()),
+        Some(SundialsError::Invalid(_))
+    ));
+    assert!(matches!(
+        new(
+            &[1.0],
+            dense.clone(),
+            CvodeOptions {
+                rtol: -1.0,
+                ..Default::default()
+            }
+        ),
+        Some(SundialsError::Invalid(_))
+    ));
+    assert!(matches!(
+        new(
+            &[1.0],
+            dense.clone(),
+            CvodeOptions {
+                max_order: 6,
+                ..Default::default()
+            }
+        ),
+        Some(SundialsError::Invalid(_))
+    ));
+    assert!(matches!(
+        new(
+            &[1.0],
+            dense.clone(),
+            CvodeOptions {
+                atol_vector: Some(vec![1.0, 2.0]),
+                ..Default::default()
+            }
+        ),
+        Some(SundialsError::Invalid(_))
+    ));
+    let gmres0 = CvodeLinearSolver::Spgmr {
+        max_krylov: 0,
+        user_product: false,
+        preconditioned: false,
+    };
+    assert!(matches!(
+        new(&[1.0], gmres0, Default::default()),
+        Some(SundialsError::Invalid(_))
+    ));
+    let mut cv = Cvode::new(
+        Decay {
+            limit: 1.0,
+            latest: 0.0,
+            refusals: 0,
+        },
+        0.0,
+        &[1.0],
+        dense,
+        &Default::default(),
+    )
+    .unwrap();
+    assert!(matches!(
+        cv.advance_to(1.0, &mut [0.0, 0.0]),
+        Err(SundialsError::Invalid(_))
+    ));
     // tout behind t0 in the wrong direction is fine for CVODE, but tout = t0 is too close.
     let e = cv.advance_to(0.0, &mut [0.0]).unwrap_err();
     assert!(e.to_string().contains("CV_TOO_CLOSE"), "{e}");
@@ -534,9 +937,26 @@ fn bad_arguments_are_invalid_errors() {
 
 #[test]
 fn one_step_interpolation_stop_time_and_reinit() {
-    let options = CvodeOptions { rtol: 1e-10, atol: 1e-14, ..Default::default() };
-    let decay = || Decay { limit: f64::INFINITY, latest: 0.0, refusals: 0 };
-    let mut cv = Cvode::new(decay(), 0.0, &[1.0], CvodeLinearSolver::Dense { user_jacobian: false }, &options).unwrap();
+    let options = CvodeOptions {
+        rtol: 1e-10,
+        atol: 1e-14,
+        ..Default::default()
+    };
+    let decay = || Decay {
+        limit: f64::INFINITY,
+        latest: 0.0,
+        refusals: 0,
+    };
+    let mut cv = Cvode::new(
+        decay(),
+        0.0,
+        &[1.0],
+        CvodeLinearSolver::Dense {
+            user_jacobian: false,
+        },
+        &options,
+    )
+    .unwrap();
     let mut y = [0.0];
     // A few single steps; dense output inside the last one matches exp(-t).
     let mut t = 0.0;
@@ -550,10 +970,24 @@ fn one_step_interpolation_stop_time_and_reinit() {
     for frac in [0.0, 0.25, 0.5, 1.0] {
         let ti = t - frac * h;
         cv.interpolate(ti, &mut yi).unwrap();
-        assert!((yi[0] - (-ti).exp()).abs() < 1e-9, "dense output at {ti}: {} vs {}", yi[0], (-ti).exp());
+        assert!(
+            (yi[0] - (-ti).exp()).abs() < 1e-9,
+            "dense output at {ti}: {} vs {}",
+            yi[0],
+            (-ti).exp()
+        );
     }
     let e = cv.interpolate(t + 10.0 * h, &mut yi).unwrap_err();
-    assert!(matches!(&e, SundialsError::Flag { name: "CV_BAD_T", .. }), "{e}");
+    assert!(
+        matches!(
+            &e,
+            SundialsError::Flag {
+                name: "CV_BAD_T",
+                ..
+            }
+        ),
+        "{e}"
+    );
     assert!(e.to_string().contains("CVodeGetDky"), "{e}");
 
     // A stop time ends the integration exactly there.
@@ -564,19 +998,48 @@ fn one_step_interpolation_stop_time_and_reinit() {
     // CVODE 6.4 forgets a stop time once reached; one behind the current time is refused.
     assert_eq!(cv.advance_to(2.0, &mut y).unwrap(), 2.0);
     let e = cv.set_stop_time(1.0).unwrap_err();
-    assert!(matches!(&e, SundialsError::Flag { function: "CVodeSetStopTime", name: "CV_ILL_INPUT", .. }), "{e}");
-    assert!(e.to_string().contains("behind current t"), "CVODE's own message: {e}");
+    assert!(
+        matches!(
+            &e,
+            SundialsError::Flag {
+                function: "CVodeSetStopTime",
+                name: "CV_ILL_INPUT",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(
+        e.to_string().contains("behind current t"),
+        "CVODE's own message: {e}"
+    );
 
     // Stop time in the options, then reinit: counters restart, same answer.
-    let with_stop = CvodeOptions { stop_time: Some(0.75), ..options.clone() };
-    let mut cv = Cvode::new(decay(), 0.0, &[2.0], CvodeLinearSolver::Dense { user_jacobian: false }, &with_stop).unwrap();
+    let with_stop = CvodeOptions {
+        stop_time: Some(0.75),
+        ..options.clone()
+    };
+    let mut cv = Cvode::new(
+        decay(),
+        0.0,
+        &[2.0],
+        CvodeLinearSolver::Dense {
+            user_jacobian: false,
+        },
+        &with_stop,
+    )
+    .unwrap();
     assert_eq!(cv.advance_to(1.0, &mut y).unwrap(), 0.75);
     let first = (y[0], cv.stats().steps);
     cv.reinit(0.0, &[2.0]).unwrap();
     assert_eq!(cv.stats().steps, 0);
     cv.set_stop_time(0.75).unwrap();
     assert_eq!(cv.advance_to(1.0, &mut y).unwrap(), 0.75);
-    assert_eq!((y[0], cv.stats().steps), first, "reinit reproduces the first run");
+    assert_eq!(
+        (y[0], cv.stats().steps),
+        first,
+        "reinit reproduces the first run"
+    );
     assert!((y[0] - 2.0 * (-0.75f64).exp()).abs() < 2e-9);
 }
 
@@ -591,15 +1054,26 @@ fn options_reach_cvode() {
         linear_tolerance_factor: Some(0.01),
         ..Default::default()
     };
-    let decay = Decay { limit: f64::INFINITY, latest: 0.0, refusals: 0 };
-    let linear = CvodeLinearSolver::Spgmr { max_krylov: 1, user_product: false, preconditioned: false };
+    let decay = Decay {
+        limit: f64::INFINITY,
+        latest: 0.0,
+        refusals: 0,
+    };
+    let linear = CvodeLinearSolver::Spgmr {
+        max_krylov: 1,
+        user_product: false,
+        preconditioned: false,
+    };
     let mut cv = Cvode::new(decay, 0.0, &[1.0], linear, &options).unwrap();
     let mut y = [0.0];
     cv.step(1.0, &mut y).unwrap();
     assert_eq!(cv.stats().last_step, 1e-3, "initial step");
     cv.advance_to(1.0, &mut y).unwrap();
     let s = cv.stats();
-    assert!(s.last_order <= 2 && s.last_step <= 0.01 + 1e-15 && s.steps >= 100, "{s:?}");
+    assert!(
+        s.last_order <= 2 && s.last_step <= 0.01 + 1e-15 && s.steps >= 100,
+        "{s:?}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------
@@ -608,15 +1082,39 @@ fn options_reach_cvode() {
 #[test]
 fn create_and_drop_many_times_with_every_solver() {
     let kinds = [
-        CvodeLinearSolver::Dense { user_jacobian: true },
-        CvodeLinearSolver::Dense { user_jacobian: false },
-        CvodeLinearSolver::Band { upper: 1, lower: 1, user_jacobian: true },
-        CvodeLinearSolver::Band { upper: 1, lower: 1, user_jacobian: false },
-        CvodeLinearSolver::Spgmr { max_krylov: 5, user_product: true, preconditioned: true },
-        CvodeLinearSolver::Spgmr { max_krylov: 5, user_product: false, preconditioned: false },
+        CvodeLinearSolver::Dense {
+            user_jacobian: true,
+        },
+        CvodeLinearSolver::Dense {
+            user_jacobian: false,
+        },
+        CvodeLinearSolver::Band {
+            upper: 1,
+            lower: 1,
+            user_jacobian: true,
+        },
+        CvodeLinearSolver::Band {
+            upper: 1,
+            lower: 1,
+            user_jacobian: false,
+        },
+        CvodeLinearSolver::Spgmr {
+            max_krylov: 5,
+            user_product: true,
+            preconditioned: true,
+        },
+        CvodeLinearSolver::Spgmr {
+            max_krylov: 5,
+            user_product: false,
+            preconditioned: false,
+        },
     ];
     let y0 = diffusion_y0();
-    let options = CvodeOptions { rtol: 1e-4, atol: 1e-8, ..Default::default() };
+    let options = CvodeOptions {
+        rtol: 1e-4,
+        atol: 1e-8,
+        ..Default::default()
+    };
     let mut y = vec![0.0; N];
     for linear in kinds {
         for k in 0..200 {

@@ -65,7 +65,10 @@ impl NonlinearSystem for Bratu {
 }
 
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
 }
 
 #[test]
@@ -73,9 +76,14 @@ fn rosenbrock_same_root_with_every_solver() {
     for (name, spec) in specs(2, 1, 1) {
         let mut kin = Kinsol::new(Rosenbrock, 2, spec, &tight()).unwrap();
         let mut u = [-1.2, 1.0];
-        let stats = kin.solve(&mut u, &[1.0; 2], &[1.0; 2]).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let stats = kin
+            .solve(&mut u, &[1.0; 2], &[1.0; 2])
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(max_diff(&u, &[1.0, 1.0]) < 1e-12, "{name}: {u:?}");
-        assert!(stats.iterations > 0 && stats.jacobian_evaluations > 0, "{name}: {stats:?}");
+        assert!(
+            stats.iterations > 0 && stats.jacobian_evaluations > 0,
+            "{name}: {stats:?}"
+        );
         assert!(stats.fnorm <= 1e-11, "{name}: {stats:?}");
     }
 }
@@ -87,7 +95,9 @@ fn bratu_200_same_root_with_every_solver() {
     for (name, spec) in specs(n, 1, 1) {
         let mut kin = Kinsol::new(Bratu { n, lambda: 1.0 }, n, spec, &tight()).unwrap();
         let mut u = vec![0.0; n];
-        let stats = kin.solve(&mut u, &vec![1.0; n], &vec![1.0; n]).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let stats = kin
+            .solve(&mut u, &vec![1.0; n], &vec![1.0; n])
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(stats.iterations >= 2, "{name}: {stats:?}");
         // The lower branch of Bratu (λ = 1) peaks at about 0.1405 in the middle.
         let peak = u.iter().cloned().fold(f64::MIN, f64::max);
@@ -111,11 +121,21 @@ fn stats_are_per_solve_and_options_can_change() {
     assert_eq!(first, second);
     assert_eq!(kin.last_stats(), second);
     // A full Newton step with a Jacobian kept for up to 10 iterations still gets there.
-    kin.set_options(&KinsolOptions { strategy: Strategy::Newton, max_setup_calls: 10, ..tight() }).unwrap();
+    kin.set_options(&KinsolOptions {
+        strategy: Strategy::Newton,
+        max_setup_calls: 10,
+        ..tight()
+    })
+    .unwrap();
     let mut u = [-1.2, 1.0];
     let stats = kin.solve(&mut u, &[1.0; 2], &[1.0; 2]).unwrap();
     assert!(max_diff(&u, &[1.0, 1.0]) < 1e-10, "{u:?} {stats:?}");
-    assert!(kin.set_options(&KinsolOptions { fnorm_tol: -1.0, ..tight() }).is_err());
+    assert!(kin
+        .set_options(&KinsolOptions {
+            fnorm_tol: -1.0,
+            ..tight()
+        })
+        .is_err());
 }
 
 /// F(u) = u² + 1 has no real root.
@@ -138,10 +158,22 @@ impl NonlinearSystem for NoRoot {
 
 #[test]
 fn no_root_gives_a_named_flag_and_the_last_iterate() {
-    let mut kin = Kinsol::new(NoRoot { seen: vec![] }, 1, LinearSolverSpec::Dense, &tight()).unwrap();
+    let mut kin = Kinsol::new(
+        NoRoot { seen: vec![] },
+        1,
+        LinearSolverSpec::Dense,
+        &tight(),
+    )
+    .unwrap();
     let mut u = [0.7];
     let err = kin.solve(&mut u, &[1.0], &[1.0]).unwrap_err();
-    let SundialsError::Flag { function, flag, name, .. } = &err else {
+    let SundialsError::Flag {
+        function,
+        flag,
+        name,
+        ..
+    } = &err
+    else {
         panic!("expected a Flag error, got {err:?}");
     };
     assert_eq!(*function, "KINSol");
@@ -151,19 +183,33 @@ fn no_root_gives_a_named_flag_and_the_last_iterate() {
     assert!(text.contains(name) && !text.contains('\n'), "{text}");
     // u holds KINSOL's last iterate: a point the residual was evaluated at, not the guess.
     assert!(u[0].is_finite() && u[0] != 0.7);
-    assert!(kin.system().seen.contains(&u[0]), "{} not among evaluated points", u[0]);
+    assert!(
+        kin.system().seen.contains(&u[0]),
+        "{} not among evaluated points",
+        u[0]
+    );
     assert!(kin.last_stats().iterations > 0, "{:?}", kin.last_stats());
     eprintln!("no-root error: {text}");
 }
 
 #[test]
 fn max_iterations_is_reported_by_name() {
-    let opts = KinsolOptions { max_iterations: 3, strategy: Strategy::Newton, ..tight() };
+    let opts = KinsolOptions {
+        max_iterations: 3,
+        strategy: Strategy::Newton,
+        ..tight()
+    };
     let mut kin = Kinsol::new(NoRoot { seen: vec![] }, 1, LinearSolverSpec::Dense, &opts).unwrap();
     let mut u = [0.7];
     let err = kin.solve(&mut u, &[1.0], &[1.0]).unwrap_err();
     assert!(
-        matches!(err, SundialsError::Flag { name: "KIN_MAXITER_REACHED" | "KIN_MXNEWT_5X_EXCEEDED", .. }),
+        matches!(
+            err,
+            SundialsError::Flag {
+                name: "KIN_MAXITER_REACHED" | "KIN_MXNEWT_5X_EXCEEDED",
+                ..
+            }
+        ),
         "{err}"
     );
     assert_eq!(kin.last_stats().iterations, 3);
@@ -189,7 +235,9 @@ impl NonlinearSystem for Faulty {
         if self.calls == self.fail_at {
             match self.mode {
                 Mode::ResidualPanics => panic!("boom in residual at call {}", self.calls),
-                Mode::ResidualFatal => return Err(CallbackError::Fatal("thickness went negative".into())),
+                Mode::ResidualFatal => {
+                    return Err(CallbackError::Fatal("thickness went negative".into()))
+                }
                 Mode::JacobianPanics => {}
             }
         }
@@ -208,13 +256,20 @@ impl NonlinearSystem for Faulty {
 #[test]
 fn panicking_residual_is_a_callback_error_not_an_abort() {
     for (name, spec) in specs(2, 1, 1) {
-        let sys = Faulty { calls: 0, fail_at: 3, mode: Mode::ResidualPanics };
+        let sys = Faulty {
+            calls: 0,
+            fail_at: 3,
+            mode: Mode::ResidualPanics,
+        };
         let mut kin = Kinsol::new(sys, 2, spec, &tight()).unwrap();
         let mut u = [-1.2, 1.0];
         let err = kin.solve(&mut u, &[1.0; 2], &[1.0; 2]).unwrap_err();
         match &err {
             SundialsError::Callback(m) => {
-                assert!(m.contains("residual panicked: boom in residual at call 3"), "{name}: {m}");
+                assert!(
+                    m.contains("residual panicked: boom in residual at call 3"),
+                    "{name}: {m}"
+                );
                 assert!(m.contains("KIN_"), "{name}: {m}");
             }
             other => panic!("{name}: expected Callback, got {other:?}"),
@@ -229,21 +284,42 @@ fn panicking_residual_is_a_callback_error_not_an_abort() {
 
 #[test]
 fn panicking_jacobian_is_a_callback_error() {
-    let sys = Faulty { calls: 0, fail_at: 0, mode: Mode::JacobianPanics };
-    let mut kin = Kinsol::new(sys, 2, LinearSolverSpec::Band { upper: 1, lower: 1 }, &tight()).unwrap();
+    let sys = Faulty {
+        calls: 0,
+        fail_at: 0,
+        mode: Mode::JacobianPanics,
+    };
+    let mut kin = Kinsol::new(
+        sys,
+        2,
+        LinearSolverSpec::Band { upper: 1, lower: 1 },
+        &tight(),
+    )
+    .unwrap();
     let mut u = [-1.2, 1.0];
     let err = kin.solve(&mut u, &[1.0; 2], &[1.0; 2]).unwrap_err();
-    let SundialsError::Callback(m) = &err else { panic!("expected Callback, got {err:?}") };
-    assert!(m.contains("jacobian panicked") && m.contains("index out of bounds"), "{m}");
+    let SundialsError::Callback(m) = &err else {
+        panic!("expected Callback, got {err:?}")
+    };
+    assert!(
+        m.contains("jacobian panicked") && m.contains("index out of bounds"),
+        "{m}"
+    );
 }
 
 #[test]
 fn fatal_residual_is_a_callback_error() {
-    let sys = Faulty { calls: 0, fail_at: 2, mode: Mode::ResidualFatal };
+    let sys = Faulty {
+        calls: 0,
+        fail_at: 2,
+        mode: Mode::ResidualFatal,
+    };
     let mut kin = Kinsol::new(sys, 2, LinearSolverSpec::Dense, &tight()).unwrap();
     let mut u = [-1.2, 1.0];
     let err = kin.solve(&mut u, &[1.0; 2], &[1.0; 2]).unwrap_err();
-    let SundialsError::Callback(m) = &err else { panic!("expected Callback, got {err:?}") };
+    let SundialsError::Callback(m) = &err else {
+        panic!("expected Callback, got {err:?}")
+    };
     assert!(m.contains("residual: thickness went negative"), "{m}");
     assert!(!err.to_string().contains('\n'));
 }
@@ -257,7 +333,10 @@ impl NonlinearSystem for Log {
     fn residual(&mut self, u: &[f64], f: &mut [f64]) -> CallbackResult {
         if u[0] <= 0.0 {
             self.failures += 1;
-            return Err(CallbackError::Recoverable(format!("ln({}) undefined", u[0])));
+            return Err(CallbackError::Recoverable(format!(
+                "ln({}) undefined",
+                u[0]
+            )));
         }
         f[0] = u[0].ln() - 1.0;
         Ok(())
@@ -273,11 +352,26 @@ impl NonlinearSystem for Log {
 fn recoverable_residual_error_lets_kinsol_shorten_the_step() {
     // From u = 20 the first Newton step lands at about -19.9, where ln fails recoverably.
     for strategy in [Strategy::Newton, Strategy::LineSearch] {
-        let mut kin = Kinsol::new(Log { failures: 0 }, 1, LinearSolverSpec::Dense, &KinsolOptions { strategy, ..tight() }).unwrap();
+        let mut kin = Kinsol::new(
+            Log { failures: 0 },
+            1,
+            LinearSolverSpec::Dense,
+            &KinsolOptions {
+                strategy,
+                ..tight()
+            },
+        )
+        .unwrap();
         let mut u = [20.0];
         let stats = kin.solve(&mut u, &[1.0], &[1.0]).unwrap();
-        assert!((u[0] - std::f64::consts::E).abs() < 1e-10, "{strategy:?}: {u:?} {stats:?}");
-        assert!(kin.system().failures >= 1, "{strategy:?}: the bad step was never tried");
+        assert!(
+            (u[0] - std::f64::consts::E).abs() < 1e-10,
+            "{strategy:?}: {u:?} {stats:?}"
+        );
+        assert!(
+            kin.system().failures >= 1,
+            "{strategy:?}: the bad step was never tried"
+        );
     }
 }
 
@@ -312,7 +406,9 @@ fn jacobian_entry_outside_the_structure_is_an_error() {
         let mut u = vec![0.0; n];
         let err = kin.solve(&mut u, &vec![1.0; n], &vec![1.0; n]).unwrap_err();
         // Release builds count the stray write; debug builds panic in a debug_assert.
-        let SundialsError::Callback(m) = &err else { panic!("expected Callback, got {err:?}") };
+        let SundialsError::Callback(m) = &err else {
+            panic!("expected Callback, got {err:?}")
+        };
         assert!(m.contains("outside"), "{m}");
     }
 }
@@ -321,17 +417,29 @@ fn jacobian_entry_outside_the_structure_is_an_error() {
 fn bad_arguments_are_invalid_errors() {
     let mut kin = Kinsol::new(Rosenbrock, 2, LinearSolverSpec::Dense, &tight()).unwrap();
     let mut u = [0.0; 3];
-    assert!(matches!(kin.solve(&mut u, &[1.0; 3], &[1.0; 3]), Err(SundialsError::Invalid(_))));
+    assert!(matches!(
+        kin.solve(&mut u, &[1.0; 3], &[1.0; 3]),
+        Err(SundialsError::Invalid(_))
+    ));
     let mut u = [0.0; 2];
-    assert!(matches!(kin.solve(&mut u, &[1.0, 0.0], &[1.0; 2]), Err(SundialsError::Invalid(_))));
-    let bad = LinearSolverSpec::Klu { row_ptr: vec![0, 2, 1], col_idx: vec![0, 1] };
+    assert!(matches!(
+        kin.solve(&mut u, &[1.0, 0.0], &[1.0; 2]),
+        Err(SundialsError::Invalid(_))
+    ));
+    let bad = LinearSolverSpec::Klu {
+        row_ptr: vec![0, 2, 1],
+        col_idx: vec![0, 1],
+    };
     assert!(Kinsol::new(Rosenbrock, 2, bad, &tight()).is_err());
     assert!(Kinsol::new(Rosenbrock, 0, LinearSolverSpec::Dense, &tight()).is_err());
 }
 
 #[test]
 fn klu_unavailable_is_reported_when_not_built() {
-    let spec = LinearSolverSpec::Klu { row_ptr: vec![0, 1, 2], col_idx: vec![0, 1] };
+    let spec = LinearSolverSpec::Klu {
+        row_ptr: vec![0, 1, 2],
+        col_idx: vec![0, 1],
+    };
     let result = Kinsol::new(Rosenbrock, 2, spec, &tight());
     if klu_available() {
         assert!(result.is_ok());
@@ -348,12 +456,19 @@ fn many_solvers_created_and_dropped() {
             let mut kin = Kinsol::new(Bratu { n, lambda: 1.0 }, n, spec, &tight()).unwrap();
             if round % 3 == 0 {
                 let mut u = vec![0.0; n];
-                kin.solve(&mut u, &vec![1.0; n], &vec![1.0; n]).unwrap_or_else(|e| panic!("{name}: {e}"));
+                kin.solve(&mut u, &vec![1.0; n], &vec![1.0; n])
+                    .unwrap_or_else(|e| panic!("{name}: {e}"));
             }
             // Dropping here frees KINSOL, then the linear solver, matrix, vectors, context.
         }
         // And one that fails, so that drop follows an error path.
-        let mut kin = Kinsol::new(NoRoot { seen: vec![] }, 1, LinearSolverSpec::Dense, &tight()).unwrap();
+        let mut kin = Kinsol::new(
+            NoRoot { seen: vec![] },
+            1,
+            LinearSolverSpec::Dense,
+            &tight(),
+        )
+        .unwrap();
         assert!(kin.solve(&mut [0.5], &[1.0], &[1.0]).is_err());
     }
 }

@@ -12,15 +12,24 @@ use nalgebra::{DMatrix, DVector};
 
 /// Exact Newton: a fresh Jacobian (and factorisation) at every iteration.
 fn exact_newton() -> KinsolOptions {
-    KinsolOptions { strategy: Strategy::Newton, fnorm_tol: 1e-12, max_iterations: 50, ..tight() }
+    KinsolOptions {
+        strategy: Strategy::Newton,
+        fnorm_tol: 1e-12,
+        max_iterations: 50,
+        ..tight()
+    }
 }
 
 /// A deterministic pseudo-random vector in [-1, 1].
 fn pseudo_random(n: usize, seed: u64) -> Vec<f64> {
-    let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut s = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (0..n)
         .map(|_| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         })
         .collect()
@@ -47,7 +56,13 @@ fn linear_a(i: usize, j: usize) -> f64 {
 }
 
 fn linear_times(v: &[f64]) -> Vec<f64> {
-    (0..N).map(|i| (i.saturating_sub(2)..(i + 2).min(N)).map(|j| linear_a(i, j) * v[j]).sum()).collect()
+    (0..N)
+        .map(|i| {
+            (i.saturating_sub(2)..(i + 2).min(N))
+                .map(|j| linear_a(i, j) * v[j])
+                .sum()
+        })
+        .collect()
 }
 
 impl NonlinearSystem for Linear {
@@ -76,15 +91,22 @@ fn linear_system_inverse_jacobian_gives_unit_vectors() {
         let mut kin = Kinsol::new(Linear { c }, N, spec, &exact_newton()).unwrap();
         let mut u = vec![0.0; N];
         let ones = vec![1.0; N];
-        kin.solve(&mut u, &ones, &ones).unwrap_or_else(|e| panic!("{name}: {e}"));
+        kin.solve(&mut u, &ones, &ones)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         let mut x = vec![0.0; N];
         for k in 0..N {
             let mut e = vec![0.0; N];
             e[k] = 1.0;
             let b = linear_times(&e);
             kin.solve_with_last_factorization(&mut x, &b).unwrap();
-            let err = x.iter().zip(&e).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            assert!(err < 1e-12, "{name}: J⁻¹ J e_{k} differs from e_{k} by {err:e}");
+            let err = x
+                .iter()
+                .zip(&e)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(
+                err < 1e-12,
+                "{name}: J⁻¹ J e_{k} differs from e_{k} by {err:e}"
+            );
         }
     }
 }
@@ -101,7 +123,11 @@ struct Nonlinear {
 
 impl Nonlinear {
     fn new() -> Self {
-        Nonlinear { lambda: 1.5, setups_at: Vec::new(), fail_jacobian: false }
+        Nonlinear {
+            lambda: 1.5,
+            setups_at: Vec::new(),
+            fail_jacobian: false,
+        }
     }
 
     fn h2() -> f64 {
@@ -131,7 +157,8 @@ impl NonlinearSystem for Nonlinear {
         for i in 0..N {
             let left = if i > 0 { u[i - 1] } else { 0.0 };
             let right = if i + 1 < N { u[i + 1] } else { 0.0 };
-            f[i] = (left - 2.0 * u[i] + right) / h2 + self.lambda * u[i].exp() + 0.3 * right * right;
+            f[i] =
+                (left - 2.0 * u[i] + right) / h2 + self.lambda * u[i].exp() + 0.3 * right * right;
         }
         Ok(())
     }
@@ -153,7 +180,10 @@ impl NonlinearSystem for Nonlinear {
 
 fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
     let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
 }
 
 #[test]
@@ -162,12 +192,20 @@ fn nonlinear_system_matches_dense_lu_at_the_last_setup() {
         let mut kin = Kinsol::new(Nonlinear::new(), N, spec, &exact_newton()).unwrap();
         let mut u = vec![0.0; N];
         let ones = vec![1.0; N];
-        let stats = kin.solve(&mut u, &ones, &ones).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert!(stats.iterations >= 3, "{name}: a nonlinear problem should take several Newton steps: {stats:?}");
+        let stats = kin
+            .solve(&mut u, &ones, &ones)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(
+            stats.iterations >= 3,
+            "{name}: a nonlinear problem should take several Newton steps: {stats:?}"
+        );
         let setups = &kin.system().setups_at;
         assert_eq!(setups.len(), stats.linear_setups, "{name}");
         let last = setups.last().unwrap().clone();
-        assert!(rel_diff(&last, &u) > 0.0, "{name}: KINSOL never factorises at the root itself");
+        assert!(
+            rel_diff(&last, &u) > 0.0,
+            "{name}: KINSOL never factorises at the root itself"
+        );
         let lu = kin.system().dense_jacobian(&last).lu();
         for seed in 0..5 {
             let b = pseudo_random(N, 100 + seed);
@@ -175,7 +213,10 @@ fn nonlinear_system_matches_dense_lu_at_the_last_setup() {
             kin.solve_with_last_factorization(&mut x, &b).unwrap();
             let reference = lu.solve(&DVector::from_column_slice(&b)).unwrap();
             let d = rel_diff(&x, reference.as_slice());
-            assert!(d < 1e-10, "{name}: differs from nalgebra's LU by {d:e} (relative)");
+            assert!(
+                d < 1e-10,
+                "{name}: differs from nalgebra's LU by {d:e} (relative)"
+            );
             // The factorisation is reused, not consumed.
             let mut again = vec![0.0; N];
             kin.solve_with_last_factorization(&mut again, &b).unwrap();
@@ -184,7 +225,11 @@ fn nonlinear_system_matches_dense_lu_at_the_last_setup() {
         // A solve that starts at the root makes no setup and keeps the factorisation
         // (KINSOL accepts an initial guess with ‖F‖ ≤ 0.01 · fnorm_tol, hence the looser tol).
         let before = kin.system().setups_at.len();
-        kin.set_options(&KinsolOptions { fnorm_tol: 1e-6, ..exact_newton() }).unwrap();
+        kin.set_options(&KinsolOptions {
+            fnorm_tol: 1e-6,
+            ..exact_newton()
+        })
+        .unwrap();
         let stats = kin.solve(&mut u, &ones, &ones).unwrap();
         assert_eq!(stats.iterations, 0, "{name}");
         // (stats.linear_setups is KINGetNumJacEvals, which KINSOL 6.4 does not reset when the
@@ -193,7 +238,15 @@ fn nonlinear_system_matches_dense_lu_at_the_last_setup() {
         let b = pseudo_random(N, 7);
         let mut x = vec![0.0; N];
         kin.solve_with_last_factorization(&mut x, &b).unwrap();
-        assert!(rel_diff(&x, lu.solve(&DVector::from_column_slice(&b)).unwrap().as_slice()) < 1e-10, "{name}");
+        assert!(
+            rel_diff(
+                &x,
+                lu.solve(&DVector::from_column_slice(&b))
+                    .unwrap()
+                    .as_slice()
+            ) < 1e-10,
+            "{name}"
+        );
     }
 }
 
@@ -205,25 +258,42 @@ fn no_factorisation_before_a_setup_or_after_a_failed_one() {
         let b = vec![1.0; N];
         let e = kin.solve_with_last_factorization(&mut x, &b).unwrap_err();
         assert!(matches!(e, SundialsError::Invalid(_)), "{name}: {e}");
-        assert!(e.to_string().contains("no successful Jacobian setup"), "{name}: {e}");
+        assert!(
+            e.to_string().contains("no successful Jacobian setup"),
+            "{name}: {e}"
+        );
 
         let ones = vec![1.0; N];
         let mut root = vec![0.0; N];
         kin.solve(&mut root, &ones, &ones).unwrap();
         kin.solve_with_last_factorization(&mut x, &b).unwrap();
-        assert!(matches!(kin.solve_with_last_factorization(&mut x[..3], &b), Err(SundialsError::Invalid(_))));
+        assert!(matches!(
+            kin.solve_with_last_factorization(&mut x[..3], &b),
+            Err(SundialsError::Invalid(_))
+        ));
 
         // A failed setup (the Jacobian callback fails) leaves no usable factorisation.
         kin.system_mut().fail_jacobian = true;
         let mut u = vec![0.5; N];
         let e = kin.solve(&mut u, &ones, &ones).unwrap_err();
-        assert!(e.to_string().contains("Jacobian assembly failed"), "{name}: {e}");
+        assert!(
+            e.to_string().contains("Jacobian assembly failed"),
+            "{name}: {e}"
+        );
         let e = kin.solve_with_last_factorization(&mut x, &b).unwrap_err();
         assert!(matches!(e, SundialsError::Invalid(_)), "{name}: {e}");
         // A solve that makes no setup (the guess is already a root) does not bring it back.
-        kin.set_options(&KinsolOptions { fnorm_tol: 1e-6, ..exact_newton() }).unwrap();
+        kin.set_options(&KinsolOptions {
+            fnorm_tol: 1e-6,
+            ..exact_newton()
+        })
+        .unwrap();
         let mut u = root.clone();
-        assert_eq!(kin.solve(&mut u, &ones, &ones).unwrap().iterations, 0, "{name}");
+        assert_eq!(
+            kin.solve(&mut u, &ones, &ones).unwrap().iterations,
+            0,
+            "{name}"
+        );
         let e = kin.solve_with_last_factorization(&mut x, &b).unwrap_err();
         assert!(matches!(e, SundialsError::Invalid(_)), "{name}: {e}");
         kin.set_options(&exact_newton()).unwrap();
@@ -259,8 +329,19 @@ fn singular_jacobian_leaves_no_factorisation() {
         let mut kin = Kinsol::new(Singular, 2, spec, &exact_newton()).unwrap();
         let mut u = vec![0.0; 2];
         let e = kin.solve(&mut u, &[1.0; 2], &[1.0; 2]).unwrap_err();
-        assert!(matches!(&e, SundialsError::Flag { name: "KIN_LSETUP_FAIL", .. }), "{name}: {e}");
-        let e = kin.solve_with_last_factorization(&mut [0.0; 2], &[1.0, 2.0]).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                SundialsError::Flag {
+                    name: "KIN_LSETUP_FAIL",
+                    ..
+                }
+            ),
+            "{name}: {e}"
+        );
+        let e = kin
+            .solve_with_last_factorization(&mut [0.0; 2], &[1.0, 2.0])
+            .unwrap_err();
         assert!(matches!(e, SundialsError::Invalid(_)), "{name}: {e}");
     }
 }

@@ -12,7 +12,11 @@ impl NonlinearSystem for Id {
         Ok(())
     }
 
-    fn jacobian(&mut self, _u: &[f64], _jac: eyeshell_sundials::JacobianMatrix<'_>) -> eyeshell_sundials::CallbackResult {
+    fn jacobian(
+        &mut self,
+        _u: &[f64],
+        _jac: eyeshell_sundials::JacobianMatrix<'_>,
+    ) -> eyeshell_sundials::CallbackResult {
         Ok(())
     }
 }
@@ -28,7 +32,8 @@ fn runtime_version_is_6_and_matches_the_headers() {
 fn loaded_sundials_libraries_are_the_system_ones() {
     // Make sure the libraries are loaded (they are linked, but be explicit).
     let ctx = Context::new().unwrap();
-    let _band = LinearSolver::for_spec(&ctx, 3, &LinearSolverSpec::Band { upper: 1, lower: 1 }).unwrap();
+    let _band =
+        LinearSolver::for_spec(&ctx, 3, &LinearSolverSpec::Band { upper: 1, lower: 1 }).unwrap();
     let _kin = Kinsol::new(Id, 2, LinearSolverSpec::Dense, &Default::default()).unwrap();
     let maps = std::fs::read_to_string("/proc/self/maps").unwrap();
     let libs: Vec<&str> = maps
@@ -36,19 +41,32 @@ fn loaded_sundials_libraries_are_the_system_ones() {
         .filter_map(|l| l.split_whitespace().nth(5))
         .filter(|p| p.contains("libsundials_"))
         .collect();
-    assert!(libs.iter().any(|p| p.contains("libsundials_kinsol")), "{libs:?}");
+    assert!(
+        libs.iter().any(|p| p.contains("libsundials_kinsol")),
+        "{libs:?}"
+    );
     for p in &libs {
-        assert!(p.starts_with("/usr/lib/") || p.starts_with("/lib/"), "not a system library: {p}");
+        assert!(
+            p.starts_with("/usr/lib/") || p.starts_with("/lib/"),
+            "not a system library: {p}"
+        );
     }
 }
 
 #[test]
 fn no_vendored_sundials_sys_build() {
-    let build = Path::new(eyeshell_sundials::BUILD_OUT_DIR).parent().and_then(Path::parent).unwrap();
+    let build = Path::new(eyeshell_sundials::BUILD_OUT_DIR)
+        .parent()
+        .and_then(Path::parent)
+        .unwrap();
     for e in std::fs::read_dir(build).unwrap().flatten() {
         if e.file_name().to_string_lossy().starts_with("sundials-sys-") {
             for sub in ["out/build", "out/lib"] {
-                assert!(!e.path().join(sub).exists(), "vendored SUNDIALS at {}", e.path().join(sub).display());
+                assert!(
+                    !e.path().join(sub).exists(),
+                    "vendored SUNDIALS at {}",
+                    e.path().join(sub).display()
+                );
             }
         }
     }
