@@ -343,9 +343,7 @@ pub fn compare_pair(
             let x = xref[j].clamp(lo, hi);
             let a = interpolate(&xs, &ys, x);
             let b = refv[j];
-            let abs = if a.is_nan() && b.is_nan() {
-                0.0
-            } else if a == b {
+            let abs = if (a.is_nan() && b.is_nan()) || a == b {
                 0.0
             } else {
                 let v = (a - b).abs();

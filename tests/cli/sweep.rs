@@ -68,7 +68,7 @@ fn a_grid_runs_every_combination_into_its_own_directory() {
         );
         assert!(scene.contains("solver.nodes = 21"));
         assert!(r[col("newton_iterations")].parse::<usize>().unwrap() > 0);
-        assert_eq!(r[col("class")].is_empty(), false);
+        assert!(!r[col("class")].is_empty());
     }
     // Different growth zones give different eyes.
     let lengths: Vec<f64> = rows

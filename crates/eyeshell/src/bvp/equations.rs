@@ -434,7 +434,8 @@ mod tests {
             let dp = data_partials(&mp, &y, &e);
             let at = |m: MaterialPoint| evaluate(&shell, &m, &y, 1.0).unwrap();
             let h = 1e-6;
-            let cases: [(fn(&mut MaterialPoint, f64), Vec5, Option<f64>); 3] = [
+            type Case = (fn(&mut MaterialPoint, f64), Vec5, Option<f64>);
+            let cases: [Case; 3] = [
                 (|m, h| m.rho += h, dp.f_rho, Some(dp.alpha_s_rho)),
                 (|m, h| m.zeta += h, dp.f_zeta, Some(dp.alpha_s_zeta)),
                 (|m, h| m.gamma += h, dp.f_gamma, None),

@@ -53,6 +53,7 @@ pub const SUPPRESS_ALGEBRAIC: bool = false;
 /// Integrate the coupled system from its consistent state at t = 0 to `t_end`, calling
 /// `output(dae, t, y)` at each of `times` (increasing, in (0, t_end]) and `progress(t)`
 /// after every step. Returns IDA's counters and, on failure, the time reached and why.
+#[allow(clippy::too_many_arguments)] // the integrator's whole set-up, each argument distinct
 pub fn integrate(
     dae: &mut CoupledDae,
     y0: &[f64],

@@ -192,7 +192,8 @@ pub trait Observer {
 pub struct GrowthError {
     pub t: f64,
     pub reason: String,
-    pub stats: GrowthStats,
+    /// The work done up to the failure (boxed: the error travels, the counters rarely).
+    pub stats: Box<GrowthStats>,
 }
 
 /// Run the growth of `growth` on the shell of `params` from t = 0 to t_end, handing each
@@ -271,7 +272,11 @@ pub fn run(
 ) -> Result<GrowthStats, GrowthError> {
     let start = std::time::Instant::now();
     let t_end = growth.t_end;
-    let fail = |t: f64, reason: String, stats: GrowthStats| GrowthError { t, reason, stats };
+    let fail = |t: f64, reason: String, stats: GrowthStats| GrowthError {
+        t,
+        reason,
+        stats: Box::new(stats),
+    };
     let mut sys = system::GrowthSystem::new(params, solver, growth)
         .map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let p0 = sys.points.initial_state();

@@ -172,7 +172,7 @@ pub fn growth_summary_json(
         RunStatus::Failed(e) => {
             map.insert("failed_at_t".into(), num(e.t));
             map.insert("error".into(), one_line(&e.to_string()).into());
-            Some(&e.stats)
+            Some(e.stats.as_ref())
         }
     };
     // Every statistic of the run, by its field name (non-finite values become null).
@@ -577,11 +577,11 @@ mod tests {
         let error = GrowthError {
             t: 0.1734,
             reason: "CVODE: the corrector did not converge\nat all".into(),
-            stats: GrowthStats {
+            stats: Box::new(GrowthStats {
                 steps: 17,
                 t_reached: 0.1734,
                 ..GrowthStats::default()
-            },
+            }),
         };
         w.fail(&error).unwrap();
         assert_eq!(read_series(&dir).len(), 2);

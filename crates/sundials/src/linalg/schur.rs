@@ -76,7 +76,7 @@ impl SchurSolver {
         }
         let n_w = n - n_p - usize::from(border);
         assert!(
-            n_p % 2 == 0 && n_p + usize::from(border) <= n,
+            n_p.is_multiple_of(2) && n_p + usize::from(border) <= n,
             "bad partition of {n}: {n_p} block unknowns"
         );
         let mut blocks: Vec<Block> = Vec::with_capacity(n_p / 2);

@@ -3,8 +3,6 @@
 //! One test binary for the group (each module was its own binary before: one link instead of
 //! many).
 
-#![allow(clippy::needless_range_loop)] // index loops mirror the maths
-
 mod sundials_support;
 
 mod cvode;
