@@ -12,6 +12,7 @@ mod export_scipy;
 mod extremes;
 mod figures;
 mod fuzz_scene;
+mod golden;
 mod grow;
 mod keys_check;
 mod solve;
