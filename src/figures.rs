@@ -36,15 +36,20 @@ pub struct Written {
 /// Why figures could not be drawn.
 #[derive(Debug, thiserror::Error)]
 pub enum FigureError {
-    #[error("{0}")]
-    Read(String),
+    /// A run that cannot be read back (the user's when it is missing or malformed).
+    #[error(transparent)]
+    Read(#[from] ExportError),
+    /// Drawing or writing a picture failed (a missing font, a full disk): not the user's.
     #[error(transparent)]
     Plot(#[from] PlotError),
 }
 
-impl From<ExportError> for FigureError {
-    fn from(e: ExportError) -> Self {
-        FigureError::Read(e.message)
+impl From<FigureError> for eyeshell::Error {
+    fn from(e: FigureError) -> Self {
+        match e {
+            FigureError::Read(e) => e.into(),
+            FigureError::Plot(e) => eyeshell::Error::failed(e.to_string()),
+        }
     }
 }
 
@@ -826,10 +831,10 @@ pub fn is_sweep(dir: &Path) -> bool {
 fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     let runs = sweep_runs(dir)?;
     if runs.is_empty() {
-        return Err(FigureError::Read(format!(
+        return Err(FigureError::Read(bad(format!(
             "{}: the sweep has no run to draw",
             dir.display()
-        )));
+        ))));
     }
     let mut files = Vec::new();
     for run in &runs {

@@ -5,7 +5,7 @@
 //! 0 success, 2 bad input (usage, scene, validation, `--at`, an output path that may not be
 //! overwritten), 1 failure of the computation or of writing the results.
 //!
-//! A subcommand is a variant of [`Command`] and a `fn cmd_*(&Args) -> Result<(), Failure>`;
+//! A subcommand is a variant of [`Command`] and a `fn cmd_*(&Args) -> Result<(), Error>`;
 //! scene loading ([`SceneArgs`]) and output directories ([`eyeshell::rundir::OutputDir`]) are
 //! shared, so later subcommands (grow, figures, converge) slot in the same way.
 
@@ -20,7 +20,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use eyeshell::growth::grow;
-use eyeshell::rundir::{self, GrowthWriter, OutputDir, OutputError};
+use eyeshell::rundir::{self, GrowthWriter, OutputDir};
 use eyeshell::scene::{Scene, SceneError, KEYS};
 
 /// Exit code for bad input: usage, scene, validation.
@@ -167,7 +167,7 @@ struct SceneArgs {
 }
 
 impl SceneArgs {
-    fn load(&self) -> Result<Scene, Failure> {
+    fn load(&self) -> Result<Scene, Error> {
         Ok(Scene::from_file(&self.scene, &self.set)?)
     }
 }
@@ -253,49 +253,9 @@ struct CompareArgs {
     quiet: bool,
 }
 
-/// A failed command: the one-line message and the exit code.
-#[derive(Debug)]
-pub struct Failure {
-    pub code: i32,
-    pub message: String,
-}
-
-impl Failure {
-    pub fn bad_input(message: impl Into<String>) -> Self {
-        Failure {
-            code: EXIT_BAD_INPUT,
-            message: message.into(),
-        }
-    }
-    pub fn failed(message: impl Into<String>) -> Self {
-        Failure {
-            code: EXIT_FAILURE,
-            message: message.into(),
-        }
-    }
-}
-
-impl From<SceneError> for Failure {
-    fn from(e: SceneError) -> Self {
-        Failure::bad_input(e.to_string())
-    }
-}
-
-impl From<OutputError> for Failure {
-    fn from(e: OutputError) -> Self {
-        if e.is_refusal() {
-            Failure::bad_input(e.to_string())
-        } else {
-            Failure::failed(e.to_string())
-        }
-    }
-}
-
-impl From<eyeshell::bvp::BvpError> for Failure {
-    fn from(e: eyeshell::bvp::BvpError) -> Self {
-        Failure::failed(e.to_string())
-    }
-}
+// Every command returns the library's one error; its class (user's or not) was decided
+// where it was made, and `run` maps it to the exit code in one place.
+use eyeshell::Error;
 
 /// Entry point of the binary: parse `std::env::args`, run, and return the exit code.
 pub fn main() -> i32 {
@@ -331,10 +291,19 @@ where
     };
     match result {
         Ok(()) => 0,
-        Err(f) => {
-            report(&f.message);
-            f.code
+        Err(e) => {
+            report(&e.to_string());
+            exit_code(&e)
         }
+    }
+}
+
+/// The one exit-code policy: 2 for the user's mistakes, 1 for failures.
+pub fn exit_code(e: &Error) -> i32 {
+    if e.is_user_error() {
+        EXIT_BAD_INPUT
+    } else {
+        EXIT_FAILURE
     }
 }
 
@@ -396,20 +365,20 @@ fn out(text: &str) {
 }
 
 /// Parse and check the `--at` material points against [ε, L] of `scene`.
-fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Failure> {
+fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Error> {
     let (lo, hi) = (scene.solver.epsilon, scene.params.length());
     values
         .iter()
         .map(|v| {
             let t = v.trim();
             let x: f64 = t.parse().map_err(|_| {
-                Failure::bad_input(format!("--at: {:?} is not a number (expected material points Σ separated by commas)", t))
+                Error::input(format!("--at: {:?} is not a number (expected material points Σ separated by commas)", t))
             })?;
             if !x.is_finite() {
-                return Err(Failure::bad_input(format!("--at: Σ = {t} must be a finite number")));
+                return Err(Error::input(format!("--at: Σ = {t} must be a finite number")));
             }
             if x < lo || x > hi {
-                return Err(Failure::bad_input(format!(
+                return Err(Error::input(format!(
                     "--at: Σ = {t} is outside the shell [ε, L] = [{lo}, {hi}] (solver.epsilon, π·geometry.fraction·geometry.R0)"
                 )));
             }
@@ -418,7 +387,7 @@ fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Failure> {
         .collect()
 }
 
-fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Failure> {
+fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Error> {
     use crate::study::extremes;
     let results: Vec<_> = extremes::cases()
         .into_iter()
@@ -429,7 +398,7 @@ fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Failure> {
         .collect();
     let text = format!("{}{}", extremes::PREAMBLE, extremes::table(&results));
     rundir::write_atomic(&a.out, text.as_bytes())
-        .map_err(|e| Failure::failed(format!("{}: {e}", a.out.display())))?;
+        .map_err(|e| Error::failed(format!("{}: {e}", a.out.display())))?;
     out(&format!(
         "eyeshell: {} cases written to {}\n",
         results.len(),
@@ -438,10 +407,10 @@ fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn cmd_converge(a: &ConvergeArgs) -> Result<(), Failure> {
+fn cmd_converge(a: &ConvergeArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
     if a.nodes.len() < 2 || a.nodes.iter().any(|&n| n < 5) {
-        return Err(Failure::bad_input(format!(
+        return Err(Error::input(format!(
             "--nodes {}: give at least two counts, each at least 5",
             a.nodes
                 .iter()
@@ -451,7 +420,7 @@ fn cmd_converge(a: &ConvergeArgs) -> Result<(), Failure> {
         )));
     }
     if a.growth && scene.growth.is_none() {
-        return Err(Failure::bad_input(format!(
+        return Err(Error::input(format!(
             "{}: --growth needs a scene with a [growth] section",
             scene.origin
         )));
@@ -466,20 +435,16 @@ fn cmd_study(
     out_dir: &std::path::Path,
     name: &str,
     study: impl FnOnce(&std::path::Path) -> Result<String, crate::study::StudyError>,
-) -> Result<(), Failure> {
-    use crate::study::StudyError;
+) -> Result<(), Error> {
     rundir::check_target(out_dir)?;
     let dir = OutputDir::create(out_dir)?;
-    let text = study(&dir.file("")).map_err(|e| match e {
-        StudyError::Invalid(m) => Failure::bad_input(m),
-        other => Failure::failed(other.to_string()),
-    })?;
+    let text = study(&dir.file(""))?;
     let summary = serde_json::json!({ "study": name, "sundials_version": rundir::sundials_version(), "report": text });
     std::fs::write(
         dir.file(rundir::SUMMARY_FILE),
         serde_json::to_string_pretty(&summary).unwrap_or_default(),
     )
-    .map_err(|e| Failure::failed(format!("{}: {e}", dir.file(rundir::SUMMARY_FILE).display())))?;
+    .map_err(|e| Error::failed(format!("{}: {e}", dir.file(rundir::SUMMARY_FILE).display())))?;
     let target = dir.commit()?;
     out(&format!(
         "eyeshell: {name} written to {}\n{text}",
@@ -488,7 +453,7 @@ fn cmd_study(
     Ok(())
 }
 
-fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
+fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
     let at = parse_at(&a.at, &scene)?;
     // Refuse a foreign output directory before the computation, not after.
@@ -531,10 +496,10 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn cmd_grow(a: &GrowArgs) -> Result<(), Failure> {
+fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
     let Some(growth) = &scene.growth else {
-        return Err(Failure::bad_input(format!(
+        return Err(Error::input(format!(
             "{}: scene has no [growth] section: use `eyeshell solve`, or add growth keys (e.g. --set growth.eta0=70)",
             scene.origin
         )));
@@ -594,8 +559,8 @@ fn cmd_grow(a: &GrowArgs) -> Result<(), Failure> {
                 ),
             };
             match writer.fail(&e) {
-                Ok(_) => Err(Failure::failed(format!("{e} ({kept})"))),
-                Err(w) => Err(Failure::failed(format!(
+                Ok(_) => Err(Error::failed(format!("{e} ({kept})"))),
+                Err(w) => Err(Error::failed(format!(
                     "{e} (and summary.json could not be written: {w})"
                 ))),
             }
@@ -621,12 +586,12 @@ fn install_interrupt() {
     });
 }
 
-fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
+fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     use eyeshell::sweep::{run_sweep, RunStatus, SweepOptions};
     let sweep = eyeshell::scene::sweep::Sweep::from_file(&a.scene.scene, &a.scene.set)?;
     rundir::check_target(&a.out)?;
     if a.jobs == Some(0) {
-        return Err(Failure::bad_input(
+        return Err(Error::input(
             "--jobs 0: give at least 1 (or leave it out: one per core)",
         ));
     }
@@ -663,13 +628,13 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
         .count();
     let total = report.records.len();
     if report.interrupted {
-        return Err(Failure::failed(format!(
+        return Err(Error::failed(format!(
             "sweep interrupted: {finished} of {total} runs finished (table: {}); run again with --resume to do the rest",
             table.display()
         )));
     }
     if !failed.is_empty() {
-        return Err(Failure::failed(format!(
+        return Err(Error::failed(format!(
             "{} of {total} runs failed: {} (the other results are in {})",
             failed.len(),
             failed.join("; "),
@@ -698,9 +663,9 @@ fn cmd_sweep(a: &SweepArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn cmd_figures(a: &FiguresArgs) -> Result<(), Failure> {
+fn cmd_figures(a: &FiguresArgs) -> Result<(), Error> {
     if a.jobs == Some(0) {
-        return Err(Failure::bad_input(
+        return Err(Error::input(
             "--jobs 0: give at least 1 (or leave it out: one per core)",
         ));
     }
@@ -711,13 +676,6 @@ fn cmd_figures(a: &FiguresArgs) -> Result<(), Failure> {
         crate::study::figures::make(&a.out, a.jobs.unwrap_or(0), a.replot, &CANCEL, &|line| {
             if !quiet {
                 let _ = writeln!(std::io::stderr(), "eyeshell: {line}");
-            }
-        })
-        .map_err(|e| {
-            if e.bad_input {
-                Failure::bad_input(e.message)
-            } else {
-                Failure::failed(e.message)
             }
         })?;
     if !a.quiet {
@@ -743,13 +701,10 @@ fn cmd_figures(a: &FiguresArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn cmd_plot(a: &PlotArgs) -> Result<(), Failure> {
-    use crate::figures::{plot_run, FigureError};
+fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
+    use crate::figures::plot_run;
     let target = a.out.clone().unwrap_or_else(|| a.dir.join("plots"));
-    let files = plot_run(&a.dir, &target).map_err(|e| match e {
-        FigureError::Read(m) => Failure::bad_input(m),
-        other => Failure::failed(other.to_string()),
-    })?;
+    let files = plot_run(&a.dir, &target)?;
     if !a.quiet {
         out(&format!(
             "eyeshell: {} files drawn from {} into {}\n",
@@ -769,9 +724,9 @@ fn plural(n: usize) -> &'static str {
     }
 }
 
-fn cmd_check(a: &SceneArgs) -> Result<(), Failure> {
+fn cmd_check(a: &SceneArgs) -> Result<(), Error> {
     let scene = match a.load() {
-        Err(Failure { .. }) if is_sweep_file(a) => return check_sweep(a),
+        Err(_) if is_sweep_file(a) => return check_sweep(a),
         other => other?,
     };
     let p = &scene.params;
@@ -816,7 +771,7 @@ fn is_sweep_file(a: &SceneArgs) -> bool {
 }
 
 /// `eyeshell check` of a sweep: its runs and the values each sets, then the first run's scene.
-fn check_sweep(a: &SceneArgs) -> Result<(), Failure> {
+fn check_sweep(a: &SceneArgs) -> Result<(), Error> {
     let sweep = eyeshell::scene::sweep::Sweep::from_file(&a.scene, &a.set)?;
     let mut text = format!(
         "# {}: valid sweep '{}' of {} run{} over {}\n",
@@ -891,22 +846,12 @@ pub fn keys_listing() -> String {
     text
 }
 
-fn cmd_keys() -> Result<(), Failure> {
+fn cmd_keys() -> Result<(), Error> {
     out(&keys_listing());
     Ok(())
 }
 
-impl From<crate::interop::export::ExportError> for Failure {
-    fn from(e: crate::interop::export::ExportError) -> Self {
-        if e.bad_input {
-            Failure::bad_input(e.message)
-        } else {
-            Failure::failed(e.message)
-        }
-    }
-}
-
-fn cmd_export(a: &ExportArgs) -> Result<(), Failure> {
+fn cmd_export(a: &ExportArgs) -> Result<(), Error> {
     use crate::interop::export::{export, Format};
     let mut jobs = Vec::new();
     if let Some(p) = &a.mat {
@@ -944,17 +889,16 @@ fn cmd_export(a: &ExportArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn cmd_compare(a: &CompareArgs) -> Result<(), Failure> {
+fn cmd_compare(a: &CompareArgs) -> Result<(), Error> {
     use crate::interop::compare::{compare_paths, format_reports};
     for (name, v) in [("--tol", a.tol), ("--rtol", a.rtol)] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(Failure::bad_input(format!(
+            return Err(Error::input(format!(
                 "{name} = {v}: must be a finite number ≥ 0"
             )));
         }
     }
-    let reports =
-        compare_paths(&a.run, &a.references, a.tol, a.rtol).map_err(|e| Failure::bad_input(e.0))?;
+    let reports = compare_paths(&a.run, &a.references, a.tol, a.rtol)?;
     let failed: Vec<_> = reports
         .iter()
         .flat_map(|r| {
@@ -971,7 +915,7 @@ fn cmd_compare(a: &CompareArgs) -> Result<(), Failure> {
         .iter()
         .max_by(|x, y| x.1.worst_ratio.total_cmp(&y.1.worst_ratio))
     {
-        return Err(Failure::failed(format!(
+        return Err(Error::failed(format!(
             "{} field comparison{} beyond |Δ| ≤ {:e} + {:e}·|ref|; worst: {} in {} (max |Δ| {:.3e} at {} = {})",
             failed.len(),
             plural(failed.len()),

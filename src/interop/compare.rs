@@ -38,6 +38,14 @@ impl std::fmt::Display for CompareError {
 
 impl std::error::Error for CompareError {}
 
+impl From<CompareError> for eyeshell::Error {
+    /// A comparison that cannot be made is about the files the user named (a result
+    /// beyond tolerance is not an error of this kind: the command reports it itself).
+    fn from(e: CompareError) -> Self {
+        eyeshell::Error::input(e.0)
+    }
+}
+
 /// Named vectors over the material points of one result.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sample {

@@ -47,6 +47,16 @@ pub struct FiguresError {
     pub message: String,
 }
 
+impl From<FiguresError> for eyeshell::Error {
+    fn from(e: FiguresError) -> Self {
+        if e.bad_input {
+            eyeshell::Error::input(e.message)
+        } else {
+            eyeshell::Error::failed(e.message)
+        }
+    }
+}
+
 fn failed(message: impl Into<String>) -> FiguresError {
     FiguresError {
         bad_input: false,

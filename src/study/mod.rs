@@ -42,6 +42,16 @@ pub enum StudyError {
     },
 }
 
+impl From<StudyError> for eyeshell::Error {
+    /// An invalid study set-up is the user's; a solve or a write that failed is not.
+    fn from(e: StudyError) -> Self {
+        match e {
+            StudyError::Invalid(m) => eyeshell::Error::input(m),
+            other => eyeshell::Error::failed(other.to_string()),
+        }
+    }
+}
+
 /// One solve, or one growth run to t_end, with what it cost.
 pub struct Run {
     /// The elastic state (at t_end for growth).

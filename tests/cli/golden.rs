@@ -214,7 +214,9 @@ fn outputs_match_the_golden_manifest() {
     }
 
     let manifest = fs::read_to_string(MANIFEST).unwrap_or_else(|e| {
-        panic!("{MANIFEST}: {e}\nwrite it with: {BLESS_ENV}=1 cargo test --release --test cli golden")
+        panic!(
+            "{MANIFEST}: {e}\nwrite it with: {BLESS_ENV}=1 cargo test --release --test cli golden"
+        )
     });
     let mut expected = BTreeMap::new();
     for (i, line) in manifest.lines().enumerate() {

@@ -54,5 +54,5 @@ pub enum EulerError {
     #[error(transparent)]
     Rhs(RhsError),
     #[error(transparent)]
-    Output(crate::Error),
+    Output(super::ObserverError),
 }

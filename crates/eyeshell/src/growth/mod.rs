@@ -174,12 +174,17 @@ pub struct GrowthStats {
     pub wall_seconds: f64,
 }
 
+/// Why an observer (or an output callback) stopped a run: any error of the caller's, a full
+/// disk or a closed pipe. The growth layer only reports it, as the reason of a [`GrowthError`]
+/// at the time it happened, so it needs to know nothing of the layers above it.
+pub type ObserverError = Box<dyn std::error::Error + Send + Sync>;
+
 /// Receives the results as they come, so that nothing is lost if the run fails later.
 pub trait Observer {
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), crate::Error>;
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), ObserverError>;
     /// The series row at every recorded time (the snapshot times and the history times)
     /// when `output.history_points` > 0, in time order.
-    fn history(&mut self, _row: &SeriesRow) -> Result<(), crate::Error> {
+    fn history(&mut self, _row: &SeriesRow) -> Result<(), ObserverError> {
         Ok(())
     }
     /// Called now and then with the time reached (for a progress bar).
@@ -258,7 +263,7 @@ fn recorded_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
 
 /// What receives the growth state at each output time: `output(sys, t, p)`.
 pub type OutputFn<'a> =
-    dyn FnMut(&mut system::GrowthSystem, f64, &[f64]) -> Result<(), crate::Error> + 'a;
+    dyn FnMut(&mut system::GrowthSystem, f64, &[f64]) -> Result<(), ObserverError> + 'a;
 
 /// The growth run behind [`grow`], for callers that want the system itself at each output
 /// time (t = 0, the output times, t_end): `output(sys, t, p)` with p the growth state.

@@ -24,7 +24,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::{format_value, inspect, num, write_atomic, OutputError, Target, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
-use crate::growth::{GrowthError, GrowthStats, Observer, SeriesRow, Snapshot, GROWTH_COLUMNS};
+use crate::growth::{
+    GrowthError, GrowthStats, Observer, ObserverError, SeriesRow, Snapshot, GROWTH_COLUMNS,
+};
 use crate::scene::Scene;
 
 /// The time series at the posterior pole, one row per output time.
@@ -349,24 +351,18 @@ fn create_with_header(path: &Path) -> Result<fs::File, OutputError> {
 }
 
 impl Observer for GrowthWriter {
-    fn history(&mut self, row: &SeriesRow) -> Result<(), crate::Error> {
+    fn history(&mut self, row: &SeriesRow) -> Result<(), ObserverError> {
         let path = self.dir.join(HISTORY_FILE);
         match &mut self.history {
             Some(file) => writeln!(file, "{}", series_line(row))
                 .and_then(|_| file.flush())
-                .map_err(|source| crate::Error::Io { path, source }),
+                .map_err(|e| OutputError::io(&path, e).into()),
             None => Ok(()),
         }
     }
 
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), crate::Error> {
-        self.write_snapshot(s).map_err(|e| match e {
-            OutputError::Io { path, source } => crate::Error::Io { path, source },
-            other => crate::Error::Io {
-                path: self.dir.clone(),
-                source: std::io::Error::other(other.to_string()),
-            },
-        })
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), ObserverError> {
+        Ok(self.write_snapshot(s)?)
     }
 
     fn progress(&mut self, t: f64, t_end: f64) {

@@ -46,7 +46,7 @@ pub enum OutputError {
 }
 
 impl OutputError {
-    fn io(path: &Path, source: std::io::Error) -> Self {
+    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
         OutputError::Io {
             path: path.to_path_buf(),
             source,

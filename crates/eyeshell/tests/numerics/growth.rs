@@ -10,7 +10,7 @@ use eyeshell::model::params::{Params, SolverSettings};
 struct Keep(Vec<Snapshot>);
 
 impl Observer for Keep {
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::Error> {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::growth::ObserverError> {
         self.0.push(s.clone());
         Ok(())
     }

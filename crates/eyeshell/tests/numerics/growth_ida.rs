@@ -10,7 +10,7 @@ use eyeshell::model::params::{Params, SolverSettings, Thickness};
 struct Keep(Vec<SeriesRow>);
 
 impl Observer for Keep {
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::Error> {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::growth::ObserverError> {
         self.0.push(s.series);
         Ok(())
     }
@@ -237,13 +237,13 @@ struct FailAt {
 }
 
 impl Observer for FailAt {
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::Error> {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::growth::ObserverError> {
         if self.kept.len() == self.fail_at {
             let full = std::io::Error::other("the disk is full");
-            return Err(eyeshell::Error::Io {
+            return Err(Box::new(eyeshell::Error::Io {
                 path: "snapshots".into(),
                 source: full,
-            });
+            }));
         }
         self.kept.push(s.t);
         Ok(())
