@@ -11,7 +11,7 @@ use std::hint::black_box;
 
 struct Discard;
 impl Observer for Discard {
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::Error> {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::growth::ObserverError> {
         black_box(s.series.axial_length);
         Ok(())
     }
