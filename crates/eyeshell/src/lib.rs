@@ -1,13 +1,35 @@
-//! eyeshell: the morphoelastic shell model of eye growth (Kimpton, Walker et al.).
+//! eyeshell: the morphoelastic shell model of eye growth (Kimpton, Walker et al.), solved
+//! through SUNDIALS.
 //!
-//! Data flows one way: a scene is read ([`scene`]), the physics is assembled ([`model`]),
-//! the material nodes are laid ([`mesh`]), the equations are discretised and solved
-//! ([`bvp`], [`growth`]) through the safe layer over SUNDIALS (the `eyeshell-sundials`
-//! crate), and results are written to run directories ([`rundir`], [`sweep`]). The model
-//! is described in docs/MODEL.md, whose sections the module comments cite.
+//! The sclera is a thin, pressurised, growing shell. At every instant it is in elastic
+//! equilibrium, a stiff two-point boundary value problem in arclength ([`Scene::solve`]);
+//! over years it grows where the retina lies in front of the eye's best-focus surface for
+//! blue light ([`Scene::grow`]). The equations, profiles and the paper's errata are in
+//! `docs/MODEL.md`, whose sections the module comments cite.
+//!
+//! # Use
+//!
+//! ```
+//! use eyeshell::Scene;
+//!
+//! let mut scene = Scene::default_scene();          // or Scene::from_path("scene.toml")?
+//! scene.set("solver.nodes", 201)?;                  // any key of `eyeshell keys`
+//! let sol = scene.solve()?;                         // the loaded shell
+//! let pole = sol.at(scene.solver.epsilon)?;         // continuous in Σ
+//! println!("r = {:.6} mm, Newton {} iterations", pole.r, sol.stats.newton_iterations);
+//! assert!(sol.stats.first_integral_max < 1e-8);
+//! # Ok::<(), eyeshell::Error>(())
+//! ```
+//!
+//! The curated entry points are [`Scene`] (read, [`Scene::set`], [`Scene::solve`],
+//! [`Scene::grow`]), [`Solution`], [`Growth`], [`Sweep`] and the one [`Error`]. Below them
+//! the layers are public for those who need them (studies, custom observers, other
+//! integrators): [`model`] (physics only), [`mesh`], [`bvp`], [`growth`], [`scene`],
+//! [`rundir`] (run directories on disk) and [`sweep`]. Data flows one way: scene → model →
+//! mesh → discretisation → SUNDIALS (the `eyeshell-sundials` crate) → results. The library
+//! prints nothing.
 
-#![forbid(unsafe_code)]
-
+mod api;
 pub mod bvp;
 pub mod error;
 pub mod growth;
@@ -17,4 +39,8 @@ pub mod rundir;
 pub mod scene;
 pub mod sweep;
 
+pub use api::Growth;
+pub use bvp::Solution;
 pub use error::Error;
+pub use scene::sweep::Sweep;
+pub use scene::Scene;

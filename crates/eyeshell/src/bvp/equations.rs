@@ -173,8 +173,9 @@ pub fn stretch(
 }
 
 /// f and ∂f/∂y at one point. `guess` seeds the α_s solve (dispatching once on the shell's
-/// membrane component; see [`Equations::evaluate`]).
-#[inline]
+/// membrane component; see [`Equations::evaluate`]). The assembly calls
+/// [`Equations::evaluate_into`]; this allocating form serves the tests.
+#[cfg(test)]
 pub fn evaluate(
     shell: &Shell,
     mp: &MaterialPoint,
@@ -195,11 +196,6 @@ impl<R: Reinforcement> Equations<R> {
             dp: shell.dp,
             inv_e_b: 1.0 / shell.e_b,
         }
-    }
-
-    /// The membrane law.
-    pub fn law(&self) -> &MembraneLaw<R> {
-        &self.law
     }
 
     /// α_s at a point from the unknowns, with the tensions and the IFT derivatives
@@ -226,7 +222,7 @@ impl<R: Reinforcement> Equations<R> {
     }
 
     /// f and ∂f/∂y at one point. `guess` seeds the α_s solve.
-    #[inline]
+    #[cfg(test)]
     pub fn evaluate(
         &self,
         mp: &MaterialPoint,
@@ -238,7 +234,7 @@ impl<R: Reinforcement> Equations<R> {
         Ok(out)
     }
 
-    /// [`Self::evaluate`] written in place (the assembly's buffers: no 300-byte copies).
+    /// f and ∂f/∂y at one point, written in place (the assembly's buffers: no 300-byte copies).
     /// On error `out` is left as it was.
     #[inline]
     pub fn evaluate_into(

@@ -91,9 +91,12 @@ pub struct SolveStats {
     pub wall_seconds: f64,
 }
 
+// The discretisation is public for the numerics tests and the benches (its residual and
+// Jacobian are checked and timed directly), not as API.
+#[doc(hidden)]
 pub mod discretisation;
-pub mod equations;
-pub mod interpolant;
-pub mod material;
+pub(crate) mod equations;
+pub(crate) mod interpolant;
+pub(crate) mod material;
 pub mod solve;
 pub use solve::{solve, BvpError, Solution};

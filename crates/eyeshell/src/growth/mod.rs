@@ -2,11 +2,15 @@
 //! elastic scheme uses, integrated by CVODE (BDF) or by the published explicit Euler. The
 //! elastic problem is solved at every right-hand-side evaluation, warm-started.
 
-pub mod cvode;
+pub(crate) mod cvode;
+// The coupled DAE and the growth system are public for the numerics tests and the benches
+// (analytic against finite-difference Jacobians, timings of their pieces), not as API.
+#[doc(hidden)]
 pub mod dae;
-pub mod euler;
-pub mod ida;
-pub mod points;
+pub(crate) mod euler;
+pub(crate) mod ida;
+pub(crate) mod points;
+#[doc(hidden)]
 pub mod system;
 
 pub use crate::model::growth_law::ThicknessLaw;

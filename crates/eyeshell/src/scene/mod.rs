@@ -242,7 +242,13 @@ impl Scene {
 
     /// Set one key from a TOML value, checking the key and the type but not the range
     /// (call [`Scene::validate`] when done). `origin` names the source in messages.
-    pub fn set(&mut self, key: &str, value: &toml::Value, origin: &str) -> Result<(), SceneError> {
+    /// [`Scene::set`] is the checked form for library users.
+    pub fn set_toml(
+        &mut self,
+        key: &str,
+        value: &toml::Value,
+        origin: &str,
+    ) -> Result<(), SceneError> {
         self.set_from(key, value, origin, &mut Sources::new())
     }
 
