@@ -11,7 +11,7 @@
 //! before this one. The vendored-directory check below is therefore a best effort; the
 //! header check uses the same condition sundials-sys uses (system headers, major ≥ 6), so if
 //! it passes sundials-sys binds the system headers too. `cargo run -p vendor-check` and
-//! `tests/sundials_linkage.rs` check what the binaries actually load.
+//! `tests/sundials/linkage.rs` check what the binaries actually load.
 
 use std::env;
 use std::fs;

@@ -70,7 +70,7 @@ fn half_limit(p: Params) -> Params {
 pub const PREAMBLE: &str = "# Stability at the extremes\n\n\
 Every parameter pushed to its edge, one at a time, from the paper's shells (docs/MODEL.md §8).\n\
 Regenerate this file with `cargo run --release -- extremes --out TESTING.md`; \
-`tests/extremes.rs` runs the same cases and asserts that each one solves with finite \
+`tests/cli/extremes.rs` runs the same cases and asserts that each one solves with finite \
 fields, a Newton residual within 10× its tolerance and a first integral within 1e-2 of \
 r²ΔP, and within 1e-5 of docs/MODEL.md §7's exact solution where that applies (1e-1 for N < 51).\n\n\
 - Elastic cases: Hermite–Simpson, N = 501, unless the case says otherwise. The sphere \

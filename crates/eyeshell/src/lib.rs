@@ -44,3 +44,8 @@ pub use bvp::Solution;
 pub use error::Error;
 pub use scene::sweep::Sweep;
 pub use scene::Scene;
+
+// The README's library example is compiled and run with the doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+struct ReadmeDoctests;

@@ -49,7 +49,7 @@ impl LinearSolverSpec {
     }
 }
 
-/// A direct SUNLinearSolver, freed on drop. An integrator (KINSOL, later CVODE/IDA) that
+/// A direct SUNLinearSolver, freed on drop. An integrator (KINSOL, CVODE or IDA) that
 /// uses it must be freed before it, and it before its matrix; the owner's field order
 /// guarantees that, and the `Rc<Context>` keeps the context alive until the last of them.
 pub struct LinearSolver {

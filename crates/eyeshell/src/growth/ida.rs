@@ -1,8 +1,9 @@
 //! Growth by IDA (issue 11): the coupled DAE of `dae.rs` (growth rates as differential
 //! rows, the elastic equations and z as algebraic rows) by variable-order BDF with one
 //! Newton iteration of the whole system per iterate. The Newton matrix is assembled
-//! analytically and factored by the system's own solver (Schur complement of the growth
-//! unknowns by default), through IDA's custom linear-solver hook; IDA decides when to
+//! analytically and factored by the system's own solver (KLU on the whole matrix by
+//! default when KLU is built, else the Schur complement of the growth unknowns; see
+//! [`default_linear`]), through IDA's custom linear-solver hook; IDA decides when to
 //! refresh it. A failure inside a step (an evaluation that cannot be made, a singular
 //! matrix) is recoverable: IDA cuts the step and tries again.
 

@@ -1,6 +1,8 @@
 //! Growth in time (docs/MODEL.md §5–6): a method-of-lines system on the material points the
-//! elastic scheme uses, integrated by CVODE (BDF) or by the published explicit Euler. The
-//! elastic problem is solved at every right-hand-side evaluation, warm-started.
+//! elastic scheme uses. By default IDA integrates the coupled DAE of growth and elastic
+//! equilibrium (one Newton per step, [`dae`]); beside it CVODE (BDF) integrates the growth
+//! ODE with the elastic problem solved at every right-hand side (warm-started), and the
+//! published explicit Euler does the same with fixed steps.
 
 pub(crate) mod cvode;
 // The coupled DAE and the growth system are public for the numerics tests and the benches

@@ -19,7 +19,7 @@
 //!   from below) at that node, across which α_s jumps and t_s stays continuous.
 //! - **Growth** (docs/MODEL.md §5, §6). Only a scene with a `[growth]` section has growth; only
 //!   then do the visual stimulus (the retina, the blue and red focal surfaces: the optics)
-//!   and the time integration (Euler or CVODE) exist (`scene::Scene::growth` is `None`
+//!   and the time integration (IDA, CVODE or Euler) exist (`scene::Scene::growth` is `None`
 //!   otherwise, and `growth::grow` is never called). Without growth one elastic solve of
 //!   the reference shell is the whole model.
 //!

@@ -1,5 +1,6 @@
-//! The physics, and nothing of the solvers (docs/MODEL.md §1–4): parameters, material
-//! profiles, the constitutive law and the cornea.
+//! The physics, and nothing of the solvers (docs/MODEL.md §1–6): parameters, material
+//! profiles, the constitutive law, the cornea, the growth law, the visual stimulus and the
+//! model's components.
 
 pub mod components;
 pub mod constitutive;

@@ -1,6 +1,6 @@
 //! The analytic Jacobian equals central differences at random states AND random parameters:
 //! ΔP, C, D ∈ {0} ∪ [1, 1e4], E_b, H0, thickness uniform/non-uniform, R0, fraction, the
-//! cornea, ε ∈ [1e-5, 1e-1] and N = 9..15, for both schemes. tests/jacobian.rs covers random
+//! cornea, ε ∈ [1e-5, 1e-1] and N = 9..15, for both schemes. jacobian.rs (beside this file) covers random
 //! states at the default parameters; the comparison (steps and the round-off-aware
 //! tolerance) is the same.
 
@@ -69,7 +69,7 @@ fn case() -> impl Strategy<Value = Case> {
     )
 }
 
-/// tests/jacobian.rs's comparison, at the case's parameters, mesh and perturbed state.
+/// jacobian.rs's comparison, at the case's parameters, mesh and perturbed state.
 fn check(case: &Case, scheme: Scheme) -> Result<(), TestCaseError> {
     let p = &case.p;
     let s = SolverSettings {
@@ -115,7 +115,7 @@ fn check(case: &Case, scheme: Scheme) -> Result<(), TestCaseError> {
         for i in 0..n {
             let a = jac.get(i, j);
             // Round-off of central differences: ε |terms of row i| / h, the terms being of
-            // the typical size 1 / f_scale[i] (tests/jacobian.rs) ...
+            // the typical size 1 / f_scale[i] (jacobian.rs) ...
             let noise = 64.0 * f64::EPSILON / (f_scale[i] * h);
             // ... which they outgrow at these parameters (C H0 ≫ ΔP R0, D ≫ C, ε ≪ 1e-3: a
             // stiff sclera's t_φ and the fibres' terms cancel in the t_s and κ rows), so the

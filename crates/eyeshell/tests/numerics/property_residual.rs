@@ -3,7 +3,7 @@
 //! truncation error, O(h^{p+1}), for every parameter set where the exact solution applies;
 //! the pole and cornea rows vanish to O(ε³) or to round-off.
 //!
-//! tests/exact_solution.rs checks the converged solutions (global error, order p) at the
+//! exact_solution.rs (beside this file) checks the converged solutions (global error, order p) at the
 //! default parameters; this file checks the residual (local error, order p + 1) without
 //! solving, over random ΔP, C, H0, E_b, R0, fraction.
 
