@@ -16,7 +16,7 @@ pub(crate) mod points;
 pub mod system;
 
 pub use crate::model::growth_law::ThicknessLaw;
-use crate::model::stimulus::{Refraction, Surface};
+use crate::model::stimulus::{EyeMeasure, Refraction, Surface};
 
 /// The growth model of one scene (docs/MODEL.md §4–6).
 #[derive(Clone, Debug, PartialEq)]
@@ -122,6 +122,20 @@ pub struct SeriesRow {
     /// The same for the red surface.
     pub retina_minus_red: f64,
     pub class: Refraction,
+}
+
+impl SeriesRow {
+    /// The row at time `t` of the eye measured as `eye`.
+    pub fn new(t: f64, eye: EyeMeasure) -> SeriesRow {
+        SeriesRow {
+            t,
+            axial_length: eye.axial_length,
+            equatorial_radius: eye.equatorial_radius,
+            retina_minus_blue: eye.retina_minus_blue,
+            retina_minus_red: eye.retina_minus_red,
+            class: eye.class,
+        }
+    }
 }
 
 /// The growth fields at one node, beside the elastic fields.

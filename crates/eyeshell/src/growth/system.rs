@@ -17,7 +17,7 @@ use crate::bvp::equations::{R, THETA};
 use crate::bvp::solve::{linear_spec, BvpError, ElasticSolver, Solution};
 use crate::model::growth_law;
 use crate::model::params::{Params, SolverSettings};
-use crate::model::stimulus::{Refraction, Surface};
+use crate::model::stimulus::{self, EyeMeasure, Surface};
 use eyeshell_sundials::{Context, LinearSolver, Matrix, NVector, SundialsError};
 use std::rc::Rc;
 
@@ -210,7 +210,7 @@ impl GrowthSystem {
                 let (r, th, z, a) = local[k];
                 let rho = p[NP * k];
                 let h = pts.zeta(k, p) / (a * r / rho);
-                let (zr, rr) = (z - 0.5 * h * th.cos(), r - 0.5 * h * th.sin());
+                let (zr, rr) = stimulus::retina(z, r, h, th);
                 PointStimulus {
                     z_retina: zr,
                     r_retina: rr,
@@ -377,17 +377,14 @@ impl GrowthSystem {
     fn series_row(&self, t: f64, stim: &[PointStimulus]) -> SeriesRow {
         let pts = &self.points;
         let pole = &stim[pts.node_point(0)];
-        let depth_red = self.growth.red.depth(pole.z_retina, pole.r_retina);
-        SeriesRow {
-            t,
-            axial_length: pole.z_retina,
-            equatorial_radius: (0..pts.above.len())
-                .map(|i| stim[pts.node_point(i)].r_retina)
-                .fold(f64::MIN, f64::max),
-            retina_minus_blue: -pole.depth_blue,
-            retina_minus_red: -depth_red,
-            class: Refraction::classify(pole.depth_blue, depth_red),
-        }
+        let radii = (0..pts.above.len()).map(|i| stim[pts.node_point(i)].r_retina);
+        let eye = EyeMeasure::new(
+            (pole.z_retina, pole.r_retina),
+            radii,
+            &self.growth.blue,
+            &self.growth.red,
+        );
+        SeriesRow::new(t, eye)
     }
 
     /// Take (p, u) as the current state (the coupled DAE's state at an output time): the

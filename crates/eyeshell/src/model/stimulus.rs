@@ -110,6 +110,49 @@ impl Surface {
     }
 }
 
+/// The retina, the shell's inner face, beside the mid-surface point (z, r) whose normal
+/// makes the angle θ with the axis, in a shell of loaded thickness h: half a thickness
+/// inwards along the normal (docs/MODEL.md §6).
+pub fn retina(z: f64, r: f64, h: f64, theta: f64) -> (f64, f64) {
+    (z - 0.5 * h * theta.cos(), r - 0.5 * h * theta.sin())
+}
+
+/// What a run reports of an eye: its retina at the posterior pole against both best-focus
+/// surfaces, and the retina's largest radius. Growth runs (every snapshot) and elastic
+/// solves (a sweep's table) measure it with this one function.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeMeasure {
+    /// z of the retina at the posterior pole.
+    pub axial_length: f64,
+    /// The largest radius of the retina.
+    pub equatorial_radius: f64,
+    /// Distance of the pole's retina behind the blue surface (negative: in front of it).
+    pub retina_minus_blue: f64,
+    /// The same for the red surface.
+    pub retina_minus_red: f64,
+    pub class: Refraction,
+}
+
+impl EyeMeasure {
+    /// From the retina at the posterior pole `(z, r)` and its radius at every node.
+    pub fn new(
+        pole: (f64, f64),
+        radii: impl IntoIterator<Item = f64>,
+        blue: &Surface,
+        red: &Surface,
+    ) -> EyeMeasure {
+        let depth_blue = blue.depth(pole.0, pole.1);
+        let depth_red = red.depth(pole.0, pole.1);
+        EyeMeasure {
+            axial_length: pole.0,
+            equatorial_radius: radii.into_iter().fold(f64::MIN, f64::max),
+            retina_minus_blue: -depth_blue,
+            retina_minus_red: -depth_red,
+            class: Refraction::classify(depth_blue, depth_red),
+        }
+    }
+}
+
 /// Refractive state at a retina point (docs/MODEL.md §6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Refraction {
@@ -156,6 +199,31 @@ impl Refraction {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_retina_is_half_a_thickness_inside_along_the_normal() {
+        assert_eq!(retina(24.0, 0.0, 0.8, 0.0), (23.6, 0.0));
+        let (z, r) = retina(12.0, 10.0, 0.5, std::f64::consts::FRAC_PI_2);
+        assert!((z - 12.0).abs() < 1e-15 && (r - 9.75).abs() < 1e-15);
+    }
+
+    #[test]
+    fn an_eye_is_measured_at_its_pole_against_both_surfaces() {
+        let (blue, red) = (Surface::blue(), Surface::default_red());
+        for z in [20.0, 22.5, 23.2, 25.0] {
+            let eye = EyeMeasure::new((z, 0.0), [3.0, 11.5, 9.0], &blue, &red);
+            assert_eq!(eye.axial_length, z);
+            assert_eq!(eye.equatorial_radius, 11.5);
+            assert_eq!(eye.retina_minus_blue, -blue.depth(z, 0.0));
+            assert_eq!(eye.retina_minus_red, -red.depth(z, 0.0));
+            let expect = Refraction::classify(blue.depth(z, 0.0), red.depth(z, 0.0));
+            assert_eq!(eye.class, expect);
+        }
+        // The red surface lies behind the blue one: a retina between them is emmetropic.
+        let between = 0.5 * (blue.point(0.0).0 + red.point(0.0).0);
+        let eye = EyeMeasure::new((between, 0.0), [10.0], &blue, &red);
+        assert_eq!(eye.class, Refraction::Emmetropic);
+    }
 
     #[test]
     fn blue_surface_on_the_axis() {
