@@ -44,9 +44,26 @@ pub enum BvpError {
 struct ElasticSystem {
     disc: Discretisation,
     failure: Option<EvalFailure>,
+    /// Residual evaluations of the current Newton solve, and the most it may make.
+    evaluations: usize,
+    max_evaluations: usize,
 }
 
+/// Residual evaluations one Newton solve may make per allowed iteration (solver.max_newton).
+/// KINSOL bounds the iterations but not its line search inside one: on a hopeless problem
+/// (E_b = 1e-200, a coefficient 1/E_b of 1e200) the search shrinks the step by tiny factors
+/// down to a minimum near 1e-300 and evaluates the residual hundreds of times per
+/// iteration, for minutes. A converging solve makes one or two per iteration.
+const EVALUATIONS_PER_ITERATION: usize = 20;
+
 impl ElasticSystem {
+    /// Start the count of a new Newton solve of at most `max_iterations` iterations.
+    fn start(&mut self, max_iterations: usize) {
+        self.failure = None;
+        self.evaluations = 0;
+        self.max_evaluations = EVALUATIONS_PER_ITERATION.saturating_mul(max_iterations.max(1));
+    }
+
     fn record(&mut self, r: Result<(), EvalFailure>) -> CallbackResult {
         r.map_err(|e| {
             self.failure = Some(e);
@@ -60,6 +77,15 @@ impl ElasticSystem {
 
 impl NonlinearSystem for ElasticSystem {
     fn residual(&mut self, u: &[f64], f: &mut [f64]) -> CallbackResult {
+        self.evaluations += 1;
+        if self.evaluations > self.max_evaluations {
+            return Err(CallbackError::Fatal(format!(
+                "stopped after {} residual evaluations, the most one solve may make \
+                 ({EVALUATIONS_PER_ITERATION} per iteration of solver.max_newton): the line \
+                 search finds no step that lowers the residual",
+                self.max_evaluations
+            )));
+        }
         let r = self.disc.residual(u, f);
         self.record(r)
     }
@@ -293,7 +319,8 @@ fn newton(
     polished: bool,
 ) -> Result<(), BvpError> {
     let (u_scale, f_scale) = kin.system().disc.scales(r0);
-    kin.system_mut().failure = None;
+    let max_iterations = kin.options().max_iterations;
+    kin.system_mut().start(max_iterations);
     match kin.solve(u, &u_scale, &f_scale) {
         Ok(k) => {
             work.add(&k);
@@ -373,6 +400,8 @@ impl ElasticSolver {
             ElasticSystem {
                 disc,
                 failure: None,
+                evaluations: 0,
+                max_evaluations: usize::MAX,
             },
             n,
             spec,

@@ -145,3 +145,38 @@ fn every_shipped_scene_solves_from_the_default_guess() {
     }
     assert!(count >= 2, "no scenes found in {}", dir.display());
 }
+
+/// A hopeless shell (E_b = 1e-200: a coefficient 1/E_b of 1e200) used to keep KINSOL's line
+/// search evaluating the residual for minutes inside one call. Each Newton solve now may
+/// make at most 20 residual evaluations per allowed iteration, so the whole continuation
+/// fails, saying where, in a bounded number of evaluations (well under a second here; the
+/// limit below only guards against a hang).
+#[test]
+fn a_hopeless_shell_fails_within_a_bounded_effort() {
+    for grading in [true, false] {
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let p = Params {
+                e_b: 1e-200,
+                ..Params::default()
+            };
+            let s = SolverSettings {
+                cornea_grading: grading,
+                ..SolverSettings::default()
+            };
+            let _ = tx.send(
+                bvp::solve(&p, &s, None)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string()),
+            );
+        });
+        let outcome = rx
+            .recv_timeout(std::time::Duration::from_secs(120))
+            .expect("the solve of E_b = 1e-200 must end (it used to run for minutes)");
+        let message = outcome.expect_err("E_b = 1e-200 has no solution to find");
+        assert!(
+            message.contains("node") && message.contains("Σ ="),
+            "{message}"
+        );
+    }
+}
