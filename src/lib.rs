@@ -409,9 +409,10 @@ fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Error> {
 
 fn cmd_converge(a: &ConvergeArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
-    if a.nodes.len() < 2 || a.nodes.iter().any(|&n| n < 5) {
+    let max = eyeshell::mesh::MAX_NODES;
+    if a.nodes.len() < 2 || a.nodes.iter().any(|&n| !(5..=max).contains(&n)) {
         return Err(Error::input(format!(
-            "--nodes {}: give at least two counts, each at least 5",
+            "--nodes {}: give at least two counts, each from 5 to {max}",
             a.nodes
                 .iter()
                 .map(|n| n.to_string())

@@ -74,7 +74,8 @@ pub fn elastic(
             nodes: nodes[0],
             ..*solver
         },
-    )];
+    )
+    .map_err(|e| StudyError::Invalid(e.to_string()))?];
     for _ in 1..nodes.len() {
         meshes.push(meshes.last().unwrap().halved());
     }

@@ -38,6 +38,7 @@ pub mod model;
 pub mod rundir;
 pub mod scene;
 pub mod sweep;
+pub mod text;
 
 pub use api::Growth;
 pub use bvp::Solution;

@@ -42,7 +42,7 @@ mod tests {
     /// A cubic is reproduced exactly.
     #[test]
     fn reproduces_cubics() {
-        let mesh = Mesh::new(0.0 + 1e-3, 2.0, 5, &[], false);
+        let mesh = Mesh::new(0.0 + 1e-3, 2.0, 5, &[], false).unwrap();
         let p = |x: f64| 1.0 - 2.0 * x + 0.5 * x * x * x;
         let dp = |x: f64| -2.0 + 1.5 * x * x;
         let values = mesh.nodes.iter().map(|&x| [p(x); NQ]).collect();

@@ -8,10 +8,11 @@ use super::equations::{self, Shell, Vec5, KAPPA, QS, R, THETA, TS};
 use super::interpolant::{Interpolant, NQ};
 use super::material::{reference_data, reference_point};
 use super::{FieldRow, SolveStats};
-use crate::mesh::Mesh;
+use crate::mesh::{self, Mesh, MeshError};
 use crate::model::cornea;
 use crate::model::params::{LinearSolverKind, Params, Scheme, SolverSettings};
 use crate::model::profiles::{self, Side};
+use crate::text::{decimals6, number};
 use eyeshell_sundials::{
     CallbackError, CallbackResult, JacobianMatrix, Kinsol, KinsolOptions, KinsolStats,
     LinearSolverSpec, NonlinearSystem, Strategy, SundialsError,
@@ -24,9 +25,11 @@ pub enum BvpError {
     Model(#[from] crate::model::ModelError),
     #[error(transparent)]
     Sundials(#[from] SundialsError),
-    #[error("Σ = {sigma} is outside the shell [{lo}, {hi}]")]
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error("Σ = {} is outside the shell [{}, {}]", number(*sigma), number(*lo), number(*hi))]
     OutOfRange { sigma: f64, lo: f64, hi: f64 },
-    #[error("Newton did not converge at ΔP = {dp} after {iterations} iterations (scaled residual {residual_norm:.3e}); worst equation: {equation} at node {node} (Σ = {sigma_ref:.6}): {reason}")]
+    #[error("Newton did not converge at ΔP = {} after {iterations} iterations (scaled residual {residual_norm:.3e}); worst equation: {equation} at node {node} (Σ = {}): {reason}", number(*dp), decimals6(*sigma_ref))]
     NewtonFailed {
         dp: f64,
         iterations: usize,
@@ -36,7 +39,7 @@ pub enum BvpError {
         equation: &'static str,
         reason: String,
     },
-    #[error("the equations cannot be evaluated at node {} (Σ = {:.6}): {}", .0.node, .0.sigma_ref, .0.why)]
+    #[error("the equations cannot be evaluated at node {} (Σ = {}): {}", .0.node, decimals6(.0.sigma_ref), .0.why)]
     Evaluation(EvalFailure),
 }
 
@@ -213,28 +216,47 @@ pub fn shell_of(p: &Params) -> Shell {
     }
 }
 
-/// The mesh a scene asks for: uniform nodes, breakpoints and pole grading (docs/MODEL.md §3–4).
-pub fn mesh_of(p: &Params, s: &SolverSettings) -> Mesh {
+/// The width of the bending boundary layer at the cornea, √(E_b / t_s) with t_s ≈ ΔP R0 / 2
+/// (bounded below by 10⁻³ C H0 so that it stays finite without pressure), when the mesh
+/// grades nodes into it: with `solver.cornea_grading` and a layer thinner than the spacing.
+fn cornea_layer(p: &Params, s: &SolverSettings) -> Option<f64> {
+    let layer = (p.e_b / (0.5 * p.dp * p.r0).max(1e-3 * p.c * p.h0)).sqrt();
+    let h = (p.length() - s.epsilon) / (s.nodes.max(2) - 1) as f64;
+    (s.cornea_grading && !(layer >= h)).then_some(layer)
+}
+
+/// The node counts of the mesh a scene asks for, checked before anything is allocated
+/// (scene validation calls this, so a mesh that cannot be laid is the user's error).
+pub fn mesh_plan(p: &Params, s: &SolverSettings) -> Result<mesh::Plan, MeshError> {
+    mesh::plan(
+        s.epsilon,
+        p.length(),
+        s.nodes,
+        s.pole_grading,
+        cornea_layer(p, s),
+    )
+}
+
+/// The mesh a scene asks for: uniform nodes, breakpoints and pole grading (docs/MODEL.md §3–4),
+/// and the cornea's grading into its bending layer.
+pub fn mesh_of(p: &Params, s: &SolverSettings) -> Result<Mesh, MeshError> {
+    mesh_plan(p, s)?;
     let mesh = Mesh::new(
         s.epsilon,
         p.length(),
         s.nodes,
         &profiles::breakpoints(p),
         s.pole_grading,
-    );
-    // The bending boundary layer at the cornea: width √(E_b / t_s), t_s ≈ ΔP R0 / 2.
-    let layer = (p.e_b / (0.5 * p.dp * p.r0).max(1e-3 * p.c * p.h0)).sqrt();
-    let h = (p.length() - s.epsilon) / (s.nodes - 1) as f64;
-    if s.cornea_grading && layer < h {
-        mesh.grade_cornea(layer)
-    } else {
-        mesh
+    )?;
+    match cornea_layer(p, s) {
+        Some(layer) => mesh.grade_cornea(layer),
+        None => Ok(mesh),
     }
 }
 
 /// The discrete problem for a parameter set on its mesh.
 pub fn discretise(p: &Params, s: &SolverSettings) -> Result<Discretisation, BvpError> {
-    discretise_on(p, s, mesh_of(p, s))
+    discretise_on(p, s, mesh_of(p, s)?)
 }
 
 /// The discrete problem on a given mesh (which must hold the scene's breakpoints).
@@ -383,7 +405,7 @@ pub struct ElasticSolver {
 impl ElasticSolver {
     /// The solver for the reference (ungrown) shell, starting from the inflated sphere.
     pub fn new(params: &Params, settings: &SolverSettings) -> Result<Self, BvpError> {
-        Self::on_mesh(params, settings, mesh_of(params, settings))
+        Self::on_mesh(params, settings, mesh_of(params, settings)?)
     }
 
     /// The same on a given mesh, e.g. a [`Mesh::halved`] one for Richardson extrapolation.
@@ -603,7 +625,7 @@ pub fn solve(
     settings: &SolverSettings,
     warm: Option<&Solution>,
 ) -> Result<Solution, BvpError> {
-    solve_on_mesh(params, settings, mesh_of(params, settings), warm)
+    solve_on_mesh(params, settings, mesh_of(params, settings)?, warm)
 }
 
 /// Solve on a given mesh (it must hold the scene's breakpoints as nodes).

@@ -213,7 +213,7 @@ pub trait Observer {
 
 /// A growth run that stopped: where, why, and the work done until then.
 #[derive(Debug, thiserror::Error)]
-#[error("growth failed at t = {t:.6}: {reason}")]
+#[error("growth failed at t = {}: {reason}", crate::text::decimals6(*t))]
 pub struct GrowthError {
     pub t: f64,
     pub reason: String,

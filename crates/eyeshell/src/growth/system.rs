@@ -50,7 +50,7 @@ pub struct Work {
 pub enum RhsError {
     #[error("the elastic solve failed: {0}")]
     Elastic(#[from] BvpError),
-    #[error("the growth rates cannot be evaluated at node {} (Σ = {:.6}): {}", .0.node, .0.sigma_ref, .0.why)]
+    #[error("the growth rates cannot be evaluated at node {} (Σ = {}): {}", .0.node, crate::text::decimals6(.0.sigma_ref), .0.why)]
     Evaluation(EvalFailure),
     #[error(transparent)]
     Sundials(#[from] SundialsError),

@@ -13,8 +13,8 @@ pub mod stimulus;
 /// A set of parameters for which the model itself has no answer.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum ModelError {
-    #[error("pressure.dP = {dp} is above the cornea's limit: the largest admissible ΔP is {max:.6} kPa (4 C_c H_c / R_c · (6/7) · 7^(-1/6))")]
+    #[error("pressure.dP = {} is above the cornea's limit: the largest admissible ΔP is {} kPa (4 C_c H_c / R_c · (6/7) · 7^(-1/6))", crate::text::number(*dp), crate::text::decimals6(*max))]
     PressureAboveCorneaLimit { dp: f64, max: f64 },
-    #[error("pressure.dP = {dp} must be non-negative")]
+    #[error("pressure.dP = {} must be non-negative", crate::text::number(*dp))]
     NegativePressure { dp: f64 },
 }

@@ -57,6 +57,8 @@ pub enum Rule {
     NonNegative,
     /// An integer ≥ n.
     AtLeast(usize),
+    /// An integer in [lo, hi]: counts that size an allocation or a loop are bounded.
+    Count(usize, usize),
     /// Strictly between 0 and 1.
     OpenUnit,
     /// At least 0 and below 1.
@@ -75,6 +77,7 @@ impl Rule {
             Rule::Positive => "> 0".into(),
             Rule::NonNegative => ">= 0".into(),
             Rule::AtLeast(n) => format!(">= {n}"),
+            Rule::Count(lo, hi) => format!("{lo} to {hi}"),
             Rule::OpenUnit => "in (0, 1)".into(),
             Rule::UnitFromZero => "in [0, 1)".into(),
             Rule::OpenHalfTurn => "in (0, π)".into(),
@@ -92,6 +95,9 @@ impl Rule {
             Rule::Positive if x <= 0.0 => Err("must be positive".into()),
             Rule::NonNegative if x < 0.0 => Err("must be non-negative".into()),
             Rule::AtLeast(n) if x < n as f64 => Err(format!("must be at least {n}")),
+            Rule::Count(lo, hi) if x < lo as f64 || x > hi as f64 => {
+                Err(format!("must lie between {lo} and {hi}"))
+            }
             Rule::OpenUnit if x <= 0.0 || x >= 1.0 => {
                 Err("must lie strictly between 0 and 1".into())
             }
@@ -142,6 +148,9 @@ impl Rule {
     pub fn check_count(self, n: usize) -> Result<(), String> {
         match self {
             Rule::AtLeast(m) if n < m => Err(format!("must be at least {m}")),
+            Rule::Count(lo, hi) if n < lo || n > hi => {
+                Err(format!("must lie between {lo} and {hi}"))
+            }
             Rule::Positive if n == 0 => Err("must be positive".into()),
             _ => Ok(()),
         }
@@ -279,6 +288,14 @@ pub fn find(key: &str) -> Option<&'static KeySpec> {
     KEYS.iter().find(|k| k.key == key)
 }
 
+/// The most Newton iterations one solve may be allowed (each may also spend a bounded
+/// number of residual evaluations in its line search).
+pub const MAX_NEWTON: usize = 10_000;
+/// The most explicit Euler steps (each an elastic solve: a million take hours already).
+pub const MAX_STEPS: usize = 1_000_000;
+/// The most history rows (history.csv: about 100 bytes each).
+pub const MAX_HISTORY_POINTS: usize = 1_000_000;
+
 const THICKNESS: &[&str] = &["uniform", "nonuniform"];
 const SCHEMES: &[&str] = &["trapezoid", "hermite-simpson"];
 const LINEAR: &[&str] = &["band", "klu"];
@@ -395,8 +412,8 @@ pub static KEYS: &[KeySpec] = &[
     KeySpec {
         key: "solver.nodes",
         access: Access::Count { get: |s| s.solver.nodes, set: |s, v| s.solver.nodes = v },
-        rule: Rule::AtLeast(5),
-        doc: "number of uniform nodes on [ε, L]; breakpoint and pole nodes come on top",
+        rule: Rule::Count(5, crate::mesh::MAX_NODES),
+        doc: "number of uniform nodes on [ε, L]; breakpoint, pole and cornea nodes come on top (at most 1000000 nodes in all)",
         growth: false,
     },
     KeySpec {
@@ -448,7 +465,7 @@ pub static KEYS: &[KeySpec] = &[
     KeySpec {
         key: "solver.max_newton",
         access: Access::Count { get: |s| s.solver.max_newton, set: |s, v| s.solver.max_newton = v },
-        rule: Rule::AtLeast(1),
+        rule: Rule::Count(1, MAX_NEWTON),
         doc: "the most Newton iterations per solve",
         growth: false,
     },
@@ -556,7 +573,7 @@ pub static KEYS: &[KeySpec] = &[
     KeySpec {
         key: "solver.steps",
         access: Access::Count { get: |s| s.growth_settings.steps, set: |s, v| s.growth_settings.steps = v },
-        rule: Rule::AtLeast(1),
+        rule: Rule::Count(1, MAX_STEPS),
         doc: "number of explicit Euler steps to growth.t_end (solver.integrator = \"euler\"; the paper used 200)",
         growth: true,
     },
@@ -570,7 +587,7 @@ pub static KEYS: &[KeySpec] = &[
     KeySpec {
         key: "output.history_points",
         access: Access::Count { get: |s| s.growth_settings.history_points, set: |s, v| s.growth_settings.history_points = v },
-        rule: Rule::AtLeast(0),
+        rule: Rule::Count(0, MAX_HISTORY_POINTS),
         doc: "also record axial length, refraction and class at this many evenly spaced times (history.csv, no snapshots): curves of axial length against t; 0: no history.csv",
         growth: true,
     },

@@ -24,6 +24,7 @@ use std::path::Path;
 use crate::growth::{GrowthParams, GrowthSettings};
 use crate::model::params::{Params, SolverSettings};
 use crate::model::stimulus::{Surface, RED_OFFSET};
+use crate::text::{decimals6, number};
 pub use keys::{Access, KeySpec, KeyValue, Rule, KEYS};
 
 /// Everything a scene sets: the physical parameters and the numerical settings.
@@ -426,6 +427,7 @@ impl Scene {
                 toml::Value::Integer(i) => {
                     let problem = match spec.rule {
                         Rule::AtLeast(n) => format!("must be at least {n}"),
+                        Rule::Count(lo, hi) => format!("must lie between {lo} and {hi}"),
                         _ => "must be non-negative".to_string(),
                     };
                     return Err(SceneError::Invalid {
@@ -538,9 +540,12 @@ impl Scene {
                 &["pressure.dP", "cornea.C", "cornea.H", "cornea.R0"],
                 show(&KeyValue::Float(p.dp)),
                 format!(
-                    "is above the cornea's limit: the largest admissible ΔP is {p_max:.6} kPa \
+                    "is above the cornea's limit: the largest admissible ΔP is {} kPa \
                      (4 C_c H_c / R_c · (6/7) · 7^(-1/6) with cornea.C = {}, cornea.H = {}, cornea.R0 = {})",
-                    p.cornea.c, p.cornea.h, p.cornea.r0
+                    decimals6(p_max),
+                    number(p.cornea.c),
+                    number(p.cornea.h),
+                    number(p.cornea.r0)
                 ),
             ));
         }
@@ -550,12 +555,15 @@ impl Scene {
                 &["solver.epsilon", "geometry.R0", "geometry.fraction"],
                 show(&KeyValue::Float(self.solver.epsilon)),
                 format!(
-                    "must be below the shell's length L = π·fraction·R0 = {length:.6} mm \
+                    "must be below the shell's length L = π·fraction·R0 = {} mm \
                      (geometry.fraction = {}, geometry.R0 = {})",
-                    p.fraction, p.r0
+                    decimals6(length),
+                    number(p.fraction),
+                    number(p.r0)
                 ),
             ));
         }
+        self.validate_mesh(sources)?;
         if let Some(g) = &self.growth {
             let times = &self.growth_settings.output_times;
             if let Some(&last) = times.last().filter(|&&t| t > g.t_end) {
@@ -570,6 +578,41 @@ impl Scene {
             }
         }
         Ok(())
+    }
+}
+
+impl Scene {
+    /// The mesh the solver will lay, counted before anything is allocated: every derived
+    /// size (the shell's length, the pole's and the cornea's graded nodes, the total) must
+    /// be finite and bounded (docs/MODEL.md §3–4, [`crate::mesh::plan`]).
+    fn validate_mesh(&self, sources: &Sources) -> Result<(), SceneError> {
+        use crate::mesh::MeshError;
+        let Err(e) = crate::bvp::solve::mesh_plan(&self.params, &self.solver) else {
+            return Ok(());
+        };
+        let (keys, value, problem): (&[&str], String, String) = match &e {
+            MeshError::Interval { length, .. } => (
+                &["geometry.R0", "geometry.fraction", "solver.epsilon"],
+                number(self.params.r0),
+                format!("makes the shell's length L = π·fraction·R0 = {} mm, which is not finite", number(*length)),
+            ),
+            MeshError::TooFewNodes { .. } | MeshError::TooManyNodes { .. } => (
+                &["solver.nodes", "solver.epsilon", "material.bending", "solver.cornea_grading"],
+                self.solver.nodes.to_string(),
+                format!("is too large for the mesh: {e}"),
+            ),
+            MeshError::LayerUnresolvable { .. } => (
+                &["material.bending", "solver.cornea_grading"],
+                number(self.params.e_b),
+                format!("is too small for this shell (ΔP, R0): {e}; raise material.bending or set solver.cornea_grading = false"),
+            ),
+        };
+        Err(SceneError::Invalid {
+            origin: self.origin_of(sources, keys),
+            key: keys[0].to_string(),
+            value,
+            problem,
+        })
     }
 }
 
@@ -696,7 +739,7 @@ fn levenshtein(a: &str, b: &str) -> usize {
 /// A value as shown in messages: like TOML, but whole numbers without ".0" (`C = -1`).
 pub(crate) fn show(v: &KeyValue) -> String {
     match v {
-        KeyValue::Float(x) if x.fract() == 0.0 && x.abs() < 1e15 => format!("{x}"),
+        KeyValue::Float(x) => number(*x),
         KeyValue::Floats(xs) => format!(
             "[{}]",
             xs.iter()

@@ -174,9 +174,18 @@ fn a_hopeless_shell_fails_within_a_bounded_effort() {
             .recv_timeout(std::time::Duration::from_secs(120))
             .expect("the solve of E_b = 1e-200 must end (it used to run for minutes)");
         let message = outcome.expect_err("E_b = 1e-200 has no solution to find");
-        assert!(
-            message.contains("node") && message.contains("Σ ="),
-            "{message}"
-        );
+        if grading {
+            // Its bending layer (1e-100 mm) cannot be graded in double precision: refused
+            // before the mesh is laid.
+            assert!(
+                message.contains("thinner than double precision"),
+                "{message}"
+            );
+        } else {
+            assert!(
+                message.contains("node") && message.contains("Σ ="),
+                "{message}"
+            );
+        }
     }
 }

@@ -1,0 +1,45 @@
+//! Numbers in messages: exact where it matters and never 300 digits long (a subnormal or a
+//! value near the float maximum printed with `{}` or `{:.6}` fills a terminal).
+
+/// `x` exactly (the shortest form that reads back to the same f64), in scientific notation
+/// outside [1e-4, 1e15): `2.5`, `0.001`, `1e-300`, `2.5e307`. At most about 24 characters.
+pub fn number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// `x` with 6 decimals where that shows it (|x| in [1e-4, 1e9), or 0), else 6 significant
+/// digits in scientific notation: `5.932091`, `1.234568e-7`. At most about 17 characters.
+pub fn decimals6(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e9).contains(&x.abs()) {
+        format!("{x:.6}")
+    } else {
+        format!("{x:.6e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn short_and_exact() {
+        assert_eq!(number(2.5), "2.5");
+        assert_eq!(number(0.001), "0.001");
+        assert_eq!(number(1e-300), "1e-300");
+        assert_eq!(number(-2.5e307), "-2.5e307");
+        assert_eq!(number(5e-324), "5e-324");
+        assert_eq!(number(f64::MAX).parse::<f64>().unwrap(), f64::MAX);
+        assert_eq!(number(f64::INFINITY), "inf");
+        assert_eq!(decimals6(5.9320914), "5.932091");
+        assert_eq!(decimals6(0.0), "0.000000");
+        assert_eq!(decimals6(1.2345678e-7), "1.234568e-7");
+        assert_eq!(decimals6(1e300), "1.000000e300");
+        for x in [f64::MIN_POSITIVE, 1e-310, 1e308, -1e-100, 123456789012.0] {
+            assert!(number(x).len() <= 24 && decimals6(x).len() <= 17, "{x:e}");
+        }
+    }
+}
