@@ -11,6 +11,7 @@
 
 pub mod figures;
 pub mod interop;
+pub mod progress;
 pub mod study;
 
 use std::ffi::OsString;
@@ -505,14 +506,19 @@ fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
             scene.origin
         )));
     };
-    let mut writer = GrowthWriter::create(&a.out, &scene, rundir::progress_wanted(a.quiet))?;
+    let mut writer = GrowthWriter::create(&a.out, &scene)?;
+    let mut bar = progress::GrowthProgress::new(&mut writer, progress::wanted(a.quiet));
     let result = grow(
         &scene.params,
         &scene.solver,
         growth,
         &scene.growth_settings,
-        &mut writer,
+        &mut bar,
     );
+    match &result {
+        Ok(_) => bar.finish(),
+        Err(_) => bar.abandon(),
+    }
     match result {
         Ok(stats) => {
             let last = writer.last_row().copied();

@@ -277,7 +277,7 @@ pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
 
 fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     let growth = scene.growth.as_ref().expect("a growth scene");
-    let mut writer = GrowthWriter::create(dir, scene, false).map_err(|e| (e.to_string(), None))?;
+    let mut writer = GrowthWriter::create(dir, scene).map_err(|e| (e.to_string(), None))?;
     // scene.toml first, so a failed run can still be reproduced.
     let path = dir.join(SCENE_FILE);
     write_atomic(&path, scene.to_toml().as_bytes())

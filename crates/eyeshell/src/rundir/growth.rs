@@ -17,10 +17,8 @@
 //! created fresh.
 
 use std::fs;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
-
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::{format_value, inspect, num, write_atomic, OutputError, Target, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
@@ -77,12 +75,6 @@ pub fn series_line(row: &SeriesRow) -> String {
         format_value(row.retina_minus_red),
         row.class.as_str()
     )
-}
-
-/// Should a growth run show a progress bar? Only on a terminal: not with `--quiet`, not
-/// when stderr is redirected, not when the environment variable `CI` is set.
-pub fn progress_wanted(quiet: bool) -> bool {
-    !quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none()
 }
 
 /// A snapshot file written so far: its time and its path relative to the output directory.
@@ -191,7 +183,8 @@ fn one_line(s: &str) -> String {
 }
 
 /// Writes a growth run into its output directory as the results come; an [`Observer`] of
-/// [`crate::growth::grow`].
+/// [`crate::growth::grow`]. It writes files only: a progress display is the caller's (the
+/// CLI wraps this observer in one that draws a bar).
 #[derive(Debug)]
 pub struct GrowthWriter {
     dir: PathBuf,
@@ -200,19 +193,13 @@ pub struct GrowthWriter {
     history: Option<fs::File>,
     snapshots: Vec<WrittenSnapshot>,
     last: Option<SeriesRow>,
-    bar: ProgressBar,
 }
 
 impl GrowthWriter {
     /// Check `target` (a directory that exists and is not an eyeshell output is refused),
     /// remove a previous output there, and create the directory with `snapshots/`, the
-    /// header of series.csv and a summary.json that says `"status": "running"`. With
-    /// `progress`, a progress bar is drawn on stderr (see [`progress_wanted`]).
-    pub fn create(
-        target: &Path,
-        scene: &Scene,
-        progress: bool,
-    ) -> Result<GrowthWriter, OutputError> {
+    /// header of series.csv and a summary.json that says `"status": "running"`.
+    pub fn create(target: &Path, scene: &Scene) -> Result<GrowthWriter, OutputError> {
         match inspect(target)? {
             Target::Absent => {}
             Target::EmptyDir => {}
@@ -229,17 +216,6 @@ impl GrowthWriter {
         } else {
             None
         };
-        let bar = if progress {
-            let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
-            if let Ok(style) = ProgressStyle::with_template(
-                "{spinner} growing [{bar:40}] {percent:>3}% {elapsed_precise} {msg}",
-            ) {
-                bar.set_style(style.progress_chars("=> "));
-            }
-            bar
-        } else {
-            ProgressBar::hidden()
-        };
         let writer = GrowthWriter {
             dir: target.to_path_buf(),
             scene: scene.clone(),
@@ -247,7 +223,6 @@ impl GrowthWriter {
             history,
             snapshots: Vec::new(),
             last: None,
-            bar,
         };
         writer.write_summary(RunStatus::Running)?;
         Ok(writer)
@@ -307,12 +282,6 @@ impl GrowthWriter {
             file: format!("{SNAPSHOT_DIR}/{name}"),
         });
         self.last = Some(s.series);
-        self.bar.set_message(format!(
-            "t = {:.4}: axial length {:.4} mm, {}",
-            s.t,
-            s.series.axial_length,
-            s.series.class.as_str()
-        ));
         Ok(())
     }
 
@@ -327,7 +296,6 @@ impl GrowthWriter {
 
     /// The run reached its end: write summary.json with `"status": "ok"` and `stats`.
     pub fn finish(self, stats: &GrowthStats) -> Result<PathBuf, OutputError> {
-        self.bar.finish_and_clear();
         self.write_summary(RunStatus::Ok(stats))?;
         Ok(self.dir)
     }
@@ -335,7 +303,6 @@ impl GrowthWriter {
     /// The run failed: write summary.json with `"status": "failed"`, where, why, and the
     /// statistics so far. The snapshots and series rows written stay.
     pub fn fail(self, error: &GrowthError) -> Result<PathBuf, OutputError> {
-        self.bar.abandon();
         self.write_summary(RunStatus::Failed(error))?;
         Ok(self.dir)
     }
@@ -363,13 +330,6 @@ impl Observer for GrowthWriter {
 
     fn snapshot(&mut self, s: &Snapshot) -> Result<(), ObserverError> {
         Ok(self.write_snapshot(s)?)
-    }
-
-    fn progress(&mut self, t: f64, t_end: f64) {
-        if t_end > 0.0 && t.is_finite() {
-            let at = (t / t_end).clamp(0.0, 1.0) * 1000.0;
-            self.bar.set_position(at.round() as u64);
-        }
     }
 }
 
@@ -468,7 +428,7 @@ mod tests {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("run");
         let scene = growing_scene();
-        let mut w = GrowthWriter::create(&dir, &scene, false).unwrap();
+        let mut w = GrowthWriter::create(&dir, &scene).unwrap();
         // From the start: the directory, the series header and a running summary.
         assert!(dir.join(SNAPSHOT_DIR).is_dir());
         assert!(read_series(&dir).is_empty());
@@ -476,7 +436,6 @@ mod tests {
         let times = [0.0, 0.1, 0.2, 0.4, 1.0];
         for (k, &t) in times.iter().enumerate() {
             Observer::snapshot(&mut w, &snapshot(t, 7)).unwrap();
-            w.progress(t, 1.0);
             // Each row is on disk at once, in order, and parses back.
             let rows = read_series(&dir);
             assert_eq!(rows.len(), k + 1);
@@ -567,7 +526,7 @@ mod tests {
     fn failure_keeps_the_results_so_far() {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("run");
-        let mut w = GrowthWriter::create(&dir, &growing_scene(), false).unwrap();
+        let mut w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
         w.write_snapshot(&snapshot(0.0, 5)).unwrap();
         w.write_snapshot(&snapshot(0.1, 5)).unwrap();
         let error = GrowthError {
@@ -596,7 +555,7 @@ mod tests {
     fn a_mismatched_snapshot_is_an_error_and_writes_nothing() {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("run");
-        let mut w = GrowthWriter::create(&dir, &growing_scene(), false).unwrap();
+        let mut w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
         let mut s = snapshot(0.0, 5);
         s.growth.pop();
         let e = Observer::snapshot(&mut w, &s).unwrap_err().to_string();
@@ -610,12 +569,12 @@ mod tests {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("run");
         // A previous run (even a killed one: its summary says running) is replaced whole.
-        let mut w = GrowthWriter::create(&dir, &growing_scene(), false).unwrap();
+        let mut w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
         w.write_snapshot(&snapshot(0.0, 3)).unwrap();
         w.write_snapshot(&snapshot(0.5, 3)).unwrap();
         drop(w);
         fs::write(dir.join("stray.txt"), "x").unwrap();
-        let w = GrowthWriter::create(&dir, &growing_scene(), false).unwrap();
+        let w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
         assert!(!dir.join("stray.txt").exists());
         assert!(read_series(&dir).is_empty());
         assert_eq!(fs::read_dir(dir.join(SNAPSHOT_DIR)).unwrap().count(), 0);
@@ -624,14 +583,14 @@ mod tests {
         let data = tmp.path().join("data");
         fs::create_dir(&data).unwrap();
         fs::write(data.join("precious.txt"), "keep").unwrap();
-        let e = GrowthWriter::create(&data, &growing_scene(), false).unwrap_err();
+        let e = GrowthWriter::create(&data, &growing_scene()).unwrap_err();
         assert!(e.is_refusal(), "{e}");
         assert_eq!(fs::read_dir(&data).unwrap().count(), 1);
         // An empty directory and missing parents are fine.
         let empty = tmp.path().join("empty");
         fs::create_dir(&empty).unwrap();
-        GrowthWriter::create(&empty, &growing_scene(), false).unwrap();
-        GrowthWriter::create(&tmp.path().join("a/b/c"), &growing_scene(), false).unwrap();
+        GrowthWriter::create(&empty, &growing_scene()).unwrap();
+        GrowthWriter::create(&tmp.path().join("a/b/c"), &growing_scene()).unwrap();
         assert!(tmp.path().join("a/b/c").join(SERIES_FILE).is_file());
     }
 }

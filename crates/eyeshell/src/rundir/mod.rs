@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use crate::bvp::{FieldRow, SolveStats, COLUMNS};
 use crate::scene::Scene;
 
-pub use growth::{progress_wanted, GrowthWriter};
+pub use growth::GrowthWriter;
 
 /// The file whose presence marks a directory as an eyeshell output.
 pub const SUMMARY_FILE: &str = "summary.json";
