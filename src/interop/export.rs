@@ -26,6 +26,7 @@ pub use eyeshell::rundir::read::{
     bad, is_run_dir, read_csv, read_run, ReadError as ExportError, Run, RunSnapshot, Table,
     GROWTH_VARS,
 };
+use eyeshell::rundir::AtomicDir;
 
 /// The rows of `sol.y`, in order (bvp4c's unknowns of the published scripts).
 pub const Y_ROWS: [&str; 5] = ["kappa", "alpha_s", "r", "theta", "Q"];
@@ -207,7 +208,7 @@ pub fn export(run_dir: &Path, out: &Path, format: Format) -> Result<Exported, Ex
                     .into_owned();
                 let name = format!("{stem}.{}", format.extension());
                 write_one(
-                    &dir.tmp.join(&name),
+                    &dir.file(&name),
                     format,
                     || growth_mat_vars(s),
                     || growth_npz_arrays(s),
@@ -225,23 +226,21 @@ pub fn export(run_dir: &Path, out: &Path, format: Format) -> Result<Exported, Ex
     }
 }
 
-/// An export directory written into a temporary sibling and renamed into place. The target
-/// may be absent, an empty directory or a previous export (a directory of `.EXT` files
-/// only); anything else is refused.
+/// An export directory written into a temporary sibling and renamed into place (the
+/// mechanism is [`AtomicDir`]'s). The target may be absent, an empty directory or a
+/// previous export (a directory of `.EXT` files only); anything else is refused.
 struct ExportDir {
-    target: PathBuf,
-    tmp: PathBuf,
-    committed: bool,
+    dir: AtomicDir,
 }
 
 impl ExportDir {
     fn create(target: &Path, ext: &str) -> Result<ExportDir, ExportError> {
-        let name = target.file_name().ok_or_else(|| {
-            bad(format!(
+        if target.file_name().is_none() {
+            return Err(bad(format!(
                 "{}: the output path has no file name",
                 target.display()
-            ))
-        })?;
+            )));
+        }
         Self::check(target, ext)?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -254,20 +253,13 @@ impl ExportDir {
                 parent.display()
             )));
         }
-        let tmp = parent.join(format!(
-            ".{}.tmp-{}",
-            name.to_string_lossy(),
-            std::process::id()
-        ));
-        if tmp.exists() {
-            let _ = fs::remove_dir_all(&tmp);
-        }
-        fs::create_dir(&tmp).map_err(|e| failed(format!("{}: {e}", tmp.display())))?;
-        Ok(ExportDir {
-            target: target.to_path_buf(),
-            tmp,
-            committed: false,
-        })
+        let dir = AtomicDir::create(target).map_err(|e| failed(e.to_string()))?;
+        Ok(ExportDir { dir })
+    }
+
+    /// The path of `name` in the directory being written.
+    fn file(&self, name: &str) -> PathBuf {
+        self.dir.file(name)
     }
 
     /// Absent, empty or a previous export: fine. Anything else: refused.
@@ -296,11 +288,13 @@ impl ExportDir {
         Ok(())
     }
 
-    fn commit(mut self) -> Result<PathBuf, ExportError> {
-        let io = |p: &Path, e: std::io::Error| failed(format!("{}: {e}", p.display()));
-        if self.target.exists() {
+    /// Check the target again (it may have changed meanwhile), then move the export into
+    /// place.
+    fn commit(self) -> Result<PathBuf, ExportError> {
+        if self.dir.target().exists() {
             let ext = self
-                .tmp
+                .dir
+                .path()
                 .read_dir()
                 .ok()
                 .and_then(|mut d| d.next())
@@ -312,35 +306,9 @@ impl ExportDir {
                 })
                 .unwrap_or_default();
             if !ext.is_empty() {
-                Self::check(&self.target, &ext)?;
+                Self::check(self.dir.target(), &ext)?;
             }
-            let old = self.tmp.with_file_name(format!(
-                ".{}.old-{}",
-                self.target
-                    .file_name()
-                    .unwrap_or_default()
-                    .to_string_lossy(),
-                std::process::id()
-            ));
-            fs::rename(&self.target, &old).map_err(|e| io(&self.target, e))?;
-            if let Err(e) = fs::rename(&self.tmp, &self.target) {
-                let _ = fs::rename(&old, &self.target);
-                return Err(io(&self.target, e));
-            }
-            self.committed = true;
-            let _ = fs::remove_dir_all(&old);
-        } else {
-            fs::rename(&self.tmp, &self.target).map_err(|e| io(&self.target, e))?;
-            self.committed = true;
         }
-        Ok(self.target.clone())
-    }
-}
-
-impl Drop for ExportDir {
-    fn drop(&mut self) {
-        if !self.committed {
-            let _ = fs::remove_dir_all(&self.tmp);
-        }
+        self.dir.commit().map_err(|e| failed(e.to_string()))
     }
 }

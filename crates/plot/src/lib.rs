@@ -590,6 +590,10 @@ fn render(canvas: &Canvas, stem: &Path) -> Result<(PathBuf, PathBuf), PlotError>
 
 /// Write the two files: both temporaries first, then both renames, so that an error
 /// leaves neither half-written. Creates missing parent directories.
+///
+/// eyeshell's atomic writer is `eyeshell::rundir::atomic`; this crate depends on nothing of
+/// eyeshell (the arrow is cli → plot), so it keeps this one small write of a figure's pair
+/// of files, and its [`write`] / [`write_panels`] keep taking a path.
 fn write_both(stem: &Path, png: (&Path, &[u8]), svg: (&Path, &[u8])) -> Result<(), PlotError> {
     if let Some(parent) = stem.parent().filter(|p| !p.as_os_str().is_empty()) {
         fs::create_dir_all(parent).map_err(|e| PlotError::Io {

@@ -1,5 +1,6 @@
 //! Writing results: `fields.csv`, `at.csv` and `summary.json` in an output directory that
-//! appears whole or not at all.
+//! appears whole or not at all ([`atomic`] is the one atomic writer of files and
+//! directories).
 //!
 //! A run writes into a temporary sibling of the target (`.NAME.tmp-<pid>`), then renames it
 //! into place. An existing target is replaced only if it is a previous eyeshell output (it
@@ -9,6 +10,7 @@
 //!
 //! A growth run ([`growth::GrowthWriter`]) writes in place instead, as its results come.
 
+pub mod atomic;
 pub mod growth;
 pub mod read;
 pub mod rundata;
@@ -20,6 +22,7 @@ use std::path::{Path, PathBuf};
 use crate::bvp::{FieldRow, SolveStats, COLUMNS};
 use crate::scene::Scene;
 
+pub use atomic::{write_atomic, AtomicDir};
 pub use growth::GrowthWriter;
 
 /// The file whose presence marks a directory as an eyeshell output.
@@ -133,107 +136,38 @@ fn inspect(target: &Path) -> Result<Target, OutputError> {
 }
 
 /// An output directory being written: files go into a temporary sibling of the target,
-/// which [`OutputDir::commit`] renames into place. Dropping it uncommitted removes it.
+/// which [`OutputDir::commit`] renames into place. Dropping it uncommitted removes it. The
+/// mechanism is [`AtomicDir`]'s; the policy (only a previous eyeshell output or an empty
+/// directory is replaced) is this type's.
 #[derive(Debug)]
 pub struct OutputDir {
-    target: PathBuf,
-    tmp: PathBuf,
-    committed: bool,
-    /// Parent directories this run created (outermost first), removed again if it fails.
-    created: Vec<PathBuf>,
+    dir: AtomicDir,
 }
 
 impl OutputDir {
     /// Check the target and create the temporary directory next to it.
     pub fn create(target: &Path) -> Result<OutputDir, OutputError> {
         inspect(target)?;
-        let name = target.file_name().ok_or_else(|| OutputError::NoName {
-            path: target.to_path_buf(),
-        })?;
-        let parent = match target.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let mut created: Vec<PathBuf> = parent
-            .ancestors()
-            .filter(|a| !a.as_os_str().is_empty() && !a.exists())
-            .map(Path::to_path_buf)
-            .collect();
-        created.reverse();
-        fs::create_dir_all(&parent).map_err(|e| OutputError::io(&parent, e))?;
-        let tmp = parent.join(format!(
-            ".{}.tmp-{}",
-            name.to_string_lossy(),
-            std::process::id()
-        ));
-        if tmp.exists() {
-            // A leftover of a killed run with our pid: ours to remove.
-            fs::remove_dir_all(&tmp).map_err(|e| OutputError::io(&tmp, e))?;
-        }
-        fs::create_dir(&tmp).map_err(|e| OutputError::io(&tmp, e))?;
         Ok(OutputDir {
-            target: target.to_path_buf(),
-            tmp,
-            committed: false,
-            created,
+            dir: AtomicDir::create(target)?,
         })
     }
 
     /// The final path of the directory.
     pub fn target(&self) -> &Path {
-        &self.target
+        self.dir.target()
     }
 
     /// The path of `name` inside the temporary directory (where it must be written).
     pub fn file(&self, name: &str) -> PathBuf {
-        self.tmp.join(name)
+        self.dir.file(name)
     }
 
     /// Move the finished directory into place, replacing a previous output or an empty
     /// directory (checked again: the target may have changed during the run).
-    pub fn commit(mut self) -> Result<PathBuf, OutputError> {
-        match inspect(&self.target)? {
-            Target::Absent => {}
-            Target::EmptyDir => {
-                fs::remove_dir(&self.target).map_err(|e| OutputError::io(&self.target, e))?
-            }
-            Target::PreviousOutput => {
-                // Move the old output aside first, so the target is never half-deleted.
-                let old = self.tmp.with_file_name(format!(
-                    ".{}.old-{}",
-                    self.target
-                        .file_name()
-                        .unwrap_or_default()
-                        .to_string_lossy(),
-                    std::process::id()
-                ));
-                if old.exists() {
-                    fs::remove_dir_all(&old).map_err(|e| OutputError::io(&old, e))?;
-                }
-                fs::rename(&self.target, &old).map_err(|e| OutputError::io(&self.target, e))?;
-                if let Err(e) = fs::rename(&self.tmp, &self.target) {
-                    let _ = fs::rename(&old, &self.target);
-                    return Err(OutputError::io(&self.target, e));
-                }
-                self.committed = true;
-                fs::remove_dir_all(&old).map_err(|e| OutputError::io(&old, e))?;
-                return Ok(self.target.clone());
-            }
-        }
-        fs::rename(&self.tmp, &self.target).map_err(|e| OutputError::io(&self.target, e))?;
-        self.committed = true;
-        Ok(self.target.clone())
-    }
-}
-
-impl Drop for OutputDir {
-    fn drop(&mut self) {
-        if !self.committed {
-            let _ = fs::remove_dir_all(&self.tmp);
-            for dir in self.created.iter().rev() {
-                let _ = fs::remove_dir(dir); // only if still empty
-            }
-        }
+    pub fn commit(self) -> Result<PathBuf, OutputError> {
+        inspect(self.dir.target())?;
+        self.dir.commit()
     }
 }
 
@@ -266,24 +200,6 @@ pub fn write_fields_csv(path: &Path, rows: &[FieldRow]) -> Result<(), OutputErro
         w.flush()
     };
     write().map_err(|e| OutputError::io(path, e))
-}
-
-/// Write `bytes` to `path` through a temporary sibling and a rename: never half-written.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), std::io::Error> {
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let write = || -> std::io::Result<()> {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.flush()
-    };
-    if let Err(e) = write() {
-        let _ = fs::remove_file(&tmp);
-        return Err(e);
-    }
-    fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = fs::remove_file(&tmp);
-    })
 }
 
 /// The SUNDIALS version the binary is linked against, if the sundials layer reports it.
