@@ -12,6 +12,7 @@ pub mod wpd;
 use eyeshell::bvp::{BvpError, FieldRow, Solution};
 use eyeshell::growth::{GrowthError, GrowthParams, GrowthSettings, GrowthStats};
 use eyeshell::model::params::{Params, SolverSettings};
+use eyeshell::rundir::table::{csv_bytes, QuoteStyle};
 use std::path::Path;
 use std::time::Instant;
 
@@ -173,15 +174,13 @@ pub fn points(lo: f64, hi: f64, count: usize) -> Vec<f64> {
 
 /// Write a CSV table (header, then rows of already formatted cells) atomically.
 pub fn write_csv(path: &Path, header: &[String], rows: &[Vec<String>]) -> Result<(), StudyError> {
-    let mut text = header.join(",") + "\n";
-    for r in rows {
-        text.push_str(&r.join(","));
-        text.push('\n');
-    }
-    eyeshell::rundir::write_atomic(path, text.as_bytes()).map_err(|source| StudyError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    // Never quoted, as the study tables have always been written (see rundir::table).
+    csv_bytes(header, rows, QuoteStyle::Never)
+        .and_then(|text| eyeshell::rundir::write_atomic(path, &text))
+        .map_err(|source| StudyError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
 }
 
 /// A number for a CSV cell (shortest round-trip form; empty for NaN).

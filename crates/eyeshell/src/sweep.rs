@@ -24,6 +24,7 @@ use rayon::prelude::*;
 use crate::bvp::FieldRow;
 use crate::growth::{grow, GrowthStats, SeriesRow};
 use crate::model::stimulus::Refraction;
+use crate::rundir::table::{csv_bytes, QuoteStyle};
 use crate::rundir::{self, format_value, write_atomic, GrowthWriter, OutputDir, OutputError};
 use crate::scene::sweep::{Sweep, SweepRun};
 use crate::scene::Scene;
@@ -392,52 +393,30 @@ pub const RESULT_COLUMNS: [&str; 13] = [
 
 /// sweep.csv and summary.json, written atomically.
 fn write_tables(sweep: &Sweep, report: &SweepReport) -> Result<(), OutputError> {
-    let csv = table_csv(sweep, report);
     let path = report.dir.join(TABLE_FILE);
-    write_atomic(&path, csv.as_bytes()).map_err(|e| io(&path, e))?;
+    table_csv(sweep, report)
+        .and_then(|csv| write_atomic(&path, &csv))
+        .map_err(|e| io(&path, e))?;
     let mut json = serde_json::to_string_pretty(&summary_json(sweep, report)).unwrap_or_default();
     json.push('\n');
     let path = report.dir.join(rundir::SUMMARY_FILE);
     write_atomic(&path, json.as_bytes()).map_err(|e| io(&path, e))
 }
 
-/// A CSV field: quoted when it holds a comma, a quote or a line break.
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-/// The text of sweep.csv.
-pub fn table_csv(sweep: &Sweep, report: &SweepReport) -> String {
-    let header: Vec<String> = ["run", "status"]
+/// The text of sweep.csv: a cell is quoted when it holds a comma, a quote or a line break.
+pub fn table_csv(sweep: &Sweep, report: &SweepReport) -> std::io::Result<Vec<u8>> {
+    let header = ["run", "status"]
         .iter()
         .map(|s| s.to_string())
         .chain(sweep.keys.iter().cloned())
-        .chain(RESULT_COLUMNS.iter().map(|s| s.to_string()))
-        .collect();
-    let mut text = header
-        .iter()
-        .map(|h| csv_field(h))
-        .collect::<Vec<_>>()
-        .join(",");
-    text.push('\n');
-    for r in &report.records {
+        .chain(RESULT_COLUMNS.iter().map(|s| s.to_string()));
+    let rows = report.records.iter().map(|r| {
         let mut fields = vec![r.name.clone(), r.status.as_str().to_string()];
         fields.extend(r.values.iter().cloned());
         fields.extend(result_fields(r));
-        text.push_str(
-            &fields
-                .iter()
-                .map(|f| csv_field(f))
-                .collect::<Vec<_>>()
-                .join(","),
-        );
-        text.push('\n');
-    }
-    text
+        fields
+    });
+    csv_bytes(header, rows, QuoteStyle::Necessary)
 }
 
 fn result_fields(r: &RunRecord) -> Vec<String> {

@@ -17,9 +17,9 @@
 //! created fresh.
 
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use super::table::{csv_bytes, csv_writer, QuoteStyle};
 use super::{format_value, inspect, num, write_atomic, OutputError, Target, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
 use crate::growth::{
@@ -64,17 +64,29 @@ pub fn series_header() -> String {
     SERIES_COLUMNS.join(",")
 }
 
-/// One line of series.csv (without the newline).
-pub fn series_line(row: &SeriesRow) -> String {
-    format!(
-        "{},{},{},{},{},{}",
+/// The cells of one row of series.csv.
+pub fn series_record(row: &SeriesRow) -> [String; 6] {
+    [
         format_value(row.t),
         format_value(row.axial_length),
         format_value(row.equatorial_radius),
         format_value(row.retina_minus_blue),
         format_value(row.retina_minus_red),
-        row.class.as_str()
-    )
+        row.class.as_str().to_string(),
+    ]
+}
+
+/// The text of a snapshot file: the [`snapshot_header`] columns, one row per node.
+pub fn snapshot_csv(s: &Snapshot) -> std::io::Result<Vec<u8>> {
+    let header = COLUMNS.iter().chain(GROWTH_COLUMNS.iter());
+    let rows = s.fields.iter().zip(&s.growth).map(|(f, g)| {
+        f.values()
+            .into_iter()
+            .chain(g.values())
+            .map(format_value)
+            .collect::<Vec<_>>()
+    });
+    csv_bytes(header, rows, QuoteStyle::Necessary)
 }
 
 /// A snapshot file written so far: its time and its path relative to the output directory.
@@ -189,8 +201,8 @@ fn one_line(s: &str) -> String {
 pub struct GrowthWriter {
     dir: PathBuf,
     scene: Scene,
-    series: fs::File,
-    history: Option<fs::File>,
+    series: csv::Writer<fs::File>,
+    history: Option<csv::Writer<fs::File>>,
     snapshots: Vec<WrittenSnapshot>,
     last: Option<SeriesRow>,
 }
@@ -259,24 +271,11 @@ impl GrowthWriter {
                 )),
             ));
         }
-        let mut text = snapshot_header();
-        text.push('\n');
-        for (f, g) in s.fields.iter().zip(&s.growth) {
-            let line = f
-                .values()
-                .iter()
-                .chain(g.values().iter())
-                .map(|&x| format_value(x))
-                .collect::<Vec<_>>()
-                .join(",");
-            text.push_str(&line);
-            text.push('\n');
-        }
-        write_atomic(&path, text.as_bytes()).map_err(|e| OutputError::io(&path, e))?;
+        snapshot_csv(s)
+            .and_then(|text| write_atomic(&path, &text))
+            .map_err(|e| OutputError::io(&path, e))?;
         let series_path = self.dir.join(SERIES_FILE);
-        writeln!(self.series, "{}", series_line(&s.series))
-            .and_then(|_| self.series.flush())
-            .map_err(|e| OutputError::io(&series_path, e))?;
+        append(&mut self.series, &s.series).map_err(|e| OutputError::io(&series_path, e))?;
         self.snapshots.push(WrittenSnapshot {
             t: s.t,
             file: format!("{SNAPSHOT_DIR}/{name}"),
@@ -309,21 +308,27 @@ impl GrowthWriter {
 }
 
 /// Create `path` with the series header as its first line.
-fn create_with_header(path: &Path) -> Result<fs::File, OutputError> {
-    let mut file = fs::File::create(path).map_err(|e| OutputError::io(path, e))?;
-    writeln!(file, "{}", series_header())
-        .and_then(|_| file.flush())
+fn create_with_header(path: &Path) -> Result<csv::Writer<fs::File>, OutputError> {
+    let file = fs::File::create(path).map_err(|e| OutputError::io(path, e))?;
+    let mut w = csv_writer(file, QuoteStyle::Necessary);
+    w.write_record(SERIES_COLUMNS)
+        .map_err(std::io::Error::from)
+        .and_then(|_| w.flush())
         .map_err(|e| OutputError::io(path, e))?;
-    Ok(file)
+    Ok(w)
+}
+
+/// Append the series row `row` and flush it to the file at once.
+fn append(w: &mut csv::Writer<fs::File>, row: &SeriesRow) -> std::io::Result<()> {
+    w.write_record(series_record(row))?;
+    w.flush()
 }
 
 impl Observer for GrowthWriter {
     fn history(&mut self, row: &SeriesRow) -> Result<(), ObserverError> {
         let path = self.dir.join(HISTORY_FILE);
         match &mut self.history {
-            Some(file) => writeln!(file, "{}", series_line(row))
-                .and_then(|_| file.flush())
-                .map_err(|e| OutputError::io(&path, e).into()),
+            Some(w) => append(w, row).map_err(|e| OutputError::io(&path, e).into()),
             None => Ok(()),
         }
     }

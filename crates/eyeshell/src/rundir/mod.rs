@@ -1,6 +1,6 @@
 //! Writing results: `fields.csv`, `at.csv` and `summary.json` in an output directory that
 //! appears whole or not at all ([`atomic`] is the one atomic writer of files and
-//! directories).
+//! directories; [`table`] writes and reads every CSV file).
 //!
 //! A run writes into a temporary sibling of the target (`.NAME.tmp-<pid>`), then renames it
 //! into place. An existing target is replaced only if it is a previous eyeshell output (it
@@ -14,9 +14,10 @@ pub mod atomic;
 pub mod growth;
 pub mod read;
 pub mod rundata;
+pub mod table;
 
 use std::fs;
-use std::io::{BufWriter, Write};
+use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use crate::bvp::{FieldRow, SolveStats, COLUMNS};
@@ -184,18 +185,12 @@ pub fn csv_header() -> String {
 
 /// Write `rows` as CSV: the header, then one line per row, every value round-trip exact.
 pub fn write_fields_csv(path: &Path, rows: &[FieldRow]) -> Result<(), OutputError> {
-    let file = fs::File::create(path).map_err(|e| OutputError::io(path, e))?;
-    let mut w = BufWriter::new(file);
-    let mut write = || -> std::io::Result<()> {
-        writeln!(w, "{}", csv_header())?;
+    let write = || -> std::io::Result<()> {
+        let file = fs::File::create(path)?;
+        let mut w = table::csv_writer(BufWriter::new(file), table::QuoteStyle::Necessary);
+        w.write_record(COLUMNS)?;
         for row in rows {
-            let line = row
-                .values()
-                .iter()
-                .map(|&x| format_value(x))
-                .collect::<Vec<_>>()
-                .join(",");
-            writeln!(w, "{line}")?;
+            w.write_record(row.values().iter().map(|&x| format_value(x)))?;
         }
         w.flush()
     };

@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 use super::growth::{SERIES_FILE, SNAPSHOT_DIR};
 use super::{FIELDS_FILE, SUMMARY_FILE};
 
+pub use super::table::{read_csv, Table};
+
 /// The row vectors of a growth export (the published scripts' variables, then Σ); `time`
 /// is written after `eta`.
 pub const GROWTH_VARS: [&str; 14] = [
@@ -48,58 +50,6 @@ pub fn bad(message: impl Into<String>) -> ReadError {
         bad_input: true,
         message: message.into(),
     }
-}
-
-/// A CSV file of numbers with a header line.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Table {
-    pub columns: Vec<String>,
-    pub rows: Vec<Vec<f64>>,
-}
-
-impl Table {
-    /// The values of column `name`, if there is one.
-    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
-        let j = self.columns.iter().position(|c| c == name)?;
-        Some(self.rows.iter().map(|r| r[j]).collect())
-    }
-}
-
-/// Read a CSV file of numbers (the header, then rows of as many values).
-pub fn read_csv(path: &Path) -> Result<Table, ReadError> {
-    let text = fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
-    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-    let columns: Vec<String> = lines
-        .next()
-        .ok_or_else(|| bad(format!("{}: empty file (no header)", path.display())))?
-        .split(',')
-        .map(|c| c.trim().to_string())
-        .collect();
-    let mut rows = Vec::new();
-    for (i, line) in lines.enumerate() {
-        let row = line
-            .split(',')
-            .map(|v| v.trim().parse::<f64>())
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|_| {
-                bad(format!(
-                    "{}: line {}: not a row of numbers: {line:?}",
-                    path.display(),
-                    i + 2
-                ))
-            })?;
-        if row.len() != columns.len() {
-            return Err(bad(format!(
-                "{}: line {}: {} values for {} columns",
-                path.display(),
-                i + 2,
-                row.len(),
-                columns.len()
-            )));
-        }
-        rows.push(row);
-    }
-    Ok(Table { columns, rows })
 }
 
 /// One output time of a growth run, read back.

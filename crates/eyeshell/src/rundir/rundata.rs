@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use super::growth::{HISTORY_FILE, SERIES_FILE};
 use super::read::ReadError as ExportError;
 use super::read::{bad, read_run, Run, RunSnapshot, Table};
+use super::table::read_records;
 use super::SUMMARY_FILE;
 use crate::growth::SeriesRow;
 use crate::model::stimulus::Refraction;
@@ -147,16 +148,10 @@ fn json_to_toml(v: &serde_json::Value) -> Option<toml::Value> {
 
 /// series.csv or history.csv: numbers, and the class as text in the last column.
 pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
-    let text = fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
+    let records = read_records(path)?;
     let mut out = Vec::new();
-    for (i, line) in text
-        .lines()
-        .enumerate()
-        .skip(1)
-        .filter(|(_, l)| !l.trim().is_empty())
-    {
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        let number = |j: usize| fields.get(j).and_then(|v| v.parse::<f64>().ok());
+    for r in records.iter() {
+        let number = |j: usize| r.cells.get(j).and_then(|v| v.parse::<f64>().ok());
         let row = (|| {
             Some(SeriesPoint {
                 t: number(0)?,
@@ -164,14 +159,15 @@ pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
                 equatorial_radius: number(2)?,
                 retina_minus_blue: number(3)?,
                 retina_minus_red: number(4)?,
-                class: Refraction::parse(fields.get(5)?)?,
+                class: Refraction::parse(r.cells.get(5)?)?,
             })
         })();
         out.push(row.ok_or_else(|| {
             bad(format!(
-                "{}: line {}: not a series row: {line:?}",
+                "{}: line {}: not a series row: {:?}",
                 path.display(),
-                i + 1
+                r.line,
+                r.text
             ))
         })?);
     }
