@@ -12,6 +12,7 @@ use plotters::style::RGBColor;
 use crate::interop::export::{bad, ExportError, RunSnapshot};
 use eyeshell::model::stimulus::Surface;
 use eyeshell::rundir::rundata::{self, column, RunData, RunKind, SeriesPoint};
+use eyeshell::rundir::Summary;
 use eyeshell::scene::Scene;
 use eyeshell_plot::{self as plot, colormap, Figure, PlotError, Series, SeriesStyle};
 
@@ -304,20 +305,20 @@ impl PaperRuns {
 
 /// Every run of a sweep directory, in the order of its table.
 pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
-    let summary = std::fs::read_to_string(dir.join(eyeshell::rundir::SUMMARY_FILE))
+    let path = dir.join(eyeshell::rundir::SUMMARY_FILE);
+    let text = std::fs::read_to_string(&path)
         .map_err(|e| bad(format!("{}: not a sweep output ({e})", dir.display())))?;
-    let v: serde_json::Value =
-        serde_json::from_str(&summary).map_err(|e| bad(format!("{}: {e}", dir.display())))?;
-    let runs = v.get("runs").and_then(|r| r.as_array()).ok_or_else(|| {
-        bad(format!(
+    let Summary::Sweep(sweep) = Summary::parse(&path, &text)? else {
+        return Err(bad(format!(
             "{}: not a sweep output (no runs in summary.json)",
             dir.display()
-        ))
-    })?;
-    runs.iter()
-        .filter(|r| r["status"] == "ok" || r["status"] == "reused" || r["status"] == "failed")
-        .filter_map(|r| r["dir"].as_str())
-        .map(|d| rundata::read(&dir.join(d)))
+        )));
+    };
+    sweep
+        .runs
+        .iter()
+        .filter(|r| r.status == "ok" || r.status == "reused" || r.status == "failed")
+        .map(|r| rundata::read(&dir.join(&r.dir)))
         .collect()
 }
 
@@ -822,10 +823,7 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
 
 /// Does `dir` hold a sweep's output (summary.json with a list of runs)?
 pub fn is_sweep(dir: &Path) -> bool {
-    std::fs::read_to_string(dir.join(eyeshell::rundir::SUMMARY_FILE))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .is_some_and(|v| v.get("sweep").is_some() && v.get("runs").is_some())
+    matches!(Summary::read(dir), Ok(Summary::Sweep(_)))
 }
 
 fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {

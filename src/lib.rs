@@ -21,7 +21,8 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use eyeshell::growth::grow;
-use eyeshell::rundir::{self, GrowthWriter, OutputDir};
+use eyeshell::rundir::summary::{ElasticSummary, StudySummary};
+use eyeshell::rundir::{self, GrowthWriter, OutputDir, Summary};
 use eyeshell::scene::{Scene, SceneError, KEYS};
 
 /// Exit code for bad input: usage, scene, validation.
@@ -441,12 +442,13 @@ fn cmd_study(
     rundir::check_target(out_dir)?;
     let dir = OutputDir::create(out_dir)?;
     let text = study(&dir.file(""))?;
-    let summary = serde_json::json!({ "study": name, "sundials_version": rundir::sundials_version(), "report": text });
-    std::fs::write(
-        dir.file(rundir::SUMMARY_FILE),
-        serde_json::to_string_pretty(&summary).unwrap_or_default(),
-    )
-    .map_err(|e| Error::failed(format!("{}: {e}", dir.file(rundir::SUMMARY_FILE).display())))?;
+    Summary::Study(StudySummary {
+        study: name.to_string(),
+        sundials_version: rundir::sundials_version(),
+        report: text.clone(),
+    })
+    .write_to(&dir.file(rundir::SUMMARY_FILE))
+    .map_err(|e| Error::failed(e.to_string()))?;
     let target = dir.commit()?;
     out(&format!(
         "eyeshell: {name} written to {}\n{text}",
@@ -473,7 +475,8 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
         rundir::write_fields_csv(&dir.file(rundir::AT_FILE), &at_rows)?;
     }
     // summary.json last: it marks the directory as a complete eyeshell output.
-    rundir::write_summary_json(&dir.file(rundir::SUMMARY_FILE), &scene, &solution.stats)?;
+    Summary::Elastic(ElasticSummary::new(&scene, &solution.stats))
+        .write_to(&dir.file(rundir::SUMMARY_FILE))?;
     let target = dir.commit()?;
 
     if !a.quiet {

@@ -7,7 +7,8 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use crate::figures::{index_html, paper_figures, PaperRuns, Written};
-use eyeshell::rundir::{self, write_atomic};
+use eyeshell::rundir::summary::{FigureEntry, FiguresSummary};
+use eyeshell::rundir::{self, write_atomic, Summary};
 use eyeshell::scene::sweep::Sweep;
 use eyeshell::sweep::{run_sweep, RunStatus, SweepOptions};
 
@@ -91,9 +92,12 @@ pub fn make(
             message: e.to_string(),
         })?;
         // Marks the directory as eyeshell's from the start, so an interrupted run is replaced.
-        write(
-            &out.join(rundir::SUMMARY_FILE),
-            b"{\n  \"figures\": [],\n  \"status\": \"running\"\n}\n",
+        write_summary(
+            out,
+            FiguresSummary {
+                status: "running".into(),
+                ..FiguresSummary::default()
+            },
         )?;
         for (name, file, text) in SCENES {
             let sweep = Sweep::from_toml_str(text, file, &[])
@@ -139,26 +143,35 @@ pub fn make(
     );
     let html = index_html(&figures, out, &preamble);
     write(&out.join(INDEX_FILE), html.as_bytes())?;
-    let summary = serde_json::json!({
-        "figures": figures.iter().map(|f| serde_json::json!({
-            "id": f.id, "title": f.title, "caption": f.caption,
-            "png": rel(out, &f.png), "svg": rel(out, &f.svg),
-        })).collect::<Vec<_>>(),
-        "data": DATA_DIR,
-        "index": INDEX_FILE,
-        "status": "ok",
-    });
-    write(
-        &out.join(rundir::SUMMARY_FILE),
-        serde_json::to_string_pretty(&summary)
-            .unwrap_or_default()
-            .as_bytes(),
+    write_summary(
+        out,
+        FiguresSummary {
+            figures: figures
+                .iter()
+                .map(|f| FigureEntry {
+                    id: f.id.clone(),
+                    title: f.title.clone(),
+                    caption: f.caption.clone(),
+                    png: rel(out, &f.png),
+                    svg: rel(out, &f.svg),
+                })
+                .collect(),
+            data: Some(DATA_DIR.into()),
+            index: Some(INDEX_FILE.into()),
+            status: "ok".into(),
+        },
     )?;
     Ok(figures)
 }
 
 fn rel(out: &Path, p: &Path) -> String {
     p.strip_prefix(out).unwrap_or(p).display().to_string()
+}
+
+fn write_summary(out: &Path, summary: FiguresSummary) -> Result<(), FiguresError> {
+    Summary::Figures(summary)
+        .write(out)
+        .map_err(|e| failed(e.to_string()))
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), FiguresError> {

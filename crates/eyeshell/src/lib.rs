@@ -33,6 +33,7 @@ mod api;
 pub mod bvp;
 pub mod error;
 pub mod growth;
+mod json;
 pub mod mesh;
 pub mod model;
 pub mod rundir;

@@ -24,8 +24,11 @@ use rayon::prelude::*;
 use crate::bvp::FieldRow;
 use crate::growth::{grow, GrowthStats, SeriesRow};
 use crate::model::stimulus::Refraction;
+use crate::rundir::summary::{ElasticSummary, SweepRunEntry, SweepSummary};
 use crate::rundir::table::{csv_bytes, QuoteStyle};
-use crate::rundir::{self, format_value, write_atomic, GrowthWriter, OutputDir, OutputError};
+use crate::rundir::{
+    self, format_value, write_atomic, GrowthWriter, OutputDir, OutputError, Summary,
+};
 use crate::scene::sweep::{Sweep, SweepRun};
 use crate::scene::Scene;
 
@@ -48,25 +51,8 @@ pub struct SweepOptions<'a> {
     pub cancel: &'a AtomicBool,
 }
 
-/// The final state of one run, for the table.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct RunResult {
-    /// "grow" or "solve".
-    pub kind: String,
-    /// The time reached (growth), 0 for an elastic solve.
-    pub t: f64,
-    /// z of the retina at the posterior pole (docs/MODEL.md §6).
-    pub axial_length: f64,
-    pub equatorial_radius: f64,
-    pub retina_minus_blue: f64,
-    pub retina_minus_red: f64,
-    pub class: String,
-    pub newton_iterations: usize,
-    pub bvp_solves: usize,
-    pub steps: usize,
-    pub rhs_evaluations: usize,
-    pub wall_seconds: f64,
-}
+/// The final state of one run, for the table (and its result.json).
+pub use crate::rundir::summary::RunResult;
 
 /// How a run ended.
 #[derive(Clone, Debug, PartialEq)]
@@ -332,7 +318,8 @@ fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     let out = OutputDir::create(dir).map_err(|e| fail(&e))?;
     rundir::write_fields_csv(&out.file(rundir::FIELDS_FILE), &solution.rows)
         .map_err(|e| fail(&e))?;
-    rundir::write_summary_json(&out.file(rundir::SUMMARY_FILE), scene, &solution.stats)
+    Summary::Elastic(ElasticSummary::new(scene, &solution.stats))
+        .write_to(&out.file(rundir::SUMMARY_FILE))
         .map_err(|e| fail(&e))?;
     out.commit().map_err(|e| fail(&e))?;
     let s = &solution.stats;
@@ -397,10 +384,7 @@ fn write_tables(sweep: &Sweep, report: &SweepReport) -> Result<(), OutputError> 
     table_csv(sweep, report)
         .and_then(|csv| write_atomic(&path, &csv))
         .map_err(|e| io(&path, e))?;
-    let mut json = serde_json::to_string_pretty(&summary_json(sweep, report)).unwrap_or_default();
-    json.push('\n');
-    let path = report.dir.join(rundir::SUMMARY_FILE);
-    write_atomic(&path, json.as_bytes()).map_err(|e| io(&path, e))
+    summary(sweep, report).write(&report.dir)
 }
 
 /// The text of sweep.csv: a cell is quoted when it holds a comma, a quote or a line break.
@@ -449,36 +433,36 @@ fn result_fields(r: &RunRecord) -> Vec<String> {
 }
 
 /// summary.json of the sweep.
-pub fn summary_json(sweep: &Sweep, report: &SweepReport) -> serde_json::Value {
-    let runs: Vec<serde_json::Value> = report
+pub fn summary(sweep: &Sweep, report: &SweepReport) -> Summary {
+    let runs = report
         .records
         .iter()
-        .map(|r| {
-            let values: serde_json::Map<String, serde_json::Value> = sweep
+        .map(|r| SweepRunEntry {
+            name: r.name.clone(),
+            dir: r.dir.clone(),
+            status: r.status.as_str().to_string(),
+            values: sweep
                 .keys
                 .iter()
                 .cloned()
-                .zip(r.values.iter().map(|v| v.clone().into()))
-                .collect();
-            serde_json::json!({
-                "name": r.name,
-                "dir": r.dir,
-                "status": r.status.as_str(),
-                "values": values,
-                "result": r.result,
-                "error": match &r.status { RunStatus::Failed(m) => Some(m.clone()), _ => None },
-            })
+                .zip(r.values.iter().cloned())
+                .collect(),
+            result: r.result.clone(),
+            error: match &r.status {
+                RunStatus::Failed(m) => Some(m.clone()),
+                _ => None,
+            },
         })
         .collect();
-    serde_json::json!({
-        "sweep": sweep.name,
-        "scene": sweep.origin,
-        "status": report.status(),
-        "keys": sweep.keys,
-        "table": TABLE_FILE,
-        "runs_total": sweep.runs.len(),
-        "runs_failed": report.failed().count(),
-        "sundials_version": rundir::sundials_version(),
-        "runs": runs,
+    Summary::Sweep(SweepSummary {
+        sweep: sweep.name.clone(),
+        scene: sweep.origin.clone(),
+        status: report.status().to_string(),
+        keys: sweep.keys.clone(),
+        table: TABLE_FILE.to_string(),
+        runs_total: sweep.runs.len(),
+        runs_failed: report.failed().count(),
+        sundials_version: rundir::sundials_version(),
+        runs,
     })
 }

@@ -65,14 +65,19 @@ impl FieldRow {
 }
 
 /// Solver diagnostics of one elastic solve (written to summary.json, every field by name).
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+/// Reading it back (`serde::Deserialize`), a missing field takes its default and `null`
+/// (how JSON holds a non-finite value) reads as NaN.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct SolveStats {
     pub newton_iterations: usize,
     pub residual_evaluations: usize,
     pub jacobian_evaluations: usize,
     /// KINSOL's final scaled residual norm (max norm).
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub residual_norm: f64,
     /// max over nodes of |Q cos θ + r t_s sin θ − r² ΔP / 2| (docs/MODEL.md §3).
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub first_integral_max: f64,
     /// All nodes of the mesh.
     pub nodes: usize,
@@ -85,9 +90,11 @@ pub struct SolveStats {
     /// Graded nodes inserted next to the cornea (membrane limit).
     pub cornea_nodes: usize,
     /// Cornea stretch α from Adkins' equation.
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub cornea_alpha: f64,
     /// Stages of pressure continuation used (0 when Newton converged directly).
     pub continuation_stages: usize,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
 }
 

@@ -175,7 +175,9 @@ pub struct Snapshot {
 }
 
 /// Work done by a growth run (summary.json).
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+/// Read back like [`crate::bvp::SolveStats`]: missing fields default, `null` is NaN.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct GrowthStats {
     pub steps: usize,
     pub rhs_evaluations: usize,
@@ -190,7 +192,9 @@ pub struct GrowthStats {
     /// (assembly and factorisation).
     pub residual_evaluations: usize,
     pub jacobian_evaluations: usize,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub t_reached: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
 }
 

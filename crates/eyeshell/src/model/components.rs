@@ -31,7 +31,7 @@ use super::params::{Params, Thickness};
 use std::fmt;
 
 /// The membrane law of the sclera (docs/MODEL.md §2).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Membrane {
     /// Neo-Hookean of modulus C (kPa); no fibres, no ψ.
@@ -41,7 +41,7 @@ pub enum Membrane {
 }
 
 /// The thickness of the unloaded, ungrown shell (docs/MODEL.md §4).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum ThicknessComponent {
     /// H(Σ) = H0 (mm) everywhere.
@@ -51,7 +51,7 @@ pub enum ThicknessComponent {
 }
 
 /// The physics a scene's model contains.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Components {
     pub membrane: Membrane,
     pub thickness: ThicknessComponent,

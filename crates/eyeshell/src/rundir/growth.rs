@@ -19,8 +19,9 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use super::summary::{GrowthSummary, RunStatus, SnapshotEntry, Summary};
 use super::table::{csv_bytes, csv_writer, QuoteStyle};
-use super::{format_value, inspect, num, write_atomic, OutputError, Target, SUMMARY_FILE};
+use super::{format_value, inspect, write_atomic, OutputError, Target, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
 use crate::growth::{
     GrowthError, GrowthStats, Observer, ObserverError, SeriesRow, Snapshot, GROWTH_COLUMNS,
@@ -90,109 +91,7 @@ pub fn snapshot_csv(s: &Snapshot) -> std::io::Result<Vec<u8>> {
 }
 
 /// A snapshot file written so far: its time and its path relative to the output directory.
-#[derive(Clone, Debug, PartialEq)]
-pub struct WrittenSnapshot {
-    pub t: f64,
-    pub file: String,
-}
-
-/// How a growth run ended, for summary.json.
-#[derive(Clone, Copy, Debug)]
-pub enum RunStatus<'a> {
-    /// Still running (or killed): written at the start.
-    Running,
-    /// Reached t_end.
-    Ok(&'a GrowthStats),
-    /// Stopped by an error.
-    Failed(&'a GrowthError),
-}
-
-/// The content of summary.json of a growth run of `scene`, given the snapshots written so
-/// far and the last series row.
-pub fn growth_summary_json(
-    scene: &Scene,
-    status: RunStatus<'_>,
-    snapshots: &[WrittenSnapshot],
-    last: Option<&SeriesRow>,
-) -> serde_json::Value {
-    let growth = scene.growth.clone().unwrap_or_default();
-    let settings = &scene.growth_settings;
-    let key = |k: &str| {
-        crate::scene::keys::find(k)
-            .map(|s| s.get(scene).to_json())
-            .unwrap_or_default()
-    };
-    let mut summary = super::run_json(scene);
-    let map = summary.as_object_mut().expect("run_json is an object");
-    let status_name = match status {
-        RunStatus::Running => "running",
-        RunStatus::Ok(_) => "ok",
-        RunStatus::Failed(_) => "failed",
-    };
-    map.insert("status".into(), status_name.into());
-    map.insert("integrator".into(), key("solver.integrator"));
-    map.insert("rtol".into(), num(settings.rtol));
-    map.insert("atol".into(), num(settings.atol));
-    map.insert("euler_steps".into(), settings.steps.into());
-    map.insert("t_end".into(), num(growth.t_end));
-    map.insert(
-        "output_times".into(),
-        serde_json::Value::Array(settings.output_times.iter().map(|&t| num(t)).collect()),
-    );
-    map.insert("thickness_law".into(), key("growth.thickness_law"));
-    map.insert("series_file".into(), SERIES_FILE.into());
-    if settings.history_points > 0 {
-        map.insert("history_file".into(), HISTORY_FILE.into());
-        map.insert("history_points".into(), settings.history_points.into());
-    }
-    map.insert(
-        "snapshots".into(),
-        serde_json::Value::Array(
-            snapshots
-                .iter()
-                .map(|s| serde_json::json!({ "t": num(s.t), "file": s.file }))
-                .collect(),
-        ),
-    );
-    map.insert(
-        "last_output_t".into(),
-        snapshots.last().map(|s| num(s.t)).unwrap_or_default(),
-    );
-    map.insert(
-        "final".into(),
-        last.map(|r| {
-            serde_json::json!({
-                "t": num(r.t),
-                "axial_length": num(r.axial_length),
-                "equatorial_radius": num(r.equatorial_radius),
-                "retina_minus_blue": num(r.retina_minus_blue),
-                "retina_minus_red": num(r.retina_minus_red),
-                "class": r.class.as_str(),
-            })
-        })
-        .unwrap_or_default(),
-    );
-    let stats = match status {
-        RunStatus::Running => None,
-        RunStatus::Ok(stats) => Some(stats),
-        RunStatus::Failed(e) => {
-            map.insert("failed_at_t".into(), num(e.t));
-            map.insert("error".into(), one_line(&e.to_string()).into());
-            Some(e.stats.as_ref())
-        }
-    };
-    // Every statistic of the run, by its field name (non-finite values become null).
-    if let Some(Ok(serde_json::Value::Object(stats))) = stats.map(serde_json::to_value) {
-        map.extend(stats);
-    }
-    summary
-}
-
-fn one_line(s: &str) -> String {
-    s.chars()
-        .map(|c| if c == '\n' || c == '\r' { ' ' } else { c })
-        .collect()
-}
+pub type WrittenSnapshot = SnapshotEntry;
 
 /// Writes a growth run into its output directory as the results come; an [`Observer`] of
 /// [`crate::growth::grow`]. It writes files only: a progress display is the caller's (the
@@ -285,12 +184,13 @@ impl GrowthWriter {
     }
 
     fn write_summary(&self, status: RunStatus<'_>) -> Result<(), OutputError> {
-        let v = growth_summary_json(&self.scene, status, &self.snapshots, self.last.as_ref());
-        let mut text = serde_json::to_string_pretty(&v)
-            .map_err(|e| OutputError::io(&self.dir.join(SUMMARY_FILE), std::io::Error::other(e)))?;
-        text.push('\n');
-        let path = self.dir.join(SUMMARY_FILE);
-        write_atomic(&path, text.as_bytes()).map_err(|e| OutputError::io(&path, e))
+        Summary::Growth(GrowthSummary::new(
+            &self.scene,
+            status,
+            &self.snapshots,
+            self.last.as_ref(),
+        ))
+        .write_to(&self.dir.join(SUMMARY_FILE))
     }
 
     /// The run reached its end: write summary.json with `"status": "ok"` and `stats`.

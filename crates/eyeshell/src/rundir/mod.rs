@@ -1,6 +1,11 @@
-//! Writing results: `fields.csv`, `at.csv` and `summary.json` in an output directory that
-//! appears whole or not at all ([`atomic`] is the one atomic writer of files and
-//! directories; [`table`] writes and reads every CSV file).
+//! Run directories: `fields.csv`, `at.csv` and `summary.json` in an output directory that
+//! appears whole or not at all, and reading them back.
+//!
+//! - [`atomic`]: the one atomic writer of files and directories;
+//! - [`summary`]: summary.json, typed ([`Summary`]);
+//! - [`table`]: the CSV files, written and read through the `csv` crate;
+//! - [`growth`]: a growth run's directory, written as the results come;
+//! - [`read`], [`rundata`]: a run directory read back, for export and for figures.
 //!
 //! A run writes into a temporary sibling of the target (`.NAME.tmp-<pid>`), then renames it
 //! into place. An existing target is replaced only if it is a previous eyeshell output (it
@@ -14,17 +19,18 @@ pub mod atomic;
 pub mod growth;
 pub mod read;
 pub mod rundata;
+pub mod summary;
 pub mod table;
 
 use std::fs;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
-use crate::bvp::{FieldRow, SolveStats, COLUMNS};
-use crate::scene::Scene;
+use crate::bvp::{FieldRow, COLUMNS};
 
 pub use atomic::{write_atomic, AtomicDir};
 pub use growth::GrowthWriter;
+pub use summary::Summary;
 
 /// The file whose presence marks a directory as an eyeshell output.
 pub const SUMMARY_FILE: &str = "summary.json";
@@ -202,67 +208,11 @@ pub fn sundials_version() -> Option<String> {
     Some(eyeshell_sundials::version())
 }
 
-fn num(x: f64) -> serde_json::Value {
-    serde_json::Number::from_f64(x)
-        .map(serde_json::Value::Number)
-        .unwrap_or(serde_json::Value::Null)
-}
-
-/// The part of summary.json every run of `scene` shares: versions, the scene, the elastic
-/// scheme and the effective parameters.
-fn run_json(scene: &Scene) -> serde_json::Value {
-    let name = |k: &str| {
-        crate::scene::keys::find(k)
-            .map(|s| s.get(scene).to_json())
-            .unwrap_or_default()
-    };
-    serde_json::json!({
-        "eyeshell_version": env!("CARGO_PKG_VERSION"),
-        "sundials_version": sundials_version(),
-        "scene": {
-            "name": scene.display_name(),
-            "path": scene.origin,
-            "description": scene.description,
-            "overrides": scene.overrides,
-        },
-        "scheme": name("solver.scheme"),
-        "scheme_order": scene.solver.scheme.order(),
-        "linear_solver": name("solver.linear"),
-        "epsilon": num(scene.solver.epsilon),
-        "length": num(scene.params.length()),
-        "model": scene.components().to_string(),
-        "components": serde_json::to_value(scene.components()).unwrap_or_default(),
-        "parameters": scene.parameters_json(),
-    })
-}
-
-/// The content of summary.json for one solve of `scene`.
-pub fn summary_json(scene: &Scene, stats: &SolveStats) -> serde_json::Value {
-    let mut summary = run_json(scene);
-    // Every solver statistic, by its field name (non-finite values become null).
-    if let (Some(map), Ok(serde_json::Value::Object(stats))) =
-        (summary.as_object_mut(), serde_json::to_value(stats))
-    {
-        map.extend(stats);
-    }
-    summary
-}
-
-/// Write [`summary_json`] to `path`, pretty-printed.
-pub fn write_summary_json(
-    path: &Path,
-    scene: &Scene,
-    stats: &SolveStats,
-) -> Result<(), OutputError> {
-    let mut text = serde_json::to_string_pretty(&summary_json(scene, stats))
-        .map_err(|e| OutputError::io(path, std::io::Error::other(e)))?;
-    text.push('\n');
-    fs::write(path, text).map_err(|e| OutputError::io(path, e))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bvp::SolveStats;
+    use crate::scene::Scene;
 
     fn row(k: f64) -> FieldRow {
         FieldRow {
@@ -305,7 +255,11 @@ mod tests {
             residual_norm: 1e-12,
             ..SolveStats::default()
         };
-        let v = summary_json(&Scene::default(), &stats);
+        let v = serde_json::to_value(Summary::Elastic(summary::ElasticSummary::new(
+            &Scene::default(),
+            &stats,
+        )))
+        .unwrap();
         for k in [
             "newton_iterations",
             "residual_evaluations",

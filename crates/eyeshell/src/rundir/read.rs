@@ -6,6 +6,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use super::growth::{SERIES_FILE, SNAPSHOT_DIR};
+use super::summary::Summary;
 use super::{FIELDS_FILE, SUMMARY_FILE};
 
 pub use super::table::{read_csv, Table};
@@ -78,37 +79,43 @@ pub fn is_run_dir(dir: &Path) -> bool {
 
 /// Read the run directory `dir`: summary.json says whether it is a growth run.
 pub fn read_run(dir: &Path) -> Result<Run, ReadError> {
-    let summary_path = dir.join(SUMMARY_FILE);
     if !dir.is_dir() {
         return Err(bad(format!("{}: not a directory", dir.display())));
     }
-    let text = fs::read_to_string(&summary_path).map_err(|e| {
-        bad(format!(
-            "{}: not an eyeshell run directory ({SUMMARY_FILE}: {e})",
-            dir.display()
-        ))
-    })?;
-    let summary: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| bad(format!("{}: not valid JSON: {e}", summary_path.display())))?;
-    let growth = summary.get("status").is_some() || summary.get("snapshots").is_some();
-    if !growth {
+    read_run_with(dir, &Summary::read(dir)?)
+}
+
+/// Read the run directory `dir` whose summary.json is `summary`.
+pub fn read_run_with(dir: &Path, summary: &Summary) -> Result<Run, ReadError> {
+    let growth = match summary {
+        Summary::Elastic(_) => None,
+        Summary::Growth(g) => Some(g),
+        other => {
+            return Err(bad(format!(
+                "{}: an eyeshell {} directory, not a run directory (of `eyeshell solve` or `eyeshell grow`)",
+                dir.display(),
+                other.kind()
+            )))
+        }
+    };
+    let Some(growth) = growth else {
         let file = dir.join(FIELDS_FILE);
         let table = read_csv(&file)?;
         check_columns(&file, &table, &["Sigma"])?;
         return Ok(Run::Elastic { file, table });
-    }
+    };
     // The times: summary.json's list (exact), else series.csv row k, else the file name.
     let mut times: BTreeMap<String, f64> = BTreeMap::new();
-    if let Some(list) = summary.get("snapshots").and_then(|s| s.as_array()) {
-        for s in list {
-            if let (Some(f), Some(t)) = (s["file"].as_str(), s["t"].as_f64()) {
-                let name = Path::new(f)
-                    .file_name()
-                    .unwrap_or_default()
-                    .to_string_lossy();
-                times.insert(name.into_owned(), t);
-            }
-        }
+    for s in growth
+        .snapshots
+        .iter()
+        .filter(|s| !s.file.is_empty() && !s.t.is_nan())
+    {
+        let name = Path::new(&s.file)
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy();
+        times.insert(name.into_owned(), s.t);
     }
     let series: Vec<f64> = read_csv(&dir.join(SERIES_FILE))
         .ok()
@@ -160,4 +167,43 @@ fn check_columns(file: &Path, table: &Table, needed: &[&str]) -> Result<(), Read
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rundir::summary::{StudySummary, SweepSummary};
+
+    #[test]
+    fn only_runs_read_as_runs() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = read_run(&dir.path().join("none")).unwrap_err();
+        assert!(
+            e.bad_input && e.message.ends_with("none: not a directory"),
+            "{e}"
+        );
+        let e = read_run(dir.path()).unwrap_err();
+        assert!(e.message.contains("not an eyeshell run directory"), "{e}");
+        // A sweep has a status too, but it is not a growth run; nor is a study a solve.
+        for summary in [
+            Summary::Sweep(SweepSummary {
+                sweep: "s".into(),
+                status: "ok".into(),
+                ..SweepSummary::default()
+            }),
+            Summary::Study(StudySummary::default()),
+        ] {
+            summary.write(dir.path()).unwrap();
+            let e = read_run(dir.path()).unwrap_err();
+            assert!(
+                e.bad_input && e.message.contains("not a run directory"),
+                "{e}"
+            );
+        }
+        // A growth run that has no snapshot yet says so.
+        fs::write(dir.path().join(SUMMARY_FILE), "{\"status\": \"running\"}").unwrap();
+        fs::create_dir(dir.path().join(SNAPSHOT_DIR)).unwrap();
+        let e = read_run(dir.path()).unwrap_err();
+        assert!(e.message.contains("has no snapshot yet"), "{e}");
+    }
 }

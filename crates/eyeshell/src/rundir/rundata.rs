@@ -2,12 +2,12 @@
 //! time series. Everything a figure shows comes from these files, never from the solver's
 //! memory, so a figure always shows what the run wrote.
 
-use std::fs;
 use std::path::{Path, PathBuf};
 
 use super::growth::{HISTORY_FILE, SERIES_FILE};
 use super::read::ReadError as ExportError;
-use super::read::{bad, read_run, Run, RunSnapshot, Table};
+use super::read::{bad, read_run_with, Run, RunSnapshot, Table};
+use super::summary::{RunInfo, Summary};
 use super::table::read_records;
 use super::SUMMARY_FILE;
 use crate::growth::SeriesRow;
@@ -77,23 +77,19 @@ impl RunData {
 
 /// Read the run in `dir` (an `eyeshell solve` or `eyeshell grow` output, finished or not).
 pub fn read(dir: &Path) -> Result<RunData, ExportError> {
+    let summary = Summary::read(dir)?;
     let summary_path = dir.join(SUMMARY_FILE);
-    let text = fs::read_to_string(&summary_path).map_err(|e| {
-        bad(format!(
-            "{}: not an eyeshell run directory ({SUMMARY_FILE}: {e})",
-            dir.display()
-        ))
-    })?;
-    let summary: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| bad(format!("{}: not valid JSON: {e}", summary_path.display())))?;
-    let scene = scene_of(&summary, &summary_path)?;
-    let name = summary
-        .pointer("/scene/name")
-        .and_then(|s| s.as_str())
-        .map(str::to_string)
+    let Some(run) = summary.run() else {
+        // Not a run: read_run_with says what it is.
+        read_run_with(dir, &summary)?;
+        return Err(bad(format!("{}: not a run", dir.display())));
+    };
+    let scene = scene_of(run, &summary_path)?;
+    let name = Some(run.scene.name.clone())
+        .filter(|n| !n.is_empty())
         .or_else(|| dir.file_name().map(|n| n.to_string_lossy().into_owned()))
         .unwrap_or_default();
-    let kind = match read_run(dir)? {
+    let kind = match read_run_with(dir, &summary)? {
         Run::Elastic { table, .. } => RunKind::Elastic(table),
         Run::Growth(snapshots) => RunKind::Growth {
             snapshots,
@@ -102,11 +98,10 @@ pub fn read(dir: &Path) -> Result<RunData, ExportError> {
                 p if p.is_file() => read_series(&p)?,
                 _ => Vec::new(),
             },
-            status: summary
-                .get("status")
-                .and_then(|s| s.as_str())
-                .unwrap_or("unknown")
-                .to_string(),
+            status: match &summary {
+                Summary::Growth(g) => g.status.as_str().to_string(),
+                _ => "unknown".to_string(),
+            },
         },
     };
     Ok(RunData {
@@ -118,10 +113,10 @@ pub fn read(dir: &Path) -> Result<RunData, ExportError> {
 }
 
 /// The scene of a run: every key of summary.json's `parameters` set on the defaults.
-fn scene_of(summary: &serde_json::Value, path: &Path) -> Result<Scene, ExportError> {
-    let params = summary
-        .get("parameters")
-        .and_then(|p| p.as_object())
+fn scene_of(run: &RunInfo, path: &Path) -> Result<Scene, ExportError> {
+    let params = run
+        .parameters
+        .as_ref()
         .ok_or_else(|| bad(format!("{}: no \"parameters\" object", path.display())))?;
     let origin = path.display().to_string();
     let assignments: Vec<(String, toml::Value, String)> = params
