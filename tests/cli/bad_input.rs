@@ -71,7 +71,7 @@ fn pressure_beyond_the_corneal_limit() {
 fn too_few_nodes() {
     file_fails("[solver]\nnodes = 4", "solver.nodes");
     file_fails("[solver]\nnodes = -1", "solver.nodes");
-    set_fails("solver.nodes=0", "at least 5");
+    set_fails("solver.nodes=0", "between 5 and 1000000");
 }
 
 #[test]
@@ -213,7 +213,7 @@ fn check_fails_like_solve() {
     );
     assert_bad(
         &run,
-        "--set solver.nodes=3: solver.nodes = 3 must be at least 5",
+        "--set solver.nodes=3: solver.nodes = 3 must lie between 5 and 1000000",
         "check --set",
     );
 }

@@ -4,7 +4,9 @@
 /// `x` exactly (the shortest form that reads back to the same f64), in scientific notation
 /// outside [1e-4, 1e15): `2.5`, `0.001`, `1e-300`, `2.5e307`. At most about 24 characters.
 pub fn number(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+    if x.is_nan() {
+        "nan".into() // as TOML spells it
+    } else if x == 0.0 || x.is_infinite() || (1e-4..1e15).contains(&x.abs()) {
         format!("{x}")
     } else {
         format!("{x:e}")
@@ -34,6 +36,8 @@ mod tests {
         assert_eq!(number(5e-324), "5e-324");
         assert_eq!(number(f64::MAX).parse::<f64>().unwrap(), f64::MAX);
         assert_eq!(number(f64::INFINITY), "inf");
+        assert_eq!(number(f64::NEG_INFINITY), "-inf");
+        assert_eq!(number(f64::NAN), "nan");
         assert_eq!(decimals6(5.9320914), "5.932091");
         assert_eq!(decimals6(0.0), "0.000000");
         assert_eq!(decimals6(1.2345678e-7), "1.234568e-7");
