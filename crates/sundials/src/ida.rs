@@ -45,6 +45,7 @@ use super::callback::{
 };
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
+use super::integrator::{common_options, invalid, to_int};
 use super::linsol::{LinearSolver, LinearSolverSpec};
 use super::matrix::{JacobianMatrix, Matrix};
 use super::nvector::{self, NVector};
@@ -277,14 +278,6 @@ pub struct Ida<S: DaeSystem> {
     /// Whether options.id was given (IDACalcIC needs it).
     has_id: bool,
     _ctx: Rc<Context>,
-}
-
-fn invalid<T>(what: String) -> Result<T, SundialsError> {
-    Err(SundialsError::Invalid(what))
-}
-
-fn to_int(what: &str, n: usize) -> Result<c_int, SundialsError> {
-    c_int::try_from(n).map_err(|_| SundialsError::Invalid(format!("{what} = {n} is too large")))
 }
 
 impl<S: DaeSystem> Ida<S> {
@@ -880,45 +873,7 @@ impl Linear {
 }
 
 fn validate(n: usize, o: &IdaOptions) -> Result<(), SundialsError> {
-    let nonneg = |x: f64| x >= 0.0 && x.is_finite();
-    if !nonneg(o.rtol) || !nonneg(o.atol) {
-        return invalid(format!(
-            "rtol and atol must be finite and ≥ 0, got {} and {}",
-            o.rtol, o.atol
-        ));
-    }
-    if let Some(v) = &o.atol_vector {
-        if v.len() != n {
-            return invalid(format!("atol_vector has length {}, expected {n}", v.len()));
-        }
-        if let Some(k) = v.iter().position(|&x| !nonneg(x)) {
-            return invalid(format!("atol_vector[{k}] = {} is not finite and ≥ 0", v[k]));
-        }
-    }
-    if o.max_steps == 0 {
-        return invalid("max_steps must be ≥ 1".into());
-    }
-    if !(1..=5).contains(&o.max_order) {
-        return invalid(format!(
-            "max_order must be 1 ..= 5 for BDF, got {}",
-            o.max_order
-        ));
-    }
-    if let Some(h) = o.initial_step {
-        if !(h.is_finite() && h != 0.0) {
-            return invalid(format!("initial_step must be finite and nonzero, got {h}"));
-        }
-    }
-    if let Some(h) = o.max_step {
-        if !(h > 0.0 && h.is_finite()) {
-            return invalid(format!("max_step must be positive, got {h}"));
-        }
-    }
-    if let Some(t) = o.stop_time {
-        if !t.is_finite() {
-            return invalid(format!("stop_time {t} is not finite"));
-        }
-    }
+    common_options!(o).validate(n)?;
     match &o.id {
         Some(id) => {
             if id.len() != n {

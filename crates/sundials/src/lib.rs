@@ -19,6 +19,7 @@ mod cvode;
 mod error;
 mod fastops;
 mod ida;
+mod integrator;
 mod kinsol;
 mod klu;
 pub mod linalg;
