@@ -686,16 +686,7 @@ unsafe extern "C" fn jacobian_trampoline<S: OdeSystem>(
         return callbacks.fail("CVODE passed a Jacobian matrix this layer did not create".into());
     };
     callbacks.guard("jacobian", || {
-        matrix.zero();
-        matrix.take_outside();
-        system.jacobian(t, y, fy, matrix.view_mut())?;
-        match matrix.take_outside() {
-            0 => Ok(()),
-            k => Err(CallbackError::Fatal(format!(
-                "{k} entries were set outside the structure of the {} Jacobian",
-                matrix.describe()
-            ))),
-        }
+        matrix.fill_jacobian(|jac| system.jacobian(t, y, fy, jac))
     })
 }
 

@@ -962,16 +962,7 @@ unsafe extern "C" fn jacobian_trampoline<S: DaeSystem>(
         return callbacks.fail("IDA passed a Jacobian matrix this layer did not create".into());
     };
     callbacks.guard("jacobian", || {
-        matrix.zero();
-        matrix.take_outside();
-        system.jacobian(t, cj, y, yp, r, matrix.view_mut())?;
-        match matrix.take_outside() {
-            0 => Ok(()),
-            k => Err(CallbackError::Fatal(format!(
-                "{k} entries were set outside the structure of the {} Jacobian",
-                matrix.describe()
-            ))),
-        }
+        matrix.fill_jacobian(|jac| system.jacobian(t, cj, y, yp, r, jac))
     })
 }
 

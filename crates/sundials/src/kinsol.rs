@@ -16,9 +16,7 @@ use sundials_sys::{
     SUNLinSolSolve, SUNMatrix, KIN_LINESEARCH, KIN_LSETUP_FAIL, KIN_NONE,
 };
 
-use super::callback::{
-    error_handler, CallbackError, CallbackResult, CallbackState, ErrorLog, RawBox,
-};
+use super::callback::{error_handler, CallbackResult, CallbackState, ErrorLog, RawBox};
 use super::context::Context;
 use super::error::{check, flag_error, FlagFamily, SundialsError};
 use super::linsol::{LinearSolver, LinearSolverSpec};
@@ -513,16 +511,8 @@ unsafe extern "C" fn jacobian_trampoline<S: NonlinearSystem>(
     }
     *jacobian_calls += 1;
     callbacks.guard("jacobian", || {
-        // Zeroing also rewrites a sparse matrix's pattern, which KINSOL's SUNMatZero cleared.
-        matrix.zero();
-        matrix.take_outside();
-        system.jacobian(u, matrix.view_mut())?;
-        match matrix.take_outside() {
-            0 => Ok(()),
-            k => Err(CallbackError::Fatal(format!(
-                "{k} entries were set outside the structure of the {} Jacobian",
-                matrix.describe()
-            ))),
-        }
+        // fill_jacobian zeroes first, which also rewrites a sparse matrix's pattern that
+        // KINSOL's SUNMatZero cleared.
+        matrix.fill_jacobian(|jac| system.jacobian(u, jac))
     })
 }

@@ -19,6 +19,7 @@ use sundials_sys::{
     SUNSparseMatrix_IndexValues, CSR_MAT,
 };
 
+use super::callback::{CallbackError, CallbackResult};
 use super::context::Context;
 use super::error::SundialsError;
 
@@ -651,6 +652,25 @@ impl Matrix {
             Matrix::Dense(m) => JacobianMatrix::Dense(m.view_mut()),
             Matrix::Band(m) => JacobianMatrix::Band(m.view_mut()),
             Matrix::Sparse(m) => JacobianMatrix::Sparse(m.view_mut()),
+        }
+    }
+
+    /// The body of every Jacobian callback (KINSOL's, CVODE's, IDA's): zero the matrix, let
+    /// `fill` set its structural entries, and fail (Fatal) if any write fell outside the
+    /// structure (release builds count those writes instead of panicking).
+    pub(crate) fn fill_jacobian(
+        &mut self,
+        fill: impl FnOnce(JacobianMatrix<'_>) -> CallbackResult,
+    ) -> CallbackResult {
+        self.zero();
+        self.take_outside();
+        fill(self.view_mut())?;
+        match self.take_outside() {
+            0 => Ok(()),
+            k => Err(CallbackError::Fatal(format!(
+                "{k} entries were set outside the structure of the {} Jacobian",
+                self.describe()
+            ))),
         }
     }
 
