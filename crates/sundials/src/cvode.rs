@@ -31,14 +31,14 @@ use sundials_sys::{
 };
 
 use super::callback::{
-    self, counter, error_handler, CallbackError, CallbackResult, CallbackState, CountGetter,
-    ErrorLog, RawBox, RealGetter,
+    self, counter, error_handler, CallbackError, CallbackResult, CountGetter, ErrorLog, RawBox,
+    RealGetter,
 };
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
-use super::integrator::{common_options, invalid, to_int};
+use super::integrator::{common_options, invalid, to_int, Shared};
 use super::linsol::{LinearSolver, LinearSolverSpec};
-use super::matrix::{JacobianMatrix, Matrix};
+use super::matrix::JacobianMatrix;
 use super::nvector::{self, NVector};
 
 /// y' = f(t, y) and the optional derivative information CVODE's linear solvers use.
@@ -207,16 +207,6 @@ pub struct CvodeStats {
     pub current_time: f64,
 }
 
-/// What the trampolines reach through CVODE's user-data pointer.
-struct Shared<S> {
-    system: S,
-    /// The matrix of a direct solver.
-    matrix: Option<Matrix>,
-    callbacks: CallbackState,
-    /// Input copy for a callback whose input and output vectors coincide.
-    scratch: Vec<f64>,
-}
-
 /// CVODE memory, freed with CVodeFree.
 struct CvMem(*mut c_void);
 
@@ -320,12 +310,7 @@ impl<S: OdeSystem> Cvode<S> {
                 (Some(m), Linear::Direct(ls))
             }
         };
-        let shared = RawBox::new(Shared {
-            system,
-            matrix,
-            callbacks: CallbackState::default(),
-            scratch: vec![0.0; n],
-        });
+        let shared = RawBox::new(Shared::new(system, matrix, n));
         let log = RawBox::new(ErrorLog::default());
         // SAFETY: ctx is live.
         let raw = unsafe { CVodeCreate(CV_BDF, ctx.raw()) };
@@ -358,13 +343,7 @@ impl<S: OdeSystem> Cvode<S> {
         let y0 = self.y.raw();
         let ls = self.linsol.raw();
         // SAFETY: the matrix is only read for its handle.
-        let a = unsafe {
-            self.shared
-                .get()
-                .matrix
-                .as_ref()
-                .map_or(std::ptr::null_mut(), |m| m.raw())
-        };
+        let a = unsafe { self.shared.get().matrix_raw() };
         // SAFETY (all calls): `mem` is live CVODE memory; the error log, the user data, the
         // vectors, linear solver and matrix all outlive it (field order). CVODE copies y0 and
         // the absolute tolerances.
@@ -654,12 +633,9 @@ unsafe extern "C" fn rhs_trampoline<S: OdeSystem>(
     // SAFETY: `data` is the Shared<S> registered with CVodeSetUserData; CVODE calls us from
     // inside CVode, while no other reference to it exists; y and ydot are distinct live
     // serial vectors of length n.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, ydot) = unsafe { (nvector::slice(y), nvector::slice_mut(ydot)) };
-    let Shared {
-        system, callbacks, ..
-    } = shared;
-    callbacks.guard("rhs", || system.rhs(t, y, ydot))
+    shared.guard("rhs", |system| system.rhs(t, y, ydot))
 }
 
 /// CVLsJacFn: zero J, let the system fill it, check nothing fell outside its structure.
@@ -674,20 +650,9 @@ unsafe extern "C" fn jacobian_trampoline<S: OdeSystem>(
     _tmp3: N_Vector,
 ) -> c_int {
     // SAFETY: as in rhs_trampoline; y and fy are live and only read.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
-    let Shared {
-        system,
-        matrix,
-        callbacks,
-        ..
-    } = shared;
-    let Some(matrix) = matrix.as_mut().filter(|m| m.raw() == jac) else {
-        return callbacks.fail("CVODE passed a Jacobian matrix this layer did not create".into());
-    };
-    callbacks.guard("jacobian", || {
-        matrix.fill_jacobian(|jac| system.jacobian(t, y, fy, jac))
-    })
+    shared.jacobian("CVODE", jac, |system, jac| system.jacobian(t, y, fy, jac))
 }
 
 /// CVLsJacTimesSetupFn.
@@ -698,12 +663,9 @@ unsafe extern "C" fn jac_times_setup_trampoline<S: OdeSystem>(
     data: *mut c_void,
 ) -> c_int {
     // SAFETY: as in rhs_trampoline; y and fy are only read.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
-    let Shared {
-        system, callbacks, ..
-    } = shared;
-    callbacks.guard("jac_times_setup", || system.jac_times_setup(t, y, fy))
+    shared.guard("jac_times_setup", |system| system.jac_times_setup(t, y, fy))
 }
 
 /// CVLsJacTimesVecFn: jv = J v.
@@ -716,24 +678,15 @@ unsafe extern "C" fn jac_times_trampoline<S: OdeSystem>(
     data: *mut c_void,
     _tmp: N_Vector,
 ) -> c_int {
-    // SAFETY: as in rhs_trampoline; y, fy and v are only read, jv only written. If v and jv
-    // are the same vector, v is copied to the scratch buffer first so the slices never alias.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
-    let Shared {
-        system,
-        callbacks,
-        scratch,
-        ..
-    } = shared;
+    // SAFETY: as in rhs_trampoline; y and fy are only read, v and jv are live vectors of
+    // length n that only this call accesses (guard_in_out copies v if it is jv).
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
-    let out = unsafe { nvector::slice_mut(jv) };
-    let input: &[f64] = if v == jv {
-        scratch.copy_from_slice(out);
-        &scratch[..]
-    } else {
-        unsafe { nvector::slice(v) }
-    };
-    callbacks.guard("jac_times", || system.jac_times(t, y, fy, input, out))
+    unsafe {
+        shared.guard_in_out("jac_times", v, jv, |system, v, jv| {
+            system.jac_times(t, y, fy, v, jv)
+        })
+    }
 }
 
 /// CVLsPrecSetupFn.
@@ -747,13 +700,10 @@ unsafe extern "C" fn precond_setup_trampoline<S: OdeSystem>(
     data: *mut c_void,
 ) -> c_int {
     // SAFETY: as in rhs_trampoline; jcur is a valid out-pointer.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
-    let Shared {
-        system, callbacks, ..
-    } = shared;
     let mut recomputed = false;
-    let flag = callbacks.guard("precond_setup", || {
+    let flag = shared.guard("precond_setup", |system| {
         recomputed = system.precond_setup(t, y, fy, jok != 0, gamma)?;
         Ok(())
     });
@@ -777,22 +727,11 @@ unsafe extern "C" fn precond_solve_trampoline<S: OdeSystem>(
     data: *mut c_void,
 ) -> c_int {
     // SAFETY: as in jac_times_trampoline, with r the input and z the output.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
-    let Shared {
-        system,
-        callbacks,
-        scratch,
-        ..
-    } = shared;
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, fy) = unsafe { (nvector::slice(y), nvector::slice(fy)) };
-    let out = unsafe { nvector::slice_mut(z) };
-    let input: &[f64] = if r == z {
-        scratch.copy_from_slice(out);
-        &scratch[..]
-    } else {
-        unsafe { nvector::slice(r) }
-    };
-    callbacks.guard("precond_solve", || {
-        system.precond_solve(t, y, fy, input, out, gamma, delta)
-    })
+    unsafe {
+        shared.guard_in_out("precond_solve", r, z, |system, r, z| {
+            system.precond_solve(t, y, fy, r, z, gamma, delta)
+        })
+    }
 }

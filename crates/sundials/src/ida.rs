@@ -40,14 +40,14 @@ use sundials_sys::{
 };
 
 use super::callback::{
-    self, counter, error_handler, CallbackError, CallbackResult, CallbackState, CountGetter,
-    ErrorLog, RawBox, RealGetter,
+    self, counter, error_handler, CallbackError, CallbackResult, CountGetter, ErrorLog, RawBox,
+    RealGetter,
 };
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
-use super::integrator::{common_options, invalid, to_int};
+use super::integrator::{common_options, invalid, to_int, Shared};
 use super::linsol::{LinearSolver, LinearSolverSpec};
-use super::matrix::{JacobianMatrix, Matrix};
+use super::matrix::JacobianMatrix;
 use super::nvector::{self, NVector};
 
 /// F(t, y, y') = 0 and how its Newton systems are solved.
@@ -200,17 +200,6 @@ pub struct IdaStats {
     pub current_time: f64,
 }
 
-/// What the trampolines reach through IDA's user-data pointer (and, for the custom solver,
-/// through the linear solver's content pointer).
-struct Shared<S> {
-    system: S,
-    /// The matrix of a dense or band solver.
-    matrix: Option<Matrix>,
-    callbacks: CallbackState,
-    /// Input copy for a callback whose input and output vectors coincide.
-    scratch: Vec<f64>,
-}
-
 /// IDA memory, freed with IDAFree.
 struct IdaMem(*mut c_void);
 
@@ -332,12 +321,7 @@ impl<S: DaeSystem> Ida<S> {
                 (Some(m), Linear::Direct(ls))
             }
         };
-        let shared = RawBox::new(Shared {
-            system,
-            matrix,
-            callbacks: CallbackState::default(),
-            scratch: vec![0.0; n],
-        });
+        let shared = RawBox::new(Shared::new(system, matrix, n));
         let log = RawBox::new(ErrorLog::default());
         // SAFETY: ctx is live.
         let raw = unsafe { IDACreate(ctx.raw()) };
@@ -380,13 +364,7 @@ impl<S: DaeSystem> Ida<S> {
         let a = match &self.linsol {
             Linear::Custom { token, .. } => token.0,
             // SAFETY: the matrix is only read for its handle.
-            Linear::Direct(_) => unsafe {
-                self.shared
-                    .get()
-                    .matrix
-                    .as_ref()
-                    .map_or(std::ptr::null_mut(), |m| m.raw())
-            },
+            Linear::Direct(_) => unsafe { self.shared.get().matrix_raw() },
         };
         // SAFETY (all calls): `mem` is live IDA memory; the error log, the user data, the
         // vectors, linear solver and matrix all outlive it (field order). IDA copies y0, yp0,
@@ -927,12 +905,9 @@ unsafe extern "C" fn residual_trampoline<S: DaeSystem>(
     // SAFETY: `data` is the Shared<S> registered with IDASetUserData; IDA calls us from
     // inside IDASolve or IDACalcIC, while no other reference to it exists; y, yp and r are
     // distinct live serial vectors of length n, y and yp only read, r only written.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, yp, r) = unsafe { (nvector::slice(y), nvector::slice(yp), nvector::slice_mut(r)) };
-    let Shared {
-        system, callbacks, ..
-    } = shared;
-    callbacks.guard("residual", || system.residual(t, y, yp, r))
+    shared.guard("residual", |system| system.residual(t, y, yp, r))
 }
 
 /// IDALsJacFn for dense and band: zero M, let the system fill it, check nothing fell outside
@@ -950,19 +925,10 @@ unsafe extern "C" fn jacobian_trampoline<S: DaeSystem>(
     _tmp3: N_Vector,
 ) -> c_int {
     // SAFETY: as in residual_trampoline; y, yp and r are live and only read.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, yp, r) = unsafe { (nvector::slice(y), nvector::slice(yp), nvector::slice(r)) };
-    let Shared {
-        system,
-        matrix,
-        callbacks,
-        ..
-    } = shared;
-    let Some(matrix) = matrix.as_mut().filter(|m| m.raw() == jac) else {
-        return callbacks.fail("IDA passed a Jacobian matrix this layer did not create".into());
-    };
-    callbacks.guard("jacobian", || {
-        matrix.fill_jacobian(|jac| system.jacobian(t, cj, y, yp, r, jac))
+    shared.jacobian("IDA", jac, |system, jac| {
+        system.jacobian(t, cj, y, yp, r, jac)
     })
 }
 
@@ -981,12 +947,11 @@ unsafe extern "C" fn linear_setup_trampoline<S: DaeSystem>(
     _tmp3: N_Vector,
 ) -> c_int {
     // SAFETY: as in jacobian_trampoline.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let shared = unsafe { Shared::<S>::from_raw(data) };
     let (y, yp, r) = unsafe { (nvector::slice(y), nvector::slice(yp), nvector::slice(r)) };
-    let Shared {
-        system, callbacks, ..
-    } = shared;
-    callbacks.guard("linear_setup", || system.linear_setup(t, cj, y, yp, r))
+    shared.guard("linear_setup", |system| {
+        system.linear_setup(t, cj, y, yp, r)
+    })
 }
 
 /// SUNLinSolSolve of the custom solver: x = M⁻¹ b by the system. The flags are the ones
@@ -1000,23 +965,15 @@ unsafe extern "C" fn custom_solve_trampoline<S: DaeSystem>(
 ) -> c_int {
     // SAFETY: the content is the Shared<S> set in Ida::new, alive as long as the solver; IDA
     // calls us from inside IDASolve or IDACalcIC, while no other reference to it exists.
-    // b is only read and x only written; if they are the same vector, b is copied to the
-    // scratch buffer first so the slices never alias.
-    let shared = unsafe { &mut *((*ls).content as *mut Shared<S>) };
-    let Shared {
-        system,
-        callbacks,
-        scratch,
-        ..
-    } = shared;
-    let out = unsafe { nvector::slice_mut(x) };
-    let input: &[f64] = if x == b {
-        scratch.copy_from_slice(out);
-        &scratch[..]
-    } else {
-        unsafe { nvector::slice(b) }
+    // b is only read and x only written, live vectors of length n that only this call
+    // accesses (guard_in_out copies b if it is x).
+    let shared = unsafe { Shared::<S>::from_raw((*ls).content) };
+    let flag = unsafe {
+        shared.guard_in_out("linear_solve", b, x, |system, b, x| {
+            system.linear_solve(b, x)
+        })
     };
-    match callbacks.guard("linear_solve", || system.linear_solve(input, out)) {
+    match flag {
         0 => SUNLS_SUCCESS as c_int,
         f if f > 0 => SUNLS_PACKAGE_FAIL_REC as c_int,
         _ => SUNLS_PACKAGE_FAIL_UNREC,

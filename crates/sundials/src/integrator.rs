@@ -3,9 +3,14 @@
 //! looks alike (the systems' callbacks, the linear solvers, the length checks that name
 //! different vectors) stays in [`cvode`](super::cvode) and [`ida`](super::ida).
 
-use std::os::raw::c_int;
+use std::os::raw::{c_int, c_void};
 
+use sundials_sys::{N_Vector, SUNMatrix};
+
+use super::callback::{CallbackResult, CallbackState};
 use super::error::SundialsError;
+use super::matrix::{JacobianMatrix, Matrix};
+use super::nvector;
 
 pub(crate) fn invalid<T>(what: String) -> Result<T, SundialsError> {
     Err(SundialsError::Invalid(what))
@@ -13,6 +18,111 @@ pub(crate) fn invalid<T>(what: String) -> Result<T, SundialsError> {
 
 pub(crate) fn to_int(what: &str, n: usize) -> Result<c_int, SundialsError> {
     c_int::try_from(n).map_err(|_| SundialsError::Invalid(format!("{what} = {n} is too large")))
+}
+
+/// What the trampolines reach through the integrator's user-data pointer (and, for IDA's
+/// custom solver, through the linear solver's content pointer).
+pub(crate) struct Shared<S> {
+    pub(crate) system: S,
+    /// The matrix of a direct solver.
+    matrix: Option<Matrix>,
+    pub(crate) callbacks: CallbackState,
+    /// Input copy for a callback whose input and output vectors coincide.
+    scratch: Vec<f64>,
+}
+
+impl<S> Shared<S> {
+    /// The state of a system of n unknowns.
+    pub(crate) fn new(system: S, matrix: Option<Matrix>, n: usize) -> Self {
+        Shared {
+            system,
+            matrix,
+            callbacks: CallbackState::default(),
+            scratch: vec![0.0; n],
+        }
+    }
+
+    /// The shared state behind the pointer a trampoline was given.
+    ///
+    /// # Safety
+    /// `data` must be the address of a live `Shared<S>` (the user data, or the custom
+    /// solver's content) to which no other reference exists while the result lives: true
+    /// inside a callback, which CVODE and IDA make only from inside the call that solves.
+    pub(crate) unsafe fn from_raw<'a>(data: *mut c_void) -> &'a mut Self {
+        &mut *(data as *mut Self)
+    }
+
+    /// The matrix's handle, NULL for a solver without one.
+    pub(crate) fn matrix_raw(&self) -> SUNMatrix {
+        self.matrix
+            .as_ref()
+            .map_or(std::ptr::null_mut(), |m| m.raw())
+    }
+
+    /// Run a callback of the system under the guard (see [`CallbackState::guard`]).
+    pub(crate) fn guard(
+        &mut self,
+        what: &'static str,
+        f: impl FnOnce(&mut S) -> CallbackResult,
+    ) -> c_int {
+        let Shared {
+            system, callbacks, ..
+        } = self;
+        callbacks.guard(what, || f(system))
+    }
+
+    /// A Jacobian callback of a direct solver: check that `jac` is the matrix this layer
+    /// created (`solver` names the integrator in the error), then let `f` fill it (see
+    /// [`Matrix::fill_jacobian`]).
+    pub(crate) fn jacobian(
+        &mut self,
+        solver: &str,
+        jac: SUNMatrix,
+        f: impl FnOnce(&mut S, JacobianMatrix<'_>) -> CallbackResult,
+    ) -> c_int {
+        let Shared {
+            system,
+            matrix,
+            callbacks,
+            ..
+        } = self;
+        let Some(matrix) = matrix.as_mut().filter(|m| m.raw() == jac) else {
+            return callbacks.fail(format!(
+                "{solver} passed a Jacobian matrix this layer did not create"
+            ));
+        };
+        callbacks.guard("jacobian", || matrix.fill_jacobian(|jac| f(system, jac)))
+    }
+
+    /// Run a callback that reads `input` and writes `output` under the guard. SUNDIALS may
+    /// pass the same vector as both: the input is then copied to the scratch buffer first,
+    /// so that the slices never alias.
+    ///
+    /// # Safety
+    /// `input` and `output` must be live serial vectors of length n that nothing else
+    /// accesses during the call.
+    pub(crate) unsafe fn guard_in_out(
+        &mut self,
+        what: &'static str,
+        input: N_Vector,
+        output: N_Vector,
+        f: impl FnOnce(&mut S, &[f64], &mut [f64]) -> CallbackResult,
+    ) -> c_int {
+        let Shared {
+            system,
+            callbacks,
+            scratch,
+            ..
+        } = self;
+        let out = nvector::slice_mut(output);
+        let input: &[f64] = if input == output {
+            scratch.copy_from_slice(out);
+            &scratch[..]
+        } else {
+            nvector::slice(input)
+        };
+        callbacks.guard(what, || f(system, input, out))
+    }
 }
 
 /// The options [`CvodeOptions`](super::CvodeOptions) and [`IdaOptions`](super::IdaOptions)
