@@ -13,7 +13,7 @@
 //! methods (which fail) are never called by a correctly configured solver: a default
 //! `jac_times` with `user_product: false` is never seen by CVODE.
 
-use std::os::raw::{c_int, c_long, c_void};
+use std::os::raw::{c_int, c_void};
 use std::rc::Rc;
 
 use sundials_sys::{
@@ -31,12 +31,11 @@ use sundials_sys::{
 };
 
 use super::callback::{
-    self, counter, error_handler, CallbackError, CallbackResult, CountGetter, ErrorLog, RawBox,
-    RealGetter,
+    self, counter, CallbackError, CallbackResult, CountGetter, ErrorLog, RawBox, RealGetter,
 };
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
-use super::integrator::{common_options, invalid, to_int, Shared};
+use super::integrator::{common_options, invalid, named, to_int, Api, Mem, Shared};
 use super::linsol::{LinearSolver, LinearSolverSpec};
 use super::matrix::JacobianMatrix;
 use super::nvector::{self, NVector};
@@ -207,15 +206,23 @@ pub struct CvodeStats {
     pub current_time: f64,
 }
 
-/// CVODE memory, freed with CVodeFree.
-struct CvMem(*mut c_void);
-
-impl Drop for CvMem {
-    fn drop(&mut self) {
-        // SAFETY: the pointer came from CVodeCreate and is freed once (CVodeFree nulls it).
-        unsafe { CVodeFree(&mut self.0) }
-    }
-}
+/// The functions CVODE shares with IDA (see [`Api`]).
+static CVODE: Api = Api {
+    family: FlagFamily::Cv,
+    create: "CVodeCreate",
+    free: CVodeFree,
+    set_err_handler_fn: named!(CVodeSetErrHandlerFn),
+    set_user_data: named!(CVodeSetUserData),
+    ss_tolerances: named!(CVodeSStolerances),
+    sv_tolerances: named!(CVodeSVtolerances),
+    set_max_num_steps: named!(CVodeSetMaxNumSteps),
+    set_max_ord: named!(CVodeSetMaxOrd),
+    set_init_step: named!(CVodeSetInitStep),
+    set_max_step: named!(CVodeSetMaxStep),
+    set_stop_time: named!(CVodeSetStopTime),
+    set_max_err_test_fails: named!(CVodeSetMaxErrTestFails),
+    set_max_conv_fails: named!(CVodeSetMaxConvFails),
+};
 
 /// A matrix-free SPGMR solver, freed on drop (after the CVODE memory that uses it).
 struct Spgmr(SUNLinearSolver);
@@ -247,7 +254,7 @@ impl Linear {
 pub struct Cvode<S: OdeSystem> {
     // Drop order = declaration order. CVODE points at the linear solver, the matrix (in
     // `shared`), the error log and the user data, so it goes first.
-    mem: CvMem,
+    mem: Mem,
     linsol: Linear,
     shared: RawBox<Shared<S>>,
     log: RawBox<ErrorLog>,
@@ -312,13 +319,10 @@ impl<S: OdeSystem> Cvode<S> {
         };
         let shared = RawBox::new(Shared::new(system, matrix, n));
         let log = RawBox::new(ErrorLog::default());
-        // SAFETY: ctx is live.
-        let raw = unsafe { CVodeCreate(CV_BDF, ctx.raw()) };
-        if raw.is_null() {
-            return Err(SundialsError::NullHandle("CVodeCreate"));
-        }
+        // SAFETY: ctx is live; the new memory is CVODE's and owned by the Mem alone.
+        let mem = unsafe { Mem::new(&CVODE, CVodeCreate(CV_BDF, ctx.raw()))? };
         let mut cv = Cvode {
-            mem: CvMem(raw),
+            mem,
             linsol,
             shared,
             log,
@@ -336,37 +340,23 @@ impl<S: OdeSystem> Cvode<S> {
         linear: &CvodeLinearSolver,
         options: &CvodeOptions,
     ) -> Result<(), SundialsError> {
-        use FlagFamily::{Cv, CvLs};
-        let mem = self.mem.0;
-        let log = self.log.as_void();
-        let data = self.shared.as_void();
+        use FlagFamily::CvLs;
+        let mem = self.mem.raw();
         let y0 = self.y.raw();
         let ls = self.linsol.raw();
         // SAFETY: the matrix is only read for its handle.
         let a = unsafe { self.shared.get().matrix_raw() };
-        // SAFETY (all calls): `mem` is live CVODE memory; the error log, the user data, the
-        // vectors, linear solver and matrix all outlive it (field order). CVODE copies y0 and
-        // the absolute tolerances.
-        self.log.call("CVodeSetErrHandlerFn", Cv, || unsafe {
-            CVodeSetErrHandlerFn(mem, Some(error_handler), log)
-        })?;
-        self.log.call("CVodeSetUserData", Cv, || unsafe {
-            CVodeSetUserData(mem, data)
-        })?;
-        self.log.call("CVodeInit", Cv, || unsafe {
+        let common = common_options!(options);
+        // SAFETY: the error log and the user data outlive the CVODE memory (field order).
+        unsafe { self.mem.attach(&mut self.log, self.shared.as_void())? };
+        // SAFETY (all calls): `mem` is live CVODE memory; the user data the trampolines
+        // reach, the vectors, linear solver and matrix all outlive it (field order). CVODE
+        // copies y0.
+        self.log.call("CVodeInit", FlagFamily::Cv, || unsafe {
             CVodeInit(mem, Some(rhs_trampoline::<S>), t0, y0)
         })?;
-        match &options.atol_vector {
-            None => self.log.call("CVodeSStolerances", Cv, || unsafe {
-                CVodeSStolerances(mem, options.rtol, options.atol)
-            })?,
-            Some(atol) => {
-                let atol = NVector::from_slice(&self._ctx, atol)?;
-                self.log.call("CVodeSVtolerances", Cv, || unsafe {
-                    CVodeSVtolerances(mem, options.rtol, atol.raw())
-                })?;
-            }
-        }
+        self.mem
+            .set_tolerances(&mut self.log, &self._ctx, &common)?;
         self.log.call("CVodeSetLinearSolver", CvLs, || unsafe {
             CVodeSetLinearSolver(mem, ls, a)
         })?;
@@ -404,39 +394,7 @@ impl<S: OdeSystem> Cvode<S> {
                 }
             }
         }
-        let long = |n: usize| c_long::try_from(n).unwrap_or(c_long::MAX);
-        self.log.call("CVodeSetMaxNumSteps", Cv, || unsafe {
-            CVodeSetMaxNumSteps(mem, long(options.max_steps))
-        })?;
-        let q = to_int("max_order", options.max_order)?;
-        self.log
-            .call("CVodeSetMaxOrd", Cv, || unsafe { CVodeSetMaxOrd(mem, q) })?;
-        if let Some(h) = options.initial_step {
-            self.log.call("CVodeSetInitStep", Cv, || unsafe {
-                CVodeSetInitStep(mem, h)
-            })?;
-        }
-        if let Some(h) = options.max_step {
-            self.log
-                .call("CVodeSetMaxStep", Cv, || unsafe { CVodeSetMaxStep(mem, h) })?;
-        }
-        if let Some(t) = options.stop_time {
-            self.log.call("CVodeSetStopTime", Cv, || unsafe {
-                CVodeSetStopTime(mem, t)
-            })?;
-        }
-        if let Some(k) = options.max_error_test_failures {
-            let k = to_int("max_error_test_failures", k)?;
-            self.log.call("CVodeSetMaxErrTestFails", Cv, || unsafe {
-                CVodeSetMaxErrTestFails(mem, k)
-            })?;
-        }
-        if let Some(k) = options.max_convergence_failures {
-            let k = to_int("max_convergence_failures", k)?;
-            self.log.call("CVodeSetMaxConvFails", Cv, || unsafe {
-                CVodeSetMaxConvFails(mem, k)
-            })?;
-        }
+        self.mem.set_step_controls(&mut self.log, &common)?;
         if let Some(eps) = options.linear_tolerance_factor {
             self.log.call("CVodeSetEpsLin", CvLs, || unsafe {
                 CVodeSetEpsLin(mem, eps)
@@ -479,7 +437,7 @@ impl<S: OdeSystem> Cvode<S> {
         let mut tret: realtype = f64::NAN;
         // SAFETY: every handle is live; during the call the only references to the shared
         // state and the log are the short-lived ones the trampolines create.
-        let flag = unsafe { CVode(self.mem.0, tout, self.y.raw(), &mut tret, itask) };
+        let flag = unsafe { CVode(self.mem.raw(), tout, self.y.raw(), &mut tret, itask) };
         y.copy_from_slice(self.y.as_slice());
         // SAFETY: CVode has returned; no callback is running.
         let (fatal, recoverable, logged) = unsafe {
@@ -522,7 +480,7 @@ impl<S: OdeSystem> Cvode<S> {
             return invalid(format!("t0 = {t0} is not finite"));
         }
         self.y.as_mut_slice().copy_from_slice(y0);
-        let (mem, y) = (self.mem.0, self.y.raw());
+        let (mem, y) = (self.mem.raw(), self.y.raw());
         // SAFETY: mem and y are live; CVODE copies y.
         self.log.call("CVodeReInit", FlagFamily::Cv, || unsafe {
             CVodeReInit(mem, t0, y)
@@ -535,15 +493,7 @@ impl<S: OdeSystem> Cvode<S> {
     /// yet reached across [`reinit`](Self::reinit). A `t` behind the current time is
     /// CV_ILL_INPUT.
     pub fn set_stop_time(&mut self, t: f64) -> Result<(), SundialsError> {
-        if !t.is_finite() {
-            return invalid(format!("stop time {t} is not finite"));
-        }
-        let mem = self.mem.0;
-        // SAFETY: mem is live.
-        self.log
-            .call("CVodeSetStopTime", FlagFamily::Cv, || unsafe {
-                CVodeSetStopTime(mem, t)
-            })
+        self.mem.set_stop_time(&mut self.log, t)
     }
 
     /// Dense output of the last step: y at any t within it (CVodeGetDky, k = 0).
@@ -551,7 +501,7 @@ impl<S: OdeSystem> Cvode<S> {
         if y.len() != self.n {
             return invalid(format!("y has length {}, expected {}", y.len(), self.n));
         }
-        let mem = self.mem.0;
+        let mem = self.mem.raw();
         // SAFETY: mem and the borrowed vector are live; CVodeGetDky calls no user callback.
         // The error handler may write to the log through its raw pointer; no reference to
         // the log is alive.
@@ -568,7 +518,7 @@ impl<S: OdeSystem> Cvode<S> {
 
     /// The counters so far (also after a failure).
     pub fn stats(&self) -> CvodeStats {
-        let mem = self.mem.0;
+        let mem = self.mem.raw();
         // SAFETY: mem is live CVODE memory, and the getters are CVODE's.
         let count = |f: CountGetter| unsafe { counter(mem, f) };
         let real = |f: RealGetter| unsafe { callback::real(mem, f) };

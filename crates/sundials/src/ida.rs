@@ -20,7 +20,7 @@
 //! Callbacks are registered only when the solver asks for them, so the trait's default
 //! methods (which fail) are never called by a correctly configured solver.
 
-use std::os::raw::{c_int, c_long, c_void};
+use std::os::raw::{c_int, c_void};
 use std::rc::Rc;
 
 use sundials_sys::{
@@ -40,12 +40,11 @@ use sundials_sys::{
 };
 
 use super::callback::{
-    self, counter, error_handler, CallbackError, CallbackResult, CountGetter, ErrorLog, RawBox,
-    RealGetter,
+    self, counter, CallbackError, CallbackResult, CountGetter, ErrorLog, RawBox, RealGetter,
 };
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
-use super::integrator::{common_options, invalid, to_int, Shared};
+use super::integrator::{common_options, invalid, named, to_int, Api, Mem, Shared};
 use super::linsol::{LinearSolver, LinearSolverSpec};
 use super::matrix::JacobianMatrix;
 use super::nvector::{self, NVector};
@@ -200,15 +199,23 @@ pub struct IdaStats {
     pub current_time: f64,
 }
 
-/// IDA memory, freed with IDAFree.
-struct IdaMem(*mut c_void);
-
-impl Drop for IdaMem {
-    fn drop(&mut self) {
-        // SAFETY: the pointer came from IDACreate and is freed once (IDAFree nulls it).
-        unsafe { IDAFree(&mut self.0) }
-    }
-}
+/// The functions IDA shares with CVODE (see [`Api`]).
+static IDA: Api = Api {
+    family: FlagFamily::Ida,
+    create: "IDACreate",
+    free: IDAFree,
+    set_err_handler_fn: named!(IDASetErrHandlerFn),
+    set_user_data: named!(IDASetUserData),
+    ss_tolerances: named!(IDASStolerances),
+    sv_tolerances: named!(IDASVtolerances),
+    set_max_num_steps: named!(IDASetMaxNumSteps),
+    set_max_ord: named!(IDASetMaxOrd),
+    set_init_step: named!(IDASetInitStep),
+    set_max_step: named!(IDASetMaxStep),
+    set_stop_time: named!(IDASetStopTime),
+    set_max_err_test_fails: named!(IDASetMaxErrTestFails),
+    set_max_conv_fails: named!(IDASetMaxConvFails),
+};
 
 /// The custom solver's SUNLinearSolver (ops set by [`Linear::custom`]), freed on drop.
 struct CustomSolver(SUNLinearSolver);
@@ -257,7 +264,7 @@ pub struct Ida<S: DaeSystem> {
     // Drop order = declaration order. IDA points at the linear solver, the matrix (the
     // token in `linsol`, or a SUNDIALS matrix in `shared`), the error log and the user data,
     // so it goes first; the custom solver points at `shared`, so it goes before it.
-    mem: IdaMem,
+    mem: Mem,
     linsol: Linear,
     shared: RawBox<Shared<S>>,
     log: RawBox<ErrorLog>,
@@ -323,14 +330,11 @@ impl<S: DaeSystem> Ida<S> {
         };
         let shared = RawBox::new(Shared::new(system, matrix, n));
         let log = RawBox::new(ErrorLog::default());
-        // SAFETY: ctx is live.
-        let raw = unsafe { IDACreate(ctx.raw()) };
-        if raw.is_null() {
-            return Err(SundialsError::NullHandle("IDACreate"));
-        }
+        // SAFETY: ctx is live; the new memory is IDA's and owned by the Mem alone.
+        let mem = unsafe { Mem::new(&IDA, IDACreate(ctx.raw()))? };
         let has_id = options.id.is_some();
         let mut ida = Ida {
-            mem: IdaMem(raw),
+            mem,
             linsol,
             shared,
             log,
@@ -356,9 +360,7 @@ impl<S: DaeSystem> Ida<S> {
         options: &IdaOptions,
     ) -> Result<(), SundialsError> {
         use FlagFamily::{Ida, IdaLs};
-        let mem = self.mem.0;
-        let log = self.log.as_void();
-        let data = self.shared.as_void();
+        let mem = self.mem.raw();
         let (y0, yp0) = (self.y.raw(), self.yp.raw());
         let ls = self.linsol.raw();
         let a = match &self.linsol {
@@ -366,30 +368,18 @@ impl<S: DaeSystem> Ida<S> {
             // SAFETY: the matrix is only read for its handle.
             Linear::Direct(_) => unsafe { self.shared.get().matrix_raw() },
         };
-        // SAFETY (all calls): `mem` is live IDA memory; the error log, the user data, the
-        // vectors, linear solver and matrix all outlive it (field order). IDA copies y0, yp0,
-        // the absolute tolerances and the id vector. The user data is set before the Jacobian
-        // function, which IDASetJacFn binds to the user data current at the call.
-        self.log.call("IDASetErrHandlerFn", Ida, || unsafe {
-            IDASetErrHandlerFn(mem, Some(error_handler), log)
-        })?;
-        self.log.call("IDASetUserData", Ida, || unsafe {
-            IDASetUserData(mem, data)
-        })?;
+        let common = common_options!(options);
+        // SAFETY: the error log and the user data outlive the IDA memory (field order).
+        unsafe { self.mem.attach(&mut self.log, self.shared.as_void())? };
+        // SAFETY (all calls): `mem` is live IDA memory; the user data the trampolines reach,
+        // the vectors, linear solver and matrix all outlive it (field order). IDA copies y0,
+        // yp0 and the id vector. The user data is set (attach) before the Jacobian function,
+        // which IDASetJacFn binds to the user data current at the call.
         self.log.call("IDAInit", Ida, || unsafe {
             IDAInit(mem, Some(residual_trampoline::<S>), t0, y0, yp0)
         })?;
-        match &options.atol_vector {
-            None => self.log.call("IDASStolerances", Ida, || unsafe {
-                IDASStolerances(mem, options.rtol, options.atol)
-            })?,
-            Some(atol) => {
-                let atol = NVector::from_slice(&self._ctx, atol)?;
-                self.log.call("IDASVtolerances", Ida, || unsafe {
-                    IDASVtolerances(mem, options.rtol, atol.raw())
-                })?;
-            }
-        }
+        self.mem
+            .set_tolerances(&mut self.log, &self._ctx, &common)?;
         self.log.call("IDASetLinearSolver", IdaLs, || unsafe {
             IDASetLinearSolver(mem, ls, a)
         })?;
@@ -418,37 +408,7 @@ impl<S: DaeSystem> Ida<S> {
                 IDASetSuppressAlg(mem, 1)
             })?;
         }
-        let long = |n: usize| c_long::try_from(n).unwrap_or(c_long::MAX);
-        self.log.call("IDASetMaxNumSteps", Ida, || unsafe {
-            IDASetMaxNumSteps(mem, long(options.max_steps))
-        })?;
-        let q = to_int("max_order", options.max_order)?;
-        self.log
-            .call("IDASetMaxOrd", Ida, || unsafe { IDASetMaxOrd(mem, q) })?;
-        if let Some(h) = options.initial_step {
-            self.log
-                .call("IDASetInitStep", Ida, || unsafe { IDASetInitStep(mem, h) })?;
-        }
-        if let Some(h) = options.max_step {
-            self.log
-                .call("IDASetMaxStep", Ida, || unsafe { IDASetMaxStep(mem, h) })?;
-        }
-        if let Some(t) = options.stop_time {
-            self.log
-                .call("IDASetStopTime", Ida, || unsafe { IDASetStopTime(mem, t) })?;
-        }
-        if let Some(k) = options.max_error_test_failures {
-            let k = to_int("max_error_test_failures", k)?;
-            self.log.call("IDASetMaxErrTestFails", Ida, || unsafe {
-                IDASetMaxErrTestFails(mem, k)
-            })?;
-        }
-        if let Some(k) = options.max_convergence_failures {
-            let k = to_int("max_convergence_failures", k)?;
-            self.log.call("IDASetMaxConvFails", Ida, || unsafe {
-                IDASetMaxConvFails(mem, k)
-            })?;
-        }
+        self.mem.set_step_controls(&mut self.log, &common)?;
         if let Some(k) = options.max_nonlinear_iterations {
             // Needs the nonlinear solver, which IDAInit creates.
             let k = to_int("max_nonlinear_iterations", k)?;
@@ -524,7 +484,7 @@ impl<S: DaeSystem> Ida<S> {
         // state and the log are the short-lived ones the trampolines create.
         let flag = unsafe {
             IDASolve(
-                self.mem.0,
+                self.mem.raw(),
                 tout,
                 &mut tret,
                 self.y.raw(),
@@ -554,7 +514,7 @@ impl<S: DaeSystem> Ida<S> {
         if stats.steps == 0 || stats.last_order < 1 {
             return;
         }
-        let (mem, y, yp) = (self.mem.0, self.y.raw(), self.yp.raw());
+        let (mem, y, yp) = (self.mem.raw(), self.y.raw(), self.yp.raw());
         // SAFETY: mem, y and yp are live; IDAGetDky calls no user callback (a failure, which
         // cannot happen at t = tn with k ≤ the last order, would only reach the log).
         unsafe {
@@ -630,9 +590,9 @@ impl<S: DaeSystem> Ida<S> {
         self.reset_reports();
         // SAFETY: mem is live; as in run, the trampolines create the only references to the
         // shared state and the log.
-        let flag = unsafe { IDACalcIC(self.mem.0, IDA_YA_YDP_INIT, tout1) };
+        let flag = unsafe { IDACalcIC(self.mem.raw(), IDA_YA_YDP_INIT, tout1) };
         self.finish("IDACalcIC", flag)?;
-        let (mem, yv, ypv) = (self.mem.0, self.y.raw(), self.yp.raw());
+        let (mem, yv, ypv) = (self.mem.raw(), self.y.raw(), self.yp.raw());
         // SAFETY: mem, yv and ypv are live; IDAGetConsistentIC copies into them.
         self.log
             .call("IDAGetConsistentIC", FlagFamily::Ida, || unsafe {
@@ -661,7 +621,7 @@ impl<S: DaeSystem> Ida<S> {
         }
         self.y.as_mut_slice().copy_from_slice(y0);
         self.yp.as_mut_slice().copy_from_slice(yp0);
-        let (mem, y, yp) = (self.mem.0, self.y.raw(), self.yp.raw());
+        let (mem, y, yp) = (self.mem.raw(), self.y.raw(), self.yp.raw());
         // SAFETY: mem, y and yp are live; IDA copies y and yp.
         self.log.call("IDAReInit", FlagFamily::Ida, || unsafe {
             IDAReInit(mem, t0, y, yp)
@@ -674,14 +634,7 @@ impl<S: DaeSystem> Ida<S> {
     /// yet reached across [`reinit`](Self::reinit). A `t` behind the current time is
     /// IDA_ILL_INPUT (once a step has been taken).
     pub fn set_stop_time(&mut self, t: f64) -> Result<(), SundialsError> {
-        if !t.is_finite() {
-            return invalid(format!("stop time {t} is not finite"));
-        }
-        let mem = self.mem.0;
-        // SAFETY: mem is live.
-        self.log.call("IDASetStopTime", FlagFamily::Ida, || unsafe {
-            IDASetStopTime(mem, t)
-        })
+        self.mem.set_stop_time(&mut self.log, t)
     }
 
     /// Dense output of the last step: y at any t within it (IDAGetDky, k = 0). A t outside
@@ -710,7 +663,7 @@ impl<S: DaeSystem> Ida<S> {
         let ctx = &self._ctx;
         let mut w = NVector::new(ctx, self.n)?;
         let mut e = NVector::new(ctx, self.n)?;
-        let mem = self.mem.0;
+        let mem = self.mem.raw();
         // SAFETY: mem, w and e are live; the getters only copy into the vectors.
         let flags = unsafe {
             (
@@ -761,7 +714,7 @@ impl<S: DaeSystem> Ida<S> {
                 Some(message),
             ));
         }
-        let mem = self.mem.0;
+        let mem = self.mem.raw();
         // SAFETY: mem and the borrowed vector are live; IDAGetDky calls no user callback.
         // The error handler may write to the log through its raw pointer; no reference to
         // the log is alive.
@@ -778,7 +731,7 @@ impl<S: DaeSystem> Ida<S> {
 
     /// The counters so far (also after a failure).
     pub fn stats(&self) -> IdaStats {
-        let mem = self.mem.0;
+        let mem = self.mem.raw();
         // SAFETY: mem is live IDA memory, and the getters are IDA's.
         let count = |f: CountGetter| unsafe { counter(mem, f) };
         let real = |f: RealGetter| unsafe { callback::real(mem, f) };

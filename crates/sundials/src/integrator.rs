@@ -1,16 +1,23 @@
-//! What CVODE and IDA share: both are variable-order BDF codes from the same family, and the
+//! What CVODE and IDA share: both are variable-order BDF codes of the same suite, and the
 //! options, checks and calls that mean the same in both are written here once. What only
-//! looks alike (the systems' callbacks, the linear solvers, the length checks that name
-//! different vectors) stays in [`cvode`](super::cvode) and [`ida`](super::ida).
+//! looks alike (the systems' callbacks, the linear solvers, the counters each reports, the
+//! length checks that name different vectors) stays in [`cvode`](super::cvode) and
+//! [`ida`](super::ida).
+//!
+//! The C functions differ only by prefix (CVodeSetMaxOrd, IDASetMaxOrd); each integrator
+//! lists its own in an [`Api`] table, and [`Mem`], the integrator memory, calls them through
+//! it.
 
-use std::os::raw::{c_int, c_void};
+use std::os::raw::{c_int, c_long, c_void};
+use std::rc::Rc;
 
-use sundials_sys::{N_Vector, SUNMatrix};
+use sundials_sys::{realtype, N_Vector, SUNMatrix};
 
-use super::callback::{CallbackResult, CallbackState};
-use super::error::SundialsError;
+use super::callback::{error_handler, CallbackResult, CallbackState, ErrorLog, RawBox};
+use super::context::Context;
+use super::error::{FlagFamily, SundialsError};
 use super::matrix::{JacobianMatrix, Matrix};
-use super::nvector;
+use super::nvector::{self, NVector};
 
 pub(crate) fn invalid<T>(what: String) -> Result<T, SundialsError> {
     Err(SundialsError::Invalid(what))
@@ -136,6 +143,8 @@ pub(crate) struct CommonOptions<'a> {
     pub(crate) initial_step: Option<f64>,
     pub(crate) max_step: Option<f64>,
     pub(crate) stop_time: Option<f64>,
+    pub(crate) max_error_test_failures: Option<usize>,
+    pub(crate) max_convergence_failures: Option<usize>,
 }
 
 /// The [`CommonOptions`] of a `CvodeOptions` or an `IdaOptions` (the two name these fields
@@ -152,6 +161,8 @@ macro_rules! common_options {
             initial_step: o.initial_step,
             max_step: o.max_step,
             stop_time: o.stop_time,
+            max_error_test_failures: o.max_error_test_failures,
+            max_convergence_failures: o.max_convergence_failures,
         }
     }};
 }
@@ -159,7 +170,8 @@ pub(crate) use common_options;
 
 impl CommonOptions<'_> {
     /// The checks of the shared options for n unknowns, in the order both integrators make
-    /// them, before their own.
+    /// them, before their own (the failure limits are left to each: their messages differ,
+    /// as IDA checks a third limit with them).
     pub(crate) fn validate(&self, n: usize) -> Result<(), SundialsError> {
         let o = self;
         let nonneg = |x: f64| x >= 0.0 && x.is_finite();
@@ -202,6 +214,187 @@ impl CommonOptions<'_> {
             }
         }
         Ok(())
+    }
+}
+
+/// A C function of an integrator with its name, for errors.
+pub(crate) type Named<F> = (&'static str, F);
+
+/// `(name, function)` for a table entry.
+macro_rules! named {
+    ($f:ident) => {
+        (stringify!($f), $f)
+    };
+}
+pub(crate) use named;
+
+type Setter<T> = unsafe extern "C" fn(*mut c_void, T) -> c_int;
+
+/// The functions of CVODE's or IDA's C API that do the same thing in both.
+pub(crate) struct Api {
+    /// The flags of the integrator's own functions (CV_*, IDA_*).
+    pub(crate) family: FlagFamily,
+    /// The name of the function that creates the memory, for [`Mem::new`].
+    pub(crate) create: &'static str,
+    pub(crate) free: unsafe extern "C" fn(*mut *mut c_void),
+    pub(crate) set_err_handler_fn: Named<
+        unsafe extern "C" fn(*mut c_void, sundials_sys::CVErrHandlerFn, *mut c_void) -> c_int,
+    >,
+    pub(crate) set_user_data: Named<Setter<*mut c_void>>,
+    pub(crate) ss_tolerances: Named<unsafe extern "C" fn(*mut c_void, realtype, realtype) -> c_int>,
+    pub(crate) sv_tolerances: Named<unsafe extern "C" fn(*mut c_void, realtype, N_Vector) -> c_int>,
+    pub(crate) set_max_num_steps: Named<Setter<c_long>>,
+    pub(crate) set_max_ord: Named<Setter<c_int>>,
+    pub(crate) set_init_step: Named<Setter<realtype>>,
+    pub(crate) set_max_step: Named<Setter<realtype>>,
+    pub(crate) set_stop_time: Named<Setter<realtype>>,
+    pub(crate) set_max_err_test_fails: Named<Setter<c_int>>,
+    pub(crate) set_max_conv_fails: Named<Setter<c_int>>,
+}
+
+/// CVODE or IDA memory, freed on drop with the integrator's own function.
+///
+/// Invariant: `raw` is live memory of the integrator `api` describes, owned by this value.
+pub(crate) struct Mem {
+    raw: *mut c_void,
+    api: &'static Api,
+}
+
+impl Mem {
+    /// Own the memory `raw` just returned by `api.create` (NULL is an error).
+    ///
+    /// # Safety
+    /// `raw` must be NULL or memory of the integrator `api` describes that nothing else
+    /// owns.
+    pub(crate) unsafe fn new(api: &'static Api, raw: *mut c_void) -> Result<Self, SundialsError> {
+        if raw.is_null() {
+            return Err(SundialsError::NullHandle(api.create));
+        }
+        Ok(Mem { raw, api })
+    }
+
+    pub(crate) fn raw(&self) -> *mut c_void {
+        self.raw
+    }
+
+    /// Call the setter `f` of this memory's integrator with `value`.
+    ///
+    /// # Safety
+    /// `f` must come from `self.api`, and `value` must stay valid for as long as the
+    /// integrator keeps it (plain numbers: no condition).
+    unsafe fn set<T>(
+        &self,
+        log: &mut RawBox<ErrorLog>,
+        (name, f): Named<Setter<T>>,
+        value: T,
+    ) -> Result<(), SundialsError> {
+        let mem = self.raw;
+        // SAFETY: `mem` is live memory of the integrator `f` belongs to (invariant and
+        // contract); the value is valid (contract).
+        log.call(name, self.api.family, || unsafe { f(mem, value) })
+    }
+
+    /// Send the integrator's messages to `log` and hand `user_data` to the callbacks: the
+    /// first calls after creation.
+    ///
+    /// # Safety
+    /// `log` and `user_data` must outlive this memory (the owner frees the memory first).
+    pub(crate) unsafe fn attach(
+        &self,
+        log: &mut RawBox<ErrorLog>,
+        user_data: *mut c_void,
+    ) -> Result<(), SundialsError> {
+        let (mem, log_data) = (self.raw, log.as_void());
+        let (name, set_err_handler_fn) = self.api.set_err_handler_fn;
+        // SAFETY: `mem` is live (invariant); the log outlives it (contract).
+        log.call(name, self.api.family, || unsafe {
+            set_err_handler_fn(mem, Some(error_handler), log_data)
+        })?;
+        // SAFETY: the user data outlives the memory (contract).
+        unsafe { self.set(log, self.api.set_user_data, user_data) }
+    }
+
+    /// The relative and absolute tolerances: scalar, or per component (the integrator
+    /// copies the vector).
+    pub(crate) fn set_tolerances(
+        &self,
+        log: &mut RawBox<ErrorLog>,
+        ctx: &Rc<Context>,
+        o: &CommonOptions,
+    ) -> Result<(), SundialsError> {
+        let mem = self.raw;
+        match o.atol_vector {
+            None => {
+                let (name, ss_tolerances) = self.api.ss_tolerances;
+                // SAFETY: `mem` is live (invariant).
+                log.call(name, self.api.family, || unsafe {
+                    ss_tolerances(mem, o.rtol, o.atol)
+                })
+            }
+            Some(atol) => {
+                let atol = NVector::from_slice(ctx, atol)?;
+                let (name, sv_tolerances) = self.api.sv_tolerances;
+                // SAFETY: `mem` and `atol` are live; the integrator copies `atol`.
+                log.call(name, self.api.family, || unsafe {
+                    sv_tolerances(mem, o.rtol, atol.raw())
+                })
+            }
+        }
+    }
+
+    /// The shared options that steer the stepping: step count, order, step sizes, stop
+    /// time, failure limits (checked by [`CommonOptions::validate`] before).
+    pub(crate) fn set_step_controls(
+        &self,
+        log: &mut RawBox<ErrorLog>,
+        o: &CommonOptions,
+    ) -> Result<(), SundialsError> {
+        let api = self.api;
+        let long = |n: usize| c_long::try_from(n).unwrap_or(c_long::MAX);
+        // SAFETY (all calls): the setters are this integrator's and take plain numbers.
+        unsafe {
+            self.set(log, api.set_max_num_steps, long(o.max_steps))?;
+            self.set(log, api.set_max_ord, to_int("max_order", o.max_order)?)?;
+            if let Some(h) = o.initial_step {
+                self.set(log, api.set_init_step, h)?;
+            }
+            if let Some(h) = o.max_step {
+                self.set(log, api.set_max_step, h)?;
+            }
+            if let Some(t) = o.stop_time {
+                self.set(log, api.set_stop_time, t)?;
+            }
+            if let Some(k) = o.max_error_test_failures {
+                let k = to_int("max_error_test_failures", k)?;
+                self.set(log, api.set_max_err_test_fails, k)?;
+            }
+            if let Some(k) = o.max_convergence_failures {
+                let k = to_int("max_convergence_failures", k)?;
+                self.set(log, api.set_max_conv_fails, k)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Do not step past `t` (SetStopTime), which must be finite.
+    pub(crate) fn set_stop_time(
+        &self,
+        log: &mut RawBox<ErrorLog>,
+        t: f64,
+    ) -> Result<(), SundialsError> {
+        if !t.is_finite() {
+            return invalid(format!("stop time {t} is not finite"));
+        }
+        // SAFETY: the setter is this integrator's and takes a plain number.
+        unsafe { self.set(log, self.api.set_stop_time, t) }
+    }
+}
+
+impl Drop for Mem {
+    fn drop(&mut self) {
+        // SAFETY: the memory is live and ours (invariant) and freed once (the free function
+        // nulls the pointer).
+        unsafe { (self.api.free)(&mut self.raw) }
     }
 }
 
