@@ -34,8 +34,8 @@ use super::callback::{
     self, counter, CallbackError, CallbackResult, CountGetter, ErrorLog, RawBox, RealGetter,
 };
 use super::context::Context;
-use super::error::{flag_error, FlagFamily, SundialsError};
-use super::integrator::{common_options, invalid, named, to_int, Api, Mem, Shared};
+use super::error::{FlagFamily, SundialsError};
+use super::integrator::{common_options, invalid, named, reset_reports, to_int, Api, Mem, Shared};
 use super::linsol::{LinearSolver, LinearSolverSpec};
 use super::matrix::JacobianMatrix;
 use super::nvector::{self, NVector};
@@ -222,6 +222,8 @@ static CVODE: Api = Api {
     set_stop_time: named!(CVodeSetStopTime),
     set_max_err_test_fails: named!(CVodeSetMaxErrTestFails),
     set_max_conv_fails: named!(CVodeSetMaxConvFails),
+    get_current_time: CVodeGetCurrentTime,
+    get_dky: named!(CVodeGetDky),
 };
 
 /// A matrix-free SPGMR solver, freed on drop (after the CVODE memory that uses it).
@@ -429,45 +431,20 @@ impl<S: OdeSystem> Cvode<S> {
         if !tout.is_finite() {
             return invalid(format!("tout = {tout} is not finite"));
         }
-        // SAFETY: no callback is running.
-        unsafe {
-            self.shared.get_mut().callbacks.reset();
-            self.log.get_mut().clear();
-        }
+        reset_reports(&mut self.shared, &mut self.log);
         let mut tret: realtype = f64::NAN;
         // SAFETY: every handle is live; during the call the only references to the shared
         // state and the log are the short-lived ones the trampolines create.
         let flag = unsafe { CVode(self.mem.raw(), tout, self.y.raw(), &mut tret, itask) };
         y.copy_from_slice(self.y.as_slice());
-        // SAFETY: CVode has returned; no callback is running.
-        let (fatal, recoverable, logged) = unsafe {
-            let shared = self.shared.get_mut();
-            (
-                shared.callbacks.fatal.take(),
-                shared.callbacks.last_recoverable.take(),
-                self.log.get().last_message(),
-            )
-        };
-        if flag >= 0 {
-            return Ok(tret);
-        }
-        let name = FlagFamily::Cv.name(flag);
         let function = if itask == CV_NORMAL {
             "CVode"
         } else {
             "CVode (one step)"
         };
-        if let Some(m) = fatal {
-            let t = self.stats().current_time;
-            return Err(SundialsError::Callback(format!(
-                "{m} ({function} stopped with {name} at t = {t:e})"
-            )));
-        }
-        let mut message = logged.unwrap_or_else(|| FlagFamily::Cv.describe(flag).1.to_string());
-        if let Some(r) = recoverable {
-            message.push_str(&format!("; last recoverable callback error: {r}"));
-        }
-        Err(flag_error(function, flag, FlagFamily::Cv, Some(message)))
+        self.mem
+            .finish(&mut self.shared, &self.log, function, flag)?;
+        Ok(tret)
     }
 
     /// Restart from y(t0) = y0 with the same system, solver and options (CVodeReInit); the
@@ -501,19 +478,7 @@ impl<S: OdeSystem> Cvode<S> {
         if y.len() != self.n {
             return invalid(format!("y has length {}, expected {}", y.len(), self.n));
         }
-        let mem = self.mem.raw();
-        // SAFETY: mem and the borrowed vector are live; CVodeGetDky calls no user callback.
-        // The error handler may write to the log through its raw pointer; no reference to
-        // the log is alive.
-        let flag = NVector::with_borrowed(&self._ctx, y, |v| unsafe { CVodeGetDky(mem, t, 0, v) })?;
-        if flag == 0 {
-            return Ok(());
-        }
-        // The log is not cleared here (that needs &mut self); CVodeGetDky reports every
-        // failure to the handler, so the last message is this call's.
-        // SAFETY: CVodeGetDky has returned.
-        let message = unsafe { self.log.get().last_message() };
-        Err(flag_error("CVodeGetDky", flag, FlagFamily::Cv, message))
+        self.mem.get_dky(&self.log, &self._ctx, t, 0, y)
     }
 
     /// The counters so far (also after a failure).

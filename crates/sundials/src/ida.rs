@@ -44,7 +44,7 @@ use super::callback::{
 };
 use super::context::Context;
 use super::error::{flag_error, FlagFamily, SundialsError};
-use super::integrator::{common_options, invalid, named, to_int, Api, Mem, Shared};
+use super::integrator::{common_options, invalid, named, reset_reports, to_int, Api, Mem, Shared};
 use super::linsol::{LinearSolver, LinearSolverSpec};
 use super::matrix::JacobianMatrix;
 use super::nvector::{self, NVector};
@@ -215,6 +215,8 @@ static IDA: Api = Api {
     set_stop_time: named!(IDASetStopTime),
     set_max_err_test_fails: named!(IDASetMaxErrTestFails),
     set_max_conv_fails: named!(IDASetMaxConvFails),
+    get_current_time: IDAGetCurrentTime,
+    get_dky: named!(IDAGetDky),
 };
 
 /// The custom solver's SUNLinearSolver (ops set by [`Linear::custom`]), freed on drop.
@@ -478,7 +480,7 @@ impl<S: DaeSystem> Ida<S> {
         if !tout.is_finite() {
             return invalid(format!("tout = {tout} is not finite"));
         }
-        self.reset_reports();
+        reset_reports(&mut self.shared, &mut self.log);
         let mut tret: realtype = f64::NAN;
         // SAFETY: every handle is live; during the call the only references to the shared
         // state and the log are the short-lived ones the trampolines create.
@@ -504,7 +506,8 @@ impl<S: DaeSystem> Ida<S> {
         } else {
             "IDASolve (one step)"
         };
-        self.finish(function, flag)?;
+        self.mem
+            .finish(&mut self.shared, &self.log, function, flag)?;
         Ok(tret)
     }
 
@@ -521,43 +524,6 @@ impl<S: DaeSystem> Ida<S> {
             IDAGetDky(mem, stats.current_time, 0, y);
             IDAGetDky(mem, stats.current_time, 1, yp);
         }
-    }
-
-    fn reset_reports(&mut self) {
-        // SAFETY: no callback is running.
-        unsafe {
-            self.shared.get_mut().callbacks.reset();
-            self.log.get_mut().clear();
-        }
-    }
-
-    /// Turn the flag of IDASolve or IDACalcIC into a Result carrying what the callbacks and
-    /// IDA reported.
-    fn finish(&mut self, function: &'static str, flag: c_int) -> Result<(), SundialsError> {
-        // SAFETY: IDA has returned; no callback is running.
-        let (fatal, recoverable, logged) = unsafe {
-            let shared = self.shared.get_mut();
-            (
-                shared.callbacks.fatal.take(),
-                shared.callbacks.last_recoverable.take(),
-                self.log.get().last_message(),
-            )
-        };
-        if flag >= 0 {
-            return Ok(());
-        }
-        let name = FlagFamily::Ida.name(flag);
-        if let Some(m) = fatal {
-            let t = self.stats().current_time;
-            return Err(SundialsError::Callback(format!(
-                "{m} ({function} stopped with {name} at t = {t:e})"
-            )));
-        }
-        let mut message = logged.unwrap_or_else(|| FlagFamily::Ida.describe(flag).1.to_string());
-        if let Some(r) = recoverable {
-            message.push_str(&format!("; last recoverable callback error: {r}"));
-        }
-        Err(flag_error(function, flag, FlagFamily::Ida, Some(message)))
     }
 
     /// Make the initial state consistent (IDACalcIC with IDA_YA_YDP_INIT): keep the
@@ -587,11 +553,12 @@ impl<S: DaeSystem> Ida<S> {
         if self.stats().steps > 0 {
             return invalid("calc_ic must come before the first step (after new or reinit)".into());
         }
-        self.reset_reports();
+        reset_reports(&mut self.shared, &mut self.log);
         // SAFETY: mem is live; as in run, the trampolines create the only references to the
         // shared state and the log.
         let flag = unsafe { IDACalcIC(self.mem.raw(), IDA_YA_YDP_INIT, tout1) };
-        self.finish("IDACalcIC", flag)?;
+        self.mem
+            .finish(&mut self.shared, &self.log, "IDACalcIC", flag)?;
         let (mem, yv, ypv) = (self.mem.raw(), self.y.raw(), self.yp.raw());
         // SAFETY: mem, yv and ypv are live; IDAGetConsistentIC copies into them.
         self.log
@@ -714,19 +681,7 @@ impl<S: DaeSystem> Ida<S> {
                 Some(message),
             ));
         }
-        let mem = self.mem.raw();
-        // SAFETY: mem and the borrowed vector are live; IDAGetDky calls no user callback.
-        // The error handler may write to the log through its raw pointer; no reference to
-        // the log is alive.
-        let flag = NVector::with_borrowed(&self._ctx, out, |v| unsafe { IDAGetDky(mem, t, k, v) })?;
-        if flag == 0 {
-            return Ok(());
-        }
-        // The log is not cleared here (that needs &mut self); IDAGetDky reports every
-        // failure to the handler, so the last message is this call's.
-        // SAFETY: IDAGetDky has returned.
-        let message = unsafe { self.log.get().last_message() };
-        Err(flag_error("IDAGetDky", flag, FlagFamily::Ida, message))
+        self.mem.get_dky(&self.log, &self._ctx, t, k, out)
     }
 
     /// The counters so far (also after a failure).

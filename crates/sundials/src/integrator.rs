@@ -13,9 +13,11 @@ use std::rc::Rc;
 
 use sundials_sys::{realtype, N_Vector, SUNMatrix};
 
-use super::callback::{error_handler, CallbackResult, CallbackState, ErrorLog, RawBox};
+use super::callback::{
+    self, error_handler, CallbackResult, CallbackState, ErrorLog, RawBox, RealGetter,
+};
 use super::context::Context;
-use super::error::{FlagFamily, SundialsError};
+use super::error::{flag_error, FlagFamily, SundialsError};
 use super::matrix::{JacobianMatrix, Matrix};
 use super::nvector::{self, NVector};
 
@@ -33,7 +35,7 @@ pub(crate) struct Shared<S> {
     pub(crate) system: S,
     /// The matrix of a direct solver.
     matrix: Option<Matrix>,
-    pub(crate) callbacks: CallbackState,
+    callbacks: CallbackState,
     /// Input copy for a callback whose input and output vectors coincide.
     scratch: Vec<f64>,
 }
@@ -250,6 +252,9 @@ pub(crate) struct Api {
     pub(crate) set_stop_time: Named<Setter<realtype>>,
     pub(crate) set_max_err_test_fails: Named<Setter<c_int>>,
     pub(crate) set_max_conv_fails: Named<Setter<c_int>>,
+    pub(crate) get_current_time: RealGetter,
+    pub(crate) get_dky:
+        Named<unsafe extern "C" fn(*mut c_void, realtype, c_int, N_Vector) -> c_int>,
 }
 
 /// CVODE or IDA memory, freed on drop with the integrator's own function.
@@ -388,6 +393,76 @@ impl Mem {
         // SAFETY: the setter is this integrator's and takes a plain number.
         unsafe { self.set(log, self.api.set_stop_time, t) }
     }
+
+    /// The time the integrator has reached (GetCurrentTime); NaN if it cannot say.
+    pub(crate) fn current_time(&self) -> f64 {
+        // SAFETY: `raw` is live memory of the integrator the getter belongs to (invariant).
+        unsafe { callback::real(self.raw, self.api.get_current_time) }
+    }
+
+    /// Dense output of the last step (GetDky): the k-th derivative of the interpolating
+    /// polynomial at `t` into `out`, whose length the caller has checked.
+    pub(crate) fn get_dky(
+        &self,
+        log: &RawBox<ErrorLog>,
+        ctx: &Context,
+        t: f64,
+        k: c_int,
+        out: &mut [f64],
+    ) -> Result<(), SundialsError> {
+        let (mem, (name, get_dky)) = (self.raw, self.api.get_dky);
+        // SAFETY: mem and the borrowed vector are live; GetDky calls no user callback.
+        // The error handler may write to the log through its raw pointer; no reference to
+        // the log is alive.
+        let flag = NVector::with_borrowed(ctx, out, |v| unsafe { get_dky(mem, t, k, v) })?;
+        if flag == 0 {
+            return Ok(());
+        }
+        // The log is not cleared here (that needs &mut self); GetDky reports every failure
+        // to the handler, so the last message is this call's.
+        // SAFETY: GetDky has returned.
+        let message = unsafe { log.get().last_message() };
+        Err(flag_error(name, flag, self.api.family, message))
+    }
+
+    /// Turn the flag of a call that ran the callbacks (CVode, IDASolve, IDACalcIC) into a
+    /// Result carrying what the callbacks (whose reports it takes) and the integrator
+    /// reported. A fatal callback error or panic wins, with the flag and the time reached;
+    /// otherwise the integrator's message (or the flag's description), with the last
+    /// recoverable callback error.
+    pub(crate) fn finish<S>(
+        &self,
+        shared: &mut RawBox<Shared<S>>,
+        log: &RawBox<ErrorLog>,
+        function: &'static str,
+        flag: c_int,
+    ) -> Result<(), SundialsError> {
+        let family = self.api.family;
+        // SAFETY: the integrator has returned; no callback is running.
+        let (fatal, recoverable, logged) = unsafe {
+            let shared = shared.get_mut();
+            (
+                shared.callbacks.fatal.take(),
+                shared.callbacks.last_recoverable.take(),
+                log.get().last_message(),
+            )
+        };
+        if flag >= 0 {
+            return Ok(());
+        }
+        let name = family.name(flag);
+        if let Some(m) = fatal {
+            let t = self.current_time();
+            return Err(SundialsError::Callback(format!(
+                "{m} ({function} stopped with {name} at t = {t:e})"
+            )));
+        }
+        let mut message = logged.unwrap_or_else(|| family.describe(flag).1.to_string());
+        if let Some(r) = recoverable {
+            message.push_str(&format!("; last recoverable callback error: {r}"));
+        }
+        Err(flag_error(function, flag, family, Some(message)))
+    }
 }
 
 impl Drop for Mem {
@@ -395,6 +470,15 @@ impl Drop for Mem {
         // SAFETY: the memory is live and ours (invariant) and freed once (the free function
         // nulls the pointer).
         unsafe { (self.api.free)(&mut self.raw) }
+    }
+}
+
+/// Forget what the callbacks and the integrator reported during an earlier call.
+pub(crate) fn reset_reports<S>(shared: &mut RawBox<Shared<S>>, log: &mut RawBox<ErrorLog>) {
+    // SAFETY: no callback is running.
+    unsafe {
+        shared.get_mut().callbacks.reset();
+        log.get_mut().clear();
     }
 }
 
