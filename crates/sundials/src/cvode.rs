@@ -415,16 +415,23 @@ impl<S: OdeSystem> Cvode<S> {
     /// On failure `y` holds the state at the last successful step and
     /// [`stats`](Self::stats)`().current_time` says where that was.
     pub fn advance_to(&mut self, tout: f64, y: &mut [f64]) -> Result<f64, SundialsError> {
-        self.run(tout, y, CV_NORMAL)
+        self.run(tout, y, CV_NORMAL, "CVode")
     }
 
     /// One internal step towards `tout` (CV_ONE_STEP); returns the time reached, and `y`
     /// the state there.
     pub fn step(&mut self, tout: f64, y: &mut [f64]) -> Result<f64, SundialsError> {
-        self.run(tout, y, CV_ONE_STEP)
+        self.run(tout, y, CV_ONE_STEP, "CVode (one step)")
     }
 
-    fn run(&mut self, tout: f64, y: &mut [f64], itask: c_int) -> Result<f64, SundialsError> {
+    /// CVode with `itask`; `function` names the call in errors.
+    fn run(
+        &mut self,
+        tout: f64,
+        y: &mut [f64],
+        itask: c_int,
+        function: &'static str,
+    ) -> Result<f64, SundialsError> {
         if y.len() != self.n {
             return invalid(format!("y has length {}, expected {}", y.len(), self.n));
         }
@@ -437,11 +444,6 @@ impl<S: OdeSystem> Cvode<S> {
         // state and the log are the short-lived ones the trampolines create.
         let flag = unsafe { CVode(self.mem.raw(), tout, self.y.raw(), &mut tret, itask) };
         y.copy_from_slice(self.y.as_slice());
-        let function = if itask == CV_NORMAL {
-            "CVode"
-        } else {
-            "CVode (one step)"
-        };
         self.mem
             .finish(&mut self.shared, &self.log, function, flag)?;
         Ok(tret)

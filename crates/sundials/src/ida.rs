@@ -448,13 +448,13 @@ impl<S: DaeSystem> Ida<S> {
         y: &mut [f64],
         yp: &mut [f64],
     ) -> Result<f64, SundialsError> {
-        self.run(tout, y, yp, IDA_NORMAL)
+        self.run(tout, y, yp, IDA_NORMAL, "IDASolve")
     }
 
     /// One internal step towards `tout` (IDA_ONE_STEP); returns the time reached, and `y`,
     /// `yp` the state there.
     pub fn step(&mut self, tout: f64, y: &mut [f64], yp: &mut [f64]) -> Result<f64, SundialsError> {
-        self.run(tout, y, yp, IDA_ONE_STEP)
+        self.run(tout, y, yp, IDA_ONE_STEP, "IDASolve (one step)")
     }
 
     fn check_lengths(&self, y: &[f64], yp: &[f64]) -> Result<(), SundialsError> {
@@ -469,12 +469,14 @@ impl<S: DaeSystem> Ida<S> {
         Ok(())
     }
 
+    /// IDASolve with `itask`; `function` names the call in errors.
     fn run(
         &mut self,
         tout: f64,
         y: &mut [f64],
         yp: &mut [f64],
         itask: c_int,
+        function: &'static str,
     ) -> Result<f64, SundialsError> {
         self.check_lengths(y, yp)?;
         if !tout.is_finite() {
@@ -501,11 +503,6 @@ impl<S: DaeSystem> Ida<S> {
         }
         y.copy_from_slice(self.y.as_slice());
         yp.copy_from_slice(self.yp.as_slice());
-        let function = if itask == IDA_NORMAL {
-            "IDASolve"
-        } else {
-            "IDASolve (one step)"
-        };
         self.mem
             .finish(&mut self.shared, &self.log, function, flag)?;
         Ok(tret)
