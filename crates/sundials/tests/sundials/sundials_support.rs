@@ -1,8 +1,9 @@
-//! Shared by the KINSOL tests: tight solver options and every linear solver for a band matrix.
+//! Shared by the test modules: tight KINSOL options, every linear solver for a band matrix,
+//! and the parts of a SUNDIALS flag error.
 
 #![allow(dead_code)]
 
-use eyeshell_sundials::{klu_available, KinsolOptions, LinearSolverSpec, Strategy};
+use eyeshell_sundials::{klu_available, KinsolOptions, LinearSolverSpec, Strategy, SundialsError};
 
 /// A line search with tight tolerances and one Jacobian setup per iteration.
 pub fn tight() -> KinsolOptions {
@@ -39,4 +40,18 @@ pub fn specs(n: usize, upper: usize, lower: usize) -> Vec<(&'static str, LinearS
         v.push(("klu", LinearSolverSpec::Klu { row_ptr, col_idx }));
     }
     v
+}
+
+/// The function, flag, symbolic name and message of a [`SundialsError::Flag`]; any other
+/// error fails the test.
+pub fn flag_parts(e: &SundialsError) -> (&'static str, i32, &'static str, &str) {
+    match e {
+        SundialsError::Flag {
+            function,
+            flag,
+            name,
+            message,
+        } => (function, *flag, name, message),
+        other => panic!("expected a flag, got {other}"),
+    }
 }
