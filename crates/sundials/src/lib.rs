@@ -10,7 +10,9 @@
 //!
 //! The pieces ([`NVector`], [`Matrix`], [`LinearSolver`], the callback guard) are independent
 //! of KINSOL so that the integrators ([`Cvode`], [`Ida`]) sit next to [`Kinsol`] and reuse
-//! them. [`linalg`] builds the structured direct solvers of the growth DAE on top, in safe
+//! them; what CVODE and IDA share beyond that (options, checks, the memory and the calls
+//! that mean the same in both, the trampolines' state) is written once in `integrator.rs`.
+//! [`linalg`] builds the structured direct solvers of the growth DAE on top, in safe
 //! Rust.
 
 mod callback;
