@@ -20,8 +20,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use eyeshell::growth::grow;
-use eyeshell::rundir::summary::{ElasticSummary, StudySummary};
+use eyeshell::rundir::run::GrowthFailure;
+use eyeshell::rundir::summary::StudySummary;
 use eyeshell::rundir::{self, GrowthWriter, OutputDir, Summary};
 use eyeshell::scene::{Scene, SceneError, KEYS};
 
@@ -460,24 +460,8 @@ fn cmd_study(
 fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
     let at = parse_at(&a.at, &scene)?;
-    // Refuse a foreign output directory before the computation, not after.
-    rundir::check_target(&a.out)?;
-
-    let solution = eyeshell::bvp::solve(&scene.params, &scene.solver, None)?;
-    let at_rows = at
-        .iter()
-        .map(|&s| solution.at(s))
-        .collect::<Result<Vec<_>, _>>()?;
-
-    let dir = OutputDir::create(&a.out)?;
-    rundir::write_fields_csv(&dir.file(rundir::FIELDS_FILE), &solution.rows)?;
-    if !at.is_empty() {
-        rundir::write_fields_csv(&dir.file(rundir::AT_FILE), &at_rows)?;
-    }
-    // summary.json last: it marks the directory as a complete eyeshell output.
-    Summary::Elastic(ElasticSummary::new(&scene, &solution.stats))
-        .write_to(&dir.file(rundir::SUMMARY_FILE))?;
-    let target = dir.commit()?;
+    let run = rundir::run::solve_into(&scene, &a.out, &at)?;
+    let (solution, target) = (run.solution, run.dir);
 
     if !a.quiet {
         let s = &solution.stats;
@@ -503,79 +487,67 @@ fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
 
 fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
-    let Some(growth) = &scene.growth else {
+    if scene.growth.is_none() {
         return Err(Error::input(format!(
             "{}: scene has no [growth] section: use `eyeshell solve`, or add growth keys (e.g. --set growth.eta0=70)",
             scene.origin
         )));
-    };
-    let mut writer = GrowthWriter::create(&a.out, &scene)?;
-    let mut bar = progress::GrowthProgress::new(&mut writer, progress::wanted(a.quiet));
-    let result = grow(
-        &scene.params,
-        &scene.solver,
-        growth,
-        &scene.growth_settings,
-        &mut bar,
-    );
-    match &result {
+    }
+    let writer = GrowthWriter::create(&a.out, &scene)?;
+    let mut bar = progress::GrowthProgress::new(progress::wanted(a.quiet));
+    let run = rundir::run::grow_with(&scene, writer, &mut bar);
+    match &run.outcome {
         Ok(_) => bar.finish(),
         Err(_) => bar.abandon(),
     }
-    match result {
-        Ok(stats) => {
-            let last = writer.last_row().copied();
-            let dir = writer.finish(&stats)?;
-            if !a.quiet {
-                let end = match last {
-                    Some(r) => format!(
-                        "t = {:.6}: axial length {:.6} mm, {} (retina − blue {:+.4} mm, retina − red {:+.4} mm)",
-                        r.t,
-                        r.axial_length,
-                        r.class.as_str(),
-                        r.retina_minus_blue,
-                        r.retina_minus_red
-                    ),
-                    None => "no snapshot was written".to_string(),
-                };
-                out(&format!(
-                    "eyeshell: grew {} ({})\n  final           {}\n  integrator      {} (rtol {:e}, atol {:e}), {} step{}\n  work            {} rhs evaluation{}, {} BVP solve{}, {} Newton iteration{}\n  time            {:.3} s\n  output          {}\n",
-                    scene.origin,
-                    scene.display_name(),
-                    end,
-                    scene.growth_settings.integrator.name(),
-                    scene.growth_settings.rtol,
-                    scene.growth_settings.atol,
-                    stats.steps,
-                    plural(stats.steps),
-                    stats.rhs_evaluations,
-                    plural(stats.rhs_evaluations),
-                    stats.bvp_solves,
-                    plural(stats.bvp_solves),
-                    stats.newton_iterations,
-                    plural(stats.newton_iterations),
-                    stats.wall_seconds,
-                    dir.display(),
-                ));
-            }
-            Ok(())
-        }
-        Err(e) => {
-            let kept = match writer.last_row() {
+    let (stats, dir) = match run.outcome {
+        Ok(done) => done,
+        Err(failure @ GrowthFailure::Stopped { summary: None, .. }) => {
+            let kept = match run.last {
                 Some(r) => format!("results up to t = {:.6} are in {}", r.t, a.out.display()),
                 None => format!(
                     "no snapshot was written; see {}",
                     a.out.join(rundir::SUMMARY_FILE).display()
                 ),
             };
-            match writer.fail(&e) {
-                Ok(_) => Err(Error::failed(format!("{e} ({kept})"))),
-                Err(w) => Err(Error::failed(format!(
-                    "{e} (and summary.json could not be written: {w})"
-                ))),
-            }
+            return Err(Error::failed(format!("{failure} ({kept})")));
         }
+        Err(GrowthFailure::Unwritten { error, .. }) => return Err(error.into()),
+        Err(failure) => return Err(Error::failed(failure.to_string())),
+    };
+    if !a.quiet {
+        let end = match run.last {
+            Some(r) => format!(
+                "t = {:.6}: axial length {:.6} mm, {} (retina − blue {:+.4} mm, retina − red {:+.4} mm)",
+                r.t,
+                r.axial_length,
+                r.class.as_str(),
+                r.retina_minus_blue,
+                r.retina_minus_red
+            ),
+            None => "no snapshot was written".to_string(),
+        };
+        out(&format!(
+            "eyeshell: grew {} ({})\n  final           {}\n  integrator      {} (rtol {:e}, atol {:e}), {} step{}\n  work            {} rhs evaluation{}, {} BVP solve{}, {} Newton iteration{}\n  time            {:.3} s\n  output          {}\n",
+            scene.origin,
+            scene.display_name(),
+            end,
+            scene.growth_settings.integrator.name(),
+            scene.growth_settings.rtol,
+            scene.growth_settings.atol,
+            stats.steps,
+            plural(stats.steps),
+            stats.rhs_evaluations,
+            plural(stats.rhs_evaluations),
+            stats.bvp_solves,
+            plural(stats.bvp_solves),
+            stats.newton_iterations,
+            plural(stats.newton_iterations),
+            stats.wall_seconds,
+            dir.display(),
+        ));
     }
+    Ok(())
 }
 
 /// Raised by the first Ctrl-C during a sweep: no new run starts.

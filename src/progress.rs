@@ -1,10 +1,10 @@
-//! The progress bar of `eyeshell grow`: an observer of the growth run that forwards
-//! everything to the observer writing the run directory, and draws a bar on stderr. The
-//! library writes no terminal output; the bar is the command line's.
+//! The progress bar of `eyeshell grow`: an observer of the growth run, shown each event
+//! after the run directory's writer (`rundir::run::grow_with`), that draws a bar on stderr.
+//! The library writes no terminal output; the bar is the command line's.
 
 use std::io::IsTerminal;
 
-use eyeshell::growth::{Observer, ObserverError, SeriesRow, Snapshot};
+use eyeshell::growth::{Observer, ObserverError, Snapshot};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Should a growth run show a progress bar? Only on a terminal: not with `--quiet`, not
@@ -13,15 +13,14 @@ pub fn wanted(quiet: bool) -> bool {
     !quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none()
 }
 
-/// Forwards to `inner` and shows the run's progress (t / t_end) and its last snapshot.
-pub struct GrowthProgress<'a> {
-    inner: &'a mut dyn Observer,
+/// Shows the run's progress (t / t_end) and its last snapshot.
+pub struct GrowthProgress {
     bar: ProgressBar,
 }
 
-impl<'a> GrowthProgress<'a> {
+impl GrowthProgress {
     /// A bar on stderr when `show` (see [`wanted`]), else a hidden one that draws nothing.
-    pub fn new(inner: &'a mut dyn Observer, show: bool) -> Self {
+    pub fn new(show: bool) -> Self {
         let bar = if show {
             let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
             if let Ok(style) = ProgressStyle::with_template(
@@ -33,7 +32,7 @@ impl<'a> GrowthProgress<'a> {
         } else {
             ProgressBar::hidden()
         };
-        GrowthProgress { inner, bar }
+        GrowthProgress { bar }
     }
 
     /// The run reached its end: the bar goes away.
@@ -47,9 +46,8 @@ impl<'a> GrowthProgress<'a> {
     }
 }
 
-impl Observer for GrowthProgress<'_> {
+impl Observer for GrowthProgress {
     fn snapshot(&mut self, s: &Snapshot) -> Result<(), ObserverError> {
-        self.inner.snapshot(s)?;
         self.bar.set_message(format!(
             "t = {:.4}: axial length {:.4} mm, {}",
             s.t,
@@ -59,12 +57,7 @@ impl Observer for GrowthProgress<'_> {
         Ok(())
     }
 
-    fn history(&mut self, row: &SeriesRow) -> Result<(), ObserverError> {
-        self.inner.history(row)
-    }
-
     fn progress(&mut self, t: f64, t_end: f64) {
-        self.inner.progress(t, t_end);
         if t_end > 0.0 && t.is_finite() {
             let at = (t / t_end).clamp(0.0, 1.0) * 1000.0;
             self.bar.set_position(at.round() as u64);
@@ -75,32 +68,11 @@ impl Observer for GrowthProgress<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use eyeshell::growth::SeriesRow;
     use eyeshell::model::stimulus::Refraction;
 
-    /// Counts what reaches it.
-    #[derive(Default)]
-    struct Count {
-        snapshots: Vec<f64>,
-        history: usize,
-        progress: Vec<(f64, f64)>,
-    }
-
-    impl Observer for Count {
-        fn snapshot(&mut self, s: &Snapshot) -> Result<(), ObserverError> {
-            self.snapshots.push(s.t);
-            Ok(())
-        }
-        fn history(&mut self, _row: &SeriesRow) -> Result<(), ObserverError> {
-            self.history += 1;
-            Ok(())
-        }
-        fn progress(&mut self, t: f64, t_end: f64) {
-            self.progress.push((t, t_end));
-        }
-    }
-
     #[test]
-    fn everything_is_forwarded_to_the_writer() {
+    fn the_bar_follows_t_and_shows_the_last_snapshot() {
         let row = SeriesRow {
             t: 0.5,
             axial_length: 23.0,
@@ -115,16 +87,18 @@ mod tests {
             growth: vec![],
             series: row,
         };
-        let mut inner = Count::default();
-        let mut bar = GrowthProgress::new(&mut inner, false);
+        let mut bar = GrowthProgress::new(false);
         bar.snapshot(&snap).unwrap();
-        bar.history(&row).unwrap();
-        bar.progress(0.5, 1.0);
-        bar.progress(f64::NAN, 1.0);
+        bar.progress(0.25, 1.0);
+        assert_eq!(bar.bar.position(), 250);
+        bar.progress(f64::NAN, 1.0); // ignored
+        bar.progress(3.0, 0.0); // ignored: no end
+        assert_eq!(bar.bar.position(), 250);
+        assert_eq!(
+            bar.bar.message(),
+            "t = 0.5000: axial length 23.0000 mm, emmetropic"
+        );
         bar.finish();
-        assert_eq!(inner.snapshots, vec![0.5]);
-        assert_eq!(inner.history, 1);
-        assert_eq!(inner.progress.len(), 2);
         // --quiet: no bar whatever the terminal.
         assert!(!wanted(true));
     }

@@ -22,13 +22,11 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 
 use crate::bvp::FieldRow;
-use crate::growth::{grow, GrowthStats, SeriesRow};
-use crate::model::stimulus::Refraction;
-use crate::rundir::summary::{ElasticSummary, SweepRunEntry, SweepSummary};
+use crate::growth::{GrowthStats, SeriesRow};
+use crate::model::stimulus::{self, EyeMeasure};
+use crate::rundir::summary::{SweepRunEntry, SweepSummary};
 use crate::rundir::table::{csv_bytes, QuoteStyle};
-use crate::rundir::{
-    self, format_value, write_atomic, GrowthWriter, OutputDir, OutputError, Summary,
-};
+use crate::rundir::{self, format_value, write_atomic, GrowthWriter, OutputError, Summary};
 use crate::scene::sweep::{Sweep, SweepRun};
 use crate::scene::Scene;
 
@@ -263,33 +261,24 @@ pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
 }
 
 fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
-    let growth = scene.growth.as_ref().expect("a growth scene");
-    let mut writer = GrowthWriter::create(dir, scene).map_err(|e| (e.to_string(), None))?;
+    let writer = GrowthWriter::create(dir, scene).map_err(|e| (e.to_string(), None))?;
     // scene.toml first, so a failed run can still be reproduced.
     let path = dir.join(SCENE_FILE);
     write_atomic(&path, scene.to_toml().as_bytes())
         .map_err(|e| (io(&path, e).to_string(), None))?;
-    let outcome = grow(
-        &scene.params,
-        &scene.solver,
-        growth,
-        &scene.growth_settings,
-        &mut writer,
-    );
-    let last = writer.last_row().copied();
-    match outcome {
-        Ok(stats) => {
-            writer.finish(&stats).map_err(|e| (e.to_string(), None))?;
-            let last = last.ok_or_else(|| ("no snapshot was written".to_string(), None))?;
+    let run = rundir::run::grow_with(scene, writer, &mut ());
+    match run.outcome {
+        Ok((stats, _)) => {
+            let last = run
+                .last
+                .ok_or_else(|| ("no snapshot was written".to_string(), None))?;
             Ok(growth_result(&last, &stats))
         }
-        Err(e) => {
-            let partial = last.map(|r| Box::new(growth_result(&r, &e.stats)));
-            let message = match writer.fail(&e) {
-                Ok(_) => e.to_string(),
-                Err(w) => format!("{e} (and summary.json could not be written: {w})"),
-            };
-            Err((message, partial))
+        Err(failure) => {
+            let partial = run
+                .last
+                .map(|r| Box::new(growth_result(&r, failure.stats())));
+            Err((failure.to_string(), partial))
         }
     }
 }
@@ -312,53 +301,32 @@ fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
 }
 
 fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
-    let fail = |e: &dyn std::fmt::Display| (e.to_string(), None);
-    let solution = crate::bvp::solve(&scene.params, &scene.solver, None).map_err(|e| fail(&e))?;
-    rundir::check_target(dir).map_err(|e| fail(&e))?;
-    let out = OutputDir::create(dir).map_err(|e| fail(&e))?;
-    rundir::write_fields_csv(&out.file(rundir::FIELDS_FILE), &solution.rows)
-        .map_err(|e| fail(&e))?;
-    Summary::Elastic(ElasticSummary::new(scene, &solution.stats))
-        .write_to(&out.file(rundir::SUMMARY_FILE))
-        .map_err(|e| fail(&e))?;
-    out.commit().map_err(|e| fail(&e))?;
-    let s = &solution.stats;
+    let run = rundir::run::solve_into(scene, dir, &[]).map_err(|e| (e.to_string(), None))?;
+    let s = &run.solution.stats;
+    let eye = unloaded_eye(scene, &run.solution.rows);
     Ok(RunResult {
         kind: "solve".into(),
+        t: 0.0,
+        axial_length: eye.axial_length,
+        equatorial_radius: eye.equatorial_radius,
+        retina_minus_blue: eye.retina_minus_blue,
+        retina_minus_red: eye.retina_minus_red,
+        class: eye.class.as_str().into(),
         newton_iterations: s.newton_iterations,
         bvp_solves: 1,
+        steps: 0,
+        rhs_evaluations: 0,
         wall_seconds: s.wall_seconds,
-        ..unloaded_eye(scene, &solution.rows)
     })
 }
 
-/// The retina of a loaded, ungrown shell, measured as a growth run would (docs/MODEL.md §6).
-fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> RunResult {
-    let retina = |f: &FieldRow| {
-        (
-            f.z - 0.5 * f.h * f.theta.cos(),
-            f.r - 0.5 * f.h * f.theta.sin(),
-        )
-    };
+/// The retina of a loaded, ungrown shell, measured as a growth run measures it
+/// (docs/MODEL.md §6; [`EyeMeasure`]).
+fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
+    let retina = |f: &FieldRow| stimulus::retina(f.z, f.r, f.h, f.theta);
     let pole = rows.first().map(retina).unwrap_or((f64::NAN, f64::NAN));
-    let (blue, red) = (
-        scene.blue().depth(pole.0, pole.1),
-        scene.red().depth(pole.0, pole.1),
-    );
-    RunResult {
-        kind: "solve".into(),
-        t: 0.0,
-        axial_length: pole.0,
-        equatorial_radius: rows.iter().map(|f| retina(f).1).fold(f64::MIN, f64::max),
-        retina_minus_blue: -blue,
-        retina_minus_red: -red,
-        class: Refraction::classify(blue, red).as_str().into(),
-        newton_iterations: 0,
-        bvp_solves: 0,
-        steps: 0,
-        rhs_evaluations: 0,
-        wall_seconds: 0.0,
-    }
+    let radii = rows.iter().map(|f| retina(f).1);
+    EyeMeasure::new(pole, radii, &scene.blue(), &scene.red())
 }
 
 /// The columns of sweep.csv after `run`, `status` and the swept keys.

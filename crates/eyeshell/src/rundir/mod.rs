@@ -18,6 +18,7 @@
 pub mod atomic;
 pub mod growth;
 pub mod read;
+pub mod run;
 pub mod rundata;
 pub mod summary;
 pub mod table;
