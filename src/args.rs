@@ -1,0 +1,232 @@
+//! The command line's arguments (clap): one struct per subcommand.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use eyeshell::scene::Scene;
+use eyeshell::Error;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "eyeshell",
+    version,
+    about = "Numerical solver for the morphoelastic shell model of eye growth",
+    color = clap::ColorChoice::Never
+)]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    pub(crate) command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub(crate) enum Command {
+    /// Solve the loaded elastic shell of a scene; write fields.csv, summary.json (and at.csv)
+    Solve(SolveArgs),
+    /// Grow the eye of a scene with [growth]; write series.csv, snapshots/ and summary.json as it goes
+    Grow(GrowArgs),
+    /// Validate a scene and print its effective parameters (as TOML)
+    Check(SceneArgs),
+    /// List every scene key with its type, default and meaning
+    Keys,
+    /// Write a run directory as MATLAB v5 .mat (bvp4c-style) and/or NumPy .npz files
+    Export(ExportArgs),
+    /// Compare a run with reference results (.mat, .npz, or another run); exit 1 beyond tolerance
+    Compare(CompareArgs),
+    /// Convergence ladders in N, ε and the tolerance: errors, observed orders, CSV and plots
+    Converge(ConvergeArgs),
+    /// Work-precision diagrams: error against seconds for each scheme and integrator
+    Wpd(StudyArgs),
+    /// The paper's refinement check of the const scene, for Euler and for CVODE
+    Refinement(RefinementArgs),
+    /// Push every parameter to its edge; write the table of outcomes (TESTING.md)
+    Extremes(ExtremesArgs),
+    /// Run every run of a sweep (a scene with [sweep]) in parallel: runs/<name>/, sweep.csv, summary.json
+    Sweep(SweepArgs),
+    /// Run the paper's scenes and draw its result figures (a)–(f) as PNG and SVG, with index.html
+    Figures(FiguresArgs),
+    /// Draw the output of any run or sweep (shells, profiles, axial length) as PNG and SVG
+    Plot(PlotArgs),
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct FiguresArgs {
+    /// Output directory: the figures, index.html, and the runs in data/
+    #[arg(long, value_name = "DIR", default_value = "figures")]
+    pub(crate) out: PathBuf,
+    /// Runs at once (default: one per core)
+    #[arg(long, short, value_name = "N")]
+    pub(crate) jobs: Option<usize>,
+    /// Draw again from the runs already in DIR/data (no computation)
+    #[arg(long)]
+    pub(crate) replot: bool,
+    /// Print nothing on success
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct PlotArgs {
+    /// A run directory (of solve or grow) or a sweep directory
+    #[arg(value_name = "DIR")]
+    pub(crate) dir: PathBuf,
+    /// Where to write the pictures (default: DIR/plots)
+    #[arg(long, value_name = "OUT")]
+    pub(crate) out: Option<PathBuf>,
+    /// Print nothing on success
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct SweepArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// Output directory: runs/<name>/ for each run, sweep.csv, summary.json (a previous eyeshell output is replaced unless --resume)
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+    /// Runs at once (default: one per core)
+    #[arg(long, short, value_name = "N")]
+    pub(crate) jobs: Option<usize>,
+    /// Keep the finished runs of an earlier sweep into DIR (same scene) and run only the rest
+    #[arg(long)]
+    pub(crate) resume: bool,
+    /// Print nothing on success
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct ExtremesArgs {
+    /// The Markdown file to write (e.g. TESTING.md)
+    #[arg(long, value_name = "FILE")]
+    pub(crate) out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct ConvergeArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// The ladder of uniform node counts (at least two)
+    #[arg(long, value_delimiter = ',', default_value = "51,101,201,401,801")]
+    pub(crate) nodes: Vec<usize>,
+    /// Run the whole growth on each rung (the scene must have [growth])
+    #[arg(long)]
+    pub(crate) growth: bool,
+    /// Output directory (CSV tables, PNG and SVG plots)
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct StudyArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// Output directory (CSV tables, PNG and SVG plots)
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct RefinementArgs {
+    /// Output directory (refinement.csv)
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+}
+
+/// A scene file and the overrides applied on top of it.
+#[derive(Args, Debug)]
+pub(crate) struct SceneArgs {
+    /// The scene (TOML); see `eyeshell keys` for its keys
+    #[arg(value_name = "SCENE.toml")]
+    pub(crate) scene: PathBuf,
+    /// Override a scene key, e.g. --set pressure.dP=2.5 or --set solver.scheme=trapezoid (repeatable; later wins)
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub(crate) set: Vec<String>,
+}
+
+impl SceneArgs {
+    pub(crate) fn load(&self) -> Result<Scene, Error> {
+        Ok(Scene::from_file(&self.scene, &self.set)?)
+    }
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct SolveArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// Also write at.csv with every field at these material points Σ (in [ε, L])
+    #[arg(
+        long,
+        value_name = "S1,S2,...",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub(crate) at: Vec<String>,
+    /// Output directory (created whole or not at all; a previous eyeshell output is replaced)
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+    /// Print nothing on success
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct GrowArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// Output directory, written as results come (a previous eyeshell output is replaced; on failure the results so far stay)
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+    /// Print nothing on success and draw no progress bar
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+#[derive(Args, Debug)]
+#[command(group = clap::ArgGroup::new("format").required(true).multiple(true).args(["mat", "npz"]))]
+pub(crate) struct ExportArgs {
+    /// The run directory (of `eyeshell solve` or `eyeshell grow`, finished or partial)
+    #[arg(value_name = "RUN_DIR")]
+    pub(crate) run: PathBuf,
+    /// Write .mat: a file (elastic solve: struct `sol` with x, y) or a directory (growth: one file per output time)
+    #[arg(long, value_name = "OUT")]
+    pub(crate) mat: Option<PathBuf>,
+    /// Write .npz: a file (elastic solve) or a directory (growth: one file per output time)
+    #[arg(long, value_name = "OUT")]
+    pub(crate) npz: Option<PathBuf>,
+    /// Compress every .mat variable (miCOMPRESSED, as MATLAB saves by default)
+    #[arg(long)]
+    pub(crate) compress: bool,
+    /// Print nothing on success
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct CompareArgs {
+    /// The run: an eyeshell run directory (or a .mat / .npz file, or a directory of them)
+    #[arg(value_name = "RUN_DIR")]
+    pub(crate) run: PathBuf,
+    /// Reference results: .mat or .npz files, directories of them, or eyeshell run directories
+    #[arg(value_name = "REFERENCE", required = true)]
+    pub(crate) references: Vec<PathBuf>,
+    /// Absolute tolerance: a point fails when |run − ref| > tol + rtol·|ref|
+    #[arg(
+        long,
+        value_name = "TOL",
+        default_value_t = 1e-8,
+        allow_negative_numbers = true
+    )]
+    pub(crate) tol: f64,
+    /// Relative tolerance (see --tol)
+    #[arg(
+        long,
+        value_name = "RTOL",
+        default_value_t = 1e-8,
+        allow_negative_numbers = true
+    )]
+    pub(crate) rtol: f64,
+    /// Print only the error line when a field is beyond tolerance, nothing on success
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}

@@ -1,0 +1,86 @@
+//! `eyeshell export` and `compare`: runs as other people's files, and against them.
+
+use eyeshell::Error;
+
+use crate::args::{CompareArgs, ExportArgs};
+use crate::{out, plural};
+
+pub(crate) fn cmd_export(a: &ExportArgs) -> Result<(), Error> {
+    use crate::interop::export::{export, Format};
+    let mut jobs = Vec::new();
+    if let Some(p) = &a.mat {
+        jobs.push((
+            p,
+            Format::Mat {
+                compress: a.compress,
+            },
+        ));
+    }
+    if let Some(p) = &a.npz {
+        jobs.push((p, Format::Npz));
+    }
+    for (path, format) in jobs {
+        let done = export(&a.run, path, format)?;
+        if !a.quiet {
+            let what = if done.growth {
+                format!(
+                    "{} file{} (one per output time)",
+                    done.files.len(),
+                    plural(done.files.len())
+                )
+            } else {
+                "1 file".to_string()
+            };
+            out(&format!(
+                "eyeshell: exported {} ({} nodes) to {}: {}\n",
+                a.run.display(),
+                done.nodes,
+                done.path.display(),
+                what
+            ));
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn cmd_compare(a: &CompareArgs) -> Result<(), Error> {
+    use crate::interop::compare::{compare_paths, format_reports};
+    for (name, v) in [("--tol", a.tol), ("--rtol", a.rtol)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(Error::input(format!(
+                "{name} = {v}: must be a finite number ≥ 0"
+            )));
+        }
+    }
+    let reports = compare_paths(&a.run, &a.references, a.tol, a.rtol)?;
+    let failed: Vec<_> = reports
+        .iter()
+        .flat_map(|r| {
+            r.fields
+                .iter()
+                .filter(|f| f.failures > 0)
+                .map(move |f| (r, f))
+        })
+        .collect();
+    if !a.quiet {
+        out(&format_reports(&reports, a.tol, a.rtol));
+    }
+    if let Some((r, worst)) = failed
+        .iter()
+        .max_by(|x, y| x.1.worst_ratio.total_cmp(&y.1.worst_ratio))
+    {
+        return Err(Error::failed(format!(
+            "{} field comparison{} beyond |Δ| ≤ {:e} + {:e}·|ref|; worst: {} in {} (max |Δ| {:.3e} at {} = {})",
+            failed.len(),
+            plural(failed.len()),
+            a.tol,
+            a.rtol,
+            worst.field,
+            r.reference,
+            worst.max_abs,
+            r.coordinate,
+            worst.at_abs
+        )));
+    }
+    Ok(())
+}

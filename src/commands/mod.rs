@@ -1,0 +1,6 @@
+//! The subcommands' bodies, a file per group; each `cmd_*` returns the library's one error.
+
+pub(crate) mod interop;
+pub(crate) mod run;
+pub(crate) mod study;
+pub(crate) mod sweep;

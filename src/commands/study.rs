@@ -1,0 +1,76 @@
+//! `eyeshell converge`, `wpd`, `refinement` and `extremes`: studies written all at once.
+
+use eyeshell::rundir::summary::StudySummary;
+use eyeshell::rundir::{self, OutputDir, Summary};
+use eyeshell::Error;
+
+use crate::args::{ConvergeArgs, ExtremesArgs};
+use crate::out;
+
+pub(crate) fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Error> {
+    use crate::study::extremes;
+    let results: Vec<_> = extremes::cases()
+        .into_iter()
+        .map(|c| {
+            let o = extremes::run(&c);
+            (c, o)
+        })
+        .collect();
+    let text = format!("{}{}", extremes::PREAMBLE, extremes::table(&results));
+    rundir::write_atomic(&a.out, text.as_bytes())
+        .map_err(|e| Error::failed(format!("{}: {e}", a.out.display())))?;
+    out(&format!(
+        "eyeshell: {} cases written to {}\n",
+        results.len(),
+        a.out.display()
+    ));
+    Ok(())
+}
+
+pub(crate) fn cmd_converge(a: &ConvergeArgs) -> Result<(), Error> {
+    let scene = a.scene.load()?;
+    let max = eyeshell::mesh::MAX_NODES;
+    if a.nodes.len() < 2 || a.nodes.iter().any(|&n| !(5..=max).contains(&n)) {
+        return Err(Error::input(format!(
+            "--nodes {}: give at least two counts, each from 5 to {max}",
+            a.nodes
+                .iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        )));
+    }
+    if a.growth && scene.growth.is_none() {
+        return Err(Error::input(format!(
+            "{}: --growth needs a scene with a [growth] section",
+            scene.origin
+        )));
+    }
+    cmd_study(&a.out, "converge", |dir| {
+        crate::study::report::converge(&scene, &a.nodes, a.growth, dir)
+    })
+}
+
+/// Run a study into an output directory written all at once; print its summary.
+pub(crate) fn cmd_study(
+    out_dir: &std::path::Path,
+    name: &str,
+    study: impl FnOnce(&std::path::Path) -> Result<String, crate::study::StudyError>,
+) -> Result<(), Error> {
+    rundir::check_target(out_dir)?;
+    let dir = OutputDir::create(out_dir)?;
+    let text = study(&dir.file(""))?;
+    Summary::Study(StudySummary {
+        study: name.to_string(),
+        sundials_version: rundir::sundials_version(),
+        report: text.clone(),
+    })
+    .write_to(&dir.file(rundir::SUMMARY_FILE))
+    .map_err(|e| Error::failed(e.to_string()))?;
+    let target = dir.commit()?;
+    out(&format!(
+        "eyeshell: {name} written to {}\n{text}",
+        target.display()
+    ));
+    Ok(())
+}

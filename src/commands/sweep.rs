@@ -1,0 +1,157 @@
+//! `eyeshell sweep`, `figures` and `plot`: many runs, and pictures of runs.
+
+use std::io::Write;
+
+use eyeshell::rundir;
+use eyeshell::Error;
+
+use crate::args::{FiguresArgs, PlotArgs, SweepArgs};
+use crate::{out, plural};
+
+/// Raised by the first Ctrl-C during a sweep: no new run starts.
+pub(crate) static CANCEL: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// A first Ctrl-C stops new runs (the running ones finish and the table is written); a
+/// second one exits at once.
+pub(crate) fn install_interrupt() {
+    use std::sync::atomic::Ordering;
+    let _ = ctrlc::set_handler(|| {
+        if CANCEL.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "eyeshell: interrupted: finishing the running runs (Ctrl-C again to stop at once)"
+        );
+    });
+}
+
+pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
+    use eyeshell::sweep::{run_sweep, RunStatus, SweepOptions};
+    let sweep = eyeshell::scene::sweep::Sweep::from_file(&a.scene.scene, &a.scene.set)?;
+    rundir::check_target(&a.out)?;
+    if a.jobs == Some(0) {
+        return Err(Error::input(
+            "--jobs 0: give at least 1 (or leave it out: one per core)",
+        ));
+    }
+    install_interrupt();
+    let options = SweepOptions {
+        jobs: a.jobs.unwrap_or(0),
+        resume: a.resume,
+        cancel: &CANCEL,
+    };
+    let quiet = a.quiet;
+    let report = run_sweep(&sweep, &a.out, &options, &|r, n, total| {
+        if quiet {
+            return;
+        }
+        let _ = writeln!(
+            std::io::stderr(),
+            "eyeshell: [{n}/{total}] {} {}",
+            r.name,
+            r.status_text()
+        );
+    })?;
+    let table = a.out.join(eyeshell::sweep::TABLE_FILE);
+    let failed: Vec<String> = report
+        .failed()
+        .map(|r| match &r.status {
+            RunStatus::Failed(m) => format!("{}: {m}", r.name),
+            _ => r.name.clone(),
+        })
+        .collect();
+    let finished = report
+        .records
+        .iter()
+        .filter(|r| matches!(r.status, RunStatus::Ok | RunStatus::Reused))
+        .count();
+    let total = report.records.len();
+    if report.interrupted {
+        return Err(Error::failed(format!(
+            "sweep interrupted: {finished} of {total} runs finished (table: {}); run again with --resume to do the rest",
+            table.display()
+        )));
+    }
+    if !failed.is_empty() {
+        return Err(Error::failed(format!(
+            "{} of {total} runs failed: {} (the other results are in {})",
+            failed.len(),
+            failed.join("; "),
+            table.display()
+        )));
+    }
+    if !a.quiet {
+        let reused = report
+            .records
+            .iter()
+            .filter(|r| r.status == RunStatus::Reused)
+            .count();
+        let reused = if reused > 0 {
+            format!(" ({reused} reused from the earlier sweep)")
+        } else {
+            String::new()
+        };
+        out(&format!(
+            "eyeshell: sweep {} ({}): {total} run{} ok{reused}\n  table           {}\n",
+            sweep.origin,
+            sweep.name,
+            plural(total),
+            table.display()
+        ));
+    }
+    Ok(())
+}
+
+pub(crate) fn cmd_figures(a: &FiguresArgs) -> Result<(), Error> {
+    if a.jobs == Some(0) {
+        return Err(Error::input(
+            "--jobs 0: give at least 1 (or leave it out: one per core)",
+        ));
+    }
+    install_interrupt();
+    let quiet = a.quiet;
+    let start = std::time::Instant::now();
+    let figures =
+        crate::study::figures::make(&a.out, a.jobs.unwrap_or(0), a.replot, &CANCEL, &|line| {
+            if !quiet {
+                let _ = writeln!(std::io::stderr(), "eyeshell: {line}");
+            }
+        })?;
+    if !a.quiet {
+        let mut text = format!(
+            "eyeshell: {} figures in {:.1} s\n",
+            figures.len(),
+            start.elapsed().as_secs_f64()
+        );
+        for f in &figures {
+            text.push_str(&format!(
+                "  ({}) {:<50} {}\n",
+                f.id,
+                f.title,
+                f.png.display()
+            ));
+        }
+        text.push_str(&format!(
+            "  index           {}\n",
+            a.out.join(crate::study::figures::INDEX_FILE).display()
+        ));
+        out(&text);
+    }
+    Ok(())
+}
+
+pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
+    use crate::figures::plot_run;
+    let target = a.out.clone().unwrap_or_else(|| a.dir.join("plots"));
+    let files = plot_run(&a.dir, &target)?;
+    if !a.quiet {
+        out(&format!(
+            "eyeshell: {} files drawn from {} into {}\n",
+            files.len(),
+            a.dir.display(),
+            target.display()
+        ));
+    }
+    Ok(())
+}
