@@ -6,9 +6,10 @@
 
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
 use eyeshell::bvp::discretisation::{LOWER, UPPER};
+use eyeshell::bvp::settings::{Scheme, SolverSettings};
 use eyeshell::bvp::solve::{discretise, sphere_guess};
 use eyeshell::bvp::{self};
-use eyeshell::model::params::{Params, Scheme, SolverSettings, Thickness};
+use eyeshell::model::params::{Params, Thickness};
 use eyeshell_sundials::MatrixSink;
 use std::hint::black_box;
 

@@ -3,10 +3,11 @@
 //! Figures go in BENCHMARKS.md.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::dae::{CoupledDae, DaeLinear};
 use eyeshell::growth::system::GrowthSystem;
 use eyeshell::growth::*;
-use eyeshell::model::params::{Params, SolverSettings};
+use eyeshell::model::params::Params;
 use std::hint::black_box;
 
 struct Discard;

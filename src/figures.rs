@@ -242,8 +242,8 @@ pub fn parameters(scene: &Scene) -> String {
 
 fn numerics(scene: &Scene) -> String {
     let scheme = match scene.solver.scheme {
-        eyeshell::model::params::Scheme::Trapezoid => "trapezoid (order 2)",
-        eyeshell::model::params::Scheme::HermiteSimpson => "Hermite–Simpson (order 4)",
+        eyeshell::bvp::settings::Scheme::Trapezoid => "trapezoid (order 2)",
+        eyeshell::bvp::settings::Scheme::HermiteSimpson => "Hermite–Simpson (order 4)",
     };
     match (&scene.growth, scene.growth_settings.integrator) {
         (None, _) => scheme.to_string(),

@@ -5,8 +5,9 @@
 //! log(e_k / e_{k+1}) / log(h_k / h_{k+1}).
 
 use super::{max_diff, points, run, sample, worst, StudyError, FIELDS};
+use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::{GrowthParams, GrowthSettings};
-use eyeshell::model::params::{Params, SolverSettings};
+use eyeshell::model::params::Params;
 
 /// What a ladder varies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -5,10 +5,11 @@
 //!
 //! `eyeshell extremes --out TESTING.md` runs them all and writes the table.
 
+use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::bvp::{self, FieldRow};
 use eyeshell::growth::{self, GrowthParams, GrowthSettings, ThicknessLaw};
 use eyeshell::model::cornea;
-use eyeshell::model::params::{Params, SolverSettings, Thickness};
+use eyeshell::model::params::{Params, Thickness};
 use std::fmt::Write as _;
 use std::time::Instant;
 

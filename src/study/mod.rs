@@ -9,9 +9,10 @@ pub mod refinement;
 pub mod report;
 pub mod wpd;
 
+use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::bvp::{BvpError, FieldRow, Solution};
 use eyeshell::growth::{GrowthError, GrowthParams, GrowthSettings, GrowthStats};
-use eyeshell::model::params::{Params, SolverSettings};
+use eyeshell::model::params::Params;
 use eyeshell::rundir::table::{csv_bytes, QuoteStyle};
 use std::path::Path;
 use std::time::Instant;

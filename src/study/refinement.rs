@@ -6,8 +6,9 @@
 //! tolerances, refined the same way (rtol ÷100 in place of the steps).
 
 use super::{points, run, sample, StudyError};
+use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::{GrowthParams, GrowthSettings, Integrator};
-use eyeshell::model::params::{Params, SolverSettings};
+use eyeshell::model::params::Params;
 
 /// The paper's reported relative changes of κ, α_s, r, θ.
 pub const PAPER: [f64; 4] = [1.7e-3, 2.1e-5, 9.4e-4, 7.4e-4];

@@ -7,8 +7,9 @@
 //!   length and the largest field error at t_end (same mesh as the reference).
 
 use super::{max_diff, run, sample, worst, StudyError};
+use eyeshell::bvp::settings::{Scheme, SolverSettings};
 use eyeshell::growth::{GrowthParams, GrowthSettings, Integrator};
-use eyeshell::model::params::{Params, Scheme, SolverSettings};
+use eyeshell::model::params::Params;
 
 /// One method's points: (knob value, error, seconds), coarse to fine.
 #[derive(Clone, Debug)]

@@ -1,7 +1,8 @@
 //! The studies of speed against accuracy: convergence ladders report the scheme's order.
 
+use eyeshell::bvp::settings::{Scheme, SolverSettings};
 use eyeshell::growth::{GrowthParams, GrowthSettings};
-use eyeshell::model::params::{Params, Scheme, SolverSettings, Thickness};
+use eyeshell::model::params::{Params, Thickness};
 use eyeshell_cli::study::converge::{ladder, Knob};
 
 fn fibre_shell() -> Params {

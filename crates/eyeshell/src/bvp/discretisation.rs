@@ -20,11 +20,11 @@ use super::equations::{
     self, Equations, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, QS, R, THETA,
     TS,
 };
+use crate::bvp::settings::Scheme;
 use crate::mesh::Mesh;
 use crate::model::components::Membrane;
 use crate::model::constitutive::Reinforcement;
 use crate::model::cornea::CorneaEdge;
-use crate::model::params::Scheme;
 use eyeshell_sundials::MatrixSink;
 
 /// Unknowns per node.
@@ -527,8 +527,9 @@ impl MatrixSink for DenseSink {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bvp::settings::SolverSettings;
     use crate::bvp::solve::{discretise, sphere_guess};
-    use crate::model::params::{Params, SolverSettings, Thickness};
+    use crate::model::params::{Params, Thickness};
 
     /// The residual and Jacobian of a fibre-free scene, built from `Equations<NoFibres>`,
     /// against the same scene forced through the fibre component with D = 0: the two

@@ -105,5 +105,6 @@ pub mod discretisation;
 pub(crate) mod equations;
 pub(crate) mod interpolant;
 pub(crate) mod material;
+pub mod settings;
 pub mod solve;
 pub use solve::{solve, BvpError, Solution};

@@ -8,9 +8,10 @@ use super::equations::{self, Shell, Vec5, KAPPA, QS, R, THETA, TS};
 use super::interpolant::{Interpolant, NQ};
 use super::material::{reference_data, reference_point};
 use super::{FieldRow, SolveStats};
+use crate::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
 use crate::mesh::{self, Mesh, MeshError};
 use crate::model::cornea;
-use crate::model::params::{LinearSolverKind, Params, Scheme, SolverSettings};
+use crate::model::params::Params;
 use crate::model::profiles::{self, Side};
 use crate::text::{decimals6, number};
 use eyeshell_sundials::{

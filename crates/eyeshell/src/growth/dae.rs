@@ -33,8 +33,8 @@ use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, P
 use crate::bvp::equations::{
     data_partials, Mat5, MaterialPoint, PointError, PointEval, Vec5, R, THETA, TS,
 };
+use crate::bvp::settings::Scheme;
 use crate::model::growth_law::positive_smooth;
-use crate::model::params::Scheme;
 use eyeshell_sundials::linalg::{
     Csr, DirectSolver, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
 };
@@ -1173,8 +1173,9 @@ impl DirectSolver for NoSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bvp::settings::SolverSettings;
     use crate::growth::GrowthParams;
-    use crate::model::params::{Params, SolverSettings};
+    use crate::model::params::Params;
 
     /// The structure the docs state: the Schur complement leaves the elastic band (lower 8,
     /// upper 8, with z in it) while the interleaved whole system has lower 14, upper 12,

@@ -229,7 +229,7 @@ pub struct GrowthError {
 /// snapshot (t = 0, each output time, t_end) to `observer` as soon as it is computed.
 pub fn grow(
     params: &crate::model::params::Params,
-    solver: &crate::model::params::SolverSettings,
+    solver: &crate::bvp::settings::SolverSettings,
     growth: &GrowthParams,
     settings: &GrowthSettings,
     observer: &mut dyn Observer,
@@ -293,7 +293,7 @@ pub type OutputFn<'a> =
 /// time (t = 0, the output times, t_end): `output(sys, t, p)` with p the growth state.
 pub fn run(
     params: &crate::model::params::Params,
-    solver: &crate::model::params::SolverSettings,
+    solver: &crate::bvp::settings::SolverSettings,
     growth: &GrowthParams,
     settings: &GrowthSettings,
     output: &mut OutputFn<'_>,

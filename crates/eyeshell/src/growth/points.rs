@@ -12,10 +12,11 @@
 use super::{GrowthParams, ThicknessLaw};
 use crate::bvp::discretisation::MaterialData;
 use crate::bvp::equations::MaterialPoint;
+use crate::bvp::settings::Scheme;
 use crate::mesh::Mesh;
 use crate::model::constitutive::FibreDirection;
 use crate::model::growth_law;
-use crate::model::params::{Params, Scheme};
+use crate::model::params::Params;
 use crate::model::profiles::{self, Side};
 
 /// Entries of the state per point: ρ then γ_s.

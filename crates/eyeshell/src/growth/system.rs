@@ -14,9 +14,10 @@ use super::points::{GrowthPoints, NP};
 use super::{GrowthParams, GrowthRow, SeriesRow};
 use crate::bvp::discretisation::{EvalFailure, NY};
 use crate::bvp::equations::{R, THETA};
+use crate::bvp::settings::SolverSettings;
 use crate::bvp::solve::{linear_spec, BvpError, ElasticSolver, Solution};
 use crate::model::growth_law;
-use crate::model::params::{Params, SolverSettings};
+use crate::model::params::Params;
 use crate::model::stimulus::{self, EyeMeasure, Surface};
 use eyeshell_sundials::{Context, LinearSolver, Matrix, NVector, SundialsError};
 use std::rc::Rc;
@@ -72,7 +73,7 @@ pub struct GrowthSystem {
     pub elastic: ElasticSolver,
     pub points: GrowthPoints,
     growth: GrowthParams,
-    linear: crate::model::params::LinearSolverKind,
+    linear: crate::bvp::settings::LinearSolverKind,
     /// The last state the elastic problem was solved for, and its converged unknowns.
     solved_at: Vec<f64>,
     /// Whether `elastic.u` solves the elastic problem at `solved_at` to Newton's tolerance

@@ -5,9 +5,10 @@
 //! To add a key, add one [`KeySpec`] here (and the field it sets); nothing else needs to change.
 
 use super::Scene;
+use crate::bvp::settings::{LinearSolverKind, Scheme};
 use crate::growth::dae::DaeLinear;
 use crate::growth::{GrowthParams, Integrator, ThicknessLaw};
-use crate::model::params::{LinearSolverKind, Scheme, Thickness};
+use crate::model::params::Thickness;
 
 /// How a key is read from and written to a [`Scene`]; the variant is the key's type.
 #[derive(Clone, Copy)]

@@ -21,8 +21,9 @@ pub mod sweep;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use crate::bvp::settings::SolverSettings;
 use crate::growth::{GrowthParams, GrowthSettings};
-use crate::model::params::{Params, SolverSettings};
+use crate::model::params::Params;
 use crate::model::stimulus::{Surface, RED_OFFSET};
 use crate::text::{decimals6, number};
 pub use keys::{Access, KeySpec, KeyValue, Rule, KEYS};

@@ -1,7 +1,8 @@
 //! Unit tests of scene parsing, overrides and validation.
 
 use super::*;
-use crate::model::params::{LinearSolverKind, Scheme, Thickness};
+use crate::bvp::settings::{LinearSolverKind, Scheme};
+use crate::model::params::Thickness;
 
 fn parse(text: &str) -> Result<Scene, SceneError> {
     Scene::from_toml_str(text, "x.toml", &[])

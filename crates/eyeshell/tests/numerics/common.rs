@@ -2,8 +2,9 @@
 //! scenes, as diffsol keeps its test models.
 #![allow(dead_code)]
 
+use eyeshell::bvp::settings::{Scheme, SolverSettings};
 use eyeshell::bvp::{self, Solution};
-use eyeshell::model::params::{Params, Scheme, SolverSettings, Thickness};
+use eyeshell::model::params::{Params, Thickness};
 
 /// docs/MODEL.md §7: uniform H0, D = 0, cornea of the sclera's material and radius.
 pub fn exact_sphere() -> Params {

@@ -2,10 +2,11 @@
 //! differences of its residual (issue 11), at grown, off-equilibrium states: both schemes,
 //! with and without fibres, both thickness laws.
 
+use eyeshell::bvp::settings::{Scheme, SolverSettings};
 use eyeshell::growth::dae::CoupledDae;
 use eyeshell::growth::system::GrowthSystem;
 use eyeshell::growth::{GrowthParams, ThicknessLaw};
-use eyeshell::model::params::{Params, Scheme, SolverSettings, Thickness};
+use eyeshell::model::params::{Params, Thickness};
 
 /// A state of the coupled system away from equilibrium and from the kinks: the consistent
 /// start, grown a little (ρ, γ_s up by a smooth profile) and its elastic unknowns shifted.

@@ -1,9 +1,10 @@
 //! Growth in time (docs/MODEL.md §5–6): the implicit-function Jacobian product, CVODE against
 //! the published explicit Euler, monotone growth, and what a failed run keeps.
 
+use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::system::GrowthSystem;
 use eyeshell::growth::*;
-use eyeshell::model::params::{Params, SolverSettings};
+use eyeshell::model::params::Params;
 
 /// Keeps every snapshot it is handed.
 #[derive(Default)]

@@ -1,9 +1,10 @@
 //! Growth by IDA on the coupled DAE (issue 11): it agrees with CVODE on the paper's scenes,
 //! survives the growth extremes of TESTING.md, and every linear solver gives the same run.
 
+use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::dae::DaeLinear;
 use eyeshell::growth::*;
-use eyeshell::model::params::{Params, SolverSettings, Thickness};
+use eyeshell::model::params::{Params, Thickness};
 
 /// Keeps every snapshot's series row.
 #[derive(Default)]

@@ -3,8 +3,9 @@
 
 use crate::common::*;
 use eyeshell::bvp::discretisation::DenseSink;
+use eyeshell::bvp::settings::Scheme;
 use eyeshell::bvp::solve::{discretise, sphere_guess};
-use eyeshell::model::params::{Params, Scheme, Thickness};
+use eyeshell::model::params::{Params, Thickness};
 use proptest::prelude::*;
 
 fn check(p: &Params, scheme: Scheme, noise: &[f64]) -> Result<(), TestCaseError> {

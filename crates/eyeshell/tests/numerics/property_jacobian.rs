@@ -5,9 +5,10 @@
 //! tolerance) is the same.
 
 use eyeshell::bvp::discretisation::DenseSink;
+use eyeshell::bvp::settings::{Scheme, SolverSettings};
 use eyeshell::bvp::solve::{discretise, sphere_guess};
 use eyeshell::model::cornea;
-use eyeshell::model::params::{CorneaParams, Params, Scheme, SolverSettings, Thickness};
+use eyeshell::model::params::{CorneaParams, Params, Thickness};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 

@@ -8,9 +8,10 @@
 //! solving, over random ΔP, C, H0, E_b, R0, fraction.
 
 use eyeshell::bvp::discretisation::{Discretisation, NY};
+use eyeshell::bvp::settings::{Scheme, SolverSettings};
 use eyeshell::bvp::solve::discretise;
 use eyeshell::model::cornea;
-use eyeshell::model::params::{Params, Scheme, SolverSettings};
+use eyeshell::model::params::Params;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 

@@ -4,7 +4,8 @@
 
 use crate::common::*;
 use eyeshell::bvp;
-use eyeshell::model::params::{LinearSolverKind, Params, Scheme, SolverSettings};
+use eyeshell::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
+use eyeshell::model::params::Params;
 
 #[test]
 fn klu_and_band_give_the_same_solution() {

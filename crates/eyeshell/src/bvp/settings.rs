@@ -1,0 +1,68 @@
+//! The numerical settings of the elastic solve: scheme, linear solver, mesh and Newton
+//! (solver.* keys). The model (docs/MODEL.md) knows nothing of them.
+
+/// Which finite-difference scheme discretises the BVP (docs/MODEL.md §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scheme {
+    /// Trapezoidal rule: order 2.
+    Trapezoid,
+    /// Hermite–Simpson = 3-stage Lobatto IIIA (bvp4c's scheme): order 4.
+    HermiteSimpson,
+}
+
+impl Scheme {
+    /// The scheme's classical order of accuracy.
+    pub fn order(self) -> u32 {
+        match self {
+            Scheme::Trapezoid => 2,
+            Scheme::HermiteSimpson => 4,
+        }
+    }
+}
+
+/// Which direct linear solver factors the Newton matrix.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinearSolverKind {
+    /// SUNDIALS band LU.
+    Band,
+    /// SuiteSparse KLU through SUNDIALS' sunlinsol_klu.
+    Klu,
+}
+
+/// Numerical settings of one elastic solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverSettings {
+    /// solver.nodes: number of uniform nodes on [ε, L]; breakpoints and pole nodes come on top.
+    pub nodes: usize,
+    /// solver.epsilon: pole truncation ε (mm).
+    pub epsilon: f64,
+    /// solver.scheme.
+    pub scheme: Scheme,
+    /// solver.linear.
+    pub linear: LinearSolverKind,
+    /// solver.newton_tol: KINSOL's tolerance on the scaled residual (max norm).
+    pub newton_tol: f64,
+    /// solver.max_newton: the most Newton iterations per solve.
+    pub max_newton: usize,
+    /// solver.pole_grading: insert geometrically graded nodes next to the pole (docs/MODEL.md §3 trap).
+    pub pole_grading: bool,
+    /// solver.cornea_grading: grade the nodes next to the cornea when the bending boundary
+    /// layer there, of width √(E_b / t_s), is thinner than the mesh spacing (the membrane
+    /// limit, small E_b).
+    pub cornea_grading: bool,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            nodes: 501,
+            epsilon: 1e-3,
+            scheme: Scheme::HermiteSimpson,
+            linear: LinearSolverKind::Band,
+            newton_tol: 1e-10,
+            max_newton: 50,
+            pole_grading: true,
+            cornea_grading: true,
+        }
+    }
+}
