@@ -6,10 +6,10 @@
 //! and the output time if it has one.
 //! - An eyeshell run: fields.csv (one sample, no time) or each snapshot (with its time),
 //!   every column by its name.
-//! - A .mat / .npz file: the struct `sol` if there is one (bvp4c's solution), else the top
-//!   level. `x` is the material coordinate Σ (so it is renamed `Sigma`); a 5×N `y` gives the
-//!   rows kappa, alpha_s, r, theta, Q; a 1×1 `time` is the output time; every other vector
-//!   of the same length is a field by its name.
+//! - A .mat / .npz file: the struct `sol` if there is one (bvp4c's solution; element 1 of a
+//!   struct array), else the top level. `x` is the material coordinate Σ (so it is renamed
+//!   `Sigma`); a 5×N `y` gives the rows kappa, alpha_s, r, theta, Q; a 1×1 `time` is the
+//!   output time; every other vector of the same length is a field by its name.
 //!
 //! Each reference sample is paired with the run's sample at the same time (within 1e-9
 //! relative), or with the run's only sample when either has no time. The coordinate is Σ
@@ -147,14 +147,12 @@ fn load_file(path: &Path) -> Result<Sample, CompareError> {
             .collect()
     } else {
         let vars = mat::read(path).map_err(|e| CompareError(e.to_string()))?;
-        // bvp4c's solution struct, if there is one; else the top level.
+        // bvp4c's solution struct (element 1 of a struct array), if there is one; else the
+        // top level.
         let container = vars
             .iter()
-            .find(|(n, v)| n == "sol" && matches!(v, MatValue::Struct(_)))
-            .map(|(_, v)| match v {
-                MatValue::Struct(f) => f.clone(),
-                MatValue::Double { .. } => unreachable!(),
-            })
+            .find_map(|(n, v)| (n == "sol").then(|| v.struct_element(0)).flatten())
+            .map(<[_]>::to_vec)
             .unwrap_or(vars);
         container
             .into_iter()
@@ -167,7 +165,7 @@ fn load_file(path: &Path) -> Result<Sample, CompareError> {
                         column_major: true,
                     },
                 )),
-                MatValue::Struct(_) => None,
+                _ => None,
             })
             .collect()
     };
