@@ -443,6 +443,7 @@ macro_rules! values {
             .collect()
     };
 }
+pub(crate) use values;
 
 /// One data element: its type and its bytes (borrowed from the file or the decompressed
 /// variable), and where its tag starts.
