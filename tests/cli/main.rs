@@ -15,6 +15,7 @@ mod fuzz_scene;
 mod golden;
 mod grow;
 mod keys_check;
+mod readers;
 mod solve;
 mod study;
 mod sweep;
