@@ -11,6 +11,7 @@ mod export_roundtrip;
 mod export_scipy;
 mod extremes;
 mod figures;
+mod fuzz_readers;
 mod fuzz_scene;
 mod golden;
 mod grow;
