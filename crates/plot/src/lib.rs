@@ -1,7 +1,7 @@
 //! Figures as PNG and SVG, drawn with `plotters` (no Python), knowing nothing of eyes:
 //! eyeshell draws its convergence studies, work-precision diagrams and the paper's figures with it.
 //!
-//! A [`Figure`] holds [`Series`] of points; [`write`] draws it to `<stem>.png` and
+//! A [`Figure`] holds [`Series`] of points; [`write()`] draws it to `<stem>.png` and
 //! `<stem>.svg`, and [`write_panels`] draws several figures as the panels of one image.
 //! Colours come from a fixed palette ([`PALETTE`]) and marker shapes from a fixed cycle,
 //! both by the series' index, so a figure looks the same on every run. A series may instead
@@ -403,13 +403,13 @@ pub const PANELS_TITLE_BAND: u32 = 50;
 /// Write several figures as the panels of one image, `<stem>.png` and `<stem>.svg`.
 ///
 /// The panels fill a grid row by row, `columns` to a row and `ceil(n / columns)` rows, each
-/// drawn in a `panel_width`×`panel_height` cell exactly as [`write`] would draw that figure
+/// drawn in a `panel_width`×`panel_height` cell exactly as [`write()`] would draw that figure
 /// at that size (the figures' own `width` and `height` are not used). A non-empty `title`
 /// goes in a band of [`PANELS_TITLE_BAND`] pixels on top, so the image is
 /// `columns * panel_width` by `rows * panel_height` (+ the band) pixels. Unused cells of the
 /// last row stay white. Errors, without writing anything, when there is no panel,
 /// `columns` is 0, a panel or the whole image is outside 100..=20000 pixels a side, or a
-/// figure is invalid for [`write`]; otherwise as [`write`].
+/// figure is invalid for [`write()`]; otherwise as [`write()`].
 pub fn write_panels(
     panels: &[Figure],
     columns: usize,
@@ -593,7 +593,7 @@ fn render(canvas: &Canvas, stem: &Path) -> Result<(PathBuf, PathBuf), PlotError>
 ///
 /// eyeshell's atomic writer is `eyeshell::rundir::atomic`; this crate depends on nothing of
 /// eyeshell (the arrow is cli → plot), so it keeps this one small write of a figure's pair
-/// of files, and its [`write`] / [`write_panels`] keep taking a path.
+/// of files, and its [`write()`] / [`write_panels`] keep taking a path.
 fn write_both(stem: &Path, png: (&Path, &[u8]), svg: (&Path, &[u8])) -> Result<(), PlotError> {
     if let Some(parent) = stem.parent().filter(|p| !p.as_os_str().is_empty()) {
         fs::create_dir_all(parent).map_err(|e| PlotError::Io {

@@ -12,7 +12,7 @@
 //!
 //! The residual and the Jacobian are built from the scene's components
 //! (`model::components`): each pass over the points resolves the membrane component once
-//! and runs a loop monomorphised for it ([`Equations<NoFibres>`] or [`Equations<Fibres>`]),
+//! and runs a loop monomorphised for it (`Equations<NoFibres>` or `Equations<Fibres>`),
 //! so a fibre-free scene's assembly holds no fibre code. A uniform thickness has no jump
 //! node and so no second evaluation at πR0/2; no component adds thickness derivatives.
 

@@ -13,13 +13,13 @@ pub enum ThicknessLaw {
     Mass,
 }
 
-/// [x]⁺ = max(x, 0).
+/// \[x\]⁺ = max(x, 0).
 #[inline]
 pub fn positive(x: f64) -> f64 {
     x.max(0.0)
 }
 
-/// [x]⁺ and its derivative, with the kink rounded over |x| < w when w > 0 (an explicit,
+/// \[x\]⁺ and its derivative, with the kink rounded over |x| < w when w > 0 (an explicit,
 /// off-by-default option, `growth.kink_width`, for measuring what the kinks cost the time
 /// integrators: docs/MODEL.md §5): (x + w)²/(4w) there, C¹ with x above and 0 below. With w = 0
 /// it is max(x, 0) exactly, with the derivative of the branch taken (1 for x > 0, else 0).
@@ -72,7 +72,7 @@ mod tests {
         assert!((gamma_rate(2.0, 1.5, 1.1, 0.0) - 0.3).abs() < 1e-12);
     }
 
-    /// The rounded [x]⁺ is C¹, exact outside |x| < w, and max(x, 0) with w = 0.
+    /// The rounded \[x\]⁺ is C¹, exact outside |x| < w, and max(x, 0) with w = 0.
     #[test]
     fn rounded_kink_is_c1_and_exact_outside() {
         let w = 0.1;

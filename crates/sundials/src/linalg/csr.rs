@@ -89,7 +89,7 @@ impl Csr {
         }
     }
 
-    /// A(i, j0 + t) += v[t] for consecutive columns j0, j0 + 1, …, all in the pattern: one
+    /// A(i, j0 + t) += v\[t\] for consecutive columns j0, j0 + 1, …, all in the pattern: one
     /// search for the whole span.
     #[inline]
     pub fn add_span(&mut self, i: usize, j0: usize, v: &[f64]) {
