@@ -91,12 +91,18 @@ pub fn exit_code(e: &Error) -> i32 {
 }
 
 /// Print one error line on stderr (control characters escaped, so it stays one line).
+/// Line breaks become spaces; every other control character is shown escaped, so that a
+/// name or a file's text quoted in a message cannot drive the terminal.
 pub(crate) fn report(message: &str) {
     let line: String = message
         .chars()
         .map(|c| if c == '\n' || c == '\r' { ' ' } else { c })
         .collect();
-    let _ = writeln!(std::io::stderr(), "eyeshell: error: {line}");
+    let _ = writeln!(
+        std::io::stderr(),
+        "eyeshell: error: {}",
+        eyeshell::text::one_line(&line)
+    );
 }
 
 /// Help and version go to stdout with exit 0; anything else is one line and exit 2.
@@ -143,8 +149,15 @@ fn usage_error(e: clap::Error) -> i32 {
 }
 
 /// Write to stdout, ignoring a closed pipe (`eyeshell keys | head` must not panic).
+/// Control characters other than the line breaks we print are shown escaped (the last
+/// guard: names are escaped where they are printed).
 pub(crate) fn out(text: &str) {
-    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+    let safe: String = text
+        .split('\n')
+        .map(eyeshell::text::one_line)
+        .collect::<Vec<_>>()
+        .join("\n");
+    let _ = std::io::stdout().lock().write_all(safe.as_bytes());
 }
 
 pub(crate) fn plural(n: usize) -> &'static str {

@@ -3,6 +3,7 @@
 use eyeshell::rundir::run::GrowthFailure;
 use eyeshell::rundir::{self, GrowthWriter};
 use eyeshell::scene::{Scene, SceneError, KEYS};
+use eyeshell::text::one_line;
 use eyeshell::Error;
 
 use crate::args::{GrowArgs, SceneArgs, SolveArgs};
@@ -42,7 +43,7 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
         out(&format!(
             "eyeshell: solved {} ({})\n  nodes           {} ({} uniform + {} breakpoint + {} pole + {} cornea)\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
             scene.origin,
-            scene.display_name(),
+            one_line(&scene.display_name()),
             s.nodes,
             s.uniform_nodes,
             s.breakpoint_nodes,
@@ -104,7 +105,7 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
         out(&format!(
             "eyeshell: grew {} ({})\n  final           {}\n  integrator      {} (rtol {:e}, atol {:e}), {} step{}\n  work            {} rhs evaluation{}, {} BVP solve{}, {} Newton iteration{}\n  time            {:.3} s\n  output          {}\n",
             scene.origin,
-            scene.display_name(),
+            one_line(&scene.display_name()),
             end,
             scene.growth_settings.integrator.name(),
             scene.growth_settings.rtol,
@@ -133,10 +134,10 @@ pub(crate) fn cmd_check(a: &SceneArgs) -> Result<(), Error> {
     let mut text = format!(
         "# {}: valid scene '{}'\n",
         scene.origin,
-        scene.display_name()
+        one_line(&scene.display_name())
     );
     for o in &scene.overrides {
-        text.push_str(&format!("# --set {o}\n"));
+        text.push_str(&format!("# --set {}\n", one_line(o)));
     }
     text.push_str(&format!(
         "# L = π·fraction·R0 = {:.6} mm; cornea's limit ΔP_max = {:.6} kPa",
@@ -176,7 +177,7 @@ pub(crate) fn check_sweep(a: &SceneArgs) -> Result<(), Error> {
     let mut text = format!(
         "# {}: valid sweep '{}' of {} run{} over {}\n",
         sweep.origin,
-        sweep.name,
+        one_line(&sweep.name),
         sweep.runs.len(),
         plural(sweep.runs.len()),
         sweep.keys.join(", ")

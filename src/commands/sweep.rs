@@ -95,7 +95,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         out(&format!(
             "eyeshell: sweep {} ({}): {total} run{} ok{reused}\n  table           {}\n",
             sweep.origin,
-            sweep.name,
+            eyeshell::text::one_line(&sweep.name),
             plural(total),
             table.display()
         ));

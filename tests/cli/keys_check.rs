@@ -138,3 +138,54 @@ fn help_and_version_succeed() {
     assert_eq!(code, Some(0));
     assert!(out.starts_with("eyeshell "));
 }
+
+/// A scene name carrying a line break and terminal escape sequences is shown escaped by
+/// `check`, `solve` and in error lines: nothing reaches the terminal raw, `check`'s output
+/// still reads back as the same scene, and an error stays one line (issue 13, family 7).
+#[test]
+fn hostile_names_are_printed_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("hostile.toml");
+    let name = "eye\n# injected = 1\u{1b}[31m\u{7}";
+    let text = format!(
+        "name = {}\n[solver]\nnodes = 21\n",
+        toml::Value::String(name.into())
+    );
+    std::fs::write(&scene, &text).unwrap();
+    let check = ok(&["check", s(&scene)]);
+    for stream in [&check.stdout, &check.stderr] {
+        assert!(
+            !stream.contains('\u{1b}') && !stream.contains('\u{7}'),
+            "{stream:?}"
+        );
+    }
+    assert!(
+        check.stdout.contains(r"eye\n# injected = 1\u{1b}[31m\u{7}"),
+        "{}",
+        check.stdout
+    );
+    let back = Scene::from_toml_str(&check.stdout, "check output", &[]).unwrap();
+    assert_eq!(back.name.as_deref(), Some(name));
+
+    let out = dir.path().join("run");
+    let solve = ok(&["solve", s(&scene), "--out", s(&out)]);
+    assert!(!solve.stdout.contains('\u{1b}'), "{:?}", solve.stdout);
+    let first = solve.stdout.lines().next().unwrap();
+    assert!(
+        first.contains(r"(eye\n# injected = 1\u{1b}[31m\u{7})"),
+        "{first}"
+    );
+
+    // An error quoting the text keeps to one line and shows the escape.
+    let bad = eyeshell(&[
+        "solve",
+        s(&scene),
+        "--set",
+        "solver.scheme=\u{1b}[2Jx",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(bad.code, Some(2));
+    assert_eq!(bad.stderr.lines().count(), 1, "{:?}", bad.stderr);
+    assert!(!bad.stderr.contains('\u{1b}'), "{:?}", bad.stderr);
+}

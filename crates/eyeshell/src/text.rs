@@ -23,9 +23,31 @@ pub fn decimals6(x: f64) -> String {
     }
 }
 
+/// Text from a user's file, made safe to print on one line: every control character
+/// (line breaks, escape sequences that would drive the terminal) is shown escaped, `\n`,
+/// `\u{1b}`, instead of acting.
+pub fn one_line(s: &str) -> String {
+    s.chars()
+        .flat_map(|c| {
+            let escaped: Vec<char> = if c.is_control() {
+                c.escape_debug().collect()
+            } else {
+                vec![c]
+            };
+            escaped
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn control_characters_are_shown_not_obeyed() {
+        assert_eq!(one_line("a\nb\u{1b}[31mred\r"), "a\\nb\\u{1b}[31mred\\r");
+        assert_eq!(one_line("Σ = 1, ΔP"), "Σ = 1, ΔP");
+    }
 
     #[test]
     fn short_and_exact() {

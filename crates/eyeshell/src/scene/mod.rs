@@ -158,18 +158,7 @@ fn suggest_section(s: &Option<String>) -> String {
         .unwrap_or_default()
 }
 
-/// Make text safe for a one-line message: control characters are escaped.
-pub(crate) fn one_line(s: &str) -> String {
-    s.chars()
-        .flat_map(|c| {
-            if c.is_control() {
-                c.escape_debug().collect::<Vec<_>>()
-            } else {
-                vec![c]
-            }
-        })
-        .collect()
-}
+pub(crate) use crate::text::one_line;
 
 /// The origin shown for a `--set` override.
 fn override_origin(text: &str) -> String {
