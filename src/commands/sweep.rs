@@ -9,6 +9,20 @@ use crate::args::{FiguresArgs, PlotArgs, SweepArgs};
 use crate::{out, plural};
 
 /// Raised by the first Ctrl-C during a sweep: no new run starts.
+/// The most runs at once: each is a thread with its own solver; beyond this a typo
+/// (--jobs 100000) would spend seconds spawning threads before any run starts.
+const MAX_JOBS: usize = 1024;
+
+/// `--jobs`: absent (one per core) or 1 to [`MAX_JOBS`].
+fn check_jobs(jobs: Option<usize>) -> Result<(), Error> {
+    match jobs {
+        Some(n) if n == 0 || n > MAX_JOBS => Err(Error::input(format!(
+            "--jobs {n}: give 1 to {MAX_JOBS} (or leave it out: one per core)"
+        ))),
+        _ => Ok(()),
+    }
+}
+
 pub(crate) static CANCEL: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// A first Ctrl-C stops new runs (the running ones finish and the table is written); a
@@ -28,13 +42,9 @@ pub(crate) fn install_interrupt() {
 
 pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     use eyeshell::sweep::{run_sweep, RunStatus, SweepOptions};
+    check_jobs(a.jobs)?;
     let sweep = eyeshell::scene::sweep::Sweep::from_file(&a.scene.scene, &a.scene.set)?;
     rundir::check_target(&a.out)?;
-    if a.jobs == Some(0) {
-        return Err(Error::input(
-            "--jobs 0: give at least 1 (or leave it out: one per core)",
-        ));
-    }
     install_interrupt();
     let options = SweepOptions {
         jobs: a.jobs.unwrap_or(0),
@@ -104,11 +114,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
 }
 
 pub(crate) fn cmd_figures(a: &FiguresArgs) -> Result<(), Error> {
-    if a.jobs == Some(0) {
-        return Err(Error::input(
-            "--jobs 0: give at least 1 (or leave it out: one per core)",
-        ));
-    }
+    check_jobs(a.jobs)?;
     install_interrupt();
     let quiet = a.quiet;
     let start = std::time::Instant::now();

@@ -363,3 +363,29 @@ fn ctrl_c_stops_starting_runs_and_keeps_the_table() {
             .is_file());
     }
 }
+
+/// `--jobs` is bounded (a typo of 100000 used to spawn threads for seconds and then blame
+/// the output directory): refused first, on one line, exit 2, nothing written.
+#[test]
+fn absurd_jobs_are_refused_before_anything_else() {
+    let dir = tempfile::tempdir().unwrap();
+    for jobs in ["0", "100000"] {
+        for cmd in [
+            vec!["sweep", "scenes/fibre.toml", "--jobs", jobs, "--out"],
+            vec!["figures", "--jobs", jobs, "--out"],
+        ] {
+            let out = dir.path().join("out");
+            let mut args = cmd.clone();
+            args.push(s(&out));
+            let r = eyeshell(&args);
+            assert_eq!(r.code, Some(2), "{args:?}: {}", r.stderr);
+            assert!(
+                r.stderr.contains(&format!("--jobs {jobs}: give 1 to 1024")),
+                "{}",
+                r.stderr
+            );
+            assert_eq!(r.stderr.lines().count(), 1);
+            assert!(!out.exists());
+        }
+    }
+}

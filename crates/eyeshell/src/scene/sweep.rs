@@ -102,13 +102,24 @@ impl Sweep {
         }
         let base = Scene::from_table(&table, &origin, &[], overrides)?;
         let name = base.display_name();
-        let combos = expand(&list, &grid);
-        if combos.len() > MAX_RUNS {
-            return Err(bad(format!(
-                "declares {} runs, more than the {MAX_RUNS} allowed",
-                combos.len()
-            )));
+        // Count before expanding: a grid of many keys multiplies to more runs than memory.
+        let count = grid.iter().try_fold(list.len().max(1), |n, (_, values)| {
+            n.checked_mul(values.len())
+        });
+        match count {
+            Some(n) if n <= MAX_RUNS => {}
+            Some(n) => {
+                return Err(bad(format!(
+                    "declares {n} runs, more than the {MAX_RUNS} allowed"
+                )))
+            }
+            None => {
+                return Err(bad(format!(
+                    "declares more runs than can be counted, more than the {MAX_RUNS} allowed"
+                )))
+            }
         }
+        let combos = expand(&list, &grid);
         let mut keys_seen: Vec<String> = Vec::new();
         for k in list
             .iter()
@@ -121,7 +132,10 @@ impl Sweep {
         }
         let mut runs: Vec<SweepRun> = Vec::with_capacity(combos.len());
         for (run_name, values) in combos {
-            let run_name = unique(run_name.unwrap_or_else(|| generated_name(&values)), &runs);
+            let run_name = unique(
+                shorten(run_name.unwrap_or_else(|| generated_name(&values))),
+                &runs,
+            );
             let run_origin = format!("{origin} [sweep] run {run_name}");
             let assignments: Vec<(String, toml::Value, String)> = values
                 .iter()
@@ -311,6 +325,26 @@ fn expand(list: &[ListEntry], grid: &[Axis]) -> Vec<Combination> {
     combos
 }
 
+/// The longest run name kept as it is; a longer one (many swept keys, long values) becomes
+/// its first 80 bytes and a hash of the whole, so that `runs/<name>/` stays a legal file
+/// name (255 bytes) with room for the temporary names beside it.
+const MAX_NAME: usize = 100;
+
+fn shorten(name: String) -> String {
+    if name.len() <= MAX_NAME {
+        return name;
+    }
+    // FNV-1a 64: stable across runs and platforms, so a resumed sweep finds its runs.
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    let mut cut = 80;
+    while !name.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    format!("{}-{hash:016x}", &name[..cut])
+}
+
 /// "Gamma=4_delta=2": the last component of each key and its value.
 fn generated_name(values: &[(String, toml::Value)]) -> String {
     if values.is_empty() {
@@ -400,6 +434,92 @@ mod tests {
         assert_eq!(s.keys, ["growth.Gamma", "growth.delta"]);
         assert_eq!(s.runs[2].shown("growth.Gamma"), "8");
         assert_eq!(s.runs[0].scene.name.as_deref(), Some("fib/Gamma=4_delta=2"));
+    }
+
+    /// A grid of 24 keys with 3 values each (2.8e11 runs) is refused by counting, before
+    /// anything is expanded (it used to take 8 GB and abort).
+    #[test]
+    fn a_huge_grid_is_counted_not_expanded() {
+        let keys = [
+            "pressure.dP",
+            "material.C",
+            "material.bending",
+            "material.H0",
+            "fibres.D",
+            "cornea.C",
+            "cornea.H",
+            "cornea.R0",
+            "geometry.R0",
+            "geometry.fraction",
+            "solver.epsilon",
+            "solver.newton_tol",
+            "growth.eta0",
+            "growth.Gamma",
+            "growth.delta",
+            "growth.t_end",
+            "solver.rtol",
+            "solver.atol",
+            "stimulus.blue.P1",
+            "stimulus.blue.P2",
+            "stimulus.blue.P3",
+            "stimulus.blue.z_B",
+            "stimulus.red.offset",
+            "growth.kink_width",
+        ];
+        let grid: String = keys
+            .iter()
+            .map(|k| format!("\"{k}\" = [1, 2, 3]\n"))
+            .collect();
+        let start = std::time::Instant::now();
+        let e = sweep(&format!("[sweep.grid]\n{grid}"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("282429536481 runs, more than the 10000 allowed"),
+            "{e}"
+        );
+        assert!(start.elapsed().as_secs() < 5, "counted, not expanded");
+        // A list of named runs counts as its length.
+        let grid: String = (0..64)
+            .map(|k| format!("[[sweep.runs]]\nname = \"r{k}\"\n"))
+            .collect::<String>();
+        assert!(sweep(&grid).is_ok());
+    }
+
+    /// Generated names stay legal file names: long ones are cut and hashed, stably.
+    #[test]
+    fn long_run_names_are_shortened_stably() {
+        let long = "x".repeat(300);
+        let keys = [
+            "material.bending",
+            "fibres.D",
+            "growth.t_end",
+            "solver.epsilon",
+            "growth.Gamma",
+            "growth.delta",
+            "growth.eta0",
+        ];
+        let grid: String = keys
+            .iter()
+            .map(|k| format!("\"{k}\" = [1.2345678901234567]\n"))
+            .collect();
+        let text = format!("[sweep.grid]\n{grid}");
+        let s = sweep(&text).unwrap();
+        let name = &s.runs[0].name;
+        assert_eq!(name.len(), 80 + 1 + 16, "{name}");
+        assert!(
+            // The grid's keys in the table's (sorted) order.
+            name.starts_with("D=1.2345678901234567_Gamma=1.2345678901234567_"),
+            "{name}"
+        );
+        assert_eq!(
+            name,
+            &sweep(&text).unwrap().runs[0].name,
+            "the same every time"
+        );
+        assert_eq!(shorten(long.clone()).len(), 80 + 1 + 16);
+        assert_ne!(shorten(long.clone()), shorten(format!("{long}y")));
+        assert_eq!(shorten("Gamma=4".into()), "Gamma=4");
     }
 
     #[test]
