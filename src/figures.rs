@@ -318,7 +318,22 @@ pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
         .runs
         .iter()
         .filter(|r| r.status == "ok" || r.status == "reused" || r.status == "failed")
-        .map(|r| rundata::read(&dir.join(&r.dir)))
+        .map(|r| {
+            // A run lives below the sweep: a plain relative path, no `..`, not the sweep.
+            let inside = !r.dir.is_empty()
+                && Path::new(&r.dir)
+                    .components()
+                    .all(|c| matches!(c, std::path::Component::Normal(_)));
+            if !inside {
+                return Err(bad(format!(
+                    "{}: run {:?} points outside the sweep's runs ({:?})",
+                    path.display(),
+                    eyeshell::text::one_line(&r.name),
+                    eyeshell::text::one_line(&r.dir)
+                )));
+            }
+            rundata::read(&dir.join(&r.dir))
+        })
         .collect()
 }
 
@@ -709,6 +724,12 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     if is_sweep(dir) {
         return plot_sweep(dir, out);
     }
+    plot_one(dir, out)
+}
+
+/// The pictures of one run directory (never a sweep: a sweep's runs are drawn by this, so
+/// a run that names a sweep, even its own, cannot send the drawing round in circles).
+fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     let run = rundata::read(dir)?;
     let stem = |name: &str| out.join(name);
     let mut files = Vec::new();
@@ -841,7 +862,7 @@ fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        files.extend(plot_run(&run.dir, &out.join(&name))?);
+        files.extend(plot_one(&run.dir, &out.join(&name))?);
     }
     let growing: Vec<(String, &RunData)> = runs
         .iter()

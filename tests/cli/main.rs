@@ -15,6 +15,7 @@ mod fuzz_readers;
 mod fuzz_scene;
 mod golden;
 mod grow;
+mod hostile;
 mod keys_check;
 mod readers;
 mod solve;

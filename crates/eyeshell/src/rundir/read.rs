@@ -101,7 +101,7 @@ pub fn read_run_with(dir: &Path, summary: &Summary) -> Result<Run, ReadError> {
     let Some(growth) = growth else {
         let file = dir.join(FIELDS_FILE);
         let table = read_csv(&file)?;
-        check_columns(&file, &table, &["Sigma"])?;
+        check_columns(&file, &table, &crate::bvp::COLUMNS)?;
         return Ok(Run::Elastic { file, table });
     };
     // The times: summary.json's list (exact), else series.csv row k, else the file name.
