@@ -69,7 +69,7 @@ pub(crate) struct PlotArgs {
     /// A run directory (of solve or grow) or a sweep directory
     #[arg(value_name = "DIR")]
     pub(crate) dir: PathBuf,
-    /// Where to write the pictures (default: DIR/plots)
+    /// Where to write the pictures (default: DIR/plots); drawn whole into a new directory, replacing only an earlier plot or an empty directory
     #[arg(long, value_name = "OUT")]
     pub(crate) out: Option<PathBuf>,
     /// Print nothing on success
@@ -97,9 +97,12 @@ pub(crate) struct SweepArgs {
 
 #[derive(Args, Debug)]
 pub(crate) struct ExtremesArgs {
-    /// The Markdown file to write (e.g. TESTING.md)
+    /// The Markdown file to write (e.g. TESTING.md); an existing file is replaced only if eyeshell wrote it
     #[arg(long, value_name = "FILE")]
     pub(crate) out: PathBuf,
+    /// Replace an existing file even if eyeshell did not write it
+    #[arg(long)]
+    pub(crate) force: bool,
 }
 
 #[derive(Args, Debug)]
@@ -197,6 +200,9 @@ pub(crate) struct ExportArgs {
     /// Compress every .mat variable (miCOMPRESSED, as MATLAB saves by default)
     #[arg(long)]
     pub(crate) compress: bool,
+    /// Replace an existing file even if eyeshell did not write it (never one of the run's own files)
+    #[arg(long)]
+    pub(crate) force: bool,
     /// Print nothing on success
     #[arg(long, short)]
     pub(crate) quiet: bool,

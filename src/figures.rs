@@ -350,6 +350,16 @@ fn snapshots_at<'a>(run: &'a RunData, times: &[f64]) -> Vec<&'a RunSnapshot> {
     out
 }
 
+/// The file stems of figures (a)–(f), each drawn as `.png` and `.svg`.
+pub const PAPER_STEMS: [&str; 6] = [
+    "fig_a_const_shells",
+    "fig_b_const_stretches",
+    "fig_c_thick",
+    "fig_d_fibre",
+    "fig_e_grow_retinas",
+    "fig_f_axial",
+];
+
 /// Draw figures (a)–(f) from `runs` into `out`; returns them in order.
 pub fn paper_figures(runs: &PaperRuns, out: &Path) -> Result<Vec<Written>, FigureError> {
     Ok(vec![
@@ -389,7 +399,7 @@ fn figure_a(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         title,
         PANEL.0,
         PANEL.1,
-        &out.join("fig_a_const_shells"),
+        &out.join(PAPER_STEMS[0]),
     )?;
     let end = run.timeline().last();
     let caption = format!(
@@ -429,7 +439,7 @@ fn figure_b(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         title,
         PANEL.0,
         PANEL.1,
-        &out.join("fig_b_const_stretches"),
+        &out.join(PAPER_STEMS[1]),
     )?;
     let caption = format!(
         "The elastic stretches α_s and α_φ against σ (arclength of the grown, unloaded shell) at t = 0, 0.1, 0.2, 0.4 and 1 (the paper's figure 'const' f–g); uniform at t = 0. Scene scenes/const.toml: {}.",
@@ -496,7 +506,7 @@ fn figure_c(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         title,
         PANEL.0,
         PANEL.1,
-        &out.join("fig_c_thick"),
+        &out.join(PAPER_STEMS[2]),
     )?;
     let pole = |r: &RunData| r.timeline().last().map_or(f64::NAN, |p| p.axial_length);
     let caption = format!(
@@ -562,7 +572,7 @@ fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         title,
         PANEL.0,
         PANEL.1,
-        &out.join("fig_d_fibre"),
+        &out.join(PAPER_STEMS[3]),
     )?;
     let lengths: Vec<String> = runs
         .fibre
@@ -633,7 +643,7 @@ fn figure_e(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         title,
         PANEL.0,
         PANEL.1,
-        &out.join("fig_e_grow_retinas"),
+        &out.join(PAPER_STEMS[4]),
     )?;
     let caption = format!(
         "The paper's figure 'grow': the retina at t = 0, 0.1 and 1 for each growth zone (rows Γ, columns δ, in mm), shaded by the growth rate η on one scale, with the blue and red best-focus surfaces. Scene scenes/grow.toml (a sweep over Γ × δ): {}.",
@@ -676,7 +686,7 @@ fn figure_f(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         title,
         PANEL.0,
         PANEL.1,
-        &out.join("fig_f_axial"),
+        &out.join(PAPER_STEMS[5]),
     )?;
     let caption = format!(
         "The paper's figure 'axial': axial length (pole of the retina, from z = 0) against t for Γ = 4, 8, 12 mm, one panel per δ. At t = 1: {}. Scene scenes/grow.toml.",

@@ -19,8 +19,21 @@ pub(crate) fn cmd_export(a: &ExportArgs) -> Result<(), Error> {
     if let Some(p) = &a.npz {
         jobs.push((p, Format::Npz));
     }
+    if a.mat.is_some() && a.mat == a.npz {
+        return Err(Error::input(format!(
+            "--mat and --npz are both {}: give two different outputs",
+            a.mat
+                .as_deref()
+                .unwrap_or_else(|| std::path::Path::new(""))
+                .display()
+        )));
+    }
+    // Every target is checked before anything is written.
+    for (path, format) in &jobs {
+        crate::interop::export::precheck(&a.run, path, *format, a.force)?;
+    }
     for (path, format) in jobs {
-        let done = export(&a.run, path, format)?;
+        let done = export(&a.run, path, format, a.force)?;
         if !a.quiet {
             let what = if done.growth {
                 format!(

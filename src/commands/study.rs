@@ -9,6 +9,8 @@ use crate::out;
 
 pub(crate) fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Error> {
     use crate::study::extremes;
+    let ours = |p: &std::path::Path| extremes::wrote(&rundir::owner::head(p, 256));
+    rundir::check_file(&a.out, a.force, ours)?;
     let results: Vec<_> = extremes::cases()
         .into_iter()
         .map(|c| {
@@ -16,7 +18,10 @@ pub(crate) fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Error> {
             (c, o)
         })
         .collect();
-    let text = format!("{}{}", extremes::PREAMBLE, extremes::table(&results));
+    // The file may have changed during the cases: check again, and keep its tail.
+    rundir::check_file(&a.out, a.force, ours)?;
+    let previous = std::fs::read_to_string(&a.out).ok();
+    let text = extremes::document(&extremes::table(&results), previous.as_deref());
     rundir::write_atomic(&a.out, text.as_bytes())
         .map_err(|e| Error::failed(format!("{}: {e}", a.out.display())))?;
     out(&format!(
@@ -57,8 +62,7 @@ pub(crate) fn cmd_study(
     name: &str,
     study: impl FnOnce(&std::path::Path) -> Result<String, crate::study::StudyError>,
 ) -> Result<(), Error> {
-    rundir::check_target(out_dir)?;
-    let dir = OutputDir::create(out_dir)?;
+    let dir = OutputDir::create(out_dir, "study")?;
     let text = study(&dir.file(""))?;
     Summary::Study(StudySummary {
         study: name.to_string(),

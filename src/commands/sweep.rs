@@ -150,7 +150,11 @@ pub(crate) fn cmd_figures(a: &FiguresArgs) -> Result<(), Error> {
 pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
     use crate::figures::plot_run;
     let target = a.out.clone().unwrap_or_else(|| a.dir.join("plots"));
-    let files = plot_run(&a.dir, &target)?;
+    // Drawn into a temporary directory and moved into place whole, with its marker: only an
+    // empty directory or an earlier eyeshell output is replaced.
+    let dir = rundir::OutputDir::create(&target, "plot")?;
+    let files = plot_run(&a.dir, &dir.file(""))?;
+    let target = dir.commit()?;
     if !a.quiet {
         out(&format!(
             "eyeshell: {} files drawn from {} into {}\n",

@@ -17,7 +17,6 @@
 //!   `time` (1×1) and, beyond the published scripts' variables, `Sigma` (1×N, the material
 //!   coordinate). In .npz the vectors are 1-D and `time` is 0-D.
 
-use std::fs;
 use std::path::{Path, PathBuf};
 
 use super::mat::{self, MatValue};
@@ -26,7 +25,7 @@ pub use eyeshell::rundir::read::{
     bad, is_run_dir, read_csv, read_run, ReadError as ExportError, Run, RunSnapshot, Table,
     GROWTH_VARS,
 };
-use eyeshell::rundir::AtomicDir;
+use eyeshell::rundir::{self, Marker, OutputDir, OutputError, MARKER_FILE};
 
 /// The rows of `sol.y`, in order (bvp4c's unknowns of the published scripts).
 pub const Y_ROWS: [&str; 5] = ["kappa", "alpha_s", "r", "theta", "Q"];
@@ -127,6 +126,23 @@ impl Format {
             Format::Npz => "npz",
         }
     }
+
+    /// Did eyeshell write the file at `path`? Its .mat header names eyeshell as the
+    /// platform; its .npz archive ends with eyeshell's comment.
+    fn wrote(self, path: &Path) -> bool {
+        match self {
+            Format::Mat { .. } => rundir::owner::head(path, 128).starts_with(mat::SIGNATURE),
+            Format::Npz => npz::has_signature(path),
+        }
+    }
+}
+
+/// An output error as an export error: a refusal is the user's.
+fn output_error(e: OutputError) -> ExportError {
+    ExportError {
+        bad_input: e.is_refusal(),
+        message: e.to_string(),
+    }
 }
 
 /// What an export wrote.
@@ -155,9 +171,63 @@ fn write_one(
     }
 }
 
+/// May the one-file export `out` of the run in `run_dir` be written? A new file, or one
+/// eyeshell exported, or any file with `force`, but never one of the run's own files.
+pub fn check_file_target(
+    run_dir: &Path,
+    out: &Path,
+    format: Format,
+    force: bool,
+) -> Result<(), ExportError> {
+    if is_file_of_run(run_dir, out) {
+        return Err(bad(format!(
+            "{}: is a file of the run being exported; refusing to overwrite it, even with --force",
+            out.display()
+        )));
+    }
+    rundir::check_file(out, force, |p| format.wrote(p)).map_err(output_error)
+}
+
+/// Check the target `out` as [`export`] will, before any export is written: a directory
+/// for a growth run, a file otherwise (a run whose summary cannot be read is checked by
+/// [`export`] itself, which refuses it before writing).
+pub fn precheck(
+    run_dir: &Path,
+    out: &Path,
+    format: Format,
+    force: bool,
+) -> Result<(), ExportError> {
+    match rundir::Summary::read(run_dir) {
+        Ok(rundir::Summary::Growth(_)) => rundir::check_target(out).map_err(output_error),
+        Ok(_) if !out.is_dir() => check_file_target(run_dir, out, format, force),
+        _ => Ok(()),
+    }
+}
+
+/// Is `path` one of the files of the run directory `run_dir` (its marker lists it)?
+fn is_file_of_run(run_dir: &Path, path: &Path) -> bool {
+    let (Ok(dir), Some(name)) = (run_dir.canonicalize(), path.file_name()) else {
+        return false;
+    };
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+    let Ok(parent) = parent.unwrap_or(Path::new(".")).canonicalize() else {
+        return false;
+    };
+    let name = name.to_string_lossy();
+    parent == dir
+        && (name == MARKER_FILE
+            || Marker::read(&dir).is_none_or(|m| m.entries.iter().any(|e| *e == name)))
+}
+
 /// Export the run in `run_dir` to `out` (a file for an elastic solve, a directory for a
-/// growth run); nothing is half-written.
-pub fn export(run_dir: &Path, out: &Path, format: Format) -> Result<Exported, ExportError> {
+/// growth run); nothing is half-written. An existing file is replaced only if eyeshell
+/// wrote it, or with `force`; a directory only if it is an earlier eyeshell export.
+pub fn export(
+    run_dir: &Path,
+    out: &Path,
+    format: Format,
+    force: bool,
+) -> Result<Exported, ExportError> {
     let run = read_run(run_dir)?;
     match run {
         Run::Elastic { table, .. } => {
@@ -168,21 +238,7 @@ pub fn export(run_dir: &Path, out: &Path, format: Format) -> Result<Exported, Ex
                     format.extension()
                 )));
             }
-            if out.file_name().is_none() {
-                return Err(bad(format!(
-                    "{}: the output path has no file name",
-                    out.display()
-                )));
-            }
-            if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-                if !parent.is_dir() {
-                    return Err(bad(format!(
-                        "{}: the directory {} does not exist",
-                        out.display(),
-                        parent.display()
-                    )));
-                }
-            }
+            check_file_target(run_dir, out, format, force)?;
             write_one(
                 out,
                 format,
@@ -197,7 +253,7 @@ pub fn export(run_dir: &Path, out: &Path, format: Format) -> Result<Exported, Ex
             })
         }
         Run::Growth(snapshots) => {
-            let dir = ExportDir::create(out, format.extension())?;
+            let dir = OutputDir::create(out, "export").map_err(output_error)?;
             let mut files = Vec::new();
             for s in &snapshots {
                 let stem = s
@@ -215,7 +271,7 @@ pub fn export(run_dir: &Path, out: &Path, format: Format) -> Result<Exported, Ex
                 )?;
                 files.push(out.join(name));
             }
-            let path = dir.commit()?;
+            let path = dir.commit().map_err(output_error)?;
             Ok(Exported {
                 path,
                 files,
@@ -223,92 +279,5 @@ pub fn export(run_dir: &Path, out: &Path, format: Format) -> Result<Exported, Ex
                 growth: true,
             })
         }
-    }
-}
-
-/// An export directory written into a temporary sibling and renamed into place (the
-/// mechanism is [`AtomicDir`]'s). The target may be absent, an empty directory or a
-/// previous export (a directory of `.EXT` files only); anything else is refused.
-struct ExportDir {
-    dir: AtomicDir,
-}
-
-impl ExportDir {
-    fn create(target: &Path, ext: &str) -> Result<ExportDir, ExportError> {
-        if target.file_name().is_none() {
-            return Err(bad(format!(
-                "{}: the output path has no file name",
-                target.display()
-            )));
-        }
-        Self::check(target, ext)?;
-        let parent = match target.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        if !parent.is_dir() {
-            return Err(bad(format!(
-                "{}: the directory {} does not exist",
-                target.display(),
-                parent.display()
-            )));
-        }
-        let dir = AtomicDir::create(target).map_err(|e| failed(e.to_string()))?;
-        Ok(ExportDir { dir })
-    }
-
-    /// The path of `name` in the directory being written.
-    fn file(&self, name: &str) -> PathBuf {
-        self.dir.file(name)
-    }
-
-    /// Absent, empty or a previous export: fine. Anything else: refused.
-    fn check(target: &Path, ext: &str) -> Result<(), ExportError> {
-        if !target.exists() {
-            return Ok(());
-        }
-        if !target.is_dir() {
-            return Err(bad(format!(
-                "{}: exists and is not a directory; a growth run exports to a directory of .{ext} files",
-                target.display()
-            )));
-        }
-        let entries =
-            fs::read_dir(target).map_err(|e| bad(format!("{}: {e}", target.display())))?;
-        for e in entries.filter_map(|e| e.ok()) {
-            let p = e.path();
-            if !(p.is_file() && p.extension().is_some_and(|x| x == ext)) {
-                return Err(bad(format!(
-                    "{}: exists and holds more than .{ext} files ({}); refusing to replace it",
-                    target.display(),
-                    e.file_name().to_string_lossy()
-                )));
-            }
-        }
-        Ok(())
-    }
-
-    /// Check the target again (it may have changed meanwhile), then move the export into
-    /// place.
-    fn commit(self) -> Result<PathBuf, ExportError> {
-        if self.dir.target().exists() {
-            let ext = self
-                .dir
-                .path()
-                .read_dir()
-                .ok()
-                .and_then(|mut d| d.next())
-                .and_then(|e| e.ok())
-                .and_then(|e| {
-                    e.path()
-                        .extension()
-                        .map(|x| x.to_string_lossy().into_owned())
-                })
-                .unwrap_or_default();
-            if !ext.is_empty() {
-                Self::check(self.dir.target(), &ext)?;
-            }
-        }
-        self.dir.commit().map_err(|e| failed(e.to_string()))
     }
 }

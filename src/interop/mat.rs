@@ -340,6 +340,9 @@ fn matrix_element(name: &str, value: &MatValue) -> Result<Vec<u8>, MatError> {
     Ok(out)
 }
 
+/// How every .mat file eyeshell writes begins (its header names eyeshell as the platform).
+pub const SIGNATURE: &[u8] = b"MATLAB 5.0 MAT-file, Platform: eyeshell ";
+
 /// The 128-byte header (deterministic: no date, so equal runs give equal files).
 pub fn header() -> Vec<u8> {
     let text = format!(

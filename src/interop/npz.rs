@@ -383,9 +383,28 @@ fn to_c_order(shape: &[usize], f: &[f64]) -> Vec<f64> {
     out
 }
 
-/// The bytes of a .npz archive of `arrays` (member `NAME.npy` each).
+/// The archive comment of every .npz eyeshell writes, by which it knows its own files.
+pub const COMMENT: &str = "written by eyeshell export";
+
+/// Does the file at `path` end with eyeshell's archive comment (the last bytes of a zip
+/// archive are its comment)?
+pub fn has_signature(path: &Path) -> bool {
+    use std::io::{Read, Seek, SeekFrom};
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return false;
+    };
+    let n = COMMENT.len() as i64;
+    let mut tail = Vec::new();
+    f.seek(SeekFrom::End(-n)).is_ok()
+        && f.take(n as u64).read_to_end(&mut tail).is_ok()
+        && tail == COMMENT.as_bytes()
+}
+
+/// The bytes of a .npz archive of `arrays` (member `NAME.npy` each), with eyeshell's
+/// [`COMMENT`].
 pub fn encode(arrays: &[(String, NpyArray)]) -> Result<Vec<u8>, String> {
     let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    zip.set_comment(COMMENT).map_err(|e| e.to_string())?;
     let options = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated);
     for (name, a) in arrays {

@@ -68,6 +68,27 @@ fn half_limit(p: Params) -> Params {
 }
 
 /// The head of TESTING.md.
+/// The line after which an existing file's text is kept when the table is regenerated
+/// (TESTING.md's hand-written sections live below it).
+pub const KEEP_BELOW: &str =
+    "<!-- eyeshell extremes regenerates the text above this line and keeps the text below -->";
+
+/// The whole file: the preamble, the table, and what `previous` (the file being replaced,
+/// if any) held below [`KEEP_BELOW`].
+pub fn document(table: &str, previous: Option<&str>) -> String {
+    let kept = previous
+        .and_then(|p| p.find(KEEP_BELOW).map(|i| &p[i..]))
+        .unwrap_or("");
+    let sep = if kept.is_empty() { "" } else { "\n" };
+    format!("{PREAMBLE}{table}{sep}{kept}")
+}
+
+/// Did eyeshell write the file with this text (it starts as [`PREAMBLE`] does)?
+pub fn wrote(text: &[u8]) -> bool {
+    let first = PREAMBLE.lines().next().unwrap_or_default();
+    text.starts_with(first.as_bytes())
+}
+
 pub const PREAMBLE: &str = "# Stability at the extremes\n\n\
 Every parameter pushed to its edge, one at a time, from the paper's shells (docs/MODEL.md §8).\n\
 Regenerate this file with `cargo run --release -- extremes --out TESTING.md`; \

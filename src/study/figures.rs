@@ -75,6 +75,8 @@ pub fn make(
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Vec<Written>, FiguresError> {
     let data = out.join(DATA_DIR);
+    // The directory's ownership and lock, held until the figures are drawn.
+    let mut owned = None;
     if replot {
         if !data.is_dir() {
             return Err(FiguresError {
@@ -87,11 +89,7 @@ pub fn make(
             });
         }
     } else {
-        rundir::fresh_dir(out).map_err(|e| FiguresError {
-            bad_input: e.is_refusal(),
-            message: e.to_string(),
-        })?;
-        // Marks the directory as eyeshell's from the start, so an interrupted run is replaced.
+        owned = Some(own(out, rundir::OwnedDir::fresh)?);
         write_summary(
             out,
             FiguresSummary {
@@ -134,6 +132,9 @@ pub fn make(
             }
         }
     }
+    if owned.is_none() {
+        owned = Some(own(out, rundir::OwnedDir::resume)?);
+    }
     let runs = PaperRuns::read(&data).map_err(|e| failed(e.to_string()))?;
     let figures = paper_figures(&runs, out).map_err(|e| failed(e.to_string()))?;
     let preamble = format!(
@@ -161,7 +162,25 @@ pub fn make(
             status: "ok".into(),
         },
     )?;
+    drop(owned);
     Ok(figures)
+}
+
+type Opener = fn(&Path, &str, &[&str]) -> Result<rundir::OwnedDir, rundir::OutputError>;
+
+/// Own `out` (fresh, or resumed for a replot): its marker lists every file the figures
+/// write, before they are written.
+fn own(out: &Path, open: Opener) -> Result<rundir::OwnedDir, FiguresError> {
+    let pictures: Vec<String> = crate::figures::PAPER_STEMS
+        .iter()
+        .flat_map(|s| [format!("{s}.png"), format!("{s}.svg")])
+        .collect();
+    let mut entries = vec![rundir::SUMMARY_FILE, INDEX_FILE, DATA_DIR];
+    entries.extend(pictures.iter().map(String::as_str));
+    open(out, "figures", &entries).map_err(|e| FiguresError {
+        bad_input: e.is_refusal(),
+        message: e.to_string(),
+    })
 }
 
 fn rel(out: &Path, p: &Path) -> String {

@@ -18,6 +18,7 @@
 //! - `*.csv`: the `wall_seconds` column (sweep.csv of the figures' sweeps), found by its
 //!   header, every other cell byte for byte;
 //! - `index.html`: the version text `eyeshell <v> (SUNDIALS <v>)`;
+//! - `.eyeshell` (the ownership marker): the version in `"written_by"`;
 //! - `*.mat`: the version in the 116-byte text header (`Platform: eyeshell <v>,`) and the
 //!   header's padding spaces, which follow the version's length; the header holds no date.
 //!   The data elements (plain and `--compress`ed) are compared raw;
@@ -325,7 +326,7 @@ impl Normaliser {
         let ext = rel.rsplit_once('.').map_or("", |(_, e)| e);
         match ext {
             "mat" => mat_header(bytes),
-            "json" | "csv" | "html" | "svg" | "toml" | "txt" => {
+            "json" | "csv" | "html" | "svg" | "toml" | "txt" | "eyeshell" => {
                 let mut text =
                     String::from_utf8(bytes).unwrap_or_else(|e| panic!("{rel}: not UTF-8: {e}"));
                 for t in &self.tmp {
@@ -338,6 +339,8 @@ impl Normaliser {
                         text = json_value(&text, "sundials_version", "\"<version>\"");
                     }
                     "csv" => text = csv_column(&text, "wall_seconds", "<timing>"),
+                    // The ownership marker `.eyeshell` names the version that wrote it.
+                    "eyeshell" => text = json_value(&text, "written_by", "\"<version>\""),
                     "html" => {
                         text = text.replace(
                             &format!("eyeshell {VERSION} (SUNDIALS {})", self.sundials),

@@ -33,6 +33,7 @@ mod api;
 pub mod bvp;
 pub mod error;
 pub mod growth;
+pub mod hash;
 mod json;
 pub mod mesh;
 pub mod model;

@@ -142,12 +142,13 @@ pub fn run_sweep(
     options: &SweepOptions<'_>,
     done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
 ) -> Result<SweepReport, OutputError> {
-    if !options.resume {
-        rundir::fresh_dir(out)?;
+    // The sweep's directory, owned and locked until the sweep ends.
+    let entries = [RUNS_DIR, TABLE_FILE, rundir::SUMMARY_FILE];
+    let _owned = if options.resume {
+        rundir::OwnedDir::resume(out, "sweep", &entries)?
     } else {
-        rundir::check_target(out)?;
-        fs::create_dir_all(out).map_err(|e| io(out, e))?;
-    }
+        rundir::OwnedDir::fresh(out, "sweep", &entries)?
+    };
     let records: Vec<RunRecord> = sweep
         .runs
         .iter()
@@ -252,6 +253,8 @@ pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
         None => execute_elastic(scene, dir)?,
     };
     let text = serde_json::to_string_pretty(&result).unwrap_or_default();
+    rundir::owner::claim(dir, &[SCENE_FILE, RESULT_FILE])
+        .map_err(|e| (e.to_string(), Some(Box::new(result.clone()))))?;
     for (file, text) in [(SCENE_FILE, scene.to_toml()), (RESULT_FILE, text)] {
         let path = dir.join(file);
         write_atomic(&path, text.as_bytes())
@@ -263,6 +266,7 @@ pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
 fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     let writer = GrowthWriter::create(dir, scene).map_err(|e| (e.to_string(), None))?;
     // scene.toml first, so a failed run can still be reproduced.
+    rundir::owner::claim(dir, &[SCENE_FILE, RESULT_FILE]).map_err(|e| (e.to_string(), None))?;
     let path = dir.join(SCENE_FILE);
     write_atomic(&path, scene.to_toml().as_bytes())
         .map_err(|e| (io(&path, e).to_string(), None))?;

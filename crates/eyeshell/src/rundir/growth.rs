@@ -6,22 +6,22 @@
 //!   renamed, so a snapshot is never half-written;
 //! - `history.csv` (with `output.history_points` > 0): the same columns at every recorded
 //!   time, the history times and the snapshot times, appended and flushed at once;
-//! - `summary.json`: `"status": "running"` from the start (which marks the directory as an
-//!   eyeshell output, so a run that was killed can be replaced by the next), then `"ok"`
+//! - `summary.json`: `"status": "running"` from the start, then `"ok"`
 //!   with every [`GrowthStats`] field, or `"failed"` with `failed_at_t`, `error` and the
 //!   statistics so far.
 //!
 //! Unlike `solve`, whose directory appears whole or not at all, a growth run writes in
-//! place: the target is checked like [`super::OutputDir`]'s (a directory that is not an
-//! eyeshell output is refused), a previous output is removed first, and the directory is
-//! created fresh.
+//! place ([`OwnedDir`]): the target is checked like [`super::OutputDir`]'s (a directory that
+//! is not an eyeshell output is refused), locked for the whole run, a previous output is
+//! removed first, and the directory is created fresh with its marker, so a run that was
+//! killed can be replaced by the next.
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
 use super::summary::{GrowthSummary, RunStatus, SnapshotEntry, Summary};
 use super::table::{csv_bytes, csv_writer, QuoteStyle};
-use super::{format_value, inspect, write_atomic, OutputError, Target, SUMMARY_FILE};
+use super::{format_value, write_atomic, OutputError, OwnedDir, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
 use crate::growth::{
     GrowthError, GrowthStats, Observer, ObserverError, SeriesRow, Snapshot, GROWTH_COLUMNS,
@@ -99,6 +99,8 @@ pub type WrittenSnapshot = SnapshotEntry;
 #[derive(Debug)]
 pub struct GrowthWriter {
     dir: PathBuf,
+    /// The directory's ownership and lock, held for the whole run.
+    _owned: OwnedDir,
     scene: Scene,
     series: csv::Writer<fs::File>,
     history: Option<csv::Writer<fs::File>>,
@@ -111,24 +113,25 @@ impl GrowthWriter {
     /// remove a previous output there, and create the directory with `snapshots/`, the
     /// header of series.csv and a summary.json that says `"status": "running"`.
     pub fn create(target: &Path, scene: &Scene) -> Result<GrowthWriter, OutputError> {
-        match inspect(target)? {
-            Target::Absent => {}
-            Target::EmptyDir => {}
-            Target::PreviousOutput => {
-                fs::remove_dir_all(target).map_err(|e| OutputError::io(target, e))?
-            }
+        let history_points = scene.growth_settings.history_points;
+        let mut entries = vec![SERIES_FILE, SNAPSHOT_DIR, SUMMARY_FILE];
+        if history_points > 0 {
+            entries.push(HISTORY_FILE);
         }
+        let owned = OwnedDir::fresh(target, "grow", &entries)?;
+        let target = owned.path().to_path_buf();
         let snapshots = target.join(SNAPSHOT_DIR);
         fs::create_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
         let series_path = target.join(SERIES_FILE);
         let series = create_with_header(&series_path)?;
-        let history = if scene.growth_settings.history_points > 0 {
+        let history = if history_points > 0 {
             Some(create_with_header(&target.join(HISTORY_FILE))?)
         } else {
             None
         };
         let writer = GrowthWriter {
-            dir: target.to_path_buf(),
+            dir: target,
+            _owned: owned,
             scene: scene.clone(),
             series,
             history,
@@ -424,7 +427,15 @@ mod tests {
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
         top.sort();
-        assert_eq!(top, vec![SERIES_FILE, SNAPSHOT_DIR, SUMMARY_FILE]);
+        assert_eq!(
+            top,
+            vec![
+                super::super::MARKER_FILE,
+                SERIES_FILE,
+                SNAPSHOT_DIR,
+                SUMMARY_FILE
+            ]
+        );
     }
 
     #[test]
@@ -478,9 +489,13 @@ mod tests {
         w.write_snapshot(&snapshot(0.0, 3)).unwrap();
         w.write_snapshot(&snapshot(0.5, 3)).unwrap();
         drop(w);
+        // ... unless it holds a file eyeshell did not write, which is never deleted.
         fs::write(dir.join("stray.txt"), "x").unwrap();
+        let e = GrowthWriter::create(&dir, &growing_scene()).unwrap_err();
+        assert!(e.to_string().contains("stray.txt"), "{e}");
+        assert!(dir.join("stray.txt").exists());
+        fs::remove_file(dir.join("stray.txt")).unwrap();
         let w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
-        assert!(!dir.join("stray.txt").exists());
         assert!(read_series(&dir).is_empty());
         assert_eq!(fs::read_dir(dir.join(SNAPSHOT_DIR)).unwrap().count(), 0);
         drop(w);

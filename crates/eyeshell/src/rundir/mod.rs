@@ -7,16 +7,23 @@
 //! - [`growth`]: a growth run's directory, written as the results come;
 //! - [`read`], [`rundata`]: a run directory read back, for export and for figures.
 //!
+//! - [`owner`]: which targets eyeshell may replace (its `.eyeshell` marker), and the two
+//!   writers of output directories, [`OutputDir`] (whole or not at all) and [`OwnedDir`]
+//!   (in place, as results come);
+//! - [`lock`]: one writer per target.
+//!
 //! A run writes into a temporary sibling of the target (`.NAME.tmp-<pid>`), then renames it
-//! into place. An existing target is replaced only if it is a previous eyeshell output (it
-//! holds `summary.json`) or an empty directory; anything else is refused. On any error, and
-//! when an [`OutputDir`] is dropped without [`OutputDir::commit`], the temporary directory
-//! is removed.
+//! into place. An existing target is replaced only if it is an eyeshell output (it holds
+//! eyeshell's marker, and nothing eyeshell did not write) or an empty directory; anything
+//! else is refused. On any error, and when an [`OutputDir`] is dropped without
+//! [`OutputDir::commit`], the temporary directory is removed.
 //!
 //! A growth run ([`growth::GrowthWriter`]) writes in place instead, as its results come.
 
 pub mod atomic;
 pub mod growth;
+pub mod lock;
+pub mod owner;
 pub mod read;
 pub mod run;
 pub mod rundata;
@@ -31,9 +38,10 @@ use crate::bvp::{FieldRow, COLUMNS};
 
 pub use atomic::{write_atomic, AtomicDir};
 pub use growth::GrowthWriter;
+pub use owner::{check_file, check_target, Marker, OutputDir, OwnedDir, MARKER_FILE};
 pub use summary::Summary;
 
-/// The file whose presence marks a directory as an eyeshell output.
+/// The summary of a run, sweep or study.
 pub const SUMMARY_FILE: &str = "summary.json";
 /// Every field on every node.
 pub const FIELDS_FILE: &str = "fields.csv";
@@ -48,8 +56,22 @@ pub enum OutputError {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("{}: exists and is not an eyeshell output directory (no {SUMMARY_FILE}); refusing to overwrite it", path.display())]
+    #[error("{}: exists and is not an eyeshell output directory (it has no {MARKER_FILE} marker); refusing to overwrite it", path.display())]
     Refused { path: PathBuf },
+    #[error("{}: holds {entry:?}, which eyeshell did not write; refusing to replace the directory (move that out first)", path.display())]
+    Foreign { path: PathBuf, entry: String },
+    #[error("{}: holds a {found} output, not a {wanted}; refusing to add to it", path.display())]
+    OtherKind {
+        path: PathBuf,
+        found: String,
+        wanted: String,
+    },
+    #[error("{}: another eyeshell process{} is writing it; wait for it to finish or choose another output", path.display(), pid.map(|p| format!(" (pid {p})")).unwrap_or_default())]
+    Busy { path: PathBuf, pid: Option<u32> },
+    #[error("{}: exists and was not written by eyeshell; refusing to overwrite it (--force replaces it)", path.display())]
+    NotOurFile { path: PathBuf },
+    #[error("{}: exists and is not a regular file; refusing to overwrite it", path.display())]
+    NotAFile { path: PathBuf },
     #[error("{}: the output path has no file name", path.display())]
     NoName { path: PathBuf },
     #[error("{}: a parent of the output path is not a directory", path.display())]
@@ -66,116 +88,7 @@ impl OutputError {
 
     /// True when the error is the user's (a target that may not be overwritten), not I/O.
     pub fn is_refusal(&self) -> bool {
-        matches!(
-            self,
-            OutputError::Refused { .. } | OutputError::NoName { .. } | OutputError::NoParent { .. }
-        )
-    }
-}
-
-/// What is at the target path now.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Target {
-    Absent,
-    EmptyDir,
-    PreviousOutput,
-}
-
-/// May `target` be written? Refuses files and non-empty directories that are not outputs.
-/// Call it before a long computation, so that a refusal comes first.
-pub fn check_target(target: &Path) -> Result<(), OutputError> {
-    inspect(target).map(|_| ())
-}
-
-/// Make `target` an empty directory to write into, in place: refuse it like
-/// [`check_target`], remove a previous eyeshell output there, create it (and its parents).
-pub fn fresh_dir(target: &Path) -> Result<(), OutputError> {
-    if inspect(target)? == Target::PreviousOutput {
-        fs::remove_dir_all(target).map_err(|e| OutputError::io(target, e))?;
-    }
-    fs::create_dir_all(target).map_err(|e| OutputError::io(target, e))
-}
-
-fn inspect(target: &Path) -> Result<Target, OutputError> {
-    if target.file_name().is_none() {
-        return Err(OutputError::NoName {
-            path: target.to_path_buf(),
-        });
-    }
-    let meta = match fs::symlink_metadata(target) {
-        Ok(m) => m,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            // Missing parents are created on commit; one that exists must be a directory.
-            let blocked = target
-                .ancestors()
-                .skip(1)
-                .any(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir());
-            return if blocked {
-                Err(OutputError::NoParent {
-                    path: target.to_path_buf(),
-                })
-            } else {
-                Ok(Target::Absent)
-            };
-        }
-        Err(e) if e.kind() == std::io::ErrorKind::NotADirectory => {
-            return Err(OutputError::NoParent {
-                path: target.to_path_buf(),
-            })
-        }
-        Err(e) => return Err(OutputError::io(target, e)),
-    };
-    if !meta.is_dir() {
-        return Err(OutputError::Refused {
-            path: target.to_path_buf(),
-        });
-    }
-    if target.join(SUMMARY_FILE).is_file() {
-        return Ok(Target::PreviousOutput);
-    }
-    let mut entries = fs::read_dir(target).map_err(|e| OutputError::io(target, e))?;
-    if entries.next().is_none() {
-        Ok(Target::EmptyDir)
-    } else {
-        Err(OutputError::Refused {
-            path: target.to_path_buf(),
-        })
-    }
-}
-
-/// An output directory being written: files go into a temporary sibling of the target,
-/// which [`OutputDir::commit`] renames into place. Dropping it uncommitted removes it. The
-/// mechanism is [`AtomicDir`]'s; the policy (only a previous eyeshell output or an empty
-/// directory is replaced) is this type's.
-#[derive(Debug)]
-pub struct OutputDir {
-    dir: AtomicDir,
-}
-
-impl OutputDir {
-    /// Check the target and create the temporary directory next to it.
-    pub fn create(target: &Path) -> Result<OutputDir, OutputError> {
-        inspect(target)?;
-        Ok(OutputDir {
-            dir: AtomicDir::create(target)?,
-        })
-    }
-
-    /// The final path of the directory.
-    pub fn target(&self) -> &Path {
-        self.dir.target()
-    }
-
-    /// The path of `name` inside the temporary directory (where it must be written).
-    pub fn file(&self, name: &str) -> PathBuf {
-        self.dir.file(name)
-    }
-
-    /// Move the finished directory into place, replacing a previous output or an empty
-    /// directory (checked again: the target may have changed during the run).
-    pub fn commit(self) -> Result<PathBuf, OutputError> {
-        inspect(self.dir.target())?;
-        self.dir.commit()
+        !matches!(self, OutputError::Io { .. })
     }
 }
 
@@ -302,14 +215,14 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let target = dir.path().join("out");
         // Fresh target.
-        let out = OutputDir::create(&target).unwrap();
+        let out = OutputDir::create(&target, "solve").unwrap();
         fs::write(out.file(SUMMARY_FILE), "{}").unwrap();
         fs::write(out.file("old-only"), "x").unwrap();
         assert!(!target.exists());
         out.commit().unwrap();
         assert!(target.join(SUMMARY_FILE).is_file());
         // A previous output is replaced wholesale.
-        let out = OutputDir::create(&target).unwrap();
+        let out = OutputDir::create(&target, "solve").unwrap();
         fs::write(out.file(SUMMARY_FILE), "{\"new\":1}").unwrap();
         out.commit().unwrap();
         assert!(!target.join("old-only").exists());
@@ -330,7 +243,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let target = dir.path().join("out");
         {
-            let out = OutputDir::create(&target).unwrap();
+            let out = OutputDir::create(&target, "solve").unwrap();
             fs::write(out.file(FIELDS_FILE), "partial").unwrap();
         }
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
@@ -342,7 +255,7 @@ mod tests {
         let target = dir.path().join("data");
         fs::create_dir(&target).unwrap();
         fs::write(target.join("precious.txt"), "keep").unwrap();
-        let e = OutputDir::create(&target).unwrap_err();
+        let e = OutputDir::create(&target, "solve").unwrap_err();
         assert!(e.is_refusal());
         assert!(
             e.to_string().contains("data") && e.to_string().contains("refusing"),
@@ -354,20 +267,20 @@ mod tests {
         );
         let file = dir.path().join("file");
         fs::write(&file, "x").unwrap();
-        assert!(OutputDir::create(&file).unwrap_err().is_refusal());
+        assert!(OutputDir::create(&file, "solve").unwrap_err().is_refusal());
         // A parent that is a file is refused; missing parents are created, and removed
         // again when the run does not commit.
-        assert!(OutputDir::create(&file.join("out"))
+        assert!(OutputDir::create(&file.join("out"), "solve")
             .unwrap_err()
             .is_refusal());
-        let nested = OutputDir::create(&dir.path().join("no/such/out")).unwrap();
+        let nested = OutputDir::create(&dir.path().join("no/such/out"), "solve").unwrap();
         assert!(dir.path().join("no/such").is_dir());
         drop(nested);
         assert!(!dir.path().join("no").exists());
         // An empty directory is fine.
         let empty = dir.path().join("empty");
         fs::create_dir(&empty).unwrap();
-        let out = OutputDir::create(&empty).unwrap();
+        let out = OutputDir::create(&empty, "solve").unwrap();
         fs::write(out.file(SUMMARY_FILE), "{}").unwrap();
         out.commit().unwrap();
         assert!(empty.join(SUMMARY_FILE).is_file());

@@ -25,21 +25,20 @@ pub struct SolvedRun {
 }
 
 /// Solve the loaded shell of `scene` into the run directory `target`: the target is
-/// checked before the computation (a foreign directory is refused first), the files are
-/// written into a temporary sibling and renamed into place, summary.json last.
+/// checked and locked before the computation (a foreign directory, or one another process
+/// is writing, is refused first), the files are written into a temporary sibling and
+/// renamed into place with their marker.
 pub fn solve_into(scene: &Scene, target: &Path, at: &[f64]) -> Result<SolvedRun, Error> {
-    super::check_target(target)?;
+    let dir = OutputDir::create(target, "solve")?;
     let solution = crate::bvp::solve(&scene.params, &scene.solver, None)?;
     let at_rows = at
         .iter()
         .map(|&s| solution.at(s))
         .collect::<Result<Vec<_>, _>>()?;
-    let dir = OutputDir::create(target)?;
     super::write_fields_csv(&dir.file(FIELDS_FILE), &solution.rows)?;
     if !at.is_empty() {
         super::write_fields_csv(&dir.file(AT_FILE), &at_rows)?;
     }
-    // summary.json last: it marks the directory as a complete eyeshell output.
     Summary::Elastic(ElasticSummary::new(scene, &solution.stats))
         .write_to(&dir.file(SUMMARY_FILE))?;
     let dir = dir.commit()?;

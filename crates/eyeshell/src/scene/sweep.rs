@@ -335,9 +335,7 @@ fn shorten(name: String) -> String {
         return name;
     }
     // FNV-1a 64: stable across runs and platforms, so a resumed sweep finds its runs.
-    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    });
+    let hash = crate::hash::fnv1a64(name.as_bytes());
     let mut cut = 80;
     while !name.is_char_boundary(cut) {
         cut -= 1;

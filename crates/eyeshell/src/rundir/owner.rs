@@ -1,0 +1,536 @@
+//! Which files and directories eyeshell may replace: only those it wrote.
+//!
+//! - **Directories.** Every output directory holds a marker, `.eyeshell`, that eyeshell
+//!   alone writes: a small JSON naming what wrote it (`"written_by": "eyeshell 0.1.0"`), the
+//!   kind of output (`solve`, `grow`, `sweep`, `study`, `figures`, `plot`, `export`) and the
+//!   entries it put there. A target may be replaced only when it is absent, an empty
+//!   directory, or a directory with that marker whose every entry eyeshell wrote (a listed
+//!   entry, its own temporary litter, or a directory with a marker of its own, such as
+//!   `plots/`). A file called summary.json proves nothing. Anything else is refused, and
+//!   named: a user's file in an output directory is never deleted with it.
+//! - **Files** (`export --mat FILE`, `extremes --out FILE`): an existing file is replaced
+//!   only when eyeshell wrote it (recognised by its own header) or with `--force`.
+//!
+//! Writers: [`OutputDir`] (solve, studies, exports: the directory appears whole, through
+//! [`AtomicDir`]) and [`OwnedDir`] (grow, sweep, figures, plot: written in place, as the
+//! results come). Both hold the target's lock ([`DirLock`]) while they write.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::atomic::{is_litter, parent_of, remove_dead_temporaries, remove_litter, write_atomic};
+use super::lock::DirLock;
+use super::{AtomicDir, OutputError};
+
+/// The marker of an eyeshell output directory.
+pub const MARKER_FILE: &str = ".eyeshell";
+/// What every marker's `written_by` starts with.
+const SIGNATURE: &str = "eyeshell ";
+/// A marker larger than this is not one of ours.
+const MAX_MARKER_BYTES: u64 = 1 << 20;
+
+/// The content of `.eyeshell`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Marker {
+    /// "eyeshell <version>".
+    pub written_by: String,
+    /// solve, grow, sweep, study, figures, plot or export.
+    pub kind: String,
+    /// The entries eyeshell wrote at the top of the directory.
+    #[serde(default)]
+    pub entries: Vec<String>,
+}
+
+impl Marker {
+    /// A marker of this version of eyeshell for an output of `kind`.
+    pub fn new(kind: &str) -> Marker {
+        Marker {
+            written_by: format!("{SIGNATURE}{}", env!("CARGO_PKG_VERSION")),
+            kind: kind.to_string(),
+            entries: Vec::new(),
+        }
+    }
+
+    /// The marker of `dir`, if it has one eyeshell wrote (a regular file, not a symlink,
+    /// of bounded size, that parses and carries the signature).
+    pub fn read(dir: &Path) -> Option<Marker> {
+        let path = dir.join(MARKER_FILE);
+        let meta = fs::symlink_metadata(&path).ok()?;
+        if !meta.is_file() || meta.len() > MAX_MARKER_BYTES {
+            return None;
+        }
+        let marker: Marker = serde_json::from_slice(&fs::read(&path).ok()?).ok()?;
+        marker.written_by.starts_with(SIGNATURE).then_some(marker)
+    }
+
+    /// Write the marker into `dir` (atomically).
+    pub fn write(&self, dir: &Path) -> Result<(), OutputError> {
+        let path = dir.join(MARKER_FILE);
+        let text = serde_json::to_string_pretty(self).unwrap_or_default() + "\n";
+        write_atomic(&path, text.as_bytes()).map_err(|e| OutputError::io(&path, e))
+    }
+
+    fn lists(&self, name: &str) -> bool {
+        self.entries.iter().any(|e| e == name)
+    }
+}
+
+/// What is at an output path now.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Target {
+    Absent,
+    EmptyDir,
+    /// An eyeshell output, all of whose entries eyeshell wrote.
+    Ours(Marker),
+}
+
+/// The path as written, without `.` components (`prev/.` is `prev`), so that its file name
+/// and parent are the directory's own.
+pub fn normalise(target: &Path) -> PathBuf {
+    target.components().collect()
+}
+
+/// May `target` be written? Refuses files, symlinks, directories that are not eyeshell
+/// outputs and outputs that hold somebody else's files. Call it before a long
+/// computation, so that a refusal comes first; the writers check again under the lock.
+pub fn check_target(target: &Path) -> Result<(), OutputError> {
+    inspect(&normalise(target)).map(|_| ())
+}
+
+/// What is at `target`, or why it may not be written.
+pub fn inspect(target: &Path) -> Result<Target, OutputError> {
+    if target.file_name().is_none() {
+        return Err(OutputError::NoName {
+            path: target.to_path_buf(),
+        });
+    }
+    let meta = match fs::symlink_metadata(target) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return absent(target),
+        Err(e) if e.kind() == std::io::ErrorKind::NotADirectory => {
+            return Err(OutputError::NoParent {
+                path: target.to_path_buf(),
+            })
+        }
+        Err(e) => return Err(OutputError::io(target, e)),
+    };
+    if !meta.is_dir() {
+        return Err(OutputError::Refused {
+            path: target.to_path_buf(),
+        });
+    }
+    let names = entry_names(target)?;
+    match Marker::read(target) {
+        None if names.is_empty() => Ok(Target::EmptyDir),
+        None => Err(OutputError::Refused {
+            path: target.to_path_buf(),
+        }),
+        Some(marker) => {
+            if let Some(foreign) = names.iter().find(|n| !is_ours(target, &marker, n)) {
+                return Err(OutputError::Foreign {
+                    path: target.to_path_buf(),
+                    entry: foreign.clone(),
+                });
+            }
+            Ok(Target::Ours(marker))
+        }
+    }
+}
+
+/// A missing target: fine if every parent that exists is a directory.
+fn absent(target: &Path) -> Result<Target, OutputError> {
+    let blocked = target
+        .ancestors()
+        .skip(1)
+        .any(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir());
+    if blocked {
+        Err(OutputError::NoParent {
+            path: target.to_path_buf(),
+        })
+    } else {
+        Ok(Target::Absent)
+    }
+}
+
+/// The entry names of a directory, sorted.
+fn entry_names(dir: &Path) -> Result<Vec<String>, OutputError> {
+    let mut names: Vec<String> = fs::read_dir(dir)
+        .map_err(|e| OutputError::io(dir, e))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    Ok(names)
+}
+
+/// Did eyeshell write `name` in `dir`? Listed, the marker, litter, or an output of its own.
+fn is_ours(dir: &Path, marker: &Marker, name: &str) -> bool {
+    name == MARKER_FILE
+        || marker.lists(name)
+        || is_litter(name)
+        || fs::symlink_metadata(dir.join(name)).is_ok_and(|m| m.is_dir())
+            && Marker::read(&dir.join(name)).is_some()
+}
+
+/// An output directory being written: files go into a temporary sibling of the target,
+/// which [`OutputDir::commit`] renames into place with its marker. Dropping it uncommitted
+/// removes it. The mechanism is [`AtomicDir`]'s; the policy (only an empty directory or
+/// an eyeshell output is replaced) is this type's.
+#[derive(Debug)]
+pub struct OutputDir {
+    dir: AtomicDir,
+    kind: String,
+}
+
+impl OutputDir {
+    /// Check the target, lock it and create the temporary directory next to it.
+    pub fn create(target: &Path, kind: &str) -> Result<OutputDir, OutputError> {
+        let target = normalise(target);
+        inspect(&target)?;
+        let dir = AtomicDir::create(&target)?;
+        inspect(&target)?; // again, under the lock
+        Ok(OutputDir {
+            dir,
+            kind: kind.to_string(),
+        })
+    }
+
+    /// The final path of the directory.
+    pub fn target(&self) -> &Path {
+        self.dir.target()
+    }
+
+    /// The path of `name` inside the temporary directory (where it must be written).
+    pub fn file(&self, name: &str) -> PathBuf {
+        self.dir.file(name)
+    }
+
+    /// Write the marker (listing what was written) and move the finished directory into
+    /// place, replacing an empty directory or an eyeshell output (checked again).
+    pub fn commit(self) -> Result<PathBuf, OutputError> {
+        inspect(self.dir.target())?;
+        let mut marker = Marker::new(&self.kind);
+        marker.entries = entry_names(self.dir.path())?;
+        marker.write(self.dir.path())?;
+        self.dir.commit()
+    }
+}
+
+/// An output directory written in place, as results come (grow, sweep, figures, plot),
+/// locked while this value lives. New top-level entries are [`OwnedDir::claim`]ed in the
+/// marker before they are written, so a run killed at any moment leaves a directory the
+/// next run may replace.
+#[derive(Debug)]
+pub struct OwnedDir {
+    path: PathBuf,
+    marker: Marker,
+    _lock: DirLock,
+}
+
+impl OwnedDir {
+    /// Lock `target`, remove a previous eyeshell output there (refusing anything else), and
+    /// create it afresh with a marker listing `entries`.
+    pub fn fresh(target: &Path, kind: &str, entries: &[&str]) -> Result<OwnedDir, OutputError> {
+        let (path, lock, found) = Self::lock(target)?;
+        if let Target::Ours(_) = found {
+            fs::remove_dir_all(&path).map_err(|e| OutputError::io(&path, e))?;
+        }
+        Self::start(path, lock, Marker::new(kind), entries)
+    }
+
+    /// Lock `target` and keep what is there if it is an eyeshell output of the same `kind`
+    /// (a resumed sweep); an empty or missing target starts fresh. Another kind of output
+    /// is refused.
+    pub fn resume(target: &Path, kind: &str, entries: &[&str]) -> Result<OwnedDir, OutputError> {
+        let (path, lock, found) = Self::lock(target)?;
+        match found {
+            Target::Ours(marker) if marker.kind == kind => Self::start(path, lock, marker, entries),
+            Target::Ours(marker) => Err(OutputError::OtherKind {
+                path,
+                found: marker.kind,
+                wanted: kind.to_string(),
+            }),
+            _ => Self::start(path, lock, Marker::new(kind), entries),
+        }
+    }
+
+    /// Check, create the parents, lock, clean litter, check again under the lock.
+    fn lock(target: &Path) -> Result<(PathBuf, DirLock, Target), OutputError> {
+        let path = normalise(target);
+        inspect(&path)?;
+        let parent = parent_of(&path);
+        fs::create_dir_all(&parent).map_err(|e| OutputError::io(&parent, e))?;
+        let lock = DirLock::acquire(&path)?;
+        remove_litter(&path)?;
+        let found = inspect(&path)?;
+        Ok((path, lock, found))
+    }
+
+    fn start(
+        path: PathBuf,
+        lock: DirLock,
+        marker: Marker,
+        entries: &[&str],
+    ) -> Result<OwnedDir, OutputError> {
+        fs::create_dir_all(&path).map_err(|e| OutputError::io(&path, e))?;
+        let mut dir = OwnedDir {
+            path,
+            marker,
+            _lock: lock,
+        };
+        dir.claim_all(entries)?;
+        dir.marker.write(&dir.path)?;
+        Ok(dir)
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Record `name` in the marker (if it is new) and return its path, to be written next.
+    pub fn claim(&mut self, name: &str) -> Result<PathBuf, OutputError> {
+        if self.claim_all(&[name])? {
+            self.marker.write(&self.path)?;
+        }
+        Ok(self.path.join(name))
+    }
+
+    /// Add `names` to the marker's entries; true if any was new.
+    fn claim_all(&mut self, names: &[&str]) -> Result<bool, OutputError> {
+        let mut new = false;
+        for &name in names {
+            if name.is_empty() || name.contains('/') || name == MARKER_FILE {
+                return Err(OutputError::io(
+                    &self.path.join(name),
+                    std::io::Error::other("not a plain entry name"),
+                ));
+            }
+            if !self.marker.lists(name) {
+                self.marker.entries.push(name.to_string());
+                new = true;
+            }
+        }
+        Ok(new)
+    }
+}
+
+/// Add `names` to the marker of the eyeshell output `dir`, before they are written into it
+/// (a sweep's run directory gains scene.toml and result.json after the run). The caller
+/// must be the directory's only writer (a sweep holds its own directory's lock).
+pub fn claim(dir: &Path, names: &[&str]) -> Result<(), OutputError> {
+    let mut marker = Marker::read(dir).ok_or_else(|| OutputError::Refused {
+        path: dir.to_path_buf(),
+    })?;
+    let before = marker.entries.len();
+    for &name in names {
+        if !marker.lists(name) {
+            marker.entries.push(name.to_string());
+        }
+    }
+    if marker.entries.len() > before {
+        marker.write(dir)?;
+    }
+    Ok(())
+}
+
+/// May the file `path` be written? Absent: yes. A regular file: if `ours` recognises it as
+/// eyeshell's, or with `force`. Anything else (a directory, a symlink, a device) is
+/// refused. Litter of killed writers beside it is removed.
+pub fn check_file(
+    path: &Path,
+    force: bool,
+    ours: impl Fn(&Path) -> bool,
+) -> Result<(), OutputError> {
+    let path = normalise(path);
+    if path.file_name().is_none() {
+        return Err(OutputError::NoName { path });
+    }
+    match fs::symlink_metadata(&path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => absent(&path).map(|_| ())?,
+        Err(e) => return Err(OutputError::io(&path, e)),
+        Ok(m) if m.is_file() => {
+            if !force && !ours(&path) {
+                return Err(OutputError::NotOurFile { path });
+            }
+        }
+        Ok(_) => return Err(OutputError::NotAFile { path }),
+    }
+    remove_dead_temporaries(&path);
+    Ok(())
+}
+
+/// The first `n` bytes of a file (fewer if it is shorter), for recognising a header.
+pub fn head(path: &Path, n: usize) -> Vec<u8> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    if let Ok(f) = fs::File::open(path) {
+        let _ = f.take(n as u64).read_to_end(&mut bytes);
+    }
+    bytes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rundir::atomic::sibling;
+
+    fn names(dir: &Path) -> Vec<String> {
+        entry_names(dir).unwrap()
+    }
+
+    fn committed(target: &Path, files: &[&str]) {
+        let out = OutputDir::create(target, "solve").unwrap();
+        for f in files {
+            fs::write(out.file(f), "x").unwrap();
+        }
+        out.commit().unwrap();
+    }
+
+    #[test]
+    fn a_summary_json_alone_proves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("data");
+        fs::create_dir(&target).unwrap();
+        fs::write(target.join("summary.json"), "{}").unwrap();
+        fs::write(target.join("thesis.tex"), "keep").unwrap();
+        let e = OutputDir::create(&target, "solve").unwrap_err();
+        assert!(e.is_refusal() && e.to_string().contains(".eyeshell"), "{e}");
+        let e = OwnedDir::fresh(&target, "grow", &[]).unwrap_err();
+        assert!(e.is_refusal(), "{e}");
+        assert_eq!(names(&target), vec!["summary.json", "thesis.tex"]);
+        // A forged marker that does not carry the signature, or is a symlink, is not ours.
+        fs::write(
+            target.join(MARKER_FILE),
+            r#"{"written_by":"me","kind":"solve"}"#,
+        )
+        .unwrap();
+        assert!(OutputDir::create(&target, "solve").is_err());
+    }
+
+    #[test]
+    fn an_output_holding_a_users_file_is_not_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out");
+        committed(&target, &["fields.csv", "summary.json"]);
+        let marker = Marker::read(&target).unwrap();
+        assert_eq!(marker.kind, "solve");
+        assert_eq!(marker.entries, vec!["fields.csv", "summary.json"]);
+        assert!(marker.written_by.starts_with("eyeshell "));
+        fs::write(target.join("notes.txt"), "mine").unwrap();
+        let e = OutputDir::create(&target, "solve").unwrap_err();
+        assert!(e.to_string().contains("\"notes.txt\""), "{e}");
+        fs::remove_file(target.join("notes.txt")).unwrap();
+        // A nested eyeshell output (plots/) and eyeshell litter are ours.
+        committed(&target.join("plots"), &["a.png"]);
+        fs::write(target.join(".summary.json.tmp-12345"), "").unwrap();
+        committed(&target, &["fields.csv"]);
+        assert_eq!(names(&target), vec![".eyeshell", "fields.csv"]);
+    }
+
+    #[test]
+    fn in_place_outputs_claim_entries_before_writing() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("grow");
+        let mut owned = OwnedDir::fresh(&target, "grow", &["series.csv"]).unwrap();
+        let p = owned.claim("snapshots").unwrap();
+        fs::create_dir(&p).unwrap();
+        assert_eq!(
+            Marker::read(&target).unwrap().entries,
+            vec!["series.csv", "snapshots"]
+        );
+        assert!(owned.claim("../escape").is_err());
+        // Locked while it lives: a second writer is refused, and told who holds it.
+        let e = OwnedDir::fresh(&target, "grow", &[]).unwrap_err();
+        assert!(matches!(e, OutputError::Busy { .. }), "{e}");
+        assert!(e.to_string().contains("another eyeshell process"), "{e}");
+        drop(owned);
+        // Killed at any moment, it is ours to replace; a resume of another kind is refused.
+        let e = OwnedDir::resume(&target, "sweep", &[]).unwrap_err();
+        assert!(
+            e.to_string().contains("holds a grow output, not a sweep"),
+            "{e}"
+        );
+        let again = OwnedDir::resume(&target, "grow", &["history.csv"]).unwrap();
+        assert!(
+            target.join("snapshots").is_dir(),
+            "resume keeps what is there"
+        );
+        drop(again);
+        OwnedDir::fresh(&target, "grow", &[]).unwrap();
+        assert_eq!(names(&target), vec![".eyeshell"]);
+    }
+
+    #[test]
+    fn litter_of_killed_writers_is_cleaned_and_an_interrupted_commit_undone() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out");
+        committed(&target, &["fields.csv"]);
+        // A killed commit: the previous output moved aside, the new one not yet in place.
+        let aside = dir.path().join(".out.old-999999999");
+        fs::rename(&target, &aside).unwrap();
+        let tmp = dir.path().join(".out.tmp-999999998");
+        fs::create_dir(&tmp).unwrap();
+        fs::write(tmp.join("fields.csv"), "half").unwrap();
+        let out = OutputDir::create(&target, "solve").unwrap();
+        assert!(
+            target.join("fields.csv").is_file(),
+            "the old output is back"
+        );
+        assert!(!aside.exists() && !tmp.exists());
+        fs::write(out.file("fields.csv"), "new").unwrap();
+        out.commit().unwrap();
+        assert_eq!(names(dir.path()), vec!["out"]);
+    }
+
+    #[test]
+    fn awkward_paths() {
+        let dir = tempfile::tempdir().unwrap();
+        // `prev/.` is prev.
+        let prev = dir.path().join("prev");
+        committed(&prev, &["a"]);
+        committed(&prev.join("."), &["b"]);
+        assert_eq!(names(&prev), vec![".eyeshell", "b"]);
+        assert!(OutputDir::create(&prev.join(".."), "solve").is_err());
+        // A legal 250-byte name gets short hidden names beside it.
+        let long = dir.path().join("n".repeat(250));
+        committed(&long, &["a"]);
+        assert!(long.join("a").is_file());
+        assert!(sibling(&long, "tmp").file_name().unwrap().len() < 120);
+        // A symlink to a directory is not followed.
+        let elsewhere = dir.path().join("elsewhere");
+        fs::create_dir(&elsewhere).unwrap();
+        fs::write(elsewhere.join("keep"), "k").unwrap();
+        let link = dir.path().join("link");
+        std::os::unix::fs::symlink(&elsewhere, &link).unwrap();
+        assert!(OutputDir::create(&link, "solve").unwrap_err().is_refusal());
+        assert!(OwnedDir::fresh(&link, "grow", &[]).is_err());
+        assert_eq!(names(&elsewhere), vec!["keep"]);
+    }
+
+    #[test]
+    fn files_are_replaced_only_if_ours_or_forced() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.mat");
+        let ours = |p: &Path| head(p, 4) == b"OURS";
+        check_file(&path, false, ours).unwrap();
+        fs::write(&path, "OURS and more").unwrap();
+        check_file(&path, false, ours).unwrap();
+        fs::write(&path, "theirs").unwrap();
+        let e = check_file(&path, false, ours).unwrap_err();
+        assert!(e.is_refusal() && e.to_string().contains("--force"), "{e}");
+        check_file(&path, true, ours).unwrap();
+        assert!(check_file(dir.path(), true, ours).is_err(), "a directory");
+        // Temporary files of dead writers go.
+        let dead = dir.path().join(".x.mat.tmp-999999999");
+        fs::write(&dead, "").unwrap();
+        let live = dir
+            .path()
+            .join(format!(".x.mat.tmp-{}", std::process::id()));
+        fs::write(&live, "").unwrap();
+        check_file(&path, true, ours).unwrap();
+        assert!(!dead.exists() && live.exists());
+    }
+}
