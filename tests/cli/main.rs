@@ -17,6 +17,7 @@ mod golden;
 mod grow;
 mod hostile;
 mod keys_check;
+mod ownership;
 mod readers;
 mod solve;
 mod study;
