@@ -5,6 +5,7 @@
 
 mod support;
 
+mod absurd;
 mod bad_input;
 mod export_compare;
 mod export_roundtrip;

@@ -3,92 +3,11 @@
 //! and a time limit ([`bounded`]) and asserts the exit code, one clean line of stderr, and
 //! that no file outside the output changed ([`World`]).
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::support::*;
-
-/// Virtual memory allowed to one eyeshell process (KiB), and its wall-clock limit.
-const MEMORY_KIB: u64 = 4 << 20;
-const SECONDS: u64 = 60;
-
-/// Run `eyeshell ARGS` in `dir` under `ulimit -v` and `timeout -s KILL`; the run must end
-/// by itself, well inside the limit.
-fn bounded(dir: &Path, args: &[&str]) -> Run {
-    let start = Instant::now();
-    let out = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "ulimit -v {MEMORY_KIB}; exec timeout -s KILL {SECONDS} \"$0\" \"$@\""
-        ))
-        .arg(env!("CARGO_BIN_EXE_eyeshell"))
-        .args(args)
-        .current_dir(dir)
-        .env("CI", "1")
-        .output()
-        .expect("run eyeshell");
-    let took = start.elapsed();
-    assert!(
-        took < Duration::from_secs(SECONDS - 5),
-        "{args:?} took {took:?}"
-    );
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
-
-/// Every file under a directory and its bytes, to show that nothing changed.
-#[derive(Debug, PartialEq)]
-struct World(BTreeMap<PathBuf, Vec<u8>>);
-
-impl World {
-    fn of(root: &Path) -> World {
-        let mut files = BTreeMap::new();
-        let mut stack = vec![root.to_path_buf()];
-        while let Some(dir) = stack.pop() {
-            for e in std::fs::read_dir(&dir).unwrap() {
-                let p = e.unwrap().path();
-                let meta = std::fs::symlink_metadata(&p).unwrap();
-                let rel = p.strip_prefix(root).unwrap().to_path_buf();
-                if meta.is_dir() {
-                    files.insert(rel, b"<dir>".to_vec());
-                    stack.push(p);
-                } else if meta.is_symlink() {
-                    let to = std::fs::read_link(&p).unwrap();
-                    files.insert(rel, to.to_string_lossy().as_bytes().to_vec());
-                } else {
-                    files.insert(rel, std::fs::read(&p).unwrap());
-                }
-            }
-        }
-        World(files)
-    }
-}
-
-/// A clean refusal: exit 2, one `eyeshell: error:` line naming `needle`, no panic.
-fn refused(r: &Run, needle: &str, what: &str) {
-    assert_eq!(r.code, Some(2), "{what}: {}", r.stderr);
-    assert_eq!(r.stderr.lines().count(), 1, "{what}: {:?}", r.stderr);
-    assert!(
-        r.stderr.starts_with("eyeshell: error: "),
-        "{what}: {}",
-        r.stderr
-    );
-    assert!(!r.stderr.contains("panicked"), "{what}: {}", r.stderr);
-    assert!(
-        r.stderr.contains(needle),
-        "{what}: {needle:?} not in {}",
-        r.stderr
-    );
-}
-
-fn succeeded(r: &Run, what: &str) {
-    assert_eq!(r.code, Some(0), "{what}: {}", r.stderr);
-}
 
 const SMALL: &str = "[solver]\nnodes = 21\n";
 const SMALL_GROW: &str =

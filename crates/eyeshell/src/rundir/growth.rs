@@ -45,9 +45,10 @@ pub const SERIES_COLUMNS: [&str; 6] = [
 ];
 
 /// The file name of output time number `k` (0 for t = 0) at time `t`: names sort in time
-/// order (`snapshot_00002_t0.200000.csv`).
+/// order (`snapshot_00002_t0.200000.csv`); a time of 1e9 or more is written in scientific
+/// notation (`snapshot_00002_t1.000000e300.csv`), so a name never outgrows the file system.
 pub fn snapshot_name(k: usize, t: f64) -> String {
-    format!("snapshot_{k:05}_t{t:.6}.csv")
+    format!("snapshot_{k:05}_t{}.csv", crate::text::decimals6(t))
 }
 
 /// The header of a snapshot file: the elastic [`COLUMNS`], then the [`GROWTH_COLUMNS`].
@@ -329,6 +330,7 @@ mod tests {
         sorted.sort();
         assert_eq!(names, sorted);
         assert_eq!(snapshot_name(2, 0.2), "snapshot_00002_t0.200000.csv");
+        assert_eq!(snapshot_name(2, 1e300), "snapshot_00002_t1.000000e300.csv");
     }
 
     #[test]
