@@ -428,3 +428,20 @@ pub fn table(results: &[(Case, Outcome)]) -> String {
     }
     t
 }
+
+#[cfg(test)]
+mod keep_tests {
+    use super::*;
+
+    /// Regenerating replaces the table and keeps the hand-written text below the marker.
+    #[test]
+    fn the_tail_below_the_marker_is_kept() {
+        let old = format!("{PREAMBLE}| old table |\n\n{KEEP_BELOW}\n## Hostile inputs\nmine\n");
+        let new = document("| new table |\n", Some(&old));
+        assert!(new.starts_with(PREAMBLE) && wrote(new.as_bytes()));
+        assert!(new.contains("| new table |") && !new.contains("old table"));
+        assert!(new.ends_with(&format!("{KEEP_BELOW}\n## Hostile inputs\nmine\n")));
+        assert_eq!(document("| t |\n", None), format!("{PREAMBLE}| t |\n"));
+        assert!(!wrote(b"# my notes"));
+    }
+}
