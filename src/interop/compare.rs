@@ -14,8 +14,11 @@
 //! Each reference sample is paired with the run's sample at the same time (within 1e-9
 //! relative), or with the run's only sample when either has no time. The coordinate is Σ
 //! (`Sigma`) when both sides have it, else the grown arclength `sigma`. The run is
-//! interpolated linearly in that coordinate to the reference's points (exactly at a node:
-//! no rounding there); reference points outside the run's range are left out. A point
+//! interpolated in that coordinate to the reference's points by local polynomials of
+//! degree 5 that never cross a breakpoint ([`super::interp`]: O(h⁶), exact at a node), and
+//! the largest estimate of that interpolation's error is reported beside each field: the
+//! smallest tolerance that means something. The reference is used at its own points, so it
+//! is never interpolated. Reference points outside the run's range are left out. A point
 //! fails when |run − ref| > tol + rtol·|ref| (numpy.isclose); the relative difference
 //! reported is |run − ref| / |ref|.
 
@@ -23,6 +26,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use super::export::{is_run_dir, read_run, Run, Y_ROWS};
+use super::interp::{Pieces, Side};
 use super::mat::{self, MatValue};
 use super::npz;
 
@@ -54,6 +58,9 @@ pub struct Sample {
     pub time: Option<f64>,
     /// Every vector, all of one length.
     pub vars: BTreeMap<String, Vec<f64>>,
+    /// Breakpoints of the data in Σ (an eyeshell run's thickness jumps and fibre kinks),
+    /// which interpolation does not cross.
+    pub breaks: Vec<f64>,
 }
 
 /// The coordinates, in order of preference.
@@ -102,9 +109,14 @@ pub fn load(path: &Path) -> Result<Vec<Sample>, CompareError> {
 
 fn from_run(dir: &Path) -> Result<Vec<Sample>, CompareError> {
     let run = read_run(dir).map_err(|e| CompareError(e.message))?;
+    // Without a scene (a summary that cannot be rebuilt) only repeated points cut the data.
+    let breaks = eyeshell::rundir::rundata::scene(dir)
+        .map(|s| eyeshell::model::profiles::breakpoints(&s.params))
+        .unwrap_or_default();
     let sample = |label: String, time: Option<f64>, t: &super::export::Table| Sample {
         label,
         time,
+        breaks: breaks.clone(),
         vars: t
             .columns
             .iter()
@@ -225,6 +237,7 @@ fn sample_from(path: &Path, raw: Vec<(String, Raw)>) -> Result<Sample, CompareEr
         label: path.display().to_string(),
         time,
         vars,
+        breaks: Vec::new(),
     })
 }
 
@@ -241,6 +254,8 @@ pub struct FieldDiff {
     pub failures: usize,
     /// Worst |Δ| / (tol + rtol·|ref|) (> 1 fails).
     pub worst_ratio: f64,
+    /// The largest estimate of the run's interpolation error at the reference's points.
+    pub interpolation: f64,
 }
 
 /// One reference sample against its run sample.
@@ -261,22 +276,6 @@ impl PairReport {
     pub fn failed(&self) -> bool {
         self.fields.iter().any(|f| f.failures > 0)
     }
-}
-
-/// Linear interpolation of (xs, ys) at x; xs increasing; x inside [xs[0], xs[n-1]].
-/// Exactly ys[i] at x = xs[i].
-fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    let i = xs.partition_point(|&v| v < x);
-    if i < xs.len() && xs[i] == x {
-        return ys[i];
-    }
-    let i = i.clamp(1, xs.len() - 1);
-    let (x0, x1, y0, y1) = (xs[i - 1], xs[i], ys[i - 1], ys[i]);
-    if x1 == x0 {
-        return y0;
-    }
-    let w = (x - x0) / (x1 - x0);
-    y0 + w * (y1 - y0)
 }
 
 /// Compare `reference` against `run` (paired already).
@@ -321,6 +320,7 @@ pub fn compare_pair(
             )))
         }
     };
+    let pieces = Pieces::new(xs.clone(), &breaks_in(run, &coordinate));
     let slack = 1e-12 * (hi - lo).abs().max(1.0);
     let xref = &reference.vars[&coordinate];
     let inside: Vec<usize> = (0..xref.len())
@@ -344,10 +344,18 @@ pub fn compare_pair(
             at_rel: xref[inside[0]],
             failures: 0,
             worst_ratio: 0.0,
+            interpolation: 0.0,
         };
         for &j in &inside {
             let x = xref[j].clamp(lo, hi);
-            let a = interpolate(&xs, &ys, x);
+            // The second of two equal reference points is the limit from above (bvp4c).
+            let side = if j > 0 && xref[j - 1] == xref[j] {
+                Side::Above
+            } else {
+                Side::Below
+            };
+            let (a, estimate) = pieces.eval(&ys, x, side);
+            d.interpolation = d.interpolation.max(estimate);
             let b = refv[j];
             let abs = if (a.is_nan() && b.is_nan()) || a == b {
                 0.0
@@ -398,6 +406,21 @@ pub fn compare_pair(
         outside: xref.len() - inside.len(),
         fields: diffs,
     })
+}
+
+/// The run's breakpoints in `coordinate`: Σ as they are; for the grown arclength σ, its
+/// value at the node where Σ is the breakpoint.
+fn breaks_in(run: &Sample, coordinate: &str) -> Vec<f64> {
+    if coordinate == "Sigma" {
+        return run.breaks.clone();
+    }
+    let (Some(sig), Some(x)) = (run.vars.get("Sigma"), run.vars.get(coordinate)) else {
+        return Vec::new();
+    };
+    run.breaks
+        .iter()
+        .filter_map(|b| sig.iter().position(|s| s == b).map(|k| x[k]))
+        .collect()
 }
 
 /// Pair each reference sample with a run sample (see the module doc).
@@ -473,22 +496,24 @@ pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
             }
         ));
         s.push_str(&format!(
-            "  {:<10} {:>12} {:>12} {:>12} {:>12}  {}\n",
+            "  {:<10} {:>12} {:>12} {:>12} {:>12} {:>12}  {}\n",
             "field",
             "max |Δ|",
             format!("at {}", r.coordinate),
             "max rel",
             format!("at {}", r.coordinate),
+            "interp. ±",
             "status"
         ));
         for f in &r.fields {
             s.push_str(&format!(
-                "  {:<10} {:>12.3e} {:>12.6} {:>12.3e} {:>12.6}  {}\n",
+                "  {:<10} {:>12.3e} {:>12.6} {:>12.3e} {:>12.6} {:>12.1e}  {}\n",
                 f.field,
                 f.max_abs,
                 f.at_abs,
                 f.max_rel,
                 f.at_rel,
+                f.interpolation,
                 if f.failures > 0 {
                     format!(
                         "FAIL ({} point{})",
@@ -511,6 +536,13 @@ pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
         total - failed,
         total
     ));
+    let interp = reports
+        .iter()
+        .flat_map(|r| r.fields.iter().map(|f| f.interpolation))
+        .fold(0.0, f64::max);
+    s.push_str(&format!(
+        "(interp. ±: an upper estimate of the error of interpolating the run to the reference's points, at most {interp:.1e}; a tolerance below it cannot be trusted)\n"
+    ));
     s
 }
 
@@ -526,20 +558,29 @@ mod tests {
             label: "s".into(),
             time,
             vars,
+            breaks: Vec::new(),
         }
     }
 
+    /// Smooth data on a coarse run against a fine reference: the interpolation is as
+    /// accurate as degree 5 on that mesh, and its estimate bounds the difference.
     #[test]
-    fn interpolation_is_exact_at_nodes_and_linear_between() {
-        let xs = [0.0, 0.1, 0.3, 1.0];
-        let ys = [1.0, 0.7, 0.123456789, -2.0];
-        for i in 0..4 {
-            assert_eq!(interpolate(&xs, &ys, xs[i]), ys[i]);
-        }
-        assert!(
-            (interpolate(&xs, &ys, 0.65) - (0.123456789 + 0.5 * (-2.0 - 0.123456789))).abs()
-                < 1e-15
-        );
+    fn interpolation_is_high_order_and_estimated() {
+        let f = |x: f64| (2.0 * x).sin() + x * x * x;
+        let coarse: Vec<f64> = (0..81).map(|i| i as f64 / 80.0).collect();
+        let fine: Vec<f64> = (0..1001).map(|i| i as f64 / 1000.0).collect();
+        let r = compare_pair(
+            &sample(&coarse, f, None),
+            &sample(&fine, f, None),
+            1e-10,
+            0.0,
+        )
+        .unwrap();
+        let d = &r.fields[0];
+        assert!(!r.failed(), "{d:?}");
+        assert!(d.max_abs < 1e-11 && d.max_abs > 0.0, "{d:?}");
+        assert!(d.interpolation >= d.max_abs, "{d:?}");
+        assert!(d.interpolation < 1e-8, "{d:?}");
     }
 
     #[test]

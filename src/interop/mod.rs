@@ -4,6 +4,7 @@
 
 pub mod compare;
 pub mod export;
+pub mod interp;
 pub mod mat;
 pub mod npz;
 

@@ -112,6 +112,15 @@ pub fn read(dir: &Path) -> Result<RunData, ExportError> {
     })
 }
 
+/// The scene of the run in `dir`, rebuilt from its summary.json.
+pub fn scene(dir: &Path) -> Result<Scene, ExportError> {
+    let summary = Summary::read(dir)?;
+    let run = summary
+        .run()
+        .ok_or_else(|| bad(format!("{}: not a run", dir.display())))?;
+    scene_of(run, &dir.join(SUMMARY_FILE))
+}
+
 /// The scene of a run: every key of summary.json's `parameters` set on the defaults.
 fn scene_of(run: &RunInfo, path: &Path) -> Result<Scene, ExportError> {
     let params = run
