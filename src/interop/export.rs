@@ -6,11 +6,13 @@
 //! files reads back to the same f64, so an export is bit-for-bit the run's values).
 //!
 //! Layouts:
-//! - elastic solve: `OUT` is one file. In .mat, the struct `sol` like bvp4c's solution:
-//!   `sol.x` (1×N, the material coordinate Σ of the nodes) and `sol.y` (5×N, rows κ, α_s,
-//!   r, θ, Q), plus the other columns of fields.csv as further fields (`sol.sigma`, `sol.z`,
-//!   `sol.s`, `sol.alpha_phi`, `sol.alpha_n`, `sol.h`, `sol.t_s`, `sol.t_phi`, 1×N each).
-//!   In .npz the same names as arrays: `x` (N,), `y` (5, N) and the others (N,).
+//! - elastic solve: `OUT` is one file. In .mat, the struct `sol` shaped like bvp4c's
+//!   solution: `sol.solver` ('bvp4c'), `sol.x` (1×N, the material coordinate Σ of the
+//!   nodes), `sol.y` (5×N, rows κ, α_s, r, θ, Q), `sol.yp` (5×N, their d/dΣ: [`yp_rows`]),
+//!   `sol.stats` (nmeshpoints, maxres, nODEevals, nBCevals: [`stats_struct`]), plus the other
+//!   columns of fields.csv as further fields (`sol.sigma`, `sol.z`, `sol.s`,
+//!   `sol.alpha_phi`, `sol.alpha_n`, `sol.h`, `sol.t_s`, `sol.t_phi`, 1×N each). In .npz the
+//!   same names as arrays: `x` (N,), `y` and `yp` (5, N) and the others (N,).
 //! - growth run: `OUT` is a directory with one file per output time, named after its
 //!   snapshot (`snapshot_00002_t0.200000.mat` / `.npz`). Each holds the row vectors (1×N)
 //!   h, s, z, r, sigma, rho, zeta, alpha_s, alpha_phi, alpha_n, eta, z_retina, r_retina,
@@ -52,15 +54,77 @@ fn col(table: &Table, name: &str) -> Vec<f64> {
     table.column(name).unwrap_or_default()
 }
 
-/// The variables of an elastic export as a .mat file: the struct `sol`.
-pub fn elastic_mat_vars(table: &Table) -> Vec<(String, MatValue)> {
+/// What an elastic export needs beyond fields.csv: the breakpoints (for yp) and the
+/// solver's statistics (for `sol.stats`), from the run's summary.json.
+#[derive(Clone, Debug, Default)]
+pub struct ElasticExtras {
+    pub breaks: Vec<f64>,
+    pub stats: Option<eyeshell::bvp::SolveStats>,
+}
+
+impl ElasticExtras {
+    /// Read from the run directory; what cannot be read is left out (an old or partial
+    /// summary gives no stats, and yp is then taken without breakpoints).
+    pub fn of(run_dir: &Path) -> ElasticExtras {
+        let stats = match rundir::Summary::read(run_dir) {
+            Ok(rundir::Summary::Elastic(e)) => Some(e.stats),
+            _ => None,
+        };
+        let breaks = eyeshell::rundir::rundata::scene(run_dir)
+            .map(|s| eyeshell::model::profiles::breakpoints(&s.params))
+            .unwrap_or_default();
+        ElasticExtras { breaks, stats }
+    }
+}
+
+/// yp: d/dΣ of each row of y at each node, as the derivative of the degree-5 local
+/// interpolant ([`super::interp::Pieces::slope`], O(h⁵), never across a breakpoint; at a
+/// breakpoint node the left derivative).
+pub fn yp_rows(table: &Table, breaks: &[f64]) -> [Vec<f64>; 5] {
+    let x = col(table, "Sigma");
+    let pieces = super::interp::Pieces::new(x.clone(), breaks);
+    Y_ROWS.map(|c| {
+        let y = col(table, c);
+        (0..x.len()).map(|k| pieces.slope(&y, k)).collect()
+    })
+}
+
+/// bvp4c's `sol.stats`: nmeshpoints (nodes), maxres (the final Newton residual's max
+/// norm: eyeshell's measure, not bvp4c's residual control), nODEevals (residual
+/// evaluations × nodes: each evaluates the equations at every node), nBCevals (residual
+/// evaluations).
+fn stats_struct(nodes: usize, stats: &eyeshell::bvp::SolveStats) -> MatValue {
+    let evals = stats.residual_evaluations as f64;
+    MatValue::Struct(vec![
+        ("nmeshpoints".to_string(), MatValue::scalar(nodes as f64)),
+        ("maxres".to_string(), MatValue::scalar(stats.residual_norm)),
+        (
+            "nODEevals".to_string(),
+            MatValue::scalar(evals * nodes as f64),
+        ),
+        ("nBCevals".to_string(), MatValue::scalar(evals)),
+    ])
+}
+
+/// The variables of an elastic export as a .mat file: the struct `sol`, shaped like
+/// bvp4c's solution (`solver`, `x`, `y`, `yp`, `stats`) so that MATLAB's `deval(sol, xi)`
+/// and `bvpinit(sol, ...)` take it, plus the other columns as further fields.
+pub fn elastic_mat_vars(table: &Table, extras: &ElasticExtras) -> Vec<(String, MatValue)> {
     let mut fields = vec![
+        ("solver".to_string(), MatValue::Char("bvp4c".to_string())),
         ("x".to_string(), MatValue::row(&col(table, "Sigma"))),
         (
             "y".to_string(),
             MatValue::from_rows(&Y_ROWS.map(|c| col(table, c))),
         ),
+        (
+            "yp".to_string(),
+            MatValue::from_rows(&yp_rows(table, &extras.breaks)),
+        ),
     ];
+    if let Some(stats) = &extras.stats {
+        fields.push(("stats".to_string(), stats_struct(table.rows.len(), stats)));
+    }
     for c in ELASTIC_EXTRA {
         if let Some(v) = table.column(c) {
             fields.push((c.to_string(), MatValue::row(&v)));
@@ -81,13 +145,17 @@ pub fn growth_mat_vars(s: &RunSnapshot) -> Vec<(String, MatValue)> {
     vars
 }
 
-/// The arrays of an elastic export as a .npz file.
-pub fn elastic_npz_arrays(table: &Table) -> Vec<(String, NpyArray)> {
+/// The arrays of an elastic export as a .npz file: x, y, yp as in .mat, and the others.
+pub fn elastic_npz_arrays(table: &Table, extras: &ElasticExtras) -> Vec<(String, NpyArray)> {
     let mut arrays = vec![
         ("x".to_string(), NpyArray::vector(&col(table, "Sigma"))),
         (
             "y".to_string(),
             NpyArray::from_rows(&Y_ROWS.map(|c| col(table, c))),
+        ),
+        (
+            "yp".to_string(),
+            NpyArray::from_rows(&yp_rows(table, &extras.breaks)),
         ),
     ];
     for c in ELASTIC_EXTRA {
@@ -239,11 +307,12 @@ pub fn export(
                 )));
             }
             check_file_target(run_dir, out, format, force)?;
+            let extras = ElasticExtras::of(run_dir);
             write_one(
                 out,
                 format,
-                || elastic_mat_vars(&table),
-                || elastic_npz_arrays(&table),
+                || elastic_mat_vars(&table, &extras),
+                || elastic_npz_arrays(&table, &extras),
             )?;
             Ok(Exported {
                 path: out.to_path_buf(),

@@ -120,6 +120,44 @@ impl Pieces {
     }
 }
 
+impl Pieces {
+    /// d/dx of `ys` at node `k`: the derivative of the degree-5 polynomial through the six
+    /// nodes of k's piece nearest to it (O(h⁵)). At a breakpoint node, the piece below's.
+    pub fn slope(&self, ys: &[f64], k: usize) -> f64 {
+        let Some(&(s, e)) = self.pieces.iter().find(|&&(s, e)| (s..e).contains(&k)) else {
+            return f64::NAN;
+        };
+        let m = STENCIL.min(e - s);
+        if m < 2 {
+            return f64::NAN;
+        }
+        let lo = k.saturating_sub(m / 2).max(s).min(e - m);
+        lagrange_slope(&self.xs[lo..lo + m], &ys[lo..lo + m], k - lo)
+    }
+}
+
+/// The derivative at xs[j] of the polynomial through (xs, ys).
+fn lagrange_slope(xs: &[f64], ys: &[f64], j: usize) -> f64 {
+    let xj = xs[j];
+    let mut total = 0.0;
+    for (i, (&xi, &yi)) in xs.iter().zip(ys).enumerate() {
+        let weight = if i == j {
+            (0..xs.len())
+                .filter(|&k| k != j)
+                .map(|k| 1.0 / (xj - xs[k]))
+                .sum::<f64>()
+        } else {
+            (0..xs.len())
+                .filter(|&k| k != i && k != j)
+                .map(|k| (xj - xs[k]) / (xi - xs[k]))
+                .product::<f64>()
+                / (xi - xj)
+        };
+        total += weight * yi;
+    }
+    total
+}
+
 /// Neville's scheme through the points (nearest to x first): the value of the full
 /// interpolant, and |p_m − p_{m−1}|, the last correction, as the error estimate.
 fn neville(xs: &[f64], ys: &[f64], x: f64) -> (f64, f64) {
@@ -184,6 +222,29 @@ mod tests {
         let order = (err(41) / err(81)).log2();
         assert!(order > 5.5, "observed order {order}");
         assert!(err(161) < 1e-10);
+    }
+
+    /// Slopes at the nodes are O(h⁵) and stay on their side of a breakpoint.
+    #[test]
+    fn slopes_at_nodes() {
+        let err = |n: usize| {
+            let xs = grid(n, 0.0, 2.0);
+            let ys: Vec<f64> = xs.iter().map(|&x| (3.0 * x).sin()).collect();
+            let pieces = Pieces::new(xs.clone(), &[1.0]);
+            (0..n)
+                .map(|k| (pieces.slope(&ys, k) - 3.0 * (3.0 * xs[k]).cos()).abs())
+                .fold(0.0, f64::max)
+        };
+        let order = (err(41) / err(81)).log2();
+        assert!(order > 4.5, "observed order {order}");
+        let xs = grid(21, 0.0, 1.0);
+        let ys: Vec<f64> = xs
+            .iter()
+            .map(|&x| if x <= 0.5 { x } else { 3.0 * x })
+            .collect();
+        let pieces = Pieces::new(xs, &[0.5]);
+        assert!((pieces.slope(&ys, 10) - 1.0).abs() < 1e-12, "below");
+        assert!((pieces.slope(&ys, 11) - 3.0).abs() < 1e-12, "above");
     }
 
     /// A jump at a breakpoint does not leak into either side, and at the breakpoint each

@@ -283,10 +283,11 @@ fn matrix_element(name: &str, value: &MatValue) -> Result<Vec<u8>, MatError> {
             (MX_DOUBLE, dims.clone())
         }
         MatValue::Struct(_) => (MX_STRUCT, vec![1, 1]),
+        MatValue::Char(text) => (MX_CHAR, vec![1, text.encode_utf16().count()]),
         _ => {
             return Err(MatError::Invalid {
                 name: name.to_string(),
-                reason: "only numeric arrays and 1×1 structs are written".into(),
+                reason: "only numeric arrays, char rows and 1×1 structs are written".into(),
             })
         }
     };
@@ -311,6 +312,11 @@ fn matrix_element(name: &str, value: &MatValue) -> Result<Vec<u8>, MatError> {
                 bytes.extend_from_slice(&x.to_le_bytes());
             }
             element(&mut body, MI_DOUBLE, &bytes, false);
+        }
+        // As MATLAB saves a char row: UTF-16 code units.
+        MatValue::Char(text) => {
+            let bytes: Vec<u8> = text.encode_utf16().flat_map(u16::to_le_bytes).collect();
+            element(&mut body, MI_UINT16, &bytes, false);
         }
         MatValue::Struct(fields) => {
             element(
@@ -1141,6 +1147,12 @@ mod tests {
             (
                 "sol".into(),
                 MatValue::Struct(vec![
+                    ("solver".into(), MatValue::Char("bvp4c".into())),
+                    ("unicode".into(), MatValue::Char("Σ κ α_s €𝄞".into())),
+                    (
+                        "stats".into(),
+                        MatValue::Struct(vec![("nmeshpoints".into(), MatValue::scalar(3.0))]),
+                    ),
                     ("x".into(), MatValue::row(&[1e-3, 0.5, 1.0])),
                     (
                         "y".into(),

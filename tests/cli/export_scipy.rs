@@ -56,7 +56,14 @@ for f in sys.argv[1:]:
                 assert a.shape == (1, 1), a.shape
                 for name in a.dtype.names:
                     v = a[0, 0][name]
-                    d[k + '.' + name] = {'shape': list(v.shape), 'dtype': str(v.dtype), 'data': bits(v.ravel(order='F'))}
+                    if v.dtype.kind == 'U':  # a char row: its text
+                        d[k + '.' + name] = {'shape': list(v.shape), 'dtype': 'char', 'text': str(v[0])}
+                    elif v.dtype.names:  # a nested struct: its fields
+                        for sub in v.dtype.names:
+                            w = v[0, 0][sub]
+                            d[k + '.' + name + '.' + sub] = {'shape': list(w.shape), 'dtype': str(w.dtype), 'data': bits(w.ravel(order='F'))}
+                    else:
+                        d[k + '.' + name] = {'shape': list(v.shape), 'dtype': str(v.dtype), 'data': bits(v.ravel(order='F'))}
             else:
                 d[k] = {'shape': list(a.shape), 'dtype': str(a.dtype), 'data': bits(a.ravel(order='F'))}
     out[f] = d
@@ -123,6 +130,30 @@ fn scipy_loads_what_eyeshell_writes() {
             let row: Vec<f64> = (0..n).map(|j| y[j * 5 + i]).collect();
             assert_bits(&row, &column(&fields, name), name);
         }
+        // bvp4c's own fields: solver, yp, stats.
+        assert_eq!(d["sol.solver"]["text"], "bvp4c", "{}", f.display());
+        assert_eq!(shape(&d["sol.yp"]), vec![5, n]);
+        assert_eq!(data(&d["sol.stats.nmeshpoints"]), vec![n as f64]);
+        assert!(data(&d["sol.stats.maxres"])[0] < 1e-8);
+        let yp = data(&d["sol.yp"]);
+        for (i, name) in Y_ROWS
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| ["r", "theta"].contains(n))
+        {
+            // yp is the slope of y: close to its centred differences (r and θ, whose slopes
+            // are of order one; κ, α_s and Q are nearly flat on this shell).
+            let (x, v) = (column(&fields, "Sigma"), column(&fields, name));
+            let centred = |j: usize| (v[j + 1] - v[j - 1]) / (x[j + 1] - x[j - 1]);
+            let scale = (1..n - 1).map(|j| centred(j).abs()).fold(0.0, f64::max);
+            for j in n / 4..3 * n / 4 {
+                let (slope, centred) = (yp[j * 5 + i], centred(j));
+                assert!(
+                    (slope - centred).abs() <= 0.1 * scale,
+                    "{name} at node {j}: yp {slope} vs centred difference {centred}"
+                );
+            }
+        }
         for name in ELASTIC_EXTRA {
             let v = &d[format!("sol.{name}")];
             assert_eq!(shape(v), vec![1, n]);
@@ -132,6 +163,13 @@ fn scipy_loads_what_eyeshell_writes() {
     let d = &dump[s(&npz)];
     assert_eq!(shape(&d["x"]), vec![n]);
     assert_eq!(shape(&d["y"]), vec![5, n]);
+    assert_eq!(shape(&d["yp"]), vec![5, n]);
+    // The same yp in both formats (C order here, column-major in .mat).
+    let (yp_npz, yp_mat) = (data(&d["yp"]), data(&dump[s(&plain)]["sol.yp"]));
+    for i in 0..5 {
+        let row: Vec<f64> = (0..n).map(|j| yp_mat[j * 5 + i]).collect();
+        assert_bits(&yp_npz[i * n..(i + 1) * n], &row, "yp");
+    }
     let y = data(&d["y"]); // C order: y[i*n + j]
     for (i, name) in Y_ROWS.iter().enumerate() {
         assert_bits(&y[i * n..(i + 1) * n], &column(&fields, name), name);

@@ -85,6 +85,18 @@ fn scipy_struct_plain_and_compressed() {
     }
 }
 
+/// GNU Octave 7's `save -v7` (compressed) and `-v6` of the same bvp4c-style `sol`
+/// (tests/fixtures/make_fixtures.py gives the command).
+#[test]
+fn octave_struct_v7_and_v6() {
+    for f in ["octave_sol_v7.mat", "octave_sol_v6.mat"] {
+        let vars = mat::read(&fixture(f)).unwrap();
+        assert_eq!(vars.len(), 1, "{f}");
+        let fields = var(&vars, "sol").struct_element(0).unwrap();
+        assert_sol(fields, "bvp4c", 1.0, f);
+    }
+}
+
 #[test]
 fn scipy_struct_array_keeps_every_element() {
     let vars = mat::read(&fixture("scipy_structarray.mat")).unwrap();
@@ -293,6 +305,8 @@ fn compare_reads_the_fixtures() {
     for f in [
         "scipy_sol.mat",
         "scipy_sol_z.mat",
+        "octave_sol_v7.mat",
+        "octave_sol_v6.mat",
         "scipy_structarray.mat",
         "np_fortran.npz",
         "np_bigendian.npz",
