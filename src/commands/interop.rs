@@ -65,7 +65,7 @@ pub(crate) fn cmd_compare(a: &CompareArgs) -> Result<(), Error> {
             )));
         }
     }
-    let reports = compare_paths(&a.run, &a.references, a.tol, a.rtol)?;
+    let reports = compare_paths(&a.run, &a.references, a.tol, a.rtol, a.field.as_ref())?;
     let failed: Vec<_> = reports
         .iter()
         .flat_map(|r| {

@@ -66,8 +66,45 @@ pub struct Sample {
 /// The coordinates, in order of preference.
 pub const COORDINATES: [&str; 2] = ["Sigma", "sigma"];
 
+/// Which struct of a .mat file holds the result (`--field`): a variable name and a 1-based
+/// element of a struct array. Default: `sol`, element 1, if there is one, else the top level.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FieldSpec {
+    pub name: String,
+    pub element: usize,
+}
+
+impl std::str::FromStr for FieldSpec {
+    type Err = String;
+
+    /// `sol`, `sol(2)`, `result`.
+    fn from_str(text: &str) -> Result<FieldSpec, String> {
+        let bad = || {
+            format!("{text:?}: give a variable name, or NAME(K) for element K of a struct array")
+        };
+        let (name, element) = match text.strip_suffix(')').and_then(|t| t.split_once('(')) {
+            Some((n, k)) => (n, k.trim().parse::<usize>().map_err(|_| bad())?),
+            None => (text, 1),
+        };
+        let valid = !name.is_empty()
+            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+            && element >= 1;
+        valid
+            .then(|| FieldSpec {
+                name: name.to_string(),
+                element,
+            })
+            .ok_or_else(bad)
+    }
+}
+
 /// Read every sample of `path`: a run directory, a directory of .mat/.npz files, or a file.
 pub fn load(path: &Path) -> Result<Vec<Sample>, CompareError> {
+    load_with(path, None)
+}
+
+/// [`load`], taking the struct named by `field` from .mat files.
+pub fn load_with(path: &Path, field: Option<&FieldSpec>) -> Result<Vec<Sample>, CompareError> {
     if path.is_dir() {
         if is_run_dir(path) {
             return from_run(path);
@@ -94,7 +131,7 @@ pub fn load(path: &Path) -> Result<Vec<Sample>, CompareError> {
         }
         let mut out = Vec::new();
         for f in files {
-            out.push(load_file(&f)?);
+            out.push(load_file(&f, field)?);
         }
         return Ok(out);
     }
@@ -104,7 +141,7 @@ pub fn load(path: &Path) -> Result<Vec<Sample>, CompareError> {
             path.display()
         )));
     }
-    Ok(vec![load_file(path)?])
+    Ok(vec![load_file(path, field)?])
 }
 
 fn from_run(dir: &Path) -> Result<Vec<Sample>, CompareError> {
@@ -140,7 +177,7 @@ struct Raw {
     column_major: bool,
 }
 
-fn load_file(path: &Path) -> Result<Sample, CompareError> {
+fn load_file(path: &Path, field: Option<&FieldSpec>) -> Result<Sample, CompareError> {
     let is_npz = path.extension().is_some_and(|x| x == "npz");
     let vars: Vec<(String, Raw)> = if is_npz {
         npz::read(path)
@@ -159,13 +196,16 @@ fn load_file(path: &Path) -> Result<Sample, CompareError> {
             .collect()
     } else {
         let vars = mat::read(path).map_err(|e| CompareError(e.to_string()))?;
-        // bvp4c's solution struct (element 1 of a struct array), if there is one; else the
-        // top level.
-        let container = vars
-            .iter()
-            .find_map(|(n, v)| (n == "sol").then(|| v.struct_element(0)).flatten())
-            .map(<[_]>::to_vec)
-            .unwrap_or(vars);
+        let container = match field {
+            Some(spec) => named_struct(path, &vars, spec)?,
+            // bvp4c's solution struct (element 1 of a struct array), if there is one; else
+            // the top level.
+            None => vars
+                .iter()
+                .find_map(|(n, v)| (n == "sol").then(|| v.struct_element(0)).flatten())
+                .map(<[_]>::to_vec)
+                .unwrap_or(vars),
+        };
         container
             .into_iter()
             .filter_map(|(n, v)| match v {
@@ -182,6 +222,34 @@ fn load_file(path: &Path) -> Result<Sample, CompareError> {
             .collect()
     };
     sample_from(path, vars)
+}
+
+/// The element of the struct variable that `spec` names, or why there is none.
+fn named_struct(
+    path: &Path,
+    vars: &[(String, MatValue)],
+    spec: &FieldSpec,
+) -> Result<Vec<(String, MatValue)>, CompareError> {
+    let fail =
+        |why: String| CompareError(format!("{}: --field {}: {why}", path.display(), spec.name));
+    let (_, value) = vars.iter().find(|(n, _)| *n == spec.name).ok_or_else(|| {
+        let names: Vec<&str> = vars.iter().map(|(n, _)| n.as_str()).collect();
+        fail(format!("no such variable (it has {})", names.join(", ")))
+    })?;
+    let count = match value {
+        MatValue::Struct(_) => 1,
+        MatValue::StructArray { elements, .. } => elements.len(),
+        _ => return Err(fail("not a struct".into())),
+    };
+    value
+        .struct_element(spec.element - 1)
+        .map(<[_]>::to_vec)
+        .ok_or_else(|| {
+            fail(format!(
+                "element {} asked for, but the struct array has {count}",
+                spec.element
+            ))
+        })
 }
 
 fn sample_from(path: &Path, raw: Vec<(String, Raw)>) -> Result<Sample, CompareError> {
@@ -464,11 +532,12 @@ pub fn compare_paths(
     references: &[PathBuf],
     tol: f64,
     rtol: f64,
+    field: Option<&FieldSpec>,
 ) -> Result<Vec<PairReport>, CompareError> {
     let run = load(run_path)?;
     let mut reports = Vec::new();
     for r in references {
-        for sample in load(r)? {
+        for sample in load_with(r, field)? {
             let partner = pair(&run, &sample)?;
             reports.push(compare_pair(partner, &sample, tol, rtol)?);
         }

@@ -321,6 +321,22 @@ fn compare_reads_the_fixtures() {
         2,
         "sparse matrices are not read",
     );
+    // --field picks the struct (and the element of a struct array) of the reference.
+    let sa = fixture("scipy_structarray.mat");
+    ok(&["compare", s(&sa), s(&sa), "--field", "sol(1)", "--tol", "0"]);
+    let r = eyeshell(&["compare", s(&sa), s(&sa), "--field", "sol(2)"]);
+    assert_eq!(r.code, Some(1), "sol(2) is y scaled by 2: {}", r.stdout);
+    for (spec, needle) in [
+        ("sol(3)", "element 3 asked for, but the struct array has 2"),
+        ("nope", "no such variable (it has sol)"),
+        ("sol(0)", "NAME(K)"),
+        ("sol(x", "NAME(K)"),
+    ] {
+        let r = eyeshell(&["compare", s(&sa), s(&sa), "--field", spec]);
+        assert_eq!(r.code, Some(2), "{spec}: {}", r.stderr);
+        assert!(r.stderr.contains(needle), "{spec}: {}", r.stderr);
+        assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    }
 
     // Hostile files: one line each, exit 2, no panic text.
     let nested = dir.path().join("nested.mat");
