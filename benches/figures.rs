@@ -32,6 +32,7 @@ fn fibre_sweep(c: &mut Criterion) {
             jobs,
             resume: false,
             cancel: &cancel,
+            runner: &eyeshell::sweep::InProcess,
         };
         group.bench_function(format!("jobs_{jobs}"), |b| {
             b.iter(|| {
@@ -52,6 +53,7 @@ fn draw(c: &mut Criterion) {
         jobs: 0,
         resume: false,
         cancel: &cancel,
+        runner: &eyeshell::sweep::InProcess,
     };
     for (name, _, _) in SCENES {
         run_sweep(&scene(name), &data.join(name), &options, &|_, _, _| {}).expect("the scene runs");

@@ -50,6 +50,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         jobs: a.jobs.unwrap_or(0),
         resume: a.resume,
         cancel: &CANCEL,
+        runner: &eyeshell::sweep::InProcess,
     };
     let quiet = a.quiet;
     let report = run_sweep(&sweep, &a.out, &options, &|r, n, total| {

@@ -104,6 +104,7 @@ pub fn make(
                 jobs,
                 resume: false,
                 cancel,
+                runner: &eyeshell::sweep::InProcess,
             };
             let report = run_sweep(&sweep, &data.join(name), &options, &|r, n, total| {
                 progress(&format!(

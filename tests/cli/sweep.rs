@@ -180,6 +180,7 @@ fn an_interrupted_sweep_keeps_its_finished_runs_and_resume_does_the_rest() {
         jobs: 1,
         resume: false,
         cancel: &cancel,
+        runner: &eyeshell::sweep::InProcess,
     };
     let report = run_sweep(&sweep, &out, &options, &|_, _, _| {
         cancel.store(true, Ordering::SeqCst)
@@ -205,6 +206,7 @@ fn an_interrupted_sweep_keeps_its_finished_runs_and_resume_does_the_rest() {
         jobs: 2,
         resume: true,
         cancel: &cancel,
+        runner: &eyeshell::sweep::InProcess,
     };
     let report = run_sweep(&sweep, &out, &options, &|_, _, _| {}).unwrap();
     assert_eq!(report.status(), "ok");

@@ -175,7 +175,9 @@ impl Solution {
 impl Sweep {
     /// Run every run of the sweep into `out` (`out/runs/<name>/`, `sweep.csv`,
     /// `summary.json`), `jobs` at a time (0: one per core), as `eyeshell sweep` does; `done`
-    /// is called after each run. A failed run is recorded and the others go on.
+    /// is called after each run. A failed run is recorded and the others go on. The runs
+    /// are threads of this process ([`InProcess`](crate::sweep::InProcess)), so a run that
+    /// aborts ends it; `run_sweep` takes another [`Runner`](crate::sweep::Runner).
     pub fn run(
         &self,
         out: impl AsRef<Path>,
@@ -187,6 +189,7 @@ impl Sweep {
             jobs,
             resume: false,
             cancel: &cancel,
+            runner: &crate::sweep::InProcess,
         };
         Ok(run_sweep(self, out.as_ref(), &options, done)?)
     }

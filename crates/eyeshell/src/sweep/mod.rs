@@ -10,9 +10,15 @@
 //!   when some runs failed, `interrupted`).
 //!
 //! A run that fails keeps what it wrote and its error goes into the table; the others go
-//! on. When `cancel` is raised (Ctrl-C), no new run starts, the running ones finish and the
-//! table says which runs did not run. With `resume`, a run whose directory holds a
-//! `result.json` and the same `scene.toml` is not run again.
+//! on. How a run is executed is the caller's choice ([`Runner`]): on a thread of this
+//! process by default ([`InProcess`]), where an abort would end the whole sweep, or in a
+//! process of its own. When `cancel` is raised (Ctrl-C), no new run starts, the running
+//! ones finish and the table says which runs did not run. With `resume`, a run whose
+//! directory holds a `result.json` and the same `scene.toml` is not run again.
+//!
+//! - [`run`]: one run, executed ([`execute`]) by a [`Runner`].
+
+pub mod run;
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -21,14 +27,12 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use crate::bvp::FieldRow;
-use crate::growth::{GrowthStats, SeriesRow};
-use crate::model::stimulus::{self, EyeMeasure};
 use crate::rundir::summary::{SweepRunEntry, SweepSummary};
 use crate::rundir::table::{csv_bytes, QuoteStyle};
-use crate::rundir::{self, format_value, write_atomic, GrowthWriter, OutputError, Summary};
+use crate::rundir::{self, format_value, write_atomic, OutputError, Summary};
 use crate::scene::sweep::{Sweep, SweepRun};
-use crate::scene::Scene;
+
+pub use run::{execute, run_scene, InProcess, RunFailure, Runner};
 
 /// The run directories, under the sweep's directory.
 pub const RUNS_DIR: &str = "runs";
@@ -47,6 +51,8 @@ pub struct SweepOptions<'a> {
     pub resume: bool,
     /// Raised to stop starting runs.
     pub cancel: &'a AtomicBool,
+    /// How each run is executed: `&InProcess`, or a runner that isolates runs.
+    pub runner: &'a dyn Runner,
 }
 
 /// The final state of one run, for the table (and its result.json).
@@ -182,7 +188,7 @@ pub fn run_sweep(
             let dir = out.join(RUNS_DIR).join(&run.name);
             let (status, result) = match options.resume.then(|| reusable(run, &dir)).flatten() {
                 Some(r) => (RunStatus::Reused, Some(r)),
-                None => run_one(run, &dir),
+                None => options.runner.run(run, &dir),
             };
             let mut rep = lock(&report);
             rep.records[i].status = status;
@@ -220,117 +226,6 @@ fn reusable(run: &SweepRun, dir: &Path) -> Option<RunResult> {
         return None;
     }
     serde_json::from_str(&fs::read_to_string(dir.join(RESULT_FILE)).ok()?).ok()
-}
-
-/// Run one scene into `dir`; a panic inside is a failed run, not a failed sweep.
-fn run_one(run: &SweepRun, dir: &Path) -> (RunStatus, Option<RunResult>) {
-    let outcome =
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| execute(&run.scene, dir)));
-    match outcome {
-        Ok(Ok(result)) => (RunStatus::Ok, Some(result)),
-        Ok(Err((message, partial))) => (RunStatus::Failed(message), partial.map(|r| *r)),
-        Err(panic) => {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown".into());
-            (
-                RunStatus::Failed(format!("internal error (a bug; please report it): {what}")),
-                None,
-            )
-        }
-    }
-}
-
-/// A failed run: the message and what it had reached.
-type RunFailure = (String, Option<Box<RunResult>>);
-
-/// Solve or grow `scene` into `dir`, then write its scene.toml and result.json.
-pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
-    let result = match &scene.growth {
-        Some(_) => execute_growth(scene, dir)?,
-        None => execute_elastic(scene, dir)?,
-    };
-    let text = serde_json::to_string_pretty(&result).unwrap_or_default();
-    rundir::owner::claim(dir, &[SCENE_FILE, RESULT_FILE])
-        .map_err(|e| (e.to_string(), Some(Box::new(result.clone()))))?;
-    for (file, text) in [(SCENE_FILE, scene.to_toml()), (RESULT_FILE, text)] {
-        let path = dir.join(file);
-        write_atomic(&path, text.as_bytes())
-            .map_err(|e| (io(&path, e).to_string(), Some(Box::new(result.clone()))))?;
-    }
-    Ok(result)
-}
-
-fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
-    let writer = GrowthWriter::create(dir, scene).map_err(|e| (e.to_string(), None))?;
-    // scene.toml first, so a failed run can still be reproduced.
-    rundir::owner::claim(dir, &[SCENE_FILE, RESULT_FILE]).map_err(|e| (e.to_string(), None))?;
-    let path = dir.join(SCENE_FILE);
-    write_atomic(&path, scene.to_toml().as_bytes())
-        .map_err(|e| (io(&path, e).to_string(), None))?;
-    let run = rundir::run::grow_with(scene, writer, &mut ());
-    match run.outcome {
-        Ok((stats, _)) => {
-            let last = run
-                .last
-                .ok_or_else(|| ("no snapshot was written".to_string(), None))?;
-            Ok(growth_result(&last, &stats))
-        }
-        Err(failure) => {
-            let partial = run
-                .last
-                .map(|r| Box::new(growth_result(&r, failure.stats())));
-            Err((failure.to_string(), partial))
-        }
-    }
-}
-
-fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
-    RunResult {
-        kind: "grow".into(),
-        t: row.t,
-        axial_length: row.axial_length,
-        equatorial_radius: row.equatorial_radius,
-        retina_minus_blue: row.retina_minus_blue,
-        retina_minus_red: row.retina_minus_red,
-        class: row.class.as_str().into(),
-        newton_iterations: stats.newton_iterations,
-        bvp_solves: stats.bvp_solves,
-        steps: stats.steps,
-        rhs_evaluations: stats.rhs_evaluations,
-        wall_seconds: stats.wall_seconds,
-    }
-}
-
-fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
-    let run = rundir::run::solve_into(scene, dir, &[]).map_err(|e| (e.to_string(), None))?;
-    let s = &run.solution.stats;
-    let eye = unloaded_eye(scene, &run.solution.rows);
-    Ok(RunResult {
-        kind: "solve".into(),
-        t: 0.0,
-        axial_length: eye.axial_length,
-        equatorial_radius: eye.equatorial_radius,
-        retina_minus_blue: eye.retina_minus_blue,
-        retina_minus_red: eye.retina_minus_red,
-        class: eye.class.as_str().into(),
-        newton_iterations: s.newton_iterations,
-        bvp_solves: 1,
-        steps: 0,
-        rhs_evaluations: 0,
-        wall_seconds: s.wall_seconds,
-    })
-}
-
-/// The retina of a loaded, ungrown shell, measured as a growth run measures it
-/// (docs/MODEL.md §6; [`EyeMeasure`]).
-fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
-    let retina = |f: &FieldRow| stimulus::retina(f.z, f.r, f.h, f.theta);
-    let pole = rows.first().map(retina).unwrap_or((f64::NAN, f64::NAN));
-    let radii = rows.iter().map(|f| retina(f).1);
-    EyeMeasure::new(pole, radii, &scene.blue(), &scene.red())
 }
 
 /// The columns of sweep.csv after `run`, `status` and the swept keys.
