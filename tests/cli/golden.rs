@@ -14,7 +14,8 @@
 //! `-j 1`, `-j 2` and `-j 4`, differ in exactly these spans; no output holds a date, and
 //! none holds an absolute path today):
 //! - `*.json`: the values of `"wall_seconds"` (run time) and of `"eyeshell_version"` /
-//!   `"sundials_version"`;
+//!   `"sundials_version"`; in a sweep run's `result.json`, the `bytes` and `fnv1a64` of
+//!   its `summary.json` entry (that file holds the run time);
 //! - `*.csv`: the `wall_seconds` column (sweep.csv of the figures' sweeps), found by its
 //!   header, every other cell byte for byte;
 //! - `index.html`: the version text `eyeshell <v> (SUNDIALS <v>)`;
@@ -334,6 +335,9 @@ impl Normaliser {
                 }
                 match ext {
                     "json" => {
+                        if rel.ends_with("/result.json") {
+                            text = summary_entry(&text);
+                        }
                         text = json_value(&text, "wall_seconds", "\"<timing>\"");
                         text = json_value(&text, "eyeshell_version", "\"<version>\"");
                         text = json_value(&text, "sundials_version", "\"<version>\"");
@@ -408,6 +412,18 @@ fn json_value(text: &str, key: &str, with: &str) -> String {
     }
     out.push_str(rest);
     out
+}
+
+/// A sweep run's result.json with the size and checksum of its summary.json (which holds
+/// the run time) replaced; the other files' kept.
+fn summary_entry(text: &str) -> String {
+    let Some(i) = text.find("\"path\": \"summary.json\"") else {
+        return text.to_string();
+    };
+    let end = text[i..].find('}').map_or(text.len(), |j| i + j);
+    let entry = json_value(&text[i..end], "bytes", "\"<size>\"");
+    let entry = json_value(&entry, "fnv1a64", "\"<checksum>\"");
+    format!("{}{entry}{}", &text[..i], &text[end..])
 }
 
 /// `text` (CSV as eyeshell writes it: fields quoted when they hold `,`, `"` or a line

@@ -1,6 +1,7 @@
 //! `eyeshell sweep`: a grid and a list of runs, each in its own directory with the table
 //! collecting them; a failed run kept beside the good ones; bad sweeps refused cleanly; an
-//! interrupted sweep keeps its finished runs and `--resume` does only the rest.
+//! interrupted sweep keeps its finished runs and `--resume` does only the rest, after
+//! checking that the files of each run it reuses are those the run wrote.
 
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -390,4 +391,88 @@ fn absurd_jobs_are_refused_before_anything_else() {
             assert!(!out.exists());
         }
     }
+}
+
+/// Each run's result.json lists its files (size, FNV-1a 64); --resume reuses a run only
+/// if they are all there unchanged, runs the others again, and says why on the run's line.
+#[test]
+fn resume_runs_again_what_was_deleted_resized_or_edited() {
+    let dir = tempfile::tempdir().unwrap();
+    write_scene(
+        dir.path(),
+        "[solver]\nnodes = 21\n[sweep.grid]\n\"fibres.D\" = [0, 100, 200, 300, 400, 500]\n",
+    );
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let runs = dir.path().join("out/runs");
+    let result: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(runs.join("D=0/result.json")).unwrap())
+            .unwrap();
+    let listed: Vec<&str> = result["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["path"].as_str().unwrap())
+        .collect();
+    assert_eq!(listed, ["fields.csv", "scene.toml", "summary.json"]);
+    let bytes = std::fs::metadata(runs.join("D=0/fields.csv"))
+        .unwrap()
+        .len();
+    assert_eq!(result["files"][0]["bytes"], bytes);
+    assert_eq!(result["files"][0]["fnv1a64"].as_str().unwrap().len(), 16);
+    // The sweep's own summary does not repeat the lists.
+    let summary = std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap();
+    assert!(!summary.contains("fnv1a64"));
+
+    let fields = runs.join("D=0/fields.csv");
+    let original = std::fs::read(&fields).unwrap();
+    let mut edited = original.clone();
+    let last = edited.len() - 2;
+    edited[last] = if edited[last] == b'1' { b'2' } else { b'1' };
+    std::fs::write(&fields, &edited).unwrap();
+    let mut longer = std::fs::read(runs.join("D=100/summary.json")).unwrap();
+    longer.push(b' ');
+    std::fs::write(runs.join("D=100/summary.json"), longer).unwrap();
+    std::fs::remove_file(runs.join("D=200/fields.csv")).unwrap();
+    // result.json as an earlier eyeshell wrote it: no list.
+    let old = runs.join("D=300/result.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&old).unwrap()).unwrap();
+    v.as_object_mut().unwrap().remove("files");
+    std::fs::write(&old, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    std::fs::write(runs.join("D=400/result.json"), "{ not json").unwrap();
+
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "--resume"]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let line = |name: &str| {
+        run.stderr
+            .lines()
+            .find(|l| l.contains(&format!("] {name} ")))
+            .unwrap_or_else(|| panic!("no line for {name}: {}", run.stderr))
+            .to_string()
+    };
+    for (name, why) in [
+        ("D=0", "ok: axial length"),
+        (
+            "D=0",
+            "; ran again: fields.csv was changed after the run wrote it",
+        ),
+        ("D=100", "; ran again: summary.json has "),
+        ("D=200", "; ran again: fields.csv is missing"),
+        ("D=300", "; ran again: its result.json lists no files"),
+        ("D=400", "; ran again: its result.json is not valid"),
+        ("D=500", "reused: axial length"),
+    ] {
+        assert!(
+            line(name).contains(why),
+            "{name}: {why:?} not in {}",
+            line(name)
+        );
+    }
+    assert!(!line("D=500").contains("ran again"));
+    // Run again, the edited run is as it first was (the solve is deterministic).
+    assert_eq!(std::fs::read(&fields).unwrap(), original);
+    let (_, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
+    let status: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
+    assert_eq!(status, ["ok", "ok", "ok", "ok", "ok", "reused"]);
 }

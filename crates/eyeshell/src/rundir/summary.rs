@@ -233,6 +233,20 @@ pub struct RunResult {
     pub rhs_evaluations: usize,
     #[serde(deserialize_with = "f64_or_nan")]
     pub wall_seconds: f64,
+    /// Every file the run wrote but result.json, as it was when the run ended: what
+    /// `--resume` checks before it reuses the run. Empty in the sweep's own summary.json,
+    /// and in the result.json of runs by an earlier eyeshell (`--resume` runs them again).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub files: Vec<RunFile>,
+}
+
+/// One file of a finished sweep run: its path relative to the run directory (`/`
+/// between components), its size and its FNV-1a 64 checksum (16 hex digits).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RunFile {
+    pub path: String,
+    pub bytes: u64,
+    pub fnv1a64: String,
 }
 
 /// summary.json of `eyeshell sweep`: its status and one entry per run.

@@ -12,12 +12,17 @@
 //! A run that fails keeps what it wrote and its error goes into the table; the others go
 //! on. How a run is executed is the caller's choice ([`Runner`]): on a thread of this
 //! process by default ([`InProcess`]), where an abort would end the whole sweep, or in a
-//! process of its own. When `cancel` is raised (Ctrl-C), no new run starts, the running
-//! ones finish and the table says which runs did not run. With `resume`, a run whose
-//! directory holds a `result.json` and the same `scene.toml` is not run again.
+//! process of its own (the command line). When `cancel` is raised (Ctrl-C), no new run
+//! starts, the running ones finish and the table says which runs did not run. With
+//! `resume`, a run whose directory holds a `result.json`, the same `scene.toml` and the
+//! files result.json lists, unchanged, is not run again ([`resume`]).
 //!
-//! - [`run`]: one run, executed ([`execute`]) by a [`Runner`].
+//! - [`run`]: one run, executed ([`execute`]) by a [`Runner`];
+//! - [`files`]: the files a run wrote, recorded in result.json and verified on resume;
+//! - [`resume`]: which runs of an earlier sweep are reused.
 
+pub mod files;
+pub mod resume;
 pub mod run;
 
 use std::fs;
@@ -30,8 +35,9 @@ use rayon::prelude::*;
 use crate::rundir::summary::{SweepRunEntry, SweepSummary};
 use crate::rundir::table::{csv_bytes, QuoteStyle};
 use crate::rundir::{self, format_value, write_atomic, OutputError, Summary};
-use crate::scene::sweep::{Sweep, SweepRun};
+use crate::scene::sweep::Sweep;
 
+use resume::Reuse;
 pub use run::{execute, run_scene, InProcess, RunFailure, Runner};
 
 /// The run directories, under the sweep's directory.
@@ -91,11 +97,23 @@ pub struct RunRecord {
     pub values: Vec<String>,
     pub status: RunStatus,
     pub result: Option<RunResult>,
+    /// Why a run an earlier sweep had finished ran again (`resume`): "its scene changed",
+    /// "fields.csv was changed after the run wrote it", ...
+    pub rerun: Option<String>,
 }
 
 impl RunRecord {
-    /// "ok: axial length 23.5809 mm, emmetropic (0.41 s)", "FAILED: why", ...
+    /// "ok: axial length 23.5809 mm, emmetropic (0.41 s)", "FAILED: why", ..., followed by
+    /// "; ran again: why" when a finished run of an earlier sweep could not be reused.
     pub fn status_text(&self) -> String {
+        let status = self.outcome_text();
+        match &self.rerun {
+            Some(why) => format!("{status}; ran again: {why}"),
+            None => status,
+        }
+    }
+
+    fn outcome_text(&self) -> String {
         match (&self.status, &self.result) {
             (RunStatus::Failed(m), _) => format!("FAILED: {m}"),
             (s, Some(x)) => format!(
@@ -164,6 +182,7 @@ pub fn run_sweep(
             values: sweep.keys.iter().map(|k| r.shown(k)).collect(),
             status: RunStatus::Pending,
             result: None,
+            rerun: None,
         })
         .collect();
     let report = Mutex::new(SweepReport {
@@ -186,13 +205,26 @@ pub fn run_sweep(
                 return;
             }
             let dir = out.join(RUNS_DIR).join(&run.name);
-            let (status, result) = match options.resume.then(|| reusable(run, &dir)).flatten() {
-                Some(r) => (RunStatus::Reused, Some(r)),
-                None => options.runner.run(run, &dir),
+            let earlier = if options.resume {
+                resume::reusable(run, &dir)
+            } else {
+                Reuse::No
+            };
+            let (status, result, rerun) = match earlier {
+                Reuse::Yes(r) => (RunStatus::Reused, Some(r), None),
+                Reuse::No => {
+                    let (status, result) = options.runner.run(run, &dir);
+                    (status, result, None)
+                }
+                Reuse::Stale(why) => {
+                    let (status, result) = options.runner.run(run, &dir);
+                    (status, result, Some(why))
+                }
             };
             let mut rep = lock(&report);
             rep.records[i].status = status;
             rep.records[i].result = result;
+            rep.records[i].rerun = rerun;
             let n = finished.fetch_add(1, Ordering::SeqCst) + 1;
             if let Err(e) = write_tables(sweep, &rep) {
                 lock(&table_error).get_or_insert(e);
@@ -217,15 +249,6 @@ fn io(path: &Path, e: std::io::Error) -> OutputError {
         path: path.to_path_buf(),
         source: e,
     }
-}
-
-/// The results of a run finished earlier with the same scene, if there is one.
-fn reusable(run: &SweepRun, dir: &Path) -> Option<RunResult> {
-    let scene = fs::read_to_string(dir.join(SCENE_FILE)).ok()?;
-    if scene != run.scene.to_toml() {
-        return None;
-    }
-    serde_json::from_str(&fs::read_to_string(dir.join(RESULT_FILE)).ok()?).ok()
 }
 
 /// The columns of sweep.csv after `run`, `status` and the swept keys.
@@ -314,7 +337,11 @@ pub fn summary(sweep: &Sweep, report: &SweepReport) -> Summary {
                 .cloned()
                 .zip(r.values.iter().cloned())
                 .collect(),
-            result: r.result.clone(),
+            // The list of files is each run's (its result.json), not the sweep's.
+            result: r.result.clone().map(|x| RunResult {
+                files: Vec::new(),
+                ..x
+            }),
             error: match &r.status {
                 RunStatus::Failed(m) => Some(m.clone()),
                 _ => None,

@@ -11,7 +11,7 @@ use crate::rundir::{self, write_atomic, GrowthWriter};
 use crate::scene::sweep::SweepRun;
 use crate::scene::Scene;
 
-use super::{io, RunResult, RunStatus, RESULT_FILE, SCENE_FILE};
+use super::{files, io, RunResult, RunStatus, RESULT_FILE, SCENE_FILE};
 
 /// How one run of a sweep is executed into its directory `dir` (`out/runs/<name>`).
 /// [`run_sweep`](super::run_sweep) calls it from as many threads as it runs jobs.
@@ -56,20 +56,24 @@ pub fn run_scene(scene: &Scene, dir: &Path) -> (RunStatus, Option<RunResult>) {
 /// A failed run: the message and what it had reached.
 pub type RunFailure = (String, Option<Box<RunResult>>);
 
-/// Solve or grow `scene` into `dir`, then write its scene.toml and result.json.
+/// Solve or grow `scene` into `dir`, then write its scene.toml and, last, result.json with
+/// the list of the files written ([`files::record`]).
 pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
-    let result = match &scene.growth {
+    let mut result = match &scene.growth {
         Some(_) => execute_growth(scene, dir)?,
         None => execute_elastic(scene, dir)?,
     };
-    let text = serde_json::to_string_pretty(&result).unwrap_or_default();
+    let unwritten = |path: &Path, e: std::io::Error, result: &RunResult| {
+        (io(path, e).to_string(), Some(Box::new(result.clone())))
+    };
     rundir::owner::claim(dir, &[SCENE_FILE, RESULT_FILE])
         .map_err(|e| (e.to_string(), Some(Box::new(result.clone()))))?;
-    for (file, text) in [(SCENE_FILE, scene.to_toml()), (RESULT_FILE, text)] {
-        let path = dir.join(file);
-        write_atomic(&path, text.as_bytes())
-            .map_err(|e| (io(&path, e).to_string(), Some(Box::new(result.clone()))))?;
-    }
+    let path = dir.join(SCENE_FILE);
+    write_atomic(&path, scene.to_toml().as_bytes()).map_err(|e| unwritten(&path, e, &result))?;
+    result.files = files::record(dir).map_err(|e| unwritten(dir, e, &result))?;
+    let path = dir.join(RESULT_FILE);
+    let text = serde_json::to_string_pretty(&result).unwrap_or_default();
+    write_atomic(&path, text.as_bytes()).map_err(|e| unwritten(&path, e, &result))?;
     Ok(result)
 }
 
@@ -111,6 +115,7 @@ fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
         steps: stats.steps,
         rhs_evaluations: stats.rhs_evaluations,
         wall_seconds: stats.wall_seconds,
+        files: Vec::new(),
     }
 }
 
@@ -131,6 +136,7 @@ fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
         steps: 0,
         rhs_evaluations: 0,
         wall_seconds: s.wall_seconds,
+        files: Vec::new(),
     })
 }
 
