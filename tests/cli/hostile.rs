@@ -1,11 +1,62 @@
 //! Hostile files and values (issue 13): each case asserts the exit code, one line of
 //! stderr with no panic text, and that nothing was written or lost. The families this
-//! module covers so far: broken run files (6) and sweeps that point outside themselves
-//! (5, 6). Finite but absurd values (1) are in `crates/eyeshell/src/scene/tests.rs`, the
+//! module covers so far: broken run files (6), sweeps that point outside themselves
+//! (5, 6), and `--resume` into directories that are not the sweep's: planted symbolic
+//! links, other outputs, other sweeps (5). Finite but absurd values (1) are in `crates/eyeshell/src/scene/tests.rs`, the
 //! mesh and solver tests; names with control characters (7) in `keys_check.rs`; foreign
 //! .mat/.npz files in `readers.rs` and `fuzz_readers.rs`.
 
+use std::collections::BTreeMap;
+use std::path::Path;
+
 use crate::support::*;
+
+/// Three small elastic runs (N = 21, a few milliseconds each): D=0, D=100, D=200.
+const THREE: &str = "[solver]\nnodes = 21\n[sweep.grid]\n\"fibres.D\" = [0, 100, 200]\n";
+
+/// Everything below `dir`: each path with its bytes, a directory's as "<dir>", a link's
+/// as "-> target" (never followed).
+fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            let rel = path.strip_prefix(root).unwrap().display().to_string();
+            let kind = std::fs::symlink_metadata(&path).unwrap().file_type();
+            if kind.is_symlink() {
+                let target = std::fs::read_link(&path).unwrap();
+                out.insert(rel, format!("-> {}", target.display()).into_bytes());
+            } else if kind.is_dir() {
+                out.insert(rel, b"<dir>".to_vec());
+                walk(root, &path, out);
+            } else {
+                out.insert(rel, std::fs::read(&path).unwrap());
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+/// `s.toml` holding [`THREE`] in a fresh directory, swept once into `out`.
+fn swept_three() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.toml"), THREE).unwrap();
+    let r = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    dir
+}
+
+/// `eyeshell sweep s.toml --out out --resume` in `dir` must be refused (exit 2, one clean
+/// line naming `needle`), changing nothing in `dir`.
+fn resume_is_refused(dir: &Path, needle: &str, what: &str) {
+    let before = tree(dir);
+    let r = eyeshell_in(dir, &["sweep", "s.toml", "--out", "out", "--resume"]);
+    assert_eq!(r.code, Some(2), "{what}: {}", r.stderr);
+    one_clean_line(&r, what);
+    assert!(r.stderr.contains(needle), "{what}: {}", r.stderr);
+    assert!(tree(dir) == before, "{what}: something changed");
+}
 
 /// stderr is one line, an eyeshell error, with no panic text.
 fn one_clean_line(r: &Run, what: &str) {
@@ -83,5 +134,135 @@ fn a_sweep_run_pointing_outside_the_sweep_is_refused() {
     assert_eq!(
         eyeshell(&["plot", s(&sweep), "--out", s(&plots), "-q"]).code,
         Some(0)
+    );
+}
+
+/// A `runs` link planted in a sweep's directory, pointing elsewhere: --resume refuses it
+/// and touches neither side; a fresh sweep replaces the link, never writing through it.
+#[test]
+fn resume_never_follows_a_planted_runs_link() {
+    let dir = swept_three();
+    let out = dir.path().join("out");
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::rename(out.join("runs"), &elsewhere).unwrap();
+    std::fs::write(elsewhere.join("precious.txt"), "keep").unwrap();
+    std::os::unix::fs::symlink(&elsewhere, out.join("runs")).unwrap();
+    resume_is_refused(dir.path(), "out/runs: is a symbolic link", "runs link");
+    // Without --resume the old output goes, link and all; what it pointed at stays.
+    let before = tree(&elsewhere);
+    let r = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(tree(&elsewhere) == before, "written through the link");
+    assert!(!std::fs::symlink_metadata(out.join("runs"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
+}
+
+/// A run directory, or a run's result.json or scene.toml, that is a link out of the sweep:
+/// refused, nothing read or written on either side.
+#[test]
+fn resume_never_follows_a_planted_run_link() {
+    for (planted, needle) in [
+        ("D=100", "out/runs/D=100: is a symbolic link"),
+        ("D=100/result.json", "result.json: is a symbolic link"),
+        ("D=100/scene.toml", "scene.toml: is a symbolic link"),
+        ("D=300", "out/runs/D=300: is a symbolic link"),
+    ] {
+        let dir = swept_three();
+        let runs = dir.path().join("out/runs");
+        let elsewhere = dir.path().join("elsewhere");
+        std::fs::create_dir(&elsewhere).unwrap();
+        let target = elsewhere.join("target");
+        match std::fs::symlink_metadata(runs.join(planted)) {
+            Ok(_) => std::fs::rename(runs.join(planted), &target).unwrap(),
+            Err(_) => std::fs::create_dir(&target).unwrap(),
+        }
+        std::os::unix::fs::symlink(&target, runs.join(planted)).unwrap();
+        resume_is_refused(dir.path(), needle, planted);
+    }
+}
+
+/// --resume into the output of something else than a sweep: refused, nothing changed.
+#[test]
+fn resume_into_another_output_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.toml"), THREE).unwrap();
+    let (solve, grow) = small_runs(dir.path());
+    let study = dir.path().join("study");
+    std::fs::create_dir(&study).unwrap();
+    std::fs::write(
+        study.join("summary.json"),
+        "{\"study\": \"converge\", \"report\": \"\"}",
+    )
+    .unwrap();
+    let broken = dir.path().join("broken");
+    std::fs::create_dir(&broken).unwrap();
+    std::fs::write(broken.join("summary.json"), "{ not json").unwrap();
+    for (target, needle) in [
+        (&solve, "holds a solve output, not a sweep"),
+        (&grow, "holds a grow output, not a sweep"),
+        (
+            &study,
+            "holds the output of a study (converge), not a sweep",
+        ),
+        (&broken, "not valid JSON"),
+    ] {
+        let before = tree(dir.path());
+        let r = eyeshell_in(
+            dir.path(),
+            &["sweep", "s.toml", "--out", s(target), "--resume"],
+        );
+        assert_eq!(r.code, Some(2), "{needle}: {}", r.stderr);
+        one_clean_line(&r, needle);
+        assert!(r.stderr.contains(needle), "{}", r.stderr);
+        assert!(tree(dir.path()) == before, "{needle}: something changed");
+    }
+}
+
+/// --resume with a sweep that lacks some of the runs in the directory: refused (the old
+/// runs would sit beside the new ones as if part of them). A sweep that adds runs, or
+/// changes the scene, resumes: new runs run, changed ones run again and say why.
+#[test]
+fn resume_into_another_sweep() {
+    let dir = swept_three();
+    std::fs::write(dir.path().join("s.toml"), THREE.replace(", 200]", "]")).unwrap();
+    resume_is_refused(
+        dir.path(),
+        "holds 1 run that is not in this sweep (D=200)",
+        "fewer runs",
+    );
+    std::fs::write(
+        dir.path().join("s.toml"),
+        THREE.replace("200]", "200, 300]"),
+    )
+    .unwrap();
+    let r = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "--resume"]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let (_, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
+    let status: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
+    assert_eq!(status, ["reused", "reused", "reused", "ok"]);
+    let args = [
+        "sweep",
+        "s.toml",
+        "--out",
+        "out",
+        "--resume",
+        "--set",
+        "pressure.dP=2.5",
+    ];
+    let r = eyeshell_in(dir.path(), &args);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert_eq!(
+        r.stderr.matches("ok: axial length").count(),
+        4,
+        "{}",
+        r.stderr
+    );
+    assert_eq!(
+        r.stderr.matches("; ran again: its scene changed").count(),
+        4,
+        "{}",
+        r.stderr
     );
 }

@@ -191,6 +191,6 @@ impl Sweep {
             cancel: &cancel,
             runner: &crate::sweep::InProcess,
         };
-        Ok(run_sweep(self, out.as_ref(), &options, done)?)
+        run_sweep(self, out.as_ref(), &options, done)
     }
 }

@@ -15,17 +15,20 @@
 //! process of its own (the command line). When `cancel` is raised (Ctrl-C), no new run
 //! starts, the running ones finish and the table says which runs did not run. With
 //! `resume`, a run whose directory holds a `result.json`, the same `scene.toml` and the
-//! files result.json lists, unchanged, is not run again ([`resume`]).
+//! files result.json lists, unchanged, is not run again ([`resume`]); the directory is
+//! checked first ([`target`]).
 //!
 //! - [`run`]: one run, executed ([`execute`]) by a [`Runner`];
 //! - [`files`]: the files a run wrote, recorded in result.json and verified on resume;
-//! - [`resume`]: which runs of an earlier sweep are reused.
+//! - [`resume`]: which runs of an earlier sweep are reused;
+//! - [`target`]: the output directory, refused when resuming would read or write outside
+//!   it, or mix a sweep with something else.
 
 pub mod files;
 pub mod resume;
 pub mod run;
+pub mod target;
 
-use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
@@ -36,6 +39,7 @@ use crate::rundir::summary::{SweepRunEntry, SweepSummary};
 use crate::rundir::table::{csv_bytes, QuoteStyle};
 use crate::rundir::{self, format_value, write_atomic, OutputError, Summary};
 use crate::scene::sweep::Sweep;
+use crate::Error;
 
 use resume::Reuse;
 pub use run::{execute, run_scene, InProcess, RunFailure, Runner};
@@ -159,20 +163,16 @@ impl SweepReport {
 }
 
 /// Run every run of `sweep` into `out`; `done(record, finished, total)` is called as each
-/// run ends. Errors are only those of the sweep's own files (a run's failure is a row).
+/// run ends. Errors are those of the sweep's own files and directory (a refusal of `out` is
+/// bad input, see [`target`]); a run's failure is a row.
 pub fn run_sweep(
     sweep: &Sweep,
     out: &Path,
     options: &SweepOptions<'_>,
     done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
-) -> Result<SweepReport, OutputError> {
+) -> Result<SweepReport, Error> {
     // The sweep's directory, owned and locked until the sweep ends.
-    let entries = [RUNS_DIR, TABLE_FILE, rundir::SUMMARY_FILE];
-    let _owned = if options.resume {
-        rundir::OwnedDir::resume(out, "sweep", &entries)?
-    } else {
-        rundir::OwnedDir::fresh(out, "sweep", &entries)?
-    };
+    let _owned = target::prepare(sweep, out, options.resume)?;
     let records: Vec<RunRecord> = sweep
         .runs
         .iter()
@@ -235,7 +235,7 @@ pub fn run_sweep(
     let report = report.into_inner().unwrap_or_else(|e| e.into_inner());
     write_tables(sweep, &report)?;
     match table_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
-        Some(e) => Err(e),
+        Some(e) => Err(e.into()),
         None => Ok(report),
     }
 }

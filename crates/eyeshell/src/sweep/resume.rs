@@ -24,8 +24,9 @@ pub enum Reuse {
     Stale(String),
 }
 
-/// What the earlier sweep left of `run` in `dir`; the files checked are reached without
-/// following any symbolic link.
+/// What the earlier sweep left of `run` in `dir`. The caller has refused symbolic links
+/// at `dir`, its scene.toml and its result.json ([`super::target`]); the files checked
+/// are reached without following any.
 pub fn reusable(run: &SweepRun, dir: &Path) -> Reuse {
     let result = match fs::read_to_string(dir.join(RESULT_FILE)) {
         Ok(text) => text,
