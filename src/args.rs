@@ -46,6 +46,17 @@ pub(crate) enum Command {
     Figures(FiguresArgs),
     /// Draw the output of any run or sweep (shells, profiles, axial length) as PNG and SVG
     Plot(PlotArgs),
+    /// Run the runs of a sweep that `eyeshell sweep` sends on stdin (its worker processes)
+    #[command(name = "sweep-worker", hide = true)]
+    SweepWorker(SweepWorkerArgs),
+}
+
+/// `eyeshell sweep-worker OUT`: a worker process of `eyeshell sweep` (src/worker).
+#[derive(Args, Debug)]
+pub(crate) struct SweepWorkerArgs {
+    /// The sweep's output directory
+    #[arg(value_name = "DIR")]
+    pub(crate) out: PathBuf,
 }
 
 #[derive(Args, Debug)]

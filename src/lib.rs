@@ -9,8 +9,9 @@
 //! dispatches to one `cmd_*` function per subcommand (a file per group in `commands/`:
 //! run, sweep, interop, study) and maps the library's one error to the exit code in one
 //! place ([`exit_code`]). Beside them: `interop/` (other people's formats), `study/` (the
-//! studies and the paper's figures), `figures.rs` (drawing runs) and `progress.rs` (the
-//! growth bar).
+//! studies and the paper's figures), `figures.rs` (drawing runs), `progress.rs` (the
+//! growth bar) and `worker/` (a sweep's runs in worker processes, the hidden
+//! `sweep-worker` subcommand).
 
 mod args;
 mod commands;
@@ -18,6 +19,7 @@ pub mod figures;
 pub mod interop;
 pub mod progress;
 pub mod study;
+pub mod worker;
 
 use std::ffi::OsString;
 use std::io::Write;
@@ -71,6 +73,7 @@ where
         Command::Sweep(a) => cmd_sweep(a),
         Command::Figures(a) => cmd_figures(a),
         Command::Plot(a) => cmd_plot(a),
+        Command::SweepWorker(a) => worker::serve(&a.out),
     };
     match result {
         Ok(()) => 0,
@@ -117,6 +120,7 @@ fn usage_error(e: clap::Error) -> i32 {
             use clap::CommandFactory;
             let names: Vec<String> = Cli::command()
                 .get_subcommands()
+                .filter(|c| !c.is_hide_set())
                 .map(|c| c.get_name().to_string())
                 .filter(|n| n != "help")
                 .collect();

@@ -46,11 +46,13 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     let sweep = eyeshell::scene::sweep::Sweep::from_file(&a.scene.scene, &a.scene.set)?;
     rundir::check_target(&a.out)?;
     install_interrupt();
+    // Each run in a worker process: one that aborts fails alone (src/worker).
+    let workers = crate::worker::Workers::new(&a.out)?;
     let options = SweepOptions {
         jobs: a.jobs.unwrap_or(0),
         resume: a.resume,
         cancel: &CANCEL,
-        runner: &eyeshell::sweep::InProcess,
+        runner: &workers,
     };
     let quiet = a.quiet;
     let report = run_sweep(&sweep, &a.out, &options, &|r, n, total| {

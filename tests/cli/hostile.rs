@@ -1,18 +1,36 @@
 //! Hostile files and values (issue 13): each case asserts the exit code, one line of
 //! stderr with no panic text, and that nothing was written or lost. The families this
 //! module covers so far: broken run files (6), sweeps that point outside themselves
-//! (5, 6), and `--resume` into directories that are not the sweep's: planted symbolic
-//! links, other outputs, other sweeps (5). Finite but absurd values (1) are in `crates/eyeshell/src/scene/tests.rs`, the
-//! mesh and solver tests; names with control characters (7) in `keys_check.rs`; foreign
-//! .mat/.npz files in `readers.rs` and `fuzz_readers.rs`.
+//! (5, 6), a sweep run that aborts its process, and `--resume` into directories that are
+//! not the sweep's: planted symbolic links, other outputs, other sweeps (5). Finite but
+//! absurd values (1) are in `crates/eyeshell/src/scene/tests.rs`, the mesh and solver
+//! tests; names with control characters (7) in `keys_check.rs`; foreign .mat/.npz files in
+//! `readers.rs` and `fuzz_readers.rs`.
 
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::process::Command;
 
 use crate::support::*;
 
 /// Three small elastic runs (N = 21, a few milliseconds each): D=0, D=100, D=200.
 const THREE: &str = "[solver]\nnodes = 21\n[sweep.grid]\n\"fibres.D\" = [0, 100, 200]\n";
+
+/// Run `eyeshell ARGS` in `dir` with the environment variable `env` set.
+fn eyeshell_env(dir: &Path, args: &[&str], env: (&str, &str)) -> Run {
+    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+        .args(args)
+        .current_dir(dir)
+        .env("CI", "1")
+        .env(env.0, env.1)
+        .output()
+        .expect("run eyeshell");
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
 
 /// Everything below `dir`: each path with its bytes, a directory's as "<dir>", a link's
 /// as "-> target" (never followed).
@@ -135,6 +153,78 @@ fn a_sweep_run_pointing_outside_the_sweep_is_refused() {
         eyeshell(&["plot", s(&sweep), "--out", s(&plots), "-q"]).code,
         Some(0)
     );
+}
+
+/// A run whose process aborts (as on a failed allocation or a stack overflow, which no
+/// catch_unwind can stop) fails alone: the runs before and after it (in the same worker
+/// slot, `--jobs 1`) finish, the table says which failed and how, the command exits 1
+/// with one line. The abort is the worker's fault-injection hook, EYESHELL_TEST_ABORT_RUN.
+#[test]
+fn a_run_that_aborts_fails_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.toml"), THREE).unwrap();
+    let abort = ("EYESHELL_TEST_ABORT_RUN", "D=100");
+    let args = ["sweep", "s.toml", "--out", "out", "--jobs", "1"];
+    let r = eyeshell_env(dir.path(), &args, abort);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    let how = "D=100: the run's process ended abnormally (killed by signal 6: SIGABRT; out of memory or a stack overflow?)";
+    // One line per run, then the error: nothing of the worker's reaches the terminal.
+    let lines: Vec<&str> = r.stderr.lines().collect();
+    assert_eq!(lines.len(), 4, "{}", r.stderr);
+    assert!(
+        lines[1].contains("FAILED: the run's process ended abnormally"),
+        "{}",
+        lines[1]
+    );
+    assert!(
+        lines[3].starts_with("eyeshell: error: 1 of 3 runs failed: ") && lines[3].contains(how),
+        "{}",
+        lines[3]
+    );
+    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    let out = dir.path().join("out");
+    let (header, rows) = csv_cells(&out.join("sweep.csv"));
+    let error = header.iter().position(|h| h == "error").unwrap();
+    let status: Vec<(&str, &str)> = rows
+        .iter()
+        .map(|r| (r[0].as_str(), r[1].as_str()))
+        .collect();
+    assert_eq!(
+        status,
+        [("D=0", "ok"), ("D=100", "failed"), ("D=200", "ok")]
+    );
+    assert_eq!(format!("D=100: {}", rows[1][error]), how);
+    for ok in ["D=0", "D=200"] {
+        for file in ["fields.csv", "summary.json", "scene.toml", "result.json"] {
+            assert!(
+                out.join("runs").join(ok).join(file).is_file(),
+                "{ok}/{file}"
+            );
+        }
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "partial");
+    assert_eq!(summary["runs_failed"], 1);
+    assert!(summary["runs"][1]["error"]
+        .as_str()
+        .unwrap()
+        .contains("SIGABRT"));
+
+    // Resumed with the hook still set: the two good runs are reused, the third aborts
+    // again; with -q the only line is the error.
+    let mut quiet = args.to_vec();
+    quiet.extend(["--resume", "-q"]);
+    let r = eyeshell_env(dir.path(), &quiet, abort);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    one_clean_line(&r, "resumed");
+    assert!(r.stderr.contains(how), "{}", r.stderr);
+    let (_, rows) = csv_cells(&out.join("sweep.csv"));
+    let status: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
+    assert_eq!(status, ["reused", "failed", "reused"]);
+    // Without the hook, the resumed sweep completes.
+    let r = eyeshell_in(dir.path(), &quiet);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
 }
 
 /// A `runs` link planted in a sweep's directory, pointing elsewhere: --resume refuses it

@@ -304,66 +304,141 @@ fn check_lists_the_runs_of_a_sweep() {
     );
 }
 
-/// A real Ctrl-C (SIGINT) to `eyeshell sweep`: no new run starts, the running one finishes,
-/// the table says which did not run, and the exit is 1 with one line saying how to resume.
-#[test]
-fn ctrl_c_stops_starting_runs_and_keeps_the_table() {
-    use std::io::{BufRead, BufReader};
-    use std::process::{Command, Stdio};
-    let dir = tempfile::tempdir().unwrap();
-    // Each run takes a few tenths of a second: the signal arrives while the second runs.
+/// Runs of a few tenths of a second each: a signal sent after the first run's line
+/// arrives while the second runs.
+fn slow_sweep(dir: &Path) {
     let text = SMALL
         .replace("nodes = 21", "nodes = 201")
         .replace("t_end = 0.2", "t_end = 1.0")
         .replace("times = [0.1]", "times = [0.5]")
         .replace("rtol = 1e-3", "rtol = 1e-6");
     write_scene(
-        dir.path(),
+        dir,
         &format!("{text}[sweep.grid]\n\"growth.Gamma\" = [4, 5, 6, 7, 8, 9]\n"),
     );
+}
+
+/// `eyeshell sweep` of [`slow_sweep`] in `dir`, one job, in a process group of its own (so
+/// that a test can signal the group as a terminal does); its stderr, after the first line.
+fn start_slow_sweep(dir: &Path) -> (std::process::Child, impl std::io::BufRead) {
+    use std::io::BufRead;
+    use std::os::unix::process::CommandExt;
+    use std::process::{Command, Stdio};
+    slow_sweep(dir);
     let mut child = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
         .args(["sweep", "s.toml", "--out", "out", "--jobs", "1"])
-        .current_dir(dir.path())
+        .current_dir(dir)
         .stderr(Stdio::piped())
         .stdout(Stdio::piped())
+        .process_group(0)
         .spawn()
         .unwrap();
-    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
     let mut first = String::new();
     stderr.read_line(&mut first).unwrap();
     assert!(first.starts_with("eyeshell: [1/6] "), "{first}");
-    let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+    (child, stderr)
+}
+
+/// SIGINT to `pid`, or to its whole process group (as Ctrl-C at a terminal).
+fn interrupt(pid: u32, group: bool) {
+    let target = if group {
+        format!("-{pid}")
+    } else {
+        pid.to_string()
+    };
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", "--", &target])
         .status()
         .unwrap();
     assert!(killed.success());
+}
+
+/// A real Ctrl-C (SIGINT) to `eyeshell sweep`: no new run starts, the running one finishes,
+/// the table says which did not run, and the exit is 1 with one line saying how to resume.
+/// Sent to the whole process group, as a terminal does, it reaches the run's worker process
+/// too, which ignores it: the running run still finishes.
+#[test]
+fn ctrl_c_stops_starting_runs_and_keeps_the_table() {
+    for group in [false, true] {
+        let dir = tempfile::tempdir().unwrap();
+        let (mut child, mut stderr) = start_slow_sweep(dir.path());
+        interrupt(child.id(), group);
+        let mut rest = String::new();
+        std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(1), "group {group}: {rest}");
+        assert!(
+            rest.contains("interrupted: finishing the running runs"),
+            "{rest}"
+        );
+        let last = rest.lines().last().unwrap();
+        assert!(
+            last.starts_with("eyeshell: error: sweep interrupted: ") && last.contains("--resume"),
+            "{last}"
+        );
+        let (_, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
+        let ok = rows.iter().filter(|r| r[1] == "ok").count();
+        let not_run = rows.iter().filter(|r| r[1] == "not run").count();
+        assert!(
+            (1..=5).contains(&ok) && ok + not_run == 6,
+            "group {group}: {rows:?}"
+        );
+        let summary = std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap();
+        assert!(summary.contains("\"status\": \"interrupted\""), "{summary}");
+        // Every finished run is whole.
+        for r in rows.iter().filter(|r| r[1] == "ok") {
+            assert!(dir
+                .path()
+                .join("out/runs")
+                .join(&r[0])
+                .join("result.json")
+                .is_file());
+        }
+    }
+}
+
+/// The processes of group `pgid` that have not ended (zombies aside), from /proc.
+fn alive_in_group(pgid: u32) -> Vec<String> {
+    let mut alive = Vec::new();
+    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(stat) = std::fs::read_to_string(entry.path().join("stat")) else {
+            continue;
+        };
+        // pid (comm) state ppid pgrp ...
+        let Some((_, fields)) = stat.rsplit_once(')') else {
+            continue;
+        };
+        let fields: Vec<&str> = fields.split_whitespace().collect();
+        if fields.len() > 2 && fields[2] == pgid.to_string() && fields[0] != "Z" {
+            alive.push(stat);
+        }
+    }
+    alive
+}
+
+/// A second Ctrl-C exits at once (130), and the worker running a run ends with it
+/// instead of finishing the run alone.
+#[test]
+fn a_second_ctrl_c_ends_the_workers_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut child, mut stderr) = start_slow_sweep(dir.path());
+    let pgid = child.id();
+    interrupt(pgid, true);
+    std::thread::sleep(std::time::Duration::from_millis(50));
+    interrupt(pgid, true);
+    let status = child.wait().unwrap();
     let mut rest = String::new();
     std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(1), "{first}{rest}");
-    assert!(
-        rest.contains("interrupted: finishing the running runs"),
-        "{rest}"
-    );
-    let last = rest.lines().last().unwrap();
-    assert!(
-        last.starts_with("eyeshell: error: sweep interrupted: ") && last.contains("--resume"),
-        "{last}"
-    );
-    let (_, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
-    let ok = rows.iter().filter(|r| r[1] == "ok").count();
-    let not_run = rows.iter().filter(|r| r[1] == "not run").count();
-    assert!((1..=5).contains(&ok) && ok + not_run == 6, "{rows:?}");
-    let summary = std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap();
-    assert!(summary.contains("\"status\": \"interrupted\""), "{summary}");
-    // Every finished run is whole.
-    for r in rows.iter().filter(|r| r[1] == "ok") {
-        assert!(dir
-            .path()
-            .join("out/runs")
-            .join(&r[0])
-            .join("result.json")
-            .is_file());
+    assert_eq!(status.code(), Some(130), "{rest}");
+    let start = std::time::Instant::now();
+    while !alive_in_group(pgid).is_empty() {
+        assert!(
+            start.elapsed().as_secs() < 10,
+            "still running: {:?}",
+            alive_in_group(pgid)
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
     }
 }
 
