@@ -90,7 +90,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         return Err(Error::failed(format!(
             "{} of {total} runs failed: {} (the other results are in {})",
             failed.len(),
-            failed.join("; "),
+            first_few(&failed),
             table.display()
         )));
     }
@@ -115,6 +115,19 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     }
     Ok(())
 }
+
+/// The first [`SHOWN_FAILURES`] of `failed`, then how many more: the error line stays
+/// short however many runs failed (the table has every message).
+fn first_few(failed: &[String]) -> String {
+    let mut text = failed[..failed.len().min(SHOWN_FAILURES)].join("; ");
+    if failed.len() > SHOWN_FAILURES {
+        text.push_str(&format!("; and {} more", failed.len() - SHOWN_FAILURES));
+    }
+    text
+}
+
+/// Failed runs named in the error line of a sweep.
+const SHOWN_FAILURES: usize = 3;
 
 pub(crate) fn cmd_figures(a: &FiguresArgs) -> Result<(), Error> {
     check_jobs(a.jobs)?;

@@ -551,3 +551,30 @@ fn resume_runs_again_what_was_deleted_resized_or_edited() {
     let status: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
     assert_eq!(status, ["ok", "ok", "ok", "ok", "ok", "reused"]);
 }
+
+/// However many runs fail, the error line names the first three and counts the rest (the
+/// table has every message).
+#[test]
+fn many_failed_runs_make_one_short_line() {
+    let dir = tempfile::tempdir().unwrap();
+    write_scene(
+        dir.path(),
+        &format!("{SMALL}[sweep.grid]\n\"growth.eta0\" = [1e4, 2e4, 3e4, 4e4, 5e4]\n\"solver.integrator\" = [\"euler\"]\n\"solver.steps\" = [2]\n"),
+    );
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
+    assert_fails(&run, 1, "5 of 5 runs failed: ");
+    assert_eq!(
+        run.stderr.matches("growth failed at").count(),
+        3,
+        "{}",
+        run.stderr
+    );
+    assert!(
+        run.stderr
+            .contains("; and 2 more (the other results are in "),
+        "{}",
+        run.stderr
+    );
+    let (_, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
+    assert!(rows.iter().all(|r| r[1] == "failed"), "{rows:?}");
+}
