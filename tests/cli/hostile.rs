@@ -280,14 +280,25 @@ fn resume_into_another_output_is_refused() {
     std::fs::write(dir.path().join("s.toml"), THREE).unwrap();
     let (solve, grow) = small_runs(dir.path());
     let study = dir.path().join("study");
-    std::fs::create_dir(&study).unwrap();
-    std::fs::write(
-        study.join("summary.json"),
-        "{\"study\": \"converge\", \"report\": \"\"}",
-    )
-    .unwrap();
+    ok(&[
+        "converge",
+        "scenes/default.toml",
+        "--nodes",
+        "11,21",
+        "--out",
+        s(&study),
+    ]);
+    // An eyeshell output (it has the marker) whose summary.json was damaged.
     let broken = dir.path().join("broken");
-    std::fs::create_dir(&broken).unwrap();
+    ok(&[
+        "solve",
+        "scenes/default.toml",
+        "--set",
+        "solver.nodes=11",
+        "--out",
+        s(&broken),
+        "-q",
+    ]);
     std::fs::write(broken.join("summary.json"), "{ not json").unwrap();
     for (target, needle) in [
         (&solve, "holds a solve output, not a sweep"),

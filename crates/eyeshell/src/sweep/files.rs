@@ -120,7 +120,7 @@ fn locate(dir: &Path, rel: &str) -> Result<PathBuf, String> {
 /// The size of the file at `path` and its FNV-1a 64 hash, read in blocks.
 fn checksum(path: &Path) -> std::io::Result<(u64, u64)> {
     let mut file = fs::File::open(path)?;
-    let mut hash = Fnv1a::new();
+    let mut hash = crate::hash::Fnv1a64::default();
     let mut bytes = 0u64;
     let mut buf = vec![0u8; 1 << 16];
     loop {
@@ -133,37 +133,9 @@ fn checksum(path: &Path) -> std::io::Result<(u64, u64)> {
     }
 }
 
-/// FNV-1a, 64 bits (as the run names' hash in `scene::sweep` and the golden test's).
-struct Fnv1a(u64);
-
-impl Fnv1a {
-    fn new() -> Fnv1a {
-        Fnv1a(0xcbf2_9ce4_8422_2325)
-    }
-
-    fn update(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn fnv(bytes: &[u8]) -> u64 {
-        let mut h = Fnv1a::new();
-        h.update(bytes);
-        h.0
-    }
-
-    #[test]
-    fn fnv1a_matches_the_reference_values() {
-        assert_eq!(fnv(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(fnv(b"a"), 0xaf63_dc4c_8601_ec8c);
-        assert_eq!(fnv(b"foobar"), 0x8594_4171_f739_67e8);
-    }
 
     #[test]
     fn a_run_verifies_until_a_file_is_missing_resized_or_edited() {
@@ -203,7 +175,7 @@ mod tests {
         let bad = |path: &str| RunFile {
             path: path.into(),
             bytes: 1,
-            fnv1a64: format!("{:016x}", fnv(b"x")),
+            fnv1a64: format!("{:016x}", crate::hash::fnv1a64(b"x")),
         };
         for path in ["../outside", "/etc/hostname", "", ".", "a/../../outside"] {
             let why = verify(&dir, &[bad(path)]).unwrap();
