@@ -9,14 +9,7 @@ use crate::support::*;
 use eyeshell::rundir::rundata::{self, RunData};
 use eyeshell_cli::figures::sweep_runs;
 
-const FIGURES: [&str; 6] = [
-    "fig_a_const_shells",
-    "fig_b_const_stretches",
-    "fig_c_thick",
-    "fig_d_fibre",
-    "fig_e_grow_retinas",
-    "fig_f_axial",
-];
+use eyeshell_cli::figures::PAPER_STEMS as FIGURES;
 
 /// `eyeshell figures` once for the whole file (it runs twelve growth runs).
 fn figures() -> &'static Path {

@@ -7,54 +7,12 @@
 //! tests; names with control characters (7) in `keys_check.rs`; foreign .mat/.npz files in
 //! `readers.rs` and `fuzz_readers.rs`.
 
-use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::Command;
 
 use crate::support::*;
 
 /// Three small elastic runs (N = 21, a few milliseconds each): D=0, D=100, D=200.
 const THREE: &str = "[solver]\nnodes = 21\n[sweep.grid]\n\"fibres.D\" = [0, 100, 200]\n";
-
-/// Run `eyeshell ARGS` in `dir` with the environment variable `env` set.
-fn eyeshell_env(dir: &Path, args: &[&str], env: (&str, &str)) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
-        .args(args)
-        .current_dir(dir)
-        .env("CI", "1")
-        .env(env.0, env.1)
-        .output()
-        .expect("run eyeshell");
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
-
-/// Everything below `dir`: each path with its bytes, a directory's as "<dir>", a link's
-/// as "-> target" (never followed).
-fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
-        for entry in std::fs::read_dir(dir).unwrap() {
-            let path = entry.unwrap().path();
-            let rel = path.strip_prefix(root).unwrap().display().to_string();
-            let kind = std::fs::symlink_metadata(&path).unwrap().file_type();
-            if kind.is_symlink() {
-                let target = std::fs::read_link(&path).unwrap();
-                out.insert(rel, format!("-> {}", target.display()).into_bytes());
-            } else if kind.is_dir() {
-                out.insert(rel, b"<dir>".to_vec());
-                walk(root, &path, out);
-            } else {
-                out.insert(rel, std::fs::read(&path).unwrap());
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
-}
 
 /// `s.toml` holding [`THREE`] in a fresh directory, swept once into `out`.
 fn swept_three() -> tempfile::TempDir {
@@ -68,23 +26,12 @@ fn swept_three() -> tempfile::TempDir {
 /// `eyeshell sweep s.toml --out out --resume` in `dir` must be refused (exit 2, one clean
 /// line naming `needle`), changing nothing in `dir`.
 fn resume_is_refused(dir: &Path, needle: &str, what: &str) {
-    let before = tree(dir);
+    let before = World::of(dir);
     let r = eyeshell_in(dir, &["sweep", "s.toml", "--out", "out", "--resume"]);
     assert_eq!(r.code, Some(2), "{what}: {}", r.stderr);
     one_clean_line(&r, what);
     assert!(r.stderr.contains(needle), "{what}: {}", r.stderr);
-    assert!(tree(dir) == before, "{what}: something changed");
-}
-
-/// stderr is one line, an eyeshell error, with no panic text.
-fn one_clean_line(r: &Run, what: &str) {
-    assert_eq!(r.stderr.lines().count(), 1, "{what}: {:?}", r.stderr);
-    assert!(
-        r.stderr.starts_with("eyeshell: error: "),
-        "{what}: {}",
-        r.stderr
-    );
-    assert!(!r.stderr.contains("panicked"), "{what}: {}", r.stderr);
+    assert!(World::of(dir) == before, "{what}: something changed");
 }
 
 /// A fields.csv that lost a column is refused by export (it used to write a .mat with a
@@ -165,7 +112,7 @@ fn a_run_that_aborts_fails_alone() {
     std::fs::write(dir.path().join("s.toml"), THREE).unwrap();
     let abort = ("EYESHELL_TEST_ABORT_RUN", "D=100");
     let args = ["sweep", "s.toml", "--out", "out", "--jobs", "1"];
-    let r = eyeshell_env(dir.path(), &args, abort);
+    let r = eyeshell_with(dir.path(), &args, &[abort]);
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     let how = "D=100: the run's process ended abnormally (killed by signal 6: SIGABRT; out of memory or a stack overflow?)";
     // One line per run, then the error: nothing of the worker's reaches the terminal.
@@ -215,7 +162,7 @@ fn a_run_that_aborts_fails_alone() {
     // again; with -q the only line is the error.
     let mut quiet = args.to_vec();
     quiet.extend(["--resume", "-q"]);
-    let r = eyeshell_env(dir.path(), &quiet, abort);
+    let r = eyeshell_with(dir.path(), &quiet, &[abort]);
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     one_clean_line(&r, "resumed");
     assert!(r.stderr.contains(how), "{}", r.stderr);
@@ -239,10 +186,10 @@ fn resume_never_follows_a_planted_runs_link() {
     std::os::unix::fs::symlink(&elsewhere, out.join("runs")).unwrap();
     resume_is_refused(dir.path(), "out/runs: is a symbolic link", "runs link");
     // Without --resume the old output goes, link and all; what it pointed at stays.
-    let before = tree(&elsewhere);
+    let before = World::of(&elsewhere);
     let r = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
-    assert!(tree(&elsewhere) == before, "written through the link");
+    assert!(World::of(&elsewhere) == before, "written through the link");
     assert!(!std::fs::symlink_metadata(out.join("runs"))
         .unwrap()
         .file_type()
@@ -309,7 +256,7 @@ fn resume_into_another_output_is_refused() {
         ),
         (&broken, "not valid JSON"),
     ] {
-        let before = tree(dir.path());
+        let before = World::of(dir.path());
         let r = eyeshell_in(
             dir.path(),
             &["sweep", "s.toml", "--out", s(target), "--resume"],
@@ -317,7 +264,10 @@ fn resume_into_another_output_is_refused() {
         assert_eq!(r.code, Some(2), "{needle}: {}", r.stderr);
         one_clean_line(&r, needle);
         assert!(r.stderr.contains(needle), "{}", r.stderr);
-        assert!(tree(dir.path()) == before, "{needle}: something changed");
+        assert!(
+            World::of(dir.path()) == before,
+            "{needle}: something changed"
+        );
     }
 }
 

@@ -21,10 +21,16 @@ pub fn repo() -> &'static Path {
 
 /// Run `eyeshell ARGS` in `dir`.
 pub fn eyeshell_in(dir: &Path, args: &[&str]) -> Run {
+    eyeshell_with(dir, args, &[])
+}
+
+/// Run `eyeshell ARGS` in `dir` with the environment variables `envs` set.
+pub fn eyeshell_with(dir: &Path, args: &[&str], envs: &[(&str, &str)]) -> Run {
     let out = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
         .args(args)
         .current_dir(dir)
         .env("CI", "1")
+        .envs(envs.iter().copied())
         .output()
         .expect("run eyeshell");
     Run {
@@ -342,9 +348,8 @@ impl World {
     }
 }
 
-/// A clean refusal: exit 2, one `eyeshell: error:` line naming `needle`, no panic.
-pub fn refused(r: &Run, needle: &str, what: &str) {
-    assert_eq!(r.code, Some(2), "{what}: {}", r.stderr);
+/// stderr is one line, an eyeshell error, with no panic text.
+pub fn one_clean_line(r: &Run, what: &str) {
     assert_eq!(r.stderr.lines().count(), 1, "{what}: {:?}", r.stderr);
     assert!(
         r.stderr.starts_with("eyeshell: error: "),
@@ -352,6 +357,12 @@ pub fn refused(r: &Run, needle: &str, what: &str) {
         r.stderr
     );
     assert!(!r.stderr.contains("panicked"), "{what}: {}", r.stderr);
+}
+
+/// A clean refusal: exit 2, one `eyeshell: error:` line naming `needle`, no panic.
+pub fn refused(r: &Run, needle: &str, what: &str) {
+    assert_eq!(r.code, Some(2), "{what}: {}", r.stderr);
+    one_clean_line(r, what);
     assert!(
         r.stderr.contains(needle),
         "{what}: {needle:?} not in {}",
