@@ -1,5 +1,6 @@
-//! Hostile files and values (issue 13): each case asserts the exit code, one line of
-//! stderr with no panic text, and that nothing was written or lost. The families this
+//! Hostile files and values (issue 13): each case runs the binary under a memory and a time
+//! limit ([`bounded`]) and asserts the exit code, one line of stderr with no panic text,
+//! and that nothing was written or lost. The families this
 //! module covers so far: broken run files (6), sweeps that point outside themselves
 //! (5, 6), a sweep run that aborts its process, and `--resume` into directories that are
 //! not the sweep's: planted symbolic links, other outputs, other sweeps (5). Finite but
@@ -18,7 +19,7 @@ const THREE: &str = "[solver]\nnodes = 21\n[sweep.grid]\n\"fibres.D\" = [0, 100,
 fn swept_three() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("s.toml"), THREE).unwrap();
-    let r = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
+    let r = bounded(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     dir
 }
@@ -27,7 +28,7 @@ fn swept_three() -> tempfile::TempDir {
 /// line naming `needle`), changing nothing in `dir`.
 fn resume_is_refused(dir: &Path, needle: &str, what: &str) {
     let before = World::of(dir);
-    let r = eyeshell_in(dir, &["sweep", "s.toml", "--out", "out", "--resume"]);
+    let r = bounded(dir, &["sweep", "s.toml", "--out", "out", "--resume"]);
     assert_eq!(r.code, Some(2), "{what}: {}", r.stderr);
     one_clean_line(&r, what);
     assert!(r.stderr.contains(needle), "{what}: {}", r.stderr);
@@ -57,7 +58,7 @@ fn a_run_missing_a_column_is_not_exported() {
     std::fs::write(&fields, cut).unwrap();
     for format in ["--mat", "--npz"] {
         let target = dir.path().join(format!("x{format}"));
-        let r = eyeshell(&["export", s(&solve), format, s(&target)]);
+        let r = bounded(repo(), &["export", s(&solve), format, s(&target)]);
         assert_eq!(r.code, Some(2), "{format}: {}", r.stderr);
         one_clean_line(&r, format);
         assert!(r.stderr.contains("no column \"kappa\""), "{}", r.stderr);
@@ -76,7 +77,7 @@ fn a_sweep_run_pointing_outside_the_sweep_is_refused() {
     )
     .unwrap();
     let sweep = dir.path().join("sweep");
-    let r = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "sweep", "-q"]);
+    let r = bounded(dir.path(), &["sweep", "s.toml", "--out", "sweep", "-q"]);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     let summary = sweep.join("summary.json");
     let original = std::fs::read_to_string(&summary).unwrap();
@@ -85,7 +86,7 @@ fn a_sweep_run_pointing_outside_the_sweep_is_refused() {
         assert_ne!(planted, original, "the run's dir is in summary.json");
         std::fs::write(&summary, planted).unwrap();
         let plots = dir.path().join("plots");
-        let r = eyeshell(&["plot", s(&sweep), "--out", s(&plots)]);
+        let r = bounded(repo(), &["plot", s(&sweep), "--out", s(&plots)]);
         assert_eq!(r.code, Some(2), "{bad:?}: {}", r.stderr);
         one_clean_line(&r, bad);
         assert!(
@@ -97,7 +98,7 @@ fn a_sweep_run_pointing_outside_the_sweep_is_refused() {
     std::fs::write(&summary, original).unwrap();
     let plots = dir.path().join("plots");
     assert_eq!(
-        eyeshell(&["plot", s(&sweep), "--out", s(&plots), "-q"]).code,
+        bounded(repo(), &["plot", s(&sweep), "--out", s(&plots), "-q"]).code,
         Some(0)
     );
 }
@@ -112,7 +113,7 @@ fn a_run_that_aborts_fails_alone() {
     std::fs::write(dir.path().join("s.toml"), THREE).unwrap();
     let abort = ("EYESHELL_TEST_ABORT_RUN", "D=100");
     let args = ["sweep", "s.toml", "--out", "out", "--jobs", "1"];
-    let r = eyeshell_with(dir.path(), &args, &[abort]);
+    let r = bounded_with(dir.path(), &args, &[abort]);
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     let how = "D=100: the run's process ended abnormally (killed by signal 6: SIGABRT; out of memory or a stack overflow?)";
     // One line per run, then the error: nothing of the worker's reaches the terminal.
@@ -162,7 +163,7 @@ fn a_run_that_aborts_fails_alone() {
     // again; with -q the only line is the error.
     let mut quiet = args.to_vec();
     quiet.extend(["--resume", "-q"]);
-    let r = eyeshell_with(dir.path(), &quiet, &[abort]);
+    let r = bounded_with(dir.path(), &quiet, &[abort]);
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     one_clean_line(&r, "resumed");
     assert!(r.stderr.contains(how), "{}", r.stderr);
@@ -170,7 +171,7 @@ fn a_run_that_aborts_fails_alone() {
     let status: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
     assert_eq!(status, ["reused", "failed", "reused"]);
     // Without the hook, the resumed sweep completes.
-    let r = eyeshell_in(dir.path(), &quiet);
+    let r = bounded(dir.path(), &quiet);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
 }
 
@@ -187,7 +188,7 @@ fn resume_never_follows_a_planted_runs_link() {
     resume_is_refused(dir.path(), "out/runs: is a symbolic link", "runs link");
     // Without --resume the old output goes, link and all; what it pointed at stays.
     let before = World::of(&elsewhere);
-    let r = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
+    let r = bounded(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     assert!(World::of(&elsewhere) == before, "written through the link");
     assert!(!std::fs::symlink_metadata(out.join("runs"))
@@ -257,7 +258,7 @@ fn resume_into_another_output_is_refused() {
         (&broken, "not valid JSON"),
     ] {
         let before = World::of(dir.path());
-        let r = eyeshell_in(
+        let r = bounded(
             dir.path(),
             &["sweep", "s.toml", "--out", s(target), "--resume"],
         );
@@ -288,7 +289,7 @@ fn resume_into_another_sweep() {
         THREE.replace("200]", "200, 300]"),
     )
     .unwrap();
-    let r = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "--resume"]);
+    let r = bounded(dir.path(), &["sweep", "s.toml", "--out", "out", "--resume"]);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     let (_, rows) = csv_cells(&dir.path().join("out/sweep.csv"));
     let status: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
@@ -302,7 +303,7 @@ fn resume_into_another_sweep() {
         "--set",
         "pressure.dP=2.5",
     ];
-    let r = eyeshell_in(dir.path(), &args);
+    let r = bounded(dir.path(), &args);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     assert_eq!(
         r.stderr.matches("ok: axial length").count(),

@@ -296,6 +296,11 @@ pub const SECONDS: u64 = 60;
 /// Run `eyeshell ARGS` in `dir` under `ulimit -v` and `timeout -s KILL`; the run must end
 /// by itself, well inside the limit.
 pub fn bounded(dir: &Path, args: &[&str]) -> Run {
+    bounded_with(dir, args, &[])
+}
+
+/// [`bounded`], with the environment variables `envs` set.
+pub fn bounded_with(dir: &Path, args: &[&str], envs: &[(&str, &str)]) -> Run {
     let start = Instant::now();
     let out = Command::new("sh")
         .arg("-c")
@@ -306,6 +311,7 @@ pub fn bounded(dir: &Path, args: &[&str]) -> Run {
         .args(args)
         .current_dir(dir)
         .env("CI", "1")
+        .envs(envs.iter().copied())
         .output()
         .expect("run eyeshell");
     let took = start.elapsed();
