@@ -319,8 +319,10 @@ pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
         .iter()
         .filter(|r| r.status == "ok" || r.status == "reused" || r.status == "failed")
         .map(|r| {
-            // A run lives below the sweep: a plain relative path, no `..`, not the sweep.
+            // A run lives below the sweep: a plain relative path, no `..`, not the sweep,
+            // nothing a message could not show (a sweep names its runs' directories so).
             let inside = !r.dir.is_empty()
+                && !r.dir.chars().any(char::is_control)
                 && Path::new(&r.dir)
                     .components()
                     .all(|c| matches!(c, std::path::Component::Normal(_)));

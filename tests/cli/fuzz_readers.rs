@@ -23,9 +23,9 @@ use std::time::{Duration, Instant};
 
 /// The bound on one call (a generous one: CI machines are shared; the calls take
 /// microseconds to a few milliseconds).
-const TIME_BOUND: Duration = Duration::from_secs(2);
+pub(crate) const TIME_BOUND: Duration = Duration::from_secs(2);
 
-fn runner(cases: u32, seed: u8) -> TestRunner {
+pub(crate) fn runner(cases: u32, seed: u8) -> TestRunner {
     let scale: u32 = std::env::var("EYESHELL_FUZZ_SCALE")
         .ok()
         .and_then(|s| s.parse().ok())
@@ -182,7 +182,7 @@ const HUGE: [u32; 10] = [
 ];
 
 #[derive(Clone, Debug)]
-enum Mutation {
+pub(crate) enum Mutation {
     Flip(usize, u8),
     Set(usize, u8),
     /// A 32-bit length-like value (little- or big-endian), at a 4-aligned offset or not.
@@ -192,7 +192,7 @@ enum Mutation {
     Remove(usize, usize),
 }
 
-fn mutation() -> impl Strategy<Value = Mutation> {
+pub(crate) fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         3 => (any::<usize>(), 0u8..8).prop_map(|(p, b)| Mutation::Flip(p, b)),
         2 => (any::<usize>(), any::<u8>()).prop_map(|(p, v)| Mutation::Set(p, v)),
@@ -205,7 +205,7 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     ]
 }
 
-fn mutate(mut b: Vec<u8>, ms: &[Mutation]) -> Vec<u8> {
+pub(crate) fn mutate(mut b: Vec<u8>, ms: &[Mutation]) -> Vec<u8> {
     for m in ms {
         let len = b.len();
         if len == 0 {
@@ -292,7 +292,7 @@ fn zip_of(members: &[Vec<u8>], deflate: bool) -> Vec<u8> {
     z.finish().unwrap().into_inner()
 }
 
-fn mutations() -> impl Strategy<Value = Vec<Mutation>> {
+pub(crate) fn mutations() -> impl Strategy<Value = Vec<Mutation>> {
     proptest::collection::vec(mutation(), 1..6)
 }
 

@@ -13,6 +13,7 @@ mod export_scipy;
 mod extremes;
 mod figures;
 mod fuzz_readers;
+mod fuzz_run_files;
 mod fuzz_scene;
 mod golden;
 mod grow;

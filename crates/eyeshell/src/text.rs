@@ -39,9 +39,28 @@ pub fn one_line(s: &str) -> String {
         .collect()
 }
 
+/// At most `max` characters of text from a user's file, on one line ([`one_line`]), with
+/// `…` where it was cut: what a message quotes of a line that may be a megabyte long.
+pub fn excerpt(s: &str, max: usize) -> String {
+    match s.char_indices().nth(max) {
+        Some((cut, _)) => format!("{}…", one_line(&s[..cut])),
+        None => one_line(s),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn excerpts_are_short_and_clean() {
+        assert_eq!(excerpt("abc", 3), "abc");
+        assert_eq!(excerpt("abcd", 3), "abc…");
+        assert_eq!(excerpt("ΣΣΣΣ", 2), "ΣΣ…");
+        assert_eq!(excerpt("a\nb", 10), "a\\nb");
+        assert_eq!(excerpt("a\nb", 10).len(), 4);
+        assert_eq!(excerpt(&"1".repeat(1 << 20), 80).chars().count(), 81);
+    }
 
     #[test]
     fn control_characters_are_shown_not_obeyed() {

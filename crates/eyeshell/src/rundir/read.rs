@@ -53,6 +53,36 @@ pub fn bad(message: impl Into<String>) -> ReadError {
     }
 }
 
+/// The most bytes a CSV run file may have: a snapshot at `mesh::MAX_NODES` nodes is about
+/// 500 MB, history.csv at its most rows about 120 MB.
+pub const MAX_CSV_BYTES: u64 = 1 << 30;
+/// The most bytes summary.json may have: a sweep of `MAX_RUNS` runs is about 10 MB.
+pub const MAX_SUMMARY_BYTES: u64 = 1 << 28;
+
+/// The text of the file `path`, refused beyond `limit` bytes (a file that is not what it
+/// says, or a link to a device that never ends, must not fill the memory). Errors name it.
+pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
+    use std::io::Read;
+    let fail = |e: std::io::Error| bad(format!("{}: {e}", path.display()));
+    let mut bytes = Vec::new();
+    fs::File::open(path)
+        .and_then(|f| f.take(limit + 1).read_to_end(&mut bytes))
+        .map_err(fail)?;
+    if bytes.len() as u64 > limit {
+        return Err(bad(format!(
+            "{}: more than {limit} bytes, larger than any file eyeshell writes",
+            path.display()
+        )));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        bad(format!(
+            "{}: not UTF-8 text (an invalid byte at offset {})",
+            path.display(),
+            e.utf8_error().valid_up_to()
+        ))
+    })
+}
+
 /// One output time of a growth run, read back.
 #[derive(Clone, Debug)]
 pub struct RunSnapshot {
@@ -102,6 +132,9 @@ pub fn read_run_with(dir: &Path, summary: &Summary) -> Result<Run, ReadError> {
         let file = dir.join(FIELDS_FILE);
         let table = read_csv(&file)?;
         check_columns(&file, &table, &crate::bvp::COLUMNS)?;
+        if let Summary::Elastic(e) = summary {
+            check_nodes(&file, &table, e.stats.nodes, "summary.json's nodes is")?;
+        }
         return Ok(Run::Elastic { file, table });
     };
     // The times: summary.json's list (exact), else series.csv row k, else the file name.
@@ -157,6 +190,7 @@ pub fn read_run_with(dir: &Path, summary: &Summary) -> Result<Run, ReadError> {
         check_columns(&file, &table, &GROWTH_VARS)?;
         snapshots.push(RunSnapshot { t, file, table });
     }
+    check_snapshot_nodes(&snapshots)?;
     Ok(Run::Growth(snapshots))
 }
 
@@ -165,6 +199,46 @@ fn check_columns(file: &Path, table: &Table, needed: &[&str]) -> Result<(), Read
         if !table.columns.iter().any(|x| x == c) {
             return Err(bad(format!("{}: no column {c:?}", file.display())));
         }
+    }
+    Ok(())
+}
+
+/// A table of one row per node has `nodes` rows (0: not known), as `expected` says ("the
+/// other snapshots have"): with fewer the file was cut short (at a line end, or a line
+/// would be broken), with more it was added to. Line numbers count the header as line 1.
+fn check_nodes(file: &Path, table: &Table, nodes: usize, expected: &str) -> Result<(), ReadError> {
+    let rows = table.rows.len();
+    let problem = if nodes == 0 || rows == nodes {
+        return Ok(());
+    } else if rows < nodes {
+        format!("line {}: the file ends after {rows} rows, where {expected} {nodes} (one row per node): cut short?", rows + 1)
+    } else {
+        format!(
+            "line {}: {rows} rows, where {expected} {nodes} (one row per node)",
+            nodes + 2
+        )
+    };
+    Err(bad(format!("{}: {problem}", file.display())))
+}
+
+/// Every snapshot of a growth run has one row per node of its one mesh: a snapshot with
+/// another number of rows than most of them (than the first, when no count is the most
+/// common) was cut short or added to, and is named.
+fn check_snapshot_nodes(snapshots: &[RunSnapshot]) -> Result<(), ReadError> {
+    let Some(first) = snapshots.first() else {
+        return Ok(());
+    };
+    let mut counts: BTreeMap<usize, usize> = BTreeMap::new();
+    for s in snapshots {
+        *counts.entry(s.table.rows.len()).or_default() += 1;
+    }
+    let first_rows = first.table.rows.len();
+    let nodes = counts
+        .iter()
+        .max_by_key(|&(&rows, &n)| (n, rows == first_rows))
+        .map_or(first_rows, |(&rows, _)| rows);
+    for s in snapshots {
+        check_nodes(&s.file, &s.table, nodes, "the other snapshots have")?;
     }
     Ok(())
 }

@@ -13,6 +13,7 @@ use super::SUMMARY_FILE;
 use crate::growth::SeriesRow;
 use crate::model::stimulus::Refraction;
 use crate::scene::Scene;
+use crate::text::excerpt;
 
 /// One row of series.csv or history.csv.
 pub type SeriesPoint = SeriesRow;
@@ -171,7 +172,7 @@ pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
                 "{}: line {}: not a series row: {:?}",
                 path.display(),
                 r.line,
-                r.text
+                excerpt(r.text, 80)
             ))
         })?);
     }

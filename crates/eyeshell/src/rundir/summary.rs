@@ -39,13 +39,14 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::growth::{HISTORY_FILE, SERIES_FILE};
-use super::read::{bad, ReadError};
+use super::read::{bad, read_text, ReadError, MAX_SUMMARY_BYTES};
 use super::{sundials_version, OutputError, SUMMARY_FILE};
 use crate::bvp::SolveStats;
 use crate::growth::{GrowthError, GrowthStats, SeriesRow};
 use crate::json::{f64_or_nan, f64s_or_nan};
 use crate::model::components::Components;
 use crate::scene::Scene;
+use crate::text::excerpt;
 
 /// The summary.json of any eyeshell output directory.
 // One value per directory read or written: the variants' sizes do not matter, and boxing
@@ -486,26 +487,32 @@ impl Summary {
     /// no summary to read, the file when it is not one.
     pub fn read(dir: &Path) -> Result<Summary, ReadError> {
         let path = dir.join(SUMMARY_FILE);
-        let text = fs::read_to_string(&path).map_err(|e| {
-            bad(format!(
+        if let Err(e) = fs::metadata(&path) {
+            return Err(bad(format!(
                 "{}: not an eyeshell run directory ({SUMMARY_FILE}: {e})",
                 dir.display()
-            ))
-        })?;
-        Summary::parse(&path, &text)
+            )));
+        }
+        Summary::parse(&path, &read_text(&path, MAX_SUMMARY_BYTES)?)
     }
 
     /// Parse the text of summary.json (`path` for the messages); see the module doc for
     /// how the kind is told.
     pub fn parse(path: &Path, text: &str) -> Result<Summary, ReadError> {
-        let value: serde_json::Value = serde_json::from_str(text)
-            .map_err(|e| bad(format!("{}: not valid JSON: {e}", path.display())))?;
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
+            bad(format!(
+                "{}: not valid JSON: {}",
+                path.display(),
+                excerpt(&e.to_string(), 200)
+            ))
+        })?;
         let has = |k: &str| value.get(k).is_some();
         let typed = |kind: &str, r: Result<Summary, serde_json::Error>| {
             r.map_err(|e| {
                 bad(format!(
-                    "{}: not a valid {kind} summary: {e}",
-                    path.display()
+                    "{}: not a valid {kind} summary: {}",
+                    path.display(),
+                    excerpt(&e.to_string(), 200)
                 ))
             })
         };

@@ -15,13 +15,13 @@
 //! are skipped, cells are trimmed, quoted cells are understood, and every error names the
 //! file and the line.
 
-use std::fs;
 use std::io;
 use std::path::Path;
 
 pub use csv::QuoteStyle;
 
-use super::read::{bad, ReadError};
+use super::read::{bad, read_text, ReadError, MAX_CSV_BYTES};
+use crate::text::excerpt;
 
 /// A CSV writer on `w` in eyeshell's dialect, quoting cells by `quote`. Rows may have any
 /// number of cells. Call `flush` to push what is written to `w`.
@@ -101,30 +101,17 @@ impl Records {
 /// Read the CSV file `path`: its header (the first non-blank line) and its records.
 /// Errors (bad input) name the file.
 pub fn read_records(path: &Path) -> Result<Records, ReadError> {
-    let text = fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
+    let text = read_text(path, MAX_CSV_BYTES)?;
     let mut header = None;
     let mut records = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line());
-            bad(format!("{}: line {line}: {e}", path.display()))
-        })?;
-        // A line of blanks only.
-        if record.len() == 1 && record[0].is_empty() {
-            continue;
-        }
-        let (line, byte) = record.position().map_or((0, 0), |p| (p.line(), p.byte()));
+    scan(path, &text, |line, byte, record| {
         if header.is_none() {
             header = Some(record.iter().map(str::to_string).collect());
         } else {
-            records.push((line, byte, record));
+            records.push((line, byte, record.clone()));
         }
-    }
+        Ok(())
+    })?;
     Ok(Records {
         header,
         text,
@@ -132,45 +119,100 @@ pub fn read_records(path: &Path) -> Result<Records, ReadError> {
     })
 }
 
-/// Read a CSV file of numbers (the header, then rows of as many values).
-pub fn read_csv(path: &Path) -> Result<Table, ReadError> {
-    let records = read_records(path)?;
-    let columns = records
-        .header
-        .clone()
-        .ok_or_else(|| bad(format!("{}: empty file (no header)", path.display())))?;
-    let mut rows = Vec::new();
-    for r in records.iter() {
-        let row = r
-            .cells
-            .iter()
-            .map(str::parse::<f64>)
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|_| {
-                bad(format!(
-                    "{}: line {}: not a row of numbers: {:?}",
+/// Hand every record of the CSV text of `path` to `each(line, byte offset, cells)` as it is
+/// parsed (so that a bad line stops the reading there, however long the file), skipping
+/// blank lines. A text whose last line has no line end was cut short (eyeshell ends every
+/// line, and appends whole lines), and is refused.
+fn scan(
+    path: &Path,
+    text: &str,
+    mut each: impl FnMut(u64, u64, &csv::StringRecord) -> Result<(), ReadError>,
+) -> Result<(), ReadError> {
+    if !text.is_empty() && !text.ends_with('\n') {
+        return Err(bad(format!(
+            "{}: line {}: the file ends inside this line (cut short?): {:?}",
+            path.display(),
+            text.lines().count(),
+            excerpt(text.lines().last().unwrap_or_default(), EXCERPT)
+        )));
+    }
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let mut record = csv::StringRecord::new();
+    loop {
+        match reader.read_record(&mut record) {
+            Ok(false) => return Ok(()),
+            Ok(true) => {}
+            Err(e) => {
+                let line = e.position().map_or(0, |p| p.line());
+                return Err(bad(format!(
+                    "{}: line {line}: {}",
                     path.display(),
-                    r.line,
-                    r.text
-                ))
-            })?;
-        if row.len() != columns.len() {
+                    excerpt(&e.to_string(), EXCERPT)
+                )));
+            }
+        }
+        // A line of blanks only.
+        if record.len() == 1 && record[0].is_empty() {
+            continue;
+        }
+        let (line, byte) = record.position().map_or((0, 0), |p| (p.line(), p.byte()));
+        each(line, byte, &record)?;
+    }
+}
+
+/// The characters of a line (or cell) an error message quotes.
+const EXCERPT: usize = 80;
+
+/// Read a CSV file of numbers (the header, then rows of as many values). Each row is
+/// checked as it is read.
+pub fn read_csv(path: &Path) -> Result<Table, ReadError> {
+    let text = read_text(path, MAX_CSV_BYTES)?;
+    let mut columns: Option<Vec<String>> = None;
+    let mut rows = Vec::new();
+    scan(path, &text, |line, _, record| {
+        let Some(columns) = &columns else {
+            columns = Some(record.iter().map(str::to_string).collect());
+            return Ok(());
+        };
+        if record.len() != columns.len() {
             return Err(bad(format!(
-                "{}: line {}: {} values for {} columns",
+                "{}: line {line}: {} values for {} columns",
                 path.display(),
-                r.line,
-                row.len(),
+                record.len(),
                 columns.len()
             )));
         }
+        let row = record
+            .iter()
+            .enumerate()
+            .map(|(j, cell)| {
+                cell.parse::<f64>().map_err(|_| {
+                    bad(format!(
+                        "{}: line {line}: value {} ({}) is not a number: {:?}",
+                        path.display(),
+                        j + 1,
+                        excerpt(&columns[j], EXCERPT),
+                        excerpt(cell, EXCERPT)
+                    ))
+                })
+            })
+            .collect::<Result<Vec<f64>, _>>()?;
         rows.push(row);
-    }
+        Ok(())
+    })?;
+    let columns =
+        columns.ok_or_else(|| bad(format!("{}: empty file (no header)", path.display())))?;
     Ok(Table { columns, rows })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs;
 
     /// The quoting sweep.csv had before the csv crate: a cell is quoted when it holds a
     /// comma, a quote or a line break, quotes doubled.
@@ -235,7 +277,7 @@ mod tests {
         fs::write(&path, "a,b\n1,2\n1,x\n").unwrap();
         let e = read_csv(&path).unwrap_err().to_string();
         assert!(
-            e.ends_with("t.csv: line 3: not a row of numbers: \"1,x\""),
+            e.ends_with("t.csv: line 3: value 2 (b) is not a number: \"x\""),
             "{e}"
         );
         fs::write(&path, "a,b\n1,2,3\n").unwrap();
@@ -244,6 +286,17 @@ mod tests {
         fs::write(&path, "\n\n").unwrap();
         let e = read_csv(&path).unwrap_err().to_string();
         assert!(e.ends_with("t.csv: empty file (no header)"), "{e}");
+        // Cut inside the last value, which still reads as a number.
+        fs::write(&path, "a,b\n1,2\n3,4.12").unwrap();
+        let e = read_csv(&path).unwrap_err().to_string();
+        assert!(
+            e.ends_with("t.csv: line 3: the file ends inside this line (cut short?): \"3,4.12\""),
+            "{e}"
+        );
+        // A megabyte-long line is quoted in 80 characters.
+        fs::write(&path, format!("a,b\n1,{}x\n", "9".repeat(1 << 20))).unwrap();
+        let e = read_csv(&path).unwrap_err().to_string();
+        assert!(e.len() < 200 && e.ends_with("9…\""), "{e}");
         let e = read_csv(&dir.path().join("none.csv")).unwrap_err();
         assert!(e.bad_input && e.to_string().contains("none.csv: "), "{e}");
     }

@@ -614,7 +614,7 @@ pub(crate) fn parse_table(text: &str, origin: &str) -> Result<toml::Table, Scene
             origin: origin.to_string(),
             line,
             column,
-            message: one_line(e.message()),
+            message: crate::text::excerpt(e.message(), 200),
         }
     })
 }
@@ -663,7 +663,7 @@ fn flatten(
                 return Err(SceneError::UnknownSection {
                     origin: origin.to_string(),
                     suggestion: closest(&key, sections().into_iter()).map(str::to_string),
-                    section: one_line(&key),
+                    section: crate::text::excerpt(&key, 80),
                 })
             }
             _ if is_section => {
@@ -683,7 +683,7 @@ fn flatten(
 pub(crate) fn unknown_key(origin: &str, key: &str) -> SceneError {
     SceneError::UnknownKey {
         origin: origin.to_string(),
-        key: one_line(key),
+        key: crate::text::excerpt(key, 80),
         suggestion: closest(key, KEYS.iter().map(|k| k.key)).map(str::to_string),
     }
 }
@@ -693,7 +693,8 @@ pub(crate) fn unknown_key(origin: &str, key: &str) -> SceneError {
 pub(crate) fn closest<'a>(name: &str, known: impl Iterator<Item = &'a str>) -> Option<&'a str> {
     let lower = name.to_lowercase();
     let last = lower.rsplit('.').next().unwrap_or(&lower).to_string();
-    let limit = 2.max(lower.chars().count() / 3);
+    let length = lower.chars().count();
+    let limit = 2.max(length / 3);
     known
         .map(|k| {
             let kl = k.to_lowercase();
@@ -701,6 +702,10 @@ pub(crate) fn closest<'a>(name: &str, known: impl Iterator<Item = &'a str>) -> O
                 0
             } else if kl.rsplit('.').next() == Some(last.as_str()) {
                 1
+            } else if kl.chars().count().abs_diff(length) > limit {
+                // Too far apart in length to be within the limit: no need to measure (a
+                // megabyte-long name would take seconds).
+                usize::MAX
             } else {
                 levenshtein(&lower, &kl)
             };
