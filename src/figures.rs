@@ -45,6 +45,13 @@ pub enum FigureError {
     Plot(#[from] PlotError),
 }
 
+impl FigureError {
+    /// Is it the user's (a run that is missing or malformed)?
+    pub fn is_bad_input(&self) -> bool {
+        matches!(self, FigureError::Read(e) if e.bad_input)
+    }
+}
+
 impl From<FigureError> for eyeshell::Error {
     fn from(e: FigureError) -> Self {
         match e {
@@ -281,7 +288,6 @@ impl PaperRuns {
     /// Read the runs under `data`: `const/`, `thick/`, and the sweeps `fibre/`, `grow/`
     /// (as `eyeshell figures` writes them).
     pub fn read(data: &Path) -> Result<PaperRuns, FigureError> {
-        let run = |p: PathBuf| rundata::read(&p);
         let mut fibre: Vec<(f64, RunData)> = sweep_runs(&data.join("fibre"))?
             .into_iter()
             .map(|r| (r.scene.params.d, r))
@@ -295,8 +301,8 @@ impl PaperRuns {
             })
             .collect();
         Ok(PaperRuns {
-            constant: only_run(&data.join("const")).or_else(|_| run(data.join("const")))?,
-            thick: only_run(&data.join("thick")).or_else(|_| run(data.join("thick")))?,
+            constant: sweep_or_run(&data.join("const"))?,
+            thick: sweep_or_run(&data.join("thick"))?,
             fibre,
             grid,
         })
@@ -337,6 +343,17 @@ pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
             rundata::read(&dir.join(&r.dir))
         })
         .collect()
+}
+
+/// The one run in `dir`: a sweep's only run (as `eyeshell figures` writes it) or a run
+/// directory. Which one is decided by summary.json, never by trying one after the other: the
+/// error of the first would be lost, and the second would blame the wrong file.
+fn sweep_or_run(dir: &Path) -> Result<RunData, ExportError> {
+    if is_sweep(dir) {
+        only_run(dir)
+    } else {
+        rundata::read(dir)
+    }
 }
 
 fn only_run(dir: &Path) -> Result<RunData, ExportError> {

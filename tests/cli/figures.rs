@@ -158,6 +158,45 @@ fn the_figures_show_what_the_runs_wrote() {
     );
 }
 
+/// A file cut short: its new text, and what the error says of it.
+type Cut = fn(&str) -> (String, String);
+
+/// `figures --replot` names the snapshot that was cut short, and the line, whether the cut
+/// falls inside a line or at a line end, in a single run or in a sweep's run (it used to
+/// read the const and thick sweeps again as plain runs when they failed, and so blamed
+/// the sweep's own directory).
+#[test]
+fn replot_names_the_snapshot_cut_short() {
+    let src = figures();
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("figures");
+    let snapshot = "snapshots/snapshot_00002_t0.200000.csv";
+    for run in ["const/runs/run", "thick/runs/run", "fibre/runs/D=200"] {
+        let file = copy.join("data").join(run).join(snapshot);
+        // Bytes cut as `truncate -s` would, inside line L; and whole lines, at a line end.
+        let cuts: [Cut; 2] = [
+            |t| {
+                let cut = &t[..t.len() / 2];
+                let line = cut.matches('\n').count() + 1;
+                (cut.to_string(), format!("line {line}: "))
+            },
+            |t| {
+                let cut = t.lines().take(11).map(|l| format!("{l}\n")).collect();
+                (cut, "line 11: the file ends after 10 rows".to_string())
+            },
+        ];
+        for cut in cuts {
+            let _ = std::fs::remove_dir_all(&copy);
+            copy_dir(src, &copy);
+            let (text, needle) = cut(&std::fs::read_to_string(&file).unwrap());
+            std::fs::write(&file, text).unwrap();
+            let r = eyeshell(&["figures", "--replot", "--out", s(&copy)]);
+            let needle = format!("{}: {needle}", file.display());
+            assert_bad(&r, &needle, run);
+        }
+    }
+}
+
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {
