@@ -6,7 +6,8 @@
 //! not the sweep's: planted symbolic links, other outputs, other sweeps (5). Finite but
 //! absurd values (1) are in `crates/eyeshell/src/scene/tests.rs`, the mesh and solver
 //! tests; names with control characters (7) in `keys_check.rs`; foreign .mat/.npz files in
-//! `readers.rs` and `fuzz_readers.rs`.
+//! `readers.rs` and `fuzz_readers.rs`; run files (CSV and summary.json) mutated at random in
+//! `fuzz_run_files.rs`; `solver.max_seconds` in `max_seconds.rs`.
 
 use std::path::Path;
 

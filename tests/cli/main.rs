@@ -19,6 +19,7 @@ mod golden;
 mod grow;
 mod hostile;
 mod keys_check;
+mod max_seconds;
 mod ownership;
 mod readers;
 mod solve;

@@ -31,6 +31,7 @@
 
 mod api;
 pub mod bvp;
+pub mod deadline;
 pub mod error;
 pub mod growth;
 pub mod hash;

@@ -50,6 +50,9 @@ pub struct SolverSettings {
     /// layer there, of width √(E_b / t_s), is thinner than the mesh spacing (the membrane
     /// limit, small E_b).
     pub cornea_grading: bool,
+    /// solver.max_seconds: the wall-clock bound on one solve (on a whole growth run, whose
+    /// solves share it); None, the default, is no bound. See [`crate::deadline`].
+    pub max_seconds: Option<f64>,
 }
 
 impl Default for SolverSettings {
@@ -63,6 +66,7 @@ impl Default for SolverSettings {
             max_newton: 50,
             pole_grading: true,
             cornea_grading: true,
+            max_seconds: None,
         }
     }
 }

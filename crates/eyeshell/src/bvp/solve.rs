@@ -9,6 +9,7 @@ use super::interpolant::{Interpolant, NQ};
 use super::material::{reference_data, reference_point};
 use super::{FieldRow, SolveStats};
 use crate::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
+use crate::deadline::{Deadline, OutOfTime};
 use crate::mesh::{self, Mesh, MeshError};
 use crate::model::cornea;
 use crate::model::params::Params;
@@ -42,6 +43,15 @@ pub enum BvpError {
     },
     #[error("the equations cannot be evaluated at node {} (Σ = {}): {}", .0.node, decimals6(.0.sigma_ref), .0.why)]
     Evaluation(EvalFailure),
+    #[error(transparent)]
+    OutOfTime(#[from] OutOfTime),
+}
+
+impl BvpError {
+    /// Did `solver.max_seconds` stop the solve? (Then nothing is tried again.)
+    pub fn is_out_of_time(&self) -> bool {
+        matches!(self, BvpError::OutOfTime(_))
+    }
 }
 
 /// The elastic system as KINSOL sees it.
@@ -51,6 +61,9 @@ struct ElasticSystem {
     /// Residual evaluations of the current Newton solve, and the most it may make.
     evaluations: usize,
     max_evaluations: usize,
+    /// solver.max_seconds, and whether it stopped the current Newton solve.
+    deadline: Deadline,
+    out_of_time: bool,
 }
 
 /// Residual evaluations one Newton solve may make per allowed iteration (solver.max_newton).
@@ -64,6 +77,7 @@ impl ElasticSystem {
     /// Start the count of a new Newton solve of at most `max_iterations` iterations.
     fn start(&mut self, max_iterations: usize) {
         self.failure = None;
+        self.out_of_time = false;
         self.evaluations = 0;
         self.max_evaluations = EVALUATIONS_PER_ITERATION.saturating_mul(max_iterations.max(1));
     }
@@ -81,6 +95,11 @@ impl ElasticSystem {
 
 impl NonlinearSystem for ElasticSystem {
     fn residual(&mut self, u: &[f64], f: &mut [f64]) -> CallbackResult {
+        if self.deadline.passed() {
+            // Fatal: KINSOL stops at once (a recoverable error would only shorten the step).
+            self.out_of_time = true;
+            return Err(CallbackError::Fatal("solver.max_seconds reached".into()));
+        }
         self.evaluations += 1;
         if self.evaluations > self.max_evaluations {
             return Err(CallbackError::Fatal(format!(
@@ -340,6 +359,7 @@ fn newton(
     r0: f64,
     work: &mut Work,
     polished: bool,
+    stage: Stage,
 ) -> Result<(), BvpError> {
     let (u_scale, f_scale) = kin.system().disc.scales(r0);
     let max_iterations = kin.options().max_iterations;
@@ -357,6 +377,11 @@ fn newton(
             let k = kin.last_stats();
             work.add(&k);
             let sys = kin.system_mut();
+            if sys.out_of_time {
+                let n = k.iterations;
+                let place = format!("in {stage}, after {n} Newton iteration{}", plural(n));
+                return Err(sys.deadline.reached(place).into());
+            }
             if let Some(f) = sys.failure {
                 return Err(BvpError::Evaluation(f));
             }
@@ -388,8 +413,45 @@ fn newton(
     }
 }
 
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
 /// The paper's bending stiffness E_b, the easy end of a bending continuation.
 const DEFAULT_BENDING: f64 = 18.0;
+
+/// Which Newton solve of [`ElasticSolver`] is running: what a message of
+/// `solver.max_seconds` says.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Stage {
+    /// From the inflated sphere, a warm start, or growth's re-solves.
+    Direct,
+    /// Stage `k` of `n` of the pressure continuation, at ΔP = `dp`.
+    Pressure { k: usize, n: usize, dp: f64 },
+    /// Stage `k` of `n` of the continuation in D and E_b at full pressure.
+    Material { k: usize, n: usize },
+}
+
+impl std::fmt::Display for Stage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Stage::Direct => f.write_str("the elastic solve"),
+            Stage::Pressure { k, n, dp } => write!(
+                f,
+                "the elastic solve, stage {k} of {n} of the pressure continuation (ΔP = {})",
+                number(dp)
+            ),
+            Stage::Material { k, n } => write!(
+                f,
+                "the elastic solve, stage {k} of {n} of the continuation in D and E_b"
+            ),
+        }
+    }
+}
 
 /// An elastic solver that lives across solves: KINSOL, its matrix and factorisation, the
 /// discretisation and the last converged unknowns. Growth re-solves it at every change of
@@ -401,6 +463,7 @@ pub struct ElasticSolver {
     /// The current unknowns (the last converged state after a successful solve).
     pub u: Vec<f64>,
     work: Work,
+    stage: Stage,
 }
 
 impl ElasticSolver {
@@ -425,6 +488,8 @@ impl ElasticSolver {
                 failure: None,
                 evaluations: 0,
                 max_evaluations: usize::MAX,
+                deadline: Deadline::after(settings.max_seconds),
+                out_of_time: false,
             },
             n,
             spec,
@@ -436,7 +501,14 @@ impl ElasticSolver {
             settings: *settings,
             u,
             work: Work::default(),
+            stage: Stage::Direct,
         })
+    }
+
+    /// `solver.max_seconds` of this solver, set when it was made: every Newton solve it makes
+    /// (a growth run's, all of them) stops once it has passed.
+    pub fn deadline(&self) -> Deadline {
+        self.kin.system().deadline
     }
 
     pub fn discretisation(&self) -> &Discretisation {
@@ -460,12 +532,16 @@ impl ElasticSolver {
             u,
             work,
             params,
+            stage,
             ..
         } = self;
-        let first = newton(kin, u, params.r0, work, !reusing);
-        let (Err(_), Some(start)) = (&first, start) else {
+        let first = newton(kin, u, params.r0, work, !reusing, *stage);
+        let (Err(e), Some(start)) = (&first, start) else {
             return first;
         };
+        if e.is_out_of_time() {
+            return first;
+        }
         let reuse = self.kin.options().clone();
         self.kin.set_options(&kinsol_options(&self.settings))?;
         self.u = start;
@@ -474,9 +550,10 @@ impl ElasticSolver {
             u,
             work,
             params,
+            stage,
             ..
         } = self;
-        let retry = newton(kin, u, params.r0, work, false);
+        let retry = newton(kin, u, params.r0, work, false, *stage);
         self.kin.set_options(&reuse)?;
         retry
     }
@@ -509,10 +586,17 @@ impl ElasticSolver {
     /// A cold start: from the inflated sphere, with pressure continuation if Newton fails.
     /// Returns the number of continuation stages used.
     pub fn solve_cold(&mut self) -> Result<usize, BvpError> {
+        let solved = self.continue_from_sphere();
+        // Later solves (growth's) are direct, whatever stage this one ended in.
+        self.stage = Stage::Direct;
+        solved
+    }
+
+    fn continue_from_sphere(&mut self) -> Result<usize, BvpError> {
         self.u = sphere_guess(self.discretisation(), self.params.r0);
         let err = match self.newton() {
             Ok(()) => return Ok(0),
-            Err(e) if self.params.dp == 0.0 => return Err(e),
+            Err(e) if self.params.dp == 0.0 || e.is_out_of_time() => return Err(e),
             Err(e) => e,
         };
         // Pressure continuation from the unloaded sphere: each stage starts from the last.
@@ -521,6 +605,7 @@ impl ElasticSolver {
         for count in [4usize, 16] {
             match self.ramp_pressure(count, &mut stages) {
                 Ok(()) => return Ok(stages),
+                Err(e) if e.is_out_of_time() => return Err(e),
                 Err(e) => last_err = e,
             }
         }
@@ -531,6 +616,7 @@ impl ElasticSolver {
             for count in [8usize, 32] {
                 match self.ramp_material(count, &mut stages) {
                     Ok(()) => return Ok(stages),
+                    Err(e) if e.is_out_of_time() => return Err(e),
                     Err(e) => last_err = e,
                 }
             }
@@ -556,6 +642,10 @@ impl ElasticSolver {
         for k in 0..=count {
             self.set_material(k as f64 / count as f64);
             *stages += 1;
+            self.stage = Stage::Material {
+                k: k + 1,
+                n: count + 1,
+            };
             self.newton()?;
         }
         Ok(())
@@ -572,11 +662,13 @@ impl ElasticSolver {
 
     fn ramp_pressure(&mut self, count: usize, stages: &mut usize) -> Result<(), BvpError> {
         for k in 1..=count {
-            self.set_pressure(self.params.dp * k as f64 / count as f64)?;
+            let dp = self.params.dp * k as f64 / count as f64;
+            self.set_pressure(dp)?;
             if k == 1 {
                 self.u = sphere_guess(self.discretisation(), self.params.r0);
             }
             *stages += 1;
+            self.stage = Stage::Pressure { k, n: count, dp };
             self.newton()?;
         }
         Ok(())
@@ -740,4 +832,27 @@ fn is_reference(params: &Params, data: &super::discretisation::MaterialData) -> 
     data.above
         .iter()
         .all(|mp| *mp == reference_point(params, mp.sigma_ref, Side::Above))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stage_says_which_solve_of_the_continuation() {
+        assert_eq!(Stage::Direct.to_string(), "the elastic solve");
+        assert_eq!(
+            Stage::Pressure {
+                k: 3,
+                n: 16,
+                dp: 0.75
+            }
+            .to_string(),
+            "the elastic solve, stage 3 of 16 of the pressure continuation (ΔP = 0.75)"
+        );
+        assert_eq!(
+            Stage::Material { k: 9, n: 33 }.to_string(),
+            "the elastic solve, stage 9 of 33 of the continuation in D and E_b"
+        );
+    }
 }

@@ -6,8 +6,9 @@
 
 use super::system::GrowthSystem;
 use super::GrowthSettings;
+use crate::text::decimals6;
 use eyeshell_sundials::{
-    CallbackError, CallbackResult, Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem,
+    CallbackResult, Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem,
 };
 
 /// The growth system as CVODE sees it.
@@ -15,17 +16,16 @@ pub struct GrowthOde<'a> {
     pub sys: &'a mut GrowthSystem,
 }
 
-fn recoverable(e: impl std::fmt::Display) -> CallbackError {
-    CallbackError::Recoverable(e.to_string())
-}
-
 impl OdeSystem for GrowthOde<'_> {
-    fn rhs(&mut self, _t: f64, y: &[f64], ydot: &mut [f64]) -> CallbackResult {
-        self.sys.rhs(y, ydot).map_err(recoverable)
+    fn rhs(&mut self, t: f64, y: &[f64], ydot: &mut [f64]) -> CallbackResult {
+        self.sys
+            .check_deadline(|| format!("in CVODE's right-hand side at t = {}", decimals6(t)))
+            .and_then(|_| self.sys.rhs(y, ydot))
+            .map_err(|e| e.to_callback())
     }
 
     fn jac_times_setup(&mut self, _t: f64, y: &[f64], _fy: &[f64]) -> CallbackResult {
-        self.sys.jac_setup(y).map_err(recoverable)
+        self.sys.jac_setup(y).map_err(|e| e.to_callback())
     }
 
     fn jac_times(
@@ -36,7 +36,9 @@ impl OdeSystem for GrowthOde<'_> {
         v: &[f64],
         jv: &mut [f64],
     ) -> CallbackResult {
-        self.sys.jac_times(y, fy, v, jv).map_err(recoverable)
+        self.sys
+            .jac_times(y, fy, v, jv)
+            .map_err(|e| e.to_callback())
     }
 }
 
@@ -92,9 +94,12 @@ struct CvodeStepper<'a, 'b, 'c> {
 
 impl super::Stepper for CvodeStepper<'_, '_, '_> {
     fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
-        self.cv
-            .step(t_end, y)
-            .map_err(|e| (self.cv.stats().current_time, e.to_string()))
+        self.cv.step(t_end, y).map_err(|e| {
+            // The deadline's own message rather than CVODE's "the right side failed".
+            let why = self.cv.system_mut().sys.take_out_of_time();
+            let why = why.map_or_else(|| e.to_string(), |o| o.to_string());
+            (self.cv.stats().current_time, why)
+        })
     }
 
     fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {

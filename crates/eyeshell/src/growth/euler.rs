@@ -27,7 +27,8 @@ pub fn integrate(
         } else {
             (n + 1) as f64 * dt
         };
-        sys.rhs(&p, &mut rate)
+        sys.check_deadline(|| format!("in Euler step {} of {steps}", n + 1))
+            .and_then(|_| sys.rhs(&p, &mut rate))
             .map_err(|e| (t, EulerError::Rhs(e)))?;
         while let Some(&&tout) = next.peek() {
             if tout > t1 * (1.0 + 1e-12) {

@@ -9,6 +9,7 @@
 
 use super::dae::{CoupledDae, DaeLinear};
 use super::GrowthSettings;
+use crate::text::decimals6;
 use eyeshell_sundials::{
     CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats,
 };
@@ -23,8 +24,12 @@ fn recoverable(e: impl std::fmt::Display) -> CallbackError {
 }
 
 impl DaeSystem for GrowthDae<'_> {
-    fn residual(&mut self, _t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> CallbackResult {
-        self.dae.residual(y, yp, r).map_err(recoverable)
+    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> CallbackResult {
+        self.dae
+            .sys
+            .check_deadline(|| format!("in IDA's residual at t = {}", decimals6(t)))
+            .and_then(|_| self.dae.residual(y, yp, r))
+            .map_err(|e| e.to_callback())
     }
 
     fn linear_setup(
@@ -114,9 +119,12 @@ struct IdaStepper<'a, 'b, 'c> {
 
 impl super::Stepper for IdaStepper<'_, '_, '_> {
     fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
-        self.ida
-            .step(t_end, y, &mut self.yp)
-            .map_err(|e| (self.ida.stats().current_time, e.to_string()))
+        self.ida.step(t_end, y, &mut self.yp).map_err(|e| {
+            // The deadline's own message rather than IDA's "the residual failed".
+            let why = self.ida.system_mut().dae.sys.take_out_of_time();
+            let why = why.map_or_else(|| e.to_string(), |o| o.to_string());
+            (self.ida.stats().current_time, why)
+        })
     }
 
     fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {

@@ -16,10 +16,11 @@ use crate::bvp::discretisation::{EvalFailure, NY};
 use crate::bvp::equations::{R, THETA};
 use crate::bvp::settings::SolverSettings;
 use crate::bvp::solve::{linear_spec, BvpError, ElasticSolver, Solution};
+use crate::deadline::OutOfTime;
 use crate::model::growth_law;
 use crate::model::params::Params;
 use crate::model::stimulus::{self, EyeMeasure, Surface};
-use eyeshell_sundials::{Context, LinearSolver, Matrix, NVector, SundialsError};
+use eyeshell_sundials::{CallbackError, Context, LinearSolver, Matrix, NVector, SundialsError};
 use std::rc::Rc;
 
 /// Newton iterations between refactorisations of the elastic Jacobian during growth.
@@ -50,11 +51,34 @@ pub struct Work {
 #[derive(Debug, thiserror::Error)]
 pub enum RhsError {
     #[error("the elastic solve failed: {0}")]
-    Elastic(#[from] BvpError),
+    Elastic(BvpError),
     #[error("the growth rates cannot be evaluated at node {} (Σ = {}): {}", .0.node, crate::text::decimals6(.0.sigma_ref), .0.why)]
     Evaluation(EvalFailure),
     #[error(transparent)]
     Sundials(#[from] SundialsError),
+    /// `solver.max_seconds` stopped the run (in an elastic solve or in a callback).
+    #[error(transparent)]
+    OutOfTime(#[from] OutOfTime),
+}
+
+impl From<BvpError> for RhsError {
+    fn from(e: BvpError) -> Self {
+        match e {
+            BvpError::OutOfTime(o) => RhsError::OutOfTime(o),
+            e => RhsError::Elastic(e),
+        }
+    }
+}
+
+impl RhsError {
+    /// How an integrator's callback reports this failure: `solver.max_seconds` stops the
+    /// integrator (fatal); anything else makes it cut the step and try again (recoverable).
+    pub fn to_callback(&self) -> CallbackError {
+        match self {
+            RhsError::OutOfTime(_) => CallbackError::Fatal(self.to_string()),
+            _ => CallbackError::Recoverable(self.to_string()),
+        }
+    }
 }
 
 /// F_u factored at the converged state of one p, for Jacobian products.
@@ -84,6 +108,9 @@ pub struct GrowthSystem {
     ctx: Rc<Context>,
     factored: Option<Factored>,
     pub work: Work,
+    /// What stopped the run when `solver.max_seconds` did: the integrator's own error says
+    /// only that a callback failed.
+    out_of_time: Option<OutOfTime>,
 }
 
 impl GrowthSystem {
@@ -112,6 +139,7 @@ impl GrowthSystem {
             ctx: Context::new()?,
             factored: None,
             work: Work::default(),
+            out_of_time: None,
         })
     }
 
@@ -150,12 +178,32 @@ impl GrowthSystem {
         if let Err(e) = solved {
             // Start the next attempt (a shorter step) from the last converged state.
             self.elastic.u.clone_from(&self.last_good_u);
-            return Err(e.into());
+            return Err(self.note(e.into()));
         }
         self.last_good_u.clone_from(&self.elastic.u);
         self.solved_at.extend_from_slice(p);
         self.exact = true;
         Ok(())
+    }
+
+    /// Check the run's `solver.max_seconds` (one deadline, set when the system was made),
+    /// reached `place` if it has passed.
+    pub fn check_deadline(&mut self, place: impl FnOnce() -> String) -> Result<(), RhsError> {
+        let checked = self.elastic.deadline().check(place);
+        checked.map_err(|o| self.note(o.into()))
+    }
+
+    /// Remember `e` if it is the deadline's, for [`Self::take_out_of_time`].
+    fn note(&mut self, e: RhsError) -> RhsError {
+        if let RhsError::OutOfTime(o) = &e {
+            self.out_of_time.get_or_insert_with(|| o.clone());
+        }
+        e
+    }
+
+    /// Where `solver.max_seconds` stopped the run, if it did (once).
+    pub fn take_out_of_time(&mut self) -> Option<OutOfTime> {
+        self.out_of_time.take()
     }
 
     /// G(p): solve the elastic problem, then the growth rates.

@@ -34,6 +34,12 @@ pub enum Access {
         get: fn(&Scene) -> usize,
         set: fn(&mut Scene, usize),
     },
+    /// A real number that may be left unset (the key's default is no value: the feature
+    /// it bounds is off); TOML integers are accepted too.
+    OptionalFloat {
+        get: fn(&Scene) -> Option<f64>,
+        set: fn(&mut Scene, f64),
+    },
     /// Free text (scene metadata, not a parameter of the model).
     Text {
         get: fn(&Scene) -> Option<String>,
@@ -183,6 +189,8 @@ pub enum KeyValue {
     Choice(&'static str),
     Text(Option<String>),
     Floats(Vec<f64>),
+    /// An [`Access::OptionalFloat`] key left unset.
+    Unset,
 }
 
 impl KeyValue {
@@ -196,7 +204,7 @@ impl KeyValue {
             KeyValue::Bool(b) => serde_json::Value::Bool(*b),
             KeyValue::Choice(s) => serde_json::Value::from(*s),
             KeyValue::Text(Some(s)) => serde_json::Value::from(s.as_str()),
-            KeyValue::Text(None) => serde_json::Value::Null,
+            KeyValue::Text(None) | KeyValue::Unset => serde_json::Value::Null,
             KeyValue::Floats(xs) => {
                 serde_json::Value::Array(xs.iter().map(|x| KeyValue::Float(*x).to_json()).collect())
             }
@@ -218,7 +226,7 @@ impl std::fmt::Display for KeyValue {
             KeyValue::Bool(b) => write!(f, "{b}"),
             KeyValue::Choice(s) => write!(f, "\"{s}\""),
             KeyValue::Text(Some(s)) => write!(f, "{}", toml::Value::String(s.clone())),
-            KeyValue::Text(None) => f.write_str("(none)"),
+            KeyValue::Text(None) | KeyValue::Unset => f.write_str("(none)"),
             KeyValue::Floats(xs) => {
                 f.write_str("[")?;
                 for (i, x) in xs.iter().enumerate() {
@@ -237,7 +245,7 @@ impl KeySpec {
     /// The key's type as shown by `eyeshell keys`.
     pub fn type_name(&self) -> String {
         match self.access {
-            Access::Float { .. } => "float".into(),
+            Access::Float { .. } | Access::OptionalFloat { .. } => "float".into(),
             Access::Count { .. } => "integer".into(),
             Access::Bool { .. } => "bool".into(),
             Access::Choice { names, .. } => names
@@ -254,6 +262,9 @@ impl KeySpec {
     pub fn get(&self, scene: &Scene) -> KeyValue {
         match self.access {
             Access::Float { get, .. } => KeyValue::Float(get(scene)),
+            Access::OptionalFloat { get, .. } => {
+                get(scene).map_or(KeyValue::Unset, KeyValue::Float)
+            }
             Access::Count { get, .. } => KeyValue::Count(get(scene)),
             Access::Bool { get, .. } => KeyValue::Bool(get(scene)),
             Access::Choice { names, get, .. } => KeyValue::Choice(names[get(scene)]),
@@ -482,6 +493,13 @@ pub static KEYS: &[KeySpec] = &[
         access: Access::Bool { get: |s| s.solver.cornea_grading, set: |s, v| s.solver.cornea_grading = v },
         rule: Rule::Any,
         doc: "grade the nodes next to the cornea when the bending layer √(E_b/t_s) is thinner than the spacing (small E_b)",
+        growth: false,
+    },
+    KeySpec {
+        key: "solver.max_seconds",
+        access: Access::OptionalFloat { get: |s| s.solver.max_seconds, set: |s, v| s.solver.max_seconds = Some(v) },
+        rule: Rule::Positive,
+        doc: "wall-clock bound (s) on each elastic solve and on each growth run as a whole: a solve still running then stops with an error saying where (KINSOL's, CVODE's and IDA's callbacks check it); a growth run keeps what it wrote; unset: no bound",
         growth: false,
     },
     KeySpec {

@@ -325,13 +325,17 @@ impl Scene {
         self.keys().map(|k| (k.key, k.get(self))).collect()
     }
 
-    /// The effective parameters (every key in use but the metadata) as a JSON object: the
-    /// growth keys only when the scene grows.
+    /// The effective parameters (every key in use but the metadata and the unset keys) as a
+    /// JSON object: the growth keys only when the scene grows.
     pub fn parameters_json(&self) -> serde_json::Value {
+        // An unset key is left out: it has no value (and the files of scenes that do not
+        // use it stay as they were).
         let map = self
             .keys()
             .filter(|k| k.is_parameter())
-            .map(|k| (k.key.to_string(), k.get(self).to_json()))
+            .map(|k| (k.key, k.get(self)))
+            .filter(|(_, v)| *v != KeyValue::Unset)
+            .map(|(k, v)| (k.to_string(), v.to_json()))
             .collect::<serde_json::Map<_, _>>();
         serde_json::Value::Object(map)
     }
@@ -342,7 +346,7 @@ impl Scene {
         let mut out = String::new();
         for k in self.keys() {
             match k.get(self) {
-                KeyValue::Text(None) => {}
+                KeyValue::Text(None) | KeyValue::Unset => {}
                 v => out.push_str(&format!("{} = {}\n", k.key, v)),
             }
         }
@@ -405,7 +409,7 @@ impl Scene {
             found: describe(value),
         };
         match spec.access {
-            Access::Float { set, .. } => match value {
+            Access::Float { set, .. } | Access::OptionalFloat { set, .. } => match value {
                 toml::Value::Float(x) => set(self, *x),
                 toml::Value::Integer(i) => set(self, *i as f64),
                 _ => return Err(wrong("a number")),

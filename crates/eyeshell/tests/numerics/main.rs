@@ -11,6 +11,7 @@ mod exact_solution;
 mod growth;
 mod growth_ida;
 mod jacobian;
+mod max_seconds;
 mod property_jacobian;
 mod property_residual;
 mod solve_features;
