@@ -14,6 +14,7 @@ use eyeshell::model::stimulus::Surface;
 use eyeshell::rundir::rundata::{self, column, RunData, RunKind, SeriesPoint};
 use eyeshell::rundir::Summary;
 use eyeshell::scene::Scene;
+use eyeshell::text::excerpt;
 use eyeshell_plot::{self as plot, colormap, Figure, PlotError, Series, SeriesStyle};
 
 /// Size of one panel, in pixels.
@@ -309,6 +310,10 @@ impl PaperRuns {
     }
 }
 
+/// The longest run directory a sweep's summary may name: a sweep names them `runs/<name>`,
+/// its names cut to at most 100 bytes.
+const MAX_RUN_DIR: usize = 255;
+
 /// Every run of a sweep directory, in the order of its table.
 pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
     let path = dir.join(eyeshell::rundir::SUMMARY_FILE);
@@ -326,18 +331,19 @@ pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
         .filter(|r| r.status == "ok" || r.status == "reused" || r.status == "failed")
         .map(|r| {
             // A run lives below the sweep: a plain relative path, no `..`, not the sweep,
-            // nothing a message could not show (a sweep names its runs' directories so).
+            // nothing a message could not show, no longer than a sweep names its runs.
             let inside = !r.dir.is_empty()
+                && r.dir.len() <= MAX_RUN_DIR
                 && !r.dir.chars().any(char::is_control)
                 && Path::new(&r.dir)
                     .components()
                     .all(|c| matches!(c, std::path::Component::Normal(_)));
             if !inside {
                 return Err(bad(format!(
-                    "{}: run {:?} points outside the sweep's runs ({:?})",
+                    "{}: run \"{}\" points outside the sweep's runs (\"{}\")",
                     path.display(),
-                    eyeshell::text::one_line(&r.name),
-                    eyeshell::text::one_line(&r.dir)
+                    excerpt(&r.name, 80),
+                    excerpt(&r.dir, 80)
                 )));
             }
             rundata::read(&dir.join(&r.dir))

@@ -757,7 +757,30 @@ fn found_a_control_character_in_a_sweeps_run_directory() {
             .map_err(|e| e.to_string())
     });
     assert!(e.contains("points outside the sweep's runs"), "{e}");
-    assert!(e.contains(r#"("a\\0b/D=0")"#), "{e}");
+    assert!(e.contains(r#"("a\0b/D=0")"#), "{e}");
+}
+
+/// A sweep naming a run directory of a kilobyte (a megabyte-long word in a longer hunt) put
+/// it whole in the message: a sweep names its runs `runs/<name>` in at most about 100 bytes,
+/// and a longer directory is refused, quoted short.
+#[test]
+fn found_a_sweeps_run_directory_of_a_kilobyte() {
+    let r = runs();
+    let summary = std::fs::read_to_string(r.sweep.join("summary.json")).unwrap();
+    let long = summary.replacen(
+        "\"runs/D=0\"",
+        &format!("\"runs/{}/D=0\"", "1".repeat(1000)),
+        1,
+    );
+    let e = error_with(&r.sweep, "summary.json", long.as_bytes(), |d| {
+        eyeshell_cli::figures::sweep_runs(d)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    });
+    assert!(
+        e.contains("points outside the sweep's runs (\"runs/111"),
+        "{e}"
+    );
 }
 
 /// Twenty-six megabyte-long lines of commas took seconds: read_csv parsed the whole file
