@@ -599,7 +599,7 @@ fn read_back(bench: &Workbench, broken: &Path) -> Result<(), TestCaseError> {
             rundata::read(run).map(|_| ()).map_err(|e| e.to_string())
         })?);
         errors.push(check("export", names, TIME_BOUND, || {
-            let done = export::export(run, &bench.export, export::Format::Npz);
+            let done = export::export(run, &bench.export, export::Format::Npz, false);
             let _ = std::fs::remove_dir_all(&bench.export);
             let _ = std::fs::remove_file(&bench.export);
             done.map(|_| ()).map_err(|e| e.to_string())
