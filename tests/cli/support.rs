@@ -14,6 +14,16 @@ pub struct Run {
     pub stderr: String,
 }
 
+impl From<std::process::Output> for Run {
+    fn from(out: std::process::Output) -> Run {
+        Run {
+            code: out.status.code(),
+            stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+            stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        }
+    }
+}
+
 /// The repository root (where `scenes/` lives).
 pub fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -33,11 +43,7 @@ pub fn eyeshell_with(dir: &Path, args: &[&str], envs: &[(&str, &str)]) -> Run {
         .envs(envs.iter().copied())
         .output()
         .expect("run eyeshell");
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    Run::from(out)
 }
 
 /// Run `eyeshell ARGS` in the repository (so `scenes/` resolves).
@@ -319,11 +325,7 @@ pub fn bounded_with(dir: &Path, args: &[&str], envs: &[(&str, &str)]) -> Run {
         took < Duration::from_secs(SECONDS - 5),
         "{args:?} took {took:?}"
     );
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    Run::from(out)
 }
 
 /// Every file under a directory and its bytes, to show that nothing changed.
