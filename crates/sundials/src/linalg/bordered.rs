@@ -1,6 +1,6 @@
 //! A band matrix bordered by one dense row and column, [A c; rᵀ s], solved by block
-//! elimination: A = LU by SUNDIALS' band LU, v = A⁻¹c once per factorisation, the scalar
-//! Schur complement σ = s − rᵀv; then each solve is one band back-substitution:
+//! elimination: A = LU by [`BandLu`], v = A⁻¹c once per factorisation, the scalar Schur
+//! complement σ = s − rᵀv; then each solve is one band back-substitution:
 //!   x_A = A⁻¹ b_A,  x_s = (b_s − rᵀ x_A) / σ,  x_A ← x_A − v x_s.
 //! Why a border: in the growth DAE one unknown (the blue depth where the retina crosses
 //! φ_max) is read by every point beyond φ_max, a dense column no band can hold.
@@ -10,16 +10,12 @@
 
 use std::rc::Rc;
 
-use super::{Csr, DirectSolver, LinalgError};
-use crate::{BandMatrix, Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector};
+use super::{BandLu, Csr, DirectSolver, LinalgError};
+use crate::{Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector};
 
 /// [A c; rᵀ s] with A an n×n band matrix; without a border, just A.
 pub struct BorderedBand {
-    n: usize,
-    lower: usize,
-    upper: usize,
-    matrix: Matrix,
-    solver: LinearSolver,
+    lu: BandLu,
     border: bool,
     col: Vec<f64>,
     row: Vec<f64>,
@@ -27,45 +23,31 @@ pub struct BorderedBand {
     /// A⁻¹ c and σ = s − rᵀ A⁻¹ c, from the last factorisation.
     v: Vec<f64>,
     sigma: f64,
-    b: NVector,
-    x: NVector,
-    _ctx: Rc<Context>,
 }
 
 impl BorderedBand {
     /// A zero matrix of size n (+ 1 with a border) whose band has these widths.
     pub fn new(n: usize, lower: usize, upper: usize, border: bool) -> Result<Self, LinalgError> {
-        let ctx = Context::new()?;
-        let matrix = Matrix::Band(BandMatrix::new(&ctx, n, upper, lower)?);
-        let solver = LinearSolver::new(&ctx, &matrix)?;
-        let (b, x) = (NVector::new(&ctx, n)?, NVector::new(&ctx, n)?);
         let border_len = if border { n } else { 0 };
         Ok(BorderedBand {
-            n,
-            lower,
-            upper,
-            matrix,
-            solver,
+            lu: BandLu::new(n, lower, upper)?,
             border,
             col: vec![0.0; border_len],
             row: vec![0.0; border_len],
             corner: 0.0,
             v: vec![0.0; border_len],
             sigma: 1.0,
-            b,
-            x,
-            _ctx: ctx,
         })
     }
 
     /// The size of the band part.
     pub fn band_size(&self) -> usize {
-        self.n
+        self.lu.size()
     }
 
     /// The whole size: the band and the border.
     pub fn len(&self) -> usize {
-        self.n + usize::from(self.border)
+        self.band_size() + usize::from(self.border)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -74,7 +56,7 @@ impl BorderedBand {
 
     /// (lower, upper) bandwidths of A.
     pub fn widths(&self) -> (usize, usize) {
-        (self.lower, self.upper)
+        self.lu.widths()
     }
 
     /// Fill the matrix: `f(a, c, r, s)` sets the band entries of A and the border, all of
@@ -83,30 +65,39 @@ impl BorderedBand {
         &mut self,
         f: impl FnOnce(&mut dyn MatrixSink, &mut [f64], &mut [f64], &mut f64),
     ) -> Result<(), LinalgError> {
-        self.matrix.zero();
-        self.col.fill(0.0);
-        self.row.fill(0.0);
-        self.corner = 0.0;
-        let Matrix::Band(band) = &mut self.matrix else {
-            unreachable!("made as a band matrix")
-        };
-        let mut view = band.view_mut();
-        f(&mut view, &mut self.col, &mut self.row, &mut self.corner);
-        match self.matrix.take_outside() {
+        self.lu.zero();
+        self.lu.take_outside();
+        self.clear_border();
+        f(&mut self.lu, &mut self.col, &mut self.row, &mut self.corner);
+        match self.lu.take_outside() {
             0 => Ok(()),
             k => Err(LinalgError::OutsidePattern(k)),
         }
     }
 
+    /// Fill the matrix row by row in place: `f(a, c, r, s)` must write every band row of A
+    /// in full through [`BandLu::row_mut`] (they hold the last factors, not zeros); the
+    /// border starts at zero. Cheaper than [`BorderedBand::fill`] for a caller that builds
+    /// whole band rows.
+    pub fn fill_rows(&mut self, f: impl FnOnce(&mut BandLu, &mut [f64], &mut [f64], &mut f64)) {
+        self.clear_border();
+        f(&mut self.lu, &mut self.col, &mut self.row, &mut self.corner);
+    }
+
+    fn clear_border(&mut self) {
+        self.col.fill(0.0);
+        self.row.fill(0.0);
+        self.corner = 0.0;
+    }
+
     /// Factorise what [`BorderedBand::fill`] set.
     pub fn factor(&mut self) -> Result<(), LinalgError> {
-        self.solver.setup(&mut self.matrix)?;
+        self.lu.factor()?;
         if !self.border {
             return Ok(());
         }
-        self.b.as_mut_slice().copy_from_slice(&self.col);
-        self.solver.solve(&mut self.matrix, &mut self.x, &self.b)?;
-        self.v.copy_from_slice(self.x.as_slice());
+        self.v.copy_from_slice(&self.col);
+        self.lu.solve_in_place(&mut self.v);
         let rv: f64 = self.row.iter().zip(&self.v).map(|(a, b)| a * b).sum();
         self.sigma = self.corner - rv;
         let scale = self.corner.abs()
@@ -127,19 +118,24 @@ impl BorderedBand {
 
     /// x = M⁻¹ b, both of length [`BorderedBand::len`].
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
-        let n = self.n;
-        self.b.as_mut_slice().copy_from_slice(&b[..n]);
-        self.solver.solve(&mut self.matrix, &mut self.x, &self.b)?;
-        x[..n].copy_from_slice(self.x.as_slice());
-        if self.border {
-            let rx: f64 = self.row.iter().zip(&x[..n]).map(|(a, b)| a * b).sum();
-            let xs = (b[n] - rx) / self.sigma;
-            for (xi, vi) in x[..n].iter_mut().zip(&self.v) {
-                *xi -= vi * xs;
-            }
-            x[n] = xs;
-        }
+        x.copy_from_slice(b);
+        self.solve_in_place(x);
         Ok(())
+    }
+
+    /// x ← M⁻¹ x, of length [`BorderedBand::len`].
+    pub fn solve_in_place(&self, x: &mut [f64]) {
+        let n = self.band_size();
+        let (xa, xs) = x.split_at_mut(n);
+        self.lu.solve_in_place(xa);
+        if self.border {
+            let rx: f64 = self.row.iter().zip(&*xa).map(|(a, b)| a * b).sum();
+            let s = (xs[0] - rx) / self.sigma;
+            for (xi, vi) in xa.iter_mut().zip(&self.v) {
+                *xi -= vi * s;
+            }
+            xs[0] = s;
+        }
     }
 }
 

@@ -8,13 +8,15 @@
 //!   with one unknown kept out as the border;
 //! - [`KluSolver`]: SUNDIALS' KLU on the CSR matrix as it is.
 //!
-//! The band LU and KLU are SUNDIALS' (through the safe layer in `crate`); what is
-//! here is safe Rust.
+//! The band LU ([`BandLu`]) is safe Rust here; KLU is SUNDIALS' (through the safe layer
+//! in `crate`).
 
+mod band_lu;
 mod bordered;
 mod csr;
 mod schur;
 
+pub use band_lu::BandLu;
 pub use bordered::{BorderedBand, InterleavedBand, KluSolver};
 pub use csr::Csr;
 pub use schur::{Reduced, SchurSolver};
@@ -32,6 +34,9 @@ pub enum LinalgError {
     /// The assembler wrote entries outside the fixed pattern (a bug in the assembler).
     #[error("{0} entries were assembled outside the matrix's pattern")]
     OutsidePattern(usize),
+    /// A matrix too large to store (its size or bandwidths are a mistake).
+    #[error("matrix too large: {0}")]
+    Size(String),
 }
 
 /// A direct solver of a matrix assembled into a [`Csr`].

@@ -5,6 +5,7 @@
 
 mod sundials_support;
 
+mod band_lu;
 mod cvode;
 mod ida;
 mod kinsol;
