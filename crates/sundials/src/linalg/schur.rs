@@ -26,7 +26,14 @@ pub enum Reduced {
 /// The factorisation of S.
 enum ReducedSolver {
     Band(BorderedBand),
-    Klu { s: Csr, klu: KluSolver },
+    /// S as CSR, and its rows in dense band storage while it is built (row jw holds
+    /// columns jw − lower ..= jw + upper) and its border row.
+    Klu {
+        s: Csr,
+        s_rows: Vec<f64>,
+        s_border: Vec<f64>,
+        klu: KluSolver,
+    },
 }
 
 /// One block's rows after elimination: D_kk⁻¹, the couplings D_kj (j < k), and
@@ -50,16 +57,10 @@ pub struct SchurSolver {
     /// Entries of C and cᵀ kept for the solves: (row in W ∪ d, column in P, value).
     coupling: Vec<(u32, u32, f64)>,
     reduced: ReducedSolver,
-    /// S's bandwidths, and its rows in dense band storage (row jw holds columns
-    /// jw − lower ..= jw + upper), its border column, border row and corner.
+    /// S's bandwidths.
     widths: (usize, usize),
-    s_rows: Vec<f64>,
-    s_col: Vec<f64>,
-    s_row: Vec<f64>,
-    s_corner: f64,
-    z: Vec<f64>,
+    /// KLU's right side (it does not solve in place).
     rhs: Vec<f64>,
-    sol: Vec<f64>,
     /// X = 0 in the last factorisation: S = [A a; aᵀ s], the algebraic block alone.
     algebraic_only: bool,
 }
@@ -150,7 +151,14 @@ impl SchurSolver {
                 }
                 let s = Csr::from_rows(rows);
                 let klu = KluSolver::new(&s)?;
-                ReducedSolver::Klu { s, klu }
+                let s_rows = vec![0.0; n_w * (lower + upper + 1)];
+                let s_border = vec![0.0; n_w];
+                ReducedSolver::Klu {
+                    s,
+                    s_rows,
+                    s_border,
+                    klu,
+                }
             }
         };
         Ok(SchurSolver {
@@ -161,13 +169,7 @@ impl SchurSolver {
             coupling: vec![],
             reduced,
             widths: (lower, upper),
-            s_rows: vec![0.0; n_w * (lower + upper + 1)],
-            s_col: vec![0.0; n_w],
-            s_row: vec![0.0; n_w],
-            s_corner: 0.0,
-            z: vec![0.0; n_p],
             rhs: vec![0.0; n_w + 1],
-            sol: vec![0.0; n_w + 1],
             algebraic_only: false,
         })
     }
@@ -182,12 +184,18 @@ impl SchurSolver {
         self.n_w + usize::from(self.border)
     }
 
-    fn reduced_solve(&mut self, b_len: usize, into_sol: bool) -> Result<(), LinalgError> {
-        let (rhs, sol) = (&self.rhs[..b_len], &mut self.sol[..b_len]);
-        let _ = into_sol;
+    /// x ← S⁻¹ x, x of the reduced length.
+    fn reduced_solve(&mut self, x: &mut [f64]) -> Result<(), LinalgError> {
         match &mut self.reduced {
-            ReducedSolver::Band(bb) => bb.solve(rhs, sol),
-            ReducedSolver::Klu { klu, .. } => klu.solve(rhs, sol),
+            ReducedSolver::Band(bb) => {
+                bb.solve_in_place(x);
+                Ok(())
+            }
+            ReducedSolver::Klu { klu, .. } => {
+                let rhs = &mut self.rhs[..x.len()];
+                rhs.copy_from_slice(x);
+                klu.solve(rhs, x)
+            }
         }
     }
 
@@ -270,29 +278,18 @@ impl SchurSolver {
         Ok(())
     }
 
-    /// S = [A a; cᵀ s] − C X in dense band rows; keeps C's entries for the solves.
+    /// S = [A a; cᵀ s] − C X, written straight into the band LU's rows (for KLU, into
+    /// dense band rows and then the CSR matrix); keeps C's entries for the solves.
     fn reduce(&mut self, a: &Csr) -> Result<(), LinalgError> {
         let (n_p, n_w, border) = (self.n_p, self.n_w, self.border);
         let (lower, upper) = self.widths;
-        let width = lower + upper + 1;
         let (blocks, coupling) = (&self.blocks, &mut self.coupling);
         coupling.clear();
-        self.s_rows.fill(0.0);
-        self.s_col.fill(0.0);
-        self.s_row.fill(0.0);
-        self.s_corner = 0.0;
-        for jw in 0..n_w + usize::from(border) {
-            let is_border = jw == n_w;
-            // Row jw's column c sits at acc[c + lower − jw].
-            let (acc, at_d): (&mut [f64], &mut f64) = if is_border {
-                (&mut self.s_row[..], &mut self.s_corner)
-            } else {
-                (
-                    &mut self.s_rows[jw * width..(jw + 1) * width],
-                    &mut self.s_col[jw],
-                )
-            };
-            let shift = |c: usize| if is_border { c } else { c + lower - jw };
+        // Band row jw keeps column c at acc[c + lower − jw], the border row at acc[c].
+        let mut reduce_row = |jw: usize, acc: &mut [f64], at_d: &mut f64| {
+            let (off, base) = if jw == n_w { (0, 0) } else { (lower, jw) };
+            acc.fill(0.0);
+            *at_d = 0.0;
             let (cols, vals) = a.row(n_p + jw);
             for (&c, &v) in cols.iter().zip(vals) {
                 if c < n_p {
@@ -302,7 +299,7 @@ impl SchurSolver {
                     coupling.push((jw as u32, c as u32, v));
                     let (b, r) = (&blocks[c / 2], c % 2);
                     if b.width > 0 {
-                        let at = shift(b.lo);
+                        let at = b.lo + off - base;
                         for (s, x) in acc[at..at + b.width]
                             .iter_mut()
                             .zip(&b.x[r * b.width..(r + 1) * b.width])
@@ -312,42 +309,45 @@ impl SchurSolver {
                     }
                     *at_d -= v * b.xd[r];
                 } else if c < n_p + n_w {
-                    acc[shift(c - n_p)] += v;
+                    acc[c - n_p + off - base] += v;
                 } else {
                     *at_d += v;
                 }
             }
-        }
-        let (rows, col, row, corner) = (&self.s_rows, &self.s_col, &self.s_row, self.s_corner);
+        };
         match &mut self.reduced {
-            ReducedSolver::Band(bb) => bb.fill(|band, bc, br, bs| {
-                for jw in 0..n_w {
-                    let r = &rows[jw * width..(jw + 1) * width];
-                    for (t, &v) in r.iter().enumerate() {
-                        if v != 0.0 {
-                            band.set(jw, jw + t - lower, v);
-                        }
+            ReducedSolver::Band(bb) => {
+                bb.fill_rows(|lu, col, row, corner| {
+                    for jw in 0..n_w {
+                        reduce_row(jw, lu.row_mut(jw), &mut col[jw]);
                     }
-                }
-                if border {
-                    bc.copy_from_slice(col);
-                    br.copy_from_slice(row);
-                    *bs = corner;
-                }
-            }),
-            ReducedSolver::Klu { s, .. } => {
+                    if border {
+                        reduce_row(n_w, row, corner);
+                    }
+                });
+                Ok(())
+            }
+            ReducedSolver::Klu {
+                s,
+                s_rows,
+                s_border,
+                ..
+            } => {
+                let width = lower + upper + 1;
+                let mut s_col = 0.0;
                 s.zero();
-                for jw in 0..n_w {
-                    let lo = jw.saturating_sub(lower);
-                    let hi = (jw + upper + 1).min(n_w);
-                    let r = &rows[jw * width..(jw + 1) * width];
+                for (jw, r) in s_rows.chunks_exact_mut(width).enumerate() {
+                    reduce_row(jw, r, &mut s_col);
+                    let (lo, hi) = (jw.saturating_sub(lower), (jw + upper + 1).min(n_w));
                     s.add_span(jw, lo, &r[lo + lower - jw..hi + lower - jw]);
                     if border {
-                        s.add(jw, n_w, col[jw]);
+                        s.add(jw, n_w, s_col);
                     }
                 }
                 if border {
-                    s.add_span(n_w, 0, row);
+                    let mut corner = 0.0;
+                    reduce_row(n_w, s_border, &mut corner);
+                    s.add_span(n_w, 0, s_border);
                     s.add(n_w, n_w, corner);
                 }
                 match s.take_outside() {
@@ -371,14 +371,12 @@ impl SchurSolver {
     /// w' = −[A a; cᵀ s]⁻¹ [C; cᵀ] p' after [`SchurSolver::factor_algebraic`]; `w` has the
     /// length of W and d together.
     pub fn solve_algebraic(&mut self, p_dot: &[f64], w: &mut [f64]) -> Result<(), LinalgError> {
-        self.rhs.fill(0.0);
+        let w = &mut w[..self.reduced_len()];
+        w.fill(0.0);
         for &(jw, c, v) in &self.coupling {
-            self.rhs[jw as usize] -= v * p_dot[c as usize];
+            w[jw as usize] -= v * p_dot[c as usize];
         }
-        let len = self.reduced_len();
-        self.reduced_solve(len, true)?;
-        w[..len].copy_from_slice(&self.sol[..len]);
-        Ok(())
+        self.reduced_solve(w)
     }
 
     fn factor_blocks(&mut self, a: &Csr) -> Result<(), LinalgError> {
@@ -388,7 +386,7 @@ impl SchurSolver {
         self.reduce(a)?;
         match &mut self.reduced {
             ReducedSolver::Band(bb) => bb.factor(),
-            ReducedSolver::Klu { s, klu } => klu.factor(s),
+            ReducedSolver::Klu { s, klu, .. } => klu.factor(s),
         }
     }
 }
@@ -399,37 +397,37 @@ impl DirectSolver for SchurSolver {
     }
 
     fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
-        let (n_p, n_w) = (self.n_p, self.n_w);
-        // z = D⁻¹ b_P, block by block.
+        let (n_p, n_w, len) = (self.n_p, self.n_w, self.reduced_len());
+        let (z, xw) = x.split_at_mut(n_p);
+        let xw = &mut xw[..len];
+        // z = D⁻¹ b_P block by block, kept in x_P until x_P is known.
         for (k, blk) in self.blocks.iter().enumerate() {
             let mut t = [b[2 * k], b[2 * k + 1]];
             for (j, m) in &blk.lower {
-                let (z0, z1) = (self.z[2 * j], self.z[2 * j + 1]);
+                let (z0, z1) = (z[2 * j], z[2 * j + 1]);
                 t[0] -= m[0][0] * z0 + m[0][1] * z1;
                 t[1] -= m[1][0] * z0 + m[1][1] * z1;
             }
-            self.z[2 * k] = blk.inv[0][0] * t[0] + blk.inv[0][1] * t[1];
-            self.z[2 * k + 1] = blk.inv[1][0] * t[0] + blk.inv[1][1] * t[1];
+            z[2 * k] = blk.inv[0][0] * t[0] + blk.inv[0][1] * t[1];
+            z[2 * k + 1] = blk.inv[1][0] * t[0] + blk.inv[1][1] * t[1];
         }
-        // The reduced right side, b_W − C z, and S's solve.
-        let len = self.reduced_len();
-        self.rhs[..len].copy_from_slice(&b[n_p..n_p + len]);
+        // The reduced right side, b_W − C z, and S's solve, in place in x_W.
+        xw.copy_from_slice(&b[n_p..n_p + len]);
         for &(jw, c, v) in &self.coupling {
-            self.rhs[jw as usize] -= v * self.z[c as usize];
+            xw[jw as usize] -= v * z[c as usize];
         }
-        self.reduced_solve(len, true)?;
-        x[n_p..n_p + len].copy_from_slice(&self.sol[..len]);
-        let xd = if self.border { self.sol[n_w] } else { 0.0 };
+        self.reduced_solve(xw)?;
+        let xd = if self.border { xw[n_w] } else { 0.0 };
         // x_P = z − X x_W − x_d x_d.
         for (k, blk) in self.blocks.iter().enumerate() {
             for r in 0..2 {
                 let xr = &blk.x[r * blk.width..(r + 1) * blk.width];
                 let dot: f64 = xr
                     .iter()
-                    .zip(&self.sol[blk.lo..blk.lo + blk.width])
+                    .zip(&xw[blk.lo..blk.lo + blk.width])
                     .map(|(a, b)| a * b)
                     .sum();
-                x[2 * k + r] = self.z[2 * k + r] - dot - blk.xd[r] * xd;
+                z[2 * k + r] -= dot + blk.xd[r] * xd;
             }
         }
         Ok(())
