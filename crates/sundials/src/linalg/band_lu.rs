@@ -216,8 +216,14 @@ impl BandLu {
         Ok(())
     }
 
-    /// b ← A⁻¹ b with the factors of the last [`BandLu::factor`] (which must have
-    /// succeeded since the matrix was last written: panics otherwise).
+    /// Whether [`BandLu::factor`] succeeded since the matrix was last written.
+    pub fn is_factored(&self) -> bool {
+        self.factored
+    }
+
+    /// b ← A⁻¹ b with the factors of the last [`BandLu::factor`], which must have
+    /// succeeded since the matrix was last written ([`BandLu::is_factored`]): panics
+    /// otherwise, or if b's length is not n.
     pub fn solve_in_place(&self, b: &mut [f64]) {
         let (n, kl, w) = (self.n, self.kl, self.w);
         assert!(self.factored, "band LU solve without a successful factor");

@@ -23,6 +23,8 @@ pub struct BorderedBand {
     /// A⁻¹ c and σ = s − rᵀ A⁻¹ c, from the last factorisation.
     v: Vec<f64>,
     sigma: f64,
+    /// The last factorisation succeeded, border included, and nothing was filled since.
+    factored: bool,
 }
 
 impl BorderedBand {
@@ -37,6 +39,7 @@ impl BorderedBand {
             corner: 0.0,
             v: vec![0.0; border_len],
             sigma: 1.0,
+            factored: false,
         })
     }
 
@@ -85,6 +88,7 @@ impl BorderedBand {
     }
 
     fn clear_border(&mut self) {
+        self.factored = false;
         self.col.fill(0.0);
         self.row.fill(0.0);
         self.corner = 0.0;
@@ -92,8 +96,10 @@ impl BorderedBand {
 
     /// Factorise what [`BorderedBand::fill`] set.
     pub fn factor(&mut self) -> Result<(), LinalgError> {
+        self.factored = false;
         self.lu.factor()?;
         if !self.border {
+            self.factored = true;
             return Ok(());
         }
         self.v.copy_from_slice(&self.col);
@@ -113,18 +119,22 @@ impl BorderedBand {
                 self.sigma
             )));
         }
+        self.factored = true;
         Ok(())
     }
 
     /// x = M⁻¹ b, both of length [`BorderedBand::len`].
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
         x.copy_from_slice(b);
-        self.solve_in_place(x);
-        Ok(())
+        self.solve_in_place(x)
     }
 
-    /// x ← M⁻¹ x, of length [`BorderedBand::len`].
-    pub fn solve_in_place(&self, x: &mut [f64]) {
+    /// x ← M⁻¹ x, of length [`BorderedBand::len`]; an error without a successful
+    /// [`BorderedBand::factor`] since the last fill.
+    pub fn solve_in_place(&self, x: &mut [f64]) -> Result<(), LinalgError> {
+        if !self.factored {
+            return Err(LinalgError::NotFactored);
+        }
         let n = self.band_size();
         let (xa, xs) = x.split_at_mut(n);
         self.lu.solve_in_place(xa);
@@ -136,6 +146,7 @@ impl BorderedBand {
             }
             xs[0] = s;
         }
+        Ok(())
     }
 }
 

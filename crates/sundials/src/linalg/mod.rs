@@ -34,6 +34,9 @@ pub enum LinalgError {
     /// The assembler wrote entries outside the fixed pattern (a bug in the assembler).
     #[error("{0} entries were assembled outside the matrix's pattern")]
     OutsidePattern(usize),
+    /// A solve with no successful factorisation since the matrix was last written.
+    #[error("solve without a successful factorisation")]
+    NotFactored,
     /// A matrix too large to store (its size or bandwidths are a mistake).
     #[error("matrix too large: {0}")]
     Size(String),

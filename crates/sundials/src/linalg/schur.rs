@@ -187,10 +187,7 @@ impl SchurSolver {
     /// x ← S⁻¹ x, x of the reduced length.
     fn reduced_solve(&mut self, x: &mut [f64]) -> Result<(), LinalgError> {
         match &mut self.reduced {
-            ReducedSolver::Band(bb) => {
-                bb.solve_in_place(x);
-                Ok(())
-            }
+            ReducedSolver::Band(bb) => bb.solve_in_place(x),
             ReducedSolver::Klu { klu, .. } => {
                 let rhs = &mut self.rhs[..x.len()];
                 rhs.copy_from_slice(x);

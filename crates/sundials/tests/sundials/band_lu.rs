@@ -267,3 +267,29 @@ proptest! {
         }
     }
 }
+
+/// No answer from a matrix that was not factored, or whose factorisation failed.
+#[test]
+fn bordered_band_refuses_to_solve_without_a_factorisation() {
+    let mut bb = BorderedBand::new(3, 1, 1, true).unwrap();
+    let mut x = vec![1.0; 4];
+    assert!(matches!(
+        bb.solve(&[1.0; 4], &mut x),
+        Err(LinalgError::NotFactored)
+    ));
+    // A nonsingular band with a singular border: [I c; cᵀ cᵀc].
+    bb.fill(|m, col, row, corner| {
+        for i in 0..3 {
+            m.set(i, i, 1.0);
+            col[i] = 1.0;
+            row[i] = 1.0;
+        }
+        *corner = 3.0;
+    })
+    .unwrap();
+    assert!(matches!(bb.factor(), Err(LinalgError::Singular(_))));
+    assert!(matches!(
+        bb.solve(&[1.0; 4], &mut x),
+        Err(LinalgError::NotFactored)
+    ));
+}
