@@ -48,14 +48,56 @@ struct Block {
     xd: [f64; 2],
 }
 
+/// The entries of C and cᵀ (the W and d rows' entries in P columns) row by row, CSR-like:
+/// row jw's are at `end[jw − 1]..end[jw]`. Row by row so that x_jw −= (C z)_jw sums in
+/// registers (a list of (row, column, value) stored to x at every entry, a serial chain).
+#[derive(Debug, Default)]
+struct Coupling {
+    end: Vec<usize>,
+    col: Vec<u32>,
+    val: Vec<f64>,
+}
+
+impl Coupling {
+    fn clear(&mut self) {
+        self.end.clear();
+        self.col.clear();
+        self.val.clear();
+    }
+
+    /// x −= C z over the rows kept.
+    fn subtract_from(&self, z: &[f64], x: &mut [f64]) {
+        let mut start = 0;
+        for (xi, &end) in x.iter_mut().zip(&self.end) {
+            let (cols, vals) = (&self.col[start..end], &self.val[start..end]);
+            // Four sums: the border row spans all of P.
+            let mut acc = [0.0; 4];
+            let (cc, vc) = (cols.chunks_exact(4), vals.chunks_exact(4));
+            let tail: f64 = cc
+                .remainder()
+                .iter()
+                .zip(vc.remainder())
+                .map(|(&c, v)| v * z[c as usize])
+                .sum();
+            for (c, v) in cc.zip(vc) {
+                for t in 0..4 {
+                    acc[t] += v[t] * z[c[t] as usize];
+                }
+            }
+            *xi -= (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail;
+            start = end;
+        }
+    }
+}
+
 /// Solves the [P | W | d] system by eliminating P block by block.
 pub struct SchurSolver {
     n_p: usize,
     n_w: usize,
     border: bool,
     blocks: Vec<Block>,
-    /// Entries of C and cᵀ kept for the solves: (row in W ∪ d, column in P, value).
-    coupling: Vec<(u32, u32, f64)>,
+    /// Entries of C and cᵀ kept for the solves.
+    coupling: Coupling,
     reduced: ReducedSolver,
     /// S's bandwidths.
     widths: (usize, usize),
@@ -166,7 +208,7 @@ impl SchurSolver {
             n_w,
             border,
             blocks,
-            coupling: vec![],
+            coupling: Coupling::default(),
             reduced,
             widths: (lower, upper),
             rhs: vec![0.0; n_w + 1],
@@ -293,7 +335,8 @@ impl SchurSolver {
                     if v == 0.0 {
                         continue;
                     }
-                    coupling.push((jw as u32, c as u32, v));
+                    coupling.col.push(c as u32);
+                    coupling.val.push(v);
                     let (b, r) = (&blocks[c / 2], c % 2);
                     if b.width > 0 {
                         let at = b.lo + off - base;
@@ -311,6 +354,7 @@ impl SchurSolver {
                     *at_d += v;
                 }
             }
+            coupling.end.push(coupling.col.len());
         };
         match &mut self.reduced {
             ReducedSolver::Band(bb) => {
@@ -370,9 +414,7 @@ impl SchurSolver {
     pub fn solve_algebraic(&mut self, p_dot: &[f64], w: &mut [f64]) -> Result<(), LinalgError> {
         let w = &mut w[..self.reduced_len()];
         w.fill(0.0);
-        for &(jw, c, v) in &self.coupling {
-            w[jw as usize] -= v * p_dot[c as usize];
-        }
+        self.coupling.subtract_from(p_dot, w);
         self.reduced_solve(w)
     }
 
@@ -410,9 +452,7 @@ impl DirectSolver for SchurSolver {
         }
         // The reduced right side, b_W − C z, and S's solve, in place in x_W.
         xw.copy_from_slice(&b[n_p..n_p + len]);
-        for &(jw, c, v) in &self.coupling {
-            xw[jw as usize] -= v * z[c as usize];
-        }
+        self.coupling.subtract_from(z, xw);
         self.reduced_solve(xw)?;
         let xd = if self.border { xw[n_w] } else { 0.0 };
         // x_P = z − X x_W − x_d x_d.
