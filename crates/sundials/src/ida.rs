@@ -146,6 +146,10 @@ pub struct IdaOptions {
     /// it up again (IDASetDeltaCjLSetup: a new set-up when the ratio leaves
     /// [(1 − dcj)/(1 + dcj), (1 + dcj)/(1 − dcj)]); None = IDA's default (0.25). In (0, 1).
     pub delta_cj_setup: Option<f64>,
+    /// The step-size ratios η ∈ [lo, hi] for which IDA keeps the step unchanged
+    /// (IDASetEtaFixedStepBounds); None = IDA's default [0, 2]: a step grows only when it
+    /// could at least double. 0 ≤ lo ≤ 1 ≤ hi.
+    pub fixed_step_bounds: Option<(f64, f64)>,
 }
 
 impl Default for IdaOptions {
@@ -166,6 +170,7 @@ impl Default for IdaOptions {
             max_nonlinear_iterations: None,
             nonlinear_convergence_coefficient: None,
             delta_cj_setup: None,
+            fixed_step_bounds: None,
         }
     }
 }
@@ -427,6 +432,12 @@ impl<S: DaeSystem> Ida<S> {
             // SAFETY: mem is live.
             self.log.call("IDASetDeltaCjLSetup", Ida, || unsafe {
                 sundials_sys::IDASetDeltaCjLSetup(mem, d)
+            })?;
+        }
+        if let Some((lo, hi)) = options.fixed_step_bounds {
+            // SAFETY: mem is live.
+            self.log.call("IDASetEtaFixedStepBounds", Ida, || unsafe {
+                sundials_sys::IDASetEtaFixedStepBounds(mem, lo, hi)
             })?;
         }
         Ok(())
@@ -794,6 +805,13 @@ fn validate(n: usize, o: &IdaOptions) -> Result<(), SundialsError> {
     if let Some(d) = o.delta_cj_setup {
         if !(d > 0.0 && d < 1.0) {
             return invalid(format!("delta_cj_setup must lie in (0, 1), got {d}"));
+        }
+    }
+    if let Some((lo, hi)) = o.fixed_step_bounds {
+        if !((0.0..=1.0).contains(&lo) && hi >= 1.0 && hi.is_finite()) {
+            return invalid(format!(
+                "fixed_step_bounds must have 0 ≤ lo ≤ 1 ≤ hi < ∞, got ({lo}, {hi})"
+            ));
         }
     }
     Ok(())
