@@ -3,8 +3,10 @@
 //! Newton iteration of the whole system per iterate. The Newton matrix is assembled
 //! analytically and factored by the system's own solver (KLU on the whole matrix by
 //! default when KLU is built, else the Schur complement of the growth unknowns; see
-//! [`default_linear`]), through IDA's custom linear-solver hook; IDA decides when to
-//! refresh it. A failure inside a step (an evaluation that cannot be made, a singular
+//! [`default_linear`]), through
+//! IDA's custom linear-solver hook; IDA decides when to refresh it. The first step comes
+//! from y'' at t = 0 ([`initial_step`]) and the step grows by any factor ≥
+//! [`STEP_GROWTH_THRESHOLD`]. A failure inside a step (an evaluation that cannot be made, a singular
 //! matrix) is recoverable: IDA cuts the step and tries again.
 
 use super::dae::{CoupledDae, DaeLinear};
@@ -13,6 +15,51 @@ use crate::text::decimals6;
 use eyeshell_sundials::{
     CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats,
 };
+
+/// The first step, from the second derivative of the growth state at t = 0 as CVODE
+/// estimates its own (IDA's default, 0.5/‖y'‖, took 1e-7-long first steps here and a dozen
+/// doubling steps, each with a new Newton matrix, to reach the step the error allows):
+/// BDF1's local error h²/2 ‖y''‖ within the tolerance, halved for safety. y''_P comes from
+/// one residual at y + δ y' (its growth rows are y'_P − rates(y + δ y') ≈ −δ y''_P; the
+/// elastic part of y + δ y' is consistent to O(δ²)). None (IDA's own estimate) if that
+/// evaluation fails or y'' vanishes.
+fn initial_step(
+    dae: &mut CoupledDae,
+    y0: &[f64],
+    yp0: &[f64],
+    rtol: f64,
+    atol: &[f64],
+    t_end: f64,
+) -> Option<f64> {
+    let n_p = dae.differential_len();
+    // δ moves no growth unknown by more than 1e-6 of its size (and atol).
+    let speed = (0..n_p)
+        .map(|k| yp0[k].abs() / (y0[k].abs() + atol[k]))
+        .fold(0.0, f64::max);
+    if !(speed.is_finite() && speed > 0.0) {
+        return None;
+    }
+    let delta = (1e-6 / speed).min(1e-6 * t_end);
+    let y: Vec<f64> = y0.iter().zip(yp0).map(|(a, b)| a + delta * b).collect();
+    let mut r = vec![0.0; y0.len()];
+    dae.residual(&y, yp0, &mut r).ok()?;
+    let sum: f64 = (0..n_p)
+        .map(|k| (r[k] / delta / (rtol * y0[k].abs() + atol[k])).powi(2))
+        .sum();
+    let norm = (sum / n_p as f64).sqrt();
+    let h = 0.5 * (2.0 / norm).sqrt();
+    // At most a tenth of the run; no lower bound tied to t_end (t_end may be absurd).
+    (h.is_finite() && h > 0.0).then(|| h.min(0.1 * t_end))
+}
+
+/// IDA keeps its step unless the error allows one at least this much longer
+/// (IDASetEtaFixedStepBounds; IDA's default is 2). Measured on the const scene (BENCHMARKS.md):
+/// with 2, the step sat at 8.6e-4 for the first 120 steps and at a quarter of what the
+/// error allowed after t = 0.3 (weighted local errors 0.05–0.3 against the test's 1), because
+/// the estimate never promised a doubling; with 1.2 a run to t = 1 takes 140 steps instead
+/// of 258 (300 with the initial step below alone) at rtol 1e-6, with errors in axial length
+/// as small or smaller at every rtol from 3e-6 to 1e-7, on the const, thick and fibre scenes.
+pub const STEP_GROWTH_THRESHOLD: f64 = 1.2;
 
 /// The coupled system as IDA sees it.
 pub struct GrowthDae<'a> {
@@ -71,14 +118,18 @@ pub fn integrate(
     output: &mut DaeOutput<'_>,
     progress: &mut dyn FnMut(f64),
 ) -> (IdaStats, Result<(), (f64, String)>) {
+    let atol = dae.abs_tolerances(settings.rtol, settings.atol, r0);
+    let h0 = initial_step(dae, y0, yp0, settings.rtol, &atol, t_end);
     let options = IdaOptions {
         rtol: settings.rtol,
         atol: settings.atol,
-        atol_vector: Some(dae.abs_tolerances(settings.rtol, settings.atol, r0)),
+        atol_vector: Some(atol),
         stop_time: Some(t_end),
         max_steps: 100_000,
         id: Some(dae.id()),
         suppress_algebraic: SUPPRESS_ALGEBRAIC,
+        fixed_step_bounds: Some((1.0, STEP_GROWTH_THRESHOLD)),
+        initial_step: h0,
         ..IdaOptions::default()
     };
     let mut ida = match Ida::new(
@@ -136,11 +187,12 @@ impl super::Stepper for IdaStepper<'_, '_, '_> {
     }
 }
 
-/// The default linear solver of the coupled system, the fastest measured (BENCHMARKS.md):
-/// KLU on the whole system where KLU was built in (a set-up 3.3 ms, a solve 154 µs at
-/// N = 501, against 3.8 ms and 174 µs for the Schur complement with KLU on the reduced
-/// matrix), else the Schur complement with band LU (a solve 446 µs, against 914 µs for
-/// band LU of the whole interleaved system).
+/// The default linear solver of the coupled system: KLU on the whole matrix where KLU was
+/// built in, else the Schur complement with the crate's band LU. The Schur path is 5–10 %
+/// faster on the const scene (a set-up 1.9–2.5 ms against 2.9 ms, a solve 97 µs against
+/// 137 µs at N = 501) but eliminates c I − ∂rates/∂P without pivoting: at huge steps
+/// (t_end = 1e200, c ≈ 1e-150) where a point's growth rate barely depends on its own
+/// state, that block is nearly singular and the run crawls, where KLU's pivoting does not.
 pub fn default_linear() -> DaeLinear {
     if eyeshell_sundials::klu_available() {
         DaeLinear::Klu
