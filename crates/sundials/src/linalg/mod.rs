@@ -6,7 +6,10 @@
 //!   triangular among themselves), leaving a bordered band in the other unknowns;
 //! - [`InterleavedBand`]: band LU of the whole matrix in a permuted (interleaved) order,
 //!   with one unknown kept out as the border;
-//! - [`KluSolver`]: SUNDIALS' KLU on the CSR matrix as it is.
+//! - [`KluSolver`]: SUNDIALS' KLU on the CSR matrix as it is;
+//!
+//! and [`Fallback`], which pairs a fast solver with a robust one for the factorisations
+//! the fast one refuses.
 //!
 //! The band LU ([`BandLu`]) is safe Rust here; KLU is SUNDIALS' (through the safe layer
 //! in `crate`).
@@ -14,11 +17,13 @@
 mod band_lu;
 mod bordered;
 mod csr;
+mod fallback;
 mod schur;
 
 pub use band_lu::BandLu;
 pub use bordered::{BorderedBand, InterleavedBand, KluSolver};
 pub use csr::Csr;
+pub use fallback::{Fallback, MakeSolver};
 pub use schur::{Reduced, SchurSolver};
 
 use crate::SundialsError;
@@ -48,4 +53,8 @@ pub trait DirectSolver {
     fn factor(&mut self, a: &Csr) -> Result<(), LinalgError>;
     /// x = A⁻¹ b with the last factorisation.
     fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError>;
+    /// Factorisations handed to a more robust solver so far ([`Fallback`]); 0 for others.
+    fn fallbacks(&self) -> usize {
+        0
+    }
 }

@@ -23,6 +23,14 @@ pub enum Reduced {
     Klu,
 }
 
+/// A pivot block D_kk is used unpivoted only while |det D_kk| ≥ this × the product of its
+/// columns' largest entries over the whole matrix (for a diagonal block: each pivot at
+/// least this fraction of its column, KLU's own threshold for keeping a diagonal pivot).
+/// Below it a pivoting LU would have chosen another row, and elimination in this order
+/// could amplify rounding errors without bound: the factorisation reports the block as
+/// singular, and the caller falls back to a pivoting solver ([`super::Fallback`]).
+pub const PIVOT_TOLERANCE: f64 = 1e-3;
+
 /// The factorisation of S.
 enum ReducedSolver {
     Band(BorderedBand),
@@ -105,6 +113,8 @@ pub struct SchurSolver {
     rhs: Vec<f64>,
     /// X = 0 in the last factorisation: S = [A a; aᵀ s], the algebraic block alone.
     algebraic_only: bool,
+    /// The largest |entry| of each P column over the whole matrix, for the pivot test.
+    col_max: Vec<f64>,
 }
 
 impl SchurSolver {
@@ -213,6 +223,7 @@ impl SchurSolver {
             widths: (lower, upper),
             rhs: vec![0.0; n_w + 1],
             algebraic_only: false,
+            col_max: vec![0.0; n_p],
         })
     }
 
@@ -289,14 +300,11 @@ impl SchurSolver {
             }
         }
         let det = d[0][0] * d[1][1] - d[0][1] * d[1][0];
-        let scale = d[0][0]
-            .abs()
-            .max(d[1][1].abs())
-            .max(d[0][1].abs())
-            .max(d[1][0].abs());
-        if !(det.abs() > 1e-14 * scale * scale) {
+        let (m0, m1) = (self.col_max[2 * k], self.col_max[2 * k + 1]);
+        if !(det.abs() >= PIVOT_TOLERANCE * m0 * m1 && det != 0.0) {
             return Err(LinalgError::Singular(format!(
-                "pivot block {k} has determinant {det:e}"
+                "pivot block {k} has determinant {det:e} against columns of size {m0:e}, {m1:e}: \
+                 elimination without pivoting would be unstable"
             )));
         }
         b.inv = [
@@ -418,7 +426,25 @@ impl SchurSolver {
         self.reduced_solve(w)
     }
 
+    /// The largest |entry| of each P column (rows list columns in order, P's first).
+    fn measure_columns(&mut self, a: &Csr) {
+        let n_p = self.n_p;
+        self.col_max.fill(0.0);
+        for i in 0..a.n() {
+            let (cols, vals) = a.row(i);
+            for (&c, &v) in cols.iter().zip(vals) {
+                if c >= n_p {
+                    break;
+                }
+                self.col_max[c] = self.col_max[c].max(v.abs());
+            }
+        }
+    }
+
     fn factor_blocks(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        if !self.algebraic_only {
+            self.measure_columns(a);
+        }
         for k in 0..self.blocks.len() {
             self.eliminate_block(a, k)?;
         }
@@ -477,10 +503,9 @@ mod tests {
     use nalgebra::{DMatrix, DVector};
 
     /// A random matrix with the structure of the growth DAE (blocks reading a band window
-    /// and earlier blocks, band rows reading blocks, a border) against a dense LU, through
-    /// all three solvers.
-    #[test]
-    fn schur_matches_dense_on_a_structured_matrix() {
+    /// and earlier blocks, band rows reading blocks, a border), as CSR and dense, with
+    /// n_p; block `weak` (if any) has its own 2×2 block scaled by `by`.
+    fn structured(weak: Option<(usize, f64)>) -> (Csr, DMatrix<f64>, usize) {
         let (nb, n_w) = (6usize, 10usize);
         let n_p = 2 * nb;
         let n = n_p + n_w + 1;
@@ -508,13 +533,27 @@ mod tests {
         let mut dense = DMatrix::zeros(n, n);
         for (i, cols) in rows.iter().enumerate() {
             for &j in cols {
-                let v = if i == j { 8.0 + rnd(i, j) } else { rnd(i, j) };
+                let mut v = if i == j { 8.0 + rnd(i, j) } else { rnd(i, j) };
+                if let Some((k, by)) = weak {
+                    if i / 2 == k && j / 2 == k && i < n_p && j < n_p {
+                        v *= by;
+                    }
+                }
                 if a.get(i, j) == 0.0 {
                     a.add(i, j, v);
                     dense[(i, j)] = v;
                 }
             }
         }
+        (a, dense, n_p)
+    }
+
+    /// The structured matrix against a dense LU, through all three solvers.
+    #[test]
+    fn schur_matches_dense_on_a_structured_matrix() {
+        let (a, dense, n_p) = structured(None);
+        let n = a.n();
+        let (d, n_w) = (n - 1, n - n_p - 1);
         let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
         let expect = dense
             .clone()
@@ -567,6 +606,62 @@ mod tests {
                 "algebraic {i}: {} vs {}",
                 w[i],
                 expect_w[i]
+            );
+        }
+    }
+
+    /// A growth block too small against its columns (its pivots would be below KLU's
+    /// threshold) is refused as singular rather than eliminated unstably, and the fallback
+    /// solves the matrix with pivoting, to the dense LU's answer.
+    #[test]
+    fn a_weak_pivot_block_is_refused_and_the_fallback_solves() {
+        let (a, dense, n_p) = structured(Some((2, 1e-4)));
+        let n = a.n();
+        let mut schur = SchurSolver::new(&a, n_p, true, Reduced::Band).unwrap();
+        match schur.factor(&a) {
+            Err(LinalgError::Singular(why)) => assert!(why.contains("pivot block 2"), "{why}"),
+            other => panic!("expected a refused pivot block, got {other:?}"),
+        }
+        let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
+        let expect = dense.lu().solve(&DVector::from_vec(b.clone())).unwrap();
+        let pattern = a.clone();
+        let mut solver = super::super::Fallback::new(
+            Box::new(SchurSolver::new(&a, n_p, true, Reduced::Band).unwrap()),
+            Box::new(move || -> Result<Box<dyn DirectSolver>, LinalgError> {
+                let perm: Vec<usize> = (0..pattern.n())
+                    .map(|i| if i == pattern.n() - 1 { 0 } else { i })
+                    .collect();
+                Ok(Box::new(super::super::InterleavedBand::new(
+                    &pattern,
+                    perm,
+                    Some(pattern.n() - 1),
+                )?))
+            }),
+        );
+        solver.factor(&a).unwrap();
+        assert_eq!(solver.fallbacks(), 1);
+        let mut x = vec![0.0; n];
+        solver.solve(&b, &mut x).unwrap();
+        for i in 0..n {
+            assert!(
+                (x[i] - expect[i]).abs() < 1e-11,
+                "{i}: {} vs {}",
+                x[i],
+                expect[i]
+            );
+        }
+        // A well-scaled matrix goes back to the fast path.
+        let (good, dense, _) = structured(None);
+        solver.factor(&good).unwrap();
+        assert_eq!(solver.fallbacks(), 1);
+        solver.solve(&b, &mut x).unwrap();
+        let expect = dense.lu().solve(&DVector::from_vec(b)).unwrap();
+        for i in 0..n {
+            assert!(
+                (x[i] - expect[i]).abs() < 1e-12,
+                "{i}: {} vs {}",
+                x[i],
+                expect[i]
             );
         }
     }
