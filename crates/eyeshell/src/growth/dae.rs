@@ -36,7 +36,7 @@ use crate::bvp::equations::{
 use crate::bvp::settings::Scheme;
 use crate::model::growth_law::positive_smooth;
 use eyeshell_sundials::linalg::{
-    Csr, DirectSolver, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
+    Csr, DirectSolver, Fallback, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
 };
 use eyeshell_sundials::MatrixSink;
 
@@ -214,6 +214,8 @@ pub struct DaeCounters {
     pub factor_seconds: f64,
     pub solve_seconds: f64,
     pub residual_seconds: f64,
+    /// Factorisations a Schur path handed to its pivoting fallback.
+    pub fallbacks: usize,
 }
 
 /// Why the coupled system could not be evaluated or solved.
@@ -357,19 +359,37 @@ impl CoupledDae {
     }
 
     fn make_solver(&self, kind: DaeLinear) -> Result<Box<dyn DirectSolver>, LinalgError> {
+        let schur = |how| -> Result<Box<dyn DirectSolver>, LinalgError> {
+            let fast = SchurSolver::new(&self.jac, self.n_p, true, how)?;
+            Ok(Box::new(Fallback::new(
+                Box::new(fast),
+                self.pivoting_solver(),
+            )))
+        };
         Ok(match kind {
-            DaeLinear::Schur => {
-                Box::new(SchurSolver::new(&self.jac, self.n_p, true, Reduced::Band)?)
-            }
-            DaeLinear::SchurKlu => {
-                Box::new(SchurSolver::new(&self.jac, self.n_p, true, Reduced::Klu)?)
-            }
+            DaeLinear::Schur => schur(Reduced::Band)?,
+            DaeLinear::SchurKlu => schur(Reduced::Klu)?,
             DaeLinear::Band => Box::new(InterleavedBand::new(
                 &self.jac,
                 self.interleaving(),
                 Some(self.d()),
             )?),
             DaeLinear::Klu => Box::new(KluSolver::new(&self.jac)?),
+        })
+    }
+
+    /// The Schur paths' fallback for a matrix whose growth block cannot be eliminated
+    /// without pivoting (huge steps where a point's rates barely depend on its own state):
+    /// KLU on the whole matrix where KLU was built in, else the pivoted interleaved band.
+    fn pivoting_solver(&self) -> eyeshell_sundials::linalg::MakeSolver {
+        let pattern = self.jac.clone();
+        let (perm, border) = (self.interleaving(), self.d());
+        Box::new(move || -> Result<Box<dyn DirectSolver>, LinalgError> {
+            Ok(if eyeshell_sundials::klu_available() {
+                Box::new(KluSolver::new(&pattern)?)
+            } else {
+                Box::new(InterleavedBand::new(&pattern, perm.clone(), Some(border))?)
+            })
         })
     }
 
@@ -1060,7 +1080,9 @@ impl CoupledDae {
         self.assemble(c, y)?;
         let mid = std::time::Instant::now();
         self.counters.jacobian_seconds += (mid - start).as_secs_f64();
-        self.linear.factor(&self.jac)?;
+        let factored = self.linear.factor(&self.jac);
+        self.counters.fallbacks = self.linear.fallbacks();
+        factored?;
         self.counters.factor_seconds += mid.elapsed().as_secs_f64();
         Ok(())
     }

@@ -1,9 +1,9 @@
 //! Growth by IDA (issue 11): the coupled DAE of `dae.rs` (growth rates as differential
 //! rows, the elastic equations and z as algebraic rows) by variable-order BDF with one
 //! Newton iteration of the whole system per iterate. The Newton matrix is assembled
-//! analytically and factored by the system's own solver (KLU on the whole matrix by
-//! default when KLU is built, else the Schur complement of the growth unknowns; see
-//! [`default_linear`]), through
+//! analytically and factored by the system's own solver (the Schur complement of the
+//! growth unknowns by default, KLU for the matrices it refuses; see [`default_linear`]),
+//! through
 //! IDA's custom linear-solver hook; IDA decides when to refresh it. The first step comes
 //! from y'' at t = 0 ([`initial_step`]) and the step grows by any factor ≥
 //! [`STEP_GROWTH_THRESHOLD`]. A failure inside a step (an evaluation that cannot be made, a singular
@@ -187,16 +187,13 @@ impl super::Stepper for IdaStepper<'_, '_, '_> {
     }
 }
 
-/// The default linear solver of the coupled system: KLU on the whole matrix where KLU was
-/// built in, else the Schur complement with the crate's band LU. The Schur path is 5–10 %
-/// faster on the const scene (a set-up 1.9–2.5 ms against 2.9 ms, a solve 97 µs against
-/// 137 µs at N = 501) but eliminates c I − ∂rates/∂P without pivoting: at huge steps
-/// (t_end = 1e200, c ≈ 1e-150) where a point's growth rate barely depends on its own
-/// state, that block is nearly singular and the run crawls, where KLU's pivoting does not.
+/// The default linear solver of the coupled system: the Schur complement of the growth
+/// unknowns with the crate's band LU, the fastest (`cargo bench --bench growth --
+/// dae_pieces`: a set-up 1.12 ms against KLU's 1.37 ms, a solve 59 µs against 85 µs at
+/// N = 501; a whole const-scene run 77 ms against 92 ms). It eliminates c I − ∂rates/∂P
+/// without pivoting, so a Newton matrix whose growth block is too small for that (huge
+/// steps where a point's rates barely depend on its own state: t_end = 1e200) goes to a
+/// pivoting solver instead, KLU where it was built in ([`CoupledDae`]'s fallback).
 pub fn default_linear() -> DaeLinear {
-    if eyeshell_sundials::klu_available() {
-        DaeLinear::Klu
-    } else {
-        DaeLinear::Schur
-    }
+    DaeLinear::Schur
 }

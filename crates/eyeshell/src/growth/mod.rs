@@ -192,6 +192,9 @@ pub struct GrowthStats {
     /// (assembly and factorisation).
     pub residual_evaluations: usize,
     pub jacobian_evaluations: usize,
+    /// IDA with a Schur linear solver: Newton matrices whose growth block was too close to
+    /// singular to eliminate unpivoted, factored by the pivoting fallback instead.
+    pub linear_fallbacks: usize,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub t_reached: f64,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
@@ -403,6 +406,7 @@ fn run_ida(
             stats.nonlinear_iterations = st.nonlinear_iterations;
             stats.nonlinear_failures = st.nonlinear_convergence_failures;
             stats.t_reached = st.current_time;
+            stats.linear_fallbacks = dae.counters.fallbacks;
             r
         }
     };
