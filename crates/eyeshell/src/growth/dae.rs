@@ -884,7 +884,7 @@ impl CoupledDae {
     /// W part to the nodes the row's pattern holds (0: node i, 1: node i+1, None: both).
     fn add_grad(&mut self, row: usize, i: usize, a: f64, g: &Grad, half: Option<usize>) {
         let w0 = self.wcol(i, 0);
-        let span: Vec<f64> = g.w.iter().map(|v| a * v).collect();
+        let span = g.w.map(|v| a * v);
         match half {
             None => self.jac.add_span(row, w0, &span),
             Some(h) => self
@@ -923,7 +923,7 @@ impl CoupledDae {
         let disc = self.sys.elastic.discretisation();
         let ev = disc.evaluations();
         let n_p = self.n_p;
-        let mut adds: Vec<(usize, usize, [f64; 2])> = vec![];
+        let mut adds: Vec<(usize, usize, [f64; 2])> = Vec::with_capacity(2 + NY * 3 * self.m);
         // Pole: f0 = r − σ_ε α_s, f1 = θ − σ_ε α_s κ, σ_ε = ε γ_s.
         let k0 = self.sys.points.above[0];
         let y0 = Vec5::from_column_slice(&self.u[..NY]);
@@ -946,24 +946,25 @@ impl CoupledDae {
                 pr.expect("every interval has ends"),
             );
             let (fl, fr) = (&self.derivs[pl], &self.derivs[pr]);
-            let mut cols: Vec<(usize, [Vec5; 2])> = vec![];
+            // At most three points' columns per interval (ends, and a midpoint).
+            let mut cols: [Option<(usize, [Vec5; 2])>; 3] = [None; 3];
             match self.hermite_simpson {
                 false => {
-                    cols.push((pl, fl.f.map(|v| -0.5 * h * v)));
-                    cols.push((pr, fr.f.map(|v| -0.5 * h * v)));
+                    cols[0] = Some((pl, fl.f.map(|v| -0.5 * h * v)));
+                    cols[1] = Some((pr, fr.f.map(|v| -0.5 * h * v)));
                 }
                 true => {
                     let jm = &ev.mid(i).jac;
                     let fm = &self.derivs[pm.expect("Hermite–Simpson has midpoints")];
-                    cols.push((pl, fl.f.map(|v| -(h / 6.0) * v - (h * h / 12.0) * (jm * v))));
-                    cols.push((pr, fr.f.map(|v| -(h / 6.0) * v + (h * h / 12.0) * (jm * v))));
-                    cols.push((
+                    cols[0] = Some((pl, fl.f.map(|v| -(h / 6.0) * v - (h * h / 12.0) * (jm * v))));
+                    cols[1] = Some((pr, fr.f.map(|v| -(h / 6.0) * v + (h * h / 12.0) * (jm * v))));
+                    cols[2] = Some((
                         pm.expect("Hermite–Simpson has midpoints"),
                         fm.f.map(|v| -(2.0 * h / 3.0) * v),
                     ));
                 }
             }
-            for (k, dv) in cols {
+            for (k, dv) in cols.into_iter().flatten() {
                 for a in 0..NY {
                     adds.push((self.interval_row(i, a), k, [dv[0][a], dv[1][a]]));
                 }

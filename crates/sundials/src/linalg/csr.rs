@@ -10,6 +10,12 @@ pub struct Csr {
     values: Vec<f64>,
     /// Additions that fell outside the pattern since the last [`Csr::zero`].
     outside: usize,
+    /// The positions found by the additions since the last [`Csr::zero`], in call order,
+    /// and the next call's index: an assembler adds in the same order every time, so each
+    /// addition first tries the position its predecessor in the last assembly found (checked
+    /// against the row and column, so a different order only costs the search).
+    trail: Vec<usize>,
+    cursor: usize,
 }
 
 impl Csr {
@@ -37,6 +43,8 @@ impl Csr {
             col_idx,
             values,
             outside: 0,
+            trail: Vec::new(),
+            cursor: 0,
         }
     }
 
@@ -71,6 +79,7 @@ impl Csr {
     pub fn zero(&mut self) {
         self.values.fill(0.0);
         self.outside = 0;
+        self.cursor = 0;
     }
 
     #[inline]
@@ -79,11 +88,33 @@ impl Csr {
         self.col_idx[lo..hi].binary_search(&j).ok().map(|k| lo + k)
     }
 
+    /// [`Csr::position`] for an addition: the trail's guess if it is (i, j), else a search,
+    /// remembered for the next assembly (the trail stops growing at 4 entries per nonzero,
+    /// for callers that add without ever zeroing).
+    #[inline]
+    fn locate(&mut self, i: usize, j: usize) -> Option<usize> {
+        let c = self.cursor;
+        self.cursor += 1;
+        if let Some(&k) = self.trail.get(c) {
+            if k >= self.row_ptr[i] && k < self.row_ptr[i + 1] && self.col_idx[k] == j {
+                return Some(k);
+            }
+        }
+        let found = self.position(i, j);
+        let k = found.unwrap_or(usize::MAX);
+        if c < self.trail.len() {
+            self.trail[c] = k;
+        } else if c == self.trail.len() && c < 4 * self.col_idx.len() + 64 {
+            self.trail.push(k);
+        }
+        found
+    }
+
     /// A(i, j) += v. Outside the pattern nothing is written and the miss is counted
     /// ([`Csr::take_outside`]); debug builds panic.
     #[inline]
     pub fn add(&mut self, i: usize, j: usize, v: f64) {
-        match self.position(i, j) {
+        match self.locate(i, j) {
             Some(k) => self.values[k] += v,
             None => self.miss(i, j),
         }
@@ -93,7 +124,7 @@ impl Csr {
     /// search for the whole span.
     #[inline]
     pub fn add_span(&mut self, i: usize, j0: usize, v: &[f64]) {
-        let Some(k) = self.position(i, j0) else {
+        let Some(k) = self.locate(i, j0) else {
             return self.miss(i, j0);
         };
         let end = k + v.len();
@@ -151,5 +182,45 @@ mod tests {
             assert_eq!(a.take_outside(), 2);
             assert_eq!(a.take_outside(), 0);
         }
+    }
+
+    /// The trail replays the last assembly's positions; a different order of additions
+    /// still lands every value where it belongs.
+    #[test]
+    fn a_changed_order_of_additions_is_still_right() {
+        let rows = vec![vec![0, 1, 3], vec![1, 2], vec![0, 2, 3], vec![3]];
+        let mut a = Csr::from_rows(rows);
+        let adds = [
+            (0, 3, 1.0),
+            (2, 0, 2.0),
+            (1, 1, 3.0),
+            (3, 3, 4.0),
+            (2, 2, 5.0),
+        ];
+        let expect = |a: &Csr| {
+            for &(i, j, v) in &adds {
+                assert_eq!(a.get(i, j), v, "({i}, {j})");
+            }
+            assert_eq!(a.values().iter().sum::<f64>(), 15.0);
+        };
+        for order in [
+            [0, 1, 2, 3, 4],
+            [0, 1, 2, 3, 4],
+            [4, 2, 0, 3, 1],
+            [1, 0, 2, 4, 3],
+        ] {
+            a.zero();
+            for k in order {
+                let (i, j, v) = adds[k];
+                a.add(i, j, v);
+            }
+            expect(&a);
+        }
+        // Without zeroing, the trail stops growing but additions stay right.
+        for _ in 0..100 {
+            a.add(0, 1, 1.0);
+        }
+        assert_eq!(a.get(0, 1), 100.0);
+        assert!(a.trail.len() <= 4 * a.nnz() + 64);
     }
 }
