@@ -26,6 +26,7 @@
 //! (`Surface::depth_gradient`). The [·]⁺ kinks take the derivative of the branch the value
 //! took.
 
+use super::crossing::Crossing;
 use super::points::NP;
 use super::system::{GrowthSystem, RhsError};
 use super::ThicknessLaw;
@@ -775,29 +776,15 @@ impl CoupledDae {
         }
     }
 
-    /// The depth of the blue surface where the retina crosses φ_max: linear in φ between the
-    /// two points (in Σ order) that straddle it (docs/MODEL.md §6); None if none reaches it.
+    /// The depth of the blue surface where the retina crosses φ_max ([`super::crossing`]);
+    /// None if no point reaches it.
     fn crossing_depth(&self, rates: &[PointRates]) -> Option<Crossing> {
-        let phi_max = self.sys.blue().phi_max;
-        let j = self.order.iter().position(|&k| rates[k].angle >= phi_max)?;
-        if j == 0 {
-            let k = self.order[0];
-            return Some(Crossing {
-                value: rates[k].depth,
-                a: k,
-                b: k,
-                t: 1.0,
-            });
-        }
-        let (a, b) = (self.order[j - 1], self.order[j]);
-        let (ra, rb) = (&rates[a], &rates[b]);
-        let t = (phi_max - ra.angle) / (rb.angle - ra.angle);
-        Some(Crossing {
-            value: ra.depth + t * (rb.depth - ra.depth),
-            a,
-            b,
-            t,
-        })
+        super::crossing::crossing(
+            &self.order,
+            |k| rates[k].angle,
+            |k| rates[k].depth,
+            self.sys.blue().phi_max,
+        )
     }
 
     /// F(t, y, y') into r.
@@ -1043,17 +1030,8 @@ impl CoupledDae {
             return;
         };
         let d = self.d();
-        // ∂D* = (1 − t) ∂d_a + t ∂d_b − (d_b − d_a)/(φ_b − φ_a) ((1 − t) ∂φ_a + t ∂φ_b).
-        let (a, b, t) = (cr.a, cr.b, cr.t);
-        let slope = if a == b {
-            0.0
-        } else {
-            (rates[b].depth - rates[a].depth) / (rates[b].angle - rates[a].angle)
-        };
-        for (k, wgt) in [(a, 1.0 - t), (b, t)] {
-            if a == b && k == a && wgt != 1.0 {
-                continue;
-            }
+        // ∂D* = Σ_i L_i (∂d_i − p'(φ_i) ∂φ_i) over the interpolant's points.
+        for &(k, wgt, slope) in cr.points() {
             let mut g = Grad::default();
             let own = match self.sites[k] {
                 Site::Left(_) => L,
@@ -1142,15 +1120,6 @@ impl CoupledDae {
         }
         v
     }
-}
-
-/// The crossing of φ_max: the interpolated depth, the straddling points and the weight.
-#[derive(Clone, Copy, Debug)]
-struct Crossing {
-    value: f64,
-    a: usize,
-    b: usize,
-    t: f64,
 }
 
 /// Writes the discretisation's Jacobian (rows and columns of the 5-per-node elastic

@@ -8,6 +8,7 @@ pub(crate) mod cvode;
 // The coupled DAE and the growth system are public for the numerics tests and the benches
 // (analytic against finite-difference Jacobians, timings of their pieces), not as API.
 #[doc(hidden)]
+pub mod crossing;
 pub mod dae;
 pub(crate) mod euler;
 pub(crate) mod ida;

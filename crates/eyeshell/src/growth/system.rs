@@ -467,17 +467,11 @@ impl GrowthSystem {
     }
 }
 
-/// The blue depth where the retina crosses the polar angle φ_max, interpolated linearly in
-/// φ between the two points (in Σ order) that straddle it, so the rule beyond φ_max does not
-/// hang on where the nodes fall (docs/MODEL.md §6). None if the retina never reaches φ_max.
+/// The blue depth where the retina crosses the polar angle φ_max ([`super::crossing`]);
+/// None if the retina never reaches φ_max.
 fn depth_at_angle(pts: &GrowthPoints, stim: &[PointStimulus], phi_max: f64) -> Option<f64> {
     let mut order: Vec<usize> = (0..pts.len()).collect();
-    order.sort_by(|&a, &b| pts.sigma_ref[a].partial_cmp(&pts.sigma_ref[b]).unwrap());
-    let j = order.iter().position(|&k| stim[k].angle >= phi_max)?;
-    if j == 0 {
-        return Some(stim[order[0]].depth_blue);
-    }
-    let (a, b) = (&stim[order[j - 1]], &stim[order[j]]);
-    let t = (phi_max - a.angle) / (b.angle - a.angle);
-    Some(a.depth_blue + t * (b.depth_blue - a.depth_blue))
+    order.sort_by(|&a, &b| pts.sigma_ref[a].total_cmp(&pts.sigma_ref[b]));
+    super::crossing::crossing(&order, |k| stim[k].angle, |k| stim[k].depth_blue, phi_max)
+        .map(|c| c.value)
 }
