@@ -60,6 +60,8 @@ pub struct Run {
     pub solution: Solution,
     /// Axial length at t_end (growth only).
     pub axial_length: Option<f64>,
+    /// (t, axial length) at each of the scene's output times and t_end (growth only).
+    pub axial_series: Vec<(f64, f64)>,
     pub seconds: f64,
     pub growth: Option<GrowthStats>,
 }
@@ -83,6 +85,7 @@ pub fn run(
             Ok(Run {
                 solution,
                 axial_length: None,
+                axial_series: vec![],
                 seconds: start.elapsed().as_secs_f64(),
                 growth: None,
             })
@@ -90,17 +93,26 @@ pub fn run(
         Some((g, s)) => {
             let t_end = g.t_end;
             let mut last = None;
+            let mut series = vec![];
+            // The scene's output times as well as t_end: an integrator's error in axial
+            // length is not monotone in t, and one instant can flatter it.
             let stats = eyeshell::growth::run(
                 params,
                 solver,
                 g,
                 &GrowthSettings {
-                    output_times: vec![],
+                    history_points: 0,
                     ..s.clone()
                 },
                 &mut |sys, t, p| {
+                    if t > 0.0 && t < t_end {
+                        // A snapshot, as the run directory would have it (IDA's elastic
+                        // state polished).
+                        series.push((t, sys.snapshot(t, p)?.series.axial_length));
+                    }
                     if t == t_end {
                         let snap = sys.snapshot(t, p)?;
+                        series.push((t, snap.series.axial_length));
                         let sol = sys
                             .elastic
                             .solution()
@@ -122,6 +134,7 @@ pub fn run(
             Ok(Run {
                 solution,
                 axial_length: Some(axial),
+                axial_series: series,
                 seconds,
                 growth: Some(stats),
             })

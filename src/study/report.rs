@@ -204,7 +204,7 @@ pub fn wpd(scene: &Scene, dir: &Path) -> Result<String, StudyError> {
             &curves,
             dir,
             "wpd_growth_axial",
-            "growth to t_end: axial-length error against CVODE rtol 1e-10",
+            "growth to t_end: axial-length error (largest over the output times) against CVODE rtol 1e-10",
             true,
         )?;
         describe_winners(
