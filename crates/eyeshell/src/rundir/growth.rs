@@ -20,7 +20,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use super::summary::{GrowthSummary, RunStatus, SnapshotEntry, Summary};
-use super::table::{csv_bytes, csv_writer, QuoteStyle};
+use super::table::{csv_writer, QuoteStyle};
 use super::{format_value, write_atomic, OutputError, OwnedDir, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
 use crate::growth::{
@@ -80,15 +80,13 @@ pub fn series_record(row: &SeriesRow) -> [String; 6] {
 
 /// The text of a snapshot file: the [`snapshot_header`] columns, one row per node.
 pub fn snapshot_csv(s: &Snapshot) -> std::io::Result<Vec<u8>> {
-    let header = COLUMNS.iter().chain(GROWTH_COLUMNS.iter());
-    let rows = s.fields.iter().zip(&s.growth).map(|(f, g)| {
-        f.values()
-            .into_iter()
-            .chain(g.values())
-            .map(format_value)
-            .collect::<Vec<_>>()
-    });
-    csv_bytes(header, rows, QuoteStyle::Necessary)
+    let header = COLUMNS.iter().chain(GROWTH_COLUMNS.iter()).copied();
+    let rows = s
+        .fields
+        .iter()
+        .zip(&s.growth)
+        .map(|(f, g)| f.values().into_iter().chain(g.values()));
+    Ok(super::numeric_csv(header, rows))
 }
 
 /// A snapshot file written so far: its time and its path relative to the output directory.
