@@ -502,6 +502,12 @@ mod tests {
     use super::*;
     use nalgebra::{DMatrix, DVector};
 
+    fn assert_close(x: &[f64], expect: &[f64], tol: f64, who: &str) {
+        for (i, (a, b)) in x.iter().zip(expect).enumerate() {
+            assert!((a - b).abs() < tol, "{who} {i}: {a} vs {b}");
+        }
+    }
+
     /// A random matrix with the structure of the growth DAE (blocks reading a band window
     /// and earlier blocks, band rows reading blocks, a border), as CSR and dense, with
     /// n_p; block `weak` (if any) has its own 2×2 block scaled by `by`.
@@ -560,16 +566,7 @@ mod tests {
             .lu()
             .solve(&DVector::from_vec(b.clone()))
             .unwrap();
-        let check = |x: &[f64], who: &str| {
-            for i in 0..n {
-                assert!(
-                    (x[i] - expect[i]).abs() < 1e-12,
-                    "{who} {i}: {} vs {}",
-                    x[i],
-                    expect[i]
-                );
-            }
-        };
+        let check = |x: &[f64], who: &str| assert_close(x, expect.as_slice(), 1e-12, who);
         let mut x = vec![0.0; n];
         for how in [Reduced::Band, Reduced::Klu] {
             if how == Reduced::Klu && !crate::klu_available() {
@@ -642,27 +639,13 @@ mod tests {
         assert_eq!(solver.fallbacks(), 1);
         let mut x = vec![0.0; n];
         solver.solve(&b, &mut x).unwrap();
-        for i in 0..n {
-            assert!(
-                (x[i] - expect[i]).abs() < 1e-11,
-                "{i}: {} vs {}",
-                x[i],
-                expect[i]
-            );
-        }
+        assert_close(&x, expect.as_slice(), 1e-11, "fallback");
         // A well-scaled matrix goes back to the fast path.
         let (good, dense, _) = structured(None);
         solver.factor(&good).unwrap();
         assert_eq!(solver.fallbacks(), 1);
         solver.solve(&b, &mut x).unwrap();
         let expect = dense.lu().solve(&DVector::from_vec(b)).unwrap();
-        for i in 0..n {
-            assert!(
-                (x[i] - expect[i]).abs() < 1e-12,
-                "{i}: {} vs {}",
-                x[i],
-                expect[i]
-            );
-        }
+        assert_close(&x, expect.as_slice(), 1e-12, "fast path again");
     }
 }
