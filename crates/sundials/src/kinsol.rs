@@ -341,13 +341,18 @@ impl<S: NonlinearSystem> Kinsol<S> {
         let stats = self.collect_stats();
         self.last_stats = stats;
         // SAFETY: KINSol has returned; no callback is running.
-        let (fatal, recoverable, logged, setup_started) = unsafe {
+        let (fatal, recoverable, logged, setup_started, factor_error) = unsafe {
             let shared = self.shared.get_mut();
+            let factor_error = match &shared.matrix {
+                Matrix::Block(m) if flag == KIN_LSETUP_FAIL => m.last_error().map(str::to_string),
+                _ => None,
+            };
             (
                 shared.callbacks.fatal.take(),
                 shared.callbacks.last_recoverable.take(),
                 self.log.get().last_message(),
                 shared.setup_started,
+                factor_error,
             )
         };
         // Every setup KINSOL begins zeroes and refills the matrix, which for dense and band
@@ -381,6 +386,9 @@ impl<S: NonlinearSystem> Kinsol<S> {
                 let mut message = logged.unwrap_or_else(|| FlagFamily::Kin.describe(flag).1.to_string());
                 if let Some(r) = recoverable {
                     message.push_str(&format!("; last recoverable callback error: {r}"));
+                }
+                if let Some(e) = factor_error {
+                    message.push_str(&format!("; {e}"));
                 }
                 Err(flag_error("KINSol", flag, FlagFamily::Kin, Some(message)))
             }

@@ -15,6 +15,7 @@
 //! [`linalg`] builds the structured direct solvers of the growth DAE on top, in safe
 //! Rust.
 
+mod block;
 mod callback;
 mod context;
 mod cvode;
@@ -37,8 +38,8 @@ pub use ida::{DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats};
 pub use kinsol::{Kinsol, KinsolOptions, KinsolStats, NonlinearSystem, Strategy};
 pub use linsol::{LinearSolver, LinearSolverSpec};
 pub use matrix::{
-    BandMatrix, BandMut, CsrMut, DenseMatrix, DenseMut, JacobianMatrix, Matrix, MatrixKind,
-    MatrixSink, SparseMatrix,
+    BandMatrix, BandMut, BlockMatrix, CsrMut, DenseMatrix, DenseMut, JacobianMatrix, Matrix,
+    MatrixKind, MatrixSink, SparseMatrix,
 };
 pub use nvector::NVector;
 

@@ -1,4 +1,4 @@
-//! Direct linear solvers (dense LU, band LU, KLU) owned by Rust, usable by KINSOL (and later
+//! Direct linear solvers (dense LU, band LU, KLU, almost-block-diagonal LU) owned by Rust, usable by KINSOL (and later
 //! CVODE/IDA) or standalone through [`LinearSolver::setup`] / [`LinearSolver::solve`].
 
 use std::rc::Rc;
@@ -8,10 +8,12 @@ use sundials_sys::{
     SUNLinSol_Dense, SUNLinearSolver,
 };
 
+use super::block::new_block_solver;
 use super::context::Context;
 use super::error::{check, FlagFamily, SundialsError};
 use super::klu::new_klu;
-use super::matrix::{BandMatrix, DenseMatrix, Matrix, MatrixKind, SparseMatrix};
+use super::linalg::ABD_NODE;
+use super::matrix::{BandMatrix, BlockMatrix, DenseMatrix, Matrix, MatrixKind, SparseMatrix};
 use super::nvector::NVector;
 
 /// Which matrix and direct solver to use for an n×n system.
@@ -29,6 +31,12 @@ pub enum LinearSolverSpec {
         row_ptr: Vec<usize>,
         col_idx: Vec<usize>,
     },
+    /// The almost-block-diagonal LU of `linalg::AbdLu`: n = 5 · nodes unknowns, `top`
+    /// boundary rows at the start and 5 − top at the end (the elastic BVP: top = 3).
+    Block {
+        nodes: usize,
+        top: usize,
+    },
 }
 
 impl LinearSolverSpec {
@@ -44,6 +52,15 @@ impl LinearSolverSpec {
                     return Err(SundialsError::KluUnavailable);
                 }
                 Matrix::Sparse(SparseMatrix::new(ctx, n, row_ptr.clone(), col_idx.clone())?)
+            }
+            LinearSolverSpec::Block { nodes, top } => {
+                if nodes.checked_mul(ABD_NODE) != Some(n) {
+                    return Err(SundialsError::Invalid(format!(
+                        "a block matrix of {nodes} nodes has {} unknowns, not {n}",
+                        nodes.saturating_mul(ABD_NODE)
+                    )));
+                }
+                Matrix::Block(BlockMatrix::new(ctx, *nodes, *top)?)
             }
         })
     }
@@ -93,6 +110,7 @@ impl LinearSolver {
                     "SUNLinSol_KLU",
                     Some(a.fingerprint()),
                 ),
+                Matrix::Block(_) => (new_block_solver(ctx)?, "SUNLinSolNewEmpty", None),
             }
         };
         if raw.is_null() {
@@ -161,7 +179,11 @@ impl LinearSolver {
         self.factored = false;
         // SAFETY: both handles are live and compatible (checked above).
         let flag = unsafe { SUNLinSolSetup(self.raw, matrix.raw()) };
-        check("SUNLinSolSetup", flag, FlagFamily::SunLs, None)?;
+        let detail = match matrix {
+            Matrix::Block(m) if flag != 0 => m.last_error().map(str::to_string),
+            _ => None,
+        };
+        check("SUNLinSolSetup", flag, FlagFamily::SunLs, detail)?;
         self.factored = true;
         Ok(())
     }

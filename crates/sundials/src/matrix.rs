@@ -19,9 +19,11 @@ use sundials_sys::{
     SUNSparseMatrix_IndexValues, CSR_MAT,
 };
 
+pub use super::block::BlockMatrix;
 use super::callback::{CallbackError, CallbackResult};
 use super::context::Context;
 use super::error::SundialsError;
+use super::linalg::AbdLu;
 
 /// A matrix the Jacobian assembler writes into, entry by entry. `set` overwrites.
 pub trait MatrixSink {
@@ -34,6 +36,8 @@ pub enum MatrixKind {
     Dense,
     Band,
     Sparse,
+    /// Almost block diagonal, 5×5 node blocks ([`BlockMatrix`]).
+    Block,
 }
 
 // ---------------------------------------------------------------------------------------
@@ -190,6 +194,9 @@ pub enum JacobianMatrix<'a> {
     Dense(DenseMut<'a>),
     Band(BandMut<'a>),
     Sparse(CsrMut<'a>),
+    /// The blocks themselves: an assembler writes every entry of every interval block (see
+    /// [`Matrix::fill_jacobian`]).
+    Block(&'a mut AbdLu),
 }
 
 impl JacobianMatrix<'_> {
@@ -198,6 +205,7 @@ impl JacobianMatrix<'_> {
             JacobianMatrix::Dense(_) => MatrixKind::Dense,
             JacobianMatrix::Band(_) => MatrixKind::Band,
             JacobianMatrix::Sparse(_) => MatrixKind::Sparse,
+            JacobianMatrix::Block(_) => MatrixKind::Block,
         }
     }
 
@@ -207,6 +215,7 @@ impl JacobianMatrix<'_> {
             JacobianMatrix::Dense(m) => m.get(i, j),
             JacobianMatrix::Band(m) => m.get(i, j),
             JacobianMatrix::Sparse(m) => m.get(i, j),
+            JacobianMatrix::Block(m) => m.get(i, j),
         }
     }
 }
@@ -217,6 +226,7 @@ impl MatrixSink for JacobianMatrix<'_> {
             JacobianMatrix::Dense(m) => m.nrows(),
             JacobianMatrix::Band(m) => m.nrows(),
             JacobianMatrix::Sparse(m) => m.nrows(),
+            JacobianMatrix::Block(m) => m.nrows(),
         }
     }
 
@@ -225,6 +235,7 @@ impl MatrixSink for JacobianMatrix<'_> {
             JacobianMatrix::Dense(m) => m.set(i, j, v),
             JacobianMatrix::Band(m) => m.set(i, j, v),
             JacobianMatrix::Sparse(m) => m.set(i, j, v),
+            JacobianMatrix::Block(m) => m.set(i, j, v),
         }
     }
 }
@@ -611,6 +622,7 @@ pub enum Matrix {
     Dense(DenseMatrix),
     Band(BandMatrix),
     Sparse(SparseMatrix),
+    Block(BlockMatrix),
 }
 
 impl Matrix {
@@ -619,6 +631,7 @@ impl Matrix {
             Matrix::Dense(_) => MatrixKind::Dense,
             Matrix::Band(_) => MatrixKind::Band,
             Matrix::Sparse(_) => MatrixKind::Sparse,
+            Matrix::Block(_) => MatrixKind::Block,
         }
     }
 
@@ -627,6 +640,7 @@ impl Matrix {
             Matrix::Dense(m) => m.nrows(),
             Matrix::Band(m) => m.n(),
             Matrix::Sparse(m) => m.n(),
+            Matrix::Block(m) => m.lu().size(),
         }
     }
 
@@ -635,6 +649,7 @@ impl Matrix {
             Matrix::Dense(m) => m.ncols(),
             Matrix::Band(m) => m.n(),
             Matrix::Sparse(m) => m.n(),
+            Matrix::Block(m) => m.lu().size(),
         }
     }
 
@@ -644,6 +659,7 @@ impl Matrix {
             Matrix::Dense(m) => m.zero(),
             Matrix::Band(m) => m.zero(),
             Matrix::Sparse(m) => m.zero(),
+            Matrix::Block(m) => m.lu_mut().zero(),
         }
     }
 
@@ -652,17 +668,31 @@ impl Matrix {
             Matrix::Dense(m) => JacobianMatrix::Dense(m.view_mut()),
             Matrix::Band(m) => JacobianMatrix::Band(m.view_mut()),
             Matrix::Sparse(m) => JacobianMatrix::Sparse(m.view_mut()),
+            Matrix::Block(m) => JacobianMatrix::Block(m.lu_mut()),
         }
     }
 
     /// The body of every Jacobian callback (KINSOL's, CVODE's, IDA's): zero the matrix, let
     /// `fill` set its structural entries, and fail (Fatal) if any write fell outside the
     /// structure (release builds count those writes instead of panicking).
+    ///
+    /// A block matrix is not zeroed whole: only its boundary rows, whose entries assemblers
+    /// set sparsely. Its interval blocks are dense and must be written whole (the factors
+    /// live apart, so they keep the last assembly's values otherwise); debug builds fill
+    /// them with NaN first, so that an entry left unwritten fails the factorisation.
     pub(crate) fn fill_jacobian(
         &mut self,
         fill: impl FnOnce(JacobianMatrix<'_>) -> CallbackResult,
     ) -> CallbackResult {
-        self.zero();
+        match self {
+            Matrix::Block(m) => {
+                m.lu_mut().zero_boundary();
+                if cfg!(debug_assertions) {
+                    m.lu_mut().poison_blocks();
+                }
+            }
+            _ => self.zero(),
+        }
         self.take_outside();
         fill(self.view_mut())?;
         match self.take_outside() {
@@ -675,11 +705,12 @@ impl Matrix {
     }
 
     /// How many writes fell outside the band/pattern since the last call; resets the count.
-    pub(crate) fn take_outside(&self) -> usize {
+    pub(crate) fn take_outside(&mut self) -> usize {
         match self {
             Matrix::Dense(_) => 0,
             Matrix::Band(m) => m.outside.replace(0),
             Matrix::Sparse(m) => m.outside.replace(0),
+            Matrix::Block(m) => m.lu_mut().take_outside(),
         }
     }
 
@@ -697,6 +728,7 @@ impl Matrix {
             Matrix::Dense(m) => m.raw(),
             Matrix::Band(m) => m.raw(),
             Matrix::Sparse(m) => m.raw(),
+            Matrix::Block(m) => m.raw(),
         }
     }
 
@@ -711,6 +743,12 @@ impl Matrix {
                 m.lower()
             ),
             Matrix::Sparse(m) => format!("CSR n={} nnz={}", m.n(), m.nnz()),
+            Matrix::Block(m) => format!(
+                "almost block diagonal n={} ({} nodes, {} top rows)",
+                m.lu().size(),
+                m.lu().nodes(),
+                m.lu().top()
+            ),
         }
     }
 }

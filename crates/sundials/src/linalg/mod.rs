@@ -11,15 +11,20 @@
 //! and [`Fallback`], which pairs a fast solver with a robust one for the factorisations
 //! the fast one refuses.
 //!
+//! [`AbdLu`] factors the almost-block-diagonal Jacobians of the elastic BVP (5×5 node
+//! blocks; KINSOL uses it through `LinearSolverSpec::Block`).
+//!
 //! The band LU ([`BandLu`]) is safe Rust here; KLU is SUNDIALS' (through the safe layer
 //! in `crate`).
 
+mod abd;
 mod band_lu;
 mod bordered;
 mod csr;
 mod fallback;
 mod schur;
 
+pub use abd::{AbdLu, NODE as ABD_NODE};
 pub use band_lu::BandLu;
 pub use bordered::{BorderedBand, InterleavedBand, KluSolver};
 pub use csr::Csr;

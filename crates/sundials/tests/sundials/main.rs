@@ -5,6 +5,7 @@
 
 mod sundials_support;
 
+mod abd;
 mod band_lu;
 mod cvode;
 mod ida;
