@@ -29,6 +29,17 @@ use super::linalg::AbdLu;
 pub trait MatrixSink {
     fn nrows(&self) -> usize;
     fn set(&mut self, i: usize, j: usize, v: f64);
+
+    /// Set the dense sub-block of `values.len() / ncols` rows from row `row0` and `ncols`
+    /// columns from column `col0` (row-major `values`). The default sets entry by entry; a
+    /// block matrix copies an interval's block whole.
+    fn set_block(&mut self, row0: usize, col0: usize, ncols: usize, values: &[f64]) {
+        for (a, row) in values.chunks_exact(ncols).enumerate() {
+            for (b, &v) in row.iter().enumerate() {
+                self.set(row0 + a, col0 + b, v);
+            }
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -236,6 +247,15 @@ impl MatrixSink for JacobianMatrix<'_> {
             JacobianMatrix::Band(m) => m.set(i, j, v),
             JacobianMatrix::Sparse(m) => m.set(i, j, v),
             JacobianMatrix::Block(m) => m.set(i, j, v),
+        }
+    }
+
+    fn set_block(&mut self, row0: usize, col0: usize, ncols: usize, values: &[f64]) {
+        match self {
+            JacobianMatrix::Dense(m) => m.set_block(row0, col0, ncols, values),
+            JacobianMatrix::Band(m) => m.set_block(row0, col0, ncols, values),
+            JacobianMatrix::Sparse(m) => m.set_block(row0, col0, ncols, values),
+            JacobianMatrix::Block(m) => m.set_block(row0, col0, ncols, values),
         }
     }
 }

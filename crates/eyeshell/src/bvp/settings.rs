@@ -27,6 +27,9 @@ pub enum LinearSolverKind {
     Band,
     /// SuiteSparse KLU through SUNDIALS' sunlinsol_klu.
     Klu,
+    /// The almost-block-diagonal LU of 5×5 node blocks (`linalg::AbdLu`), assembled
+    /// straight into its blocks.
+    Block,
 }
 
 /// Numerical settings of one elastic solve.

@@ -3,7 +3,9 @@
 //! sphere, warm starts from a previous solution, and pressure continuation when a cold
 //! start does not converge.
 
-use super::discretisation::{Discretisation, EvalFailure, MaterialData, LOWER, NY, UPPER};
+use super::discretisation::{
+    Discretisation, EvalFailure, MaterialData, LOWER, NY, POLE_ROWS, UPPER,
+};
 use super::equations::{self, Shell, Vec5, KAPPA, QS, R, THETA, TS};
 use super::interpolant::{Interpolant, NQ};
 use super::material::{reference_data, reference_point};
@@ -118,6 +120,7 @@ impl NonlinearSystem for ElasticSystem {
             JacobianMatrix::Band(mut m) => self.disc.jacobian(u, &mut m),
             JacobianMatrix::Sparse(mut m) => self.disc.jacobian(u, &mut m),
             JacobianMatrix::Dense(mut m) => self.disc.jacobian(u, &mut m),
+            JacobianMatrix::Block(m) => self.disc.jacobian(u, m),
         };
         self.record(r)
     }
@@ -314,7 +317,8 @@ fn kinsol_options(s: &SolverSettings) -> KinsolOptions {
     }
 }
 
-/// The linear solver for a discretisation: band (its bandwidths) or KLU (its pattern).
+/// The linear solver for a discretisation: band (its bandwidths), KLU (its pattern) or the
+/// almost-block-diagonal LU (its nodes and pole rows).
 pub fn linear_spec(disc: &Discretisation, kind: LinearSolverKind) -> LinearSolverSpec {
     match kind {
         LinearSolverKind::Band => LinearSolverSpec::Band {
@@ -325,6 +329,10 @@ pub fn linear_spec(disc: &Discretisation, kind: LinearSolverKind) -> LinearSolve
             let (row_ptr, col_idx) = disc.pattern();
             LinearSolverSpec::Klu { row_ptr, col_idx }
         }
+        LinearSolverKind::Block => LinearSolverSpec::Block {
+            nodes: disc.mesh.len(),
+            top: POLE_ROWS,
+        },
     }
 }
 

@@ -310,7 +310,7 @@ pub const MAX_HISTORY_POINTS: usize = 1_000_000;
 
 const THICKNESS: &[&str] = &["uniform", "nonuniform"];
 const SCHEMES: &[&str] = &["trapezoid", "hermite-simpson"];
-const LINEAR: &[&str] = &["band", "klu"];
+const LINEAR: &[&str] = &["band", "klu", "block"];
 const THICKNESS_LAWS: &[&str] = &["none", "mass"];
 const INTEGRATORS: &[&str] = &Integrator::NAMES;
 
@@ -458,13 +458,18 @@ pub static KEYS: &[KeySpec] = &[
             get: |s| match s.solver.linear {
                 LinearSolverKind::Band => 0,
                 LinearSolverKind::Klu => 1,
+                LinearSolverKind::Block => 2,
             },
             set: |s, i| {
-                s.solver.linear = if i == 0 { LinearSolverKind::Band } else { LinearSolverKind::Klu }
+                s.solver.linear = match i {
+                    0 => LinearSolverKind::Band,
+                    1 => LinearSolverKind::Klu,
+                    _ => LinearSolverKind::Block,
+                }
             },
         },
         rule: Rule::Any,
-        doc: "direct linear solver of the Newton matrix: SUNDIALS band LU or KLU",
+        doc: "direct linear solver of the Newton matrix: SUNDIALS band LU, KLU, or block (the almost-block-diagonal LU of 5×5 node blocks)",
         growth: false,
     },
     KeySpec {

@@ -2,7 +2,7 @@
 //! scenes, as diffsol keeps its test models.
 #![allow(dead_code)]
 
-use eyeshell::bvp::settings::{Scheme, SolverSettings};
+use eyeshell::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
 use eyeshell::bvp::{self, Solution};
 use eyeshell::model::params::{Params, Thickness};
 
@@ -20,12 +20,27 @@ pub fn fibre_shell() -> Params {
     }
 }
 
+/// The tests' settings. `EYESHELL_TEST_LINEAR=band|klu|block` picks the linear solver of
+/// every test that uses them (default: the scene default), so that the whole elastic suite
+/// runs with each: `EYESHELL_TEST_LINEAR=block cargo test --release -p eyeshell --test numerics`.
 pub fn settings(nodes: usize, scheme: Scheme) -> SolverSettings {
     SolverSettings {
         nodes,
         scheme,
         newton_tol: 1e-12,
+        linear: test_linear(),
         ..SolverSettings::default()
+    }
+}
+
+/// The linear solver `EYESHELL_TEST_LINEAR` names (the default one if unset).
+pub fn test_linear() -> LinearSolverKind {
+    match std::env::var("EYESHELL_TEST_LINEAR").as_deref() {
+        Err(_) | Ok("") => SolverSettings::default().linear,
+        Ok("band") => LinearSolverKind::Band,
+        Ok("klu") => LinearSolverKind::Klu,
+        Ok("block") => LinearSolverKind::Block,
+        Ok(other) => panic!("EYESHELL_TEST_LINEAR={other}: expected band, klu or block"),
     }
 }
 

@@ -422,6 +422,32 @@ impl MatrixSink for AbdLu {
             None => self.count_outside(i, j),
         }
     }
+
+    /// An interval's whole 5×10 block (rows p + 5k.., columns 5k..) is one copy; anything
+    /// else goes entry by entry.
+    #[inline]
+    fn set_block(&mut self, row0: usize, col0: usize, ncols: usize, values: &[f64]) {
+        let p = self.top;
+        if ncols == WIDE
+            && values.len() == NODE * WIDE
+            && row0 >= p
+            && (row0 - p) % NODE == 0
+            && col0 == row0 - p
+            && (row0 - p) / NODE < self.blocks.len()
+        {
+            self.factored = false;
+            let block = &mut self.blocks[(row0 - p) / NODE];
+            for (dst, src) in block.iter_mut().zip(values.chunks_exact(WIDE)) {
+                dst.copy_from_slice(src);
+            }
+            return;
+        }
+        for (a, row) in values.chunks_exact(ncols).enumerate() {
+            for (b, &v) in row.iter().enumerate() {
+                self.set(row0 + a, col0 + b, v);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
