@@ -2,16 +2,20 @@
 //!   cargo bench --bench elastic
 //! and the interleaved fibres-or-not comparison with
 //!   EYESHELL_INTERLEAVED=1 cargo bench --bench elastic -- components
+//! The linear solvers side by side (band, klu, block; issue 15):
+//!   cargo bench --bench elastic -- "factor_and_solve|solve_by_nodes"
 //! Figures go in BENCHMARKS.md.
 
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
-use eyeshell::bvp::discretisation::{LOWER, UPPER};
-use eyeshell::bvp::settings::{Scheme, SolverSettings};
-use eyeshell::bvp::solve::{discretise, sphere_guess};
+use eyeshell::bvp::discretisation::{LOWER, NY, POLE_ROWS, UPPER};
+use eyeshell::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
+use eyeshell::bvp::solve::{discretise, linear_spec, sphere_guess};
 use eyeshell::bvp::{self};
 use eyeshell::model::params::{Params, Thickness};
-use eyeshell_sundials::MatrixSink;
+use eyeshell_sundials::linalg::{AbdLu, BandLu};
+use eyeshell_sundials::{Context, LinearSolver, MatrixSink, NVector};
 use std::hint::black_box;
+use std::time::Duration;
 
 fn fibre_shell() -> Params {
     Params {
@@ -54,8 +58,14 @@ fn cold_and_warm(c: &mut Criterion) {
     g.finish();
 }
 
-/// Cost per node: cold and warm solves over N from 101 to 20001 (linear in N if the band
-/// holds). Warm: from the solution at a 1 % higher pressure.
+const LINEAR: [(&str, LinearSolverKind); 3] = [
+    ("band", LinearSolverKind::Band),
+    ("klu", LinearSolverKind::Klu),
+    ("block", LinearSolverKind::Block),
+];
+
+/// Cost per node: cold and warm solves over N from 101 to 20001 with each linear solver
+/// (linear in N if the band holds). Warm: from the solution at a 1 % higher pressure.
 fn scaling(c: &mut Criterion) {
     let p = fibre_shell();
     for warm in [false, true] {
@@ -65,26 +75,107 @@ fn scaling(c: &mut Criterion) {
             "cold_solve_by_nodes"
         });
         g.sample_size(10);
+        g.warm_up_time(Duration::from_secs(1));
+        g.measurement_time(Duration::from_secs(3));
         for n in [101usize, 501, 2001, 20001] {
-            let s = settings(n);
-            let near = warm.then(|| {
-                bvp::solve(
-                    &Params {
-                        dp: p.dp * 1.01,
-                        ..p
-                    },
-                    &s,
-                    None,
-                )
-                .unwrap()
-            });
-            g.throughput(Throughput::Elements(n as u64));
-            g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-                b.iter(|| bvp::solve(black_box(&p), &s, near.as_ref()).unwrap())
-            });
+            for (name, linear) in LINEAR {
+                let s = SolverSettings {
+                    linear,
+                    ..settings(n)
+                };
+                let near = warm.then(|| {
+                    bvp::solve(
+                        &Params {
+                            dp: p.dp * 1.01,
+                            ..p
+                        },
+                        &s,
+                        None,
+                    )
+                    .unwrap()
+                });
+                g.throughput(Throughput::Elements(n as u64));
+                g.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+                    b.iter(|| bvp::solve(black_box(&p), &s, near.as_ref()).unwrap())
+                });
+            }
         }
         g.finish();
     }
+}
+
+/// The linear algebra of one Newton iteration alone: factorisation and one solve of the
+/// fibre shell's Jacobian at its solution, N = 101 … 20001, by SUNDIALS' band LU, KLU, the
+/// almost-block-diagonal LU (through the same SUNDIALS ops KINSOL calls) and the crate's
+/// safe-Rust band LU. The band LUs factor in place, so each iteration first copies the
+/// assembled matrix back (`band_copy` times that copy alone); KLU and the block LU keep
+/// the matrix and factor from it.
+fn factor_and_solve(c: &mut Criterion) {
+    let p = fibre_shell();
+    let mut g = c.benchmark_group("factor_and_solve");
+    g.warm_up_time(Duration::from_secs(1));
+    g.measurement_time(Duration::from_secs(3));
+    for n in [101usize, 501, 2001, 20001] {
+        let s = settings(n);
+        let sol = bvp::solve(&p, &s, None).unwrap();
+        let mut disc = discretise(&p, &s).unwrap();
+        let m = disc.len();
+        let b: Vec<f64> = (0..m).map(|i| (0.3 * i as f64).sin()).collect();
+        let ctx = Context::new().unwrap();
+        g.throughput(Throughput::Elements(n as u64));
+        for (name, linear) in LINEAR {
+            let spec = linear_spec(&disc, linear);
+            let (mut a, mut ls) = LinearSolver::for_spec(&ctx, m, &spec).unwrap();
+            disc.jacobian(&sol.u, &mut a.view_mut()).unwrap();
+            let (mut saved, _) = LinearSolver::for_spec(&ctx, m, &spec).unwrap();
+            saved.copy_from(&a).unwrap();
+            let rhs = NVector::from_slice(&ctx, &b).unwrap();
+            let mut x = NVector::new(&ctx, m).unwrap();
+            let in_place = linear == LinearSolverKind::Band;
+            g.bench_with_input(BenchmarkId::new(name, n), &n, |bch, _| {
+                bch.iter(|| {
+                    if in_place {
+                        a.copy_from(&saved).unwrap();
+                    }
+                    ls.setup(&mut a).unwrap();
+                    ls.solve(&mut a, &mut x, &rhs).unwrap();
+                    black_box(x.as_slice()[0])
+                })
+            });
+            if in_place {
+                g.bench_with_input(BenchmarkId::new("band_copy", n), &n, |bch, _| {
+                    bch.iter(|| a.copy_from(black_box(&saved)).unwrap())
+                });
+            }
+        }
+        let mut own = BandLu::new(m, LOWER, UPPER).unwrap();
+        disc.jacobian(&sol.u, &mut own).unwrap();
+        let saved = own.clone();
+        let mut x = b.clone();
+        g.bench_with_input(BenchmarkId::new("band_rust", n), &n, |bch, _| {
+            bch.iter(|| {
+                own.clone_from(&saved);
+                own.factor().unwrap();
+                x.copy_from_slice(&b);
+                own.solve_in_place(&mut x);
+                black_box(x[0])
+            })
+        });
+        // The block LU's two halves, for the flop table.
+        let mut abd = AbdLu::new(m / NY, POLE_ROWS).unwrap();
+        disc.jacobian(&sol.u, &mut abd).unwrap();
+        g.bench_with_input(BenchmarkId::new("block_factor_only", n), &n, |bch, _| {
+            bch.iter(|| abd.factor().unwrap())
+        });
+        g.bench_with_input(BenchmarkId::new("block_solve_only", n), &n, |bch, _| {
+            bch.iter(|| {
+                x.copy_from_slice(&b);
+                abd.solve_in_place(&mut x);
+                black_box(x[0])
+            })
+        });
+    }
+    g.finish();
 }
 
 /// A band matrix stored as SUNDIALS stores one (column-major, entry (i, j) at offset
@@ -301,7 +392,14 @@ fn interleaved_components(rounds: usize, per: usize) {
     }
 }
 
-criterion_group!(benches, cold_and_warm, scaling, assembly, components);
+criterion_group!(
+    benches,
+    cold_and_warm,
+    scaling,
+    factor_and_solve,
+    assembly,
+    components
+);
 
 fn main() {
     if std::env::var_os("EYESHELL_INTERLEAVED").is_some() {

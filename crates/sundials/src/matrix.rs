@@ -692,6 +692,33 @@ impl Matrix {
         }
     }
 
+    /// Copy `other`'s entries into this matrix (same kind and shape; a sparse matrix's
+    /// pattern too): SUNMatCopy, or the blocks for a block matrix. For benchmarks and
+    /// callers that keep an assembled matrix to factor again (dense and band LU factor in
+    /// place).
+    pub fn copy_from(&mut self, other: &Matrix) -> Result<(), SundialsError> {
+        if self.kind() != other.kind() || self.nrows() != other.nrows() {
+            return Err(SundialsError::Invalid(format!(
+                "cannot copy a {} into a {}",
+                other.describe(),
+                self.describe()
+            )));
+        }
+        if let (Matrix::Block(dst), Matrix::Block(src)) = (&mut *self, other) {
+            dst.lu_mut().clone_from(src.lu());
+            return Ok(());
+        }
+        // SAFETY: both matrices are live SUNDIALS matrices of the same kind and size,
+        // distinct (one is borrowed mutably); SUNMatCopy only reads `other`.
+        let flag = unsafe { sundials_sys::SUNMatCopy(other.raw(), self.raw()) };
+        if flag != 0 {
+            return Err(SundialsError::Invalid(format!(
+                "SUNMatCopy failed with flag {flag}"
+            )));
+        }
+        Ok(())
+    }
+
     /// The body of every Jacobian callback (KINSOL's, CVODE's, IDA's): zero the matrix, let
     /// `fill` set its structural entries, and fail (Fatal) if any write fell outside the
     /// structure (release builds count those writes instead of panicking).
