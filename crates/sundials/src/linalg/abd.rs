@@ -47,8 +47,12 @@
 //! overwritten by a factorisation, so an assembler that writes the same entries every time
 //! (the discretisation writes every entry of every interval block) needs no zeroing between
 //! Jacobians ([`AbdLu::zero_boundary`] clears only the boundary rows, whose entries are set
-//! sparsely). Each stage's factors are one 10×10 row-major array (rows 0..p+5 used): the
-//! multipliers below the diagonal of columns 0..5, U above, the pivots' reciprocals apart.
+//! sparsely). Each stage's factors are one 10×10 column-major array (rows 0..p+5 used):
+//! the multipliers below the diagonal of columns 0..5, U above, the pivots' reciprocals
+//! apart. Column-major because the elimination then updates whole columns with
+//! fixed-length vector operations, and the stage sizes are constants (dispatched on the
+//! number of top rows): at N = 501 the factorisation took 165 µs row-major with runtime
+//! loop bounds, 101 µs without serial reductions, 76 µs column-major with constant sizes.
 
 use super::LinalgError;
 use crate::MatrixSink;
@@ -60,7 +64,8 @@ const WIDE: usize = 2 * NODE;
 /// A pivot at most this much of its column's largest original entry counts as singular.
 const PIVOT_TOLERANCE: f64 = 1e-14;
 
-type Row = [f64; WIDE];
+/// A column of a stage's working block (up to 10 rows).
+type Col = [f64; WIDE];
 
 /// An almost-block-diagonal matrix (see the module docs) and, after [`AbdLu::factor`], its
 /// LU factors.
@@ -70,12 +75,13 @@ pub struct AbdLu {
     top: usize,
     /// The top rows over columns 0..5.
     top_rows: Vec<[f64; NODE]>,
-    /// Interval k's rows over columns 5k..5k+10.
-    blocks: Vec<[Row; NODE]>,
+    /// Interval k's rows over columns 5k..5k+10, column-major: `blocks[k][j][a]`.
+    blocks: Vec<[[f64; NODE]; WIDE]>,
     /// The bottom rows over the last five columns.
     bottom_rows: Vec<[f64; NODE]>,
-    /// Stage k's working block after elimination: rows 0..p+5 (0..5 at the last stage).
-    lu: Vec<[Row; WIDE]>,
+    /// Stage k's working block after elimination, column-major (`lu[k][j][r]`): rows
+    /// 0..p+5 (0..5 at the last stage).
+    lu: Vec<[Col; WIDE]>,
     /// Stage k: the row exchanged with row c at step c (full-row swaps, as LAPACK's getrf).
     piv: Vec<[u8; NODE]>,
     /// Stage k: 1 / U_cc.
@@ -104,7 +110,7 @@ impl AbdLu {
             nodes,
             top,
             top_rows: vec![[0.0; NODE]; top],
-            blocks: vec![[[0.0; WIDE]; NODE]; nodes - 1],
+            blocks: vec![[[0.0; NODE]; WIDE]; nodes - 1],
             bottom_rows: vec![[0.0; NODE]; NODE - top],
             lu: vec![[[0.0; WIDE]; WIDE]; nodes],
             piv: vec![[0; NODE]; nodes],
@@ -133,7 +139,7 @@ impl AbdLu {
     pub fn zero(&mut self) {
         self.zero_boundary();
         for b in &mut self.blocks {
-            *b = [[0.0; WIDE]; NODE];
+            *b = [[0.0; NODE]; WIDE];
         }
     }
 
@@ -150,7 +156,7 @@ impl AbdLu {
     /// tests of assemblers that rely on [`AbdLu::zero_boundary`]).
     pub fn poison_blocks(&mut self) {
         for b in &mut self.blocks {
-            *b = [[f64::NAN; WIDE]; NODE];
+            *b = [[f64::NAN; NODE]; WIDE];
         }
         self.factored = false;
     }
@@ -177,15 +183,9 @@ impl AbdLu {
         match self.locate(i, j) {
             Some((Part::Top, a, b)) => self.top_rows[a][b],
             Some((Part::Bottom, a, b)) => self.bottom_rows[a][b],
-            Some((Part::Block(k), a, b)) => self.blocks[k][a][b],
+            Some((Part::Block(k), a, b)) => self.blocks[k][b][a],
             None => 0.0,
         }
-    }
-
-    /// Interval k's block: its five rows over columns 5k..5k+10, to be written whole.
-    pub fn block_mut(&mut self, k: usize) -> &mut [[f64; WIDE]; NODE] {
-        self.factored = false;
-        &mut self.blocks[k]
     }
 
     /// The number of writes outside the structure since the last call, and reset it.
@@ -208,103 +208,144 @@ impl AbdLu {
     /// largest original entry, or a non-finite entry, is [`LinalgError::Singular`].
     pub fn factor(&mut self) -> Result<(), LinalgError> {
         self.factored = false;
-        let (m, p) = (self.nodes, self.top);
-        let mut a_max = 0.0f64;
-        let mut u_max = 0.0f64;
-        // The rows carried into the next stage (their columns there are 0..5).
-        let mut carry = [[0.0; NODE]; NODE];
-        carry[..p].copy_from_slice(&self.top_rows);
-        // Largest original |entry| of the stage's columns seen so far (from the rows above).
-        let mut col_max = [0.0f64; NODE];
-        for row in &self.top_rows {
-            for c in 0..NODE {
-                col_max[c] = col_max[c].max(row[c].abs());
-            }
-        }
+        let m = self.nodes;
+        let (mut a_max, mut u_max) = (0.0f64, 0.0f64);
         for k in 0..m {
-            let last = k == m - 1;
-            let (rows, cols) = if last { (NODE, NODE) } else { (p + NODE, WIDE) };
-            let w = &mut self.lu[k];
-            for r in 0..p {
-                w[r][..NODE].copy_from_slice(&carry[r]);
-                w[r][NODE..].fill(0.0);
-            }
-            let mut next_max = [0.0f64; NODE];
-            if last {
-                for (a, row) in self.bottom_rows.iter().enumerate() {
-                    w[p + a][..NODE].copy_from_slice(row);
-                    w[p + a][NODE..].fill(0.0);
-                    for c in 0..NODE {
-                        col_max[c] = col_max[c].max(row[c].abs());
-                    }
-                }
-            } else {
-                for (a, row) in self.blocks[k].iter().enumerate() {
-                    w[p + a] = *row;
-                    for c in 0..NODE {
-                        col_max[c] = col_max[c].max(row[c].abs());
-                        next_max[c] = next_max[c].max(row[NODE + c].abs());
-                    }
-                }
-            }
-            let stage_max = col_max.iter().fold(0.0f64, |x, &y| x.max(y));
-            if !stage_max.is_finite() || w[..rows].iter().flatten().any(|v| !v.is_finite()) {
-                return Err(LinalgError::Singular(format!(
-                    "block LU: node {k}'s rows hold a non-finite entry"
-                )));
-            }
-            a_max = a_max.max(stage_max);
-            for c in 0..NODE {
-                let (mut best_row, mut best) = (c, w[c][c].abs());
-                for r in c + 1..rows {
-                    let v = w[r][c].abs();
-                    if v > best {
-                        (best_row, best) = (r, v);
-                    }
-                }
-                let scale = col_max[c];
-                if !(best > PIVOT_TOLERANCE * scale) {
-                    let col = NODE * k + c;
-                    return Err(LinalgError::Singular(if best == 0.0 {
-                        format!(
-                            "block LU: column {col} (node {k}, unknown {c}) has no nonzero pivot"
-                        )
-                    } else {
-                        format!(
-                            "block LU: column {col} (node {k}, unknown {c}): pivot {best:e} is below {PIVOT_TOLERANCE:e} of the column's scale {scale:e}"
-                        )
-                    }));
-                }
-                self.piv[k][c] = best_row as u8;
-                w.swap(c, best_row);
-                let pivot_row = w[c];
-                let inv = 1.0 / pivot_row[c];
-                self.inv_diag[k][c] = inv;
-                for row in &mut w[c + 1..rows] {
-                    let l = row[c] * inv;
-                    row[c] = l;
-                    if l != 0.0 {
-                        for j in c + 1..cols {
-                            row[j] -= l * pivot_row[j];
-                        }
-                    }
-                }
-            }
-            for row in &w[..NODE] {
-                for v in &row[..cols] {
-                    u_max = u_max.max(v.abs());
-                }
-            }
-            if !last {
-                for r in 0..p {
-                    carry[r].copy_from_slice(&w[NODE + r][NODE..]);
-                }
-                col_max = next_max;
-            }
+            // Fixed sizes let the compiler unroll the elimination and vectorise its columns.
+            let result = match (k == m - 1, self.top) {
+                (true, _) => self.stage::<5, NODE>(k),
+                (false, 0) => self.stage::<5, WIDE>(k),
+                (false, 1) => self.stage::<6, WIDE>(k),
+                (false, 2) => self.stage::<7, WIDE>(k),
+                (false, 3) => self.stage::<8, WIDE>(k),
+                (false, 4) => self.stage::<9, WIDE>(k),
+                (false, _) => self.stage::<10, WIDE>(k),
+            };
+            let (stage_a, stage_u) = result?;
+            a_max = a_max.max(stage_a);
+            u_max = u_max.max(stage_u);
         }
         self.growth = if a_max > 0.0 { u_max / a_max } else { 0.0 };
         self.factored = true;
         Ok(())
+    }
+
+    /// Stage k: gather its R×C working block (the rows carried from stage k − 1, or the top
+    /// rows, and interval k's rows, or the bottom rows), eliminate node k's five columns with
+    /// partial pivoting among all R rows (full-row swaps, as LAPACK's getrf), store it.
+    /// Returns (max |A| over node k's columns, max |U|).
+    ///
+    /// Column-major, so that each column update is one fixed-length vector operation over
+    /// all R rows: the multipliers of the rows at or above the pivot are zero, which leaves
+    /// them unchanged (a few wasted flops, no branches or runtime bounds).
+    #[inline(always)]
+    fn stage<const R: usize, const C: usize>(
+        &mut self,
+        k: usize,
+    ) -> Result<(f64, f64), LinalgError> {
+        // A constant but at the last stage: fixed-length copies, no memmove calls.
+        let p = if C == NODE { self.top } else { R - NODE };
+        let mut a = [[0.0f64; R]; C];
+        // Largest original |entry| of node k's columns: from interval k − 1's right half
+        // (or the top rows) and this stage's new rows.
+        let mut col_max = [0.0f64; NODE];
+        if k == 0 {
+            for (r, row) in self.top_rows.iter().enumerate() {
+                for j in 0..NODE {
+                    a[j][r] = row[j];
+                    col_max[j] = col_max[j].max(row[j].abs());
+                }
+            }
+        } else {
+            let prev = &self.lu[k - 1];
+            for j in 0..NODE {
+                a[j][..p].copy_from_slice(&prev[NODE + j][NODE..NODE + p]);
+                col_max[j] = self.blocks[k - 1][NODE + j]
+                    .iter()
+                    .fold(0.0f64, |x, v| x.max(v.abs()));
+            }
+        }
+        if C == NODE {
+            for (r, row) in self.bottom_rows.iter().enumerate() {
+                for j in 0..NODE {
+                    a[j][p + r] = row[j];
+                }
+            }
+        } else {
+            for (col, src) in a.iter_mut().zip(&self.blocks[k]) {
+                col[p..].copy_from_slice(src);
+            }
+        }
+        for j in 0..NODE {
+            for v in &a[j][p..] {
+                col_max[j] = col_max[j].max(v.abs());
+            }
+        }
+        let stage_max = col_max.iter().fold(0.0f64, |x, &y| x.max(y));
+        let (piv, inv_diag) = (&mut self.piv[k], &mut self.inv_diag[k]);
+        for c in 0..NODE {
+            let (mut best_row, mut best) = (c, a[c][c].abs());
+            for r in c + 1..R {
+                let v = a[c][r].abs();
+                if v > best {
+                    (best_row, best) = (r, v);
+                }
+            }
+            if !(best > PIVOT_TOLERANCE * col_max[c]) {
+                let (col, scale) = (NODE * k + c, col_max[c]);
+                return Err(LinalgError::Singular(if best == 0.0 {
+                    format!("block LU: column {col} (node {k}, unknown {c}) has no nonzero pivot")
+                } else if best.is_nan() || scale.is_nan() {
+                    format!(
+                        "block LU: column {col} (node {k}, unknown {c}) holds a non-finite entry"
+                    )
+                } else {
+                    format!(
+                        "block LU: column {col} (node {k}, unknown {c}): pivot {best:e} is below {PIVOT_TOLERANCE:e} of the column's scale {scale:e}"
+                    )
+                }));
+            }
+            piv[c] = best_row as u8;
+            if best_row != c {
+                for col in a.iter_mut() {
+                    col.swap(c, best_row);
+                }
+            }
+            let inv = 1.0 / a[c][c];
+            inv_diag[c] = inv;
+            let mut l = [0.0f64; R];
+            for r in c + 1..R {
+                l[r] = a[c][r] * inv;
+            }
+            a[c][c + 1..].copy_from_slice(&l[c + 1..]);
+            for col in a[c + 1..].iter_mut() {
+                let u = col[c];
+                for r in 0..R {
+                    col[r] -= l[r] * u;
+                }
+            }
+        }
+        // Column-wise lanes, so that neither reduction is one long dependency chain: the
+        // magnitudes of U (rows 0..5), and x · 0 (0, or NaN for a NaN or an infinity that
+        // compares false everywhere and could hide from the pivot test) over every entry.
+        let (mut big, mut probe) = ([0.0f64; R], [0.0f64; R]);
+        for col in &a {
+            for r in 0..R {
+                if r < NODE {
+                    big[r] = big[r].max(col[r].abs());
+                }
+                probe[r] += col[r] * 0.0;
+            }
+        }
+        if probe.iter().sum::<f64>().is_nan() || !stage_max.is_finite() {
+            return Err(LinalgError::Singular(format!(
+                "block LU: node {k}'s rows hold a non-finite entry"
+            )));
+        }
+        for (dst, src) in self.lu[k].iter_mut().zip(&a) {
+            dst[..R].copy_from_slice(src);
+        }
+        Ok((stage_max, big.iter().fold(0.0f64, |x, &y| x.max(y))))
     }
 
     /// b ← A⁻¹ b with the factors of the last [`AbdLu::factor`], which must have succeeded
@@ -322,27 +363,30 @@ impl AbdLu {
         );
         // Forward: stage k reads its rows' right sides (carried ones and interval k's, which
         // start at p + 5k ≥ 5k) and leaves y_k at 5k..5k+5: in place, read before written.
-        let mut carry = [0.0; NODE];
-        carry[..p].copy_from_slice(&b[..p]);
-        for k in 0..m {
-            let rows = if k == m - 1 { NODE } else { p + NODE };
-            let (w, piv) = (&self.lu[k], &self.piv[k]);
-            let mut y = [0.0; WIDE];
-            y[..p].copy_from_slice(&carry[..p]);
-            let at = p + NODE * k;
-            y[p..rows].copy_from_slice(&b[at..at + rows - p]);
-            for c in 0..NODE {
-                y.swap(c, piv[c] as usize);
-            }
-            for c in 0..NODE {
-                let t = y[c];
-                for r in c + 1..rows {
-                    y[r] -= w[r][c] * t;
-                }
-            }
-            b[NODE * k..NODE * k + NODE].copy_from_slice(&y[..NODE]);
-            carry[..p].copy_from_slice(&y[NODE..NODE + p]);
+        let carry = match p {
+            0 => self.forward::<0>(b),
+            1 => self.forward::<1>(b),
+            2 => self.forward::<2>(b),
+            3 => self.forward::<3>(b),
+            4 => self.forward::<4>(b),
+            _ => self.forward::<5>(b),
+        };
+        // The last stage: the carried rows and the bottom ones.
+        let k = m - 1;
+        let (w, piv) = (&self.lu[k], &self.piv[k]);
+        let mut y = [0.0; NODE];
+        y[..p].copy_from_slice(&carry[..p]);
+        y[p..].copy_from_slice(&b[p + NODE * k..]);
+        for c in 0..NODE {
+            y.swap(c, piv[c] as usize);
         }
+        for c in 0..NODE {
+            let t = y[c];
+            for r in c + 1..NODE {
+                y[r] -= w[c][r] * t;
+            }
+        }
+        b[NODE * k..].copy_from_slice(&y);
         // Back: x_k = U₁₁⁻¹ (y_k − U₁₂ x_{k+1}).
         let mut next = [0.0; NODE];
         for k in (0..m).rev() {
@@ -350,24 +394,50 @@ impl AbdLu {
             let mut y = [0.0; NODE];
             y.copy_from_slice(&b[NODE * k..NODE * k + NODE]);
             if k < m - 1 {
-                for a in 0..NODE {
-                    let mut s = 0.0;
-                    for j in 0..NODE {
-                        s += w[a][NODE + j] * next[j];
+                for j in 0..NODE {
+                    let (col, t) = (&w[NODE + j], next[j]);
+                    for a in 0..NODE {
+                        y[a] -= col[a] * t;
                     }
-                    y[a] -= s;
                 }
             }
             for c in (0..NODE).rev() {
-                let mut s = y[c];
-                for j in c + 1..NODE {
-                    s -= w[c][j] * y[j];
+                let t = y[c] * self.inv_diag[k][c];
+                y[c] = t;
+                for a in 0..c {
+                    y[a] -= w[c][a] * t;
                 }
-                y[c] = s * self.inv_diag[k][c];
             }
             b[NODE * k..NODE * k + NODE].copy_from_slice(&y);
             next = y;
         }
+    }
+
+    /// The forward elimination of every stage but the last, P = top rows (a constant, so
+    /// that the copies and loops have fixed lengths). Returns the rows carried into the last.
+    #[inline(always)]
+    fn forward<const P: usize>(&self, b: &mut [f64]) -> [f64; NODE] {
+        let mut carry = [0.0; NODE];
+        carry[..P].copy_from_slice(&b[..P]);
+        for k in 0..self.nodes - 1 {
+            let (w, piv) = (&self.lu[k], &self.piv[k]);
+            let mut y = [0.0; WIDE];
+            y[..P].copy_from_slice(&carry[..P]);
+            let at = P + NODE * k;
+            y[P..P + NODE].copy_from_slice(&b[at..at + NODE]);
+            for c in 0..NODE {
+                y.swap(c, piv[c] as usize);
+            }
+            for c in 0..NODE {
+                let t = y[c];
+                for r in c + 1..P + NODE {
+                    y[r] -= w[c][r] * t;
+                }
+            }
+            b[NODE * k..NODE * k + NODE].copy_from_slice(&y[..NODE]);
+            carry[..P].copy_from_slice(&y[NODE..NODE + P]);
+        }
+        carry
     }
 
     /// x = A⁻¹ b (see [`AbdLu::solve_in_place`]); `NotFactored` without a factorisation.
@@ -418,7 +488,7 @@ impl MatrixSink for AbdLu {
         match self.locate(i, j) {
             Some((Part::Top, a, b)) => self.top_rows[a][b] = v,
             Some((Part::Bottom, a, b)) => self.bottom_rows[a][b] = v,
-            Some((Part::Block(k), a, b)) => self.blocks[k][a][b] = v,
+            Some((Part::Block(k), a, b)) => self.blocks[k][b][a] = v,
             None => self.count_outside(i, j),
         }
     }
@@ -437,8 +507,10 @@ impl MatrixSink for AbdLu {
         {
             self.factored = false;
             let block = &mut self.blocks[(row0 - p) / NODE];
-            for (dst, src) in block.iter_mut().zip(values.chunks_exact(WIDE)) {
-                dst.copy_from_slice(src);
+            for (a, src) in values.chunks_exact(WIDE).enumerate() {
+                for (col, &v) in block.iter_mut().zip(src) {
+                    col[a] = v;
+                }
             }
             return;
         }
