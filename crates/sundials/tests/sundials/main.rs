@@ -10,6 +10,7 @@ mod band_lu;
 mod cvode;
 mod ida;
 mod kinsol;
+mod kinsol_block;
 mod kinsol_factorization;
 mod linkage;
 mod linsol;
