@@ -64,7 +64,7 @@ const LINEAR: [(&str, LinearSolverKind); 3] = [
     ("block", LinearSolverKind::Block),
 ];
 
-/// Cost per node: cold and warm solves over N from 101 to 20001 with each linear solver
+/// Cost per node: cold and warm solves over N from 51 to 20001 with each linear solver
 /// (linear in N if the band holds). Warm: from the solution at a 1 % higher pressure.
 fn scaling(c: &mut Criterion) {
     let p = fibre_shell();
@@ -77,7 +77,7 @@ fn scaling(c: &mut Criterion) {
         g.sample_size(10);
         g.warm_up_time(Duration::from_secs(1));
         g.measurement_time(Duration::from_secs(3));
-        for n in [101usize, 501, 2001, 20001] {
+        for n in [51usize, 101, 501, 2001, 20001] {
             for (name, linear) in LINEAR {
                 let s = SolverSettings {
                     linear,

@@ -41,7 +41,7 @@ pub struct SolverSettings {
     pub epsilon: f64,
     /// solver.scheme.
     pub scheme: Scheme,
-    /// solver.linear.
+    /// solver.linear (default: block).
     pub linear: LinearSolverKind,
     /// solver.newton_tol: KINSOL's tolerance on the scaled residual (max norm).
     pub newton_tol: f64,
@@ -64,7 +64,9 @@ impl Default for SolverSettings {
             nodes: 501,
             epsilon: 1e-3,
             scheme: Scheme::HermiteSimpson,
-            linear: LinearSolverKind::Band,
+            // The fastest at every N from 51 to 20001, cold and warm (BENCHMARKS.md,
+            // "The almost-block-diagonal solver", 2026-11-24).
+            linear: LinearSolverKind::Block,
             newton_tol: 1e-10,
             max_newton: 50,
             pole_grading: true,
