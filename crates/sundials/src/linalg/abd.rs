@@ -501,7 +501,7 @@ impl MatrixSink for AbdLu {
         if ncols == WIDE
             && values.len() == NODE * WIDE
             && row0 >= p
-            && (row0 - p) % NODE == 0
+            && (row0 - p).is_multiple_of(NODE)
             && col0 == row0 - p
             && (row0 - p) / NODE < self.blocks.len()
         {

@@ -145,7 +145,7 @@ fn block_band_and_dense_find_the_same_root() {
 fn the_last_factorization_solves_again() {
     let nodes = 30;
     let n = 5 * nodes;
-    let mut by = |spec| {
+    let by = |spec| {
         let mut kin = Kinsol::new(bvp(nodes), n, spec, &tight()).unwrap();
         let mut u = guess(nodes);
         kin.solve(&mut u, &vec![1.0; n], &vec![1.0; n]).unwrap();
