@@ -100,7 +100,7 @@ impl AbdLu {
                 "almost-block-diagonal matrix of {nodes} nodes with {top} top rows (need ≥ 1 node and ≤ {NODE} top rows)"
             )));
         }
-        // Each stage stores about 1.7 kB; more than 2^24 nodes (28 GB) is a caller's mistake.
+        // Each node stores about 1.25 kB; more than 2^24 nodes (21 GB) is a caller's mistake.
         if nodes > 1 << 24 {
             return Err(LinalgError::Size(format!(
                 "almost-block-diagonal matrix of {nodes} nodes"
