@@ -88,20 +88,63 @@ pub(crate) struct PlotArgs {
     pub(crate) quiet: bool,
 }
 
+/// `eyeshell sweep SCENE --out DIR ...`, or `eyeshell sweep merge|status DIR`. SCENE and
+/// --out are required unless a subcommand is given (hence Options, always Some then).
 #[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub(crate) struct SweepArgs {
-    #[command(flatten)]
-    pub(crate) scene: SceneArgs,
-    /// Output directory: runs/<name>/ for each run, sweep.csv, summary.json (a previous eyeshell output is replaced unless --resume)
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: PathBuf,
+    #[command(subcommand)]
+    pub(crate) action: Option<SweepAction>,
+    /// The scene (TOML) with a [sweep] table; see `eyeshell keys` for its keys
+    #[arg(value_name = "SCENE.toml", required = true)]
+    pub(crate) scene: Option<PathBuf>,
+    /// Override a scene key, e.g. --set pressure.dP=2.5 (repeatable; later wins; not a swept key)
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub(crate) set: Vec<String>,
+    /// Output directory: runs/<name>/ for each run, sweep.csv, summary.json (a previous eyeshell output is replaced unless --resume or --shard)
+    #[arg(long, value_name = "DIR", required = true)]
+    pub(crate) out: Option<PathBuf>,
     /// Runs at once (default: one per core)
     #[arg(long, short, value_name = "N")]
     pub(crate) jobs: Option<usize>,
     /// Keep the finished runs of an earlier sweep into DIR (same scene) and run only the rest
     #[arg(long)]
     pub(crate) resume: bool,
+    /// Run only shard K of N of the runs (writes DIR/runs/<name>/ and DIR/shards/K.json; `eyeshell sweep merge DIR` makes the table), or `slurm`: K and N from the Slurm job array
+    #[arg(long, value_name = "K/N|slurm", conflicts_with = "slurm_script")]
+    pub(crate) shard: Option<String>,
+    /// Print an sbatch script that runs the sweep as a Slurm job array, one shard per task (runs nothing)
+    #[arg(long)]
+    pub(crate) slurm_script: bool,
+    /// With --slurm-script: the number of shards (array tasks); default: one per run, at most 100
+    #[arg(long, value_name = "N", requires = "slurm_script")]
+    pub(crate) shards: Option<usize>,
+    /// With --slurm-script: each task's time limit (sbatch --time, e.g. 2:00:00)
+    #[arg(long, value_name = "TIME", requires = "slurm_script")]
+    pub(crate) time: Option<String>,
+    /// With --slurm-script: CPUs per task (sbatch --cpus-per-task; each shard runs that many runs at once)
+    #[arg(long, value_name = "C", requires = "slurm_script")]
+    pub(crate) cpus_per_task: Option<usize>,
     /// Print nothing on success
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+/// `eyeshell sweep merge DIR`, `eyeshell sweep status DIR`.
+#[derive(Subcommand, Debug)]
+pub(crate) enum SweepAction {
+    /// Assemble DIR/sweep.csv and DIR/summary.json from the runs of the shards of a sweep; list missing and failed runs (exit 1 if any)
+    Merge(SweepDirArgs),
+    /// Say which runs of a sharded sweep in DIR are done, failed or missing, writing nothing (exit 1 unless all are done)
+    Status(SweepDirArgs),
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct SweepDirArgs {
+    /// The sweep's output directory (the --out of its shards)
+    #[arg(value_name = "DIR")]
+    pub(crate) dir: PathBuf,
+    /// Print nothing when every run is done
     #[arg(long, short)]
     pub(crate) quiet: bool,
 }

@@ -2,5 +2,6 @@
 
 pub(crate) mod interop;
 pub(crate) mod run;
+pub(crate) mod shards;
 pub(crate) mod study;
 pub(crate) mod sweep;

@@ -41,13 +41,30 @@ pub(crate) fn install_interrupt() {
 }
 
 pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
-    use eyeshell::sweep::{run_sweep, RunStatus, SweepOptions};
+    use eyeshell::sweep::{run_shard, run_sweep, RunStatus, Shard, SweepOptions};
+    if let Some(action) = &a.action {
+        return super::shards::cmd_sweep_dir(action);
+    }
+    // clap requires both without a subcommand.
+    let (Some(scene), Some(out_dir)) = (&a.scene, &a.out) else {
+        return Err(Error::input("sweep: give SCENE.toml and --out DIR"));
+    };
     check_jobs(a.jobs)?;
-    let sweep = eyeshell::scene::sweep::Sweep::from_file(&a.scene.scene, &a.scene.set)?;
-    rundir::check_target(&a.out)?;
+    let shard = match a.shard.as_deref() {
+        None => None,
+        Some("slurm") => {
+            Some(Shard::from_slurm(|name| std::env::var(name).ok()).map_err(Error::input)?)
+        }
+        Some(text) => Some(Shard::parse(text).map_err(Error::input)?),
+    };
+    let sweep = eyeshell::scene::sweep::Sweep::from_file(scene, &a.set)?;
+    if a.slurm_script {
+        return super::shards::print_slurm_script(a, &sweep, scene, out_dir);
+    }
+    rundir::check_target(out_dir)?;
     install_interrupt();
     // Each run in a worker process: one that aborts fails alone (src/worker).
-    let workers = crate::worker::Workers::new(&a.out)?;
+    let workers = crate::worker::Workers::new(out_dir)?;
     let options = SweepOptions {
         jobs: a.jobs.unwrap_or(0),
         resume: a.resume,
@@ -55,7 +72,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         runner: &workers,
     };
     let quiet = a.quiet;
-    let report = run_sweep(&sweep, &a.out, &options, &|r, n, total| {
+    let progress = |r: &eyeshell::sweep::RunRecord, n: usize, total: usize| {
         if quiet {
             return;
         }
@@ -65,8 +82,26 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
             r.name,
             r.status_text()
         );
-    })?;
-    let table = a.out.join(eyeshell::sweep::TABLE_FILE);
+    };
+    let report = match shard {
+        Some(shard) => run_shard(&sweep, out_dir, shard, &options, &progress)?,
+        None => run_sweep(&sweep, out_dir, &options, &progress)?,
+    };
+    // Where the results are: the table, or the shard's record.
+    let (table, shard_text, again) = match shard {
+        Some(s) => (
+            out_dir
+                .join(eyeshell::sweep::SHARDS_DIR)
+                .join(s.file_name()),
+            format!(" shard {s}"),
+            format!(" --shard {s}"),
+        ),
+        None => (
+            out_dir.join(eyeshell::sweep::TABLE_FILE),
+            String::new(),
+            String::new(),
+        ),
+    };
     let failed: Vec<String> = report
         .failed()
         .map(|r| match &r.status {
@@ -82,13 +117,14 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     let total = report.records.len();
     if report.interrupted {
         return Err(Error::failed(format!(
-            "sweep interrupted: {finished} of {total} runs finished (table: {}); run again with --resume to do the rest",
+            "sweep{shard_text} interrupted: {finished} of {total} runs finished ({}: {}); run again with --resume{again} to do the rest",
+            if shard.is_some() { "record" } else { "table" },
             table.display()
         )));
     }
     if !failed.is_empty() {
         return Err(Error::failed(format!(
-            "{} of {total} runs failed: {} (the other results are in {})",
+            "{} of {total} runs{shard_text} failed: {} (the other results are in {})",
             failed.len(),
             first_few(&failed),
             table.display()
@@ -105,13 +141,21 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         } else {
             String::new()
         };
-        out(&format!(
-            "eyeshell: sweep {} ({}): {total} run{} ok{reused}\n  table           {}\n",
+        let mut text = format!(
+            "eyeshell: sweep {} ({}){shard_text}: {total} run{} ok{reused}\n",
             sweep.origin,
             eyeshell::text::one_line(&sweep.name),
             plural(total),
-            table.display()
-        ));
+        );
+        match shard {
+            Some(_) => text.push_str(&format!(
+                "  record          {}\n  once every shard has run: eyeshell sweep merge {}\n",
+                table.display(),
+                crate::commands::shards::shell_word(&out_dir.display().to_string())
+            )),
+            None => text.push_str(&format!("  table           {}\n", table.display())),
+        }
+        out(&text);
     }
     Ok(())
 }

@@ -7,7 +7,9 @@
 //! - `sweep.csv`: one row per run (status, swept values, final axial length, class, solver
 //!   statistics, error), rewritten after every run;
 //! - `summary.json`: the same as JSON with the sweep's status (`running`, `ok`, `partial`
-//!   when some runs failed, `interrupted`).
+//!   when some runs failed, `interrupted`);
+//! - `shards/K.json`: with `--shard K/N` ([`run_shard`]), the record of shard K, which
+//!   writes neither sweep.csv nor summary.json; [`merge`] writes them from the runs.
 //!
 //! A run that fails keeps what it wrote and its error goes into the table; the others go
 //! on. How a run is executed is the caller's choice ([`Runner`]): on a thread of this
@@ -21,12 +23,14 @@
 //! - [`run`]: one run, executed ([`execute`]) by a [`Runner`];
 //! - [`files`]: the files a run wrote, recorded in result.json and verified on resume;
 //! - [`resume`]: which runs of an earlier sweep are reused;
+//! - [`shard`]: one shard of a sweep (`--shard K/N`), and the merge of the shards' runs;
 //! - [`target`]: the output directory, refused when resuming would read or write outside
 //!   it, or mix a sweep with something else.
 
 pub mod files;
 pub mod resume;
 pub mod run;
+pub mod shard;
 pub mod target;
 
 use std::path::{Path, PathBuf};
@@ -43,6 +47,7 @@ use crate::Error;
 
 use resume::Reuse;
 pub use run::{execute, run_scene, InProcess, RunFailure, Runner};
+pub use shard::{merge, Shard, ShardRecord, SHARDS_DIR};
 
 /// The run directories, under the sweep's directory.
 pub const RUNS_DIR: &str = "runs";
@@ -173,9 +178,41 @@ pub fn run_sweep(
 ) -> Result<SweepReport, Error> {
     // The sweep's directory, owned and locked until the sweep ends.
     let _owned = target::prepare(sweep, out, options.resume)?;
-    let records: Vec<RunRecord> = sweep
-        .runs
+    let all: Vec<usize> = (0..sweep.runs.len()).collect();
+    run_some(sweep, &all, out, options, &|r| write_tables(sweep, r), done)
+}
+
+/// Run the runs of `shard` ([`shard::runs_of`]) into `out`, as [`run_sweep`] runs them,
+/// beside any other shard of the same sweep writing into `out` at the same time: the
+/// shard writes its runs and `out/shards/K.json` only ([`shard`]). The report holds the
+/// shard's runs.
+pub fn run_shard(
+    sweep: &Sweep,
+    out: &Path,
+    shard: Shard,
+    options: &SweepOptions<'_>,
+    done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
+) -> Result<SweepReport, Error> {
+    // The shard's record, locked until the shard ends (the directory is shared).
+    let (record, _lock) = target::prepare_shard(sweep, out, shard)?;
+    let mine = shard::runs_of(sweep, shard);
+    let write = |report: &SweepReport| ShardRecord::new(sweep, shard, report).write(&record);
+    run_some(sweep, &mine, out, options, &write, done)
+}
+
+/// Run `indices` of `sweep.runs` into `out`, calling `write` with the report at the start,
+/// after each run and at the end.
+fn run_some(
+    sweep: &Sweep,
+    indices: &[usize],
+    out: &Path,
+    options: &SweepOptions<'_>,
+    write: &(dyn Fn(&SweepReport) -> Result<(), OutputError> + Sync),
+    done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
+) -> Result<SweepReport, Error> {
+    let records: Vec<RunRecord> = indices
         .iter()
+        .map(|&i| &sweep.runs[i])
         .map(|r| RunRecord {
             name: r.name.clone(),
             dir: format!("{RUNS_DIR}/{}", r.name),
@@ -190,8 +227,8 @@ pub fn run_sweep(
         interrupted: false,
         dir: out.to_path_buf(),
     });
-    write_tables(sweep, &lock(&report))?;
-    let total = sweep.runs.len();
+    write(&lock(&report))?;
+    let total = indices.len();
     let finished = std::sync::atomic::AtomicUsize::new(0);
     let table_error: Mutex<Option<OutputError>> = Mutex::new(None);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -199,7 +236,8 @@ pub fn run_sweep(
         .build()
         .map_err(|e| io(out, std::io::Error::other(e.to_string())))?;
     pool.install(|| {
-        sweep.runs.par_iter().enumerate().for_each(|(i, run)| {
+        indices.par_iter().enumerate().for_each(|(i, &index)| {
+            let run = &sweep.runs[index];
             if options.cancel.load(Ordering::SeqCst) {
                 lock(&report).interrupted = true;
                 return;
@@ -226,14 +264,14 @@ pub fn run_sweep(
             rep.records[i].result = result;
             rep.records[i].rerun = rerun;
             let n = finished.fetch_add(1, Ordering::SeqCst) + 1;
-            if let Err(e) = write_tables(sweep, &rep) {
+            if let Err(e) = write(&rep) {
                 lock(&table_error).get_or_insert(e);
             }
             done(&rep.records[i], n, total);
         });
     });
     let report = report.into_inner().unwrap_or_else(|e| e.into_inner());
-    write_tables(sweep, &report)?;
+    write(&report)?;
     match table_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
         Some(e) => Err(e.into()),
         None => Ok(report),

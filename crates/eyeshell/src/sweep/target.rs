@@ -14,16 +14,24 @@
 //!   adds runs to it; a sweep that dropped runs needs another directory or a fresh start.
 
 use std::fs;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use crate::rundir::{self, Summary, SUMMARY_FILE};
+use crate::rundir::lock::DirLock;
+use crate::rundir::owner::Marker;
+use crate::rundir::{self, OutputError, Summary, SUMMARY_FILE};
 use crate::scene::sweep::Sweep;
 use crate::Error;
 
+use super::shard::{Shard, SHARDS_DIR};
 use super::{RESULT_FILE, RUNS_DIR, SCENE_FILE, TABLE_FILE};
 
 /// What to do instead, said after every refusal.
 const INSTEAD: &str = "give another --out, or leave out --resume to replace it";
+/// The same for a shard, which never replaces anything (another shard may be writing).
+const SHARD_INSTEAD: &str =
+    "give another --out (a shard never removes anything: other shards may be writing there)";
+/// What a sweep's directory holds at the top; shards add `shards/`.
+const ENTRIES: [&str; 4] = [RUNS_DIR, TABLE_FILE, SUMMARY_FILE, SHARDS_DIR];
 
 /// Make `out` ready for `sweep`: fresh, or (`resume`) checked as the module says; the
 /// returned [`rundir::OwnedDir`] holds its lock until dropped.
@@ -34,9 +42,71 @@ pub fn prepare(sweep: &Sweep, out: &Path, resume: bool) -> Result<rundir::OwnedD
     }
     rundir::check_target(out)?;
     refuse_links(out)?;
-    refuse_other_outputs(out)?;
-    refuse_other_runs(sweep, out)?;
+    refuse_other_outputs(out, INSTEAD)?;
+    refuse_other_runs(sweep, out, INSTEAD)?;
     Ok(rundir::OwnedDir::resume(out, "sweep", &entries)?)
+}
+
+/// Make `out` ready for one shard of `sweep` ([`super::shard`]): checked as for `--resume`
+/// (whether or not the shard resumes: it may not remove anything), given the sweep's marker
+/// if it has none yet, with `runs/` and `shards/`. No lock is taken on `out`, which the
+/// shards share; the shard's record, `shards/K.json`, is locked instead. Returns its path
+/// and the lock.
+pub fn prepare_shard(sweep: &Sweep, out: &Path, shard: Shard) -> Result<(PathBuf, DirLock), Error> {
+    let out = &rundir::owner::normalise(out);
+    rundir::check_target(out)?;
+    refuse_links(out)?;
+    no_link(&out.join(SHARDS_DIR))?;
+    refuse_other_outputs(out, SHARD_INSTEAD)?;
+    refuse_other_runs(sweep, out, SHARD_INSTEAD)?;
+    let io = |path: &Path, source: std::io::Error| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    fs::create_dir_all(out).map_err(|e| io(out, e))?;
+    // The marker first, before any entry it must list: another shard checking `out` in
+    // between sees an empty directory or a marked one, never unlisted entries. Shards that
+    // race here write the same marker.
+    match Marker::read(out) {
+        Some(marker) if marker.kind == "sweep" => rundir::owner::claim(out, &ENTRIES)?,
+        Some(marker) => {
+            return Err(OutputError::OtherKind {
+                path: out.clone(),
+                found: marker.kind,
+                wanted: "sweep".into(),
+            }
+            .into())
+        }
+        None => {
+            rundir::owner::inspect(out)?;
+            let mut marker = Marker::new("sweep");
+            marker.entries = ENTRIES.iter().map(|e| e.to_string()).collect();
+            marker.write(out)?;
+        }
+    }
+    for name in [RUNS_DIR, SHARDS_DIR] {
+        let path = out.join(name);
+        match fs::create_dir(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => return Err(io(&path, e)),
+            _ if !path.is_dir() => {
+                return Err(Error::input(format!(
+                    "{}: is not a directory, so this is not a sweep's output; {SHARD_INSTEAD}",
+                    path.display()
+                )))
+            }
+            _ => {}
+        }
+    }
+    let record = out.join(SHARDS_DIR).join(shard.file_name());
+    no_link(&record)?;
+    if record.exists() && !record.is_file() {
+        return Err(Error::input(format!(
+            "{}: is not a shard's record (not a file); {SHARD_INSTEAD}",
+            record.display()
+        )));
+    }
+    let lock = DirLock::acquire(&record)?;
+    Ok((record, lock))
 }
 
 /// Refuse `path` if it is a symbolic link (a missing path is fine).
@@ -80,7 +150,7 @@ fn run_entries(out: &Path) -> Result<Vec<std::path::PathBuf>, Error> {
     listed.map_err(|source| Error::Io { path: runs, source })
 }
 
-fn refuse_other_outputs(out: &Path) -> Result<(), Error> {
+fn refuse_other_outputs(out: &Path, instead: &str) -> Result<(), Error> {
     if fs::symlink_metadata(out.join(SUMMARY_FILE)).is_err() {
         return Ok(());
     }
@@ -92,17 +162,17 @@ fn refuse_other_outputs(out: &Path) -> Result<(), Error> {
         Ok(Summary::Figures(_)) => "figures".to_string(),
         Err(e) => {
             return Err(Error::input(format!(
-                "{e} (--resume continues a sweep only: {INSTEAD})"
+                "{e} (--resume continues a sweep only: {instead})"
             )))
         }
     };
     Err(Error::input(format!(
-        "{}: holds {held}, not a sweep; --resume continues a sweep only: {INSTEAD}",
+        "{}: holds {held}, not a sweep; --resume continues a sweep only: {instead}",
         out.display()
     )))
 }
 
-fn refuse_other_runs(sweep: &Sweep, out: &Path) -> Result<(), Error> {
+fn refuse_other_runs(sweep: &Sweep, out: &Path, instead: &str) -> Result<(), Error> {
     let mut others: Vec<String> = run_entries(out)?
         .iter()
         .filter_map(|p| p.file_name())
@@ -124,7 +194,7 @@ fn refuse_other_runs(sweep: &Sweep, out: &Path) -> Result<(), Error> {
         shown.push(format!("and {} more", count - 3));
     }
     Err(Error::input(format!(
-        "{}: holds {count} run{} that {} not in this sweep ({}); --resume only continues the same sweep or adds runs to it: {INSTEAD}",
+        "{}: holds {count} run{} that {} not in this sweep ({}); --resume only continues the same sweep or adds runs to it: {instead}",
         out.join(RUNS_DIR).display(),
         if count == 1 { "" } else { "s" },
         if count == 1 { "is" } else { "are" },

@@ -1,0 +1,258 @@
+//! A sweep beyond one process: `eyeshell sweep merge|status DIR` (the table of a sharded
+//! sweep) and `eyeshell sweep SCENE --out DIR --slurm-script` (an sbatch job array, one
+//! shard per task). The shards themselves are `eyeshell sweep --shard` (sweep.rs).
+
+use std::path::Path;
+
+use eyeshell::scene::sweep::Sweep;
+use eyeshell::sweep::{RunStatus, TABLE_FILE};
+use eyeshell::Error;
+
+use crate::args::{SweepAction, SweepArgs};
+use crate::out;
+
+/// Runs named on a line of the merge's report before "and N more".
+const SHOWN: usize = 5;
+/// The default number of shards of a generated script: one per run, at most this many.
+const DEFAULT_SHARDS: usize = 100;
+
+/// `eyeshell sweep merge DIR` (writes sweep.csv and summary.json) and `status DIR`
+/// (writes nothing): what the shards did, and how to finish what they did not.
+pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
+    let (args, write) = match action {
+        SweepAction::Merge(a) => (a, true),
+        SweepAction::Status(a) => (a, false),
+    };
+    let dir = &args.dir;
+    let merged = eyeshell::sweep::merge(dir, write)?;
+    let records = &merged.report.records;
+    let total = records.len();
+    let ok = records.iter().filter(|r| r.status == RunStatus::Ok).count();
+    let failed: Vec<String> = merged
+        .report
+        .failed()
+        .map(|r| match &r.status {
+            RunStatus::Failed(m) => format!("{}: {m}", r.name),
+            _ => r.name.clone(),
+        })
+        .collect();
+    let missing: Vec<String> = merged
+        .missing()
+        .map(|r| match merged.stale.iter().find(|(n, _)| n == &r.name) {
+            Some((_, why)) => format!("{} (its results cannot be trusted: {why})", r.name),
+            None => r.name.clone(),
+        })
+        .collect();
+    let shards: Vec<String> = merged
+        .records
+        .iter()
+        .map(|r| format!("{}/{} {}", r.shard, r.shards, r.status))
+        .collect();
+    let complete = failed.is_empty() && missing.is_empty();
+    if !(args.quiet && complete) {
+        let mut text = format!(
+            "eyeshell: sweep {} ({}): {ok} of {total} run{} ok, {} failed, {} missing\n  shards          {}\n",
+            merged.sweep.origin,
+            eyeshell::text::one_line(&merged.sweep.name),
+            crate::plural(total),
+            failed.len(),
+            missing.len(),
+            first(&shards, ", ")
+        );
+        if write {
+            text.push_str(&format!(
+                "  table           {}\n",
+                dir.join(TABLE_FILE).display()
+            ));
+        }
+        if !failed.is_empty() {
+            text.push_str(&format!("  failed          {}\n", first(&failed, "; ")));
+        }
+        if !missing.is_empty() {
+            text.push_str(&format!("  missing         {}\n", first(&missing, ", ")));
+        }
+        if !complete {
+            text.push_str(&resume_hint(&merged, dir));
+        }
+        out(&text);
+    }
+    if complete {
+        return Ok(());
+    }
+    Err(Error::failed(format!(
+        "{} of {total} runs of the sweep in {} are not done ({} failed, {} missing): run them with the --resume command above",
+        failed.len() + missing.len(),
+        dir.display(),
+        failed.len(),
+        missing.len()
+    )))
+}
+
+/// The first [`SHOWN`] of `items`, then how many more.
+fn first(items: &[String], sep: &str) -> String {
+    let mut text = items[..items.len().min(SHOWN)].join(sep);
+    if items.len() > SHOWN {
+        text.push_str(&format!("{sep}and {} more", items.len() - SHOWN));
+    }
+    text
+}
+
+/// The commands that run what is left: the whole rest on one machine, or again the shards
+/// that own it (as they were split).
+fn resume_hint(merged: &eyeshell::sweep::shard::Merged, dir: &Path) -> String {
+    let record = &merged.records[0];
+    // The scene as the shards named it if it is the same file from here, else absolute.
+    let same = std::fs::canonicalize(&record.scene)
+        .is_ok_and(|p| p.display().to_string() == record.scene_path);
+    let scene = if same {
+        &record.scene
+    } else {
+        &record.scene_path
+    };
+    let mut command = format!("eyeshell sweep {}", shell_word(scene));
+    for set in &record.overrides {
+        command.push_str(&format!(" --set {}", shell_word(set)));
+    }
+    command.push_str(&format!(
+        " --out {} --resume",
+        shell_word(&dir.display().to_string())
+    ));
+    let mut text = format!("  run the rest:   {command}\n");
+    if let Some((n, ks)) = merged.shards_to_resume() {
+        let ks: Vec<String> = ks.iter().map(|k| k.to_string()).collect();
+        text.push_str(&format!(
+            "  or by shard:    {command} --shard K/{n}   for K = {}\n",
+            first(&ks, ", ")
+        ));
+    }
+    text
+}
+
+/// `word` as one shell word: as it is when it holds only safe characters, else quoted.
+pub(crate) fn shell_word(word: &str) -> String {
+    let safe = !word.is_empty()
+        && word
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "/._-=+:,@%".contains(c));
+    if safe {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', r"'\''"))
+    }
+}
+
+/// `--slurm-script`: print an sbatch script running `sweep` as a job array, one shard per
+/// task, each with `--jobs` from the CPUs Slurm grants it; nothing is run or written.
+pub(crate) fn print_slurm_script(
+    a: &SweepArgs,
+    sweep: &Sweep,
+    scene: &Path,
+    out_dir: &Path,
+) -> Result<(), Error> {
+    let runs = sweep.runs.len();
+    let shards = match a.shards {
+        None => runs.min(DEFAULT_SHARDS),
+        Some(n) if n >= 1 && n <= runs => n,
+        Some(n) => {
+            return Err(Error::input(format!(
+                "--shards {n}: give 1 to {runs} (the sweep has {runs} run{})",
+                crate::plural(runs)
+            )))
+        }
+    };
+    let cpus = match a.cpus_per_task {
+        None => 1,
+        Some(c) if (1..=1024).contains(&c) => c,
+        Some(c) => return Err(Error::input(format!("--cpus-per-task {c}: give 1 to 1024"))),
+    };
+    if let Some(time) = &a.time {
+        let plain = !time.is_empty()
+            && time
+                .chars()
+                .all(|c| c.is_ascii_digit() || c == ':' || c == '-');
+        if !plain {
+            return Err(Error::input(format!(
+                "--time {}: give a Slurm time such as 30, 2:00:00 or 1-12:00:00",
+                eyeshell::text::one_line(time)
+            )));
+        }
+    }
+    // Refused now rather than in every task.
+    eyeshell::rundir::check_target(out_dir)?;
+    let here = std::env::current_dir().map_err(|source| Error::Io {
+        path: ".".into(),
+        source,
+    })?;
+    let absolute = |p: &Path| {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            here.join(p)
+        }
+    };
+    let exe = std::env::current_exe()
+        .and_then(std::fs::canonicalize)
+        .map_err(|source| Error::Io {
+            path: "eyeshell".into(),
+            source,
+        })?;
+    let word = |p: &Path| shell_word(&p.display().to_string());
+    let out_abs = absolute(out_dir);
+    let job = format!(
+        "eyeshell-{}",
+        sweep
+            .name
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '-'
+            })
+            .take(40)
+            .collect::<String>()
+    );
+    let mut sets = String::new();
+    for set in &a.set {
+        sets.push_str(&format!(" --set {}", shell_word(set)));
+    }
+    let time_line = match &a.time {
+        Some(t) => format!("#SBATCH --time={t}\n"),
+        None => {
+            "##SBATCH --time=1:00:00          # each task's limit: set it (remove one #)\n".into()
+        }
+    };
+    let script = format!(
+        r#"#!/bin/bash
+# The sweep {origin} ({runs} run{s}) as a Slurm job array: {shards} shard{ss}, one per task.
+# Each task runs its shard's runs into {out}/runs/<name>/ and writes
+# {out}/shards/<task>.json; no task writes a file another one writes.
+#
+#   submit:  sbatch THIS_FILE            (edit the #SBATCH lines first if need be)
+#   then:    eyeshell sweep merge {out}
+#            (sweep.csv and summary.json, as a plain `eyeshell sweep` writes them; it
+#            lists runs that failed or are missing, and the command that runs them)
+#   or, merged by Slurm when every task has ended:
+#            sbatch --dependency=afterany:JOBID --wrap '{exe} sweep merge {out}'
+#
+# --resume: a task submitted again (or the whole array) keeps the runs that finished.
+#SBATCH --job-name={job}
+#SBATCH --array=1-{shards}
+#SBATCH --cpus-per-task={cpus}
+{time_line}#SBATCH --output={job}-%A_%a.out
+
+set -euo pipefail
+cd {here}
+exec {exe} sweep {scene}{sets} --out {out} --resume \
+    --shard slurm --jobs "${{SLURM_CPUS_PER_TASK:-1}}"
+"#,
+        origin = sweep.origin,
+        s = crate::plural(runs),
+        ss = crate::plural(shards),
+        out = word(&out_abs),
+        exe = word(&exe),
+        here = word(&here),
+        scene = word(scene),
+    );
+    out(&script);
+    Ok(())
+}
