@@ -22,6 +22,8 @@ mod keys_check;
 mod max_seconds;
 mod ownership;
 mod readers;
+mod shards;
+mod slurm;
 mod solve;
 mod study;
 mod sweep;

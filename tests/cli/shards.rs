@@ -1,0 +1,541 @@
+//! `eyeshell sweep --shard K/N` and `eyeshell sweep merge|status DIR`: shards run by hand,
+//! one after the other or at once, merge to the table of a plain sweep; a shard killed
+//! mid-way resumes; bad `--shard` values are refused; merge names missing and failed runs;
+//! `--shard slurm` takes its shard from a job array's environment. (The real Slurm is
+//! tests/cli/slurm.rs.)
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+use crate::support::*;
+
+/// A small growth scene (N = 21, CVODE rtol 1e-3): a run takes a few hundredths of a second.
+pub(crate) const SMALL: &str = "name = \"small\"\n[fibres]\nD = 0.0\n[growth]\neta0 = 70.0\nt_end = 0.2\n[solver]\nnodes = 21\nrtol = 1e-3\n[output]\ntimes = [0.1]\nhistory_points = 10\n";
+/// Six runs, as the paper's grow sweep: Γ × δ.
+pub(crate) const GRID: &str =
+    "[sweep.grid]\n\"growth.Gamma\" = [4, 8, 12]\n\"growth.delta\" = [2, 6]\n";
+
+/// The cells of a CSV line (quoted cells unquoted).
+fn cells(line: &str) -> Vec<String> {
+    let mut out = vec![String::new()];
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                chars.next();
+                out.last_mut().unwrap().push('"');
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => out.push(String::new()),
+            (c, _) => out.last_mut().unwrap().push(c),
+        }
+    }
+    out
+}
+
+/// sweep.csv of `dir` without its timing column (wall_seconds): what must not depend on how
+/// the sweep was run.
+pub(crate) fn table_without_timings(dir: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
+    let mut rows: Vec<Vec<String>> = text.lines().map(cells).collect();
+    let col = rows[0].iter().position(|h| h == "wall_seconds").unwrap();
+    for r in &mut rows {
+        r.remove(col);
+    }
+    rows
+}
+
+/// summary.json of `dir` without the runs' wall_seconds.
+fn summary_without_timings(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for run in v["runs"].as_array_mut().unwrap() {
+        if let Some(r) = run["result"].as_object_mut() {
+            r.remove("wall_seconds");
+        }
+    }
+    v
+}
+
+fn scene_dir(text: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.toml"), text).unwrap();
+    dir
+}
+
+fn spawn_shard(dir: &Path, shard: &str) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+        .args(["sweep", "s.toml", "--out", "out", "--jobs", "1", "-q"])
+        .args(["--shard", shard])
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+#[test]
+fn shards_in_any_order_and_at_once_merge_to_the_plain_sweeps_table() {
+    let dir = scene_dir(&format!("{SMALL}{GRID}"));
+    let d = dir.path();
+    let plain = eyeshell_in(d, &["sweep", "s.toml", "--out", "plain", "-q"]);
+    assert_eq!(plain.code, Some(0), "{}", plain.stderr);
+
+    // The last shard first, alone: two runs, its record, no table.
+    let last = eyeshell_in(d, &["sweep", "s.toml", "--out", "out", "--shard", "3/3"]);
+    assert_eq!(last.code, Some(0), "{}", last.stderr);
+    assert!(
+        last.stdout.contains("shard 3/3: 2 runs ok"),
+        "{}",
+        last.stdout
+    );
+    assert!(
+        last.stdout.contains("eyeshell sweep merge out"),
+        "{}",
+        last.stdout
+    );
+    let out = d.join("out");
+    assert!(out.join("shards/3.json").is_file());
+    assert!(!out.join("sweep.csv").exists() && !out.join("summary.json").exists());
+    let runs = std::fs::read_dir(out.join("runs")).unwrap().count();
+    assert_eq!(runs, 2);
+
+    // status: four runs missing, the command that runs them, exit 1, nothing written.
+    let status = eyeshell_in(d, &["sweep", "status", "out"]);
+    assert_fails(&status, 1, "4 of 6 runs of the sweep in out are not done");
+    assert!(
+        status
+            .stdout
+            .contains("2 of 6 runs ok, 0 failed, 4 missing"),
+        "{}",
+        status.stdout
+    );
+    assert!(
+        status
+            .stdout
+            .contains("eyeshell sweep s.toml --out out --resume --shard K/3   for K = 1, 2"),
+        "{}",
+        status.stdout
+    );
+    assert!(!out.join("sweep.csv").exists());
+
+    // The other two at once.
+    let a = spawn_shard(d, "1/3");
+    let b = spawn_shard(d, "2/3");
+    for child in [a, b] {
+        let r = Run::from(child.wait_with_output().unwrap());
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+    }
+    // Every run in exactly one shard's record.
+    let mut names: Vec<String> = (1..=3)
+        .flat_map(|k| {
+            let text = std::fs::read_to_string(out.join(format!("shards/{k}.json"))).unwrap();
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert_eq!(v["status"], "ok");
+            assert_eq!(v["shards"], 3);
+            v["runs"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|r| r["name"].as_str().unwrap().to_string())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 6);
+    names.dedup();
+    assert_eq!(names.len(), 6);
+
+    let merge = eyeshell_in(d, &["sweep", "merge", "out"]);
+    assert_eq!(merge.code, Some(0), "{}{}", merge.stdout, merge.stderr);
+    assert!(
+        merge.stdout.contains("6 of 6 runs ok, 0 failed, 0 missing"),
+        "{}",
+        merge.stdout
+    );
+    assert_eq!(
+        table_without_timings(&out),
+        table_without_timings(&d.join("plain"))
+    );
+    assert_eq!(
+        summary_without_timings(&out),
+        summary_without_timings(&d.join("plain"))
+    );
+    // A merged sweep is an ordinary sweep: --resume reuses every run, a plain sweep replaces it.
+    let resumed = eyeshell_in(d, &["sweep", "s.toml", "--out", "out", "--resume"]);
+    assert_eq!(resumed.code, Some(0), "{}", resumed.stderr);
+    assert!(resumed.stdout.contains("(6 reused"), "{}", resumed.stdout);
+}
+
+#[test]
+fn merge_names_failed_and_missing_runs_and_matches_a_plain_sweep_with_failures() {
+    // η0 = 1e4 with two Euler steps turns the shell inside out at the first step.
+    let dir = scene_dir(&format!("{SMALL}[[sweep.runs]]\nname = \"good\"\n[[sweep.runs]]\nname = \"bad\"\n\"growth.eta0\" = 1e4\n\"solver.integrator\" = \"euler\"\n\"solver.steps\" = 2\n[[sweep.runs]]\nname = \"other\"\n\"growth.Gamma\" = 6\n"));
+    let d = dir.path();
+    let plain = eyeshell_in(d, &["sweep", "s.toml", "--out", "plain", "-q"]);
+    assert_eq!(plain.code, Some(1), "{}", plain.stderr);
+    // Which shard holds "bad"? Run every shard but the one with "other".
+    let mut ran = Vec::new();
+    for k in 1..=3 {
+        let r = eyeshell_in(
+            d,
+            &[
+                "sweep",
+                "s.toml",
+                "--out",
+                "out",
+                "-q",
+                "--shard",
+                &format!("{k}/3"),
+            ],
+        );
+        let record = std::fs::read_to_string(d.join(format!("out/shards/{k}.json"))).unwrap();
+        if record.contains("\"name\": \"bad\"") {
+            assert_fails(
+                &r,
+                1,
+                &format!("1 of 1 runs shard {k}/3 failed: bad: growth failed"),
+            );
+        } else {
+            assert_eq!(r.code, Some(0), "{}", r.stderr);
+        }
+        ran.push((k, record.contains("\"name\": \"other\"")));
+    }
+    // Remove "other"'s result: it is missing now, as if its shard had never run.
+    std::fs::remove_file(d.join("out/runs/other/result.json")).unwrap();
+    let merge = eyeshell_in(d, &["sweep", "merge", "out"]);
+    assert_fails(
+        &merge,
+        1,
+        "2 of 3 runs of the sweep in out are not done (1 failed, 1 missing)",
+    );
+    assert!(
+        merge
+            .stdout
+            .contains("  failed          bad: growth failed at t = 0.02"),
+        "{}",
+        merge.stdout
+    );
+    assert!(
+        merge.stdout.contains("  missing         other\n"),
+        "{}",
+        merge.stdout
+    );
+    let k_other = ran.iter().find(|(_, other)| *other).unwrap().0;
+    assert!(
+        merge
+            .stdout
+            .contains("  run the rest:   eyeshell sweep s.toml --out out --resume\n"),
+        "{}",
+        merge.stdout
+    );
+    assert!(merge.stdout.contains("for K = "), "{}", merge.stdout);
+    let (_, rows) = csv_cells(&d.join("out/sweep.csv"));
+    let status: Vec<(&str, &str)> = rows
+        .iter()
+        .map(|r| (r[0].as_str(), r[1].as_str()))
+        .collect();
+    assert_eq!(
+        status,
+        [("good", "ok"), ("bad", "failed"), ("other", "not run")]
+    );
+    // The missing run's shard again, with --resume: then the table is the plain sweep's.
+    let again = eyeshell_in(
+        d,
+        &[
+            "sweep",
+            "s.toml",
+            "--out",
+            "out",
+            "-q",
+            "--resume",
+            "--shard",
+            &format!("{k_other}/3"),
+        ],
+    );
+    assert!(
+        again.code == Some(0) || again.code == Some(1),
+        "{}",
+        again.stderr
+    );
+    let merge = eyeshell_in(d, &["sweep", "merge", "out"]);
+    assert_fails(
+        &merge,
+        1,
+        "1 of 3 runs of the sweep in out are not done (1 failed, 0 missing)",
+    );
+    assert_eq!(
+        table_without_timings(&d.join("out")),
+        table_without_timings(&d.join("plain"))
+    );
+    assert_eq!(
+        summary_without_timings(&d.join("out")),
+        summary_without_timings(&d.join("plain"))
+    );
+}
+
+/// Runs of about a second each (the published Euler's fixed work on 201 nodes), so that a
+/// kill sent after the first run's line lands while the second runs.
+fn slow_scene() -> String {
+    let text = SMALL
+        .replace("nodes = 21", "nodes = 201")
+        .replace("t_end = 0.2", "t_end = 1.0")
+        .replace("times = [0.1]", "times = [0.5]")
+        .replace(
+            "rtol = 1e-3",
+            "rtol = 1e-6\nintegrator = \"euler\"\nsteps = 4000",
+        );
+    format!("{text}[sweep.grid]\n\"growth.Gamma\" = [4, 5, 6, 7]\n")
+}
+
+#[test]
+fn a_shard_killed_mid_way_resumes_and_keeps_its_finished_runs() {
+    use std::io::BufRead;
+    use std::os::unix::process::CommandExt;
+    let dir = scene_dir(&slow_scene());
+    let d = dir.path();
+    // Shard 1/2 (two runs), one at a time, in a process group of its own: SIGKILL to the
+    // group once its first run has ended, as a cluster ends a job out of time.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+        .args([
+            "sweep", "s.toml", "--out", "out", "--jobs", "1", "--shard", "1/2",
+        ])
+        .current_dir(d)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .process_group(0)
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut first = String::new();
+    stderr.read_line(&mut first).unwrap();
+    assert!(first.starts_with("eyeshell: [1/2] "), "{first}");
+    let done = first["eyeshell: [1/2] ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .to_string();
+    let killed = Command::new("kill")
+        .args(["-KILL", "--", &format!("-{}", child.id())])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let _ = child.wait();
+    // The record still says the shard was running, with one run done.
+    let record = std::fs::read_to_string(d.join("out/shards/1.json")).unwrap();
+    assert!(record.contains("\"status\": \"running\""), "{record}");
+    let status = eyeshell_in(d, &["sweep", "status", "out"]);
+    assert_fails(
+        &status,
+        1,
+        "3 of 4 runs of the sweep in out are not done (0 failed, 3 missing)",
+    );
+    assert!(status.stdout.contains("1/2 running"), "{}", status.stdout);
+    assert!(status.stdout.contains("for K = 1, 2"), "{}", status.stdout);
+
+    // --resume: the finished run is reused, the other runs.
+    let again = eyeshell_in(
+        d,
+        &[
+            "sweep", "s.toml", "--out", "out", "--jobs", "1", "--shard", "1/2", "--resume",
+        ],
+    );
+    assert_eq!(again.code, Some(0), "{}", again.stderr);
+    assert!(
+        again.stderr.contains(&format!("{done} reused: ")),
+        "{}",
+        again.stderr
+    );
+    assert!(
+        again.stdout.contains("2 runs ok (1 reused"),
+        "{}",
+        again.stdout
+    );
+    let other = eyeshell_in(
+        d,
+        &[
+            "sweep", "s.toml", "--out", "out", "--jobs", "1", "--shard", "2/2", "-q",
+        ],
+    );
+    assert_eq!(other.code, Some(0), "{}", other.stderr);
+    let merge = eyeshell_in(d, &["sweep", "merge", "out", "-q"]);
+    assert_eq!(merge.code, Some(0), "{}{}", merge.stdout, merge.stderr);
+    assert!(merge.stdout.is_empty(), "{}", merge.stdout);
+    let (_, rows) = csv_cells(&d.join("out/sweep.csv"));
+    assert!(rows.iter().all(|r| r[1] == "ok"), "{rows:?}");
+}
+
+#[test]
+fn bad_shards_are_refused_with_one_line_and_nothing_written() {
+    let dir = scene_dir(&format!("{SMALL}{GRID}"));
+    let d = dir.path();
+    let cases: [(&[&str], &str); 9] = [
+        (
+            &["--shard", "0/3"],
+            "--shard 0/3: K must be 1 to N = 3, not 0",
+        ),
+        (
+            &["--shard", "4/3"],
+            "--shard 4/3: K must be 1 to N = 3, not 4",
+        ),
+        (&["--shard", "1/0"], "--shard 1/0: N must be 1 to"),
+        (&["--shard", "2"], "--shard 2: give K/N with 1 <= K <= N"),
+        (&["--shard", "a/b"], "--shard a/b: give K/N"),
+        (&["--shard", "1/99999999"], "N must be 1 to 1000000"),
+        (
+            &["--shard", "slurm"],
+            "--shard slurm: SLURM_ARRAY_TASK_ID is not set",
+        ),
+        (&["--shard", "1/2", "--jobs", "0"], "--jobs 0"),
+        (
+            &["--slurm-script", "--shards", "7"],
+            "--shards 7: give 1 to 6 (the sweep has 6 runs)",
+        ),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["sweep", "s.toml", "--out", "out"];
+        args.extend_from_slice(extra);
+        let r = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+            .args(&args)
+            .current_dir(d)
+            .env_remove("SLURM_ARRAY_TASK_ID")
+            .output()
+            .unwrap();
+        assert_bad(&Run::from(r), needle, &format!("{extra:?}"));
+        assert!(!d.join("out").exists(), "{extra:?} wrote out/");
+    }
+    // Stepped arrays have no K/N: refused with the range to use.
+    let stepped = eyeshell_with(
+        d,
+        &["sweep", "s.toml", "--out", "out", "--shard", "slurm"],
+        &[
+            ("SLURM_ARRAY_TASK_ID", "3"),
+            ("SLURM_ARRAY_TASK_MIN", "1"),
+            ("SLURM_ARRAY_TASK_MAX", "5"),
+            ("SLURM_ARRAY_TASK_COUNT", "3"),
+        ],
+    );
+    assert_bad(
+        &stepped,
+        "must be a plain range (--array=1-5)",
+        "stepped array",
+    );
+    // Usage errors (clap): exit 2 as well.
+    for args in [
+        &["sweep", "s.toml", "--out", "out", "--shards", "2"][..],
+        &[
+            "sweep",
+            "s.toml",
+            "--out",
+            "out",
+            "--shard",
+            "1/2",
+            "--slurm-script",
+        ][..],
+    ] {
+        let r = eyeshell_in(d, args);
+        assert_eq!(r.code, Some(2), "{args:?}: {}", r.stderr);
+        assert!(!d.join("out").exists());
+    }
+    // merge of a directory no shard wrote.
+    assert_bad(
+        &eyeshell_in(d, &["sweep", "merge", "nowhere"]),
+        "nowhere: no shard has run here",
+        "merge of nothing",
+    );
+    // A shard never removes another output: a solve's directory is refused.
+    std::fs::create_dir(d.join("mine")).unwrap();
+    std::fs::write(d.join("mine/notes.txt"), "mine").unwrap();
+    let r = eyeshell_in(d, &["sweep", "s.toml", "--out", "mine", "--shard", "1/2"]);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert_eq!(
+        std::fs::read_to_string(d.join("mine/notes.txt")).unwrap(),
+        "mine"
+    );
+}
+
+#[test]
+fn more_shards_than_runs_leave_the_extra_shards_empty() {
+    let dir = scene_dir(&format!("{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 8]\n"));
+    let d = dir.path();
+    for k in 1..=4 {
+        let r = eyeshell_in(
+            d,
+            &[
+                "sweep",
+                "s.toml",
+                "--out",
+                "out",
+                "-q",
+                "--shard",
+                &format!("{k}/4"),
+            ],
+        );
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+    }
+    let record = std::fs::read_to_string(d.join("out/shards/4.json")).unwrap();
+    assert!(record.contains("\"runs_total\": 0"), "{record}");
+    let merge = eyeshell_in(d, &["sweep", "merge", "out", "-q"]);
+    assert_eq!(merge.code, Some(0), "{}", merge.stderr);
+}
+
+#[test]
+fn the_slurm_script_runs_one_shard_per_task_and_merges_to_the_plain_table() {
+    let dir = scene_dir(&format!("{SMALL}{GRID}"));
+    let d = dir.path();
+    let script = eyeshell_in(
+        d,
+        &[
+            "sweep",
+            "s.toml",
+            "--out",
+            "out",
+            "--slurm-script",
+            "--shards",
+            "3",
+            "--time",
+            "10:00",
+            "--cpus-per-task",
+            "2",
+        ],
+    );
+    assert_eq!(script.code, Some(0), "{}", script.stderr);
+    let text = &script.stdout;
+    assert!(text.starts_with("#!/bin/bash\n"), "{text}");
+    for line in [
+        "#SBATCH --array=1-3\n",
+        "#SBATCH --cpus-per-task=2\n",
+        "#SBATCH --time=10:00\n",
+        " --resume \\\n    --shard slurm --jobs \"${SLURM_CPUS_PER_TASK:-1}\"\n",
+        "eyeshell sweep merge ",
+    ] {
+        assert!(text.contains(line), "{line:?} not in:\n{text}");
+    }
+    assert!(!d.join("out").exists(), "--slurm-script wrote out/");
+    // The tasks as Slurm would start them (in any order), then the merge.
+    for id in ["3", "1", "2"] {
+        let r = eyeshell_with(
+            d,
+            &[
+                "sweep", "s.toml", "--out", "out", "--resume", "--shard", "slurm", "-q",
+            ],
+            &[
+                ("SLURM_ARRAY_TASK_ID", id),
+                ("SLURM_ARRAY_TASK_MIN", "1"),
+                ("SLURM_ARRAY_TASK_MAX", "3"),
+                ("SLURM_ARRAY_TASK_COUNT", "3"),
+            ],
+        );
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        assert!(d.join(format!("out/shards/{id}.json")).is_file());
+    }
+    let merge = eyeshell_in(d, &["sweep", "merge", "out", "-q"]);
+    assert_eq!(merge.code, Some(0), "{}", merge.stderr);
+    let plain = eyeshell_in(d, &["sweep", "s.toml", "--out", "plain", "-q"]);
+    assert_eq!(plain.code, Some(0), "{}", plain.stderr);
+    assert_eq!(
+        table_without_timings(&d.join("out")),
+        table_without_timings(&d.join("plain"))
+    );
+}

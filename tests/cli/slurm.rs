@@ -1,0 +1,230 @@
+//! On a real Slurm: tests/slurm/cluster.sh starts munged, slurmctld and slurmd on this
+//! machine (one node, 2 CPUs, its files under /var/tmp), the script of `eyeshell sweep
+//! --slurm-script` runs a six-run growth sweep as a three-task job array (`sbatch --wait`),
+//! `eyeshell sweep merge` assembles it, and sweep.csv must be a plain sweep's (timings
+//! aside). The daemons are stopped by their pid files however the test ends.
+//!
+//! It needs root and Debian's slurm-wlm and munge (`.ci/run` installs them). Without them
+//! it prints `SKIPPED: <why>` on stderr and returns; with `EYESHELL_REQUIRE_SLURM=1` (set
+//! by CI) a skip is a failure instead.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::shards::{table_without_timings, SMALL};
+use crate::support::*;
+
+/// The whole test, cluster included, stays well under this.
+const JOB_LIMIT: Duration = Duration::from_secs(90);
+const DAEMONS_LIMIT: Duration = Duration::from_secs(60);
+
+fn skip(why: &str) {
+    if std::env::var_os("EYESHELL_REQUIRE_SLURM").is_some_and(|v| v == "1") {
+        panic!("Slurm test not run, but EYESHELL_REQUIRE_SLURM=1: {why}");
+    }
+    eprintln!("SKIPPED: the real Slurm test (tests/cli/slurm.rs): {why}");
+}
+
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH").is_some_and(|path| {
+        std::env::split_paths(&path)
+            .chain([PathBuf::from("/usr/sbin"), PathBuf::from("/sbin")])
+            .any(|d| d.join(program).is_file())
+    })
+}
+
+/// Run `cmd` to its end or until `limit`, killing it then; (exit code, stdout, stderr).
+fn run_with_limit(cmd: &mut Command, limit: Duration) -> Result<Run, String> {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("{cmd:?}: {e}"))?;
+    let start = Instant::now();
+    loop {
+        match child.try_wait() {
+            Ok(Some(_)) => return Ok(Run::from(child.wait_with_output().unwrap())),
+            Ok(None) if start.elapsed() > limit => {
+                let _ = child.kill();
+                let out = Run::from(child.wait_with_output().unwrap());
+                return Err(format!(
+                    "{cmd:?} took more than {} s: {}{}",
+                    limit.as_secs(),
+                    out.stdout,
+                    out.stderr
+                ));
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(100)),
+            Err(e) => return Err(e.to_string()),
+        }
+    }
+}
+
+/// The cluster of tests/slurm/cluster.sh, stopped when dropped.
+struct Cluster {
+    dir: PathBuf,
+}
+
+impl Cluster {
+    fn script() -> PathBuf {
+        repo().join("tests/slurm/cluster.sh")
+    }
+
+    fn start(dir: &Path) -> Result<Cluster, String> {
+        let cluster = Cluster {
+            dir: dir.to_path_buf(),
+        };
+        let r = run_with_limit(
+            Command::new("bash")
+                .arg(Self::script())
+                .arg("start")
+                .arg(dir),
+            DAEMONS_LIMIT,
+        )?;
+        if r.code != Some(0) {
+            return Err(format!("the daemons did not start: {}", r.stderr.trim()));
+        }
+        Ok(cluster)
+    }
+
+    fn conf(&self) -> PathBuf {
+        self.dir.join("slurm.conf")
+    }
+}
+
+impl Drop for Cluster {
+    fn drop(&mut self) {
+        let stopped = run_with_limit(
+            Command::new("bash")
+                .arg(Self::script())
+                .arg("stop")
+                .arg(&self.dir),
+            DAEMONS_LIMIT,
+        );
+        if let Err(e) = stopped {
+            eprintln!("stopping the test's Slurm: {e}");
+        }
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+#[test]
+fn a_slurm_job_array_of_shards_merges_to_the_plain_sweeps_table() {
+    let start = Instant::now();
+    // Root? (`id -u`: no libc call needed.)
+    let uid = Command::new("id").arg("-u").output().ok();
+    let root = uid.is_some_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    if !root {
+        return skip("not root (slurmctld and slurmd must run as root here)");
+    }
+    let missing: Vec<&str> = [
+        "slurmctld",
+        "slurmd",
+        "sbatch",
+        "scontrol",
+        "sinfo",
+        "munged",
+        "munge",
+        "unmunge",
+    ]
+    .into_iter()
+    .filter(|p| !on_path(p))
+    .collect();
+    if !missing.is_empty() {
+        return skip(&format!(
+            "{} not installed (apt-get install slurm-wlm munge)",
+            missing.join(", ")
+        ));
+    }
+    // The cluster's files under /var (a spool on tmpfs or in a user's tmp can be refused).
+    let base = tempfile::Builder::new()
+        .prefix("eyeshell-slurm-")
+        .tempdir_in("/var/tmp")
+        .unwrap();
+    let cluster = match Cluster::start(&base.path().join("cluster")) {
+        Ok(c) => c,
+        Err(why) => return skip(&why),
+    };
+    // The paper's grow sweep (Γ × δ, six runs), made small: 41 nodes, t_end = 0.2.
+    let work = base.path().join("work");
+    std::fs::create_dir(&work).unwrap();
+    let grid = "[sweep.grid]\n\"growth.Gamma\" = [4, 8, 12]\n\"growth.delta\" = [2, 6]\n";
+    let scene = SMALL.replace("nodes = 21", "nodes = 41");
+    std::fs::write(work.join("s.toml"), format!("{scene}{grid}")).unwrap();
+    let script = eyeshell_in(
+        &work,
+        &[
+            "sweep",
+            "s.toml",
+            "--out",
+            "out",
+            "--slurm-script",
+            "--shards",
+            "3",
+            "--time",
+            "5:00",
+        ],
+    );
+    assert_eq!(script.code, Some(0), "{}", script.stderr);
+    std::fs::write(work.join("job.sh"), &script.stdout).unwrap();
+    let job = run_with_limit(
+        Command::new("sbatch")
+            .args(["--wait", "job.sh"])
+            .current_dir(&work)
+            .env("SLURM_CONF", cluster.conf()),
+        JOB_LIMIT,
+    )
+    .unwrap_or_else(|e| panic!("{e}\n{}", logs(&work, &cluster)));
+    assert_eq!(
+        job.code,
+        Some(0),
+        "sbatch --wait: {}{}\n{}",
+        job.stdout,
+        job.stderr,
+        logs(&work, &cluster)
+    );
+    for k in 1..=3 {
+        assert!(
+            work.join(format!("out/shards/{k}.json")).is_file(),
+            "shard {k}: {}",
+            logs(&work, &cluster)
+        );
+    }
+    let merge = eyeshell_in(&work, &["sweep", "merge", "out"]);
+    assert_eq!(merge.code, Some(0), "{}{}", merge.stdout, merge.stderr);
+    assert!(merge.stdout.contains("6 of 6 runs ok"), "{}", merge.stdout);
+    let plain = eyeshell_in(&work, &["sweep", "s.toml", "--out", "plain", "-q"]);
+    assert_eq!(plain.code, Some(0), "{}", plain.stderr);
+    assert_eq!(
+        table_without_timings(&work.join("out")),
+        table_without_timings(&work.join("plain"))
+    );
+    drop(cluster);
+    eprintln!(
+        "the real Slurm test ran: 3 array tasks, merged, in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+}
+
+/// The tasks' output and the daemons' logs, for a failure's message.
+fn logs(work: &Path, cluster: &Cluster) -> String {
+    let mut text = String::new();
+    let dirs = [work.to_path_buf(), cluster.dir.join("log")];
+    for dir in dirs {
+        for entry in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+            let path = entry.path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            if name.ends_with(".out") || name.ends_with(".log") {
+                let body = std::fs::read_to_string(&path).unwrap_or_default();
+                let tail: Vec<&str> = body.lines().rev().take(20).collect();
+                text.push_str(&format!("--- {}\n", path.display()));
+                for line in tail.into_iter().rev() {
+                    text.push_str(line);
+                    text.push('\n');
+                }
+            }
+        }
+    }
+    text
+}
