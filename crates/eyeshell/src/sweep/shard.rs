@@ -364,14 +364,13 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
     } else {
         None
     };
-    let failures = |name: &str| {
-        found
-            .iter()
-            .flat_map(|(_, r)| r.runs.iter())
-            .filter(|e| e.name == name && e.status == "failed")
-            .last()
-            .cloned()
-    };
+    // The failed runs the shards recorded, by name (a later shard's record wins).
+    let failures: std::collections::HashMap<&str, &SweepRunEntry> = found
+        .iter()
+        .flat_map(|(_, r)| r.runs.iter())
+        .filter(|e| e.status == "failed")
+        .map(|e| (e.name.as_str(), e))
+        .collect();
     let mut stale = Vec::new();
     let records: Vec<RunRecord> = sweep
         .runs
@@ -384,8 +383,11 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
                     if let resume::Reuse::Stale(why) = other {
                         stale.push((run.name.clone(), why));
                     }
-                    match failures(&run.name) {
-                        Some(e) => (RunStatus::Failed(e.error.unwrap_or_default()), e.result),
+                    match failures.get(run.name.as_str()) {
+                        Some(e) => (
+                            RunStatus::Failed(e.error.clone().unwrap_or_default()),
+                            e.result.clone(),
+                        ),
                         None => (RunStatus::Pending, None),
                     }
                 }

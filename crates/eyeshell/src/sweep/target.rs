@@ -12,6 +12,9 @@
 //! - `runs/` holds runs that are not in this sweep: resuming would leave them beside the
 //!   new runs, looking like part of a sweep they are not. `--resume` continues a sweep or
 //!   adds runs to it; a sweep that dropped runs needs another directory or a fresh start.
+//!
+//! A shard (`--shard K/N`, [`prepare_shard`]) checks the directory the same way, resuming or
+//! not (it shares the directory and so may remove nothing), and locks only its own record.
 
 use std::fs;
 use std::path::{Path, PathBuf};
