@@ -456,6 +456,24 @@ fn bad_shards_are_refused_with_one_line_and_nothing_written() {
 }
 
 #[test]
+fn shards_started_together_into_a_fresh_directory_all_succeed() {
+    let dir = scene_dir(&format!(
+        "{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 8, 12]\n"
+    ));
+    let d = dir.path();
+    for attempt in 0..3 {
+        let _ = std::fs::remove_dir_all(d.join("out"));
+        let children: Vec<_> = (1..=4).map(|k| spawn_shard(d, &format!("{k}/4"))).collect();
+        for child in children {
+            let r = Run::from(child.wait_with_output().unwrap());
+            assert_eq!(r.code, Some(0), "attempt {attempt}: {}", r.stderr);
+        }
+        let merge = eyeshell_in(d, &["sweep", "merge", "out", "-q"]);
+        assert_eq!(merge.code, Some(0), "attempt {attempt}: {}", merge.stderr);
+    }
+}
+
+#[test]
 fn more_shards_than_runs_leave_the_extra_shards_empty() {
     let dir = scene_dir(&format!("{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 8]\n"));
     let d = dir.path();

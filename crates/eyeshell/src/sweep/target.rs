@@ -57,6 +57,7 @@ pub fn prepare(sweep: &Sweep, out: &Path, resume: bool) -> Result<rundir::OwnedD
 /// and the lock.
 pub fn prepare_shard(sweep: &Sweep, out: &Path, shard: Shard) -> Result<(PathBuf, DirLock), Error> {
     let out = &rundir::owner::normalise(out);
+    wait_for_marker(out);
     rundir::check_target(out)?;
     refuse_links(out)?;
     no_link(&out.join(SHARDS_DIR))?;
@@ -110,6 +111,28 @@ pub fn prepare_shard(sweep: &Sweep, out: &Path, shard: Shard) -> Result<(PathBuf
     }
     let lock = DirLock::acquire(&record)?;
     Ok((record, lock))
+}
+
+/// Wait (a second at most) while `out` has no marker and holds nothing but temporaries, as
+/// while another shard, started at the same moment, writes the marker: a check now would
+/// take it for a directory that is not eyeshell's.
+fn wait_for_marker(out: &Path) {
+    let pending = || {
+        Marker::read(out).is_none()
+            && fs::read_dir(out).is_ok_and(|entries| {
+                let names: Vec<String> = entries
+                    .flatten()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .collect();
+                !names.is_empty() && names.iter().all(|n| rundir::atomic::is_litter(n))
+            })
+    };
+    for _ in 0..50 {
+        if !pending() {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
 }
 
 /// Refuse `path` if it is a symbolic link (a missing path is fine).
