@@ -113,8 +113,8 @@ pub(crate) struct SweepArgs {
     /// Run only shard K of N of the runs (writes DIR/runs/<name>/ and DIR/shards/K.json; `eyeshell sweep merge DIR` makes the table), or `slurm`: K and N from the Slurm job array
     #[arg(long, value_name = "K/N|slurm", conflicts_with = "slurm_script")]
     pub(crate) shard: Option<String>,
-    /// Print an sbatch script that runs the sweep as a Slurm job array, one shard per task (runs nothing)
-    #[arg(long)]
+    /// Print an sbatch script that runs the sweep as a Slurm job array, one shard per task (runs nothing; each task's --jobs is its CPUs)
+    #[arg(long, conflicts_with = "jobs")]
     pub(crate) slurm_script: bool,
     /// With --slurm-script: the number of shards (array tasks); default: one per run, at most 100
     #[arg(long, value_name = "N", requires = "slurm_script")]
