@@ -178,18 +178,7 @@ fn merge_names_failed_and_missing_runs_and_matches_a_plain_sweep_with_failures()
     // Which shard holds "bad"? Run every shard but the one with "other".
     let mut ran = Vec::new();
     for k in 1..=3 {
-        let r = eyeshell_in(
-            d,
-            &[
-                "sweep",
-                "s.toml",
-                "--out",
-                "out",
-                "-q",
-                "--shard",
-                &format!("{k}/3"),
-            ],
-        );
+        let r = quiet_shard(d, k, 3);
         let record = std::fs::read_to_string(d.join(format!("out/shards/{k}.json"))).unwrap();
         if record.contains("\"name\": \"bad\"") {
             assert_fails(
@@ -478,18 +467,7 @@ fn more_shards_than_runs_leave_the_extra_shards_empty() {
     let dir = scene_dir(&format!("{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 8]\n"));
     let d = dir.path();
     for k in 1..=4 {
-        let r = eyeshell_in(
-            d,
-            &[
-                "sweep",
-                "s.toml",
-                "--out",
-                "out",
-                "-q",
-                "--shard",
-                &format!("{k}/4"),
-            ],
-        );
+        let r = quiet_shard(d, k, 4);
         assert_eq!(r.code, Some(0), "{}", r.stderr);
     }
     let record = std::fs::read_to_string(d.join("out/shards/4.json")).unwrap();
@@ -556,4 +534,20 @@ fn the_slurm_script_runs_one_shard_per_task_and_merges_to_the_plain_table() {
         table_without_timings(&d.join("out")),
         table_without_timings(&d.join("plain"))
     );
+}
+
+/// `eyeshell sweep s.toml --out out -q --shard K/N` in `d`.
+fn quiet_shard(d: &Path, k: usize, n: usize) -> Run {
+    eyeshell_in(
+        d,
+        &[
+            "sweep",
+            "s.toml",
+            "--out",
+            "out",
+            "-q",
+            "--shard",
+            &format!("{k}/{n}"),
+        ],
+    )
 }

@@ -125,13 +125,7 @@ fn exact_sphere_converges_at_order_4_with_the_block_solver() {
                 .iter()
                 .flat_map(|row| {
                     let x = row.sigma_ref;
-                    let exact = [
-                        1.0 / (a * p.r0),
-                        a,
-                        a * p.r0 * (x / p.r0).sin(),
-                        x / p.r0,
-                        0.0,
-                    ];
+                    let exact = exact_sphere_fields(&p, a, x);
                     five(row).into_iter().zip(exact).map(|(v, e)| (v - e).abs())
                 })
                 .fold(0.0, f64::max)

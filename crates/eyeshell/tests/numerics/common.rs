@@ -64,3 +64,15 @@ pub fn sci(v: &[f64]) -> String {
     let parts: Vec<String> = v.iter().map(|x| format!("{x:.2e}")).collect();
     format!("[{}]", parts.join(", "))
 }
+
+/// The exact solution (docs/MODEL.md §7) at material point Σ = x of the sphere `p` inflated
+/// to stretch `a` (the cornea's α): κ, α_s, r, θ, Q.
+pub fn exact_sphere_fields(p: &Params, a: f64, x: f64) -> [f64; 5] {
+    [
+        1.0 / (a * p.r0),
+        a,
+        a * p.r0 * (x / p.r0).sin(),
+        x / p.r0,
+        0.0,
+    ]
+}

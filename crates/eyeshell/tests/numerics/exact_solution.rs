@@ -14,13 +14,7 @@ fn max_error(nodes: usize, scheme: Scheme) -> f64 {
     let mut worst: f64 = 0.0;
     for row in &sol.rows {
         let x = row.sigma_ref;
-        let exact = [
-            1.0 / (a * p.r0),
-            a,
-            a * p.r0 * (x / p.r0).sin(),
-            x / p.r0,
-            0.0,
-        ];
+        let exact = exact_sphere_fields(&p, a, x);
         for (v, e) in five(row).iter().zip(exact) {
             worst = worst.max((v - e).abs());
         }

@@ -4,6 +4,7 @@
 //! from the next block, singular matrices reported as such, non-finite entries, and a
 //! proptest over sizes and structures.
 
+use crate::sundials_support::{fill_from_dense, relative_residual};
 use eyeshell_sundials::linalg::{AbdLu, LinalgError, ABD_NODE};
 use eyeshell_sundials::MatrixSink;
 use nalgebra::{DMatrix, DVector};
@@ -111,24 +112,9 @@ fn random_abd(nodes: usize, top: usize, kind: Kind, seed: u64) -> DMatrix<f64> {
 fn abd_of(a: &DMatrix<f64>, top: usize) -> AbdLu {
     let nodes = a.nrows() / ABD_NODE;
     let mut lu = AbdLu::new(nodes, top).unwrap();
-    for i in 0..a.nrows() {
-        for j in 0..a.ncols() {
-            if a[(i, j)] != 0.0 {
-                lu.set(i, j, a[(i, j)]);
-            }
-        }
-    }
+    fill_from_dense(&mut lu, a);
     assert_eq!(lu.take_outside(), 0);
     lu
-}
-
-/// ‖A x − b‖ / (‖A‖ ‖x‖ + ‖b‖), infinity norms.
-fn relative_residual(a: &DMatrix<f64>, x: &[f64], b: &[f64]) -> f64 {
-    let x = DVector::from_column_slice(x);
-    let b = DVector::from_column_slice(b);
-    let r = a * &x - &b;
-    let norm_a = a.row_iter().map(|r| r.abs().sum()).fold(0.0, f64::max);
-    r.amax() / (norm_a * x.amax() + b.amax())
 }
 
 /// Factor once, solve three right sides, compare with nalgebra's dense LU; returns the

@@ -3,6 +3,7 @@
 //! interchanges, singular matrices reported as such, writes outside the band, and the
 //! bordered band built on it.
 
+use crate::sundials_support::{fill_from_dense, relative_residual};
 use eyeshell_sundials::linalg::{BandLu, BorderedBand, LinalgError};
 use eyeshell_sundials::MatrixSink;
 use nalgebra::{DMatrix, DVector};
@@ -34,24 +35,9 @@ fn random_band(n: usize, kl: usize, ku: usize, diag: f64, seed: u64) -> DMatrix<
 
 fn band_lu_of(a: &DMatrix<f64>, kl: usize, ku: usize) -> BandLu {
     let mut lu = BandLu::new(a.nrows(), kl, ku).unwrap();
-    for i in 0..a.nrows() {
-        for j in 0..a.ncols() {
-            if a[(i, j)] != 0.0 {
-                lu.set(i, j, a[(i, j)]);
-            }
-        }
-    }
+    fill_from_dense(&mut lu, a);
     assert_eq!(lu.take_outside(), 0);
     lu
-}
-
-/// ‖A x − b‖ / (‖A‖ ‖x‖ + ‖b‖), infinity norms.
-fn relative_residual(a: &DMatrix<f64>, x: &[f64], b: &[f64]) -> f64 {
-    let x = DVector::from_column_slice(x);
-    let b = DVector::from_column_slice(b);
-    let r = a * &x - &b;
-    let norm_a = a.row_iter().map(|r| r.abs().sum()).fold(0.0, f64::max);
-    r.amax() / (norm_a * x.amax() + b.amax())
 }
 
 /// Factor, solve two right sides with one factorisation, and compare with nalgebra.

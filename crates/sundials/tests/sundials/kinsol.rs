@@ -64,13 +64,6 @@ impl NonlinearSystem for Bratu {
     }
 }
 
-fn max_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn rosenbrock_same_root_with_every_solver() {
     for (name, spec) in specs(2, 1, 1) {

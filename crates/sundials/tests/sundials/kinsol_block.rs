@@ -116,13 +116,6 @@ fn solve(nodes: usize, spec: LinearSolverSpec) -> Result<Vec<f64>, SundialsError
     Ok(u)
 }
 
-fn max_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn block_band_and_dense_find_the_same_root() {
     for nodes in [2, 3, 40, 401] {
