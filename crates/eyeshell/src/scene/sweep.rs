@@ -131,11 +131,13 @@ impl Sweep {
             }
         }
         let mut runs: Vec<SweepRun> = Vec::with_capacity(combos.len());
+        let mut taken = std::collections::HashSet::with_capacity(combos.len());
         for (run_name, values) in combos {
             let run_name = unique(
                 shorten(run_name.unwrap_or_else(|| generated_name(&values))),
-                &runs,
+                &taken,
             );
+            taken.insert(run_name.clone());
             let run_origin = format!("{origin} [sweep] run {run_name}");
             let assignments: Vec<(String, toml::Value, String)> = values
                 .iter()
@@ -388,15 +390,15 @@ fn valid_name(s: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || "._=+-".contains(c))
 }
 
-/// `name`, or `name-2`, `name-3`, ... if a run already has it.
-fn unique(name: String, runs: &[SweepRun]) -> String {
-    let taken = |n: &str| runs.iter().any(|r| r.name == n);
-    if !taken(&name) {
+/// `name`, or `name-2`, `name-3`, ... if a run already has it (`taken`: a set, so that
+/// naming n runs is linear in n, not quadratic).
+fn unique(name: String, taken: &std::collections::HashSet<String>) -> String {
+    if !taken.contains(&name) {
         return name;
     }
     (2..)
         .map(|k| format!("{name}-{k}"))
-        .find(|n| !taken(n))
+        .find(|n| !taken.contains(n))
         .unwrap_or(name)
 }
 
