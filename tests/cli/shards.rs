@@ -442,6 +442,36 @@ fn bad_shards_are_refused_with_one_line_and_nothing_written() {
         std::fs::read_to_string(d.join("mine/notes.txt")).unwrap(),
         "mine"
     );
+    // Nor does merge or status touch it: one line, exit 2.
+    for cmd in ["merge", "status"] {
+        let r = eyeshell_in(d, &["sweep", cmd, "mine"]);
+        assert_eq!(r.code, Some(2), "{cmd}: {}", r.stderr);
+        assert_eq!(r.stderr.lines().count(), 1, "{cmd}: {}", r.stderr);
+    }
+    assert_eq!(std::fs::read_dir(d.join("mine")).unwrap().count(), 1);
+}
+
+/// The same shard twice at once: the second is refused while the first holds its record's
+/// lock (held here by the test, as a running shard holds it), and runs once it is free.
+#[test]
+fn the_same_shard_twice_at_once_is_refused() {
+    let dir = scene_dir(&format!("{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 8]\n"));
+    let d = dir.path();
+    let first = quiet_shard(d, 1, 2);
+    assert_eq!(first.code, Some(0), "{}", first.stderr);
+    let lock = std::fs::File::create(d.join("out/shards/.1.json.lock")).unwrap();
+    lock.try_lock().unwrap();
+    let second = quiet_shard(d, 1, 2);
+    assert_eq!(second.code, Some(2), "{}", second.stderr);
+    assert!(
+        second.stderr.contains("another eyeshell process"),
+        "{}",
+        second.stderr
+    );
+    lock.unlock().unwrap();
+    drop(lock);
+    let third = quiet_shard(d, 1, 2);
+    assert_eq!(third.code, Some(0), "{}", third.stderr);
 }
 
 #[test]

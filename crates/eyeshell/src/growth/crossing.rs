@@ -145,8 +145,8 @@ mod tests {
         }
     }
 
-    /// At the ends of the shell fewer points enter; a fold falls back to the chord; no
-    /// point at φ_max gives None, and a first point beyond it gives its own depth.
+    /// At the ends of the shell fewer points enter; a fold or a NaN angle falls back to the
+    /// chord; no point at φ_max gives None, and a first point beyond it gives its own depth.
     #[test]
     fn ends_folds_and_absent_crossings() {
         let order = [0, 1, 2];
@@ -163,5 +163,10 @@ mod tests {
         assert!(crossing(&order, |k| ang[k], |k| k as f64, 0.9).is_none());
         let c = crossing(&order, |k| ang[k], |k| 1.0 + k as f64, 0.05).unwrap();
         assert_eq!((c.len, c.value), (1, 1.0));
+        // A NaN angle beside the straddling pair: the chord, still finite.
+        let with_nan = [f64::NAN, 0.2, 0.4, 0.5];
+        let c = crossing(&order, |k| with_nan[k], |k| 10.0 * with_nan[k], 0.3).unwrap();
+        assert_eq!((c.len, c.stencil[0].0, c.stencil[1].0), (2, 1, 2));
+        assert!((c.value - 3.0).abs() < 1e-14);
     }
 }
