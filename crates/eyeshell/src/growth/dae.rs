@@ -187,8 +187,6 @@ pub struct CoupledDae {
     n_p: usize,
     n_w: usize,
     sites: Vec<Site>,
-    /// Points in Σ order (for the crossing of φ_max).
-    order: Vec<usize>,
     hermite_simpson: bool,
     jac: Csr,
     linear: Box<dyn DirectSolver>,
@@ -250,14 +248,11 @@ impl CoupledDae {
         for (i, &k) in pts.mid.iter().enumerate() {
             sites[k] = Site::Mid(i);
         }
-        let mut order: Vec<usize> = (0..pts.len()).collect();
-        order.sort_by(|&a, &b| pts.sigma_ref[a].total_cmp(&pts.sigma_ref[b]));
         let mut dae = CoupledDae {
             m,
             n_p,
             n_w,
             sites,
-            order,
             hermite_simpson,
             jac: Csr::from_rows(vec![]),
             linear: Box::new(NoSolver),
@@ -459,9 +454,9 @@ impl CoupledDae {
         self.at_p.clear();
         self.load(&y)?;
         let local = self.locals(&y, None);
-        let rates = self.point_rates(&y, &local, None);
+        let (_, crossing) = self.point_rates(&y, &local, None);
         let d = self.d();
-        y[d] = self.crossing_depth(&rates).map_or(0.0, |c| c.value);
+        y[d] = crossing.map_or(0.0, |c| c.value);
         Ok(y)
     }
 
@@ -644,14 +639,15 @@ impl CoupledDae {
         [gr, gt, *gz, ga]
     }
 
-    /// The retina, the stimulus and the rates at every point; with `deriv`, their
-    /// derivatives in each point's (r, θ, z, α_s, ρ, γ_s) and d.
+    /// The retina, the stimulus and the rates at every point, and the crossing of φ_max
+    /// they read beyond it; with `deriv`, their derivatives in each point's
+    /// (r, θ, z, α_s, ρ, γ_s) and d.
     fn point_rates(
         &self,
         y: &[f64],
         local: &[Local],
         mut deriv: Option<&mut Vec<RateDeriv>>,
-    ) -> Vec<PointRates> {
+    ) -> (Vec<PointRates>, Option<Crossing>) {
         let pts = &self.sys.points;
         let law = self.sys.points_law();
         let blue = self.sys.blue();
@@ -696,7 +692,8 @@ impl CoupledDae {
             }
         }
         // Beyond φ_max the depth is the unknown d (docs/MODEL.md §6).
-        let has_crossing = self.crossing_depth(&out).is_some();
+        let crossing = self.crossing_depth(&out);
+        let has_crossing = crossing.is_some();
         for (k, pr) in out.iter_mut().enumerate() {
             let s = &local[k];
             let (rho, gam) = (y[NP * k], y[NP * k + 1]);
@@ -733,7 +730,7 @@ impl CoupledDae {
                 rd.rate_d = [cap * gv_d * pr_, cap * gv_d * gam * pa];
             }
         }
-        out
+        (out, crossing)
     }
 
     /// Rates (and, with `deriv`, their derivatives) that are not finite fail the evaluation
@@ -780,7 +777,7 @@ impl CoupledDae {
     /// None if no point reaches it.
     fn crossing_depth(&self, rates: &[PointRates]) -> Option<Crossing> {
         super::crossing::crossing(
-            &self.order,
+            &self.sys.points.by_sigma,
             |k| rates[k].angle,
             |k| rates[k].depth,
             self.sys.blue().phi_max,
@@ -793,7 +790,7 @@ impl CoupledDae {
         self.counters.residuals += 1;
         self.load(y)?;
         let local = self.locals(y, None);
-        let rates = self.point_rates(y, &local, None);
+        let (rates, crossing) = self.point_rates(y, &local, None);
         self.check_finite(&rates, None)?;
         for (k, pr) in rates.iter().enumerate() {
             r[NP * k] = yp[NP * k] - pr.rho;
@@ -821,7 +818,7 @@ impl CoupledDae {
         r[d - 3] = f[nf - 2];
         r[d - 2] = f[nf - 1];
         r[d - 1] = y[self.wcol(m - 1, Z)] - z_star;
-        r[d] = y[d] - self.crossing_depth(&rates).map_or(0.0, |c| c.value);
+        r[d] = y[d] - crossing.map_or(0.0, |c| c.value);
         (self.f, self.dz) = (f, dz);
         self.counters.residual_seconds += start.elapsed().as_secs_f64();
         Ok(())
@@ -853,13 +850,13 @@ impl CoupledDae {
         let mut grads = std::mem::take(&mut self.grads);
         let local = self.locals(y, Some(&mut grads));
         let mut rd = Vec::with_capacity(local.len());
-        let rates = self.point_rates(y, &local, Some(&mut rd));
+        let (rates, crossing) = self.point_rates(y, &local, Some(&mut rd));
         if let Err(e) = self.check_finite(&rates, Some(&rd)) {
             self.grads = grads;
             return Err(e.into());
         }
         self.assemble_growth_rows(c, &grads, &rd, &rates);
-        self.assemble_border(&grads, &rd, &rates);
+        self.assemble_border(&grads, &rd, crossing);
         self.grads = grads;
         match self.jac.take_outside() {
             0 => Ok(()),
@@ -1025,8 +1022,13 @@ impl CoupledDae {
     }
 
     /// The border row: d − D*(y), D* the depth interpolated at φ_max.
-    fn assemble_border(&mut self, grads: &[[Grad; 4]], rd: &[RateDeriv], rates: &[PointRates]) {
-        let Some(cr) = self.crossing_depth(rates) else {
+    fn assemble_border(
+        &mut self,
+        grads: &[[Grad; 4]],
+        rd: &[RateDeriv],
+        crossing: Option<Crossing>,
+    ) {
+        let Some(cr) = crossing else {
             return;
         };
         let d = self.d();

@@ -37,6 +37,9 @@ pub struct GrowthPoints {
     pub rho_ref: Vec<f64>,
     /// Growth capacity g_c(Σ).
     pub capacity: Vec<f64>,
+    /// The points in Σ order (a jump node's point from below first), for the crossing of
+    /// φ_max (`super::crossing`).
+    pub by_sigma: Vec<usize>,
     fibre: Vec<Option<FibreDirection>>,
     law: ThicknessLaw,
     steps: Vec<f64>,
@@ -55,6 +58,7 @@ impl GrowthPoints {
             h: vec![],
             rho_ref: vec![],
             capacity: vec![],
+            by_sigma: vec![],
             fibre: vec![],
             law: g.thickness_law,
             steps: (0..m - 1).map(|i| mesh.step(i)).collect(),
@@ -94,6 +98,9 @@ impl GrowthPoints {
                 pts.mid.push(k);
             }
         }
+        pts.by_sigma = (0..pts.sigma_ref.len()).collect();
+        let sigma = &pts.sigma_ref;
+        pts.by_sigma.sort_by(|&a, &b| sigma[a].total_cmp(&sigma[b]));
         pts
     }
 

@@ -470,8 +470,11 @@ impl GrowthSystem {
 /// The blue depth where the retina crosses the polar angle φ_max ([`super::crossing`]);
 /// None if the retina never reaches φ_max.
 fn depth_at_angle(pts: &GrowthPoints, stim: &[PointStimulus], phi_max: f64) -> Option<f64> {
-    let mut order: Vec<usize> = (0..pts.len()).collect();
-    order.sort_by(|&a, &b| pts.sigma_ref[a].total_cmp(&pts.sigma_ref[b]));
-    super::crossing::crossing(&order, |k| stim[k].angle, |k| stim[k].depth_blue, phi_max)
-        .map(|c| c.value)
+    super::crossing::crossing(
+        &pts.by_sigma,
+        |k| stim[k].angle,
+        |k| stim[k].depth_blue,
+        phi_max,
+    )
+    .map(|c| c.value)
 }
