@@ -22,14 +22,12 @@ use std::ptr::NonNull;
 use std::rc::Rc;
 
 use sundials_sys::{
-    realtype, N_Vector, SUNLinSolFreeEmpty, SUNLinSolNewEmpty, SUNLinearSolver, SUNLinearSolver_ID,
-    SUNLinearSolver_ID_SUNLINEARSOLVER_CUSTOM, SUNLinearSolver_Type,
-    SUNLinearSolver_Type_SUNLINEARSOLVER_DIRECT, SUNMatDestroy, SUNMatFreeEmpty, SUNMatNewEmpty,
-    SUNMatrix, SUNMatrix_ID, SUNMatrix_ID_SUNMATRIX_CUSTOM, SUNLS_LUFACT_FAIL,
+    realtype, N_Vector, SUNLinearSolver, SUNMatDestroy, SUNMatrix, SUNLS_LUFACT_FAIL,
     SUNLS_PACKAGE_FAIL_UNREC, SUNLS_SUCCESS,
 };
 
 use super::context::Context;
+use super::custom;
 use super::error::SundialsError;
 use super::linalg::{AbdLu, LinalgError};
 use super::nvector;
@@ -63,22 +61,16 @@ impl BlockMatrix {
             lu,
             last_error: None,
         })));
-        // SAFETY: ctx is live; the result is checked for NULL at once.
-        let raw = unsafe { SUNMatNewEmpty(ctx.raw()) };
-        if raw.is_null() {
-            // SAFETY: the state was leaked just above and is owned by nobody else.
-            drop(unsafe { Box::from_raw(state.as_ptr()) });
-            return Err(SundialsError::NullHandle("SUNMatNewEmpty"));
+        // Its zero op does nothing: the Jacobian trampoline clears the boundary rows before
+        // it assembles.
+        match custom::token_matrix(ctx, state.as_ptr().cast()) {
+            Ok(raw) => Ok(BlockMatrix { raw, state }),
+            Err(e) => {
+                // SAFETY: the state was leaked just above and is owned by nobody else.
+                drop(unsafe { Box::from_raw(state.as_ptr()) });
+                Err(e)
+            }
         }
-        // SAFETY: raw is a live, empty matrix with an ops table (every op NULL); we own it.
-        unsafe {
-            (*raw).content = state.as_ptr().cast();
-            let ops = &mut *(*raw).ops;
-            ops.getid = Some(token_getid);
-            ops.zero = Some(token_zero);
-            ops.destroy = Some(SUNMatFreeEmpty);
-        }
-        Ok(BlockMatrix { raw, state })
     }
 
     pub fn lu(&self) -> &AbdLu {
@@ -119,23 +111,7 @@ impl Drop for BlockMatrix {
 /// The custom SUNLinearSolver for [`BlockMatrix`] (freed by `LinearSolver`'s drop through
 /// its free op). It holds no content: the factors live in the matrix, as for band LU.
 pub(crate) fn new_block_solver(ctx: &Rc<Context>) -> Result<SUNLinearSolver, SundialsError> {
-    // SAFETY: ctx is live; checked for NULL at once.
-    let ls = unsafe { SUNLinSolNewEmpty(ctx.raw()) };
-    if ls.is_null() {
-        return Err(SundialsError::NullHandle("SUNLinSolNewEmpty"));
-    }
-    // SAFETY: ls is live with an ops table whose ops are all NULL. KINSOL 6.4 requires
-    // gettype and solve (KINSetLinearSolver); initialize, setup, space, numiters, ... go
-    // through wrappers that treat NULL as success or zero.
-    unsafe {
-        let ops = &mut *(*ls).ops;
-        ops.gettype = Some(block_gettype);
-        ops.getid = Some(block_getid);
-        ops.setup = Some(block_setup);
-        ops.solve = Some(block_solve);
-        ops.free = Some(block_free);
-    }
-    Ok(ls)
+    custom::direct_solver(ctx, block_setup, block_solve)
 }
 
 /// The state behind a token matrix made by [`BlockMatrix::new`].
@@ -148,14 +124,6 @@ unsafe fn state<'a>(a: SUNMatrix) -> Option<&'a mut BlockState> {
     }
     let st = &mut *((*a).content as *mut BlockState);
     (st.tag == TAG).then_some(st)
-}
-
-unsafe extern "C" fn block_gettype(_ls: SUNLinearSolver) -> SUNLinearSolver_Type {
-    SUNLinearSolver_Type_SUNLINEARSOLVER_DIRECT
-}
-
-unsafe extern "C" fn block_getid(_ls: SUNLinearSolver) -> SUNLinearSolver_ID {
-    SUNLinearSolver_ID_SUNLINEARSOLVER_CUSTOM
 }
 
 /// SUNLinSolSetup: factor the blocks as the Jacobian function left them.
@@ -218,20 +186,4 @@ unsafe extern "C" fn block_solve(
             SUNLS_PACKAGE_FAIL_UNREC
         }
     }
-}
-
-/// Free the solver object (it has no content).
-unsafe extern "C" fn block_free(ls: SUNLinearSolver) -> c_int {
-    // SAFETY: ls came from SUNLinSolNewEmpty; called once, from LinearSolver's drop.
-    unsafe { SUNLinSolFreeEmpty(ls) };
-    SUNLS_SUCCESS as c_int
-}
-
-unsafe extern "C" fn token_getid(_a: SUNMatrix) -> SUNMatrix_ID {
-    SUNMatrix_ID_SUNMATRIX_CUSTOM
-}
-
-/// Nothing: the Jacobian trampoline clears the boundary rows before it assembles.
-unsafe extern "C" fn token_zero(_a: SUNMatrix) -> c_int {
-    0
 }

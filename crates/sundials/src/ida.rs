@@ -31,18 +31,16 @@ use sundials_sys::{
     IDASStolerances, IDASVtolerances, IDASetErrHandlerFn, IDASetId, IDASetInitStep, IDASetJacFn,
     IDASetLinearSolver, IDASetMaxConvFails, IDASetMaxErrTestFails, IDASetMaxNonlinIters,
     IDASetMaxNumSteps, IDASetMaxOrd, IDASetMaxStep, IDASetNonlinConvCoef, IDASetStopTime,
-    IDASetSuppressAlg, IDASetUserData, IDASolve, N_Vector, SUNLinSolFree, SUNLinSolFreeEmpty,
-    SUNLinSolNewEmpty, SUNLinearSolver, SUNLinearSolver_ID,
-    SUNLinearSolver_ID_SUNLINEARSOLVER_CUSTOM, SUNLinearSolver_Type,
-    SUNLinearSolver_Type_SUNLINEARSOLVER_DIRECT, SUNMatDestroy, SUNMatFreeEmpty, SUNMatNewEmpty,
-    SUNMatrix, SUNMatrix_ID, SUNMatrix_ID_SUNMATRIX_CUSTOM, IDA_NORMAL, IDA_ONE_STEP,
-    IDA_YA_YDP_INIT, SUNLS_PACKAGE_FAIL_REC, SUNLS_PACKAGE_FAIL_UNREC, SUNLS_SUCCESS,
+    IDASetSuppressAlg, IDASetUserData, IDASolve, N_Vector, SUNLinSolFree, SUNLinearSolver,
+    SUNMatDestroy, SUNMatrix, IDA_NORMAL, IDA_ONE_STEP, IDA_YA_YDP_INIT, SUNLS_PACKAGE_FAIL_REC,
+    SUNLS_PACKAGE_FAIL_UNREC, SUNLS_SUCCESS,
 };
 
 use super::callback::{
     self, counter, CallbackError, CallbackResult, CountGetter, ErrorLog, RawBox, RealGetter,
 };
 use super::context::Context;
+use super::custom;
 use super::error::{flag_error, FlagFamily, SundialsError};
 use super::integrator::{common_options, invalid, named, reset_reports, to_int, Api, Mem, Shared};
 use super::linsol::{LinearSolver, LinearSolverSpec};
@@ -734,34 +732,14 @@ impl Linear {
     /// The custom solver and its token matrix; the solver's content (the shared state) is set
     /// by the caller once that exists.
     fn custom<S: DaeSystem>(ctx: &Rc<Context>) -> Result<Self, SundialsError> {
-        // SAFETY: ctx is live; the result is checked for NULL and owned (freed on drop) at once.
-        let solver = CustomSolver(unsafe { SUNLinSolNewEmpty(ctx.raw()) });
-        if solver.0.is_null() {
-            return Err(SundialsError::NullHandle("SUNLinSolNewEmpty"));
-        }
-        // SAFETY: as above.
-        let token = TokenMatrix(unsafe { SUNMatNewEmpty(ctx.raw()) });
-        if token.0.is_null() {
-            return Err(SundialsError::NullHandle("SUNMatNewEmpty"));
-        }
-        // SAFETY: both objects are live, ours, and have an ops table (the constructors
-        // allocate it with every op NULL). IDA 6.4 requires gettype and solve
-        // (IDASetLinearSolver); the other solver ops it may call (initialize, setup,
-        // setzeroguess, setscalingvectors, space, ...) go through wrappers that treat NULL as
-        // success. Of the matrix it calls only SUNMatZero, which has no NULL check.
-        unsafe {
-            let ops = &mut *(*solver.0).ops;
-            ops.gettype = Some(custom_gettype);
-            ops.getid = Some(custom_getid);
-            ops.setup = Some(custom_setup);
-            ops.solve = Some(custom_solve_trampoline::<S>);
-            ops.free = Some(custom_free);
-            let ops = &mut *(*token.0).ops;
-            ops.getid = Some(token_getid);
-            // idaLsSetup zeroes a DIRECT solver's matrix before each Jacobian evaluation.
-            ops.zero = Some(token_zero);
-            ops.destroy = Some(SUNMatFreeEmpty);
-        }
+        // Each owned (freed on drop) as soon as it exists. Of the matrix IDA 6.4 calls only
+        // SUNMatZero (idaLsSetup, before each Jacobian evaluation): the token's does nothing.
+        let solver = CustomSolver(custom::direct_solver(
+            ctx,
+            custom_setup,
+            custom_solve_trampoline::<S>,
+        )?);
+        let token = TokenMatrix(custom::token_matrix(ctx, std::ptr::null_mut())?);
         Ok(Linear::Custom { solver, token })
     }
 }
@@ -903,32 +881,7 @@ unsafe extern "C" fn custom_solve_trampoline<S: DaeSystem>(
     }
 }
 
-/// DIRECT, so that IDA keeps lsetup, calls the Jacobian function and scales the correction.
-unsafe extern "C" fn custom_gettype(_ls: SUNLinearSolver) -> SUNLinearSolver_Type {
-    SUNLinearSolver_Type_SUNLINEARSOLVER_DIRECT
-}
-
-unsafe extern "C" fn custom_getid(_ls: SUNLinearSolver) -> SUNLinearSolver_ID {
-    SUNLinearSolver_ID_SUNLINEARSOLVER_CUSTOM
-}
-
 /// The system's linear_setup already ran in the Jacobian function; nothing left to do.
 unsafe extern "C" fn custom_setup(_ls: SUNLinearSolver, _a: SUNMatrix) -> c_int {
     SUNLS_SUCCESS as c_int
-}
-
-/// Free the solver object only: the content is the shared state, owned by Ida.
-unsafe extern "C" fn custom_free(ls: SUNLinearSolver) -> c_int {
-    // SAFETY: ls came from SUNLinSolNewEmpty; called once, from CustomSolver's drop.
-    unsafe { SUNLinSolFreeEmpty(ls) };
-    SUNLS_SUCCESS as c_int
-}
-
-unsafe extern "C" fn token_getid(_a: SUNMatrix) -> SUNMatrix_ID {
-    SUNMatrix_ID_SUNMATRIX_CUSTOM
-}
-
-/// Nothing to zero: the system keeps its matrix itself.
-unsafe extern "C" fn token_zero(_a: SUNMatrix) -> c_int {
-    0
 }

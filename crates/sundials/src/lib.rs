@@ -18,6 +18,7 @@
 mod block;
 mod callback;
 mod context;
+mod custom;
 mod cvode;
 mod error;
 mod fastops;
