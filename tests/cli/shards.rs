@@ -280,26 +280,17 @@ fn slow_scene() -> String {
 
 #[test]
 fn a_shard_killed_mid_way_resumes_and_keeps_its_finished_runs() {
-    use std::io::BufRead;
-    use std::os::unix::process::CommandExt;
     let dir = scene_dir(&slow_scene());
     let d = dir.path();
     // Shard 1/2 (two runs), one at a time, in a process group of its own: SIGKILL to the
     // group once its first run has ended, as a cluster ends a job out of time.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
-        .args([
+    let (mut child, _stderr, first) = spawn_in_own_group(
+        d,
+        &[
             "sweep", "s.toml", "--out", "out", "--jobs", "1", "--shard", "1/2",
-        ])
-        .current_dir(d)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .process_group(0)
-        .spawn()
-        .unwrap();
-    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
-    let mut first = String::new();
-    stderr.read_line(&mut first).unwrap();
-    assert!(first.starts_with("eyeshell: [1/2] "), "{first}");
+        ],
+        "eyeshell: [1/2] ",
+    );
     let done = first["eyeshell: [1/2] ".len()..]
         .split(' ')
         .next()

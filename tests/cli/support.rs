@@ -381,3 +381,32 @@ pub fn refused(r: &Run, needle: &str, what: &str) {
 pub fn succeeded(r: &Run, what: &str) {
     assert_eq!(r.code, Some(0), "{what}: {}", r.stderr);
 }
+
+/// `eyeshell ARGS` in `dir`, started in a process group of its own (so that a test can
+/// signal the group as a terminal or a cluster does), stdout discarded; its stderr after
+/// the first line, which must start with `first` (the first run's report).
+pub fn spawn_in_own_group(
+    dir: &Path,
+    args: &[&str],
+    first: &str,
+) -> (
+    std::process::Child,
+    std::io::BufReader<std::process::ChildStderr>,
+    String,
+) {
+    use std::io::BufRead;
+    use std::os::unix::process::CommandExt;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_eyeshell"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .process_group(0)
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    stderr.read_line(&mut line).unwrap();
+    assert!(line.starts_with(first), "{line}");
+    (child, stderr, line)
+}

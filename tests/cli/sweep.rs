@@ -326,22 +326,12 @@ fn slow_sweep(dir: &Path) {
 /// `eyeshell sweep` of [`slow_sweep`] in `dir`, one job, in a process group of its own (so
 /// that a test can signal the group as a terminal does); its stderr, after the first line.
 fn start_slow_sweep(dir: &Path) -> (std::process::Child, impl std::io::BufRead) {
-    use std::io::BufRead;
-    use std::os::unix::process::CommandExt;
-    use std::process::{Command, Stdio};
     slow_sweep(dir);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_eyeshell"))
-        .args(["sweep", "s.toml", "--out", "out", "--jobs", "1"])
-        .current_dir(dir)
-        .stderr(Stdio::piped())
-        .stdout(Stdio::piped())
-        .process_group(0)
-        .spawn()
-        .unwrap();
-    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
-    let mut first = String::new();
-    stderr.read_line(&mut first).unwrap();
-    assert!(first.starts_with("eyeshell: [1/6] "), "{first}");
+    let (child, stderr, _) = spawn_in_own_group(
+        dir,
+        &["sweep", "s.toml", "--out", "out", "--jobs", "1"],
+        "eyeshell: [1/6] ",
+    );
     (child, stderr)
 }
 
