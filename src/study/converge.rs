@@ -206,7 +206,7 @@ pub fn ladder(
         err_richardson,
         axial: growth.map(|_| {
             runs.iter()
-                .map(|r| r.axial_length.unwrap_or(f64::NAN))
+                .map(|r| r.axial_length().unwrap_or(f64::NAN))
                 .collect()
         }),
     })

@@ -58,12 +58,17 @@ impl From<StudyError> for eyeshell::Error {
 pub struct Run {
     /// The elastic state (at t_end for growth).
     pub solution: Solution,
-    /// Axial length at t_end (growth only).
-    pub axial_length: Option<f64>,
     /// (t, axial length) at each of the scene's output times and t_end (growth only).
     pub axial_series: Vec<(f64, f64)>,
     pub seconds: f64,
     pub growth: Option<GrowthStats>,
+}
+
+impl Run {
+    /// Axial length at t_end (growth only).
+    pub fn axial_length(&self) -> Option<f64> {
+        self.axial_series.last().map(|&(_, a)| a)
+    }
 }
 
 /// Solve the elastic problem, or run the growth when `growth` is given, and time it.
@@ -84,7 +89,6 @@ pub fn run(
             })?;
             Ok(Run {
                 solution,
-                axial_length: None,
                 axial_series: vec![],
                 seconds: start.elapsed().as_secs_f64(),
                 growth: None,
@@ -105,19 +109,17 @@ pub fn run(
                     ..s.clone()
                 },
                 &mut |sys, t, p| {
-                    if t > 0.0 && t < t_end {
+                    if t > 0.0 {
                         // A snapshot, as the run directory would have it (IDA's elastic
                         // state polished).
                         series.push((t, sys.snapshot(t, p)?.series.axial_length));
                     }
                     if t == t_end {
-                        let snap = sys.snapshot(t, p)?;
-                        series.push((t, snap.series.axial_length));
-                        let sol = sys
-                            .elastic
-                            .solution()
-                            .map_err(eyeshell::growth::system::RhsError::from)?;
-                        last = Some((sol, snap.series.axial_length));
+                        last = Some(
+                            sys.elastic
+                                .solution()
+                                .map_err(eyeshell::growth::system::RhsError::from)?,
+                        );
                     }
                     Ok(())
                 },
@@ -128,12 +130,11 @@ pub fn run(
                 source: Box::new(source),
             })?;
             let seconds = start.elapsed().as_secs_f64();
-            let (solution, axial) = last.ok_or_else(|| {
+            let solution = last.ok_or_else(|| {
                 StudyError::Invalid(format!("{what}: the run gave no state at t_end"))
             })?;
             Ok(Run {
                 solution,
-                axial_length: Some(axial),
                 axial_series: series,
                 seconds,
                 growth: Some(stats),
