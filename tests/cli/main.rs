@@ -21,6 +21,7 @@ mod hostile;
 mod keys_check;
 mod max_seconds;
 mod ownership;
+mod peer;
 mod readers;
 mod shards;
 mod slurm;
