@@ -20,9 +20,18 @@ fn solve_bvp_and_eyeshell_agree_on_the_fibre_shell() {
         eprintln!("note: python3 with scipy and numpy not found; skipping the solve_bvp peer (.ci/run installs them)");
         return;
     }
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/peer/solve_bvp_fibre.py");
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/benches/peer/solve_bvp_fibre.py"
+    );
     let out = Command::new("python3")
-        .args([script, "--eyeshell", env!("CARGO_BIN_EXE_eyeshell"), "--nodes", "801"])
+        .args([
+            script,
+            "--eyeshell",
+            env!("CARGO_BIN_EXE_eyeshell"),
+            "--nodes",
+            "801",
+        ])
         .args(["--repeats", "1", "--scipy-repeats", "1", "--json"])
         .output()
         .expect("python3 runs");
