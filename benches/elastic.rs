@@ -17,6 +17,10 @@ use eyeshell_sundials::{Context, LinearSolver, MatrixSink, NVector};
 use std::hint::black_box;
 use std::time::Duration;
 
+/// The binary's allocator (src/main.rs), so that the figures are what `eyeshell` gets.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn fibre_shell() -> Params {
     Params {
         thickness: Thickness::NonUniform,

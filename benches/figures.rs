@@ -11,6 +11,10 @@ use eyeshell::sweep::{run_sweep, SweepOptions};
 use eyeshell_cli::figures::{paper_figures, PaperRuns};
 use eyeshell_cli::study::figures::SCENES;
 
+/// The binary's allocator (src/main.rs), so that the figures are what `eyeshell` gets.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn scene(name: &str) -> Sweep {
     let (_, file, text) = SCENES
         .iter()

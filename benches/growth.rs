@@ -10,6 +10,10 @@ use eyeshell::growth::*;
 use eyeshell::model::params::Params;
 use std::hint::black_box;
 
+/// The binary's allocator (src/main.rs), so that the figures are what `eyeshell` gets.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 struct Discard;
 impl Observer for Discard {
     fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::growth::ObserverError> {
