@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use eyeshell::scene::sweep::Sweep;
+use eyeshell::scene::sweep::{SweepPlan, MAX_RUNS};
 use eyeshell::sweep::{RunStatus, TABLE_FILE};
 use eyeshell::Error;
 
@@ -52,8 +52,8 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
     if !(args.quiet && complete) {
         let mut text = format!(
             "eyeshell: sweep {} ({}): {ok} of {total} run{} ok, {} failed, {} missing\n  shards          {}\n",
-            merged.sweep.origin,
-            eyeshell::text::one_line(&merged.sweep.name),
+            merged.plan.origin,
+            eyeshell::text::one_line(&merged.plan.name),
             crate::plural(total),
             failed.len(),
             missing.len(),
@@ -117,11 +117,21 @@ fn resume_hint(merged: &eyeshell::sweep::shard::Merged, dir: &Path) -> String {
         " --out {} --resume",
         shell_word(&dir.display().to_string())
     ));
-    let mut text = format!("  run the rest:   {command}\n");
+    // A sweep larger than one process holds runs only in shards.
+    let whole = merged.plan.len() <= MAX_RUNS;
+    let mut text = match whole {
+        true => format!("  run the rest:   {command}\n"),
+        false => String::new(),
+    };
     if let Some((n, ks)) = merged.shards_to_resume() {
         let ks: Vec<String> = ks.iter().map(|k| k.to_string()).collect();
         text.push_str(&format!(
-            "  or by shard:    {command} --shard K/{n}   for K = {}\n",
+            "  {}{command} --shard K/{n}   for K = {}\n",
+            if whole {
+                "or by shard:    "
+            } else {
+                "run the rest:   "
+            },
             first(&ks, ", ")
         ));
     }
@@ -141,18 +151,43 @@ pub(crate) fn shell_word(word: &str) -> String {
     }
 }
 
-/// `--slurm-script`: print an sbatch script running `sweep` as a job array, one shard per
-/// task, each with `--jobs` from the CPUs Slurm grants it; nothing is run or written.
+/// `--slurm-script`: print an sbatch script running `plan` as a job array, one shard per
+/// task, each with `--jobs` from the CPUs Slurm grants it; nothing is run or written. Every
+/// run is validated first (one scene at a time), and no shard may hold more than
+/// [`MAX_RUNS`] runs.
 pub(crate) fn print_slurm_script(
     a: &SweepArgs,
-    sweep: &Sweep,
+    plan: &SweepPlan,
     scene: &Path,
     out_dir: &Path,
 ) -> Result<(), Error> {
-    let runs = sweep.runs.len();
+    let runs = plan.len();
+    let costs = eyeshell::sweep::shard::costs_of(plan)?;
+    let largest_share = |n: usize| {
+        let mut count = vec![0usize; n];
+        for s in eyeshell::sweep::shard::partition(&costs, n) {
+            count[s] += 1;
+        }
+        count.into_iter().max().unwrap_or(0)
+    };
     let shards = match a.shards {
-        None => runs.min(DEFAULT_SHARDS),
-        Some(n) if n >= 1 && n <= runs => n,
+        // The default, or as many more as keep every shard within MAX_RUNS.
+        None => {
+            let mut n = runs.min(DEFAULT_SHARDS).max(runs.div_ceil(MAX_RUNS));
+            while largest_share(n) > MAX_RUNS {
+                n = (2 * n).min(runs);
+            }
+            n
+        }
+        Some(n) if n >= 1 && n <= runs => match largest_share(n) {
+            share if share > MAX_RUNS => {
+                return Err(Error::input(format!(
+                    "--shards {n}: a shard would hold {share} of the sweep's {runs} runs, more than the {MAX_RUNS} one process runs: give more shards (at least {})",
+                    runs.div_ceil(MAX_RUNS)
+                )))
+            }
+            _ => n,
+        },
         Some(n) => {
             return Err(Error::input(format!(
                 "--shards {n}: give 1 to {runs} (the sweep has {runs} run{})",
@@ -200,8 +235,7 @@ pub(crate) fn print_slurm_script(
     let out_abs = absolute(out_dir);
     let job = format!(
         "eyeshell-{}",
-        sweep
-            .name
+        plan.name
             .chars()
             .map(|c| if c.is_ascii_alphanumeric() || "-_.".contains(c) {
                 c
@@ -245,7 +279,7 @@ cd {here}
 exec {exe} sweep {scene}{sets} --out {out} --resume \
     --shard slurm --jobs "${{SLURM_CPUS_PER_TASK:-1}}"
 "#,
-        origin = sweep.origin,
+        origin = plan.origin,
         s = crate::plural(runs),
         ss = crate::plural(shards),
         out = word(&out_abs),

@@ -57,10 +57,20 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         }
         Some(text) => Some(Shard::parse(text).map_err(Error::input)?),
     };
-    let sweep = eyeshell::scene::sweep::Sweep::from_file(scene, &a.set)?;
+    // A shard, or the script of a sharded sweep, plans the runs without building them all
+    // (up to MAX_PLANNED_RUNS); a plain sweep builds every run (up to MAX_RUNS).
+    let plan = match shard.is_some() || a.slurm_script {
+        true => Some(eyeshell::scene::sweep::SweepPlan::from_file(scene, &a.set)?),
+        false => None,
+    };
     if a.slurm_script {
-        return super::shards::print_slurm_script(a, &sweep, scene, out_dir);
+        let plan = plan.as_ref().expect("planned above");
+        return super::shards::print_slurm_script(a, plan, scene, out_dir);
     }
+    let sweep = match plan {
+        Some(_) => None,
+        None => Some(eyeshell::scene::sweep::Sweep::from_file(scene, &a.set)?),
+    };
     rundir::check_target(out_dir)?;
     install_interrupt();
     // Each run in a worker process: one that aborts fails alone (src/worker).
@@ -83,9 +93,15 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
             r.status_text()
         );
     };
-    let report = match shard {
-        Some(shard) => run_shard(&sweep, out_dir, shard, &options, &progress)?,
-        None => run_sweep(&sweep, out_dir, &options, &progress)?,
+    let head: eyeshell::sweep::Head = match (&plan, &sweep) {
+        (Some(plan), _) => plan.into(),
+        (_, Some(sweep)) => sweep.into(),
+        _ => unreachable!("a shard has a plan, a plain sweep its runs"),
+    };
+    let report = match (shard, &plan, &sweep) {
+        (Some(shard), Some(plan), _) => run_shard(plan, out_dir, shard, &options, &progress)?,
+        (_, _, Some(sweep)) => run_sweep(sweep, out_dir, &options, &progress)?,
+        _ => unreachable!("a shard has a plan, a plain sweep its runs"),
     };
     // Where the results are: the table, or the shard's record.
     let (table, shard_text, again) = match shard {
@@ -143,8 +159,8 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         };
         let mut text = format!(
             "eyeshell: sweep {} ({}){shard_text}: {total} run{} ok{reused}\n",
-            sweep.origin,
-            eyeshell::text::one_line(&sweep.name),
+            head.origin,
+            eyeshell::text::one_line(head.name),
             plural(total),
         );
         match shard {

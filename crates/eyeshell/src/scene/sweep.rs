@@ -24,7 +24,8 @@ use super::{
 
 /// The name of the sweep table.
 pub const SWEEP: &str = "sweep";
-/// The most runs one sweep may declare (a typo such as a 1000-value grid is caught early).
+/// The most runs one process holds as a [`Sweep`] (every run's scene built); a larger sweep
+/// (up to [`MAX_PLANNED_RUNS`]) runs in shards, each at most this many runs.
 pub const MAX_RUNS: usize = 10_000;
 
 /// One run of a sweep: its name (a directory name), the values it sets, and its scene.
@@ -69,12 +70,73 @@ impl Sweep {
         Sweep::from_toml_str(&text, &origin, overrides)
     }
 
-    /// Parse a sweep (a scene without `[sweep]` is a sweep of one run, named after it).
+    /// Parse a sweep (a scene without `[sweep]` is a sweep of one run, named after it) and
+    /// build every run's scene (at most [`MAX_RUNS`]; a larger sweep is planned with
+    /// [`SweepPlan`] and run in shards).
     pub fn from_toml_str(
         text: &str,
         origin: &str,
         overrides: &[String],
     ) -> Result<Sweep, SceneError> {
+        let plan = SweepPlan::from_toml_str(text, origin, overrides)?;
+        if plan.len() > MAX_RUNS {
+            return Err(SceneError::BadSweep {
+                origin: plan.origin.clone(),
+                problem: format!(
+                    "declares {} runs, more than the {MAX_RUNS} allowed in one process: run it in shards (`eyeshell sweep SCENE --out DIR --shard K/N` or --slurm-script), each at most {MAX_RUNS} runs",
+                    plan.len()
+                ),
+            });
+        }
+        plan.sweep_of(&(0..plan.len()).collect::<Vec<_>>())
+    }
+}
+
+/// The most runs one sweep may plan (a typo such as a grid of many long lists is caught
+/// early). A plan holds only each run's name (about 50 bytes a run); its scenes are built
+/// one at a time.
+pub const MAX_PLANNED_RUNS: usize = 10_000_000;
+
+/// A sweep's run list as a recipe: run i's values and name come from its index (the list
+/// entries crossed with the grid, last axis fastest), and its scene is built only when
+/// asked for, so a grid of 10⁶ runs is validated and partitioned into shards without
+/// holding 10⁶ scenes ([`SweepPlan::each_run`], [`SweepPlan::sweep_of`]).
+#[derive(Clone, Debug)]
+pub struct SweepPlan {
+    pub origin: String,
+    /// The swept keys: the list's keys (first seen order), then the grid's.
+    pub keys: Vec<String>,
+    /// The base scene's name (the file's `name`, else its stem).
+    pub name: String,
+    table: toml::Table,
+    overrides: Vec<String>,
+    list: Vec<ListEntry>,
+    grid: Vec<Axis>,
+    /// Every run's name, made unique in sweep order.
+    names: Vec<String>,
+}
+
+impl SweepPlan {
+    /// Read the sweep in `path`, with `overrides` applied to every run.
+    pub fn from_file(
+        path: &std::path::Path,
+        overrides: &[String],
+    ) -> Result<SweepPlan, SceneError> {
+        let origin = one_line(&path.display().to_string());
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Read {
+            path: origin.clone(),
+            message: one_line(&e.to_string()),
+        })?;
+        SweepPlan::from_toml_str(&text, &origin, overrides)
+    }
+
+    /// Parse a sweep, validate its base scene, count its runs and name them; no run's scene
+    /// is built.
+    pub fn from_toml_str(
+        text: &str,
+        origin: &str,
+        overrides: &[String],
+    ) -> Result<SweepPlan, SceneError> {
         let origin = one_line(origin);
         let mut table = parse_table(text, &origin)?;
         let spec = table.remove(SWEEP);
@@ -102,64 +164,145 @@ impl Sweep {
         }
         let base = Scene::from_table(&table, &origin, &[], overrides)?;
         let name = base.display_name();
-        // Count before expanding: a grid of many keys multiplies to more runs than memory.
+        // Count before naming: a grid of many keys multiplies to more runs than memory.
         let count = grid.iter().try_fold(list.len().max(1), |n, (_, values)| {
             n.checked_mul(values.len())
         });
         match count {
-            Some(n) if n <= MAX_RUNS => {}
+            Some(n) if n <= MAX_PLANNED_RUNS => {}
             Some(n) => {
                 return Err(bad(format!(
-                    "declares {n} runs, more than the {MAX_RUNS} allowed"
+                    "declares {n} runs, more than the {MAX_PLANNED_RUNS} allowed"
                 )))
             }
             None => {
                 return Err(bad(format!(
-                    "declares more runs than can be counted, more than the {MAX_RUNS} allowed"
-                )))
+                "declares more runs than can be counted, more than the {MAX_PLANNED_RUNS} allowed"
+            )))
             }
         }
-        let combos = expand(&list, &grid);
-        let mut keys_seen: Vec<String> = Vec::new();
+        let mut keys: Vec<String> = Vec::new();
         for k in list
             .iter()
             .flat_map(|e| e.values.iter().map(|(k, _)| k))
             .chain(grid.iter().map(|(k, _)| k))
         {
-            if !keys_seen.contains(k) {
-                keys_seen.push(k.clone());
+            if !keys.contains(k) {
+                keys.push(k.clone());
             }
         }
-        let mut runs: Vec<SweepRun> = Vec::with_capacity(combos.len());
-        let mut taken = std::collections::HashSet::with_capacity(combos.len());
-        for (run_name, values) in combos {
-            let run_name = unique(
-                shorten(run_name.unwrap_or_else(|| generated_name(&values))),
+        let mut plan = SweepPlan {
+            origin,
+            keys,
+            name,
+            table,
+            overrides: overrides.to_vec(),
+            list,
+            grid,
+            names: Vec::new(),
+        };
+        plan.names = plan.unique_names();
+        Ok(plan)
+    }
+
+    /// The number of runs.
+    pub fn len(&self) -> usize {
+        self.grid
+            .iter()
+            .fold(self.list.len().max(1), |n, (_, v)| n * v.len())
+    }
+
+    /// Whether the plan has no runs (never: a sweep has at least one).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Every run's name, in sweep order.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Run `index`'s scene, built and validated now (an error names the run).
+    pub fn run(&self, index: usize) -> Result<SweepRun, SceneError> {
+        let (_, mut values) = self.combination(index);
+        let run_name = self.names[index].clone();
+        let run_origin = format!("{} [sweep] run {run_name}", self.origin);
+        let assignments: Vec<(String, toml::Value, String)> = values
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone(), run_origin.clone()))
+            .collect();
+        let mut scene = Scene::from_table(&self.table, &run_origin, &assignments, &self.overrides)?;
+        scene.origin = self.origin.clone();
+        scene.name = Some(format!("{}/{run_name}", self.name));
+        values.sort_by_key(|(k, _)| self.keys.iter().position(|s| s == k));
+        Ok(SweepRun {
+            name: run_name,
+            values,
+            scene,
+        })
+    }
+
+    /// Build and validate every run in turn, one scene at a time, and hand each to `f`:
+    /// the first invalid run is the error.
+    pub fn each_run(&self, mut f: impl FnMut(usize, &SweepRun)) -> Result<(), SceneError> {
+        for i in 0..self.len() {
+            f(i, &self.run(i)?);
+        }
+        Ok(())
+    }
+
+    /// The sweep of the runs `indices` only (each built now), in that order.
+    pub fn sweep_of(&self, indices: &[usize]) -> Result<Sweep, SceneError> {
+        Ok(Sweep {
+            origin: self.origin.clone(),
+            keys: self.keys.clone(),
+            runs: indices
+                .iter()
+                .map(|&i| self.run(i))
+                .collect::<Result<_, _>>()?,
+            name: self.name.clone(),
+        })
+    }
+
+    /// Run `index`'s name as given or generated (before it is made unique) and its values
+    /// in the list's then the grid's order: the list entry is index / (grid runs), the
+    /// grid's axes the digits of the rest, the last axis fastest.
+    fn combination(&self, index: usize) -> Combination {
+        let per_entry: usize = self.grid.iter().map(|(_, v)| v.len()).product();
+        let (mut name, mut values) = match self.list.get(index / per_entry) {
+            Some(e) => (e.name.clone(), e.values.clone()),
+            None => (None, Vec::new()),
+        };
+        let mut rest = index % per_entry;
+        let mut digits = vec![0; self.grid.len()];
+        for (d, (_, axis)) in digits.iter_mut().zip(&self.grid).rev() {
+            *d = rest % axis.len();
+            rest /= axis.len();
+        }
+        for ((key, axis), d) in self.grid.iter().zip(digits) {
+            let v = &axis[d];
+            // A named run crossed with a grid keeps its name as a prefix.
+            name = name.map(|n| format!("{n}_{}", part(key, v)));
+            values.push((key.clone(), v.clone()));
+        }
+        (name, values)
+    }
+
+    /// Every run's directory name, unique in sweep order (`name`, `name-2`, ...).
+    fn unique_names(&self) -> Vec<String> {
+        let n = self.len();
+        let mut names = Vec::with_capacity(n);
+        let mut taken = std::collections::HashSet::with_capacity(n);
+        for i in 0..n {
+            let (given, values) = self.combination(i);
+            let name = unique(
+                shorten(given.unwrap_or_else(|| generated_name(&values))),
                 &taken,
             );
-            taken.insert(run_name.clone());
-            let run_origin = format!("{origin} [sweep] run {run_name}");
-            let assignments: Vec<(String, toml::Value, String)> = values
-                .iter()
-                .map(|(k, v)| (k.clone(), v.clone(), run_origin.clone()))
-                .collect();
-            let mut scene = Scene::from_table(&table, &run_origin, &assignments, overrides)?;
-            scene.origin = origin.clone();
-            scene.name = Some(format!("{name}/{run_name}"));
-            let mut values = values;
-            values.sort_by_key(|(k, _)| keys_seen.iter().position(|s| s == k));
-            runs.push(SweepRun {
-                name: run_name,
-                values,
-                scene,
-            });
+            taken.insert(name.clone());
+            names.push(name);
         }
-        Ok(Sweep {
-            origin,
-            keys: keys_seen,
-            runs,
-            name,
-        })
+        names
     }
 }
 
@@ -171,6 +314,7 @@ type Axis = (String, Vec<toml::Value>);
 type Combination = (Option<String>, Vec<Assignment>);
 
 /// One entry of `[[sweep.runs]]`: an optional name and the values it sets.
+#[derive(Clone, Debug)]
 struct ListEntry {
     name: Option<String>,
     values: Vec<Assignment>,
@@ -298,33 +442,6 @@ fn leaves(
         }
     }
     Ok(out)
-}
-
-/// Every run: each list entry (or one empty entry) crossed with the grid, last axis fastest.
-fn expand(list: &[ListEntry], grid: &[Axis]) -> Vec<Combination> {
-    let base: Vec<Combination> = if list.is_empty() {
-        vec![(None, Vec::new())]
-    } else {
-        list.iter()
-            .map(|e| (e.name.clone(), e.values.clone()))
-            .collect()
-    };
-    let mut combos = base;
-    for (key, values) in grid {
-        combos = combos
-            .into_iter()
-            .flat_map(|(name, vals)| {
-                values.iter().map(move |v| {
-                    let mut vals = vals.clone();
-                    vals.push((key.clone(), v.clone()));
-                    // A named run crossed with a grid keeps its name as a prefix.
-                    let name = name.as_ref().map(|n| format!("{n}_{}", part(key, v)));
-                    (name, vals)
-                })
-            })
-            .collect();
-    }
-    combos
 }
 
 /// The longest run name kept as it is; a longer one (many swept keys, long values) becomes
@@ -475,7 +592,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("282429536481 runs, more than the 10000 allowed"),
+            e.contains("282429536481 runs, more than the 10000000 allowed"),
             "{e}"
         );
         assert!(start.elapsed().as_secs() < 5, "counted, not expanded");

@@ -5,7 +5,8 @@
 //! - `runs/<name>/`: an ordinary run directory (`eyeshell solve` or `eyeshell grow` output),
 //!   plus `scene.toml` (the run's effective scene) and, once it has finished, `result.json`;
 //! - `sweep.csv`: one row per run (status, swept values, final axial length, class, solver
-//!   statistics, error), rewritten after every run;
+//!   statistics, error), rewritten after every run (for more than [`TABLE_EVERY_RUN`] runs,
+//!   at most every [`TABLE_INTERVAL`]);
 //! - `summary.json`: the same as JSON with the sweep's status (`running`, `ok`, `partial`
 //!   when some runs failed, `interrupted`);
 //! - `shards/K.json`: with `--shard K/N` ([`run_shard`]), the record of shard K, which
@@ -42,7 +43,7 @@ use rayon::prelude::*;
 use crate::rundir::summary::{SweepRunEntry, SweepSummary};
 use crate::rundir::table::{csv_bytes, QuoteStyle};
 use crate::rundir::{self, format_value, write_atomic, OutputError, Summary};
-use crate::scene::sweep::Sweep;
+use crate::scene::sweep::{Sweep, SweepPlan};
 use crate::Error;
 
 use resume::Reuse;
@@ -177,27 +178,41 @@ pub fn run_sweep(
     done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
 ) -> Result<SweepReport, Error> {
     // The sweep's directory, owned and locked until the sweep ends.
-    let _owned = target::prepare(sweep, out, options.resume)?;
+    let names: std::collections::HashSet<&str> =
+        sweep.runs.iter().map(|r| r.name.as_str()).collect();
+    let _owned = target::prepare(&|n| names.contains(n), out, options.resume)?;
     let all: Vec<usize> = (0..sweep.runs.len()).collect();
-    run_some(sweep, &all, out, options, &|r| write_tables(sweep, r), done)
+    run_some(
+        sweep,
+        &all,
+        out,
+        options,
+        &|r| write_tables(sweep.into(), r),
+        done,
+    )
 }
 
 /// Run the runs of `shard` ([`shard::runs_of`]) into `out`, as [`run_sweep`] runs them,
 /// beside any other shard of the same sweep writing into `out` at the same time: the
-/// shard writes its runs and `out/shards/K.json` only ([`shard`]). The report holds the
-/// shard's runs.
+/// shard writes its runs and `out/shards/K.json` only ([`shard`]). The plan's runs are
+/// validated one at a time and only the shard's own are built ([`SweepPlan`]); a shard may
+/// hold at most [`crate::scene::sweep::MAX_RUNS`] runs. The report holds the shard's runs.
 pub fn run_shard(
-    sweep: &Sweep,
+    plan: &SweepPlan,
     out: &Path,
     shard: Shard,
     options: &SweepOptions<'_>,
     done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
 ) -> Result<SweepReport, Error> {
+    let mine = shard::runs_of(plan, shard)?;
+    let sweep = plan.sweep_of(&mine)?;
     // The shard's record, locked until the shard ends (the directory is shared).
-    let (record, _lock) = target::prepare_shard(sweep, out, shard)?;
-    let mine = shard::runs_of(sweep, shard);
-    let write = |report: &SweepReport| ShardRecord::new(sweep, shard, report).write(&record);
-    run_some(sweep, &mine, out, options, &write, done)
+    let names: std::collections::HashSet<&str> = plan.names().iter().map(String::as_str).collect();
+    let (record, _lock) = target::prepare_shard(&|n| names.contains(n), out, shard)?;
+    drop(names);
+    let write = |report: &SweepReport| ShardRecord::new(&sweep, shard, report).write(&record);
+    let all: Vec<usize> = (0..sweep.runs.len()).collect();
+    run_some(&sweep, &all, out, options, &write, done)
 }
 
 /// Run `indices` of `sweep.runs` into `out`, calling `write` with the report at the start,
@@ -231,6 +246,7 @@ fn run_some(
     let total = indices.len();
     let finished = std::sync::atomic::AtomicUsize::new(0);
     let table_error: Mutex<Option<OutputError>> = Mutex::new(None);
+    let last_write = Mutex::new(std::time::Instant::now());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.jobs)
         .build()
@@ -264,8 +280,10 @@ fn run_some(
             rep.records[i].result = result;
             rep.records[i].rerun = rerun;
             let n = finished.fetch_add(1, Ordering::SeqCst) + 1;
-            if let Err(e) = write(&rep) {
-                lock(&table_error).get_or_insert(e);
+            if table_due(total, &mut lock(&last_write)) {
+                if let Err(e) = write(&rep) {
+                    lock(&table_error).get_or_insert(e);
+                }
             }
             done(&rep.records[i], n, total);
         });
@@ -276,6 +294,23 @@ fn run_some(
         Some(e) => Err(e.into()),
         None => Ok(report),
     }
+}
+
+/// Up to this many runs the table is rewritten after every run; a larger sweep's at most
+/// once every [`TABLE_INTERVAL`]: each rewrite is the whole table, so rewriting it after
+/// each of 10,000 runs would write 10,000 tables (gigabytes). It is always written at the
+/// start and the end; the runs' own result.json files are what `--resume` and `merge` trust.
+pub const TABLE_EVERY_RUN: usize = 1000;
+/// See [`TABLE_EVERY_RUN`].
+pub const TABLE_INTERVAL: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Whether the table is to be rewritten after a run ends (`last`: when it last was).
+fn table_due(runs: usize, last: &mut std::time::Instant) -> bool {
+    if runs > TABLE_EVERY_RUN && last.elapsed() < TABLE_INTERVAL {
+        return false;
+    }
+    *last = std::time::Instant::now();
+    true
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -306,8 +341,37 @@ pub const RESULT_COLUMNS: [&str; 13] = [
     "error",
 ];
 
+/// What sweep.csv and summary.json say of the sweep itself: a [`Sweep`]'s or a
+/// [`SweepPlan`]'s name, scene and keys.
+#[derive(Clone, Copy)]
+pub struct Head<'a> {
+    pub name: &'a str,
+    pub origin: &'a str,
+    pub keys: &'a [String],
+}
+
+impl<'a> From<&'a Sweep> for Head<'a> {
+    fn from(s: &'a Sweep) -> Head<'a> {
+        Head {
+            name: &s.name,
+            origin: &s.origin,
+            keys: &s.keys,
+        }
+    }
+}
+
+impl<'a> From<&'a SweepPlan> for Head<'a> {
+    fn from(s: &'a SweepPlan) -> Head<'a> {
+        Head {
+            name: &s.name,
+            origin: &s.origin,
+            keys: &s.keys,
+        }
+    }
+}
+
 /// sweep.csv and summary.json, written atomically.
-fn write_tables(sweep: &Sweep, report: &SweepReport) -> Result<(), OutputError> {
+fn write_tables(sweep: Head<'_>, report: &SweepReport) -> Result<(), OutputError> {
     let path = report.dir.join(TABLE_FILE);
     table_csv(sweep, report)
         .and_then(|csv| write_atomic(&path, &csv))
@@ -316,7 +380,7 @@ fn write_tables(sweep: &Sweep, report: &SweepReport) -> Result<(), OutputError> 
 }
 
 /// The text of sweep.csv: a cell is quoted when it holds a comma, a quote or a line break.
-pub fn table_csv(sweep: &Sweep, report: &SweepReport) -> std::io::Result<Vec<u8>> {
+pub fn table_csv(sweep: Head<'_>, report: &SweepReport) -> std::io::Result<Vec<u8>> {
     let header = ["run", "status"]
         .iter()
         .map(|s| s.to_string())
@@ -361,7 +425,7 @@ fn result_fields(r: &RunRecord) -> Vec<String> {
 }
 
 /// summary.json of the sweep.
-pub fn summary(sweep: &Sweep, report: &SweepReport) -> Summary {
+pub fn summary(sweep: Head<'_>, report: &SweepReport) -> Summary {
     let runs = report
         .records
         .iter()
@@ -387,14 +451,37 @@ pub fn summary(sweep: &Sweep, report: &SweepReport) -> Summary {
         })
         .collect();
     Summary::Sweep(SweepSummary {
-        sweep: sweep.name.clone(),
-        scene: sweep.origin.clone(),
+        sweep: sweep.name.to_string(),
+        scene: sweep.origin.to_string(),
         status: report.status().to_string(),
-        keys: sweep.keys.clone(),
+        keys: sweep.keys.to_vec(),
         table: TABLE_FILE.to_string(),
-        runs_total: sweep.runs.len(),
+        runs_total: report.records.len(),
         runs_failed: report.failed().count(),
         sundials_version: rundir::sundials_version(),
         runs,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Instant;
+
+    #[test]
+    fn a_large_sweeps_table_is_rewritten_at_most_every_interval() {
+        let mut last = Instant::now();
+        assert!(
+            table_due(TABLE_EVERY_RUN, &mut last),
+            "small: after every run"
+        );
+        assert!(table_due(TABLE_EVERY_RUN, &mut last));
+        let mut last = Instant::now();
+        assert!(!table_due(TABLE_EVERY_RUN + 1, &mut last));
+        let Some(mut last) = Instant::now().checked_sub(TABLE_INTERVAL) else {
+            return; // a clock younger than the interval
+        };
+        assert!(table_due(TABLE_EVERY_RUN + 1, &mut last));
+        assert!(!table_due(TABLE_EVERY_RUN + 1, &mut last), "just written");
+    }
 }

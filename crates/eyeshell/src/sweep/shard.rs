@@ -15,6 +15,11 @@
 //!   summary.json. Shards take no lock on `DIR`, only on their own record (`shards/.K.json.lock`:
 //!   the same shard twice at once is refused). A shard never removes anything: it cannot
 //!   know that another is not writing; a fresh start is another `--out`.
+//! - **Large sweeps.** A shard plans the sweep ([`SweepPlan`]): every run is built and
+//!   validated one at a time for its cost and dropped, and only the shard's own runs are
+//!   built to run, so a grid of 10⁶ runs (up to `MAX_PLANNED_RUNS`) is planned in seconds
+//!   and a few hundred MB; a shard runs at most [`MAX_RUNS`] runs. Merge and status read
+//!   the runs the same way, holding one row per run.
 //! - **Merge.** [`merge`] rebuilds the run list from the scene the shards recorded, takes
 //!   each run that finished from its own `result.json` (checked as `--resume` checks it),
 //!   a failed run from its shard's record, and writes sweep.csv and summary.json exactly as
@@ -28,7 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::rundir::summary::SweepRunEntry;
 use crate::rundir::{write_atomic, OutputError};
-use crate::scene::sweep::Sweep;
+use crate::scene::sweep::{Sweep, SweepPlan, MAX_RUNS};
 use crate::scene::Scene;
 use crate::Error;
 
@@ -155,13 +160,36 @@ pub fn partition(costs: &[u64], n: usize) -> Vec<usize> {
     shard_of
 }
 
-/// The runs (indices into `sweep.runs`, in sweep order) of `shard`.
-pub fn runs_of(sweep: &Sweep, shard: Shard) -> Vec<usize> {
-    let costs: Vec<u64> = sweep.runs.iter().map(|r| run_cost(&r.scene)).collect();
-    partition(&costs, shard.n)
-        .into_iter()
+/// Every run's cost, in sweep order: each run is built and validated in turn, one scene at
+/// a time (the first invalid run is the error).
+pub fn costs_of(plan: &SweepPlan) -> Result<Vec<u64>, Error> {
+    let mut costs = Vec::with_capacity(plan.len());
+    plan.each_run(|_, run| costs.push(run_cost(&run.scene)))?;
+    Ok(costs)
+}
+
+/// The runs (indices into the plan, in sweep order) of `shard`; bad input when they are
+/// more than one process holds ([`MAX_RUNS`]).
+pub fn runs_of(plan: &SweepPlan, shard: Shard) -> Result<Vec<usize>, Error> {
+    let mine = shard_runs(&partition(&costs_of(plan)?, shard.n), shard);
+    if mine.len() > MAX_RUNS {
+        return Err(Error::input(format!(
+            "{}: shard {shard} would hold {} of the sweep's {} runs, more than the {MAX_RUNS} one process runs: split it into more shards (N of at least {})",
+            plan.origin,
+            mine.len(),
+            plan.len(),
+            plan.len().div_ceil(MAX_RUNS)
+        )));
+    }
+    Ok(mine)
+}
+
+/// The indices the partition `shard_of` gives `shard`.
+fn shard_runs(shard_of: &[usize], shard: Shard) -> Vec<usize> {
+    shard_of
+        .iter()
         .enumerate()
-        .filter(|&(_, s)| s + 1 == shard.k)
+        .filter(|&(_, &s)| s + 1 == shard.k)
         .map(|(i, _)| i)
         .collect()
 }
@@ -190,7 +218,7 @@ pub struct ShardRecord {
 impl ShardRecord {
     /// The record of `report` (the shard's runs so far).
     pub fn new(sweep: &Sweep, shard: Shard, report: &SweepReport) -> ShardRecord {
-        let crate::rundir::Summary::Sweep(summary) = super::summary(sweep, report) else {
+        let crate::rundir::Summary::Sweep(summary) = super::summary(sweep.into(), report) else {
             unreachable!("a sweep's summary is a sweep summary")
         };
         ShardRecord {
@@ -289,8 +317,10 @@ pub fn read_records(out: &Path) -> Result<Vec<(PathBuf, ShardRecord)>, Error> {
 /// What [`merge`] found.
 #[derive(Debug)]
 pub struct Merged {
-    /// The sweep, rebuilt from the scene the shards recorded.
-    pub sweep: Sweep,
+    /// The sweep's plan, rebuilt from the scene the shards recorded.
+    pub plan: SweepPlan,
+    /// Each run's cost, in sweep order (the partition's input).
+    pub costs: Vec<u64>,
     /// One row per run of the sweep: ok, failed, or not run (missing).
     pub report: SweepReport,
     /// The shards' records, by K.
@@ -315,8 +345,7 @@ impl Merged {
         if self.records.iter().any(|r| r.shards != n) {
             return None;
         }
-        let costs: Vec<u64> = self.sweep.runs.iter().map(|r| run_cost(&r.scene)).collect();
-        let shard_of = partition(&costs, n);
+        let shard_of = partition(&self.costs, n);
         let mut ks: Vec<usize> = self
             .report
             .records
@@ -358,9 +387,11 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
             first.scene_path
         ))
     })?;
-    let sweep = Sweep::from_toml_str(&text, &first.scene, &first.overrides)?;
+    let plan = SweepPlan::from_toml_str(&text, &first.scene, &first.overrides)?;
     let _owned = if write {
-        Some(super::target::prepare(&sweep, out, true)?)
+        let names: std::collections::HashSet<&str> =
+            plan.names().iter().map(String::as_str).collect();
+        Some(super::target::prepare(&|n| names.contains(n), out, true)?)
     } else {
         None
     };
@@ -372,36 +403,36 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
         .map(|e| (e.name.as_str(), e))
         .collect();
     let mut stale = Vec::new();
-    let records: Vec<RunRecord> = sweep
-        .runs
-        .iter()
-        .map(|run| {
-            let dir = out.join(RUNS_DIR).join(&run.name);
-            let (status, result) = match resume::reusable(run, &dir) {
-                resume::Reuse::Yes(result) => (RunStatus::Ok, Some(result)),
-                other => {
-                    if let resume::Reuse::Stale(why) = other {
-                        stale.push((run.name.clone(), why));
-                    }
-                    match failures.get(run.name.as_str()) {
-                        Some(e) => (
-                            RunStatus::Failed(e.error.clone().unwrap_or_default()),
-                            e.result.clone(),
-                        ),
-                        None => (RunStatus::Pending, None),
-                    }
+    let mut costs = Vec::with_capacity(plan.len());
+    let mut records = Vec::with_capacity(plan.len());
+    // One run's scene at a time: a plan of 10⁶ runs is never held as scenes.
+    plan.each_run(|_, run| {
+        costs.push(run_cost(&run.scene));
+        let dir = out.join(RUNS_DIR).join(&run.name);
+        let (status, result) = match resume::reusable(run, &dir) {
+            resume::Reuse::Yes(result) => (RunStatus::Ok, Some(result)),
+            other => {
+                if let resume::Reuse::Stale(why) = other {
+                    stale.push((run.name.clone(), why));
                 }
-            };
-            RunRecord {
-                name: run.name.clone(),
-                dir: format!("{RUNS_DIR}/{}", run.name),
-                values: sweep.keys.iter().map(|k| run.shown(k)).collect(),
-                status,
-                result,
-                rerun: None,
+                match failures.get(run.name.as_str()) {
+                    Some(e) => (
+                        RunStatus::Failed(e.error.clone().unwrap_or_default()),
+                        e.result.clone(),
+                    ),
+                    None => (RunStatus::Pending, None),
+                }
             }
-        })
-        .collect();
+        };
+        records.push(RunRecord {
+            name: run.name.clone(),
+            dir: format!("{RUNS_DIR}/{}", run.name),
+            values: plan.keys.iter().map(|k| run.shown(k)).collect(),
+            status,
+            result,
+            rerun: None,
+        });
+    })?;
     let interrupted = records.iter().any(|r| r.status == RunStatus::Pending);
     let report = SweepReport {
         records,
@@ -409,10 +440,11 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
         dir: out.to_path_buf(),
     };
     if write {
-        super::write_tables(&sweep, &report)?;
+        super::write_tables((&plan).into(), &report)?;
     }
     Ok(Merged {
-        sweep,
+        plan,
+        costs,
         report,
         records: found.into_iter().map(|(_, r)| r).collect(),
         stale,

@@ -22,7 +22,6 @@ use std::path::{Path, PathBuf};
 use crate::rundir::lock::DirLock;
 use crate::rundir::owner::Marker;
 use crate::rundir::{self, OutputError, Summary, SUMMARY_FILE};
-use crate::scene::sweep::Sweep;
 use crate::Error;
 
 use super::shard::{Shard, SHARDS_DIR};
@@ -36,9 +35,14 @@ const SHARD_INSTEAD: &str =
 /// What a sweep's directory holds at the top; shards add `shards/`.
 const ENTRIES: [&str; 4] = [RUNS_DIR, TABLE_FILE, SUMMARY_FILE, SHARDS_DIR];
 
-/// Make `out` ready for `sweep`: fresh, or (`resume`) checked as the module says; the
-/// returned [`rundir::OwnedDir`] holds its lock until dropped.
-pub fn prepare(sweep: &Sweep, out: &Path, resume: bool) -> Result<rundir::OwnedDir, Error> {
+/// Make `out` ready for a sweep whose run names `is_run` accepts: fresh, or (`resume`)
+/// checked as the module says; the returned [`rundir::OwnedDir`] holds its lock until
+/// dropped.
+pub fn prepare(
+    is_run: &dyn Fn(&str) -> bool,
+    out: &Path,
+    resume: bool,
+) -> Result<rundir::OwnedDir, Error> {
     let entries = [RUNS_DIR, TABLE_FILE, SUMMARY_FILE];
     if !resume {
         return Ok(rundir::OwnedDir::fresh(out, "sweep", &entries)?);
@@ -46,23 +50,28 @@ pub fn prepare(sweep: &Sweep, out: &Path, resume: bool) -> Result<rundir::OwnedD
     rundir::check_target(out)?;
     refuse_links(out)?;
     refuse_other_outputs(out, INSTEAD)?;
-    refuse_other_runs(sweep, out, INSTEAD)?;
+    refuse_other_runs(is_run, out, INSTEAD)?;
     Ok(rundir::OwnedDir::resume(out, "sweep", &entries)?)
 }
 
-/// Make `out` ready for one shard of `sweep` ([`super::shard`]): checked as for `--resume`
-/// (whether or not the shard resumes: it may not remove anything), given the sweep's marker
+/// Make `out` ready for one shard of a sweep whose run names `is_run` accepts
+/// ([`super::shard`]): checked as for `--resume` (whether or not the shard resumes: it may
+/// not remove anything), given the sweep's marker
 /// if it has none yet, with `runs/` and `shards/`. No lock is taken on `out`, which the
 /// shards share; the shard's record, `shards/K.json`, is locked instead. Returns its path
 /// and the lock.
-pub fn prepare_shard(sweep: &Sweep, out: &Path, shard: Shard) -> Result<(PathBuf, DirLock), Error> {
+pub fn prepare_shard(
+    is_run: &dyn Fn(&str) -> bool,
+    out: &Path,
+    shard: Shard,
+) -> Result<(PathBuf, DirLock), Error> {
     let out = &rundir::owner::normalise(out);
     wait_for_marker(out);
     rundir::check_target(out)?;
     refuse_links(out)?;
     no_link(&out.join(SHARDS_DIR))?;
     refuse_other_outputs(out, SHARD_INSTEAD)?;
-    refuse_other_runs(sweep, out, SHARD_INSTEAD)?;
+    refuse_other_runs(is_run, out, SHARD_INSTEAD)?;
     let io = |path: &Path, source: std::io::Error| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -198,13 +207,17 @@ fn refuse_other_outputs(out: &Path, instead: &str) -> Result<(), Error> {
     )))
 }
 
-fn refuse_other_runs(sweep: &Sweep, out: &Path, instead: &str) -> Result<(), Error> {
+fn refuse_other_runs(
+    is_run: &dyn Fn(&str) -> bool,
+    out: &Path,
+    instead: &str,
+) -> Result<(), Error> {
     let mut others: Vec<String> = run_entries(out)?
         .iter()
         .filter_map(|p| p.file_name())
         .map(|n| n.to_string_lossy().into_owned())
         // Hidden names are the temporary siblings of atomic writes; no run is named so.
-        .filter(|n| !n.starts_with('.') && !sweep.runs.iter().any(|r| &r.name == n))
+        .filter(|n| !n.starts_with('.') && !is_run(n))
         .collect();
     if others.is_empty() {
         return Ok(());
