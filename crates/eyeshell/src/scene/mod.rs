@@ -345,6 +345,11 @@ impl Scene {
     pub fn to_toml(&self) -> String {
         let mut out = String::new();
         for k in self.keys() {
+            // A red surface that follows the blue one is derived, not given: writing it
+            // would make it given (and stop it following) when the text is read back.
+            if self.stimulus.red_follows_blue && k.key.starts_with("stimulus.red.") {
+                continue;
+            }
             match k.get(self) {
                 KeyValue::Text(None) | KeyValue::Unset => {}
                 v => out.push_str(&format!("{} = {}\n", k.key, v)),

@@ -652,6 +652,18 @@ fn red_follows_blue_unless_given() {
             ..g.blue
         }
     );
+    // The effective scene reads back with red still following blue, and no red key in it.
+    let s = parse("growth.eta0 = 70\n[stimulus.blue]\nP3 = 25").unwrap();
+    assert!(!s.to_toml().contains("stimulus.red."), "{}", s.to_toml());
+    let mut back = Scene::from_toml_str(&s.to_toml(), "b.toml", &[]).unwrap();
+    assert_eq!(back.stimulus, s.stimulus);
+    assert_eq!(back.growth, s.growth);
+    back.set("stimulus.blue.P3", 24).unwrap();
+    assert_eq!(back.red().p3, 24.0, "red follows the new blue");
+    // A given red surface is written and read back as given.
+    let s = parse_set("growth.eta0 = 70", &["stimulus.red.P1=-5"]).unwrap();
+    let back = Scene::from_toml_str(&s.to_toml(), "b.toml", &[]).unwrap();
+    assert_eq!((back.stimulus, back.growth), (s.stimulus, s.growth));
     // Any red key: red starts from its own default, in any order of the keys.
     for sets in [
         ["stimulus.blue.P3=25", "stimulus.red.P1=-5"],
