@@ -319,3 +319,30 @@ fn resume_into_another_sweep() {
         r.stderr
     );
 }
+
+/// A scene file longer than 64 MB, or a device that never ends, is refused on one line
+/// before it is read into memory, for every command that reads a scene.
+#[test]
+fn an_endless_or_huge_scene_file_is_refused_before_it_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = dir.path().join("huge.toml");
+    let mut text = String::from("name = \"huge\"\n");
+    let comment = format!("# {}\n", "x".repeat(1000));
+    while text.len() <= 64 << 20 {
+        text.push_str(&comment);
+    }
+    std::fs::write(&huge, text).unwrap();
+    for scene in [s(&huge), "/dev/zero"] {
+        for cmd in ["solve", "sweep"] {
+            let run = bounded(dir.path(), &[cmd, scene, "--out", "out"]);
+            assert_bad(&run, "too long for a scene", &format!("{cmd} {scene}"));
+            assert!(run.stderr.contains(scene), "{}", run.stderr);
+            assert!(!dir.path().join("out").exists());
+        }
+    }
+    let run = bounded(
+        dir.path(),
+        &["sweep", "/dev/zero", "--out", "out", "--shard", "1/2"],
+    );
+    assert_bad(&run, "too long for a scene", "a shard of /dev/zero");
+}

@@ -171,11 +171,7 @@ type Sources = BTreeMap<&'static str, (usize, String)>;
 impl Scene {
     /// Read, override and validate the scene in `path`.
     pub fn from_file(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
-        let origin = one_line(&path.display().to_string());
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Read {
-            path: origin.clone(),
-            message: one_line(&e.to_string()),
-        })?;
+        let (origin, text) = read_scene_file(path)?;
         Scene::from_toml_str(&text, &origin, overrides)
     }
 
@@ -786,6 +782,33 @@ fn line_column(text: &str, at: usize) -> (usize, usize) {
         .unwrap_or(0)
         + 1;
     (line, column)
+}
+
+/// The most bytes a scene file may have (a sweep listing 10⁵ runs by hand is a few MB): a
+/// larger file, or a device that never ends, is refused before it is read into memory.
+pub const MAX_SCENE_BYTES: u64 = 64 << 20;
+
+/// A scene file's name as messages show it, and its text (at most [`MAX_SCENE_BYTES`]).
+pub fn read_scene_file(path: &Path) -> Result<(String, String), SceneError> {
+    use std::io::Read;
+    let origin = one_line(&path.display().to_string());
+    let failed = |message: String| SceneError::Read {
+        path: origin.clone(),
+        message,
+    };
+    let file = std::fs::File::open(path).map_err(|e| failed(one_line(&e.to_string())))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_SCENE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| failed(one_line(&e.to_string())))?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(failed(format!(
+            "longer than {} MB, too long for a scene",
+            MAX_SCENE_BYTES >> 20
+        )));
+    }
+    let text = String::from_utf8(bytes).map_err(|_| failed("not UTF-8 text".into()))?;
+    Ok((origin, text))
 }
 
 #[cfg(test)]

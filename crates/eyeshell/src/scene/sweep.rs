@@ -62,11 +62,7 @@ pub struct Sweep {
 impl Sweep {
     /// Read the sweep in `path`, with `overrides` applied to every run.
     pub fn from_file(path: &std::path::Path, overrides: &[String]) -> Result<Sweep, SceneError> {
-        let origin = one_line(&path.display().to_string());
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Read {
-            path: origin.clone(),
-            message: one_line(&e.to_string()),
-        })?;
+        let (origin, text) = super::read_scene_file(path)?;
         Sweep::from_toml_str(&text, &origin, overrides)
     }
 
@@ -122,11 +118,7 @@ impl SweepPlan {
         path: &std::path::Path,
         overrides: &[String],
     ) -> Result<SweepPlan, SceneError> {
-        let origin = one_line(&path.display().to_string());
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Read {
-            path: origin.clone(),
-            message: one_line(&e.to_string()),
-        })?;
+        let (origin, text) = super::read_scene_file(path)?;
         SweepPlan::from_toml_str(&text, &origin, overrides)
     }
 

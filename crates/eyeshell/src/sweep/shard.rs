@@ -380,11 +380,10 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
             )));
         }
     }
-    let text = fs::read_to_string(&first.scene_path).map_err(|e| {
+    let (_, text) = crate::scene::read_scene_file(Path::new(&first.scene_path)).map_err(|e| {
         Error::input(format!(
-            "{}: the scene the shards ran ({}) cannot be read: {e}",
-            first_path.display(),
-            first.scene_path
+            "{}: the scene the shards ran cannot be read: {e}",
+            first_path.display()
         ))
     })?;
     let plan = SweepPlan::from_toml_str(&text, &first.scene, &first.overrides)?;
