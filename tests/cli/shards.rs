@@ -663,3 +663,48 @@ fn a_million_run_grid_is_planned_and_sharded_without_building_its_scenes() {
         status.stdout
     );
 }
+
+/// A plain sweep into a directory where a shard is running is refused (it would replace
+/// the shard's runs, or run them twice at once), resuming or not; once the shard is gone
+/// (killed: the kernel drops its lock), a plain --resume finishes the sweep.
+#[test]
+fn a_plain_sweep_is_refused_while_a_shard_runs_in_its_directory() {
+    let dir = scene_dir(&slow_scene());
+    let d = dir.path();
+    let (mut child, _stderr, first) = spawn_in_own_group(
+        d,
+        &[
+            "sweep", "s.toml", "--out", "out", "--jobs", "1", "--shard", "1/2",
+        ],
+        "eyeshell: [1/2] ",
+    );
+    let done = first["eyeshell: [1/2] ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .to_string();
+    for extra in [&[][..], &["--resume"][..]] {
+        let mut args = vec!["sweep", "s.toml", "--out", "out", "-q"];
+        args.extend_from_slice(extra);
+        let plain = eyeshell_in(d, &args);
+        assert_bad(&plain, "shard 1 is running here", &format!("{extra:?}"));
+        assert!(
+            plain.stderr.contains(&format!("(pid {})", child.id())),
+            "{}",
+            plain.stderr
+        );
+    }
+    let killed = Command::new("kill")
+        .args(["-KILL", "--", &format!("-{}", child.id())])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let _ = child.wait();
+    // The shard's finished run and its record are still there (a fresh plain sweep would
+    // have replaced the directory), and neither table was written.
+    assert!(d.join("out/runs").join(&done).join("result.json").is_file());
+    assert!(d.join("out/shards/1.json").is_file());
+    assert!(!d.join("out/sweep.csv").exists());
+    let resumed = eyeshell_in(d, &["sweep", "s.toml", "--out", "out", "--resume", "-q"]);
+    assert_eq!(resumed.code, Some(0), "{}", resumed.stderr);
+}

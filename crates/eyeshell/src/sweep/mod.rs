@@ -177,6 +177,7 @@ pub fn run_sweep(
     options: &SweepOptions<'_>,
     done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
 ) -> Result<SweepReport, Error> {
+    target::refuse_running_shards(out)?;
     // The sweep's directory, owned and locked until the sweep ends.
     let names: std::collections::HashSet<&str> =
         sweep.runs.iter().map(|r| r.name.as_str()).collect();

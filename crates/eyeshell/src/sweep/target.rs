@@ -122,6 +122,33 @@ pub fn prepare_shard(
     Ok((record, lock))
 }
 
+/// Refuse a plain sweep into `out` while a shard runs there (its record `shards/K.json` is
+/// locked): replacing the directory would delete the shard's runs under it, and resuming
+/// would run the same runs twice at once. (A shard started after this check is not seen:
+/// shards take no lock on `out`, so that a merge may run beside them.)
+pub fn refuse_running_shards(out: &Path) -> Result<(), Error> {
+    let Ok(listed) = fs::read_dir(out.join(SHARDS_DIR)) else {
+        return Ok(());
+    };
+    for entry in listed.flatten() {
+        let path = entry.path();
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') || !name.ends_with(".json") {
+            continue;
+        }
+        if let Err(OutputError::Busy { pid, .. }) = DirLock::acquire(&path) {
+            let by = pid.map(|p| format!(" (pid {p})")).unwrap_or_default();
+            return Err(Error::input(format!(
+                "{}: shard {} is running here{by}: a plain sweep would replace or rerun its runs; wait for the shards and run `eyeshell sweep merge {}`, or give another --out",
+                out.display(),
+                name.trim_end_matches(".json"),
+                out.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Wait (a second at most) while `out` has no marker and holds nothing but temporaries, as
 /// while another shard, started at the same moment, writes the marker: a check now would
 /// take it for a directory that is not eyeshell's.
