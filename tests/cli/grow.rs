@@ -95,7 +95,7 @@ fn check_says_whether_growth_is_on() {
         "growth.thickness_law = \"none\"\n",
         "solver.integrator = \"ida\"\n",
         "output.times = [0.1, 0.2, 0.4, 1.0]\n",
-        "stimulus.red.offset = 0.655\n",
+        "# stimulus.red.offset = 0.655  (follows blue)\n",
     ] {
         assert!(
             run.stdout.contains(line),

@@ -341,13 +341,13 @@ impl Scene {
     pub fn to_toml(&self) -> String {
         let mut out = String::new();
         for k in self.keys() {
-            // A red surface that follows the blue one is derived, not given: writing it
-            // would make it given (and stop it following) when the text is read back.
-            if self.stimulus.red_follows_blue && k.key.starts_with("stimulus.red.") {
-                continue;
-            }
+            // A red surface that follows the blue one is derived, not given: written as a
+            // key it would be given (and stop following) when the text is read back, so it
+            // is shown as a comment.
+            let derived = self.stimulus.red_follows_blue && k.key.starts_with("stimulus.red.");
             match k.get(self) {
                 KeyValue::Text(None) | KeyValue::Unset => {}
+                v if derived => out.push_str(&format!("# {} = {v}  (follows blue)\n", k.key)),
                 v => out.push_str(&format!("{} = {}\n", k.key, v)),
             }
         }

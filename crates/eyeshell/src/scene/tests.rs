@@ -654,7 +654,17 @@ fn red_follows_blue_unless_given() {
     );
     // The effective scene reads back with red still following blue, and no red key in it.
     let s = parse("growth.eta0 = 70\n[stimulus.blue]\nP3 = 25").unwrap();
-    assert!(!s.to_toml().contains("stimulus.red."), "{}", s.to_toml());
+    let text = s.to_toml();
+    assert!(
+        text.lines()
+            .filter(|l| l.contains("stimulus.red."))
+            .all(|l| l.starts_with("# ") && l.ends_with("(follows blue)")),
+        "{text}"
+    );
+    assert!(
+        text.contains("# stimulus.red.offset = 0.655  (follows blue)\n"),
+        "{text}"
+    );
     let mut back = Scene::from_toml_str(&s.to_toml(), "b.toml", &[]).unwrap();
     assert_eq!(back.stimulus, s.stimulus);
     assert_eq!(back.growth, s.growth);
