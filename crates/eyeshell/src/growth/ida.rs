@@ -188,12 +188,12 @@ impl super::Stepper for IdaStepper<'_, '_, '_> {
 }
 
 /// The default linear solver of the coupled system: the Schur complement of the growth
-/// unknowns with the crate's band LU, the fastest (`cargo bench --bench growth --
-/// dae_pieces`: a set-up 1.12 ms against KLU's 1.37 ms, a solve 59 µs against 85 µs at
-/// N = 501; a whole const-scene run 77 ms against 92 ms). It eliminates c I − ∂rates/∂P
+/// unknowns, its reduced matrix by the crate's almost-block-diagonal LU of 6×6 node blocks
+/// (`Reduced::Block`), the fastest (BENCHMARKS.md, "The reduced matrix by block LU":
+/// `cargo bench --bench growth -- "const_scene|dae_pieces"`). It eliminates c I − ∂rates/∂P
 /// without pivoting, so a Newton matrix whose growth block is too small for that (huge
 /// steps where a point's rates barely depend on its own state: t_end = 1e200) goes to a
 /// pivoting solver instead, KLU where it was built in ([`CoupledDae`]'s fallback).
 pub fn default_linear() -> DaeLinear {
-    DaeLinear::Schur
+    DaeLinear::SchurBlock
 }

@@ -577,7 +577,7 @@ pub static KEYS: &[KeySpec] = &[
             set: |s, i| s.growth_settings.dae_linear = DaeLinear::ALL[i],
         },
         rule: Rule::Any,
-        doc: "linear solver of IDA's Newton matrix: schur (the default: eliminate the growth unknowns point by point, band LU of the rest; a matrix whose growth block is too small to eliminate unpivoted goes to KLU, counted as linear_fallbacks in summary.json), schur-klu (the same, KLU of the rest), band (band LU of the whole system, interleaved) or klu",
+        doc: "linear solver of IDA's Newton matrix: schur-block (the default: eliminate the growth unknowns point by point, almost-block-diagonal LU of the rest; a matrix whose growth block is too small to eliminate unpivoted goes to KLU, counted as linear_fallbacks in summary.json), schur (the same, band LU of the rest), schur-klu (the same, KLU of the rest), band (band LU of the whole system, interleaved) or klu",
         growth: true,
     },
     KeySpec {

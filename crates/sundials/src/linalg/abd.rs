@@ -1,7 +1,10 @@
-//! LU of almost-block-diagonal (ABD) matrices with 5×5 node blocks, in safe Rust: the
-//! Jacobians of the shell's finite-difference BVP (docs/MODEL.md §3), where each interval's
-//! five equations couple the unknowns of two neighbouring nodes and the boundary conditions
-//! sit at the two ends.
+//! LU of almost-block-diagonal (ABD) matrices with N×N node blocks, in safe Rust: the
+//! Jacobians of the shell's finite-difference BVP (docs/MODEL.md §3; N = 5, [`AbdLu`]),
+//! where each interval's five equations couple the unknowns of two neighbouring nodes and
+//! the boundary conditions sit at the two ends, and the growth DAE's reduced Newton matrix
+//! (docs/MODEL.md §5–6; N = 6, [`AbdLu6`]: the elastic unknowns and z per node, after
+//! [`super::SchurSolver`] has eliminated the growth points). The block width is a const
+//! generic, so each width gets the fixed-size code below; the text describes N = 5.
 //!
 //! Structure (M nodes, n = 5M unknowns, p rows at the start, 5 − p at the end):
 //!
@@ -39,14 +42,14 @@
 //! A pivot of at most 1e-14 of its column's largest original entry (the tolerance of
 //! [`BandLu`](super::BandLu)) is reported as [`LinalgError::Singular`], naming the node and
 //! the column; non-finite entries are reported too. The growth factor
-//! max |U| / max |A| of the last factorisation is kept ([`AbdLu::growth`]) as a diagnostic.
+//! max |U| / max |A| of the last factorisation is kept ([`Abd::growth`]) as a diagnostic.
 //!
 //! # Storage
 //!
 //! The assembled matrix and the factors are kept apart: the assembler's blocks are never
 //! overwritten by a factorisation, so an assembler that writes the same entries every time
 //! (the discretisation writes every entry of every interval block) needs no zeroing between
-//! Jacobians ([`AbdLu::zero_boundary`] clears only the boundary rows, whose entries are set
+//! Jacobians ([`Abd::zero_boundary`] clears only the boundary rows, whose entries are set
 //! sparsely). Each stage's factors are one 10×10 column-major array (rows 0..p+5 used):
 //! the multipliers below the diagonal of columns 0..5, U above, the pivots' reciprocals
 //! apart. Column-major because the elimination then updates whole columns with
@@ -57,80 +60,85 @@
 use super::LinalgError;
 use crate::MatrixSink;
 
-/// Unknowns per node: the size of a diagonal block.
+/// Unknowns per node of the elastic BVP's Jacobian: the size of [`AbdLu`]'s diagonal blocks.
 pub const NODE: usize = 5;
-/// Columns of an interval's block (two nodes).
-const WIDE: usize = 2 * NODE;
 /// A pivot at most this much of its column's largest original entry counts as singular.
 const PIVOT_TOLERANCE: f64 = 1e-14;
 
-/// A column of a stage's working block (up to 10 rows).
-type Col = [f64; WIDE];
+/// The elastic BVP's Jacobian (KINSOL's and CVODE's elastic solves): 5×5 node blocks.
+pub type AbdLu = Abd<NODE, { 2 * NODE }>;
+/// The reduced Newton matrix S of the growth DAE ([`super::SchurSolver`]): 6×6 node
+/// blocks (the five elastic unknowns and z).
+pub type AbdLu6 = Abd<6, 12>;
 
-/// An almost-block-diagonal matrix (see the module docs) and, after [`AbdLu::factor`], its
-/// LU factors.
+/// An almost-block-diagonal matrix with N×N node blocks (see the module docs; W = 2N, the
+/// columns of an interval's block, a parameter of its own because stable Rust cannot
+/// write array lengths 2N) and, after [`Abd::factor`], its LU factors.
 #[derive(Clone, Debug)]
-pub struct AbdLu {
+pub struct Abd<const N: usize, const W: usize> {
     nodes: usize,
     top: usize,
     /// The top rows over columns 0..5.
-    top_rows: Vec<[f64; NODE]>,
+    top_rows: Vec<[f64; N]>,
     /// Interval k's rows over columns 5k..5k+10, column-major: `blocks[k][j][a]`.
-    blocks: Vec<[[f64; NODE]; WIDE]>,
+    blocks: Vec<[[f64; N]; W]>,
     /// The bottom rows over the last five columns.
-    bottom_rows: Vec<[f64; NODE]>,
+    bottom_rows: Vec<[f64; N]>,
     /// Stage k's working block after elimination, column-major (`lu[k][j][r]`): rows
-    /// 0..p+5 (0..5 at the last stage).
-    lu: Vec<[Col; WIDE]>,
+    /// 0..p+N (0..N at the last stage).
+    lu: Vec<[[f64; W]; W]>,
     /// Stage k: the row exchanged with row c at step c (full-row swaps, as LAPACK's getrf).
-    piv: Vec<[u8; NODE]>,
+    piv: Vec<[u8; N]>,
     /// Stage k: 1 / U_cc.
-    inv_diag: Vec<[f64; NODE]>,
+    inv_diag: Vec<[f64; N]>,
     growth: f64,
     outside: usize,
     factored: bool,
 }
 
-impl AbdLu {
-    /// A zero ABD matrix of `nodes` nodes (n = 5 · nodes) with `top` rows at the start
-    /// (0 ≤ top ≤ 5) and 5 − top at the end.
+impl<const N: usize, const W: usize> Abd<N, W> {
+    /// A zero ABD matrix of `nodes` nodes (n = N · nodes) with `top` rows at the start
+    /// (0 ≤ top ≤ N) and N − top at the end.
     pub fn new(nodes: usize, top: usize) -> Result<Self, LinalgError> {
-        if nodes == 0 || top > NODE {
+        // The stage dispatch in `factor` and `solve_in_place` covers blocks up to 6 wide.
+        const { assert!(W == 2 * N && N >= 1 && N <= 6) };
+        if nodes == 0 || top > N {
             return Err(LinalgError::Size(format!(
-                "almost-block-diagonal matrix of {nodes} nodes with {top} top rows (need ≥ 1 node and ≤ {NODE} top rows)"
+                "almost-block-diagonal matrix of {nodes} nodes with {top} top rows (need ≥ 1 node and ≤ {N} top rows)"
             )));
         }
-        // Each node stores about 1.25 kB; more than 2^24 nodes (21 GB) is a caller's mistake.
+        // Each node stores at most about 1.7 kB; more than 2^24 nodes (28 GB) is a caller's
+        // mistake.
         if nodes > 1 << 24 {
             return Err(LinalgError::Size(format!(
                 "almost-block-diagonal matrix of {nodes} nodes"
             )));
         }
-        Ok(AbdLu {
+        Ok(Abd {
             nodes,
             top,
-            top_rows: vec![[0.0; NODE]; top],
-            blocks: vec![[[0.0; NODE]; WIDE]; nodes - 1],
-            bottom_rows: vec![[0.0; NODE]; NODE - top],
-            lu: vec![[[0.0; WIDE]; WIDE]; nodes],
-            piv: vec![[0; NODE]; nodes],
-            inv_diag: vec![[0.0; NODE]; nodes],
+            top_rows: vec![[0.0; N]; top],
+            blocks: vec![[[0.0; N]; W]; nodes - 1],
+            bottom_rows: vec![[0.0; N]; N - top],
+            lu: vec![[[0.0; W]; W]; nodes],
+            piv: vec![[0; N]; nodes],
+            inv_diag: vec![[0.0; N]; nodes],
             growth: 0.0,
             outside: 0,
             factored: false,
         })
     }
 
-    /// n = 5 · nodes.
+    /// n = N · nodes.
     pub fn size(&self) -> usize {
-        NODE * self.nodes
+        N * self.nodes
     }
 
     pub fn nodes(&self) -> usize {
         self.nodes
     }
 
-    /// Rows at the start (the rest of the boundary rows, 5 − top, are at the end).
+    /// Rows at the start (the rest of the boundary rows, N − top, are at the end).
     pub fn top(&self) -> usize {
         self.top
     }
@@ -139,24 +147,24 @@ impl AbdLu {
     pub fn zero(&mut self) {
         self.zero_boundary();
         for b in &mut self.blocks {
-            *b = [[0.0; NODE]; WIDE];
+            *b = [[0.0; N]; W];
         }
     }
 
     /// Zero the boundary rows only: enough between Jacobians when the assembler writes
     /// every entry of every interval block (see the module docs).
     pub fn zero_boundary(&mut self) {
-        self.top_rows.fill([0.0; NODE]);
-        self.bottom_rows.fill([0.0; NODE]);
+        self.top_rows.fill([0.0; N]);
+        self.bottom_rows.fill([0.0; N]);
         self.factored = false;
     }
 
     /// Fill every interval block with NaN: an assembler that leaves an entry unwritten then
-    /// makes [`AbdLu::factor`] fail instead of using a stale value (for debug builds and
-    /// tests of assemblers that rely on [`AbdLu::zero_boundary`]).
+    /// makes [`Abd::factor`] fail instead of using a stale value (for debug builds and
+    /// tests of assemblers that rely on [`Abd::zero_boundary`]).
     pub fn poison_blocks(&mut self) {
         for b in &mut self.blocks {
-            *b = [[f64::NAN; NODE]; WIDE];
+            *b = [[f64::NAN; N]; W];
         }
         self.factored = false;
     }
@@ -167,14 +175,13 @@ impl AbdLu {
         let n = self.size();
         let p = self.top;
         if i < p {
-            (j < NODE).then_some((Part::Top, i, j))
-        } else if i >= n - (NODE - p) {
-            (i < n && j >= n - NODE && j < n)
-                .then(|| (Part::Bottom, i + NODE - p - n, j + NODE - n))
+            (j < N).then_some((Part::Top, i, j))
+        } else if i >= n - (N - p) {
+            (i < n && j >= n - N && j < n).then(|| (Part::Bottom, i + N - p - n, j + N - n))
         } else {
-            let k = (i - p) / NODE;
-            let c0 = NODE * k;
-            (j >= c0 && j < c0 + WIDE).then_some((Part::Block(k), (i - p) % NODE, j - c0))
+            let k = (i - p) / N;
+            let c0 = N * k;
+            (j >= c0 && j < c0 + W).then_some((Part::Block(k), (i - p) % N, j - c0))
         }
     }
 
@@ -188,12 +195,44 @@ impl AbdLu {
         }
     }
 
+    /// Row i's columns in the structure: (first, count), N columns for a boundary row and
+    /// 2N for an interval's.
+    pub fn row_span(&self, i: usize) -> (usize, usize) {
+        let (n, p) = (self.size(), self.top);
+        assert!(i < n, "row {i} of a matrix of size {n}");
+        if i < p {
+            (0, N)
+        } else if i >= n - (N - p) {
+            (n - N, N)
+        } else {
+            (N * ((i - p) / N), W)
+        }
+    }
+
+    /// Overwrite row i over its [`Abd::row_span`] (`values` of exactly that length).
+    pub fn set_row(&mut self, i: usize, values: &[f64]) {
+        let (n, p) = (self.size(), self.top);
+        self.factored = false;
+        if i < p {
+            self.top_rows[i].copy_from_slice(values);
+        } else if i >= n - (N - p) {
+            self.bottom_rows[i + N - p - n].copy_from_slice(values);
+        } else {
+            let a = (i - p) % N;
+            let block = &mut self.blocks[(i - p) / N];
+            assert_eq!(values.len(), W, "row {i} spans {W} columns");
+            for (col, &v) in block.iter_mut().zip(values) {
+                col[a] = v;
+            }
+        }
+    }
+
     /// The number of writes outside the structure since the last call, and reset it.
     pub fn take_outside(&mut self) -> usize {
         std::mem::take(&mut self.outside)
     }
 
-    /// Whether [`AbdLu::factor`] succeeded since the matrix was last written.
+    /// Whether [`Abd::factor`] succeeded since the matrix was last written.
     pub fn is_factored(&self) -> bool {
         self.factored
     }
@@ -211,15 +250,19 @@ impl AbdLu {
         let m = self.nodes;
         let (mut a_max, mut u_max) = (0.0f64, 0.0f64);
         for k in 0..m {
-            // Fixed sizes let the compiler unroll the elimination and vectorise its columns.
-            let result = match (k == m - 1, self.top) {
-                (true, _) => self.stage::<5, NODE>(k),
-                (false, 0) => self.stage::<5, WIDE>(k),
-                (false, 1) => self.stage::<6, WIDE>(k),
-                (false, 2) => self.stage::<7, WIDE>(k),
-                (false, 3) => self.stage::<8, WIDE>(k),
-                (false, 4) => self.stage::<9, WIDE>(k),
-                (false, _) => self.stage::<10, WIDE>(k),
+            // Fixed sizes let the compiler unroll the elimination and vectorise its columns:
+            // R = top + N rows, instantiated for the block widths in use (5 and 6).
+            let result = match (k == m - 1, self.top + N) {
+                (true, _) => self.stage::<N, N>(k),
+                (false, 5) => self.stage::<5, W>(k),
+                (false, 6) => self.stage::<6, W>(k),
+                (false, 7) => self.stage::<7, W>(k),
+                (false, 8) => self.stage::<8, W>(k),
+                (false, 9) => self.stage::<9, W>(k),
+                (false, 10) => self.stage::<10, W>(k),
+                (false, 11) => self.stage::<11, W>(k),
+                (false, 12) => self.stage::<12, W>(k),
+                (false, r) => unreachable!("{r} rows in a stage: new() admits N ≤ 6"),
             };
             let (stage_a, stage_u) = result?;
             a_max = a_max.max(stage_a);
@@ -244,30 +287,30 @@ impl AbdLu {
         k: usize,
     ) -> Result<(f64, f64), LinalgError> {
         // A constant but at the last stage: fixed-length copies, no memmove calls.
-        let p = if C == NODE { self.top } else { R - NODE };
+        let p = if C == N { self.top } else { R - N };
         let mut a = [[0.0f64; R]; C];
         // Largest original |entry| of node k's columns: from interval k − 1's right half
         // (or the top rows) and this stage's new rows.
-        let mut col_max = [0.0f64; NODE];
+        let mut col_max = [0.0f64; N];
         if k == 0 {
             for (r, row) in self.top_rows.iter().enumerate() {
-                for j in 0..NODE {
+                for j in 0..N {
                     a[j][r] = row[j];
                     col_max[j] = col_max[j].max(row[j].abs());
                 }
             }
         } else {
             let prev = &self.lu[k - 1];
-            for j in 0..NODE {
-                a[j][..p].copy_from_slice(&prev[NODE + j][NODE..NODE + p]);
-                col_max[j] = self.blocks[k - 1][NODE + j]
+            for j in 0..N {
+                a[j][..p].copy_from_slice(&prev[N + j][N..N + p]);
+                col_max[j] = self.blocks[k - 1][N + j]
                     .iter()
                     .fold(0.0f64, |x, v| x.max(v.abs()));
             }
         }
-        if C == NODE {
+        if C == N {
             for (r, row) in self.bottom_rows.iter().enumerate() {
-                for j in 0..NODE {
+                for j in 0..N {
                     a[j][p + r] = row[j];
                 }
             }
@@ -276,14 +319,14 @@ impl AbdLu {
                 col[p..].copy_from_slice(src);
             }
         }
-        for j in 0..NODE {
+        for j in 0..N {
             for v in &a[j][p..] {
                 col_max[j] = col_max[j].max(v.abs());
             }
         }
         let stage_max = col_max.iter().fold(0.0f64, |x, &y| x.max(y));
         let (piv, inv_diag) = (&mut self.piv[k], &mut self.inv_diag[k]);
-        for c in 0..NODE {
+        for c in 0..N {
             let (mut best_row, mut best) = (c, a[c][c].abs());
             for r in c + 1..R {
                 let v = a[c][r].abs();
@@ -292,7 +335,7 @@ impl AbdLu {
                 }
             }
             if !(best > PIVOT_TOLERANCE * col_max[c]) {
-                let (col, scale) = (NODE * k + c, col_max[c]);
+                let (col, scale) = (N * k + c, col_max[c]);
                 return Err(LinalgError::Singular(if best == 0.0 {
                     format!("block LU: column {col} (node {k}, unknown {c}) has no nonzero pivot")
                 } else if best.is_nan() || scale.is_nan() {
@@ -331,7 +374,7 @@ impl AbdLu {
         let (mut big, mut probe) = ([0.0f64; R], [0.0f64; R]);
         for col in &a {
             for r in 0..R {
-                if r < NODE {
+                if r < N {
                     big[r] = big[r].max(col[r].abs());
                 }
                 probe[r] += col[r] * 0.0;
@@ -348,8 +391,8 @@ impl AbdLu {
         Ok((stage_max, big.iter().fold(0.0f64, |x, &y| x.max(y))))
     }
 
-    /// b ← A⁻¹ b with the factors of the last [`AbdLu::factor`], which must have succeeded
-    /// since the matrix was last written ([`AbdLu::is_factored`]): panics otherwise, or if
+    /// b ← A⁻¹ b with the factors of the last [`Abd::factor`], which must have succeeded
+    /// since the matrix was last written ([`Abd::is_factored`]): panics otherwise, or if
     /// b's length is not n. The factors are not changed: any number of right sides.
     pub fn solve_in_place(&self, b: &mut [f64]) {
         let (m, p) = (self.nodes, self.top);
@@ -369,46 +412,47 @@ impl AbdLu {
             2 => self.forward::<2>(b),
             3 => self.forward::<3>(b),
             4 => self.forward::<4>(b),
-            _ => self.forward::<5>(b),
+            5 => self.forward::<5>(b),
+            _ => self.forward::<6>(b),
         };
         // The last stage: the carried rows and the bottom ones.
         let k = m - 1;
         let (w, piv) = (&self.lu[k], &self.piv[k]);
-        let mut y = [0.0; NODE];
+        let mut y = [0.0; N];
         y[..p].copy_from_slice(&carry[..p]);
-        y[p..].copy_from_slice(&b[p + NODE * k..]);
-        for c in 0..NODE {
+        y[p..].copy_from_slice(&b[p + N * k..]);
+        for c in 0..N {
             y.swap(c, piv[c] as usize);
         }
-        for c in 0..NODE {
+        for c in 0..N {
             let t = y[c];
-            for r in c + 1..NODE {
+            for r in c + 1..N {
                 y[r] -= w[c][r] * t;
             }
         }
-        b[NODE * k..].copy_from_slice(&y);
+        b[N * k..].copy_from_slice(&y);
         // Back: x_k = U₁₁⁻¹ (y_k − U₁₂ x_{k+1}).
-        let mut next = [0.0; NODE];
+        let mut next = [0.0; N];
         for k in (0..m).rev() {
             let w = &self.lu[k];
-            let mut y = [0.0; NODE];
-            y.copy_from_slice(&b[NODE * k..NODE * k + NODE]);
+            let mut y = [0.0; N];
+            y.copy_from_slice(&b[N * k..N * k + N]);
             if k < m - 1 {
-                for j in 0..NODE {
-                    let (col, t) = (&w[NODE + j], next[j]);
-                    for a in 0..NODE {
+                for j in 0..N {
+                    let (col, t) = (&w[N + j], next[j]);
+                    for a in 0..N {
                         y[a] -= col[a] * t;
                     }
                 }
             }
-            for c in (0..NODE).rev() {
+            for c in (0..N).rev() {
                 let t = y[c] * self.inv_diag[k][c];
                 y[c] = t;
                 for a in 0..c {
                     y[a] -= w[c][a] * t;
                 }
             }
-            b[NODE * k..NODE * k + NODE].copy_from_slice(&y);
+            b[N * k..N * k + N].copy_from_slice(&y);
             next = y;
         }
     }
@@ -416,31 +460,31 @@ impl AbdLu {
     /// The forward elimination of every stage but the last, P = top rows (a constant, so
     /// that the copies and loops have fixed lengths). Returns the rows carried into the last.
     #[inline(always)]
-    fn forward<const P: usize>(&self, b: &mut [f64]) -> [f64; NODE] {
-        let mut carry = [0.0; NODE];
+    fn forward<const P: usize>(&self, b: &mut [f64]) -> [f64; N] {
+        let mut carry = [0.0; N];
         carry[..P].copy_from_slice(&b[..P]);
         for k in 0..self.nodes - 1 {
             let (w, piv) = (&self.lu[k], &self.piv[k]);
-            let mut y = [0.0; WIDE];
+            let mut y = [0.0; W];
             y[..P].copy_from_slice(&carry[..P]);
-            let at = P + NODE * k;
-            y[P..P + NODE].copy_from_slice(&b[at..at + NODE]);
-            for c in 0..NODE {
+            let at = P + N * k;
+            y[P..P + N].copy_from_slice(&b[at..at + N]);
+            for c in 0..N {
                 y.swap(c, piv[c] as usize);
             }
-            for c in 0..NODE {
+            for c in 0..N {
                 let t = y[c];
-                for r in c + 1..P + NODE {
+                for r in c + 1..P + N {
                     y[r] -= w[c][r] * t;
                 }
             }
-            b[NODE * k..NODE * k + NODE].copy_from_slice(&y[..NODE]);
-            carry[..P].copy_from_slice(&y[NODE..NODE + P]);
+            b[N * k..N * k + N].copy_from_slice(&y[..N]);
+            carry[..P].copy_from_slice(&y[N..N + P]);
         }
         carry
     }
 
-    /// x = A⁻¹ b (see [`AbdLu::solve_in_place`]); `NotFactored` without a factorisation.
+    /// x = A⁻¹ b (see [`Abd::solve_in_place`]); `NotFactored` without a factorisation.
     pub fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
         if !self.factored {
             return Err(LinalgError::NotFactored);
@@ -476,8 +520,8 @@ enum Part {
 }
 
 /// The assembler's view: `set` overwrites an entry of the structure; outside it the write
-/// is counted (see [`AbdLu::take_outside`]) and debug builds panic.
-impl MatrixSink for AbdLu {
+/// is counted (see [`Abd::take_outside`]) and debug builds panic.
+impl<const N: usize, const W: usize> MatrixSink for Abd<N, W> {
     fn nrows(&self) -> usize {
         self.size()
     }
@@ -498,16 +542,16 @@ impl MatrixSink for AbdLu {
     #[inline]
     fn set_block(&mut self, row0: usize, col0: usize, ncols: usize, values: &[f64]) {
         let p = self.top;
-        if ncols == WIDE
-            && values.len() == NODE * WIDE
+        if ncols == W
+            && values.len() == N * W
             && row0 >= p
-            && (row0 - p).is_multiple_of(NODE)
+            && (row0 - p).is_multiple_of(N)
             && col0 == row0 - p
-            && (row0 - p) / NODE < self.blocks.len()
+            && (row0 - p) / N < self.blocks.len()
         {
             self.factored = false;
-            let block = &mut self.blocks[(row0 - p) / NODE];
-            for (a, src) in values.chunks_exact(WIDE).enumerate() {
+            let block = &mut self.blocks[(row0 - p) / N];
+            for (a, src) in values.chunks_exact(W).enumerate() {
                 for (col, &v) in block.iter_mut().zip(src) {
                     col[a] = v;
                 }

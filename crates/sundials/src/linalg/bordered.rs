@@ -1,5 +1,6 @@
-//! A band matrix bordered by one dense row and column, [A c; rᵀ s], solved by block
-//! elimination: A = LU by [`BandLu`], v = A⁻¹c once per factorisation, the scalar Schur
+//! A band (or almost-block-diagonal) matrix bordered by one dense row and column,
+//! [A c; rᵀ s], solved by block elimination: A = LU by [`BandLu`] (or [`AbdLu6`]),
+//! v = A⁻¹c once per factorisation, the scalar Schur
 //! complement σ = s − rᵀv; then each solve is one band back-substitution:
 //!   x_A = A⁻¹ b_A,  x_s = (b_s − rᵀ x_A) / σ,  x_A ← x_A − v x_s.
 //! Why a border: in the growth DAE one unknown (the blue depth where the retina crosses
@@ -10,12 +11,48 @@
 
 use std::rc::Rc;
 
-use super::{BandLu, Csr, DirectSolver, LinalgError};
+use super::{AbdLu6, BandLu, Csr, DirectSolver, LinalgError};
 use crate::{Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector};
 
-/// [A c; rᵀ s] with A an n×n band matrix; without a border, just A.
-pub struct BorderedBand {
-    lu: BandLu,
+/// The square matrix A inside a border: factored in place, then solved with any number of
+/// times ([`BandLu`], or the almost-block-diagonal [`AbdLu6`] of the growth DAE's reduced
+/// matrix).
+pub trait Bordering {
+    /// n, A's size.
+    fn size(&self) -> usize;
+    /// Factorise A as it was written.
+    fn factor(&mut self) -> Result<(), LinalgError>;
+    /// x ← A⁻¹ x after a successful [`Bordering::factor`].
+    fn solve_in_place(&self, x: &mut [f64]);
+}
+
+impl Bordering for BandLu {
+    fn size(&self) -> usize {
+        BandLu::size(self)
+    }
+    fn factor(&mut self) -> Result<(), LinalgError> {
+        BandLu::factor(self)
+    }
+    fn solve_in_place(&self, x: &mut [f64]) {
+        BandLu::solve_in_place(self, x)
+    }
+}
+
+impl Bordering for AbdLu6 {
+    fn size(&self) -> usize {
+        AbdLu6::size(self)
+    }
+    fn factor(&mut self) -> Result<(), LinalgError> {
+        AbdLu6::factor(self)
+    }
+    fn solve_in_place(&self, x: &mut [f64]) {
+        AbdLu6::solve_in_place(self, x)
+    }
+}
+
+/// [A c; rᵀ s] with A an n×n matrix factored by `L`; without a border, just A.
+pub struct Bordered<L> {
+    lu: L,
     border: bool,
     col: Vec<f64>,
     row: Vec<f64>,
@@ -27,34 +64,15 @@ pub struct BorderedBand {
     factored: bool,
 }
 
+/// A band matrix with a border.
+pub type BorderedBand = Bordered<BandLu>;
+/// An almost-block-diagonal matrix of 6×6 node blocks with a border.
+pub type BorderedAbd = Bordered<AbdLu6>;
+
 impl BorderedBand {
     /// A zero matrix of size n (+ 1 with a border) whose band has these widths.
     pub fn new(n: usize, lower: usize, upper: usize, border: bool) -> Result<Self, LinalgError> {
-        let border_len = if border { n } else { 0 };
-        Ok(BorderedBand {
-            lu: BandLu::new(n, lower, upper)?,
-            border,
-            col: vec![0.0; border_len],
-            row: vec![0.0; border_len],
-            corner: 0.0,
-            v: vec![0.0; border_len],
-            sigma: 1.0,
-            factored: false,
-        })
-    }
-
-    /// The size of the band part.
-    pub fn band_size(&self) -> usize {
-        self.lu.size()
-    }
-
-    /// The whole size: the band and the border.
-    pub fn len(&self) -> usize {
-        self.band_size() + usize::from(self.border)
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
+        Ok(Bordered::around(BandLu::new(n, lower, upper)?, border))
     }
 
     /// (lower, upper) bandwidths of A.
@@ -77,12 +95,48 @@ impl BorderedBand {
             k => Err(LinalgError::OutsidePattern(k)),
         }
     }
+}
 
-    /// Fill the matrix row by row in place: `f(a, c, r, s)` must write every band row of A
-    /// in full through [`BandLu::row_mut`] (they hold the last factors, not zeros); the
-    /// border starts at zero. Cheaper than [`BorderedBand::fill`] for a caller that builds
-    /// whole band rows.
-    pub fn fill_rows(&mut self, f: impl FnOnce(&mut BandLu, &mut [f64], &mut [f64], &mut f64)) {
+impl<L: Bordering> Bordered<L> {
+    /// `lu` (its entries as they are) with a zero border, if `border`.
+    pub fn around(lu: L, border: bool) -> Self {
+        let border_len = if border { lu.size() } else { 0 };
+        Bordered {
+            lu,
+            border,
+            col: vec![0.0; border_len],
+            row: vec![0.0; border_len],
+            corner: 0.0,
+            v: vec![0.0; border_len],
+            sigma: 1.0,
+            factored: false,
+        }
+    }
+
+    /// The size of A.
+    pub fn band_size(&self) -> usize {
+        self.lu.size()
+    }
+
+    /// The whole size: A and the border.
+    pub fn len(&self) -> usize {
+        self.band_size() + usize::from(self.border)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// A (and after a factorisation, its factors).
+    pub fn inner(&self) -> &L {
+        &self.lu
+    }
+
+    /// Fill the matrix row by row in place: `f(a, c, r, s)` must write every row of A in
+    /// full (for a band, through [`BandLu::row_mut`]: they hold the last factors, not
+    /// zeros); the border starts at zero. Cheaper than [`BorderedBand::fill`] for a caller
+    /// that builds whole rows.
+    pub fn fill_rows(&mut self, f: impl FnOnce(&mut L, &mut [f64], &mut [f64], &mut f64)) {
         self.clear_border();
         f(&mut self.lu, &mut self.col, &mut self.row, &mut self.corner);
     }
@@ -94,7 +148,8 @@ impl BorderedBand {
         self.corner = 0.0;
     }
 
-    /// Factorise what [`BorderedBand::fill`] set.
+    /// Factorise what was filled: A = LU, v = A⁻¹ c and σ = s − rᵀ v. A σ at most 1e-14
+    /// of |s| + Σ |r_i v_i| (the size of the terms it is the difference of) is singular.
     pub fn factor(&mut self) -> Result<(), LinalgError> {
         self.factored = false;
         self.lu.factor()?;
@@ -123,14 +178,14 @@ impl BorderedBand {
         Ok(())
     }
 
-    /// x = M⁻¹ b, both of length [`BorderedBand::len`].
+    /// x = M⁻¹ b, both of length [`Bordered::len`].
     pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
         x.copy_from_slice(b);
         self.solve_in_place(x)
     }
 
-    /// x ← M⁻¹ x, of length [`BorderedBand::len`]; an error without a successful
-    /// [`BorderedBand::factor`] since the last fill.
+    /// x ← M⁻¹ x, of length [`Bordered::len`]; an error without a successful
+    /// [`Bordered::factor`] since the last fill.
     pub fn solve_in_place(&self, x: &mut [f64]) -> Result<(), LinalgError> {
         if !self.factored {
             return Err(LinalgError::NotFactored);

@@ -12,7 +12,9 @@
 //! the fast one refuses.
 //!
 //! [`AbdLu`] factors the almost-block-diagonal Jacobians of the elastic BVP (5×5 node
-//! blocks; KINSOL uses it through `LinearSolverSpec::Block`).
+//! blocks; KINSOL uses it through `LinearSolverSpec::Block`), [`AbdLu6`] the Schur
+//! solver's reduced matrix S (6×6 node blocks, bordered: [`BorderedAbd`]) for
+//! `Reduced::Block`.
 //!
 //! The band LU ([`BandLu`]) is safe Rust here; KLU is SUNDIALS' (through the safe layer
 //! in `crate`).
@@ -24,9 +26,9 @@ mod csr;
 mod fallback;
 mod schur;
 
-pub use abd::{AbdLu, NODE as ABD_NODE};
+pub use abd::{Abd, AbdLu, AbdLu6, NODE as ABD_NODE};
 pub use band_lu::BandLu;
-pub use bordered::{BorderedBand, InterleavedBand, KluSolver};
+pub use bordered::{Bordered, BorderedAbd, BorderedBand, Bordering, InterleavedBand, KluSolver};
 pub use csr::Csr;
 pub use fallback::{Fallback, MakeSolver};
 pub use schur::{Reduced, SchurSolver};
@@ -50,6 +52,9 @@ pub enum LinalgError {
     /// A matrix too large to store (its size or bandwidths are a mistake).
     #[error("matrix too large: {0}")]
     Size(String),
+    /// A pattern that does not have the structure the solver needs.
+    #[error("matrix structure: {0}")]
+    Structure(String),
 }
 
 /// A direct solver of a matrix assembled into a [`Csr`].

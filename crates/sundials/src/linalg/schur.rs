@@ -12,13 +12,19 @@
 //! The elimination order is the blocks' order, so the caller numbers blocks that others
 //! read first; [`SchurSolver::new`] checks the pattern for it.
 
-use super::{BorderedBand, Csr, DirectSolver, KluSolver, LinalgError};
+use super::{
+    AbdLu6, Bordered, BorderedAbd, BorderedBand, Csr, DirectSolver, KluSolver, LinalgError,
+};
 
 /// How the reduced matrix S is factored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reduced {
-    /// SUNDIALS' band LU, the border by block elimination.
+    /// The crate's band LU ([`super::BandLu`]), the border by block elimination.
     Band,
+    /// The almost-block-diagonal LU of 6×6 node blocks ([`AbdLu6`]), the border by block
+    /// elimination: S's rows are the pole's (node 0), each interval's (its two nodes) and
+    /// the cornea's (the last node), checked on the pattern by [`SchurSolver::new`].
+    Block,
     /// KLU on S as a sparse matrix (its band rows and the border).
     Klu,
 }
@@ -34,6 +40,11 @@ pub const PIVOT_TOLERANCE: f64 = 1e-3;
 /// The factorisation of S.
 enum ReducedSolver {
     Band(BorderedBand),
+    /// S's almost-block-diagonal part and border, and one row's span of scratch.
+    Block {
+        bb: BorderedAbd,
+        row: Vec<f64>,
+    },
     /// S as CSR, and its rows in dense band storage while it is built (row jw holds
     /// columns jw − lower ..= jw + upper) and its border row.
     Klu {
@@ -170,9 +181,11 @@ impl SchurSolver {
                 ..Block::default()
             });
         }
-        // S's band: A's entries and the fill C X, row by row.
+        // S's band: A's entries and the fill C X, row by row; each row's first and last
+        // column (for the block structure).
         let (mut lower, mut upper) = (0usize, 0usize);
-        for jw in 0..n_w {
+        let mut spans: Vec<Option<(usize, usize)>> = vec![None; n_w];
+        for (jw, row_span) in spans.iter_mut().enumerate() {
             for &c in pattern.row(n_p + jw).0 {
                 let span = if c < n_p {
                     let b = &blocks[c / 2];
@@ -185,11 +198,17 @@ impl SchurSolver {
                 if let Some((a, b)) = span {
                     lower = lower.max(jw.saturating_sub(a));
                     upper = upper.max(b.saturating_sub(jw));
+                    let (lo, hi) = row_span.get_or_insert((a, b));
+                    (*lo, *hi) = ((*lo).min(a), (*hi).max(b));
                 }
             }
         }
         let reduced = match how {
             Reduced::Band => ReducedSolver::Band(BorderedBand::new(n_w, lower, upper, border)?),
+            Reduced::Block => ReducedSolver::Block {
+                bb: Bordered::around(block_structure(&spans)?, border),
+                row: vec![0.0; BLOCK_WIDTH * 2],
+            },
             Reduced::Klu => {
                 let mut rows: Vec<Vec<usize>> = (0..n_w)
                     .map(|jw| {
@@ -241,6 +260,7 @@ impl SchurSolver {
     fn reduced_solve(&mut self, x: &mut [f64]) -> Result<(), LinalgError> {
         match &mut self.reduced {
             ReducedSolver::Band(bb) => bb.solve_in_place(x),
+            ReducedSolver::Block { bb, .. } => bb.solve_in_place(x),
             ReducedSolver::Klu { klu, .. } => {
                 let rhs = &mut self.rhs[..x.len()];
                 rhs.copy_from_slice(x);
@@ -325,53 +345,68 @@ impl SchurSolver {
         Ok(())
     }
 
-    /// S = [A a; cᵀ s] − C X, written straight into the band LU's rows (for KLU, into
-    /// dense band rows and then the CSR matrix); keeps C's entries for the solves.
+    /// S = [A a; cᵀ s] − C X, written straight into the band LU's rows (for the block LU,
+    /// a row at a time into its blocks; for KLU, into dense band rows and then the CSR
+    /// matrix); keeps C's entries for the solves.
     fn reduce(&mut self, a: &Csr) -> Result<(), LinalgError> {
         let (n_p, n_w, border) = (self.n_p, self.n_w, self.border);
         let (lower, upper) = self.widths;
         let (blocks, coupling) = (&self.blocks, &mut self.coupling);
         coupling.clear();
-        // Band row jw keeps column c at acc[c + lower − jw], the border row at acc[c].
-        let mut reduce_row = |jw: usize, acc: &mut [f64], at_d: &mut f64| {
-            let (off, base) = if jw == n_w { (0, 0) } else { (lower, jw) };
-            acc.fill(0.0);
-            *at_d = 0.0;
-            let (cols, vals) = a.row(n_p + jw);
-            for (&c, &v) in cols.iter().zip(vals) {
-                if c < n_p {
-                    if v == 0.0 {
-                        continue;
-                    }
-                    coupling.col.push(c as u32);
-                    coupling.val.push(v);
-                    let (b, r) = (&blocks[c / 2], c % 2);
-                    if b.width > 0 {
-                        let at = b.lo + off - base;
-                        for (s, x) in acc[at..at + b.width]
-                            .iter_mut()
-                            .zip(&b.x[r * b.width..(r + 1) * b.width])
-                        {
-                            *s -= v * x;
+        // Row jw keeps W column c at acc[c + off − base]: a band row (off, base) =
+        // (lower, jw), a block row (0, its first column), the border row (0, 0).
+        let mut reduce_row =
+            |jw: usize, acc: &mut [f64], at_d: &mut f64, off: usize, base: usize| {
+                acc.fill(0.0);
+                *at_d = 0.0;
+                let (cols, vals) = a.row(n_p + jw);
+                for (&c, &v) in cols.iter().zip(vals) {
+                    if c < n_p {
+                        if v == 0.0 {
+                            continue;
                         }
+                        coupling.col.push(c as u32);
+                        coupling.val.push(v);
+                        let (b, r) = (&blocks[c / 2], c % 2);
+                        if b.width > 0 {
+                            let at = b.lo + off - base;
+                            for (s, x) in acc[at..at + b.width]
+                                .iter_mut()
+                                .zip(&b.x[r * b.width..(r + 1) * b.width])
+                            {
+                                *s -= v * x;
+                            }
+                        }
+                        *at_d -= v * b.xd[r];
+                    } else if c < n_p + n_w {
+                        acc[c - n_p + off - base] += v;
+                    } else {
+                        *at_d += v;
                     }
-                    *at_d -= v * b.xd[r];
-                } else if c < n_p + n_w {
-                    acc[c - n_p + off - base] += v;
-                } else {
-                    *at_d += v;
                 }
-            }
-            coupling.end.push(coupling.col.len());
-        };
+                coupling.end.push(coupling.col.len());
+            };
         match &mut self.reduced {
             ReducedSolver::Band(bb) => {
                 bb.fill_rows(|lu, col, row, corner| {
                     for jw in 0..n_w {
-                        reduce_row(jw, lu.row_mut(jw), &mut col[jw]);
+                        reduce_row(jw, lu.row_mut(jw), &mut col[jw], lower, jw);
                     }
                     if border {
-                        reduce_row(n_w, row, corner);
+                        reduce_row(n_w, row, corner, 0, 0);
+                    }
+                });
+                Ok(())
+            }
+            ReducedSolver::Block { bb, row: acc } => {
+                bb.fill_rows(|lu, col, row, corner| {
+                    for jw in 0..n_w {
+                        let (first, len) = lu.row_span(jw);
+                        reduce_row(jw, &mut acc[..len], &mut col[jw], 0, first);
+                        lu.set_row(jw, &acc[..len]);
+                    }
+                    if border {
+                        reduce_row(n_w, row, corner, 0, 0);
                     }
                 });
                 Ok(())
@@ -386,7 +421,7 @@ impl SchurSolver {
                 let mut s_col = 0.0;
                 s.zero();
                 for (jw, r) in s_rows.chunks_exact_mut(width).enumerate() {
-                    reduce_row(jw, r, &mut s_col);
+                    reduce_row(jw, r, &mut s_col, lower, jw);
                     let (lo, hi) = (jw.saturating_sub(lower), (jw + upper + 1).min(n_w));
                     s.add_span(jw, lo, &r[lo + lower - jw..hi + lower - jw]);
                     if border {
@@ -395,7 +430,7 @@ impl SchurSolver {
                 }
                 if border {
                     let mut corner = 0.0;
-                    reduce_row(n_w, s_border, &mut corner);
+                    reduce_row(n_w, s_border, &mut corner, 0, 0);
                     s.add_span(n_w, 0, s_border);
                     s.add(n_w, n_w, corner);
                 }
@@ -451,9 +486,45 @@ impl SchurSolver {
         self.reduce(a)?;
         match &mut self.reduced {
             ReducedSolver::Band(bb) => bb.factor(),
+            ReducedSolver::Block { bb, .. } => bb.factor(),
             ReducedSolver::Klu { s, klu, .. } => klu.factor(s),
         }
     }
+}
+
+/// Unknowns per node of S for [`Reduced::Block`].
+const BLOCK_WIDTH: usize = 6;
+
+/// The almost-block-diagonal matrix whose structure holds S's rows, given each row's first
+/// and last column (None: an empty row): the top rows are the leading rows within node 0
+/// (3 pole rows for the growth DAE), and every row must lie within its row's span in that
+/// structure, or S is not of this shape.
+fn block_structure(spans: &[Option<(usize, usize)>]) -> Result<AbdLu6, LinalgError> {
+    let n = spans.len();
+    if n == 0 || !n.is_multiple_of(BLOCK_WIDTH) {
+        return Err(LinalgError::Structure(format!(
+            "a reduced matrix of size {n} is not made of {BLOCK_WIDTH}-wide nodes"
+        )));
+    }
+    let top = spans
+        .iter()
+        .take_while(|s| s.is_some_and(|(_, hi)| hi < BLOCK_WIDTH))
+        .count()
+        .min(BLOCK_WIDTH);
+    let abd = AbdLu6::new(n / BLOCK_WIDTH, top)?;
+    for (jw, span) in spans.iter().enumerate() {
+        let (first, len) = abd.row_span(jw);
+        if let Some((lo, hi)) = *span {
+            if lo < first || hi >= first + len {
+                return Err(LinalgError::Structure(format!(
+                    "row {jw} of the reduced matrix reaches columns {lo}..={hi}, outside its \
+                     block's columns {first}..{} ({top} top rows)",
+                    first + len
+                )));
+            }
+        }
+    }
+    Ok(abd)
 }
 
 impl DirectSolver for SchurSolver {
