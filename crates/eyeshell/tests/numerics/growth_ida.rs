@@ -233,6 +233,58 @@ fn every_linear_solver_gives_the_same_run() {
     }
 }
 
+/// The default reduced solver (block LU of S) gives the band path's run on the const scene
+/// at N = 501 (the benches' run) and on the fibre scene, Hermite–Simpson, at N = 101: the
+/// same steps, residuals and Newton matrices, and the axial-length series at every output
+/// time within 1e-10 mm (the two LUs pivot alike, so only rounding differs).
+#[test]
+fn the_block_reduced_solver_gives_the_band_paths_run() {
+    let fibre = Params {
+        thickness: Thickness::NonUniform,
+        d: 200.0,
+        ..Params::default()
+    };
+    for (p, nodes) in [(Params::default(), 501), (fibre, 101)] {
+        let s = |lin| GrowthSettings {
+            dae_linear: lin,
+            ..settings(Integrator::Ida, 1e-6)
+        };
+        assert_eq!(
+            s(DaeLinear::SchurBlock).dae_linear,
+            GrowthSettings::default().dae_linear
+        );
+        let g = GrowthParams::default();
+        let (block_rows, block) = run(&p, nodes, &g, &s(DaeLinear::SchurBlock));
+        let (band_rows, band) = run(&p, nodes, &g, &s(DaeLinear::Schur));
+        let (block, band) = (block.unwrap(), band.unwrap());
+        assert_eq!(
+            (
+                block.steps,
+                block.residual_evaluations,
+                block.jacobian_evaluations
+            ),
+            (
+                band.steps,
+                band.residual_evaluations,
+                band.jacobian_evaluations
+            ),
+            "{block:?} vs {band:?}"
+        );
+        assert_eq!(block_rows.len(), band_rows.len());
+        assert!(block_rows.len() >= 4);
+        for (a, b) in block_rows.iter().zip(&band_rows) {
+            assert_eq!(a.t, b.t);
+            assert!(
+                (a.axial_length - b.axial_length).abs() <= 1e-10,
+                "N = {nodes}, t = {}: {} vs {}",
+                a.t,
+                a.axial_length,
+                b.axial_length
+            );
+        }
+    }
+}
+
 /// The default Schur path hands the Newton matrices it cannot eliminate unpivoted to a
 /// pivoting solver: with Γ = −10 nothing grows, growth rates barely depend on the growth
 /// state, and IDA's long steps leave c I − ∂rates/∂P tiny (measured: 4 of 4 matrices at
@@ -245,14 +297,14 @@ fn the_schur_path_falls_back_to_pivoting_where_it_must() {
         ..settings(Integrator::Ida, 1e-6)
     };
     assert_eq!(
-        s(DaeLinear::Schur).dae_linear,
+        s(DaeLinear::SchurBlock).dae_linear,
         GrowthSettings::default().dae_linear
     );
     let idle = GrowthParams {
         gamma: -10.0,
         ..GrowthParams::default()
     };
-    let (rows, r) = run(&p, 101, &idle, &s(DaeLinear::Schur));
+    let (rows, r) = run(&p, 101, &idle, &s(DaeLinear::SchurBlock));
     let stats = r.unwrap();
     assert!(stats.linear_fallbacks > 0, "{stats:?}");
     let (band_rows, band) = run(&p, 101, &idle, &s(DaeLinear::Band));
@@ -262,7 +314,7 @@ fn the_schur_path_falls_back_to_pivoting_where_it_must() {
         (a.axial_length - b.axial_length).abs() < 1e-9,
         "{a:?} vs {b:?}"
     );
-    let (_, r) = run(&p, 101, &GrowthParams::default(), &s(DaeLinear::Schur));
+    let (_, r) = run(&p, 101, &GrowthParams::default(), &s(DaeLinear::SchurBlock));
     assert_eq!(r.unwrap().linear_fallbacks, 0);
 }
 
