@@ -1,5 +1,6 @@
 //! Growth timings (issue: growth in time). Run with
 //!   cargo bench --bench growth
+//! (`reduced_on_cpu` times by the thread's on-CPU time, for the shared machine).
 //! Figures go in BENCHMARKS.md.
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -8,7 +9,9 @@ use eyeshell::growth::dae::{CoupledDae, DaeLinear};
 use eyeshell::growth::system::GrowthSystem;
 use eyeshell::growth::*;
 use eyeshell::model::params::Params;
+use eyeshell_sundials::linalg::{DirectSolver, Reduced, SchurSolver};
 use std::hint::black_box;
+use std::time::Duration;
 
 /// The binary's allocator (src/main.rs), so that the figures are what `eyeshell` gets.
 #[global_allocator]
@@ -167,5 +170,78 @@ fn dae_pieces(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, const_scene, pieces, dae_pieces);
+/// This thread's CPU time (CLOCK_THREAD_CPUTIME_ID).
+fn on_cpu_now() -> Duration {
+    let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+    Duration::new(t.tv_sec as u64, t.tv_nsec as u32)
+}
+
+/// `iters` calls of f, timed by the thread's time on a CPU instead of the wall clock: on
+/// the shared 2-core machine the other builds held the core for 50–80 % of the wall time
+/// at times, which made wall-clock comparisons of a 10 % difference meaningless.
+fn on_cpu(iters: u64, mut f: impl FnMut()) -> Duration {
+    let start = on_cpu_now();
+    for _ in 0..iters {
+        f();
+    }
+    on_cpu_now() - start
+}
+
+/// The block and band reduced solvers side by side, in on-CPU time (see [`on_cpu`]): the
+/// Schur solver alone on the assembled matrix at the consistent start (factor: growth
+/// blocks eliminated, S filled and factored; solve: one right side), the whole set-up and
+/// solve of the Newton matrix as IDA calls them, and the const scene's IDA run.
+fn reduced_on_cpu(c: &mut Criterion) {
+    let mut group = c.benchmark_group("reduced_on_cpu_n501");
+    let sys = GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();
+    let mut dae = CoupledDae::new(sys);
+    let y = dae.initial_state().unwrap();
+    dae.assemble(500.0, &y).unwrap();
+    let a = dae.matrix().clone();
+    let n = a.n();
+    let rhs: Vec<f64> = (0..n).map(|k| (0.01 * k as f64).sin()).collect();
+    let mut x = vec![0.0; n];
+    for (name, how, lin) in [
+        ("block", Reduced::Block, DaeLinear::SchurBlock),
+        ("band", Reduced::Band, DaeLinear::Schur),
+    ] {
+        let mut schur = SchurSolver::new(&a, dae.differential_len(), true, how).unwrap();
+        group.bench_function(format!("schur_factor_only_{name}"), |b| {
+            b.iter_custom(|k| on_cpu(k, || schur.factor(black_box(&a)).unwrap()))
+        });
+        schur.factor(&a).unwrap();
+        group.bench_function(format!("schur_solve_only_{name}"), |b| {
+            b.iter_custom(|k| on_cpu(k, || schur.solve(black_box(&rhs), &mut x).unwrap()))
+        });
+        dae.set_linear(lin).unwrap();
+        group.bench_function(format!("setup_{name}"), |b| {
+            b.iter_custom(|k| on_cpu(k, || dae.setup(black_box(500.0), &y).unwrap()))
+        });
+        dae.setup(500.0, &y).unwrap();
+        group.bench_function(format!("solve_{name}"), |b| {
+            b.iter_custom(|k| on_cpu(k, || dae.solve(black_box(&rhs), &mut x).unwrap()))
+        });
+    }
+    group.sample_size(10);
+    let (p, g) = (Params::default(), GrowthParams::default());
+    for lin in [DaeLinear::SchurBlock, DaeLinear::Schur] {
+        let ida = GrowthSettings {
+            integrator: Integrator::Ida,
+            dae_linear: lin,
+            rtol: 1e-6,
+            atol: 1e-8,
+            ..GrowthSettings::default()
+        };
+        group.bench_function(format!("const_scene_ida_rtol_1e-6_{}", lin.name()), |b| {
+            b.iter_custom(|k| {
+                on_cpu(k, || {
+                    grow(&p, &settings(), &g, &ida, &mut Discard).unwrap();
+                })
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, const_scene, pieces, dae_pieces, reduced_on_cpu);
 criterion_main!(benches);

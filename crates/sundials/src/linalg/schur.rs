@@ -6,8 +6,16 @@
 //!   [cᵀ aᵀ s]      A: band, B and C local (a block's rows and columns touch a few nodes),
 //! eliminating P leaves S = [A − C X, −C x_d; aᵀ − cᵀX, s − cᵀ x_d] with [X x_d] = D⁻¹[B e],
 //! which has A's band (every X row spans the W columns of one interval) bordered by d.
-//! A Newton step then costs one band LU of S (at setup) and one band back-substitution
-//! (per solve), the size of the elastic problem alone.
+//! A Newton step then costs one LU of S (at setup) and one back-substitution (per solve),
+//! the size of the elastic problem alone.
+//!
+//! S's structure is the elastic Jacobian's with z added (docs/MODEL.md §3, §5–6): 6
+//! unknowns a node; 3 pole rows reading node 0 (through the pole's growth point, whose X
+//! spans node 0 only), per interval 6 rows reading its two nodes (its points' X span the
+//! same nodes, a midpoint's both), 3 cornea rows reading the last node; and the border.
+//! So besides a band (lower 8, upper 8: [`Reduced::Band`]) S is almost block diagonal with
+//! 6×6 node blocks, factored by [`super::AbdLu6`] ([`Reduced::Block`]: no zero band
+//! entries are stored or eliminated); [`SchurSolver::new`] checks that the pattern fits.
 //!
 //! The elimination order is the blocks' order, so the caller numbers blocks that others
 //! read first; [`SchurSolver::new`] checks the pattern for it.
