@@ -57,11 +57,12 @@ impl Observer for GrowthProgress {
         Ok(())
     }
 
-    fn progress(&mut self, t: f64, t_end: f64) {
+    fn progress(&mut self, t: f64, t_end: f64) -> Result<(), ObserverError> {
         if t_end > 0.0 && t.is_finite() {
             let at = (t / t_end).clamp(0.0, 1.0) * 1000.0;
             self.bar.set_position(at.round() as u64);
         }
+        Ok(())
     }
 }
 
@@ -89,10 +90,10 @@ mod tests {
         };
         let mut bar = GrowthProgress::new(false);
         bar.snapshot(&snap).unwrap();
-        bar.progress(0.25, 1.0);
+        bar.progress(0.25, 1.0).unwrap();
         assert_eq!(bar.bar.position(), 250);
-        bar.progress(f64::NAN, 1.0); // ignored
-        bar.progress(3.0, 0.0); // ignored: no end
+        bar.progress(f64::NAN, 1.0).unwrap(); // ignored
+        bar.progress(3.0, 0.0).unwrap(); // ignored: no end
         assert_eq!(bar.bar.position(), 250);
         assert_eq!(
             bar.bar.message(),

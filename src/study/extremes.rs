@@ -345,7 +345,7 @@ pub fn run(case: &Case) -> Outcome {
                     last = Some(snap);
                     Ok(())
                 },
-                &mut |_| {},
+                &mut |_| Ok(()),
             );
             match (r, last) {
                 (Ok(stats), Some(snap)) => Outcome::Solved {

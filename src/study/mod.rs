@@ -123,7 +123,7 @@ pub fn run(
                     }
                     Ok(())
                 },
-                &mut |_| {},
+                &mut |_| Ok(()),
             )
             .map_err(|source| StudyError::Growth {
                 what: what.into(),

@@ -18,6 +18,8 @@ use std::path::Path;
 
 use crate::bvp::{self, Solution, COLUMNS};
 use crate::growth::{self, GrowthStats, Observer, ObserverError, SeriesRow, Snapshot};
+use crate::rundir::growth::{snapshot_name, SNAPSHOT_DIR};
+use crate::rundir::summary::{ElasticSummary, GrowthSummary, RunStatus, SnapshotEntry, Summary};
 use crate::scene::sweep::Sweep;
 use crate::scene::{Scene, SceneError};
 use crate::sweep::{run_sweep, RunRecord, SweepOptions, SweepReport};
@@ -94,8 +96,8 @@ impl Scene {
         };
         let mut record = Record {
             inner: observer,
-            series: Vec::new(),
-            last: None,
+            snapshots: Vec::new(),
+            history: Vec::new(),
         };
         let stats = growth::grow(
             &self.params,
@@ -106,9 +108,34 @@ impl Scene {
         )?;
         Ok(Growth {
             stats,
-            series: record.series,
-            last: record.last,
+            series: record.snapshots.iter().map(|s| s.series).collect(),
+            last: record.snapshots.last().cloned(),
+            snapshots: record.snapshots,
+            history: record.history,
         })
+    }
+
+    /// The text of the summary.json `eyeshell solve` writes for `solution`, a solve of this
+    /// scene (a library caller gets the same record without a run directory).
+    pub fn solve_summary(&self, solution: &Solution) -> String {
+        Summary::Elastic(ElasticSummary::new(self, &solution.stats)).to_text()
+    }
+
+    /// The text of the summary.json `eyeshell grow` writes for `growth`, a finished growth
+    /// of this scene: the snapshots named as `eyeshell grow` names their files.
+    pub fn grow_summary(&self, growth: &Growth) -> String {
+        let entries: Vec<SnapshotEntry> = growth
+            .snapshots
+            .iter()
+            .enumerate()
+            .map(|(k, s)| SnapshotEntry {
+                t: s.t,
+                file: format!("{SNAPSHOT_DIR}/{}", snapshot_name(k, s.t)),
+            })
+            .collect();
+        let status = RunStatus::Ok(&growth.stats);
+        let last = growth.series.last();
+        Summary::Growth(GrowthSummary::new(self, status, &entries, last)).to_text()
     }
 }
 
@@ -126,33 +153,39 @@ impl std::str::FromStr for Scene {
 pub struct Growth {
     pub stats: GrowthStats,
     /// One row per snapshot (t = 0, each output time, t_end), in time order: axial length,
-    /// equatorial radius, the retina against the best-focus surfaces.
+    /// equatorial radius, the retina against the best-focus surfaces (series.csv).
     pub series: Vec<SeriesRow>,
     /// The last snapshot: every field at every node at t_end.
     pub last: Option<Snapshot>,
+    /// Every snapshot, in time order (the files `snapshots/*.csv` of `eyeshell grow`).
+    pub snapshots: Vec<Snapshot>,
+    /// The series row at every recorded time when `output.history_points` > 0 (history.csv);
+    /// empty otherwise.
+    pub history: Vec<SeriesRow>,
 }
 
-/// Keeps the series and the last snapshot, and passes everything on.
+/// Keeps the snapshots and the history rows, and passes everything on.
 struct Record<'a> {
     inner: &'a mut dyn Observer,
-    series: Vec<SeriesRow>,
-    last: Option<Snapshot>,
+    snapshots: Vec<Snapshot>,
+    history: Vec<SeriesRow>,
 }
 
 impl Observer for Record<'_> {
     fn snapshot(&mut self, s: &Snapshot) -> Result<(), ObserverError> {
         self.inner.snapshot(s)?;
-        self.series.push(s.series);
-        self.last = Some(s.clone());
+        self.snapshots.push(s.clone());
         Ok(())
     }
 
     fn history(&mut self, row: &SeriesRow) -> Result<(), ObserverError> {
-        self.inner.history(row)
+        self.inner.history(row)?;
+        self.history.push(*row);
+        Ok(())
     }
 
-    fn progress(&mut self, t: f64, t_end: f64) {
-        self.inner.progress(t, t_end);
+    fn progress(&mut self, t: f64, t_end: f64) -> Result<(), ObserverError> {
+        self.inner.progress(t, t_end)
     }
 }
 
@@ -192,5 +225,70 @@ impl Sweep {
             runner: &crate::sweep::InProcess,
         };
         run_sweep(self, out.as_ref(), &options, done)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small_growth() -> Scene {
+        let mut scene = Scene::default_scene();
+        scene.set("solver.nodes", 101).unwrap();
+        scene.set("growth.eta0", 70).unwrap(); // any growth key turns growth on
+        scene.set("output.history_points", 10).unwrap();
+        scene
+    }
+
+    /// Stops the run at its `n`-th step.
+    struct StopAt {
+        n: usize,
+        seen: Vec<f64>,
+    }
+
+    impl Observer for StopAt {
+        fn snapshot(&mut self, _s: &Snapshot) -> Result<(), ObserverError> {
+            Ok(())
+        }
+
+        fn progress(&mut self, t: f64, _t_end: f64) -> Result<(), ObserverError> {
+            self.seen.push(t);
+            if self.seen.len() == self.n {
+                return Err("stopped by the caller".into());
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn an_error_from_progress_stops_the_run_at_that_step() {
+        let mut stop = StopAt { n: 3, seen: vec![] };
+        let Err(Error::Growth(e)) = small_growth().grow(&mut stop) else {
+            panic!("the run went on");
+        };
+        assert_eq!(stop.seen.len(), 3);
+        assert_eq!(e.t, stop.seen[2]);
+        assert!(e.t > 0.0 && e.t < 1.0 && e.reason.contains("stopped by the caller"));
+    }
+
+    #[test]
+    fn a_growth_keeps_every_snapshot_and_its_history() {
+        let scene = small_growth();
+        let growth = scene.grow(&mut ()).unwrap();
+        let times: Vec<f64> = growth.snapshots.iter().map(|s| s.t).collect();
+        assert_eq!(times, [0.0, 0.1, 0.2, 0.4, 1.0]);
+        assert_eq!(growth.series.len(), 5);
+        assert_eq!(growth.series[4], growth.snapshots[4].series);
+        // The history: t = 0, then t_end·k/10 (the snapshot times among them, once each).
+        let history: Vec<f64> = growth.history.iter().map(|r| r.t).collect();
+        let expected: Vec<f64> = (0..=10).map(|k| k as f64 / 10.0).collect();
+        assert_eq!(history, expected);
+        let summary: serde_json::Value =
+            serde_json::from_str(&scene.grow_summary(&growth)).unwrap();
+        assert_eq!(summary["status"], "ok");
+        assert_eq!(
+            summary["snapshots"][4]["file"],
+            "snapshots/snapshot_00004_t1.000000.csv"
+        );
     }
 }

@@ -55,7 +55,7 @@ pub fn integrate(
     settings: &GrowthSettings,
     times: &[f64],
     output: &mut super::OutputFn<'_>,
-    progress: &mut dyn FnMut(f64),
+    progress: &mut super::ProgressFn<'_>,
 ) -> (CvodeStats, Result<(), (f64, String)>) {
     let options = CvodeOptions {
         rtol: settings.rtol,

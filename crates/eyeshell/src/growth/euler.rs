@@ -14,7 +14,7 @@ pub fn integrate(
     steps: usize,
     times: &[f64],
     output: &mut super::OutputFn<'_>,
-    progress: &mut dyn FnMut(f64),
+    progress: &mut super::ProgressFn<'_>,
 ) -> Result<Vec<f64>, (f64, EulerError)> {
     let dt = t_end / steps as f64;
     let mut p = p0.to_vec();
@@ -45,7 +45,7 @@ pub fn integrate(
         for (a, r) in p.iter_mut().zip(&rate) {
             *a += (t1 - t) * r;
         }
-        progress(t1);
+        progress(t1).map_err(|e| (t1, EulerError::Output(e)))?;
     }
     Ok(p)
 }

@@ -116,7 +116,7 @@ pub fn integrate(
     r0: f64,
     times: &[f64],
     output: &mut DaeOutput<'_>,
-    progress: &mut dyn FnMut(f64),
+    progress: &mut super::ProgressFn<'_>,
 ) -> (IdaStats, Result<(), (f64, String)>) {
     let atol = dae.abs_tolerances(settings.rtol, settings.atol, r0);
     let h0 = initial_step(dae, y0, yp0, settings.rtol, &atol, t_end);

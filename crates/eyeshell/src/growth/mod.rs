@@ -215,8 +215,11 @@ pub trait Observer {
     fn history(&mut self, _row: &SeriesRow) -> Result<(), ObserverError> {
         Ok(())
     }
-    /// Called now and then with the time reached (for a progress bar).
-    fn progress(&mut self, _t: f64, _t_end: f64) {}
+    /// Called after every step with the time reached (for a progress bar). An error stops
+    /// the run there, as a failed snapshot would (a caller's Ctrl-C, a cancelled job).
+    fn progress(&mut self, _t: f64, _t_end: f64) -> Result<(), ObserverError> {
+        Ok(())
+    }
 }
 
 /// A growth run that stopped: where, why, and the work done until then.
@@ -289,6 +292,9 @@ fn recorded_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
     times
 }
 
+/// What hears of the time reached after every step: `progress(t)`; an error stops the run.
+pub type ProgressFn<'a> = dyn FnMut(f64) -> Result<(), ObserverError> + 'a;
+
 /// What receives the growth state at each output time: `output(sys, t, p)`.
 pub type OutputFn<'a> =
     dyn FnMut(&mut system::GrowthSystem, f64, &[f64]) -> Result<(), ObserverError> + 'a;
@@ -301,7 +307,7 @@ pub fn run(
     growth: &GrowthParams,
     settings: &GrowthSettings,
     output: &mut OutputFn<'_>,
-    progress: &mut dyn FnMut(f64),
+    progress: &mut ProgressFn<'_>,
 ) -> Result<GrowthStats, GrowthError> {
     let start = std::time::Instant::now();
     let t_end = growth.t_end;
@@ -378,7 +384,7 @@ fn run_ida(
     t_end: f64,
     times: &[f64],
     output: &mut OutputFn<'_>,
-    progress: &mut dyn FnMut(f64),
+    progress: &mut ProgressFn<'_>,
     stats: &mut GrowthStats,
 ) -> (system::GrowthSystem, Result<(), (f64, String)>) {
     let mut dae = dae::CoupledDae::new(sys);
@@ -432,14 +438,14 @@ fn march(
     n: usize,
     t_end: f64,
     times: &[f64],
-    progress: &mut dyn FnMut(f64),
+    progress: &mut ProgressFn<'_>,
 ) -> Result<(), (f64, String)> {
     let (mut y, mut yo) = (vec![0.0; n], vec![0.0; n]);
     let mut next = times.iter().peekable();
     let mut t = 0.0;
     while t < t_end {
         t = s.step(t_end, &mut y)?;
-        progress(t);
+        progress(t).map_err(|e| (t, e.to_string()))?;
         while let Some(&&tout) = next.peek() {
             if tout > t {
                 break;

@@ -155,8 +155,8 @@ impl Observer for Tee<'_, '_> {
         self.watch.history(row)
     }
 
-    fn progress(&mut self, t: f64, t_end: f64) {
-        self.writer.progress(t, t_end);
-        self.watch.progress(t, t_end);
+    fn progress(&mut self, t: f64, t_end: f64) -> Result<(), ObserverError> {
+        self.writer.progress(t, t_end)?;
+        self.watch.progress(t, t_end)
     }
 }
