@@ -1,0 +1,641 @@
+"""The Python API over the extension module ``eyeshell._eyeshell``.
+
+The extension converts (scenes, arrays, errors) and runs the computations with the GIL
+released; this module shapes the results (Solution, Growth, RunResult), formats progress,
+and runs sweeps on threads or on any ``concurrent.futures.Executor``-like object.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence, Union
+
+import numpy as np
+
+from . import _eyeshell
+from ._eyeshell import EyeshellError, InputError, SolverError
+
+PathLike = Union[str, "os.PathLike[str]"]
+SceneLike = Union["Scene", PathLike, Mapping[str, Any], None]
+Progress = Union[bool, Callable[[float, float], Any], None]
+
+
+def _key(name: str) -> str:
+    """A keyword argument's name as a scene key: ``fibres__D`` is ``fibres.D``."""
+    return name.replace("__", ".")
+
+
+def _flatten(mapping: Mapping[str, Any], prefix: str = "") -> Iterator[tuple[str, Any]]:
+    """(dotted key, value) of a mapping with dotted keys or TOML-like nested tables."""
+    for k, v in mapping.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, Mapping):
+            yield from _flatten(v, key + ".")
+        else:
+            yield key, v
+
+
+class Scene:
+    """A scene: the shell's parameters and the solver's settings, with the command line's keys.
+
+    ``Scene()`` is the default scene (the paper's shell); ``Scene(mapping)`` sets the keys of
+    ``mapping`` on it, given dotted (``{"fibres.D": 200}``) or nested as in a TOML file
+    (``{"fibres": {"D": 200}}``); keyword arguments set more keys, with ``__`` for the dot
+    (``Scene(fibres__D=200)``). Every value is checked as ``eyeshell check`` checks it: a
+    bad key or value raises :class:`InputError` naming it.
+
+    >>> s = eyeshell.Scene({"fibres": {"D": 200}}, solver__nodes=301)
+    >>> s["fibres.D"], s["solver.nodes"]
+    (200.0, 301)
+    >>> s.set("pressure.dP", 2.5)["pressure.dP"]
+    2.5
+    >>> eyeshell.Scene(fibres__D=-1)
+    Traceback (most recent call last):
+    ...
+    eyeshell.InputError: defaults: fibres.D = -1 must be non-negative
+    """
+
+    __slots__ = ("_s",)
+
+    def __init__(self, mapping: Mapping[str, Any] | None = None, /, **overrides: Any) -> None:
+        self._s = _eyeshell._Scene.defaults()
+        self.update(mapping or {}, **overrides)
+
+    @classmethod
+    def _wrap(cls, native: Any) -> "Scene":
+        scene = cls.__new__(cls)
+        scene._s = native
+        return scene
+
+    @classmethod
+    def from_file(cls, path: PathLike, /, **overrides: Any) -> "Scene":
+        """Read and validate the scene file ``path`` (TOML, as ``eyeshell solve`` reads it),
+        then set ``overrides``.
+
+        >>> s = eyeshell.Scene.from_file(SCENES + "/const.toml")
+        >>> s.grows, s.name
+        (True, 'const')
+        """
+        return cls._wrap(_eyeshell._Scene.from_file(os.fspath(path))).update(**overrides)
+
+    @classmethod
+    def from_toml(cls, text: str, /, **overrides: Any) -> "Scene":
+        """Parse and validate a scene from TOML text.
+
+        >>> eyeshell.Scene.from_toml("[fibres]\\nD = 100\\n")["fibres.D"]
+        100.0
+        """
+        return cls._wrap(_eyeshell._Scene.from_toml(text)).update(**overrides)
+
+    def update(self, mapping: Mapping[str, Any] | None = None, /, **overrides: Any) -> "Scene":
+        """Set every key of ``mapping`` (dotted or nested), then of ``overrides``
+        (``__`` for the dot), in order; returns the scene."""
+        for key, value in _flatten(mapping or {}):
+            self.set(key, value)
+        for key, value in overrides.items():
+            self.set(_key(key), value)
+        return self
+
+    def set(self, key: str, value: Any) -> "Scene":
+        """Set one key (``scene.set("fibres.D", 200)``, as ``--set fibres.D=200``) and
+        validate; on an error the scene is left as it was. Returns the scene."""
+        self._s.set(key, value)
+        return self
+
+    def get(self, key: str) -> Any:
+        """The effective value of ``key`` (None for an optional key left unset)."""
+        return self._s.get(key)
+
+    __getitem__ = get
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        self.set(key, value)
+
+    def copy(self, **overrides: Any) -> "Scene":
+        """A copy of the scene, with ``overrides`` set on the copy."""
+        return Scene._wrap(_eyeshell._Scene.from_toml(self._s.to_toml(), self._s.origin)).update(
+            **overrides
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every key in use and its effective value, in the order of ``eyeshell keys``."""
+        return self._s.entries()
+
+    def to_toml(self) -> str:
+        """The effective scene as TOML (dotted keys); it reads back to the same scene."""
+        return self._s.to_toml()
+
+    @property
+    def grows(self) -> bool:
+        """Does the scene grow (is any ``growth.*`` key set)?"""
+        return self._s.grows
+
+    @property
+    def name(self) -> str:
+        """The scene's ``name``, else its file's stem."""
+        return self._s.name
+
+    @property
+    def span(self) -> tuple[float, float]:
+        """Σ's range [ε, L]: ``solver.epsilon`` and the shell's length."""
+        return self._s.span
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Scene) and self.to_toml() == other.to_toml()
+
+    def __repr__(self) -> str:
+        return f"<eyeshell.Scene {self.name!r} ({'growth' if self.grows else 'elastic'})>"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (Scene.from_toml, (self.to_toml(),))
+
+
+def _as_scene(scene: SceneLike, overrides: Mapping[str, Any]) -> Scene:
+    """A new Scene from a Scene, a path or a mapping, with ``overrides`` set."""
+    if scene is None:
+        result = Scene()
+    elif isinstance(scene, Scene):
+        result = scene.copy()
+    elif isinstance(scene, Mapping):
+        result = Scene(scene)
+    else:
+        result = Scene.from_file(scene)
+    return result.update(**overrides)
+
+
+def keys() -> list[dict[str, Any]]:
+    """Every scene key (``eyeshell keys``): dicts with key, type, default, doc, range and
+    growth (a key of the growth model, used only when the scene grows).
+
+    >>> k = {k["key"]: k for k in eyeshell.keys()}
+    >>> k["fibres.D"]["default"], k["solver.nodes"]["type"]
+    (0.0, 'integer')
+    """
+    return _eyeshell.keys()
+
+
+class Solution:
+    """A solved elastic shell: every field at every node as NumPy arrays.
+
+    ``sol.fields`` maps each column of fields.csv (``Sigma``, ``sigma``, ``kappa``,
+    ``alpha_s``, ``r``, ``theta``, ``Q``, ``z``, ``s``, ``alpha_phi``, ``alpha_n``, ``h``,
+    ``t_s``, ``t_phi``) to an array over the nodes, each also an attribute (``sol.r``).
+    ``sol.x``, ``sol.y`` (5×N: κ, α_s, r, θ, Q) and ``sol.yp`` (their d/dΣ) are bvp4c's;
+    :meth:`at` evaluates the continuous interpolant; :attr:`summary` is summary.json's
+    content; :meth:`to_bvp4c` is the ``sol`` struct of ``eyeshell export --mat``.
+
+    >>> sol = eyeshell.solve(solver__nodes=101)
+    >>> sol.y.shape == (5, len(sol))
+    True
+    >>> bool(np.all(np.diff(sol.Sigma) > 0))
+    True
+    """
+
+    def __init__(self, native: Any) -> None:
+        self._native = native
+        self._scene_toml = native.scene().to_toml()
+        self.fields: dict[str, np.ndarray] = native.fields()
+        self.summary: dict[str, Any] = json.loads(native.summary_text())
+        self._bvp4c: dict[str, Any] | None = None
+
+    @property
+    def scene(self) -> Scene:
+        """The scene solved."""
+        return Scene.from_toml(self._scene_toml)
+
+    def _solved(self) -> Any:
+        if self._native is None:  # unpickled: solve again (deterministic, bit for bit)
+            self._native = _eyeshell.solve(self.scene._s)
+        return self._native
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        fields = self.__dict__.get("fields")
+        if fields is not None and name in fields:
+            return fields[name]
+        raise AttributeError(f"Solution has no attribute or field {name!r}")
+
+    def __len__(self) -> int:
+        return len(self.fields["Sigma"])
+
+    def at(self, Sigma: float | Sequence[float] | np.ndarray) -> dict[str, Any]:
+        """Every field at the material points ``Sigma`` (in [ε, L]) from the continuous
+        interpolant (cubic Hermite, as bvp4c's deval): a dict of floats for a number, of
+        arrays for an array.
+
+        >>> sol = eyeshell.solve(solver__nodes=101)
+        >>> p = sol.at(5.0)
+        >>> round(p["Sigma"], 12), sorted(p) == sorted(sol.fields)
+        (5.0, True)
+        >>> sol.at([1.0, 2.0])["r"].shape
+        (2,)
+        """
+        x = np.asarray(Sigma, dtype=float)
+        values = self._solved().at(np.atleast_1d(x).ravel().tolist())
+        if x.ndim == 0:
+            return {k: float(v[0]) for k, v in values.items()}
+        return {k: v.reshape(x.shape) for k, v in values.items()}
+
+    def _export(self) -> dict[str, Any]:
+        if self._bvp4c is None:
+            self._bvp4c = self._solved().bvp4c()
+        return self._bvp4c
+
+    @property
+    def x(self) -> np.ndarray:
+        """Σ at the nodes (bvp4c's ``sol.x``)."""
+        return self.fields["Sigma"]
+
+    @property
+    def y(self) -> np.ndarray:
+        """5×N: κ, α_s, r, θ, Q at the nodes (bvp4c's ``sol.y``)."""
+        return self._export()["y"]
+
+    @property
+    def yp(self) -> np.ndarray:
+        """5×N: d/dΣ of the rows of :attr:`y` at the nodes (bvp4c's ``sol.yp``; at a
+        breakpoint of the thickness, the derivative from below)."""
+        return self._export()["yp"]
+
+    def to_bvp4c(self) -> dict[str, Any]:
+        """A dict shaped like bvp4c's ``sol`` (``solver``, ``x``, ``y``, ``yp``, ``stats``,
+        and the other fields), as ``eyeshell export --mat`` writes it: save it with
+        ``scipy.io.savemat(path, {"sol": sol.to_bvp4c()})`` for MATLAB's ``deval``.
+
+        >>> b = eyeshell.solve(solver__nodes=101).to_bvp4c()
+        >>> b["solver"], b["y"].shape[0], sorted(b["stats"])
+        ('bvp4c', 5, ['maxres', 'nBCevals', 'nODEevals', 'nmeshpoints'])
+        """
+        return dict(self._export())
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return (
+            f"<eyeshell.Solution of {s.get('scene', {}).get('name', '?')!r}: {len(self)} nodes, "
+            f"Newton {s.get('newton_iterations')} iterations, residual {s.get('residual_norm'):.2e}>"
+        )
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state["_native"] = None
+        state["_bvp4c"] = None
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+
+
+def solve(scene: SceneLike = None, /, **overrides: Any) -> Solution:
+    """Solve the loaded elastic shell of ``scene`` (a :class:`Scene`, a scene file's path,
+    a mapping of keys, or None for the default scene), with ``overrides`` set on a copy
+    (``solve(scene, fibres__D=200)`` or ``solve(scene, **{"fibres.D": 200})``). The GIL is
+    released while it solves.
+
+    Raises :class:`InputError` for bad input (a key, a value, a pressure beyond the
+    cornea's limit) and :class:`SolverError` when the solve fails.
+
+    >>> sol = eyeshell.solve(SCENES + "/default.toml", solver__nodes=201)
+    >>> sol.summary["nodes"] >= 201 and sol.summary["first_integral_max"] < 1e-8
+    True
+    """
+    s = _as_scene(scene, overrides)
+    return Solution(_eyeshell.solve(s._s))
+
+
+def _frame(columns: dict[str, Any], frames: bool | None) -> Any:
+    """A dict of arrays, or a pandas DataFrame when asked (None: when pandas imports)."""
+    if frames is False:
+        return columns
+    try:
+        import pandas
+    except ImportError:
+        if frames:
+            raise
+        return columns
+    return pandas.DataFrame(columns)
+
+
+class Growth:
+    """A growth run from t = 0 to ``growth.t_end``.
+
+    - ``series``: series.csv's columns (t, axial_length, equatorial_radius,
+      retina_minus_blue, retina_minus_red, class) at each snapshot;
+    - ``history``: the same at every recorded time when ``output.history_points`` > 0
+      (history.csv), else empty;
+    - ``snapshots``: {t: every field at every node (the snapshot files' columns)};
+    - ``summary``: summary.json's content.
+
+    ``series`` and ``history`` are pandas DataFrames when pandas is installed (or
+    ``frames=True``), else dicts of arrays (``frames=False``).
+    """
+
+    def __init__(self, raw: dict[str, Any], scene_toml: str, frames: bool | None) -> None:
+        self._scene_toml = scene_toml
+        self.series = _frame(_series_columns(raw["series"]), frames)
+        self.history = _frame(_series_columns(raw["history"]), frames)
+        self.snapshots: dict[float, dict[str, np.ndarray]] = dict(raw["snapshots"])
+        self.summary: dict[str, Any] = json.loads(raw["summary_text"])
+
+    @property
+    def scene(self) -> Scene:
+        """The scene grown."""
+        return Scene.from_toml(self._scene_toml)
+
+    @property
+    def times(self) -> list[float]:
+        """The snapshot times, in order."""
+        return list(self.snapshots)
+
+    @property
+    def final(self) -> dict[str, np.ndarray]:
+        """The last snapshot (t_end)."""
+        return self.snapshots[self.times[-1]]
+
+    def __repr__(self) -> str:
+        last = self.summary.get("final") or {}
+        return (
+            f"<eyeshell.Growth to t = {last.get('t')}: axial length "
+            f"{last.get('axial_length')} mm, {last.get('class')}, {len(self.snapshots)} snapshots>"
+        )
+
+
+def _series_columns(raw: dict[str, Any]) -> dict[str, Any]:
+    columns = dict(raw)
+    columns["class"] = np.array(raw["class"], dtype=str)
+    return columns
+
+
+class _Bar:
+    """progress=True: a one-line bar on stderr, redrawn at most ten times a second."""
+
+    def __init__(self) -> None:
+        self.last = 0.0
+
+    def __call__(self, t: float, t_end: float) -> None:
+        now = time.monotonic()
+        if now - self.last < 0.1 and t < t_end:
+            return
+        self.last = now
+        done = t / t_end if t_end > 0 else 1.0
+        n = int(round(30 * done))
+        end = "\n" if t >= t_end else ""
+        print(f"\r[{'#' * n}{'.' * (30 - n)}] t = {t:.4f} / {t_end:g}", end=end, file=sys.stderr, flush=True)
+
+
+def _progress_callable(progress: Progress) -> Callable[[float, float], Any] | None:
+    if progress is True:
+        return _Bar()
+    if progress is False or progress is None:
+        return None
+    if callable(progress):
+        return progress
+    raise TypeError("progress must be True, False, None or a callable (t, t_end)")
+
+
+def grow(
+    scene: SceneLike = None,
+    /,
+    progress: Progress = None,
+    frames: bool | None = None,
+    **overrides: Any,
+) -> Growth:
+    """Grow the eye of ``scene`` (as :func:`solve` takes it; the scene must grow: set a
+    ``growth.*`` key) from t = 0 to ``growth.t_end``, with the GIL released.
+
+    ``progress=True`` draws a bar on stderr; a callable is called as ``progress(t, t_end)``
+    after every step (an exception it raises stops the run and is raised). Ctrl-C stops the
+    run after the current step and raises KeyboardInterrupt.
+
+    >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101)
+    >>> g.series["t"][-1], g.summary["status"]
+    (1.0, 'ok')
+    >>> bool(g.series["axial_length"][-1] > g.series["axial_length"][0])
+    True
+    """
+    s = _as_scene(scene, overrides)
+    raw = _eyeshell.grow(s._s, _progress_callable(progress))
+    return Growth(raw, s.to_toml(), frames)
+
+
+@dataclass
+class RunResult:
+    """One run of a sweep: its name and swept values, how it ended, and its result (a
+    :class:`Solution` for an elastic scene, a :class:`Growth` for a growing one; None when
+    it failed, ``error`` then saying why)."""
+
+    name: str
+    values: dict[str, str]
+    status: str
+    result: Solution | Growth | None = None
+    error: str | None = None
+    seconds: float = 0.0
+    index: int = field(default=-1, repr=False)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    @property
+    def summary(self) -> dict[str, Any] | None:
+        return None if self.result is None else self.result.summary
+
+
+def _run_one(
+    index: int, name: str, values: dict[str, str], scene_toml: str, cancel: Any = None
+) -> RunResult:
+    """Run one scene of a sweep (in a thread, or in a process an executor ships this to):
+    a failed run is recorded, not raised, as ``eyeshell sweep`` records it."""
+    start = time.perf_counter()
+    s = Scene.from_toml(scene_toml)
+    try:
+        if s.grows:
+            raw = _eyeshell.grow(s._s, None, cancel)
+            result: Solution | Growth = Growth(raw, scene_toml, False)
+        else:
+            result = Solution(_eyeshell.solve(s._s))
+    except EyeshellError as e:
+        return RunResult(name, values, "failed", None, str(e), time.perf_counter() - start, index)
+    return RunResult(name, values, "ok", result, None, time.perf_counter() - start, index)
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        x = float(v)
+        return repr(x) if math.isfinite(x) else ("nan" if x != x else ("inf" if x > 0 else "-inf"))
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"a sweep value must be a number, a bool, a string or a list, not {type(v).__name__}")
+
+
+def _sweep_text(
+    scene: SceneLike, grid: Mapping[str, Sequence[Any]] | None, runs: Sequence[Mapping[str, Any]] | None
+) -> tuple[str, str]:
+    """The sweep's TOML text and origin: a sweep file as it is, or a scene with a grid
+    and/or a list of runs added as its [sweep] table."""
+    if isinstance(scene, (str, os.PathLike)) and not grid and not runs:
+        path = os.fspath(scene)
+        try:
+            with open(path, encoding="utf-8") as f:
+                return f.read(), path
+        except OSError as e:
+            raise InputError(f"{path}: cannot read the sweep: {e.strerror}") from None
+    base = _as_scene(scene, {})
+    lines = [base.to_toml()]
+    if grid:
+        lines.append("[sweep.grid]")
+        lines += [f"{json.dumps(k)} = {_toml_value(list(v))}" for k, v in _flatten(grid)]
+    for run in runs or ():
+        lines.append("[[sweep.runs]]")
+        lines += [f"{json.dumps(k)} = {_toml_value(v)}" for k, v in _flatten(run)]
+    return "\n".join(lines) + "\n", f"<sweep of {base.name}>"
+
+
+def iter_sweep(
+    scene: SceneLike,
+    /,
+    *,
+    jobs: int | None = None,
+    executor: Any = None,
+    grid: Mapping[str, Sequence[Any]] | None = None,
+    runs: Sequence[Mapping[str, Any]] | None = None,
+    **overrides: Any,
+) -> Iterator[RunResult]:
+    """The runs of a sweep, each yielded as it finishes (see :func:`sweep`)."""
+    text, origin = _sweep_text(scene, grid, runs)
+    sets = [f"{_key(k)}={_toml_value(v)}" for k, v in overrides.items()]
+    plan = _eyeshell.expand_sweep(text, origin, sets)
+    if jobs is not None and (not isinstance(jobs, int) or jobs < 1):
+        raise InputError(f"jobs = {jobs!r}: must be a whole number ≥ 1")
+    own = executor is None
+    cancel = _eyeshell._Cancel() if own else None
+    pool = ThreadPoolExecutor(max_workers=jobs or os.cpu_count() or 1) if own else executor
+    try:
+        pending = []
+        for i, (name, values, native) in enumerate(plan):
+            args = (i, name, dict(values), native.to_toml())
+            pending.append(pool.submit(_run_one, *args, cancel) if own else pool.submit(_run_one, *args))
+        while pending:
+            done = [f for f in pending if f.done()]
+            if not done:
+                time.sleep(0.01)
+                continue
+            for f in done:
+                pending.remove(f)
+                yield f.result()
+    except BaseException:
+        # Ctrl-C (or a run's exception): no new run starts, and our own runs stop after
+        # their current step; an executor's running tasks are its own to stop.
+        if cancel is not None:
+            cancel.set()
+        for f in pending:
+            f.cancel()
+        raise
+    finally:
+        if own:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def sweep(
+    scene: SceneLike,
+    /,
+    *,
+    jobs: int | None = None,
+    executor: Any = None,
+    grid: Mapping[str, Sequence[Any]] | None = None,
+    runs: Sequence[Mapping[str, Any]] | None = None,
+    **overrides: Any,
+) -> list[RunResult]:
+    """Run every run of a sweep and return their :class:`RunResult` in the sweep's order.
+
+    ``scene`` is a sweep file (a scene with a ``[sweep]`` table, as ``eyeshell sweep``
+    reads it), or a scene (a :class:`Scene`, a path or a mapping) with ``grid`` (a mapping
+    of keys to lists of values: every combination, the last key varying fastest) and/or
+    ``runs`` (a list of mappings of keys). ``overrides`` are set on every run. The runs are
+    named as ``eyeshell sweep`` names them.
+
+    Runs go ``jobs`` at a time on threads of this process (default: one per core; the GIL
+    is released while they compute), or to ``executor``: anything with
+    ``submit(fn, *args)`` returning futures with ``done()`` and ``result()`` — a
+    ``concurrent.futures.ProcessPoolExecutor``, an ``mpi4py.futures.MPIPoolExecutor``, a
+    Dask ``distributed.Client``. A failed run is recorded (``status == "failed"``,
+    ``error``) and the others go on. Ctrl-C stops the sweep: no run starts, the local runs
+    stop after their current step, and KeyboardInterrupt is raised.
+
+    >>> rs = eyeshell.sweep(eyeshell.Scene(solver__nodes=101), grid={"fibres.D": [0, 200]}, jobs=2)
+    >>> [(r.name, r.values, r.status) for r in rs]
+    [('D=0', {'fibres.D': '0'}, 'ok'), ('D=200', {'fibres.D': '200'}, 'ok')]
+    >>> bool(rs[1].result.r.max() < rs[0].result.r.max())  # stiffer fibres, smaller shell
+    True
+    """
+    results = sorted(
+        iter_sweep(scene, jobs=jobs, executor=executor, grid=grid, runs=runs, **overrides),
+        key=lambda r: r.index,
+    )
+    return results
+
+
+@dataclass
+class Comparison:
+    """What :func:`compare` found: ``passed``, one report per compared pair (``pairs``:
+    dicts with reference, run, time, coordinate, points, passed and per-field ``fields``
+    maxima), and ``text``, the table ``eyeshell compare`` prints."""
+
+    passed: bool
+    pairs: list[dict[str, Any]]
+    text: str
+
+    def __bool__(self) -> bool:
+        return self.passed
+
+    def __str__(self) -> str:
+        return self.text
+
+
+def compare(
+    run: PathLike,
+    reference: PathLike,
+    /,
+    tol: float = 1e-8,
+    rtol: float = 1e-8,
+    field: str | None = None,
+) -> Comparison:
+    """``eyeshell compare RUN REFERENCE``: compare a run directory (or an export) against a
+    reference (.mat, .npz, .csv or another run), interpolating the run at the reference's
+    points; a point fails when |run − ref| > tol + rtol·|ref|. ``field`` names the struct
+    of a .mat reference that holds the result (default: ``sol`` if present).
+
+    Unlike the command line, a comparison beyond tolerance is not an error: it returns a
+    :class:`Comparison` whose ``passed`` is False. Unreadable or mismatched inputs raise
+    :class:`InputError`.
+    """
+    pairs, text = _eyeshell.compare(os.fspath(run), os.fspath(reference), tol, rtol, field)
+    return Comparison(all(p["passed"] for p in pairs), pairs, text)
+
+
+__all__ = [
+    "Comparison",
+    "EyeshellError",
+    "Growth",
+    "InputError",
+    "RunResult",
+    "Scene",
+    "Solution",
+    "SolverError",
+    "compare",
+    "grow",
+    "iter_sweep",
+    "keys",
+    "solve",
+    "sweep",
+]

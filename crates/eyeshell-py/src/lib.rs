@@ -1,0 +1,602 @@
+//! `eyeshell._eyeshell`: the library's facade (crates/eyeshell/src/api.rs) as a Python
+//! extension module. The Python package around it (python/eyeshell/) shapes the results
+//! into `Solution`, `Growth` and sweep results; this module only converts.
+//!
+//! - Every computation runs with the GIL released ([`Python::detach`]); a growth run
+//!   takes the GIL back briefly after each step to call the progress callback and to let
+//!   Python handle a pending signal (Ctrl-C stops the run there and raises
+//!   KeyboardInterrupt), and stops as well when its [`Cancel`] flag is raised (a sweep's
+//!   Ctrl-C, from another thread).
+//! - Arrays are handed to NumPy without a copy: each column is gathered once from the
+//!   library's rows (which are per node, not per field) into a `Vec`, whose buffer NumPy
+//!   then owns (`PyArray1::from_vec`, `PyArray2::from_owned_array`).
+//! - Errors keep the library's class: bad input (exit 2 on the command line) is
+//!   `InputError`, everything else (exit 1) `SolverError`, with the same one-line message.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use eyeshell::bvp::{FieldRow, Solution, COLUMNS};
+use eyeshell::growth::{Observer, ObserverError, SeriesRow, Snapshot, GROWTH_COLUMNS};
+use eyeshell::scene::{KeyValue, Scene, KEYS};
+use eyeshell::{Error, Sweep};
+use eyeshell_cli::interop::export::{elastic_mat_vars, ElasticExtras, Table};
+use eyeshell_cli::interop::mat::MatValue;
+use numpy::ndarray::{Array2, ShapeBuilder};
+use numpy::{PyArray1, PyArray2};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyKeyError, PyTypeError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+create_exception!(
+    eyeshell,
+    EyeshellError,
+    PyException,
+    "Any error of eyeshell: an InputError or a SolverError."
+);
+create_exception!(
+    eyeshell,
+    InputError,
+    EyeshellError,
+    "Bad input: a scene or key that does not validate, a value out of range, a file that is not what it should be (what `eyeshell` exits 2 for)."
+);
+create_exception!(
+    eyeshell,
+    SolverError,
+    EyeshellError,
+    "A computation that failed: Newton did not converge, a growth run stopped, a file could not be written (what `eyeshell` exits 1 for)."
+);
+
+/// The library's error as its Python exception, with the command line's one-line message.
+fn py_err(e: Error) -> PyErr {
+    let line = eyeshell::text::one_line(&e.to_string().replace(['\n', '\r'], " "));
+    if e.is_user_error() {
+        InputError::new_err(line)
+    } else {
+        SolverError::new_err(line)
+    }
+}
+
+fn input_err(message: impl Into<String>) -> PyErr {
+    InputError::new_err(message.into())
+}
+
+/// A 1-D NumPy array owning `values` (no copy).
+fn array1<'py>(py: Python<'py>, values: Vec<f64>) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_vec(py, values)
+}
+
+/// Column `j` of `rows` (values given by `get`) as a NumPy array.
+fn column<'py, R>(
+    py: Python<'py>,
+    rows: &[R],
+    get: impl Fn(&R) -> f64,
+) -> Bound<'py, PyArray1<f64>> {
+    array1(py, rows.iter().map(get).collect())
+}
+
+/// Every field of `rows` by its fields.csv name, as a dict of arrays.
+fn fields_dict<'py>(py: Python<'py>, rows: &[FieldRow]) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (j, name) in COLUMNS.iter().enumerate() {
+        d.set_item(*name, column(py, rows, |r| r.values()[j]))?;
+    }
+    Ok(d)
+}
+
+// ---------------------------------------------------------------------------------------
+// Scenes
+
+/// A Python value as the TOML value a scene key takes.
+fn toml_value(v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+    if v.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(v.extract()?));
+    }
+    if v.is_instance_of::<PyInt>() {
+        return Ok(toml::Value::Integer(v.extract()?));
+    }
+    if v.is_instance_of::<PyFloat>() {
+        return Ok(toml::Value::Float(v.extract()?));
+    }
+    if v.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(v.extract()?));
+    }
+    if let Ok(x) = v.extract::<f64>() {
+        // NumPy scalars and anything else with __float__.
+        return Ok(toml::Value::Float(x));
+    }
+    if let Ok(items) = v.try_iter() {
+        let values = items
+            .map(|item| toml_value(&item?))
+            .collect::<PyResult<Vec<_>>>()?;
+        return Ok(toml::Value::Array(values));
+    }
+    Err(PyTypeError::new_err(format!(
+        "a scene value must be a number, a bool, a string or a list of numbers, not {}",
+        v.get_type().name()?
+    )))
+}
+
+/// A scene key's value as a Python object.
+fn key_value<'py>(py: Python<'py>, v: KeyValue) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        KeyValue::Float(x) => x.into_pyobject(py)?.into_any(),
+        KeyValue::Count(n) => n.into_pyobject(py)?.into_any(),
+        KeyValue::Bool(b) => PyBool::new(py, b).to_owned().into_any(),
+        KeyValue::Choice(s) => s.into_pyobject(py)?.into_any(),
+        KeyValue::Text(s) => s.into_pyobject(py)?.into_any(),
+        KeyValue::Floats(xs) => PyList::new(py, xs)?.into_any(),
+        KeyValue::Unset => py.None().into_bound(py),
+    })
+}
+
+/// The scene's own keys (`eyeshell keys`): every parameter and setting, checked.
+#[pyclass(name = "_Scene", module = "eyeshell._eyeshell", from_py_object)]
+#[derive(Clone)]
+struct PyScene {
+    inner: Scene,
+}
+
+#[pymethods]
+impl PyScene {
+    /// The default scene (the paper's shell).
+    #[staticmethod]
+    fn defaults() -> Self {
+        PyScene {
+            inner: Scene::default_scene(),
+        }
+    }
+
+    /// Read and validate the scene file at `path`.
+    #[staticmethod]
+    fn from_file(path: std::path::PathBuf) -> PyResult<Self> {
+        let inner = Scene::from_path(&path).map_err(|e| py_err(e.into()))?;
+        Ok(PyScene { inner })
+    }
+
+    /// Parse and validate a scene from TOML text; `origin` names it in messages.
+    #[staticmethod]
+    #[pyo3(signature = (text, origin = "<string>"))]
+    fn from_toml(text: &str, origin: &str) -> PyResult<Self> {
+        let inner = Scene::from_toml_str(text, origin, &[]).map_err(|e| py_err(e.into()))?;
+        Ok(PyScene { inner })
+    }
+
+    /// Set `key` to `value` and validate (on an error the scene is left as it was).
+    fn set(&mut self, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let v = toml_value(value)?;
+        self.inner.set(key, v).map_err(|e| py_err(e.into()))
+    }
+
+    /// The effective value of `key` (None for an optional key left unset).
+    fn get<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
+        let spec = KEYS.iter().find(|k| k.key == key).ok_or_else(|| {
+            PyKeyError::new_err(format!("{key:?} is not a scene key (see eyeshell.keys())"))
+        })?;
+        key_value(py, spec.get(&self.inner))
+    }
+
+    /// The keys in use and their effective values, in the order of `eyeshell keys`.
+    fn entries<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (k, v) in self.inner.entries() {
+            d.set_item(k, key_value(py, v)?)?;
+        }
+        Ok(d)
+    }
+
+    /// The effective scene as TOML, which reads back to the same scene.
+    fn to_toml(&self) -> String {
+        self.inner.to_toml()
+    }
+
+    /// Does the scene grow (any growth key set)?
+    #[getter]
+    fn grows(&self) -> bool {
+        self.inner.growth.is_some()
+    }
+
+    /// Where the scene came from (its file, or `<string>`).
+    #[getter]
+    fn origin(&self) -> String {
+        self.inner.origin.clone()
+    }
+
+    /// The scene's name: `name` if given, else its file's stem.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.display_name()
+    }
+
+    /// Σ's range [ε, L]: solver.epsilon and the shell's length.
+    #[getter]
+    fn span(&self) -> (f64, f64) {
+        (self.inner.solver.epsilon, self.inner.params.length())
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .extract::<PyScene>()
+            .is_ok_and(|o| o.inner.to_toml() == self.inner.to_toml())
+    }
+}
+
+/// Every scene key: dicts of key, type, default, doc and range, in `eyeshell keys` order.
+#[pyfunction]
+fn keys(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let list = PyList::empty(py);
+    for k in KEYS.iter() {
+        let d = PyDict::new(py);
+        d.set_item("key", k.key)?;
+        d.set_item("type", k.type_name())?;
+        d.set_item("default", key_value(py, k.default_value())?)?;
+        d.set_item("doc", k.doc)?;
+        d.set_item("range", k.rule.describe())?;
+        d.set_item("growth", k.growth)?;
+        list.append(d)?;
+    }
+    Ok(list)
+}
+
+// ---------------------------------------------------------------------------------------
+// Elastic solves
+
+/// A solved shell: the library's [`Solution`] and the scene it solves.
+#[pyclass(name = "_Solved", module = "eyeshell._eyeshell", frozen)]
+struct Solved {
+    scene: Scene,
+    solution: Solution,
+}
+
+/// Solve the loaded shell of `scene`, with the GIL released.
+#[pyfunction]
+fn solve(py: Python<'_>, scene: PyScene) -> PyResult<Solved> {
+    let scene = scene.inner;
+    let solution = py.detach(|| scene.solve()).map_err(py_err)?;
+    Ok(Solved { scene, solution })
+}
+
+/// fields.csv's table of `solution`, for the command line's export functions.
+fn table_of(solution: &Solution) -> Table {
+    Table {
+        columns: COLUMNS.iter().map(|c| c.to_string()).collect(),
+        rows: solution.rows.iter().map(|r| r.values().to_vec()).collect(),
+    }
+}
+
+/// A MATLAB value as Python: a 1×1 double as a float, a row or column as a 1-D array, a
+/// matrix as a 2-D array (Fortran order, as MATLAB keeps it; no copy), a struct as a dict.
+fn mat_to_py<'py>(py: Python<'py>, v: MatValue) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        MatValue::Double { dims, data } => match dims.as_slice() {
+            [1, 1] => data[0].into_pyobject(py)?.into_any(),
+            [1, _] | [_, 1] => array1(py, data).into_any(),
+            &[r, c] => {
+                let a = Array2::from_shape_vec((r, c).f(), data)
+                    .map_err(|e| SolverError::new_err(e.to_string()))?;
+                PyArray2::from_owned_array(py, a).into_any()
+            }
+            _ => array1(py, data).into_any(),
+        },
+        MatValue::Struct(fields) => {
+            let d = PyDict::new(py);
+            for (name, value) in fields {
+                d.set_item(name, mat_to_py(py, value)?)?;
+            }
+            d.into_any()
+        }
+        MatValue::Char(s) => s.into_pyobject(py)?.into_any(),
+        other => {
+            return Err(SolverError::new_err(format!(
+                "unexpected value in the bvp4c export: {other:?}"
+            )))
+        }
+    })
+}
+
+#[pymethods]
+impl Solved {
+    /// Every field at every node: a dict of arrays named as fields.csv's columns.
+    fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        fields_dict(py, &self.solution.rows)
+    }
+
+    /// Every field at the material points `sigma` (continuous interpolant), a dict of arrays.
+    fn at<'py>(&self, py: Python<'py>, sigma: Vec<f64>) -> PyResult<Bound<'py, PyDict>> {
+        let (lo, hi) = (self.scene.solver.epsilon, self.scene.params.length());
+        let rows = sigma
+            .iter()
+            .map(|&x| {
+                if !(x >= lo && x <= hi) {
+                    return Err(input_err(format!(
+                        "at: Σ = {x} is outside the shell [ε, L] = [{lo}, {hi}] (solver.epsilon, π·geometry.fraction·geometry.R0)"
+                    )));
+                }
+                self.solution.at(x).map_err(|e| py_err(e.into()))
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        fields_dict(py, &rows)
+    }
+
+    /// The sol struct `eyeshell export --mat` writes, shaped like bvp4c's solution.
+    fn bvp4c<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let extras = ElasticExtras {
+            breaks: eyeshell::model::profiles::breakpoints(&self.scene.params),
+            stats: Some(self.solution.stats.clone()),
+        };
+        let mut vars = elastic_mat_vars(&table_of(&self.solution), &extras);
+        let (_, sol) = vars.remove(0);
+        mat_to_py(py, sol)
+    }
+
+    /// The text of the summary.json `eyeshell solve` writes.
+    fn summary_text(&self) -> String {
+        self.scene.solve_summary(&self.solution)
+    }
+
+    /// The scene solved.
+    fn scene(&self) -> PyScene {
+        PyScene {
+            inner: self.scene.clone(),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Growth
+
+/// A flag that stops growth runs from another thread (a sweep's Ctrl-C).
+#[pyclass(name = "_Cancel", module = "eyeshell._eyeshell", frozen)]
+#[derive(Default)]
+struct Cancel {
+    raised: Arc<AtomicBool>,
+}
+
+#[pymethods]
+impl Cancel {
+    #[new]
+    fn new() -> Self {
+        Cancel::default()
+    }
+
+    /// Stop every run that watches this flag, after its current step.
+    fn set(&self) {
+        self.raised.store(true, Ordering::SeqCst);
+    }
+
+    fn is_set(&self) -> bool {
+        self.raised.load(Ordering::SeqCst)
+    }
+}
+
+/// Why a run stopped early on the caller's behalf.
+#[derive(Debug)]
+struct Stopped(&'static str);
+
+impl std::fmt::Display for Stopped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.0)
+    }
+}
+
+impl std::error::Error for Stopped {}
+
+/// The observer of a growth run from Python: after each step, with the GIL taken back
+/// briefly, the progress callback and Python's pending signals; the cancel flag.
+struct Watch<'a> {
+    progress: Option<&'a Py<PyAny>>,
+    cancel: Option<&'a AtomicBool>,
+    /// The Python exception that stopped the run (KeyboardInterrupt, or the callback's).
+    raised: Option<PyErr>,
+}
+
+impl Observer for Watch<'_> {
+    fn snapshot(&mut self, _s: &Snapshot) -> Result<(), ObserverError> {
+        Ok(())
+    }
+
+    fn progress(&mut self, t: f64, t_end: f64) -> Result<(), ObserverError> {
+        if self.cancel.is_some_and(|c| c.load(Ordering::SeqCst)) {
+            return Err(Box::new(Stopped("cancelled")));
+        }
+        let outcome = Python::attach(|py| {
+            py.check_signals()?;
+            if let Some(f) = self.progress {
+                f.call1(py, (t, t_end))?;
+            }
+            Ok::<(), PyErr>(())
+        });
+        if let Err(e) = outcome {
+            self.raised = Some(e);
+            return Err(Box::new(Stopped("interrupted")));
+        }
+        Ok(())
+    }
+}
+
+const SERIES_NAMES: [&str; 5] = [
+    "t",
+    "axial_length",
+    "equatorial_radius",
+    "retina_minus_blue",
+    "retina_minus_red",
+];
+
+/// Series rows as a dict of arrays (series.csv's columns; `class` as a list of str).
+fn series_dict<'py>(py: Python<'py>, rows: &[SeriesRow]) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let getters: [fn(&SeriesRow) -> f64; 5] = [
+        |r| r.t,
+        |r| r.axial_length,
+        |r| r.equatorial_radius,
+        |r| r.retina_minus_blue,
+        |r| r.retina_minus_red,
+    ];
+    for (name, get) in SERIES_NAMES.iter().zip(getters) {
+        d.set_item(*name, column(py, rows, get))?;
+    }
+    let classes: Vec<&str> = rows.iter().map(|r| r.class.as_str()).collect();
+    d.set_item("class", PyList::new(py, classes)?)?;
+    Ok(d)
+}
+
+/// One snapshot's fields (fields.csv's columns, then the growth columns) as arrays.
+fn snapshot_dict<'py>(py: Python<'py>, s: &Snapshot) -> PyResult<Bound<'py, PyDict>> {
+    let d = fields_dict(py, &s.fields)?;
+    for (j, name) in GROWTH_COLUMNS.iter().enumerate() {
+        d.set_item(*name, column(py, &s.growth, |g| g.values()[j]))?;
+    }
+    Ok(d)
+}
+
+/// Grow the eye of `scene` with the GIL released, calling `progress(t, t_end)` after each
+/// step; returns a dict: series, history, snapshots (a list of (t, fields)), summary_text.
+#[pyfunction]
+#[pyo3(signature = (scene, progress = None, cancel = None))]
+fn grow<'py>(
+    py: Python<'py>,
+    scene: PyScene,
+    progress: Option<Py<PyAny>>,
+    cancel: Option<Py<Cancel>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let scene = scene.inner;
+    let flag = cancel.map(|c| c.get().raised.clone());
+    let (result, raised) = py.detach(|| {
+        let mut watch = Watch {
+            progress: progress.as_ref(),
+            cancel: flag.as_deref(),
+            raised: None,
+        };
+        let result = scene.grow(&mut watch);
+        (result, watch.raised)
+    });
+    if let Some(e) = raised {
+        return Err(e);
+    }
+    let growth = result.map_err(py_err)?;
+    let d = PyDict::new(py);
+    d.set_item("series", series_dict(py, &growth.series)?)?;
+    d.set_item("history", series_dict(py, &growth.history)?)?;
+    let snapshots = PyList::empty(py);
+    for s in &growth.snapshots {
+        snapshots.append(PyTuple::new(
+            py,
+            [
+                s.t.into_pyobject(py)?.into_any(),
+                snapshot_dict(py, s)?.into_any(),
+            ],
+        )?)?;
+    }
+    d.set_item("snapshots", snapshots)?;
+    d.set_item("summary_text", scene.grow_summary(&growth))?;
+    Ok(d)
+}
+
+// ---------------------------------------------------------------------------------------
+// Sweeps and comparisons
+
+/// One run of a sweep: its name, its swept (key, value as shown), its scene.
+type PlannedRun = (String, Vec<(String, String)>, PyScene);
+
+/// The runs of the sweep in TOML `text` (`origin` names it), each as (name, values, scene),
+/// values being (key, value as shown) in the order of the swept keys.
+#[pyfunction]
+#[pyo3(signature = (text, origin, overrides = Vec::new()))]
+fn expand_sweep(text: &str, origin: &str, overrides: Vec<String>) -> PyResult<Vec<PlannedRun>> {
+    let sweep = Sweep::from_toml_str(text, origin, &overrides).map_err(|e| py_err(e.into()))?;
+    Ok(sweep
+        .runs
+        .into_iter()
+        .map(|r| {
+            let values = r
+                .values
+                .iter()
+                .map(|(k, v)| (k.clone(), eyeshell::scene::sweep::show_value(v)))
+                .collect();
+            (r.name, values, PyScene { inner: r.scene })
+        })
+        .collect())
+}
+
+/// `eyeshell compare RUN REFERENCE --tol --rtol [--field]`: the reports, one dict per
+/// pair, and the text the command prints.
+#[pyfunction]
+#[pyo3(signature = (run, reference, tol, rtol, field = None))]
+fn compare<'py>(
+    py: Python<'py>,
+    run: std::path::PathBuf,
+    reference: std::path::PathBuf,
+    tol: f64,
+    rtol: f64,
+    field: Option<String>,
+) -> PyResult<(Bound<'py, PyList>, String)> {
+    use eyeshell_cli::interop::compare::{compare_paths, format_reports, FieldSpec};
+    for (name, v) in [("tol", tol), ("rtol", rtol)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(input_err(format!(
+                "{name} = {v}: must be a finite number ≥ 0"
+            )));
+        }
+    }
+    let field = field
+        .map(|f| {
+            f.parse::<FieldSpec>()
+                .map_err(|e| input_err(format!("field: {e}")))
+        })
+        .transpose()?;
+    let reports = py
+        .detach(|| compare_paths(&run, &[reference], tol, rtol, field.as_ref()))
+        .map_err(|e| py_err(e.into()))?;
+    let list = PyList::empty(py);
+    for r in &reports {
+        let d = PyDict::new(py);
+        d.set_item("reference", &r.reference)?;
+        d.set_item("run", &r.run)?;
+        d.set_item("time", r.time)?;
+        d.set_item("coordinate", &r.coordinate)?;
+        d.set_item("points", r.points)?;
+        d.set_item("outside", r.outside)?;
+        d.set_item("passed", !r.failed())?;
+        let fields = PyDict::new(py);
+        for f in &r.fields {
+            let fd = PyDict::new(py);
+            fd.set_item("max_abs", f.max_abs)?;
+            fd.set_item("at_abs", f.at_abs)?;
+            fd.set_item("max_rel", f.max_rel)?;
+            fd.set_item("at_rel", f.at_rel)?;
+            fd.set_item("failures", f.failures)?;
+            fd.set_item("worst_ratio", f.worst_ratio)?;
+            fd.set_item("interpolation", f.interpolation)?;
+            fields.set_item(&f.field, fd)?;
+        }
+        d.set_item("fields", fields)?;
+        list.append(d)?;
+    }
+    Ok((list, format_reports(&reports, tol, rtol)))
+}
+
+/// The SUNDIALS version the module loads, as summary.json names it.
+#[pyfunction]
+fn sundials_version() -> Option<String> {
+    eyeshell::rundir::sundials_version()
+}
+
+#[pymodule]
+fn _eyeshell(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("EyeshellError", py.get_type::<EyeshellError>())?;
+    m.add("InputError", py.get_type::<InputError>())?;
+    m.add("SolverError", py.get_type::<SolverError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<PyScene>()?;
+    m.add_class::<Solved>()?;
+    m.add_class::<Cancel>()?;
+    m.add_function(wrap_pyfunction!(keys, m)?)?;
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(grow, m)?)?;
+    m.add_function(wrap_pyfunction!(expand_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(sundials_version, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,70 @@
+"""eyeshell.grow against the command line's run directory, bit for bit, and its progress."""
+
+import numpy as np
+import pytest
+
+import eyeshell
+from conftest import SCENES, read_csv
+
+
+def test_the_const_scene_matches_the_command_lines_series(cli, tmp_path):
+    cli("grow", SCENES / "const.toml", "--out", tmp_path / "run", "--quiet")
+    g = eyeshell.grow(SCENES / "const.toml", frames=False)
+    run = tmp_path / "run"
+    for name, table in [("series.csv", g.series), ("history.csv", g.history)]:
+        written = read_csv(run / name)
+        assert list(written) == list(table), name
+        for column, values in written.items():
+            assert list(np.asarray(table[column])) == values, (name, column)
+    assert len(g.history["t"]) > len(g.series["t"]) > 2  # const records 100 history points
+    files = sorted((run / "snapshots").iterdir())
+    assert len(files) == len(g.snapshots)
+    for path, (t, fields) in zip(files, g.snapshots.items()):
+        written = read_csv(path)
+        assert f"_t{t:.6f}" in path.name and list(written) == list(fields)
+        for column, values in written.items():
+            assert np.array_equal(np.array(values), fields[column]), (path.name, column)
+    import json
+
+    summary = json.loads((run / "summary.json").read_text())
+    for k in ["final", "snapshots", "status", "steps", "newton_iterations", "parameters"]:
+        assert g.summary[k] == summary[k], k
+
+
+def test_progress_is_called_after_every_step_in_time_order():
+    seen = []
+    g = eyeshell.grow(SCENES / "const.toml", progress=lambda t, t_end: seen.append((t, t_end)),
+                      frames=False, solver__nodes=101)
+    ts = [t for t, _ in seen]
+    assert len(ts) == g.summary["steps"] and ts == sorted(ts) and ts[-1] == 1.0
+    assert {t_end for _, t_end in seen} == {1.0}
+
+
+def test_an_exception_in_progress_stops_the_run_and_is_raised():
+    calls = []
+
+    def stop(t, t_end):
+        calls.append(t)
+        if len(calls) == 3:
+            raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        eyeshell.grow(SCENES / "const.toml", progress=stop)
+    assert len(calls) == 3
+
+
+def test_progress_true_draws_a_bar_on_stderr(capfd):
+    eyeshell.grow(SCENES / "const.toml", progress=True, frames=False, solver__nodes=101)
+    err = capfd.readouterr().err
+    assert "t = 1.0000 / 1" in err and err.endswith("\n")
+
+
+def test_series_are_data_frames_with_pandas():
+    pandas = pytest.importorskip("pandas")
+    g = eyeshell.grow(SCENES / "const.toml", solver__nodes=101)
+    assert isinstance(g.series, pandas.DataFrame)
+    assert list(g.series.columns) == ["t", "axial_length", "equatorial_radius",
+                                      "retina_minus_blue", "retina_minus_red", "class"]
+    assert g.series["class"].iloc[-1] == g.summary["final"]["class"]
+    plain = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=101)
+    assert np.array_equal(g.series["axial_length"].to_numpy(), plain.series["axial_length"])

@@ -1,0 +1,103 @@
+"""eyeshell.solve against the exact sphere, against the command line bit for bit, and its
+bvp4c export read back by `eyeshell compare`."""
+
+import json
+
+import numpy as np
+import pytest
+
+import eyeshell
+from conftest import SCENES, read_csv
+
+
+def test_the_exact_sphere_to_1e_10():
+    """docs/MODEL.md §7: uniform inflation by the cornea's stretch α."""
+    sol = eyeshell.solve(SCENES / "exact-sphere.toml", solver__nodes=1601)
+    alpha, r0, h0, c = sol.summary["cornea_alpha"], 10.0, 0.65, 100.0
+    S = sol.Sigma
+    exact = {
+        "r": alpha * r0 * np.sin(S / r0),
+        "theta": S / r0,
+        "kappa": np.full_like(S, 1 / (alpha * r0)),
+        "alpha_s": np.full_like(S, alpha),
+        "alpha_phi": np.full_like(S, alpha),
+        "Q": np.zeros_like(S),
+        "t_s": np.full_like(S, 2 * h0 * c * (1 - alpha**-6)),
+    }
+    for name, want in exact.items():
+        error = np.abs(sol.fields[name] - want).max()
+        assert error < 1e-10, f"{name}: max error {error:.3e}"
+    # The interpolant between the nodes is as good.
+    mid = 0.5 * (S[1:] + S[:-1])
+    assert np.abs(sol.at(mid)["r"] - alpha * r0 * np.sin(mid / r0)).max() < 1e-10
+
+
+@pytest.mark.parametrize("scene", ["fibres-nonuniform.toml", "default.toml"])
+def test_fields_are_the_command_lines_bit_for_bit(cli, tmp_path, scene):
+    at = [0.5, 7.853981633974483, 12.0]
+    cli("solve", SCENES / scene, "--set", "solver.nodes=301", "--at", ",".join(map(repr, at)),
+        "--out", tmp_path / "run", "--quiet")
+    sol = eyeshell.solve(SCENES / scene, **{"solver.nodes": 301})
+    fields = read_csv(tmp_path / "run" / "fields.csv")
+    assert list(fields) == list(sol.fields)
+    for name, values in fields.items():
+        assert np.array_equal(np.array(values), sol.fields[name]), name
+    for name, values in read_csv(tmp_path / "run" / "at.csv").items():
+        assert np.array_equal(np.array(values), sol.at(at)[name]), name
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    for k in ["newton_iterations", "residual_norm", "first_integral_max", "nodes", "parameters",
+              "components", "sundials_version", "scheme"]:
+        assert sol.summary[k] == summary[k], k
+
+
+def test_arrays_are_handed_over_not_copied():
+    sol = eyeshell.solve(solver__nodes=101)
+    # NumPy owns no copy: the buffer is the Rust Vec's, kept alive by its container.
+    for a in [sol.r, sol.Sigma, sol.y, sol.yp]:
+        assert not a.flags.owndata and type(a.base).__name__ == "PySliceContainer"
+    assert sol.r is sol.fields["r"] and sol.x is sol.Sigma
+    assert sol.y.flags.f_contiguous  # MATLAB's order, as the export built it
+
+
+def test_yp_is_the_derivative_of_y():
+    sol = eyeshell.solve(solver__nodes=2001)
+    # d/dΣ of r is α_s cos θ (docs/MODEL.md §1): the exported slope agrees to the scheme's accuracy.
+    r_row = 2
+    assert np.abs(sol.yp[r_row] - sol.alpha_s * np.cos(sol.theta)).max() < 1e-8
+
+
+def test_to_bvp4c_saved_by_scipy_is_read_back_by_eyeshell_compare(cli, tmp_path):
+    scipy_io = pytest.importorskip("scipy.io")
+    sol = eyeshell.solve(SCENES / "fibres-nonuniform.toml", solver__nodes=401)
+    sol4c = sol.to_bvp4c()
+    assert sol4c["solver"] == "bvp4c" and sol4c["y"].shape == (5, len(sol))
+    assert sol4c["stats"]["nmeshpoints"] == len(sol)
+    scipy_io.savemat(tmp_path / "sol.mat", {"sol": sol4c})
+    back = scipy_io.loadmat(tmp_path / "sol.mat", squeeze_me=True)["sol"]
+    assert np.array_equal(back["y"].item(), sol.y)
+    # The command line's run of the same scene meets it to round-off ...
+    cli("solve", SCENES / "fibres-nonuniform.toml", "--set", "solver.nodes=401", "--out",
+        tmp_path / "run", "--quiet")
+    r = cli("compare", tmp_path / "run", tmp_path / "sol.mat", "--tol", "1e-13", "--rtol", "0")
+    assert "sol" in r.stdout
+    c = eyeshell.compare(tmp_path / "run", tmp_path / "sol.mat", tol=1e-13, rtol=0)
+    assert c.passed and c.pairs[0]["points"] == len(sol)
+    assert set(c.pairs[0]["fields"]) >= {"kappa", "r", "theta"}
+    # ... and a perturbed copy fails, by the amount put in.
+    sol4c["y"] = sol4c["y"].copy()
+    sol4c["y"][2, 100] += 1e-6
+    scipy_io.savemat(tmp_path / "bad.mat", {"sol": sol4c})
+    bad = eyeshell.compare(tmp_path / "run", tmp_path / "bad.mat", tol=1e-9, rtol=0)
+    assert not bad.passed and bad.pairs[0]["fields"]["r"]["failures"] == 1
+    assert abs(bad.pairs[0]["fields"]["r"]["max_abs"] - 1e-6) < 1e-12
+    assert cli("compare", tmp_path / "run", tmp_path / "bad.mat", "--tol", "1e-9", "--rtol", "0",
+               check=False).returncode == 1
+
+
+def test_solutions_pickle_and_solve_again_when_asked():
+    import pickle
+
+    sol = eyeshell.solve(solver__nodes=101, fibres__D=100)
+    back = pickle.loads(pickle.dumps(sol))
+    assert np.array_equal(back.r, sol.r) and back.summary == sol.summary
+    assert back.at(3.0) == sol.at(3.0)

@@ -1,0 +1,101 @@
+"""The GIL is released while eyeshell computes, and Ctrl-C stops a long grow or sweep."""
+
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+
+import eyeshell
+from conftest import SCENES
+
+
+def longest_pause_of_a_ticking_thread(work):
+    """Run `work` while a second Python thread ticks every millisecond; return the work's
+    duration and the longest time the ticking thread went without a tick meanwhile."""
+    ticks, stop = [], threading.Event()
+
+    def tick():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.001)
+
+    thread = threading.Thread(target=tick)
+    thread.start()
+    time.sleep(0.05)
+    start = time.perf_counter()
+    work()
+    end = time.perf_counter()
+    stop.set()
+    thread.join()
+    inside = [start] + [t for t in ticks if start < t < end] + [end]
+    return end - start, max(b - a for a, b in zip(inside, inside[1:]))
+
+
+def test_a_second_thread_runs_during_a_solve():
+    scene = eyeshell.Scene.from_file(SCENES / "fibres-nonuniform.toml", solver__nodes=40001)
+    duration, pause = longest_pause_of_a_ticking_thread(lambda: eyeshell.solve(scene))
+    # Holding the GIL, the solve would stop the other thread for its whole duration.
+    assert duration > 0.2 and pause < 0.1, (duration, pause)
+
+
+def test_a_second_thread_runs_during_a_grow_with_progress():
+    scene = eyeshell.Scene.from_file(SCENES / "const.toml", solver__nodes=1001, solver__rtol=1e-9)
+    duration, pause = longest_pause_of_a_ticking_thread(
+        lambda: eyeshell.grow(scene, progress=lambda t, t_end: None, frames=False))
+    assert duration > 0.2 and pause < 0.1, (duration, pause)
+
+
+# A growth run of several seconds: explicit Euler, many steps on a fine mesh.
+LONG = {"solver.integrator": "euler", "solver.steps": 4000, "solver.nodes": 2001}
+
+
+def interrupt(script):
+    """Run `script` in a child Python, send it SIGINT once it prints 'started', and return
+    (seconds from the signal to the child's exit, its stdout)."""
+    child = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "started", child.stderr.read()
+    time.sleep(0.3)
+    sent = time.perf_counter()
+    child.send_signal(signal.SIGINT)
+    out, err = child.communicate(timeout=60)
+    return time.perf_counter() - sent, out, err, child.returncode
+
+
+def test_ctrl_c_stops_a_long_grow():
+    seconds, out, err, code = interrupt(f"""
+        import sys, time, eyeshell
+        LONG = {LONG!r}
+        started = False
+        def progress(t, t_end):
+            global started
+            if not started:
+                print("started", flush=True); started = True
+        start = time.perf_counter()
+        try:
+            eyeshell.grow({str(SCENES / 'const.toml')!r}, progress=progress, **LONG)
+            print("finished")
+        except KeyboardInterrupt:
+            print(f"interrupted after {{time.perf_counter() - start:.2f}} s")
+    """)
+    assert code == 0 and out.startswith("interrupted"), (out, err)
+    assert seconds < 2.0
+
+
+def test_ctrl_c_stops_a_long_sweep():
+    seconds, out, err, code = interrupt(f"""
+        import threading, eyeshell
+        LONG = {LONG!r}
+        scene = eyeshell.Scene.from_file({str(SCENES / 'const.toml')!r}, **LONG)
+        print("started", flush=True)
+        try:
+            eyeshell.sweep(scene, grid={{"fibres.D": [0, 100, 200, 400]}}, jobs=2)
+            print("finished")
+        except KeyboardInterrupt:
+            print("interrupted", threading.active_count())
+    """)
+    # The running runs stopped after their step: no thread is left behind.
+    assert code == 0 and out.split() == ["interrupted", "1"], (out, err)
+    assert seconds < 2.0
