@@ -37,14 +37,14 @@ def test_a_second_thread_runs_during_a_solve():
     scene = eyeshell.Scene.from_file(SCENES / "fibres-nonuniform.toml", solver__nodes=40001)
     duration, pause = longest_pause_of_a_ticking_thread(lambda: eyeshell.solve(scene))
     # Holding the GIL, the solve would stop the other thread for its whole duration.
-    assert duration > 0.2 and pause < 0.1, (duration, pause)
+    assert duration > 0.2 and pause < duration / 3, (duration, pause)
 
 
 def test_a_second_thread_runs_during_a_grow_with_progress():
     scene = eyeshell.Scene.from_file(SCENES / "const.toml", solver__nodes=1001, solver__rtol=1e-9)
     duration, pause = longest_pause_of_a_ticking_thread(
         lambda: eyeshell.grow(scene, progress=lambda t, t_end: None, frames=False))
-    assert duration > 0.2 and pause < 0.1, (duration, pause)
+    assert duration > 0.2 and pause < duration / 3, (duration, pause)
 
 
 # A growth run of several seconds: explicit Euler, many steps on a fine mesh.
