@@ -276,6 +276,21 @@ impl Mesh {
         }
     }
 
+    /// A mesh laid node by node (by `bvp::adapt`): `nodes` increasing, `breakpoint_nodes`
+    /// the indices of the breakpoints. It has no uniform part: all its nodes count as
+    /// `uniform`, none as graded or inserted breakpoints.
+    pub fn adapted(nodes: Vec<f64>, breakpoint_nodes: Vec<usize>) -> Mesh {
+        debug_assert!(nodes.windows(2).all(|w| w[0] < w[1]));
+        Mesh {
+            uniform: nodes.len(),
+            nodes,
+            breakpoint_nodes,
+            inserted_breakpoints: 0,
+            pole_nodes: 0,
+            cornea_nodes: 0,
+        }
+    }
+
     /// Index of the node at exactly Σ, if any.
     pub fn node_at(&self, sigma_ref: f64) -> Option<usize> {
         self.nodes

@@ -96,8 +96,37 @@ pub struct SolveStats {
     pub continuation_stages: usize,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
+    /// With solver.tol: the estimated global error of the reported solution.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_estimate: Option<ErrorEstimate>,
+    /// With solver.tol: the meshes laid after the first.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh_refinements: Option<usize>,
+    /// With solver.tol: the nodes of each pass's reported (halved) mesh, the last the final.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pass_nodes: Option<Vec<usize>>,
 }
 
+/// The estimated global error of a solution (solver.tol): the largest over the nodes of
+/// each field's absolute error, in fields.csv's units, and the largest of the five.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct ErrorEstimate {
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub kappa: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub alpha_s: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub r: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub theta: f64,
+    #[serde(rename = "Q", deserialize_with = "crate::json::f64_or_nan")]
+    pub q: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub overall: f64,
+}
+
+pub mod adapt;
 // The discretisation is public for the numerics tests and the benches (its residual and
 // Jacobian are checked and timed directly), not as API.
 #[doc(hidden)]

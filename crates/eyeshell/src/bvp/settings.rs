@@ -32,6 +32,9 @@ pub enum LinearSolverKind {
     Block,
 }
 
+/// solver.max_nodes' default.
+pub const DEFAULT_MAX_NODES: usize = 200_000;
+
 /// Numerical settings of one elastic solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolverSettings {
@@ -56,6 +59,14 @@ pub struct SolverSettings {
     /// solver.max_seconds: the wall-clock bound on one solve (on a whole growth run, whose
     /// solves share it); None, the default, is no bound. See [`crate::deadline`].
     pub max_seconds: Option<f64>,
+    /// solver.tol: the global error asked for; None, the default, lets `nodes` lay the mesh.
+    /// When set, the mesh is adapted until the estimated error of every reported field
+    /// (κ, α_s, r, θ, Q, absolute, in fields.csv's units) is at most tol
+    /// ([`crate::bvp::adapt`]).
+    pub tol: Option<f64>,
+    /// solver.max_nodes: the most nodes an adapted mesh may have (its halved mesh's, the
+    /// one reported).
+    pub max_nodes: usize,
 }
 
 impl Default for SolverSettings {
@@ -72,6 +83,8 @@ impl Default for SolverSettings {
             pole_grading: true,
             cornea_grading: true,
             max_seconds: None,
+            tol: None,
+            max_nodes: DEFAULT_MAX_NODES,
         }
     }
 }

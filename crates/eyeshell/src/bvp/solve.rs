@@ -47,6 +47,8 @@ pub enum BvpError {
     Evaluation(EvalFailure),
     #[error(transparent)]
     OutOfTime(#[from] OutOfTime),
+    #[error("{0}")]
+    Unreached(super::adapt::Unreached),
 }
 
 impl BvpError {
@@ -242,7 +244,7 @@ pub fn shell_of(p: &Params) -> Shell {
 /// The width of the bending boundary layer at the cornea, √(E_b / t_s) with t_s ≈ ΔP R0 / 2
 /// (bounded below by 10⁻³ C H0 so that it stays finite without pressure), when the mesh
 /// grades nodes into it: with `solver.cornea_grading` and a layer thinner than the spacing.
-fn cornea_layer(p: &Params, s: &SolverSettings) -> Option<f64> {
+pub(crate) fn cornea_layer(p: &Params, s: &SolverSettings) -> Option<f64> {
     let layer = (p.e_b / (0.5 * p.dp * p.r0).max(1e-3 * p.c * p.h0)).sqrt();
     let h = (p.length() - s.epsilon) / (s.nodes.max(2) - 1) as f64;
     (s.cornea_grading && !(layer >= h)).then_some(layer)
@@ -720,12 +722,16 @@ fn polish(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], f_scale: &[f64]) {
     }
 }
 
-/// Solve the elastic BVP, warm-started from `warm` when given.
+/// Solve the elastic BVP, warm-started from `warm` when given. With `solver.tol` (and no
+/// warm start) the mesh is adapted to it ([`super::adapt`]).
 pub fn solve(
     params: &Params,
     settings: &SolverSettings,
     warm: Option<&Solution>,
 ) -> Result<Solution, BvpError> {
+    if settings.tol.is_some() && warm.is_none() {
+        return super::adapt::solve_to_tolerance(params, settings);
+    }
     solve_on_mesh(params, settings, mesh_of(params, settings)?, warm)
 }
 

@@ -508,6 +508,20 @@ pub static KEYS: &[KeySpec] = &[
         growth: false,
     },
     KeySpec {
+        key: "solver.tol",
+        access: Access::OptionalFloat { get: |s| s.solver.tol, set: |s, v| s.solver.tol = Some(v) },
+        rule: Rule::OpenUnit,
+        doc: "the global error asked for: the mesh is adapted until the estimated error of each of κ, α_s, r, θ, Q (absolute, in fields.csv's units) is at most tol (Richardson on the halved mesh); unset: solver.nodes lays the mesh",
+        growth: false,
+    },
+    KeySpec {
+        key: "solver.max_nodes",
+        access: Access::Count { get: |s| s.solver.max_nodes, set: |s, v| s.solver.max_nodes = v },
+        rule: Rule::Count(5, crate::mesh::MAX_NODES),
+        doc: "with solver.tol: the most nodes the adapted (reported) mesh may have",
+        growth: false,
+    },
+    KeySpec {
         key: "growth.eta0",
         access: Access::Float { get: |s| growth(s).eta0, set: |s, v| s.growth_mut().eta0 = v },
         rule: Rule::NonNegative,

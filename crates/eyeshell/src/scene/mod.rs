@@ -559,6 +559,15 @@ impl Scene {
             ));
         }
         self.validate_mesh(sources)?;
+        if let (Some(tol), Some(_)) = (self.solver.tol, &self.growth) {
+            return Err(invalid(
+                &["solver.tol"],
+                show(&KeyValue::Float(tol)),
+                "is for elastic solves only: a growth run's material mesh cannot move, and \
+                 choosing it from a tolerance is not implemented yet (use solver.nodes)"
+                    .into(),
+            ));
+        }
         if let Some(g) = &self.growth {
             let times = &self.growth_settings.output_times;
             if let Some(&last) = times.last().filter(|&&t| t > g.t_end) {

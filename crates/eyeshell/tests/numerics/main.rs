@@ -5,6 +5,7 @@
 
 mod common;
 
+mod adapt;
 mod block_solver;
 mod convergence;
 mod dae_jacobian;

@@ -1,0 +1,382 @@
+//! Tolerance-driven elastic solves (`solver.tol`): the mesh is adapted until the estimated
+//! global error of every reported field is at most the tolerance (docs/MODEL.md §3–4).
+//!
+//! **The estimate.** Each pass solves on a mesh M and on M halved ([`Mesh::halved`]), the
+//! self-similar refinement under which the error expansion h^p C + … keeps C, so at M's
+//! nodes the halved solution's error is (u_{h/2} − u_h) / (2^p − 1) (p = 4 for
+//! Hermite–Simpson, 2 for the trapezoid). The halved solution is the one reported (fields.csv
+//! is on the halved mesh), with that estimate. Errors are absolute, per field, in the units
+//! of fields.csv: κ (1/mm), α_s, r (mm), θ (rad), Q (kPa·mm²); the overall error is the
+//! largest of the five.
+//!
+//! **The adaptation.** The local error indicator of interval i is how far the halved
+//! solution at the interval's midpoint lies from M's own interpolant there (cubic Hermite
+//! for Hermite–Simpson, linear for the trapezoid), less the smooth part of the global
+//! error difference: ≈ h_i^p |y^(p)| / c, times h_i it is the local error e_i ∝ h_i^{p+1}.
+//! The global error is taken as K Σ e_i (K measured on this pass), and the next mesh
+//! equidistributes e_i so that it should reach tol / 2. The new mesh is walked from each
+//! fixed node (ε, the breakpoints, L) to the next with the smallest of: the spacing the
+//! indicator asks for, the pole grading's (a spacing no larger than (1 − q)/q times the
+//! distance from the pole, and ε at the pole), the cornea grading's (layer/4 near L, then
+//! growing at most as the distance from L) and a twentieth of the shell. Each new mesh
+//! starts Newton from the last solution through its interpolant.
+//!
+//! **Stopping.** A tolerance below the fields' round-off floor ([`round_off_floor`]: 256
+//! ulps of the largest field, 6e-13 for r ≈ 11 mm) cannot be told from round-off; the
+//! solve refines to that floor and stops. When the estimate no longer falls (by half, pass
+//! on pass), the arithmetic has run out too; when the next mesh would exceed `solver.max_nodes`,
+//! it is out of reach. Either way the solve stops with the best error and its nodes.
+
+use super::solve::{cornea_layer, mesh_of, solve_on_mesh, BvpError, Solution};
+use super::{ErrorEstimate, FieldRow};
+use crate::bvp::settings::{Scheme, SolverSettings};
+use crate::mesh::{Mesh, POLE_RATIO};
+use crate::model::params::Params;
+use crate::text::number;
+use std::time::Instant;
+
+/// Uniform nodes of the first, coarse mesh (pole and cornea gradings and breakpoints on top).
+pub const START_NODES: usize = 41;
+/// The most passes (each a solve on M and on M halved) before giving up.
+pub const MAX_PASSES: usize = 12;
+/// Each pass aims at this fraction of tol, so that a pass whose prediction is a little
+/// optimistic still meets tol.
+const AIM: f64 = 0.5;
+/// A pass refines an interval at most this many times, and coarsens it at most 4 times.
+const MAX_REFINE: f64 = 16.0;
+const MAX_COARSEN: f64 = 4.0;
+
+/// Why `solver.tol` was not reached.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unreached {
+    pub tol: f64,
+    pub best_error: f64,
+    pub best_nodes: usize,
+    pub why: UnreachedWhy,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum UnreachedWhy {
+    /// The estimate stopped falling: round-off.
+    Floor,
+    /// The next mesh would have more nodes than solver.max_nodes.
+    NodeCap { max_nodes: usize },
+    /// MAX_PASSES passes did not reach tol.
+    Passes,
+}
+
+impl std::fmt::Display for Unreached {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "solver.tol = {} cannot be reached: the best estimated error was {:.2e} with {} nodes; ",
+            number(self.tol),
+            self.best_error,
+            self.best_nodes
+        )?;
+        match self.why {
+            UnreachedWhy::Floor => write!(
+                f,
+                "the error stopped falling as the mesh was refined (round-off floor): ask for a larger tol"
+            ),
+            UnreachedWhy::NodeCap { max_nodes } => write!(
+                f,
+                "the next mesh would need more than solver.max_nodes = {max_nodes} nodes"
+            ),
+            UnreachedWhy::Passes => write!(f, "{MAX_PASSES} refinements did not reach it"),
+        }
+    }
+}
+
+/// The five reported fields of a row: κ, α_s, r, θ, Q.
+fn five(row: &FieldRow) -> [f64; 5] {
+    [row.kappa, row.alpha_s, row.r, row.theta, row.q]
+}
+
+/// The estimate of one pass: the global error of the fine (halved) solution per field, and
+/// the local error e_i of each interval of the coarse mesh.
+#[derive(Clone, Debug)]
+pub struct PassEstimate {
+    pub global: [f64; 5],
+    pub local: Vec<f64>,
+}
+
+impl PassEstimate {
+    pub fn overall(&self) -> f64 {
+        self.global.iter().cloned().fold(0.0, f64::max)
+    }
+
+    pub fn error_estimate(&self) -> ErrorEstimate {
+        let [kappa, alpha_s, r, theta, q] = self.global;
+        ErrorEstimate {
+            kappa,
+            alpha_s,
+            r,
+            theta,
+            q,
+            overall: self.overall(),
+        }
+    }
+}
+
+/// The error of `fine` (on `coarse.mesh.halved()`) estimated against `coarse`.
+pub fn estimate(coarse: &Solution, fine: &Solution) -> PassEstimate {
+    let p = coarse.scheme.order() as i32;
+    let factor = 1.0 / (2f64.powi(p) - 1.0);
+    let m = coarse.mesh.len();
+    let mut global = [0.0f64; 5];
+    for i in 0..m {
+        let (c, f) = (five(&coarse.rows[i]), five(&fine.rows[2 * i]));
+        for k in 0..5 {
+            global[k] = global[k].max(factor * (f[k] - c[k]).abs());
+        }
+    }
+    // The indicator compares the unknowns κ, r, θ and Q = r q_s (α_s follows from r and
+    // t_s, and jumps at breakpoints, where no interpolant of it is meant to hold).
+    let unknowns = |v: &[f64; super::interpolant::NQ]| [v[0], v[1], v[2], v[1] * v[3]];
+    let cv = &coarse.interpolant.values;
+    let fv = &fine.interpolant.values;
+    let local = (0..m - 1)
+        .map(|i| {
+            let x = 0.5 * (coarse.mesh.nodes[i] + coarse.mesh.nodes[i + 1]);
+            let interp = match coarse.scheme {
+                Scheme::HermiteSimpson => coarse.interpolant.eval(&coarse.mesh, i, x),
+                Scheme::Trapezoid => std::array::from_fn(|k| 0.5 * (cv[i][k] + cv[i + 1][k])),
+            };
+            let (c0, c1, cm) = (unknowns(&cv[i]), unknowns(&cv[i + 1]), unknowns(&interp));
+            let (f0, f1, fm) = (
+                unknowns(&fv[2 * i]),
+                unknowns(&fv[2 * i + 2]),
+                unknowns(&fv[2 * i + 1]),
+            );
+            let eta = (0..4)
+                .map(|k| ((fm[k] - cm[k]) - 0.5 * ((f0[k] - c0[k]) + (f1[k] - c1[k]))).abs())
+                .fold(0.0, f64::max);
+            coarse.mesh.step(i) * eta
+        })
+        .collect();
+    PassEstimate { global, local }
+}
+
+/// Resolution of a field: differences below ROUND_OFF_ULPS · ε_mach · max|field| are
+/// round-off (Newton stops at a scaled residual of 1e-13 at best).
+const ROUND_OFF_ULPS: f64 = 256.0;
+
+/// The smallest error the estimate can tell from round-off: the largest over the five
+/// fields of ROUND_OFF_ULPS ulps of the field's largest magnitude.
+pub fn round_off_floor(sol: &Solution) -> f64 {
+    let mut size = [0.0f64; 5];
+    for row in &sol.rows {
+        for (k, v) in five(row).iter().enumerate() {
+            size[k] = size[k].max(v.abs());
+        }
+    }
+    ROUND_OFF_ULPS * f64::EPSILON * size.iter().cloned().fold(0.0, f64::max)
+}
+
+/// What the pole and cornea gradings and the shell's size demand of any spacing.
+#[derive(Clone, Copy, Debug)]
+pub struct Floors {
+    pub epsilon: f64,
+    pub length: f64,
+    pub grade_pole: bool,
+    /// The cornea's bending layer when the mesh grades into it.
+    pub cornea_layer: Option<f64>,
+}
+
+impl Floors {
+    /// The largest spacing allowed for an interval starting at x.
+    fn spacing(&self, x: f64) -> f64 {
+        let mut h = (self.length - self.epsilon) / 20.0;
+        if self.grade_pole {
+            h = h.min(
+                self.epsilon
+                    .max((1.0 - POLE_RATIO) / POLE_RATIO * (x - self.epsilon)),
+            );
+        }
+        if let Some(layer) = self.cornea_layer {
+            // Spacing ≤ max(layer/4, distance from L left after the step / 2).
+            h = h.min((0.25 * layer).max((self.length - x) / 3.0));
+        }
+        h
+    }
+}
+
+/// The next mesh: on each coarse interval the spacing that makes its local error
+/// `target`, within the gradings' floors; breakpoints stay nodes. None when it would have
+/// more than `max_nodes` nodes: the walk stops there, before allocating more, and returns
+/// the count it reached.
+pub fn equidistribute(
+    mesh: &Mesh,
+    local: &[f64],
+    order: u32,
+    target: f64,
+    floors: &Floors,
+    max_nodes: usize,
+) -> Result<Mesh, usize> {
+    let power = 1.0 / (order as f64 + 1.0);
+    let wanted: Vec<f64> = local
+        .iter()
+        .enumerate()
+        .map(|(i, &e)| {
+            let h = mesh.step(i);
+            let ratio = if e > 0.0 {
+                (target / e).powf(power)
+            } else {
+                MAX_COARSEN
+            };
+            h * ratio.clamp(1.0 / MAX_REFINE, MAX_COARSEN)
+        })
+        .collect();
+    let mut fixed: Vec<usize> = vec![0];
+    fixed.extend(mesh.breakpoint_nodes.iter().copied());
+    fixed.push(mesh.len() - 1);
+    fixed.sort_unstable();
+    fixed.dedup();
+    let mut nodes = vec![mesh.nodes[0]];
+    let mut breakpoint_nodes = vec![];
+    for w in fixed.windows(2) {
+        let b = mesh.nodes[w[1]];
+        let mut x = nodes[nodes.len() - 1];
+        let mut j = w[0];
+        loop {
+            while j + 1 < w[1] && mesh.nodes[j + 1] <= x {
+                j += 1;
+            }
+            let mut h = floors.spacing(x).min(wanted[j]);
+            // Every coarse interval the step reaches into bounds it too.
+            let mut k = j + 1;
+            while k < w[1] && mesh.nodes[k] < x + h {
+                h = h.min(wanted[k]);
+                k += 1;
+            }
+            let rest = b - x;
+            if rest <= h * (1.0 + 1e-9) {
+                nodes.push(b);
+                break;
+            }
+            x = if rest < 2.0 * h {
+                x + 0.5 * rest
+            } else {
+                x + h
+            };
+            nodes.push(x);
+            if nodes.len() > max_nodes {
+                return Err(nodes.len());
+            }
+        }
+        if mesh.breakpoint_nodes.contains(&w[1]) {
+            breakpoint_nodes.push(nodes.len() - 1);
+        }
+        if nodes.len() > max_nodes {
+            return Err(nodes.len());
+        }
+    }
+    // The breakpoints in the order the coarse mesh lists them.
+    let order_of: Vec<usize> = mesh
+        .breakpoint_nodes
+        .iter()
+        .map(|&i| {
+            let rank = fixed.iter().position(|&f| f == i).unwrap();
+            breakpoint_nodes[rank - 1]
+        })
+        .collect();
+    Ok(Mesh::adapted(nodes, order_of))
+}
+
+/// Solve to `solver.tol` (which must be set): passes of a solve on M and on M halved until
+/// the halved solution's estimated error is at most tol. The solution returned is on the
+/// last halved mesh, with its estimate and the nodes of each pass in its stats.
+pub fn solve_to_tolerance(
+    params: &Params,
+    settings: &SolverSettings,
+) -> Result<Solution, BvpError> {
+    let start = Instant::now();
+    let tol = settings.tol.expect("solve_to_tolerance needs solver.tol");
+    let s = SolverSettings {
+        nodes: START_NODES,
+        // Newton's error must sit well below the discretisation's.
+        newton_tol: settings.newton_tol.min(1e-2 * tol).max(1e-13),
+        ..*settings
+    };
+    let floors = Floors {
+        epsilon: s.epsilon,
+        length: params.length(),
+        grade_pole: s.pole_grading,
+        cornea_layer: cornea_layer(params, &s),
+    };
+    let order = s.scheme.order();
+    let mut coarse = solve_on_mesh(params, &s, mesh_of(params, &s)?, None)?;
+    let mut pass_nodes = vec![];
+    let mut best: Option<(f64, usize)> = None;
+    let mut work = (0usize, 0usize, 0usize);
+    let add = |w: &mut (usize, usize, usize), sol: &Solution| {
+        w.0 += sol.stats.newton_iterations;
+        w.1 += sol.stats.residual_evaluations;
+        w.2 += sol.stats.jacobian_evaluations;
+    };
+    add(&mut work, &coarse);
+    loop {
+        let mut fine = solve_on_mesh(params, &s, coarse.mesh.halved(), Some(&coarse))?;
+        add(&mut work, &fine);
+        let est = estimate(&coarse, &fine);
+        let error = est.overall();
+        pass_nodes.push(fine.mesh.len());
+        let unreached = |why, best: (f64, usize)| {
+            BvpError::Unreached(Unreached {
+                tol,
+                best_error: best.0,
+                best_nodes: best.1,
+                why,
+            })
+        };
+        // Below a few hundred ulps of a field's size, the estimate is round-off, not error.
+        let floor = round_off_floor(&fine);
+        let previous = best;
+        if best.is_none_or(|(e, _)| error < e) {
+            best = Some((error, fine.mesh.len()));
+        }
+        let best_now = best.unwrap();
+        if error <= floor.max(tol) && tol < floor {
+            return Err(unreached(UnreachedWhy::Floor, best_now));
+        }
+        if error <= tol {
+            fine.stats.error_estimate = Some(est.error_estimate());
+            fine.stats.mesh_refinements = Some(pass_nodes.len() - 1);
+            fine.stats.pass_nodes = Some(pass_nodes);
+            fine.stats.newton_iterations = work.0;
+            fine.stats.residual_evaluations = work.1;
+            fine.stats.jacobian_evaluations = work.2;
+            fine.stats.wall_seconds = start.elapsed().as_secs_f64();
+            return Ok(fine);
+        }
+        if previous.is_some_and(|(e, _)| error > 0.5 * e) {
+            return Err(unreached(UnreachedWhy::Floor, best_now));
+        }
+        if pass_nodes.len() >= MAX_PASSES {
+            return Err(unreached(UnreachedWhy::Passes, best_now));
+        }
+        // Global error ≈ K Σ e_i; equidistributed, Σ e_i = n τ with n = Σ (e_i/τ)^{1/(p+1)}.
+        let sum: f64 = est.local.iter().sum();
+        let target = if sum > 0.0 {
+            let k = error / sum;
+            let q = 1.0 / (order as f64 + 1.0);
+            let s_q: f64 = est.local.iter().map(|e| e.powf(q)).sum();
+            (AIM * tol.max(floor) / (k * s_q)).powf(1.0 / (1.0 - q))
+        } else {
+            0.0
+        };
+        // The coarse mesh of the next pass has at most (max_nodes + 1) / 2 nodes, so that its
+        // halved mesh, the one reported, has at most max_nodes.
+        let cap = settings.max_nodes.div_ceil(2);
+        let mesh = match equidistribute(&coarse.mesh, &est.local, order, target, &floors, cap) {
+            Ok(m) => m,
+            Err(_) => {
+                let max_nodes = settings.max_nodes;
+                return Err(unreached(UnreachedWhy::NodeCap { max_nodes }, best_now));
+            }
+        };
+        coarse = solve_on_mesh(params, &s, mesh, Some(&fine))?;
+        add(&mut work, &coarse);
+    }
+}
