@@ -40,15 +40,31 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
 
     if !a.quiet {
         let s = &solution.stats;
+        let nodes = match (&s.pass_nodes, &s.error_estimate) {
+            (Some(passes), Some(e)) => format!(
+                "{} (adapted to solver.tol = {} in {} pass{}: {})\n  error estimate  {:.3e} (κ {:.2e}, α_s {:.2e}, r {:.2e}, θ {:.2e}, Q {:.2e})",
+                s.nodes,
+                scene.solver.tol.map_or(String::new(), eyeshell::text::number),
+                passes.len(),
+                if passes.len() == 1 { "" } else { "es" },
+                passes.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", "),
+                e.overall,
+                e.kappa,
+                e.alpha_s,
+                e.r,
+                e.theta,
+                e.q
+            ),
+            _ => format!(
+                "{} ({} uniform + {} breakpoint + {} pole + {} cornea)",
+                s.nodes, s.uniform_nodes, s.breakpoint_nodes, s.pole_nodes, s.cornea_nodes
+            ),
+        };
         out(&format!(
-            "eyeshell: solved {} ({})\n  nodes           {} ({} uniform + {} breakpoint + {} pole + {} cornea)\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
+            "eyeshell: solved {} ({})\n  nodes           {}\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
             scene.origin,
             one_line(&scene.display_name()),
-            s.nodes,
-            s.uniform_nodes,
-            s.breakpoint_nodes,
-            s.pole_nodes,
-            s.cornea_nodes,
+            nodes,
             s.newton_iterations,
             if s.newton_iterations == 1 { "" } else { "s" },
             s.residual_norm,

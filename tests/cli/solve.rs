@@ -110,3 +110,117 @@ fn exact_sphere_is_reproduced() {
         assert!((kappa - 1.0 / (alpha * 10.0)).abs() < 1e-5, "{row:?}");
     }
 }
+
+/// `solver.tol`: the mesh is adapted, summary.json gives the estimate per field and overall,
+/// the refinements and each pass's nodes, fields.csv is on the final mesh and `--at` works.
+#[test]
+fn solve_to_a_tolerance_reports_its_error_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let out_s = out.to_str().unwrap();
+    let Run {
+        code,
+        stdout,
+        stderr,
+    } = eyeshell(&[
+        "solve",
+        "scenes/exact-sphere.toml",
+        "--set",
+        "solver.tol=1e-8",
+        "--at",
+        "1,12.5",
+        "--out",
+        out_s,
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(stdout.contains("adapted to solver.tol = 1e-8"), "{stdout}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let est = &summary["error_estimate"];
+    for f in ["kappa", "alpha_s", "r", "theta", "Q"] {
+        let e = est[f].as_f64().unwrap();
+        assert!(
+            e > 0.0 && e <= est["overall"].as_f64().unwrap(),
+            "{summary}"
+        );
+    }
+    let overall = est["overall"].as_f64().unwrap();
+    assert!(overall <= 1e-8 && overall > 1e-11, "{summary}");
+    let passes: Vec<u64> = summary["pass_nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_u64().unwrap())
+        .collect();
+    assert_eq!(
+        summary["mesh_refinements"].as_u64().unwrap() as usize,
+        passes.len() - 1
+    );
+    let (_, fields) = csv(&out.join("fields.csv"));
+    assert_eq!(*passes.last().unwrap() as usize, fields.len());
+    assert_eq!(summary["nodes"].as_u64().unwrap() as usize, fields.len());
+    assert_eq!(summary["parameters"]["solver.tol"], 1e-8);
+    // The exact sphere's r = α R0 sin(Σ/R0), to the tolerance, at the points asked for.
+    let alpha = summary["cornea_alpha"].as_f64().unwrap();
+    let (_, at) = csv(&out.join("at.csv"));
+    for row in &at {
+        let exact = alpha * 10.0 * (row[0] / 10.0).sin();
+        assert!((row[4] - exact).abs() < 1e-8, "{row:?}");
+    }
+}
+
+/// A tolerance below round-off: exit 1, one line with the best error and its nodes, and no
+/// output directory.
+#[test]
+fn a_tolerance_below_round_off_fails_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let Run { code, stderr, .. } = eyeshell(&[
+        "solve",
+        "scenes/fibres-nonuniform.toml",
+        "--set",
+        "solver.tol=1e-15",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with(
+            "eyeshell: error: solver.tol = 1e-15 cannot be reached: the best estimated error was "
+        ) && stderr.contains(" nodes; ")
+            && stderr.contains("round-off"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}
+
+/// A node cap below what the tolerance needs, and solver.tol in a growth scene.
+#[test]
+fn solver_tol_refusals_are_clear() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let Run { code, stderr, .. } = eyeshell(&[
+        "solve",
+        "scenes/fibres-nonuniform.toml",
+        "--set",
+        "solver.tol=1e-10",
+        "--set",
+        "solver.max_nodes=500",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("more than solver.max_nodes = 500 nodes") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    assert!(!out.exists());
+    let Run { code, stderr, .. } =
+        eyeshell(&["check", "scenes/const.toml", "--set", "solver.tol=1e-6"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("solver.tol") && stderr.contains("growth"),
+        "{stderr}"
+    );
+}
