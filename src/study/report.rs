@@ -183,6 +183,8 @@ pub fn wpd(scene: &Scene, dir: &Path) -> Result<String, StudyError> {
         &mut text,
         "elastic",
     );
+    write_tolerance(&curves, dir, &mut text)?;
+    write_efficiency(&wpd::efficiency(p, s, &wpd::TOLERANCES)?, dir, &mut text)?;
     if let Some(g) = &scene.growth {
         let curves = wpd::growth(
             p,
@@ -250,6 +252,114 @@ fn write_curves(
         ));
     }
     plot::write(&fig, &dir.join(stem)).map_err(plot_error)?;
+    Ok(())
+}
+
+/// The tolerance-driven solves: true error and estimate against the tolerance asked for,
+/// with the line error = tol.
+fn write_tolerance(curves: &[wpd::Curve], dir: &Path, text: &mut String) -> Result<(), StudyError> {
+    let Some(c) = curves.iter().find(|c| c.knob == "tol") else {
+        return Ok(());
+    };
+    let pick = |f: &dyn Fn(&wpd::WorkPoint) -> f64| -> Vec<(f64, f64)> {
+        c.points.iter().map(|p| (p.value, f(p))).collect()
+    };
+    let fig = Figure::new(
+        "solver.tol: true error and estimate against the tolerance asked for",
+        "requested tol",
+        "largest field error",
+    )
+    .scales(Scale::Log10, Scale::Log10)
+    .with(Series::new(
+        "true error".to_string(),
+        pick(&|p| p.error),
+        SeriesStyle::LineAndMarkers,
+    ))
+    .with(Series::new(
+        "estimate".to_string(),
+        pick(&|p| p.estimate),
+        SeriesStyle::LineAndMarkers,
+    ))
+    .with(Series::new(
+        "error = tol".to_string(),
+        pick(&|p| p.value),
+        SeriesStyle::DashedLine,
+    ));
+    plot::write(&fig, &dir.join("wpd_tolerance")).map_err(plot_error)?;
+    let _ = writeln!(
+        text,
+        "solver.tol: requested, true error, estimate, nodes, seconds"
+    );
+    for p in &c.points {
+        let _ = writeln!(
+            text,
+            "  {:.0e}  {:.2e}  {:.2e}  {}  {:.4} s",
+            p.value, p.error, p.estimate, p.nodes, p.seconds
+        );
+    }
+    Ok(())
+}
+
+/// The efficiency table of solver.tol (CSV, and markdown rows in the report).
+fn write_efficiency(
+    rows: &[wpd::Efficiency],
+    dir: &Path,
+    text: &mut String,
+) -> Result<(), StudyError> {
+    use super::cell;
+    let header: Vec<String> = [
+        "tol",
+        "adapted_nodes",
+        "adapted_error",
+        "estimate",
+        "adapted_seconds",
+        "uniform",
+        "fixed_nodes",
+        "fixed_error",
+        "fixed_seconds",
+    ]
+    .map(String::from)
+    .to_vec();
+    let table: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            vec![
+                cell(r.tol),
+                r.adapted_nodes.to_string(),
+                cell(r.adapted_error),
+                cell(r.estimate),
+                cell(r.adapted_seconds),
+                r.uniform.to_string(),
+                r.fixed_nodes.to_string(),
+                cell(r.fixed_error),
+                cell(r.fixed_seconds),
+            ]
+        })
+        .collect();
+    write_csv(&dir.join("wpd_efficiency.csv"), &header, &table)?;
+    let _ = writeln!(
+        text,
+        "solver.tol against the uniform + graded mesh of the same true error:\n\
+         | tol | adapted nodes | true error | estimate | time | uniform N | its nodes | its error | its time | nodes ratio | time ratio |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for r in rows {
+        let _ = writeln!(
+            text,
+            "| {:.0e} | {} | {:.2e} | {:.2e} | {:.3} ms | {} | {} | {:.2e} | {:.3} ms | {:.2} | {:.2} |",
+            r.tol,
+            r.adapted_nodes,
+            r.adapted_error,
+            r.estimate,
+            1e3 * r.adapted_seconds,
+            r.uniform,
+            r.fixed_nodes,
+            r.fixed_error,
+            1e3 * r.fixed_seconds,
+            r.adapted_nodes as f64 / r.fixed_nodes as f64,
+            r.adapted_seconds / r.fixed_seconds
+        );
+    }
     Ok(())
 }
 

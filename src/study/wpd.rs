@@ -2,7 +2,8 @@
 //! CPU seconds, each error taken against a reference computed at much tighter settings.
 //! - Elastic: trapezoid and Hermite–Simpson over a self-similar ladder of meshes (each
 //!   rung the last with every interval halved), and Richardson-extrapolated
-//!   Hermite–Simpson from consecutive rungs (order 6), errors at common material points.
+//!   Hermite–Simpson from consecutive rungs (order 6), errors at common material points;
+//!   and Hermite–Simpson with `solver.tol`, its mesh adapted to each tolerance.
 //! - Growth: explicit Euler over its step count, CVODE and IDA over rtol, errors in the axial
 //!   length (the largest over the scene's output times and t_end: an integrator's error is
 //!   not monotone in t, and one instant can flatter it) and the largest field error at t_end
@@ -30,6 +31,10 @@ pub struct WorkPoint {
     /// NaN otherwise).
     pub axial_error: f64,
     pub seconds: f64,
+    /// The error the solve estimated for itself (solver.tol; NaN otherwise).
+    pub estimate: f64,
+    /// Nodes of the mesh reported (elastic; NaN for growth).
+    pub nodes: f64,
 }
 
 /// Repeat short runs so that timings are not a single noisy sample: the least of up to
@@ -131,6 +136,8 @@ pub fn elastic(
                 error: worst(&max_diff(&vals, &ref_vals)),
                 axial_error: f64::NAN,
                 seconds,
+                estimate: f64::NAN,
+                nodes: mesh.len() as f64,
             });
             if scheme == Scheme::HermiteSimpson {
                 hs_runs.push((mesh.len(), vals, seconds));
@@ -156,10 +163,65 @@ pub fn elastic(
             error: worst(&max_diff(&extrapolated, &ref_vals)),
             axial_error: f64::NAN,
             seconds: t1 + t2,
+            estimate: f64::NAN,
+            nodes: *n as f64,
         });
     }
     curves.push(rich);
+    curves.push(tolerance_curve(params, solver, &pts, &ref_vals)?);
     Ok(curves)
+}
+
+/// The requested tolerances of the tolerance-driven curve.
+pub const TOLERANCES: [f64; 4] = [1e-4, 1e-6, 1e-8, 1e-10];
+
+/// Hermite–Simpson with `solver.tol` (the mesh adapted to each of [`TOLERANCES`]): the
+/// true error at the same points, the estimate it reported, and the time of the whole
+/// adaptive solve.
+fn tolerance_curve(
+    params: &Params,
+    solver: &SolverSettings,
+    pts: &[f64],
+    ref_vals: &[[f64; 5]],
+) -> Result<Curve, StudyError> {
+    let mut c = Curve {
+        method: "hermite-simpson solver.tol".into(),
+        knob: "tol",
+        points: vec![],
+    };
+    for tol in TOLERANCES {
+        let s = SolverSettings {
+            scheme: Scheme::HermiteSimpson,
+            tol: Some(tol),
+            ..*solver
+        };
+        let what = format!("solver.tol = {tol:e}");
+        let ((vals, estimate, nodes), seconds) = best_of(
+            || {
+                let start = std::time::Instant::now();
+                let sol = eyeshell::bvp::solve(params, &s, None).map_err(|source| {
+                    StudyError::Elastic {
+                        what: what.clone(),
+                        source,
+                    }
+                })?;
+                let secs = start.elapsed().as_secs_f64();
+                let estimate = sol.stats.error_estimate.map_or(f64::NAN, |e| e.overall);
+                Ok(((sample(&sol, pts, &what)?, estimate, sol.mesh.len()), secs))
+            },
+            5,
+            1.0,
+        )?;
+        c.points.push(WorkPoint {
+            value: tol,
+            error: worst(&max_diff(&vals, ref_vals)),
+            axial_error: f64::NAN,
+            seconds,
+            estimate,
+            nodes: nodes as f64,
+        });
+    }
+    Ok(c)
 }
 
 /// The largest |axial length − reference| over the times both runs report (the scene's
@@ -208,6 +270,8 @@ pub fn growth(
             error: worst(&max_diff(&vals, &ref_vals)),
             axial_error: largest_axial_difference(&r.axial_series, &ref_axial),
             seconds: r.seconds,
+            estimate: f64::NAN,
+            nodes: f64::NAN,
         })
     };
     let mut euler = Curve {
@@ -274,12 +338,22 @@ pub fn winners(curves: &[Curve], targets: &[f64], axial: bool) -> Vec<(f64, Stri
         .collect()
 }
 
-/// All curves as one CSV table: method, knob, value, error, axial_error, seconds.
+/// All curves as one CSV table: method, knob, value, error, axial_error, seconds, and the
+/// estimate and nodes where known.
 pub fn table(curves: &[Curve]) -> (Vec<String>, Vec<Vec<String>>) {
     use super::cell;
-    let header = ["method", "knob", "value", "error", "axial_error", "seconds"]
-        .map(String::from)
-        .to_vec();
+    let header = [
+        "method",
+        "knob",
+        "value",
+        "error",
+        "axial_error",
+        "seconds",
+        "estimate",
+        "nodes",
+    ]
+    .map(String::from)
+    .to_vec();
     let rows = curves
         .iter()
         .flat_map(|c| {
@@ -291,9 +365,130 @@ pub fn table(curves: &[Curve]) -> (Vec<String>, Vec<Vec<String>>) {
                     cell(p.error),
                     cell(p.axial_error),
                     cell(p.seconds),
+                    cell(p.estimate),
+                    cell(p.nodes),
                 ]
             })
         })
         .collect();
     (header, rows)
+}
+
+/// One row of the efficiency table of `solver.tol`: the adapted solve against the
+/// uniform-plus-grading mesh (solver.nodes, pole and cornea grading, breakpoints) that
+/// reaches the same true error.
+#[derive(Clone, Copy, Debug)]
+pub struct Efficiency {
+    pub tol: f64,
+    pub adapted_nodes: usize,
+    pub adapted_error: f64,
+    pub estimate: f64,
+    pub adapted_seconds: f64,
+    /// The fewest uniform nodes N whose mesh reaches `adapted_error` (to 2 %), and the
+    /// nodes, error and time of that solve.
+    pub uniform: usize,
+    pub fixed_nodes: usize,
+    pub fixed_error: f64,
+    pub fixed_seconds: f64,
+}
+
+/// For each tolerance: the adapted Hermite–Simpson solve, and the smallest solver.nodes
+/// whose (uniform + graded) mesh is as accurate, found by doubling then bisection. True
+/// errors are the largest over the five fields at the solution's own nodes (fields.csv,
+/// what solver.tol's estimate is of), against Hermite–Simpson on the 1601-node mesh
+/// halved twice (interpolated there); times the least of up to 5 runs.
+pub fn efficiency(
+    params: &Params,
+    solver: &SolverSettings,
+    tols: &[f64],
+) -> Result<Vec<Efficiency>, StudyError> {
+    let solver = SolverSettings {
+        scheme: Scheme::HermiteSimpson,
+        newton_tol: solver.newton_tol.min(1e-12),
+        tol: None,
+        ..*solver
+    };
+    let elastic = |what: &str| {
+        let what = what.to_string();
+        move |source| StudyError::Elastic { what, source }
+    };
+    let fine = SolverSettings {
+        nodes: 1601,
+        ..solver
+    };
+    let mesh = eyeshell::bvp::solve::mesh_of(params, &fine)
+        .map_err(|e| StudyError::Invalid(e.to_string()))?
+        .halved()
+        .halved();
+    let reference = eyeshell::bvp::solve::solve_on_mesh(params, &solver, mesh, None)
+        .map_err(elastic("reference"))?;
+    let nodal_error = |sol: &eyeshell::bvp::Solution| -> Result<f64, StudyError> {
+        let vals = sol.rows.iter().map(super::five).collect::<Vec<_>>();
+        Ok(worst(&max_diff(
+            &vals,
+            &sample(&reference, &sol.mesh.nodes, "reference")?,
+        )))
+    };
+    let timed = |s: &SolverSettings, what: &str| {
+        best_of(
+            || {
+                let start = std::time::Instant::now();
+                let sol = eyeshell::bvp::solve(params, s, None).map_err(elastic(what))?;
+                let secs = start.elapsed().as_secs_f64();
+                let err = nodal_error(&sol)?;
+                Ok(((sol, err), secs))
+            },
+            5,
+            1.0,
+        )
+    };
+    let error_at = |n: usize| -> Result<f64, StudyError> {
+        let s = SolverSettings { nodes: n, ..solver };
+        let sol = eyeshell::bvp::solve(params, &s, None).map_err(elastic("uniform"))?;
+        nodal_error(&sol)
+    };
+    let mut rows = vec![];
+    for &tol in tols {
+        let s = SolverSettings {
+            tol: Some(tol),
+            ..solver
+        };
+        let ((sol, adapted_error), adapted_seconds) = timed(&s, &format!("solver.tol = {tol:e}"))?;
+        // The fewest uniform nodes reaching the adapted solve's true error.
+        let (mut lo, mut hi) = (5usize, 26usize);
+        while error_at(hi)? > adapted_error {
+            lo = hi;
+            hi = 2 * hi - 1;
+            if hi > eyeshell::mesh::MAX_NODES / 2 {
+                return Err(StudyError::Invalid(format!(
+                    "no uniform mesh of up to {hi} nodes reaches {adapted_error:e}"
+                )));
+            }
+        }
+        while hi - lo > (hi / 50).max(1) {
+            let mid = (lo + hi) / 2;
+            if error_at(mid)? > adapted_error {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let fixed = SolverSettings {
+            nodes: hi,
+            ..solver
+        };
+        let ((fixed_sol, fixed_error), fixed_seconds) = timed(&fixed, &format!("N = {hi}"))?;
+        rows.push(Efficiency {
+            tol,
+            adapted_nodes: sol.mesh.len(),
+            adapted_error,
+            estimate: sol.stats.error_estimate.map_or(f64::NAN, |e| e.overall),
+            adapted_seconds,
+            uniform: hi,
+            fixed_nodes: fixed_sol.mesh.len(),
+            fixed_error,
+            fixed_seconds,
+        });
+    }
+    Ok(rows)
 }
