@@ -299,19 +299,149 @@ pub fn equidistribute(
     Ok(Mesh::adapted(nodes, order_of))
 }
 
-/// Solve to `solver.tol` (which must be set): passes of a solve on M and on M halved until
-/// the halved solution's estimated error is at most tol. The solution returned is on the
-/// last halved mesh, with its estimate and the nodes of each pass in its stats.
+/// Richardson's extrapolation of `coarse` and `fine` (on `coarse.mesh.halved()`) at the
+/// order p of the scheme, on M's nodes: every field, the unknowns, the node values and end
+/// slopes of the interpolant, y_f + (y_f − y_c)/(2^p − 1). Its error is O(h^{p+2}).
+pub fn extrapolate(coarse: &Solution, fine: &Solution) -> Solution {
+    let q = 1.0 / (2f64.powi(coarse.scheme.order() as i32) - 1.0);
+    let mix = |c: f64, f: f64| f + (f - c) * q;
+    let mixn = |c: &[f64; super::interpolant::NQ], f: &[f64; super::interpolant::NQ]| {
+        std::array::from_fn(|k| mix(c[k], f[k]))
+    };
+    let m = coarse.mesh.len();
+    let rows = (0..m)
+        .map(|i| {
+            let (c, f) = (coarse.rows[i].values(), fine.rows[2 * i].values());
+            FieldRow::from_values(std::array::from_fn(|k| mix(c[k], f[k])))
+        })
+        .collect();
+    let u = (0..m)
+        .flat_map(|i| {
+            let (c, f) = (coarse.y(i), fine.y(2 * i));
+            (0..5).map(move |k| mix(c[k], f[k]))
+        })
+        .collect();
+    let (ci, fi) = (&coarse.interpolant, &fine.interpolant);
+    let interpolant = super::interpolant::Interpolant {
+        values: (0..m)
+            .map(|i| mixn(&ci.values[i], &fi.values[2 * i]))
+            .collect(),
+        slope_left: (0..m - 1)
+            .map(|i| mixn(&ci.slope_left[i], &fi.slope_left[2 * i]))
+            .collect(),
+        slope_right: (0..m - 1)
+            .map(|i| mixn(&ci.slope_right[i], &fi.slope_right[2 * i + 1]))
+            .collect(),
+    };
+    let mut stats = fine.stats.clone();
+    stats.nodes = m;
+    stats.uniform_nodes = coarse.stats.uniform_nodes;
+    stats.breakpoint_nodes = coarse.stats.breakpoint_nodes;
+    stats.pole_nodes = coarse.stats.pole_nodes;
+    stats.cornea_nodes = coarse.stats.cornea_nodes;
+    Solution {
+        params: fine.params,
+        scheme: fine.scheme,
+        mesh: coarse.mesh.clone(),
+        u,
+        rows,
+        interpolant,
+        stats,
+        grown: None,
+    }
+}
+
+/// One pass's answer: the solution reported, its estimate and the local errors that lay
+/// the next mesh (with the order they fall at).
+struct PassResult {
+    report: Solution,
+    global: [f64; 5],
+    local: Vec<f64>,
+    order: u32,
+}
+
+/// A pass on mesh M (solved as `coarse`): solve on M halved (and, with Richardson, on M
+/// halved twice), estimate, and say what to report.
+fn pass(
+    params: &Params,
+    s: &SolverSettings,
+    coarse: &Solution,
+    work: &mut Work,
+) -> Result<PassResult, BvpError> {
+    let fine = solve_on_mesh(params, s, coarse.mesh.halved(), Some(coarse))?;
+    work.add(&fine);
+    let est = estimate(coarse, &fine);
+    if !s.richardson {
+        return Ok(PassResult {
+            report: fine,
+            global: est.global,
+            local: est.local,
+            order: s.scheme.order(),
+        });
+    }
+    // Order p + 2: the extrapolations from (M, M/2) and (M/2, M/4) differ by the error of
+    // the first, (2^{p+2} − 1) times that of the second, at M's nodes.
+    let finer = solve_on_mesh(params, s, fine.mesh.halved(), Some(&fine))?;
+    work.add(&finer);
+    let first = extrapolate(coarse, &fine);
+    let second = extrapolate(&fine, &finer);
+    let p = s.scheme.order() + 2;
+    let factor = 1.0 / (2f64.powi(p as i32) - 1.0);
+    let mut global = [0.0f64; 5];
+    for i in 0..coarse.mesh.len() {
+        let (a, b) = (five(&first.rows[i]), five(&second.rows[2 * i]));
+        for k in 0..5 {
+            global[k] = global[k].max(factor * (b[k] - a[k]).abs());
+        }
+    }
+    // The local errors of order p + 1 from the (M, M/2) pair, raised to fall as h^{p+3}.
+    let power = (p as f64 + 1.0) / (s.scheme.order() as f64 + 1.0);
+    let local = est.local.iter().map(|e| e.powf(power)).collect();
+    Ok(PassResult {
+        report: second,
+        global,
+        local,
+        order: p,
+    })
+}
+
+/// Newton work summed over the solves of an adaptive solve.
+#[derive(Default)]
+struct Work {
+    iterations: usize,
+    residuals: usize,
+    jacobians: usize,
+}
+
+impl Work {
+    fn add(&mut self, sol: &Solution) {
+        self.iterations += sol.stats.newton_iterations;
+        self.residuals += sol.stats.residual_evaluations;
+        self.jacobians += sol.stats.jacobian_evaluations;
+    }
+}
+
+/// Solve to `solver.tol`, or with `solver.richardson` alone, extrapolate once on the mesh
+/// of `solver.nodes`. Each pass solves on M and on M halved (and halved twice with
+/// Richardson) until the reported solution's estimated error is at most tol. The solution
+/// returned is on the last halved mesh (with Richardson: the extrapolation, on M halved),
+/// with its estimate and the nodes of each pass in its stats.
 pub fn solve_to_tolerance(
     params: &Params,
     settings: &SolverSettings,
 ) -> Result<Solution, BvpError> {
     let start = Instant::now();
-    let tol = settings.tol.expect("solve_to_tolerance needs solver.tol");
+    let tol = settings.tol;
     let s = SolverSettings {
-        nodes: START_NODES,
+        nodes: if tol.is_some() {
+            START_NODES
+        } else {
+            settings.nodes
+        },
         // Newton's error must sit well below the discretisation's.
-        newton_tol: settings.newton_tol.min(1e-2 * tol).max(1e-13),
+        newton_tol: tol.map_or(settings.newton_tol, |t| {
+            settings.newton_tol.min(1e-2 * t).max(1e-13)
+        }),
         ..*settings
     };
     let floors = Floors {
@@ -320,78 +450,94 @@ pub fn solve_to_tolerance(
         grade_pole: s.pole_grading,
         cornea_layer: cornea_layer(params, &s),
     };
-    let order = s.scheme.order();
     let mut coarse = solve_on_mesh(params, &s, mesh_of(params, &s)?, None)?;
     let mut pass_nodes = vec![];
     let mut best: Option<(f64, usize)> = None;
-    let mut work = (0usize, 0usize, 0usize);
-    let add = |w: &mut (usize, usize, usize), sol: &Solution| {
-        w.0 += sol.stats.newton_iterations;
-        w.1 += sol.stats.residual_evaluations;
-        w.2 += sol.stats.jacobian_evaluations;
-    };
-    add(&mut work, &coarse);
+    let mut work = Work::default();
+    work.add(&coarse);
     loop {
-        let mut fine = solve_on_mesh(params, &s, coarse.mesh.halved(), Some(&coarse))?;
-        add(&mut work, &fine);
-        let est = estimate(&coarse, &fine);
+        let PassResult {
+            report,
+            global,
+            local,
+            order,
+        } = pass(params, &s, &coarse, &mut work)?;
+        let est = PassEstimate { global, local };
         let error = est.overall();
-        pass_nodes.push(fine.mesh.len());
-        let unreached = |why, best: (f64, usize)| {
+        pass_nodes.push(report.mesh.len());
+        // Below a few hundred ulps of a field's size, the estimate is round-off, not error.
+        let floor = round_off_floor(&report);
+        let previous = best;
+        if best.is_none_or(|(e, _)| error < e) {
+            best = Some((error, report.mesh.len()));
+        }
+        let best_now = best.unwrap();
+        let Some(tol) = tol else {
+            return Ok(finish(report, &est, pass_nodes, &work, start));
+        };
+        let unreached = |why| {
             BvpError::Unreached(Unreached {
                 tol,
-                best_error: best.0,
-                best_nodes: best.1,
+                best_error: best_now.0,
+                best_nodes: best_now.1,
                 why,
             })
         };
-        // Below a few hundred ulps of a field's size, the estimate is round-off, not error.
-        let floor = round_off_floor(&fine);
-        let previous = best;
-        if best.is_none_or(|(e, _)| error < e) {
-            best = Some((error, fine.mesh.len()));
-        }
-        let best_now = best.unwrap();
         if error <= floor.max(tol) && tol < floor {
-            return Err(unreached(UnreachedWhy::Floor, best_now));
+            return Err(unreached(UnreachedWhy::Floor));
         }
         if error <= tol {
-            fine.stats.error_estimate = Some(est.error_estimate());
-            fine.stats.mesh_refinements = Some(pass_nodes.len() - 1);
-            fine.stats.pass_nodes = Some(pass_nodes);
-            fine.stats.newton_iterations = work.0;
-            fine.stats.residual_evaluations = work.1;
-            fine.stats.jacobian_evaluations = work.2;
-            fine.stats.wall_seconds = start.elapsed().as_secs_f64();
-            return Ok(fine);
+            return Ok(finish(report, &est, pass_nodes, &work, start));
         }
         if previous.is_some_and(|(e, _)| error > 0.5 * e) {
-            return Err(unreached(UnreachedWhy::Floor, best_now));
+            return Err(unreached(UnreachedWhy::Floor));
         }
         if pass_nodes.len() >= MAX_PASSES {
-            return Err(unreached(UnreachedWhy::Passes, best_now));
+            return Err(unreached(UnreachedWhy::Passes));
         }
-        // Global error ≈ K Σ e_i; equidistributed, Σ e_i = n τ with n = Σ (e_i/τ)^{1/(p+1)}.
-        let sum: f64 = est.local.iter().sum();
-        let target = if sum > 0.0 {
-            let k = error / sum;
-            let q = 1.0 / (order as f64 + 1.0);
-            let s_q: f64 = est.local.iter().map(|e| e.powf(q)).sum();
-            (AIM * tol.max(floor) / (k * s_q)).powf(1.0 / (1.0 - q))
-        } else {
-            0.0
-        };
-        // The coarse mesh of the next pass has at most (max_nodes + 1) / 2 nodes, so that its
-        // halved mesh, the one reported, has at most max_nodes.
+        let target = next_target(&est, order, AIM * tol.max(floor));
+        // The reported mesh of the next pass has at most max_nodes nodes: M halved has
+        // 2M − 1, and with Richardson too the report is on M halved.
         let cap = settings.max_nodes.div_ceil(2);
-        let mesh = match equidistribute(&coarse.mesh, &est.local, order, target, &floors, cap) {
-            Ok(m) => m,
-            Err(_) => {
-                let max_nodes = settings.max_nodes;
-                return Err(unreached(UnreachedWhy::NodeCap { max_nodes }, best_now));
-            }
+        let Ok(mesh) = equidistribute(&coarse.mesh, &est.local, order, target, &floors, cap) else {
+            let max_nodes = settings.max_nodes;
+            return Err(unreached(UnreachedWhy::NodeCap { max_nodes }));
         };
-        coarse = solve_on_mesh(params, &s, mesh, Some(&fine))?;
-        add(&mut work, &coarse);
+        coarse = solve_on_mesh(params, &s, mesh, Some(&report))?;
+        work.add(&coarse);
     }
+}
+
+/// The local error τ every interval of the next mesh should have so that the global error
+/// is `aim`: the global error is taken as K Σ e_i (K measured on this pass); equidistributed,
+/// Σ e_i = n τ with n = Σ (e_i/τ)^{1/(p+1)}.
+fn next_target(est: &PassEstimate, order: u32, aim: f64) -> f64 {
+    let sum: f64 = est.local.iter().sum();
+    if !(sum > 0.0) {
+        return 0.0;
+    }
+    let k = est.overall() / sum;
+    let q = 1.0 / (order as f64 + 1.0);
+    let s_q: f64 = est.local.iter().map(|e| e.powf(q)).sum();
+    (aim / (k * s_q)).powf(1.0 / (1.0 - q))
+}
+
+/// The reported solution with its estimate, the passes and the work of them all.
+fn finish(
+    mut report: Solution,
+    est: &PassEstimate,
+    pass_nodes: Vec<usize>,
+    work: &Work,
+    start: Instant,
+) -> Solution {
+    let stats = &mut report.stats;
+    stats.error_estimate = Some(est.error_estimate());
+    stats.mesh_refinements = Some(pass_nodes.len() - 1);
+    stats.pass_nodes = Some(pass_nodes);
+    stats.newton_iterations = work.iterations;
+    stats.residual_evaluations = work.residuals;
+    stats.jacobian_evaluations = work.jacobians;
+    stats.continuation_stages = 0;
+    stats.wall_seconds = start.elapsed().as_secs_f64();
+    report
 }

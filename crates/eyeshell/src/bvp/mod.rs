@@ -43,6 +43,28 @@ pub struct FieldRow {
 }
 
 impl FieldRow {
+    /// The row of values in the order of [`COLUMNS`].
+    pub fn from_values(v: [f64; 14]) -> FieldRow {
+        let [sigma_ref, sigma, kappa, alpha_s, r, theta, q, z, s, alpha_phi, alpha_n, h, t_s, t_phi] =
+            v;
+        FieldRow {
+            sigma_ref,
+            sigma,
+            kappa,
+            alpha_s,
+            r,
+            theta,
+            q,
+            z,
+            s,
+            alpha_phi,
+            alpha_n,
+            h,
+            t_s,
+            t_phi,
+        }
+    }
+
     /// The values in the order of [`COLUMNS`].
     pub fn values(&self) -> [f64; 14] {
         [

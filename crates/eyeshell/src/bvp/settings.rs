@@ -67,6 +67,9 @@ pub struct SolverSettings {
     /// solver.max_nodes: the most nodes an adapted mesh may have (its halved mesh's, the
     /// one reported).
     pub max_nodes: usize,
+    /// solver.richardson: report Richardson's extrapolation of the solutions on M and M
+    /// halved (order p + 2), with its error estimated from M halved twice.
+    pub richardson: bool,
 }
 
 impl Default for SolverSettings {
@@ -85,6 +88,7 @@ impl Default for SolverSettings {
             max_seconds: None,
             tol: None,
             max_nodes: DEFAULT_MAX_NODES,
+            richardson: false,
         }
     }
 }

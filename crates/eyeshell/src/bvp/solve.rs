@@ -723,13 +723,14 @@ fn polish(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], f_scale: &[f64]) {
 }
 
 /// Solve the elastic BVP, warm-started from `warm` when given. With `solver.tol` (and no
-/// warm start) the mesh is adapted to it ([`super::adapt`]).
+/// warm start) the mesh is adapted to it, and with `solver.richardson` the extrapolated
+/// solution is reported ([`super::adapt`]).
 pub fn solve(
     params: &Params,
     settings: &SolverSettings,
     warm: Option<&Solution>,
 ) -> Result<Solution, BvpError> {
-    if settings.tol.is_some() && warm.is_none() {
+    if (settings.tol.is_some() || settings.richardson) && warm.is_none() {
         return super::adapt::solve_to_tolerance(params, settings);
     }
     solve_on_mesh(params, settings, mesh_of(params, settings)?, warm)

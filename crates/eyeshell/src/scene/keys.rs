@@ -522,6 +522,13 @@ pub static KEYS: &[KeySpec] = &[
         growth: false,
     },
     KeySpec {
+        key: "solver.richardson",
+        access: Access::Bool { get: |s| s.solver.richardson, set: |s, v| s.solver.richardson = v },
+        rule: Rule::Any,
+        doc: "report Richardson's extrapolation of the solutions on a mesh and on it halved (order 6 with Hermite–Simpson, on the halved mesh's nodes), with its error estimated from the mesh halved twice; with solver.tol the mesh is adapted to it, without on the mesh of solver.nodes",
+        growth: false,
+    },
+    KeySpec {
         key: "growth.eta0",
         access: Access::Float { get: |s| growth(s).eta0, set: |s, v| s.growth_mut().eta0 = v },
         rule: Rule::NonNegative,

@@ -568,6 +568,13 @@ impl Scene {
                     .into(),
             ));
         }
+        if self.solver.richardson && self.growth.is_some() {
+            return Err(invalid(
+                &["solver.richardson"],
+                show(&KeyValue::Bool(true)),
+                "is for elastic solves only: a growth run is not extrapolated".into(),
+            ));
+        }
         if let Some(g) = &self.growth {
             let times = &self.growth_settings.output_times;
             if let Some(&last) = times.last().filter(|&&t| t > g.t_end) {

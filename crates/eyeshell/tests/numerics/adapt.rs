@@ -77,9 +77,21 @@ fn worst(e: &[f64; 5]) -> f64 {
 
 /// Solve at each tolerance; check true ≤ tol and est/true in [1/3, 30].
 fn check(name: &str, p: &Params, exact: bool, scheme: Scheme, tols: &[f64]) {
-    for &tol in tols {
-        let sol = bvp::solve(p, &tol_settings(tol, scheme), None)
-            .unwrap_or_else(|e| panic!("{name}, tol {tol:e}: {e}"));
+    check_with(
+        name,
+        p,
+        exact,
+        &tols
+            .iter()
+            .map(|&t| tol_settings(t, scheme))
+            .collect::<Vec<_>>(),
+    );
+}
+
+fn check_with(name: &str, p: &Params, exact: bool, settings: &[SolverSettings]) {
+    for s in settings {
+        let (tol, scheme) = (s.tol.unwrap(), s.scheme);
+        let sol = bvp::solve(p, s, None).unwrap_or_else(|e| panic!("{name}, tol {tol:e}: {e}"));
         let est = sol.stats.error_estimate.expect("an estimate");
         let truth = true_error(p, &sol, exact);
         let t = worst(&truth);
@@ -149,6 +161,25 @@ fn trapezoid_meets_the_tolerance_too() {
         false,
         Scheme::Trapezoid,
         &[1e-4, 1e-6],
+    );
+}
+
+/// solver.richardson: the extrapolated solution (order 6) meets the tolerance, and its
+/// estimate (from the mesh halved twice) is reliable, on far fewer nodes.
+#[test]
+fn richardson_meets_the_tolerance_with_its_own_estimate() {
+    let rich = |tol| SolverSettings {
+        richardson: true,
+        ..tol_settings(tol, Scheme::HermiteSimpson)
+    };
+    let settings: Vec<SolverSettings> = [1e-6, 1e-8, 1e-10].map(rich).to_vec();
+    check_with("exact sphere, Richardson", &exact_sphere(), true, &settings);
+    check_with("fibre shell, Richardson", &fibre_shell(), false, &settings);
+    check_with(
+        "non-uniform shell, Richardson",
+        &nonuniform_shell(),
+        false,
+        &settings,
     );
 }
 
