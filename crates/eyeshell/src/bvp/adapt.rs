@@ -27,8 +27,8 @@
 //!
 //! **Stopping.** A tolerance below the fields' round-off floor ([`round_off_floor`]: 256
 //! ulps of the largest field, 6e-13 for r ≈ 11 mm) cannot be told from round-off; the
-//! solve refines to that floor and stops. When the estimate no longer falls (by half, pass
-//! on pass), the arithmetic has run out too; when the next mesh would exceed `solver.max_nodes`,
+//! solve refines to that floor and stops. When the estimate no longer falls (at an observed
+//! order below 1, two passes in a row), the arithmetic has run out too; when the next mesh would exceed `solver.max_nodes`,
 //! it is out of reach. Either way the solve stops with the best error and its nodes.
 
 use super::solve::{cornea_layer, mesh_of, solve_on_mesh, BvpError, Solution};
@@ -62,8 +62,11 @@ pub struct Unreached {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum UnreachedWhy {
+    /// tol is below the fields' round-off floor ([`round_off_floor`]), which the estimate
+    /// has reached.
+    RoundOff { floor: f64 },
     /// The estimate stopped falling: round-off.
-    Floor,
+    Stalled,
     /// The next mesh would have more nodes than solver.max_nodes.
     NodeCap { max_nodes: usize },
     /// MAX_PASSES passes did not reach tol.
@@ -80,9 +83,13 @@ impl std::fmt::Display for Unreached {
             self.best_nodes
         )?;
         match self.why {
-            UnreachedWhy::Floor => write!(
+            UnreachedWhy::RoundOff { floor } => write!(
                 f,
-                "the error stopped falling as the mesh was refined (round-off floor): ask for a larger tol"
+                "it is below the round-off floor of these fields ({floor:.1e}, {ROUND_OFF_ULPS} ulps of the largest): ask for a larger tol"
+            ),
+            UnreachedWhy::Stalled => write!(
+                f,
+                "the error stopped falling as the mesh was refined (round-off): ask for a larger tol"
             ),
             UnreachedWhy::NodeCap { max_nodes } => write!(
                 f,
@@ -453,6 +460,9 @@ pub fn solve_to_tolerance(
     let mut coarse = solve_on_mesh(params, &s, mesh_of(params, &s)?, None)?;
     let mut pass_nodes = vec![];
     let mut best: Option<(f64, usize)> = None;
+    // The last pass's (error, nodes), and how many passes in a row the error stalled.
+    let mut last: Option<(f64, usize)> = None;
+    let mut stalls = 0;
     let mut work = Work::default();
     work.add(&coarse);
     loop {
@@ -467,7 +477,6 @@ pub fn solve_to_tolerance(
         pass_nodes.push(report.mesh.len());
         // Below a few hundred ulps of a field's size, the estimate is round-off, not error.
         let floor = round_off_floor(&report);
-        let previous = best;
         if best.is_none_or(|(e, _)| error < e) {
             best = Some((error, report.mesh.len()));
         }
@@ -484,14 +493,21 @@ pub fn solve_to_tolerance(
             })
         };
         if error <= floor.max(tol) && tol < floor {
-            return Err(unreached(UnreachedWhy::Floor));
+            return Err(unreached(UnreachedWhy::RoundOff { floor }));
         }
         if error <= tol {
             return Ok(finish(report, &est, pass_nodes, &work, start));
         }
-        if previous.is_some_and(|(e, _)| error > 0.5 * e) {
-            return Err(unreached(UnreachedWhy::Floor));
+        // Twice in a row: once may be a coarse mesh's estimate, not yet asymptotic.
+        if last.is_some_and(|(e, n)| stalled(e, n, error, report.mesh.len())) {
+            stalls += 1;
+            if stalls == 2 {
+                return Err(unreached(UnreachedWhy::Stalled));
+            }
+        } else {
+            stalls = 0;
         }
+        last = Some((error, report.mesh.len()));
         if pass_nodes.len() >= MAX_PASSES {
             return Err(unreached(UnreachedWhy::Passes));
         }
@@ -506,6 +522,15 @@ pub fn solve_to_tolerance(
         coarse = solve_on_mesh(params, &s, mesh, Some(&report))?;
         work.add(&coarse);
     }
+}
+
+/// Has the error stopped falling? From `e0` on `n0` nodes to `e1` on `n1`: the observed
+/// order log(e0/e1) / log(n1/n0) is below 1 (the scheme's is 4 or 6) on a mesh at least
+/// 20 % larger. (A pass that added fewer nodes, or that fell short of its aim, is no
+/// evidence: the next pass aims again.)
+fn stalled(e0: f64, n0: usize, e1: f64, n1: usize) -> bool {
+    let growth = n1 as f64 / n0 as f64;
+    growth >= 1.2 && e1 > 0.0 && (e0 / e1).ln() < growth.ln()
 }
 
 /// The local error τ every interval of the next mesh should have so that the global error
