@@ -265,3 +265,29 @@ fn richardson_alone_extrapolates_on_the_mesh_of_solver_nodes() {
         "{est:e} vs {worst:e}"
     );
 }
+
+/// `solver.max_seconds` bounds a tolerance-driven solve as a whole, not each of its solves.
+#[test]
+fn max_seconds_bounds_the_whole_adaptive_solve() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let Run { code, stderr, .. } = eyeshell(&[
+        "solve",
+        "scenes/fibres-nonuniform.toml",
+        "--set",
+        "solver.tol=1e-12",
+        "--set",
+        "solver.max_seconds=0.002",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr
+            .starts_with("eyeshell: error: solver.max_seconds = 0.002 s reached in the solve on ")
+            && stderr.contains("solver.tol's adaptation")
+            && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}

@@ -375,8 +375,7 @@ fn pass(
     coarse: &Solution,
     work: &mut Work,
 ) -> Result<PassResult, BvpError> {
-    let fine = solve_on_mesh(params, s, coarse.mesh.halved(), Some(coarse))?;
-    work.add(&fine);
+    let fine = work.solve(params, s, coarse.mesh.halved(), Some(coarse))?;
     let est = estimate(coarse, &fine);
     if !s.richardson {
         return Ok(PassResult {
@@ -388,8 +387,7 @@ fn pass(
     }
     // Order p + 2: the extrapolations from (M, M/2) and (M/2, M/4) differ by the error of
     // the first, (2^{p+2} − 1) times that of the second, at M's nodes.
-    let finer = solve_on_mesh(params, s, fine.mesh.halved(), Some(&fine))?;
-    work.add(&finer);
+    let finer = work.solve(params, s, fine.mesh.halved(), Some(&fine))?;
     let first = extrapolate(coarse, &fine);
     let second = extrapolate(&fine, &finer);
     let p = s.scheme.order() + 2;
@@ -412,19 +410,65 @@ fn pass(
     })
 }
 
-/// Newton work summed over the solves of an adaptive solve.
-#[derive(Default)]
+/// The solves of an adaptive solve: the Newton work summed over them, and
+/// `solver.max_seconds`, which bounds them all together (each solve gets what is left).
 struct Work {
+    start: Instant,
+    max_seconds: Option<f64>,
     iterations: usize,
     residuals: usize,
     jacobians: usize,
 }
 
 impl Work {
-    fn add(&mut self, sol: &Solution) {
+    fn new(max_seconds: Option<f64>) -> Work {
+        Work {
+            start: Instant::now(),
+            max_seconds,
+            iterations: 0,
+            residuals: 0,
+            jacobians: 0,
+        }
+    }
+
+    /// One solve on `mesh` (from `warm` when given) within the time left.
+    fn solve(
+        &mut self,
+        params: &Params,
+        s: &SolverSettings,
+        mesh: Mesh,
+        warm: Option<&Solution>,
+    ) -> Result<Solution, BvpError> {
+        let nodes = mesh.len();
+        let out_of_time = |total: f64| {
+            BvpError::OutOfTime(crate::deadline::OutOfTime {
+                seconds: total,
+                place: format!("in the solve on {nodes} nodes of solver.tol's adaptation"),
+            })
+        };
+        let left = match self.max_seconds {
+            Some(total) => {
+                let left = total - self.start.elapsed().as_secs_f64();
+                if !(left > 0.0) {
+                    return Err(out_of_time(total));
+                }
+                Some(left)
+            }
+            None => None,
+        };
+        let s = SolverSettings {
+            max_seconds: left,
+            ..*s
+        };
+        let sol =
+            solve_on_mesh(params, &s, mesh, warm).map_err(|e| match (e, self.max_seconds) {
+                (BvpError::OutOfTime(_), Some(total)) => out_of_time(total),
+                (e, _) => e,
+            })?;
         self.iterations += sol.stats.newton_iterations;
         self.residuals += sol.stats.residual_evaluations;
         self.jacobians += sol.stats.jacobian_evaluations;
+        Ok(sol)
     }
 }
 
@@ -437,7 +481,6 @@ pub fn solve_to_tolerance(
     params: &Params,
     settings: &SolverSettings,
 ) -> Result<Solution, BvpError> {
-    let start = Instant::now();
     let tol = settings.tol;
     let s = SolverSettings {
         nodes: if tol.is_some() {
@@ -457,14 +500,13 @@ pub fn solve_to_tolerance(
         grade_pole: s.pole_grading,
         cornea_layer: cornea_layer(params, &s),
     };
-    let mut coarse = solve_on_mesh(params, &s, mesh_of(params, &s)?, None)?;
+    let mut work = Work::new(settings.max_seconds);
+    let mut coarse = work.solve(params, &s, mesh_of(params, &s)?, None)?;
     let mut pass_nodes = vec![];
     let mut best: Option<(f64, usize)> = None;
     // The last pass's (error, nodes), and how many passes in a row the error stalled.
     let mut last: Option<(f64, usize)> = None;
     let mut stalls = 0;
-    let mut work = Work::default();
-    work.add(&coarse);
     loop {
         let PassResult {
             report,
@@ -482,7 +524,7 @@ pub fn solve_to_tolerance(
         }
         let best_now = best.unwrap();
         let Some(tol) = tol else {
-            return Ok(finish(report, &est, pass_nodes, &work, start));
+            return Ok(finish(report, &est, pass_nodes, &work));
         };
         let unreached = |why| {
             BvpError::Unreached(Unreached {
@@ -496,7 +538,7 @@ pub fn solve_to_tolerance(
             return Err(unreached(UnreachedWhy::RoundOff { floor }));
         }
         if error <= tol {
-            return Ok(finish(report, &est, pass_nodes, &work, start));
+            return Ok(finish(report, &est, pass_nodes, &work));
         }
         // Twice in a row: once may be a coarse mesh's estimate, not yet asymptotic.
         if last.is_some_and(|(e, n)| stalled(e, n, error, report.mesh.len())) {
@@ -519,8 +561,7 @@ pub fn solve_to_tolerance(
             let max_nodes = settings.max_nodes;
             return Err(unreached(UnreachedWhy::NodeCap { max_nodes }));
         };
-        coarse = solve_on_mesh(params, &s, mesh, Some(&report))?;
-        work.add(&coarse);
+        coarse = work.solve(params, &s, mesh, Some(&report))?;
     }
 }
 
@@ -553,7 +594,6 @@ fn finish(
     est: &PassEstimate,
     pass_nodes: Vec<usize>,
     work: &Work,
-    start: Instant,
 ) -> Solution {
     let stats = &mut report.stats;
     stats.error_estimate = Some(est.error_estimate());
@@ -563,6 +603,6 @@ fn finish(
     stats.residual_evaluations = work.residuals;
     stats.jacobian_evaluations = work.jacobians;
     stats.continuation_stages = 0;
-    stats.wall_seconds = start.elapsed().as_secs_f64();
+    stats.wall_seconds = work.start.elapsed().as_secs_f64();
     report
 }
