@@ -18,18 +18,25 @@
 //! for Hermite–Simpson, linear for the trapezoid), less the smooth part of the global
 //! error difference: ≈ h_i^p |y^(p)| / c, times h_i it is the local error e_i ∝ h_i^{p+1}.
 //! The global error is taken as K Σ e_i (K measured on this pass), and the next mesh
-//! equidistributes e_i so that it should reach tol / 2. The new mesh is walked from each
+//! equidistributes e_i so that it should reach 0.3 tol ([`AIM`]). The new mesh is walked from each
 //! fixed node (ε, the breakpoints, L) to the next with the smallest of: the spacing the
 //! indicator asks for, the pole grading's (a spacing no larger than (1 − q)/q times the
 //! distance from the pole, and ε at the pole), the cornea grading's (layer/4 near L, then
 //! growing at most as the distance from L) and a twentieth of the shell. Each new mesh
 //! starts Newton from the last solution through its interpolant.
 //!
+//! **Richardson** (`solver.richardson`). A pass also solves on M halved twice, and reports
+//! the extrapolation of (M/2, M/4) on M/2's nodes, order p + 2; its error is estimated at
+//! M's nodes against the extrapolation of (M, M/2), over 2^{p+2} − 1. The local errors of
+//! the (M, M/2) pair, raised to the power (p + 3)/(p + 1), lay the next mesh. Without
+//! `solver.tol` one pass is made, on the mesh of `solver.nodes`.
+//!
 //! **Stopping.** A tolerance below the fields' round-off floor ([`round_off_floor`]: 256
 //! ulps of the largest field, 6e-13 for r ≈ 11 mm) cannot be told from round-off; the
 //! solve refines to that floor and stops. When the estimate no longer falls (at an observed
-//! order below 1, two passes in a row), the arithmetic has run out too; when the next mesh would exceed `solver.max_nodes`,
-//! it is out of reach. Either way the solve stops with the best error and its nodes.
+//! order below 1, two passes in a row), the arithmetic has run out too; when the next mesh
+//! would exceed `solver.max_nodes`, it is out of reach. Either way the solve stops with the
+//! best error and its nodes. `solver.max_seconds` bounds all the passes together.
 
 use super::solve::{cornea_layer, mesh_of, solve_on_mesh, BvpError, Solution};
 use super::{ErrorEstimate, FieldRow};
@@ -46,7 +53,7 @@ pub const MAX_PASSES: usize = 12;
 /// Each pass aims at this fraction of tol, so that a pass whose prediction is optimistic
 /// (the first, from a coarse mesh, often is) still meets tol: a pass costs more than the
 /// 35 % more nodes this asks for.
-const AIM: f64 = 0.3;
+pub const AIM: f64 = 0.3;
 /// A pass refines an interval at most this many times, and coarsens it at most 4 times.
 const MAX_REFINE: f64 = 64.0;
 const MAX_COARSEN: f64 = 4.0;
@@ -225,7 +232,7 @@ impl Floors {
 }
 
 /// The next mesh: on each coarse interval the spacing that makes its local error
-/// `target`, within the gradings' floors; breakpoints stay nodes. None when it would have
+/// `target`, within the gradings' floors; breakpoints stay nodes. Err when it would have
 /// more than `max_nodes` nodes: the walk stops there, before allocating more, and returns
 /// the count it reached.
 pub fn equidistribute(
@@ -605,4 +612,66 @@ fn finish(
     stats.continuation_stages = 0;
     stats.wall_seconds = work.start.elapsed().as_secs_f64();
     report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::profiles;
+
+    fn fibre_params() -> Params {
+        Params {
+            d: 200.0,
+            ..Params::default()
+        }
+    }
+
+    /// A mesh laid by equidistribution keeps every breakpoint as a node (the same ones, in
+    /// order), and every spacing within the pole's and the cornea's gradings.
+    #[test]
+    fn equidistributed_meshes_keep_breakpoints_and_gradings() {
+        let p = fibre_params();
+        let s = SolverSettings {
+            nodes: START_NODES,
+            ..SolverSettings::default()
+        };
+        let mesh = mesh_of(&p, &s).unwrap();
+        let layer = 0.05;
+        let floors = Floors {
+            epsilon: s.epsilon,
+            length: p.length(),
+            grade_pole: true,
+            cornea_layer: Some(layer),
+        };
+        // Local errors that vary by 12 orders of magnitude along the shell.
+        let local: Vec<f64> = (0..mesh.intervals())
+            .map(|i| 10f64.powi(-(((i * 7) % 13) as i32)))
+            .collect();
+        let next = equidistribute(&mesh, &local, 4, 1e-9, &floors, 100_000).unwrap();
+        let bps = profiles::breakpoints(&p);
+        assert_eq!(next.breakpoint_nodes.len(), bps.len());
+        for (k, &b) in bps.iter().enumerate() {
+            assert_eq!(next.nodes[next.breakpoint_nodes[k]], b);
+        }
+        assert!(next.nodes.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(next.nodes[0], s.epsilon);
+        assert_eq!(*next.nodes.last().unwrap(), p.length());
+        let q = (1.0 - POLE_RATIO) / POLE_RATIO;
+        let l = p.length();
+        for i in 0..next.intervals() {
+            let (x, h) = (next.nodes[i], next.step(i));
+            let pole = s.epsilon.max(q * (x - s.epsilon));
+            let cornea = (0.25 * layer).max((l - x) / 3.0);
+            // A step cut short before a fixed node is split in two equal halves, each at
+            // most the spacing allowed at its start.
+            assert!(
+                h <= 1.0000001 * pole.min(cornea),
+                "interval {i} at {x}: {h}"
+            );
+        }
+        // The first interval is no longer than ε, as the pole grading's.
+        assert!(next.step(0) <= s.epsilon * (1.0 + 1e-12));
+        // Too many nodes: refused before they are laid.
+        assert!(equidistribute(&mesh, &local, 4, 1e-30, &floors, 1000).is_err_and(|n| n > 1000));
+    }
 }
