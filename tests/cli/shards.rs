@@ -278,13 +278,16 @@ fn slow_scene() -> String {
     format!("{text}[sweep.grid]\n\"growth.Gamma\" = [4, 5, 6, 7]\n")
 }
 
-#[test]
-fn a_shard_killed_mid_way_resumes_and_keeps_its_finished_runs() {
-    let dir = scene_dir(&slow_scene());
-    let d = dir.path();
-    // Shard 1/2 (two runs), one at a time, in a process group of its own: SIGKILL to the
-    // group once its first run has ended, as a cluster ends a job out of time.
-    let (mut child, _stderr, first) = spawn_in_own_group(
+/// Shard 1/2 of [`slow_scene`] (two runs, one at a time) started in `d`, in a process
+/// group of its own, once its first run has ended; with that run's name.
+fn shard_one_of_two_after_its_first_run(
+    d: &Path,
+) -> (
+    std::process::Child,
+    std::io::BufReader<std::process::ChildStderr>,
+    String,
+) {
+    let (child, stderr, first) = spawn_in_own_group(
         d,
         &[
             "sweep", "s.toml", "--out", "out", "--jobs", "1", "--shard", "1/2",
@@ -296,12 +299,27 @@ fn a_shard_killed_mid_way_resumes_and_keeps_its_finished_runs() {
         .next()
         .unwrap()
         .to_string();
+    (child, stderr, done)
+}
+
+/// SIGKILL to `child`'s process group (as a cluster ends a job out of time), then reap it.
+fn kill_group(child: &mut std::process::Child) {
     let killed = Command::new("kill")
         .args(["-KILL", "--", &format!("-{}", child.id())])
         .status()
         .unwrap();
     assert!(killed.success());
     let _ = child.wait();
+}
+
+#[test]
+fn a_shard_killed_mid_way_resumes_and_keeps_its_finished_runs() {
+    let dir = scene_dir(&slow_scene());
+    let d = dir.path();
+    // Shard 1/2 (two runs), one at a time, in a process group of its own: SIGKILL to the
+    // group once its first run has ended, as a cluster ends a job out of time.
+    let (mut child, _stderr, done) = shard_one_of_two_after_its_first_run(d);
+    kill_group(&mut child);
     // The record still says the shard was running, with one run done.
     let record = std::fs::read_to_string(d.join("out/shards/1.json")).unwrap();
     assert!(record.contains("\"status\": \"running\""), "{record}");
@@ -671,18 +689,7 @@ fn a_million_run_grid_is_planned_and_sharded_without_building_its_scenes() {
 fn a_plain_sweep_is_refused_while_a_shard_runs_in_its_directory() {
     let dir = scene_dir(&slow_scene());
     let d = dir.path();
-    let (mut child, _stderr, first) = spawn_in_own_group(
-        d,
-        &[
-            "sweep", "s.toml", "--out", "out", "--jobs", "1", "--shard", "1/2",
-        ],
-        "eyeshell: [1/2] ",
-    );
-    let done = first["eyeshell: [1/2] ".len()..]
-        .split(' ')
-        .next()
-        .unwrap()
-        .to_string();
+    let (mut child, _stderr, done) = shard_one_of_two_after_its_first_run(d);
     for extra in [&[][..], &["--resume"][..]] {
         let mut args = vec!["sweep", "s.toml", "--out", "out", "-q"];
         args.extend_from_slice(extra);
@@ -694,12 +701,7 @@ fn a_plain_sweep_is_refused_while_a_shard_runs_in_its_directory() {
             plain.stderr
         );
     }
-    let killed = Command::new("kill")
-        .args(["-KILL", "--", &format!("-{}", child.id())])
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    let _ = child.wait();
+    kill_group(&mut child);
     // The shard's finished run and its record are still there (a fresh plain sweep would
     // have replaced the directory), and neither table was written.
     assert!(d.join("out/runs").join(&done).join("result.json").is_file());

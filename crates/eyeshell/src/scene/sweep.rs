@@ -62,19 +62,22 @@ pub struct Sweep {
 impl Sweep {
     /// Read the sweep in `path`, with `overrides` applied to every run.
     pub fn from_file(path: &std::path::Path, overrides: &[String]) -> Result<Sweep, SceneError> {
-        let (origin, text) = super::read_scene_file(path)?;
-        Sweep::from_toml_str(&text, &origin, overrides)
+        Sweep::from_plan(SweepPlan::from_file(path, overrides)?)
     }
 
     /// Parse a sweep (a scene without `[sweep]` is a sweep of one run, named after it) and
-    /// build every run's scene (at most [`MAX_RUNS`]; a larger sweep is planned with
-    /// [`SweepPlan`] and run in shards).
+    /// build every run's scene ([`Sweep::from_plan`]).
     pub fn from_toml_str(
         text: &str,
         origin: &str,
         overrides: &[String],
     ) -> Result<Sweep, SceneError> {
-        let plan = SweepPlan::from_toml_str(text, origin, overrides)?;
+        Sweep::from_plan(SweepPlan::from_toml_str(text, origin, overrides)?)
+    }
+
+    /// Every run of `plan`, built (at most [`MAX_RUNS`]; a larger sweep runs in shards, each
+    /// building only its own runs).
+    pub fn from_plan(plan: SweepPlan) -> Result<Sweep, SceneError> {
         if plan.len() > MAX_RUNS {
             return Err(SceneError::BadSweep {
                 origin: plan.origin.clone(),
