@@ -195,7 +195,7 @@ fn a_tolerance_below_round_off_fails_in_one_line() {
     assert!(!out.exists());
 }
 
-/// A node cap below what the tolerance needs, and solver.tol in a growth scene.
+/// A node cap below what the tolerance needs; solver.richardson in a growth scene.
 #[test]
 fn solver_tol_refusals_are_clear() {
     let dir = tempfile::tempdir().unwrap();
@@ -216,11 +216,19 @@ fn solver_tol_refusals_are_clear() {
         "{stderr}"
     );
     assert!(!out.exists());
+    // In a growth scene solver.tol chooses the mesh; solver.richardson is refused.
     let Run { code, stderr, .. } =
         eyeshell(&["check", "scenes/const.toml", "--set", "solver.tol=1e-6"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let Run { code, stderr, .. } = eyeshell(&[
+        "check",
+        "scenes/const.toml",
+        "--set",
+        "solver.richardson=true",
+    ]);
     assert_eq!(code, Some(2), "{stderr}");
     assert!(
-        stderr.contains("solver.tol") && stderr.contains("growth"),
+        stderr.contains("solver.richardson") && stderr.contains("growth"),
         "{stderr}"
     );
 }

@@ -187,6 +187,14 @@ pub fn estimate(coarse: &Solution, fine: &Solution) -> PassEstimate {
     PassEstimate { global, local }
 }
 
+/// Newton's tolerance under `solver.tol`: its error must sit well below the
+/// discretisation's.
+pub fn newton_tol_for(settings: &SolverSettings) -> f64 {
+    settings.tol.map_or(settings.newton_tol, |t| {
+        settings.newton_tol.min(1e-2 * t).max(1e-13)
+    })
+}
+
 /// Resolution of a field: differences below ROUND_OFF_ULPS · ε_mach · max|field| are
 /// round-off (Newton stops at a scaled residual of 1e-13 at best).
 const ROUND_OFF_ULPS: f64 = 256.0;
@@ -214,6 +222,21 @@ pub struct Floors {
 }
 
 impl Floors {
+    /// The gradings `s` asks for on the shell of `params` (the cornea's layer as the start
+    /// mesh of [`START_NODES`] would grade into it).
+    pub fn of(params: &Params, s: &SolverSettings) -> Floors {
+        let start = SolverSettings {
+            nodes: START_NODES,
+            ..*s
+        };
+        Floors {
+            epsilon: s.epsilon,
+            length: params.length(),
+            grade_pole: s.pole_grading,
+            cornea_layer: cornea_layer(params, &start),
+        }
+    }
+
     /// The largest spacing allowed for an interval starting at x.
     fn spacing(&self, x: f64) -> f64 {
         let mut h = (self.length - self.epsilon) / 20.0;
@@ -495,18 +518,10 @@ pub fn solve_to_tolerance(
         } else {
             settings.nodes
         },
-        // Newton's error must sit well below the discretisation's.
-        newton_tol: tol.map_or(settings.newton_tol, |t| {
-            settings.newton_tol.min(1e-2 * t).max(1e-13)
-        }),
+        newton_tol: newton_tol_for(settings),
         ..*settings
     };
-    let floors = Floors {
-        epsilon: s.epsilon,
-        length: params.length(),
-        grade_pole: s.pole_grading,
-        cornea_layer: cornea_layer(params, &s),
-    };
+    let floors = Floors::of(params, &s);
     let mut work = Work::new(settings.max_seconds);
     let mut coarse = work.solve(params, &s, mesh_of(params, &s)?, None)?;
     let mut pass_nodes = vec![];
@@ -584,7 +599,7 @@ fn stalled(e0: f64, n0: usize, e1: f64, n1: usize) -> bool {
 /// The local error τ every interval of the next mesh should have so that the global error
 /// is `aim`: the global error is taken as K Σ e_i (K measured on this pass); equidistributed,
 /// Σ e_i = n τ with n = Σ (e_i/τ)^{1/(p+1)}.
-fn next_target(est: &PassEstimate, order: u32, aim: f64) -> f64 {
+pub fn next_target(est: &PassEstimate, order: u32, aim: f64) -> f64 {
     let sum: f64 = est.local.iter().sum();
     if !(sum > 0.0) {
         return 0.0;

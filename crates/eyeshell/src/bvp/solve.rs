@@ -521,6 +521,11 @@ impl ElasticSolver {
         self.kin.system().deadline
     }
 
+    /// The shell's parameters.
+    pub fn params(&self) -> Params {
+        self.params
+    }
+
     pub fn discretisation(&self) -> &Discretisation {
         &self.kin.system().disc
     }

@@ -12,6 +12,7 @@ pub mod crossing;
 pub mod dae;
 pub(crate) mod euler;
 pub(crate) mod ida;
+pub mod mesh_choice;
 pub(crate) mod points;
 #[doc(hidden)]
 pub mod system;
@@ -200,6 +201,9 @@ pub struct GrowthStats {
     pub t_reached: f64,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
+    /// With `solver.tol`: how the material mesh was chosen (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh_choice: Option<mesh_choice::MeshChoice>,
 }
 
 /// Why an observer (or an output callback) stopped a run: any error of the caller's, a full
@@ -301,11 +305,62 @@ pub type OutputFn<'a> =
 
 /// The growth run behind [`grow`], for callers that want the system itself at each output
 /// time (t = 0, the output times, t_end): `output(sys, t, p)` with p the growth state.
+/// With `solver.tol` the material mesh is chosen first ([`mesh_choice`]), and the run
+/// records how in its stats.
 pub fn run(
     params: &crate::model::params::Params,
     solver: &crate::bvp::settings::SolverSettings,
     growth: &GrowthParams,
     settings: &GrowthSettings,
+    output: &mut OutputFn<'_>,
+    progress: &mut ProgressFn<'_>,
+) -> Result<GrowthStats, GrowthError> {
+    let Some(_) = solver.tol else {
+        return run_on(params, solver, growth, settings, None, output, progress);
+    };
+    let start = std::time::Instant::now();
+    let (mesh, choice) =
+        mesh_choice::choose(params, solver, growth, settings).map_err(|reason| GrowthError {
+            t: 0.0,
+            reason,
+            stats: Box::default(),
+        })?;
+    // The run's elastic solves are as tight as the choice's.
+    let solver = crate::bvp::settings::SolverSettings {
+        newton_tol: crate::bvp::adapt::newton_tol_for(solver),
+        ..*solver
+    };
+    let with_choice = |stats: &mut GrowthStats| {
+        stats.mesh_choice = Some(choice.clone());
+        stats.wall_seconds = start.elapsed().as_secs_f64();
+    };
+    match run_on(
+        params,
+        &solver,
+        growth,
+        settings,
+        Some(mesh),
+        output,
+        progress,
+    ) {
+        Ok(mut stats) => {
+            with_choice(&mut stats);
+            Ok(stats)
+        }
+        Err(mut e) => {
+            with_choice(&mut e.stats);
+            Err(e)
+        }
+    }
+}
+
+/// The growth run on `mesh` (None: the mesh of `solver.nodes`).
+pub(crate) fn run_on(
+    params: &crate::model::params::Params,
+    solver: &crate::bvp::settings::SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    mesh: Option<crate::mesh::Mesh>,
     output: &mut OutputFn<'_>,
     progress: &mut ProgressFn<'_>,
 ) -> Result<GrowthStats, GrowthError> {
@@ -316,8 +371,11 @@ pub fn run(
         reason,
         stats: Box::new(stats),
     };
-    let mut sys = system::GrowthSystem::new(params, solver, growth)
-        .map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
+    let sys = match mesh {
+        None => system::GrowthSystem::new(params, solver, growth),
+        Some(mesh) => system::GrowthSystem::on_mesh(params, solver, growth, mesh),
+    };
+    let mut sys = sys.map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let p0 = sys.points.initial_state();
     let times = recorded_times(settings, t_end);
     output(&mut sys, 0.0, &p0).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;

@@ -119,14 +119,34 @@ impl GrowthSystem {
         solver: &SolverSettings,
         growth: &GrowthParams,
     ) -> Result<Self, RhsError> {
-        let mut elastic = ElasticSolver::new(params, solver)?;
+        Self::with_elastic(ElasticSolver::new(params, solver)?, solver, growth)
+    }
+
+    /// The growth system on a given material mesh (it must hold the scene's breakpoints), as
+    /// `solver.tol` chooses it ([`super::mesh_choice`]).
+    pub fn on_mesh(
+        params: &Params,
+        solver: &SolverSettings,
+        growth: &GrowthParams,
+        mesh: crate::mesh::Mesh,
+    ) -> Result<Self, RhsError> {
+        let elastic = ElasticSolver::on_mesh(params, solver, mesh)?;
+        Self::with_elastic(elastic, solver, growth)
+    }
+
+    fn with_elastic(
+        mut elastic: ElasticSolver,
+        solver: &SolverSettings,
+        growth: &GrowthParams,
+    ) -> Result<Self, RhsError> {
+        let params = elastic.params();
         elastic.solve_cold()?;
         // Successive right sides change the shell a little: modified Newton from the last
         // factorisation, refactored every 3 iterations (measured on the const scene, N = 501:
         // 0.77 → 0.63 s; refactoring every 10 iterations is slower again).
         elastic.set_jacobian_reuse(Some(REFACTOR_EVERY))?;
         let disc = elastic.discretisation();
-        let points = GrowthPoints::new(params, growth, &disc.mesh, disc.scheme);
+        let points = GrowthPoints::new(&params, growth, &disc.mesh, disc.scheme);
         let last_good_u = elastic.u.clone();
         Ok(GrowthSystem {
             elastic,

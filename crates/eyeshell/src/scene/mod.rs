@@ -559,15 +559,6 @@ impl Scene {
             ));
         }
         self.validate_mesh(sources)?;
-        if let (Some(tol), Some(_)) = (self.solver.tol, &self.growth) {
-            return Err(invalid(
-                &["solver.tol"],
-                show(&KeyValue::Float(tol)),
-                "is for elastic solves only: a growth run's material mesh cannot move, and \
-                 choosing it from a tolerance is not implemented yet (use solver.nodes)"
-                    .into(),
-            ));
-        }
         if self.solver.richardson && self.growth.is_some() {
             return Err(invalid(
                 &["solver.richardson"],

@@ -247,3 +247,41 @@ fn a_failed_run_says_when_and_keeps_what_it_had() {
     assert!(!snaps.is_empty() && snaps.iter().all(|s| s.t <= e.t));
     assert!(e.stats.bvp_solves > 0);
 }
+
+/// `solver.tol` in a growth run (the const scene): the material mesh is chosen once, and
+/// the estimated elastic error at t = 0 and at t_end is at most tol; the axial length agrees
+/// with a fixed mesh of 2001 nodes within tol (both at rtol 1e-9, so that the time
+/// integration's error stays below it).
+#[test]
+fn solver_tol_chooses_the_growth_mesh() {
+    let tol = 1e-6;
+    let g = GrowthParams::default();
+    let s = GrowthSettings {
+        rtol: 1e-9,
+        atol: 1e-11,
+        ..GrowthSettings::default()
+    };
+    let solver = SolverSettings {
+        tol: Some(tol),
+        ..SolverSettings::default()
+    };
+    let mut keep = Keep::default();
+    let stats = grow(&Params::default(), &solver, &g, &s, &mut keep).unwrap();
+    let choice = stats
+        .mesh_choice
+        .expect("solver.tol records its mesh choice");
+    assert_eq!(choice.nodes, keep.0[0].fields.len());
+    assert_eq!(*choice.test_run_nodes.last().unwrap(), choice.nodes);
+    let (first, last) = (choice.estimates[0], *choice.estimates.last().unwrap());
+    assert_eq!((first.t, last.t), (0.0, 1.0));
+    assert!(choice
+        .estimates
+        .iter()
+        .all(|e| e.error_estimate.overall <= tol));
+    // Not trivially small either: the grown shell needs the nodes it got.
+    assert!(last.error_estimate.overall > 1e-3 * tol, "{last:?}");
+    let (fine, r) = run(2001, &g, &s);
+    r.unwrap();
+    let (a, b) = (axial(&keep.0), axial(&fine));
+    assert!((a[3] - b[3]).abs() <= tol, "{a:?} against {b:?}");
+}
