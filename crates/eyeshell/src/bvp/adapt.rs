@@ -47,7 +47,7 @@ use crate::text::number;
 use std::time::Instant;
 
 /// Uniform nodes of the first, coarse mesh (pole and cornea gradings and breakpoints on top).
-pub const START_NODES: usize = 21;
+pub const START_NODES: usize = 11;
 /// The most passes (each a solve on M and on M halved) before giving up.
 pub const MAX_PASSES: usize = 12;
 /// Each pass aims at this fraction of tol, so that a pass whose prediction is optimistic
@@ -237,25 +237,58 @@ impl Floors {
         }
     }
 
-    /// The largest spacing allowed for an interval starting at x.
-    fn spacing(&self, x: f64) -> f64 {
-        let mut h = (self.length - self.epsilon) / 20.0;
+    /// The largest spacing of the mesh M at x such that M halved, the mesh reported, keeps
+    /// the gradings: each of its intervals, starting at y, no longer than ε, than
+    /// (1 − q)/q (y − ε) (the pole's), than max(layer/4, (L − y)/3) (the cornea's) and
+    /// than a twentieth of the shell. For M that is twice the pole's and the shell's, and at
+    /// the cornea max(layer/2, (L − x)/2) (M halved's second half-step, nearer L, keeps its
+    /// third).
+    fn coarse_spacing(&self, x: f64) -> f64 {
+        let mut h = (self.length - self.epsilon) / 10.0;
         if self.grade_pole {
             h = h.min(
-                self.epsilon
+                2.0 * self
+                    .epsilon
                     .max((1.0 - POLE_RATIO) / POLE_RATIO * (x - self.epsilon)),
             );
         }
         if let Some(layer) = self.cornea_layer {
-            // Spacing ≤ max(layer/4, distance from L left after the step / 2).
-            h = h.min((0.25 * layer).max((self.length - x) / 3.0));
+            h = h.min((0.5 * layer).max((self.length - x) / 2.0));
         }
         h
     }
 }
 
-/// The next mesh: on each coarse interval the spacing that makes its local error
-/// `target`, within the gradings' floors; breakpoints stay nodes. Err when it would have
+/// The first, coarse mesh: [`START_NODES`] uniform nodes and the breakpoints, graded so
+/// that its halving has the pole's and the cornea's gradings ([`Floors::coarse_spacing`]),
+/// as every later mesh is. (Graded as a reported mesh, its halving would grade the pole twice
+/// as finely as a uniform + graded mesh of the same spacing: on the exact sphere at tol
+/// 1e-4, 55 nodes where 49 reach the same error.)
+pub fn start_mesh(params: &Params, s: &SolverSettings) -> Result<Mesh, BvpError> {
+    let uniform = SolverSettings {
+        nodes: START_NODES,
+        pole_grading: false,
+        cornea_grading: false,
+        ..*s
+    };
+    let mesh = mesh_of(params, &uniform)?;
+    // Local errors that ask for the uniform spacing h everywhere (not for the short
+    // intervals beside the breakpoints, which would spread to their neighbours).
+    let h = (params.length() - s.epsilon) / (START_NODES - 1) as f64;
+    let local: Vec<f64> = (0..mesh.intervals())
+        .map(|i| (mesh.step(i) / h).powi(5))
+        .collect();
+    let floors = Floors::of(params, s);
+    // The gradings add a few dozen nodes at most; past the cap (never seen), grade as usual.
+    match equidistribute(&mesh, &local, 4, 1.0, &floors, 10 * START_NODES) {
+        Ok(start) => Ok(start),
+        Err(_) => Ok(mesh_of(params, s)?),
+    }
+}
+
+/// The next mesh M: on each coarse interval the spacing that makes its local error
+/// `target`, within the gradings' floors for M (so that M halved, the reported mesh, keeps
+/// the gradings); breakpoints stay nodes. Err when it would have
 /// more than `max_nodes` nodes: the walk stops there, before allocating more, and returns
 /// the count it reached.
 pub fn equidistribute(
@@ -295,7 +328,7 @@ pub fn equidistribute(
             while j + 1 < w[1] && mesh.nodes[j + 1] <= x {
                 j += 1;
             }
-            let mut h = floors.spacing(x).min(wanted[j]);
+            let mut h = floors.coarse_spacing(x).min(wanted[j]);
             // Every coarse interval the step reaches into bounds it too.
             let mut k = j + 1;
             while k < w[1] && mesh.nodes[k] < x + h {
@@ -523,7 +556,12 @@ pub fn solve_to_tolerance(
     };
     let floors = Floors::of(params, &s);
     let mut work = Work::new(settings.max_seconds);
-    let mut coarse = work.solve(params, &s, mesh_of(params, &s)?, None)?;
+    let start = if tol.is_some() {
+        start_mesh(params, &s)?
+    } else {
+        mesh_of(params, &s)?
+    };
+    let mut coarse = work.solve(params, &s, start, None)?;
     let mut pass_nodes = vec![];
     let mut best: Option<(f64, usize)> = None;
     // The last pass's (error, nodes), and how many passes in a row the error stalled.
@@ -671,10 +709,12 @@ mod tests {
         assert!(next.nodes.windows(2).all(|w| w[0] < w[1]));
         assert_eq!(next.nodes[0], s.epsilon);
         assert_eq!(*next.nodes.last().unwrap(), p.length());
+        // The reported mesh, M halved, keeps the gradings.
+        let reported = next.halved();
         let q = (1.0 - POLE_RATIO) / POLE_RATIO;
         let l = p.length();
-        for i in 0..next.intervals() {
-            let (x, h) = (next.nodes[i], next.step(i));
+        for i in 0..reported.intervals() {
+            let (x, h) = (reported.nodes[i], reported.step(i));
             let pole = s.epsilon.max(q * (x - s.epsilon));
             let cornea = (0.25 * layer).max((l - x) / 3.0);
             // A step cut short before a fixed node is split in two equal halves, each at
@@ -685,7 +725,15 @@ mod tests {
             );
         }
         // The first interval is no longer than ε, as the pole grading's.
-        assert!(next.step(0) <= s.epsilon * (1.0 + 1e-12));
+        assert!(reported.step(0) <= s.epsilon * (1.0 + 1e-12));
+        // So does the start mesh's halving.
+        let start = start_mesh(&p, &s).unwrap().halved();
+        assert!(start.step(0) <= s.epsilon * (1.0 + 1e-12));
+        for i in 0..start.intervals() {
+            let (x, h) = (start.nodes[i], start.step(i));
+            let pole = s.epsilon.max(q * (x - s.epsilon));
+            assert!(h <= 1.0000001 * pole, "start interval {i} at {x}: {h}");
+        }
         // Too many nodes: refused before they are laid.
         assert!(equidistribute(&mesh, &local, 4, 1e-30, &floors, 1000).is_err_and(|n| n > 1000));
     }
