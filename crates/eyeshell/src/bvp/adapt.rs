@@ -20,10 +20,12 @@
 //! The global error is taken as K Σ e_i (K measured on this pass), and the next mesh
 //! equidistributes e_i so that it should reach 0.3 tol ([`AIM`]). The new mesh is walked from each
 //! fixed node (ε, the breakpoints, L) to the next with the smallest of: the spacing the
-//! indicator asks for, the pole grading's (a spacing no larger than (1 − q)/q times the
-//! distance from the pole, and ε at the pole), the cornea grading's (layer/4 near L, then
-//! growing at most as the distance from L) and a twentieth of the shell. Each new mesh
-//! starts Newton from the last solution through its interpolant.
+//! indicator asks for and the gradings, which bound the mesh reported, M halved: the pole's
+//! (a spacing no larger than (1 − q)/q times the distance from the pole, and ε at the
+//! pole), the cornea's (layer/4 near L, then growing at most as the distance from L) and a
+//! twentieth of the shell ([`Floors::coarse_spacing`]). The first mesh ([`start_mesh`]) is
+//! [`START_NODES`] uniform nodes laid the same way. Each new mesh starts Newton from the
+//! last solution through its interpolant.
 //!
 //! **Richardson** (`solver.richardson`). A pass also solves on M halved twice, and reports
 //! the extrapolation of (M/2, M/4) on M/2's nodes, order p + 2; its error is estimated at

@@ -17,7 +17,7 @@
 //! from point to point of the shell (each point stops growing at its own time), and that
 //! jitter in the unloaded shell's data is part of what M/2 sees and M does not. On the const
 //! scene at tol 1e-6, a test run at rtol 1e-4 left the estimate stalled at 4e-6 however
-//! fine the mesh; at the scene's rtol 1e-6 it took 1119 nodes, at rtol 1e-9 only 567.
+//! fine the mesh; at the scene's rtol 1e-6 it took 1039 nodes, at rtol 1e-9 only 525.
 //!
 //! What it promises: the estimated elastic error of every field (in summary.json's units,
 //! [`crate::bvp::adapt`]), at t = 0 and at the snapshot times of the last test run (the run
