@@ -23,7 +23,8 @@
 //! [`crate::bvp::adapt`]), at t = 0 and at the snapshot times of the last test run (the run
 //! on the chosen mesh with the run's own settings), is at most tol. What it does not: the
 //! error of the time integration (solver.rtol's), the elastic error between snapshot
-//! times, and anything about the growth fields beyond the elastic ones.
+//! times, and anything about the growth fields beyond the elastic ones. `solver.max_seconds`
+//! bounds the adaptation at t = 0, each test run and the final run each on its own.
 
 use crate::bvp::adapt::{self, PassEstimate};
 use crate::bvp::discretisation::{MaterialData, NY};
