@@ -311,11 +311,13 @@ fn slow_sweep(dir: &Path) {
         .replace("nodes = 21", "nodes = 201")
         .replace("t_end = 0.2", "t_end = 1.0")
         .replace("times = [0.1]", "times = [0.5]")
-        // The published Euler's fixed work (4000 elastic solves, about 1 s a run here), so
-        // that a run outlasts the tests' signals however fast the adaptive integrators get.
+        // The published Euler's fixed work (12000 elastic solves, about 2.3 s a run here),
+        // so that a run outlasts the tests' signals however fast the solves get and however
+        // loaded the machine (at 4000 steps, 0.8 s, a run once ended between the two
+        // Ctrl-Cs of `a_second_ctrl_c_ends_the_workers_too` at load 7).
         .replace(
             "rtol = 1e-3",
-            "rtol = 1e-6\nintegrator = \"euler\"\nsteps = 4000",
+            "rtol = 1e-6\nintegrator = \"euler\"\nsteps = 12000",
         );
     write_scene(
         dir,
