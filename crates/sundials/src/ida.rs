@@ -90,6 +90,23 @@ pub trait DaeSystem {
     ) -> CallbackResult {
         Err(CallbackError::Fatal("no Jacobian".into()))
     }
+
+    /// Forward sensitivities only ([`Ida::init_sensitivities`]): for each parameter j,
+    /// rs\[j\] = F_y ys\[j\] + F_y' yps\[j\] + ∂F/∂p_j at (t, y, y'), r = F(t, y, y')
+    /// (IDASensResFn). Recoverable makes IDAS cut the step.
+    #[allow(clippy::too_many_arguments)] // IDASensResFn's arguments, each distinct
+    fn sensitivity_residual(
+        &mut self,
+        _t: f64,
+        _y: &[f64],
+        _yp: &[f64],
+        _r: &[f64],
+        _ys: &[&[f64]],
+        _yps: &[&[f64]],
+        _rs: &mut [&mut [f64]],
+    ) -> CallbackResult {
+        Err(CallbackError::Fatal("no sensitivity residual".into()))
+    }
 }
 
 /// The linear solver inside IDA's Newton iteration.
@@ -278,6 +295,8 @@ pub struct Ida<S: DaeSystem> {
     n: usize,
     /// Whether options.id was given (IDACalcIC needs it).
     has_id: bool,
+    /// The number of sensitivities ([`Ida::init_sensitivities`]; 0 without).
+    pub(crate) n_sens: usize,
     _ctx: Rc<Context>,
 }
 
@@ -347,6 +366,7 @@ impl<S: DaeSystem> Ida<S> {
             yp,
             n,
             has_id,
+            n_sens: 0,
             _ctx: ctx,
         };
         if let Linear::Custom { solver, .. } = &ida.linsol {
@@ -670,6 +690,12 @@ impl<S: DaeSystem> Ida<S> {
                 self.n
             ));
         }
+        self.check_dense_output_time(t)?;
+        self.mem.get_dky(&self.log, &self._ctx, t, k, out)
+    }
+
+    /// Refuse a t outside the last step (see [`Ida::dky`]).
+    pub(crate) fn check_dense_output_time(&self, t: f64) -> Result<(), SundialsError> {
         // IDAGetDky 6.4 refuses only a t before the last step and extrapolates beyond its
         // end without complaint; refuse that too, as CVODE does, with IDA's fuzz and message.
         let s = self.stats();
@@ -687,7 +713,7 @@ impl<S: DaeSystem> Ida<S> {
                 Some(message),
             ));
         }
-        self.mem.get_dky(&self.log, &self._ctx, t, k, out)
+        Ok(())
     }
 
     /// The counters so far (also after a failure).
@@ -720,6 +746,14 @@ impl<S: DaeSystem> Ida<S> {
     pub fn system(&self) -> &S {
         // SAFETY: no callback is running while we hold &self (advance_to needs &mut self).
         unsafe { &self.shared.get().system }
+    }
+
+    pub(crate) fn parts(&self) -> (&Mem, &RawBox<ErrorLog>, &Rc<Context>) {
+        (&self.mem, &self.log, &self._ctx)
+    }
+
+    pub(crate) fn parts_mut(&mut self) -> (&Mem, &mut RawBox<ErrorLog>, &Rc<Context>) {
+        (&self.mem, &mut self.log, &self._ctx)
     }
 
     pub fn system_mut(&mut self) -> &mut S {

@@ -23,6 +23,7 @@ mod cvode;
 mod error;
 mod fastops;
 mod ida;
+mod idas;
 mod integrator;
 mod kinsol;
 mod klu;
@@ -36,6 +37,7 @@ pub use context::Context;
 pub use cvode::{Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem};
 pub use error::SundialsError;
 pub use ida::{DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats};
+pub use idas::{IdaSensStats, SensitivityOptions};
 pub use kinsol::{Kinsol, KinsolOptions, KinsolStats, NonlinearSystem, Strategy};
 pub use linsol::{LinearSolver, LinearSolverSpec};
 pub use matrix::{

@@ -173,6 +173,8 @@ struct PointRates {
     g_v: f64,
     eta: f64,
     beyond: bool,
+    /// ∂(rate_ρ, rate_γ)/∂g_c: the rates are linear in the growth capacity.
+    per_capacity: [f64; 2],
 }
 
 /// Derivatives of (rate_ρ, rate_γ, depth, angle) in (r, θ, z, α_s, ρ, γ_s) and d.
@@ -205,6 +207,58 @@ pub struct CoupledDae {
     /// The (p, u) the discretisation's data and evaluations were last set for.
     at_p: Vec<f64>,
     pub counters: DaeCounters,
+    /// Forward sensitivities: the parameters, and F_y and each ∂F/∂p_j at the y they were
+    /// last computed for (IDAS's staggered corrector asks for them repeatedly at one y).
+    sens_params: Vec<SensParam>,
+    sens_jac: Csr,
+    sens_fp: Vec<Vec<f64>>,
+    sens_at: Vec<f64>,
+}
+
+/// A parameter the growth run's forward sensitivities are taken with respect to
+/// (docs/MODEL.md §5: g_c(Σ) = η0/2 (1 + tanh((Γ − Σ)/δ))). These enter only the growth
+/// rates, through the capacity, so ∂F/∂p is exact and analytic: the rates are linear in g_c.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SensParam {
+    /// growth.eta0.
+    Eta0,
+    /// growth.Gamma.
+    Gamma,
+    /// growth.delta.
+    Delta,
+}
+
+impl SensParam {
+    pub const ALL: [SensParam; 3] = [SensParam::Eta0, SensParam::Gamma, SensParam::Delta];
+
+    /// The scene key.
+    pub fn key(self) -> &'static str {
+        match self {
+            SensParam::Eta0 => "growth.eta0",
+            SensParam::Gamma => "growth.Gamma",
+            SensParam::Delta => "growth.delta",
+        }
+    }
+
+    /// Its value in `g`.
+    pub fn value(self, g: &super::GrowthParams) -> f64 {
+        match self {
+            SensParam::Eta0 => g.eta0,
+            SensParam::Gamma => g.gamma,
+            SensParam::Delta => g.delta,
+        }
+    }
+
+    /// ∂g_c/∂p at Σ = `sigma` (docs/MODEL.md §5).
+    pub fn capacity_partial(self, g: &super::GrowthParams, sigma: f64) -> f64 {
+        let u = (g.gamma - sigma) / g.delta;
+        let (th, sech2) = (u.tanh(), 1.0 - u.tanh() * u.tanh());
+        match self {
+            SensParam::Eta0 => 0.5 * (1.0 + th),
+            SensParam::Gamma => 0.5 * g.eta0 * sech2 / g.delta,
+            SensParam::Delta => -0.5 * g.eta0 * sech2 * u / g.delta,
+        }
+    }
 }
 
 /// Work done by the coupled system's callbacks.
@@ -267,9 +321,14 @@ impl CoupledDae {
             derivs: vec![],
             at_p: vec![],
             counters: DaeCounters::default(),
+            sens_params: vec![],
+            sens_jac: Csr::from_rows(vec![]),
+            sens_fp: vec![],
+            sens_at: vec![],
             sys,
         };
         dae.jac = Csr::from_rows(dae.pattern());
+        dae.sens_jac = dae.jac.clone();
         dae
     }
 
@@ -481,6 +540,101 @@ impl CoupledDae {
         let (p_dot, w_dot) = yp.split_at_mut(n_p);
         schur.solve_algebraic(p_dot, w_dot)?;
         Ok(yp)
+    }
+
+    /// Take forward sensitivities with respect to `params`.
+    pub fn set_sensitivities(&mut self, params: &[SensParam]) {
+        self.sens_params = params.to_vec();
+        self.sens_at.clear();
+    }
+
+    /// The parameters of the forward sensitivities.
+    pub fn sensitivity_params(&self) -> &[SensParam] {
+        &self.sens_params
+    }
+
+    /// ∂F/∂p at y for parameter `param`: only the growth rows, −(∂rates/∂g_c) ∂g_c/∂p; the
+    /// elastic rows and the border do not hold g_c.
+    pub fn parameter_residual(
+        &mut self,
+        y: &[f64],
+        param: SensParam,
+        out: &mut [f64],
+    ) -> Result<(), RhsError> {
+        self.load(y)?;
+        let local = self.locals(y, None);
+        let (rates, _) = self.point_rates(y, &local, None);
+        self.check_finite(&rates, None)?;
+        out.fill(0.0);
+        let g = self.sys.growth_params();
+        for (k, pr) in rates.iter().enumerate() {
+            let dc = param.capacity_partial(g, self.sys.points.sigma_ref[k]);
+            out[NP * k] = -pr.per_capacity[0] * dc;
+            out[NP * k + 1] = -pr.per_capacity[1] * dc;
+        }
+        Ok(())
+    }
+
+    /// The sensitivity residuals rs_j = F_y ys_j + F_y' yps_j + ∂F/∂p_j at y (F_y' is the
+    /// identity on the growth rows and zero elsewhere). F_y is the Newton matrix's own
+    /// analytic assembly at c = 0, in a matrix of its own (the Newton matrix stays factored).
+    pub fn sensitivity_residual(
+        &mut self,
+        y: &[f64],
+        ys: &[&[f64]],
+        yps: &[&[f64]],
+        rs: &mut [&mut [f64]],
+    ) -> Result<(), DaeError> {
+        if self.sens_at.as_slice() != y {
+            self.sens_at.clear();
+            std::mem::swap(&mut self.jac, &mut self.sens_jac);
+            let assembled = self.assemble(0.0, y);
+            std::mem::swap(&mut self.jac, &mut self.sens_jac);
+            assembled?;
+            let n = self.len();
+            let mut fp = std::mem::take(&mut self.sens_fp);
+            fp.resize(self.sens_params.len(), vec![0.0; n]);
+            for (j, &param) in self.sens_params.clone().iter().enumerate() {
+                self.parameter_residual(y, param, &mut fp[j])?;
+            }
+            self.sens_fp = fp;
+            self.sens_at.extend_from_slice(y);
+        }
+        for j in 0..rs.len() {
+            let r = &mut *rs[j];
+            self.sens_jac.mul(ys[j], r);
+            for k in 0..self.n_p {
+                r[k] += yps[j][k];
+            }
+            for (a, b) in r.iter_mut().zip(&self.sens_fp[j]) {
+                *a += b;
+            }
+        }
+        Ok(())
+    }
+
+    /// The consistent initial sensitivities at the consistent y(0) = `y`: s(0) = 0 (the
+    /// initial shell and its equilibrium do not hold the growth parameters), and s'(0) from
+    /// F_y' s' = −F_p on the growth rows, the algebraic rows' derivative as in
+    /// [`CoupledDae::derivative`] (so the history IDAS starts from is consistent).
+    pub fn initial_sensitivities(&mut self, y: &[f64]) -> Result<Vec<Vec<f64>>, DaeError> {
+        let n = self.len();
+        let mut out = Vec::with_capacity(self.sens_params.len());
+        self.assemble(0.0, y)?;
+        let mut schur = SchurSolver::new(&self.jac, self.n_p, true, Reduced::Band)?;
+        schur.factor_algebraic(&self.jac)?;
+        for &param in &self.sens_params.clone() {
+            let mut fp = vec![0.0; n];
+            self.parameter_residual(y, param, &mut fp)?;
+            let mut sp = vec![0.0; n];
+            for k in 0..self.n_p {
+                sp[k] = -fp[k];
+            }
+            let (p_dot, w_dot) = sp.split_at_mut(self.n_p);
+            schur.solve_algebraic(p_dot, w_dot)?;
+            out.push(sp);
+        }
+        Ok(out)
     }
 
     /// The local state of every point; with `grads`, each one's derivatives in its window.
@@ -715,6 +869,7 @@ impl CoupledDae {
             pr.eta = cap * pr.g_v;
             pr.rho = pr.eta * pr_;
             pr.gamma = pr.eta * gam * pa;
+            pr.per_capacity = [pr.g_v * pr_, pr.g_v * gam * pa];
             if let Some(dv) = deriv.as_deref_mut() {
                 let rd = &mut dv[k];
                 // ∂g_v/∂(local) and ∂g_v/∂d: the slope of the branch the value took.

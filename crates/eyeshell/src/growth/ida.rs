@@ -13,7 +13,8 @@ use super::dae::{CoupledDae, DaeLinear};
 use super::GrowthSettings;
 use crate::text::decimals6;
 use eyeshell_sundials::{
-    CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats,
+    CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaSensStats,
+    IdaStats, SensitivityOptions,
 };
 
 /// The first step, from the second derivative of the growth state at t = 0 as CVODE
@@ -93,7 +94,38 @@ impl DaeSystem for GrowthDae<'_> {
     fn linear_solve(&mut self, b: &[f64], x: &mut [f64]) -> CallbackResult {
         self.dae.solve(b, x).map_err(recoverable)
     }
+
+    fn sensitivity_residual(
+        &mut self,
+        _t: f64,
+        y: &[f64],
+        _yp: &[f64],
+        _r: &[f64],
+        ys: &[&[f64]],
+        yps: &[&[f64]],
+        rs: &mut [&mut [f64]],
+    ) -> CallbackResult {
+        self.dae
+            .sensitivity_residual(y, ys, yps, rs)
+            .map_err(recoverable)
+    }
 }
+
+/// The forward sensitivities of a run: s(0), s'(0) (from
+/// [`CoupledDae::initial_sensitivities`]), whether they take part in the error test, and
+/// what receives them at each output time.
+pub struct Sensitivities<'a> {
+    pub ys0: Vec<Vec<f64>>,
+    pub yps0: Vec<Vec<f64>>,
+    pub scales: Vec<f64>,
+    pub error_control: bool,
+    pub output: &'a mut SensOutput<'a>,
+}
+
+/// What receives the sensitivities at an output time: `output(dae, t, y, s)`, called before
+/// the state's own output there.
+pub type SensOutput<'a> =
+    dyn FnMut(&mut CoupledDae, f64, &[f64], &[Vec<f64>]) -> Result<(), String> + 'a;
 
 /// Whether the local error test leaves out the algebraic unknowns (IDASetSuppressAlg): no.
 /// Measured on the const scene's work-precision diagram (BENCHMARKS.md): testing them too
@@ -117,7 +149,8 @@ pub fn integrate(
     times: &[f64],
     output: &mut DaeOutput<'_>,
     progress: &mut super::ProgressFn<'_>,
-) -> (IdaStats, Result<(), (f64, String)>) {
+    sens: Option<Sensitivities<'_>>,
+) -> (IdaStats, IdaSensStats, Result<(), (f64, String)>) {
     let atol = dae.abs_tolerances(settings.rtol, settings.atol, r0);
     let h0 = initial_step(dae, y0, yp0, settings.rtol, &atol, t_end);
     let options = IdaOptions {
@@ -141,34 +174,60 @@ pub fn integrate(
         &options,
     ) {
         Ok(ida) => ida,
-        Err(e) => return (IdaStats::default(), Err((0.0, e.to_string()))),
+        Err(e) => {
+            return (
+                IdaStats::default(),
+                IdaSensStats::default(),
+                Err((0.0, e.to_string())),
+            )
+        }
     };
     let n = y0.len();
+    let mut sens_output = None;
+    if let Some(sens) = sens {
+        let options = SensitivityOptions {
+            error_control: sens.error_control,
+            scales: sens.scales,
+        };
+        if let Err(e) = ida.init_sensitivities(&sens.ys0, &sens.yps0, &options) {
+            return (
+                IdaStats::default(),
+                IdaSensStats::default(),
+                Err((0.0, e.to_string())),
+            );
+        }
+        sens_output = Some(sens.output);
+    }
     let result = super::march(
         &mut IdaStepper {
             ida: &mut ida,
             yp: vec![0.0; n],
             output,
+            sens_output,
+            s: vec![],
         },
         n,
         t_end,
         times,
         progress,
     );
-    (ida.stats(), result)
+    (ida.stats(), ida.sensitivity_stats(), result)
 }
 
 /// What receives the coupled system's state at an output time.
 pub type DaeOutput<'a> = dyn FnMut(&mut CoupledDae, f64, &[f64]) -> Result<(), String> + 'a;
 
 /// IDA as [`super::march`] drives it.
-struct IdaStepper<'a, 'b, 'c> {
+struct IdaStepper<'a, 'b, 'c, 'd> {
     ida: &'a mut Ida<GrowthDae<'b>>,
     yp: Vec<f64>,
     output: &'a mut DaeOutput<'c>,
+    sens_output: Option<&'d mut SensOutput<'d>>,
+    /// The sensitivities at the output time (scratch).
+    s: Vec<Vec<f64>>,
 }
 
-impl super::Stepper for IdaStepper<'_, '_, '_> {
+impl super::Stepper for IdaStepper<'_, '_, '_, '_> {
     fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
         self.ida.step(t_end, y, &mut self.yp).map_err(|e| {
             // The deadline's own message rather than IDA's "the residual failed".
@@ -183,6 +242,14 @@ impl super::Stepper for IdaStepper<'_, '_, '_> {
     }
 
     fn output(&mut self, t: f64, y: &[f64]) -> Result<(), String> {
+        if let Some(sens_output) = self.sens_output.as_deref_mut() {
+            let (ns, n) = (self.ida.sensitivity_count(), self.ida.n());
+            self.s.resize(ns, vec![0.0; n]);
+            self.ida
+                .sensitivities_at(t, &mut self.s)
+                .map_err(|e| e.to_string())?;
+            sens_output(self.ida.system_mut().dae, t, y, &self.s)?;
+        }
         (self.output)(self.ida.system_mut().dae, t, y)
     }
 }

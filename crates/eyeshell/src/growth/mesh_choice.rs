@@ -118,6 +118,8 @@ fn test_run(
 ) -> Result<(Vec<State>, super::points::GrowthPoints), String> {
     let recorded = GrowthSettings {
         history_points: 0,
+        // The test runs check the mesh only: no sensitivities.
+        sensitivities: Vec::new(),
         ..settings.clone()
     };
     let mut states = vec![];
@@ -146,6 +148,7 @@ fn test_run(
         growth,
         &recorded,
         Some(fine.clone()),
+        &mut |_| Ok(()),
         &mut output,
         &mut |_| Ok(()),
     )

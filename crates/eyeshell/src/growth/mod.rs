@@ -95,6 +95,11 @@ pub struct GrowthSettings {
     /// output.history_points: record the series row (axial length, class, ...) at this many
     /// evenly spaced times t_end·k/n as well (history.csv), without snapshots; 0: none.
     pub history_points: usize,
+    /// Forward sensitivities of the run with respect to these parameters (IDA only;
+    /// `eyeshell grow --sensitivities`): [`Observer::sensitivities`] at every recorded time.
+    pub sensitivities: Vec<dae::SensParam>,
+    /// Whether the sensitivities take part in IDAS's local error test (IDASetSensErrCon).
+    pub sensitivity_error_control: bool,
 }
 
 impl Default for GrowthSettings {
@@ -107,6 +112,8 @@ impl Default for GrowthSettings {
             dae_linear: ida::default_linear(),
             output_times: vec![0.1, 0.2, 0.4, 1.0],
             history_points: 0,
+            sensitivities: vec![],
+            sensitivity_error_control: false,
         }
     }
 }
@@ -197,6 +204,9 @@ pub struct GrowthStats {
     /// IDA with a Schur linear solver: Newton matrices whose growth block was too close to
     /// singular to eliminate unpivoted, factored by the pivoting fallback instead.
     pub linear_fallbacks: usize,
+    /// IDA with forward sensitivities: their work (absent without).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensitivities: Option<SensitivityWork>,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub t_reached: f64,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
@@ -204,6 +214,45 @@ pub struct GrowthStats {
     /// With `solver.tol`: how the material mesh was chosen (absent otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mesh_choice: Option<mesh_choice::MeshChoice>,
+}
+
+/// The forward sensitivities' share of a growth run's work (summary.json), IDAS's counters.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct SensitivityWork {
+    /// The scene keys, in the order of sensitivities.csv.
+    pub parameters: Vec<String>,
+    /// Whether they took part in the local error test.
+    pub error_control: bool,
+    /// Sensitivity residual evaluations (each for every parameter at once).
+    pub residual_evaluations: usize,
+    pub nonlinear_iterations: usize,
+    pub nonlinear_failures: usize,
+    pub error_test_failures: usize,
+    pub linear_setups: usize,
+}
+
+/// One row of sensitivities.csv: how the eye at time `t` moves with one parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensitivityRow {
+    pub t: f64,
+    /// The scene key.
+    pub parameter: &'static str,
+    /// Its value in the run.
+    pub value: f64,
+    /// The axial length itself (for the scaled sensitivity).
+    pub axial_length: f64,
+    /// d(axial length)/dp, d(equatorial radius)/dp, d(retina − blue)/dp, per unit of p.
+    pub d_axial_length: f64,
+    pub d_equatorial_radius: f64,
+    pub d_retina_minus_blue: f64,
+}
+
+impl SensitivityRow {
+    /// (p/L) dL/dp: the relative change of the axial length per relative change of p.
+    pub fn scaled_axial_length(&self) -> f64 {
+        self.value / self.axial_length * self.d_axial_length
+    }
 }
 
 /// Why an observer (or an output callback) stopped a run: any error of the caller's, a full
@@ -222,6 +271,12 @@ pub trait Observer {
     /// Called after every step with the time reached (for a progress bar). An error stops
     /// the run there, as a failed snapshot would (a caller's Ctrl-C, a cancelled job).
     fn progress(&mut self, _t: f64, _t_end: f64) -> Result<(), ObserverError> {
+        Ok(())
+    }
+    /// With `GrowthSettings::sensitivities`: one row per parameter at every recorded time
+    /// (t = 0, the output and history times), in time order (after t = 0's snapshot, before
+    /// each later time's snapshot or history row).
+    fn sensitivities(&mut self, _rows: &[SensitivityRow]) -> Result<(), ObserverError> {
         Ok(())
     }
 }
@@ -250,11 +305,12 @@ pub fn grow(
     let t_end = growth.t_end;
     let snapshot_times = snapshot_times(settings, t_end);
     let with_history = settings.history_points > 0;
-    run(
+    run_with(
         params,
         solver,
         growth,
         settings,
+        &mut |rows| observer.borrow_mut().sensitivities(rows),
         &mut |sys, t, p| {
             let mut obs = observer.borrow_mut();
             if t == 0.0 || snapshot_times.contains(&t) {
@@ -315,8 +371,32 @@ pub fn run(
     output: &mut OutputFn<'_>,
     progress: &mut ProgressFn<'_>,
 ) -> Result<GrowthStats, GrowthError> {
+    run_with(
+        params,
+        solver,
+        growth,
+        settings,
+        &mut |_| Ok(()),
+        output,
+        progress,
+    )
+}
+
+/// What receives the sensitivity rows of one recorded time.
+pub type SensitivityFn<'a> = dyn FnMut(&[SensitivityRow]) -> Result<(), ObserverError> + 'a;
+
+/// [`run`] with the forward sensitivities of `settings.sensitivities` handed to `sens`.
+pub fn run_with(
+    params: &crate::model::params::Params,
+    solver: &crate::bvp::settings::SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    sens: &mut SensitivityFn<'_>,
+    output: &mut OutputFn<'_>,
+    progress: &mut ProgressFn<'_>,
+) -> Result<GrowthStats, GrowthError> {
     let Some(_) = solver.tol else {
-        return run_on(params, solver, growth, settings, None, output, progress);
+        return run_on(params, solver, growth, settings, None, sens, output, progress);
     };
     let start = std::time::Instant::now();
     let (mesh, choice) =
@@ -340,6 +420,7 @@ pub fn run(
         growth,
         settings,
         Some(mesh),
+        sens,
         output,
         progress,
     ) {
@@ -361,6 +442,7 @@ pub(crate) fn run_on(
     growth: &GrowthParams,
     settings: &GrowthSettings,
     mesh: Option<crate::mesh::Mesh>,
+    sens: &mut SensitivityFn<'_>,
     output: &mut OutputFn<'_>,
     progress: &mut ProgressFn<'_>,
 ) -> Result<GrowthStats, GrowthError> {
@@ -371,6 +453,16 @@ pub(crate) fn run_on(
         reason,
         stats: Box::new(stats),
     };
+    if !settings.sensitivities.is_empty() && settings.integrator != Integrator::Ida {
+        return Err(fail(
+            0.0,
+            format!(
+                "sensitivities need solver.integrator = \"ida\" (the scene has \"{}\")",
+                settings.integrator.name()
+            ),
+            GrowthStats::default(),
+        ));
+    }
     let sys = match mesh {
         None => system::GrowthSystem::new(params, solver, growth),
         Some(mesh) => system::GrowthSystem::on_mesh(params, solver, growth, mesh),
@@ -409,7 +501,7 @@ pub(crate) fn run_on(
         }
         Integrator::Ida => {
             let (back, r) = run_ida(
-                sys, params.r0, settings, t_end, &times, output, progress, &mut stats,
+                sys, params.r0, settings, t_end, &times, output, progress, sens, &mut stats,
             );
             sys = back;
             r
@@ -443,27 +535,84 @@ fn run_ida(
     times: &[f64],
     output: &mut OutputFn<'_>,
     progress: &mut ProgressFn<'_>,
+    sens: &mut SensitivityFn<'_>,
     stats: &mut GrowthStats,
 ) -> (system::GrowthSystem, Result<(), (f64, String)>) {
     let mut dae = dae::CoupledDae::new(sys);
+    dae.set_sensitivities(&settings.sensitivities);
     let start = dae
         .set_linear(settings.dae_linear)
         .and_then(|_| dae.initial_state())
-        .and_then(|y| dae.derivative(&y).map(|yp| (y, yp)));
+        .and_then(|y| dae.derivative(&y).map(|yp| (y, yp)))
+        .and_then(|(y, yp)| {
+            let s = match settings.sensitivities.is_empty() {
+                true => vec![],
+                false => dae.initial_sensitivities(&y)?,
+            };
+            Ok((y, yp, s))
+        });
     let result = match start {
         Err(e) => Err((
             0.0,
             format!("the consistent start of the coupled system: {e}"),
         )),
-        Ok((y0, yp0)) => {
+        Ok((y0, yp0, sp0)) => {
             let n_p = dae.differential_len();
             let mut out = |dae: &mut dae::CoupledDae, t: f64, y: &[f64]| {
                 dae.adopt(y);
                 output(&mut dae.sys, t, &y[..n_p]).map_err(|e| e.to_string())
             };
-            let (st, r) = ida::integrate(
-                &mut dae, &y0, &yp0, t_end, settings, r0, times, &mut out, progress,
+            let mut sens_out = |dae: &mut dae::CoupledDae, t: f64, y: &[f64], s: &[Vec<f64>]| {
+                let rows = sensitivity_rows(dae, t, y, s)?;
+                sens(&rows).map_err(|e| e.to_string())
+            };
+            let mut sensitivities = None;
+            if !sp0.is_empty() {
+                let zero = vec![vec![0.0; y0.len()]; sp0.len()];
+                // s(0) = 0: the rows at t = 0 are zero (written by the caller's output there).
+                if let Err(e) = sens_out(&mut dae, 0.0, &y0, &zero) {
+                    return (dae.sys, Err((0.0, e)));
+                }
+                let g = dae.sys.growth_params().clone();
+                sensitivities = Some(ida::Sensitivities {
+                    scales: settings
+                        .sensitivities
+                        .iter()
+                        .map(|p| p.value(&g).abs().max(f64::MIN_POSITIVE))
+                        .collect(),
+                    ys0: zero,
+                    yps0: sp0,
+                    error_control: settings.sensitivity_error_control,
+                    output: &mut sens_out,
+                });
+            }
+            let (st, sst, r) = ida::integrate(
+                &mut dae,
+                &y0,
+                &yp0,
+                t_end,
+                settings,
+                r0,
+                times,
+                &mut out,
+                progress,
+                sensitivities,
             );
+            if !settings.sensitivities.is_empty() {
+                stats.sensitivities = Some(SensitivityWork {
+                    parameters: settings
+                        .sensitivities
+                        .iter()
+                        .map(|p| p.key().to_string())
+                        .collect(),
+                    error_control: settings.sensitivity_error_control,
+                    residual_evaluations: sst.residual_evaluations,
+                    nonlinear_iterations: sst.nonlinear_iterations,
+                    nonlinear_failures: sst.nonlinear_convergence_failures,
+                    error_test_failures: sst.error_test_failures,
+                    linear_setups: sst.linear_setups,
+                });
+            }
             stats.steps = st.steps;
             stats.residual_evaluations = st.residual_evaluations;
             stats.jacobian_evaluations = st.jacobian_evaluations;
@@ -476,6 +625,58 @@ fn run_ida(
         }
     };
     (dae.sys, result)
+}
+
+/// The measured eye's derivatives along each sensitivity s_j = ∂y/∂p_j at the state y:
+/// the measurement (retina, stimulus, largest radius) is a function of y alone, and its
+/// derivative along s_j is taken as a central difference M(y ± ε s_j) — the one place a
+/// directional difference stands in for an analytic derivative (the measurement reads the
+/// retina through the stimulus code, which has no derivative). ε moves y by 1e-6 of its
+/// largest entry: truncation (ε²) and round-off (u/ε) both stay below 1e-9 relative.
+fn sensitivity_rows(
+    dae: &mut dae::CoupledDae,
+    t: f64,
+    y: &[f64],
+    s: &[Vec<f64>],
+) -> Result<Vec<SensitivityRow>, String> {
+    let n_p = dae.differential_len();
+    let measure = |dae: &mut dae::CoupledDae, y: &[f64]| -> Result<SeriesRow, String> {
+        dae.adopt(y);
+        dae.sys.series(t, &y[..n_p]).map_err(|e| e.to_string())
+    };
+    let at = measure(dae, y)?;
+    let g = dae.sys.growth_params().clone();
+    let y_max = y.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+    let mut rows = Vec::with_capacity(s.len());
+    for (sj, &param) in s.iter().zip(dae.sensitivity_params().to_vec().iter()) {
+        let s_max = sj.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        let mut d = [0.0; 3];
+        if s_max > 0.0 {
+            let eps = 1e-6 * y_max / s_max;
+            let shifted = |sign: f64| -> Vec<f64> {
+                y.iter().zip(sj).map(|(a, b)| a + sign * eps * b).collect()
+            };
+            let plus = measure(dae, &shifted(1.0))?;
+            let minus = measure(dae, &shifted(-1.0))?;
+            let diff = |f: fn(&SeriesRow) -> f64| (f(&plus) - f(&minus)) / (2.0 * eps);
+            d = [
+                diff(|r| r.axial_length),
+                diff(|r| r.equatorial_radius),
+                diff(|r| r.retina_minus_blue),
+            ];
+        }
+        rows.push(SensitivityRow {
+            t,
+            parameter: param.key(),
+            value: param.value(&g),
+            axial_length: at.axial_length,
+            d_axial_length: d[0],
+            d_equatorial_radius: d[1],
+            d_retina_minus_blue: d[2],
+        });
+    }
+    dae.adopt(y);
+    Ok(rows)
 }
 
 /// A time integrator as [`march`] drives it: one internal step at a time, its interpolant

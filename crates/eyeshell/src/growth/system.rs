@@ -476,6 +476,11 @@ impl GrowthSystem {
         self.points.law()
     }
 
+    /// The growth model this system runs.
+    pub fn growth_params(&self) -> &super::GrowthParams {
+        &self.growth
+    }
+
     /// The blue best-focus surface.
     pub fn blue(&self) -> Surface {
         self.growth.blue

@@ -16,4 +16,5 @@ mod jacobian;
 mod max_seconds;
 mod property_jacobian;
 mod property_residual;
+mod sensitivities;
 mod solve_features;
