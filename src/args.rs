@@ -234,6 +234,12 @@ pub(crate) struct GrowArgs {
     /// Output directory, written as results come (a previous eyeshell output is replaced; on failure the results so far stay)
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
+    /// Forward sensitivities of the run (IDAS) with respect to these scene keys, into sensitivities.csv (growth.eta0, growth.Gamma, growth.delta)
+    #[arg(long, value_name = "KEY,KEY,...", value_delimiter = ',')]
+    pub(crate) sensitivities: Vec<String>,
+    /// Include the sensitivities in the local error test (IDASetSensErrCon; slower: see BENCHMARKS.md)
+    #[arg(long, requires = "sensitivities")]
+    pub(crate) sensitivity_error_control: bool,
     /// Print nothing on success and draw no progress bar
     #[arg(long, short)]
     pub(crate) quiet: bool,

@@ -1,5 +1,7 @@
 //! `eyeshell solve`, `grow`, `check` and `keys`: one scene.
 
+use eyeshell::growth::dae::SensParam;
+use eyeshell::growth::Integrator;
 use eyeshell::rundir::run::GrowthFailure;
 use eyeshell::rundir::{self, GrowthWriter};
 use eyeshell::scene::{Scene, SceneError, KEYS};
@@ -77,13 +79,14 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
 }
 
 pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
-    let scene = a.scene.load()?;
+    let mut scene = a.scene.load()?;
     if scene.growth.is_none() {
         return Err(Error::input(format!(
             "{}: scene has no [growth] section: use `eyeshell solve`, or add growth keys (e.g. --set growth.eta0=70)",
             scene.origin
         )));
     }
+    set_sensitivities(&mut scene, &a.sensitivities, a.sensitivity_error_control)?;
     let writer = GrowthWriter::create(&a.out, &scene)?;
     let mut bar = progress::GrowthProgress::new(progress::wanted(a.quiet));
     let run = rundir::run::grow_with(&scene, writer, &mut bar);
@@ -138,6 +141,37 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
             dir.display(),
         ));
     }
+    Ok(())
+}
+
+/// `--sensitivities KEY,KEY,...`: the parameters, each once, and only with IDA; refused
+/// before anything is written.
+fn set_sensitivities(scene: &mut Scene, keys: &[String], error_control: bool) -> Result<(), Error> {
+    if keys.is_empty() {
+        return Ok(());
+    }
+    let mut params = Vec::with_capacity(keys.len());
+    for key in keys {
+        let key = key.trim();
+        let p = SensParam::from_key(key)
+            .map_err(|why| Error::input(format!("--sensitivities: {why}")))?;
+        if params.contains(&p) {
+            return Err(Error::input(format!(
+                "--sensitivities: {key} is listed twice"
+            )));
+        }
+        params.push(p);
+    }
+    let integrator = scene.growth_settings.integrator;
+    if integrator != Integrator::Ida {
+        return Err(Error::input(format!(
+            "--sensitivities needs solver.integrator = \"ida\" ({} has \"{}\")",
+            scene.origin,
+            integrator.name()
+        )));
+    }
+    scene.growth_settings.sensitivities = params;
+    scene.growth_settings.sensitivity_error_control = error_control;
     Ok(())
 }
 

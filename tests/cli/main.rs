@@ -23,6 +23,7 @@ mod max_seconds;
 mod ownership;
 mod peer;
 mod readers;
+mod sensitivities;
 mod shards;
 mod slurm;
 mod solve;

@@ -240,6 +240,26 @@ impl SensParam {
         }
     }
 
+    /// The parameter of scene key `key`, or why there is none: a one-line reason naming it.
+    pub fn from_key(key: &str) -> Result<SensParam, String> {
+        if let Some(p) = Self::ALL.into_iter().find(|p| p.key() == key) {
+            return Ok(p);
+        }
+        let supported = "supported: growth.eta0, growth.Gamma, growth.delta";
+        Err(match key {
+            "stimulus.red.offset" => format!(
+                "{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero ({supported})"
+            ),
+            "fibres.D" | "material.C" | "material.bending" | "pressure.dP" | "stimulus.blue.z_B" => format!(
+                "sensitivities to {key} are not implemented yet (it enters the elastic equations or the stimulus, not only the growth rates; {supported})"
+            ),
+            _ => match crate::scene::keys::find(key) {
+                Some(_) => format!("sensitivities to {key} are not available ({supported})"),
+                None => format!("{key:?} is not a scene key ({supported}; `eyeshell keys` lists every key)"),
+            },
+        })
+    }
+
     /// Its value in `g`.
     pub fn value(self, g: &super::GrowthParams) -> f64 {
         match self {

@@ -6,6 +6,8 @@
 //!   renamed, so a snapshot is never half-written;
 //! - `history.csv` (with `output.history_points` > 0): the same columns at every recorded
 //!   time, the history times and the snapshot times, appended and flushed at once;
+//! - `sensitivities.csv` (with `GrowthSettings::sensitivities`): one row per recorded time
+//!   and parameter, [`SENSITIVITY_COLUMNS`], appended and flushed at once;
 //! - `summary.json`: `"status": "running"` from the start, then `"ok"`
 //!   with every [`GrowthStats`] field, or `"failed"` with `failed_at_t`, `error` and the
 //!   statistics so far.
@@ -24,7 +26,8 @@ use super::table::{csv_writer, QuoteStyle};
 use super::{format_value, write_atomic, OutputError, OwnedDir, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
 use crate::growth::{
-    GrowthError, GrowthStats, Observer, ObserverError, SeriesRow, Snapshot, GROWTH_COLUMNS,
+    GrowthError, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
+    GROWTH_COLUMNS,
 };
 use crate::scene::Scene;
 
@@ -32,6 +35,18 @@ use crate::scene::Scene;
 pub const SERIES_FILE: &str = "series.csv";
 /// The series rows at the history times (`output.history_points`), same columns as series.csv.
 pub const HISTORY_FILE: &str = "history.csv";
+/// The forward sensitivities (`eyeshell grow --sensitivities`).
+pub const SENSITIVITIES_FILE: &str = "sensitivities.csv";
+/// The columns of sensitivities.csv: the derivatives per unit of the parameter, and the
+/// scaled (p/L) dL/dp.
+pub const SENSITIVITY_COLUMNS: [&str; 6] = [
+    "t",
+    "parameter",
+    "d_axial_length",
+    "d_equatorial_radius",
+    "d_retina_minus_blue",
+    "scaled_axial_length",
+];
 /// The directory of the snapshot files.
 pub const SNAPSHOT_DIR: &str = "snapshots";
 /// The columns of series.csv.
@@ -103,6 +118,7 @@ pub struct GrowthWriter {
     scene: Scene,
     series: csv::Writer<fs::File>,
     history: Option<csv::Writer<fs::File>>,
+    sensitivities: Option<csv::Writer<fs::File>>,
     snapshots: Vec<WrittenSnapshot>,
     last: Option<SeriesRow>,
 }
@@ -117,6 +133,10 @@ impl GrowthWriter {
         if history_points > 0 {
             entries.push(HISTORY_FILE);
         }
+        let with_sensitivities = !scene.growth_settings.sensitivities.is_empty();
+        if with_sensitivities {
+            entries.push(SENSITIVITIES_FILE);
+        }
         let owned = OwnedDir::fresh(target, "grow", &entries)?;
         let target = owned.path().to_path_buf();
         let snapshots = target.join(SNAPSHOT_DIR);
@@ -128,12 +148,19 @@ impl GrowthWriter {
         } else {
             None
         };
+        let sensitivities = if with_sensitivities {
+            let path = target.join(SENSITIVITIES_FILE);
+            Some(create_with_columns(&path, &SENSITIVITY_COLUMNS)?)
+        } else {
+            None
+        };
         let writer = GrowthWriter {
             dir: target,
             _owned: owned,
             scene: scene.clone(),
             series,
             history,
+            sensitivities,
             snapshots: Vec::new(),
             last: None,
         };
@@ -211,9 +238,17 @@ impl GrowthWriter {
 
 /// Create `path` with the series header as its first line.
 fn create_with_header(path: &Path) -> Result<csv::Writer<fs::File>, OutputError> {
+    create_with_columns(path, &SERIES_COLUMNS)
+}
+
+/// Create `path` with `columns` as its first line.
+fn create_with_columns(
+    path: &Path,
+    columns: &[&str],
+) -> Result<csv::Writer<fs::File>, OutputError> {
     let file = fs::File::create(path).map_err(|e| OutputError::io(path, e))?;
     let mut w = csv_writer(file, QuoteStyle::Necessary);
-    w.write_record(SERIES_COLUMNS)
+    w.write_record(columns)
         .map_err(std::io::Error::from)
         .and_then(|_| w.flush())
         .map_err(|e| OutputError::io(path, e))?;
@@ -237,6 +272,27 @@ impl Observer for GrowthWriter {
 
     fn snapshot(&mut self, s: &Snapshot) -> Result<(), ObserverError> {
         Ok(self.write_snapshot(s)?)
+    }
+
+    fn sensitivities(&mut self, rows: &[SensitivityRow]) -> Result<(), ObserverError> {
+        let path = self.dir.join(SENSITIVITIES_FILE);
+        let Some(w) = &mut self.sensitivities else {
+            return Ok(());
+        };
+        let write = |w: &mut csv::Writer<fs::File>| -> std::io::Result<()> {
+            for r in rows {
+                w.write_record([
+                    format_value(r.t),
+                    r.parameter.to_string(),
+                    format_value(r.d_axial_length),
+                    format_value(r.d_equatorial_radius),
+                    format_value(r.d_retina_minus_blue),
+                    format_value(r.scaled_axial_length()),
+                ])?;
+            }
+            w.flush()
+        };
+        write(w).map_err(|e| OutputError::io(&path, e).into())
     }
 }
 

@@ -11,7 +11,9 @@ use std::path::{Path, PathBuf};
 use super::summary::ElasticSummary;
 use super::{GrowthWriter, OutputDir, OutputError, Summary, AT_FILE, FIELDS_FILE, SUMMARY_FILE};
 use crate::bvp::{FieldRow, Solution};
-use crate::growth::{GrowthError, GrowthStats, Observer, ObserverError, SeriesRow, Snapshot};
+use crate::growth::{
+    GrowthError, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
+};
 use crate::scene::Scene;
 use crate::Error;
 
@@ -158,5 +160,10 @@ impl Observer for Tee<'_, '_> {
     fn progress(&mut self, t: f64, t_end: f64) -> Result<(), ObserverError> {
         self.writer.progress(t, t_end)?;
         self.watch.progress(t, t_end)
+    }
+
+    fn sensitivities(&mut self, rows: &[SensitivityRow]) -> Result<(), ObserverError> {
+        self.writer.sensitivities(rows)?;
+        self.watch.sensitivities(rows)
     }
 }

@@ -1,0 +1,121 @@
+//! `eyeshell grow --sensitivities` (issue 19): sensitivities.csv, its work in summary.json,
+//! and the keys it refuses (exit 2, one line, nothing written).
+
+use crate::support::*;
+
+#[test]
+fn bad_sensitivity_keys_are_refused_and_nothing_is_written() {
+    for (keys, sets, needle) in [
+        ("stimulus.red.offset", "", "only affects the classification"),
+        (
+            "material.C",
+            "",
+            "sensitivities to material.C are not implemented yet",
+        ),
+        (
+            "pressure.dP",
+            "",
+            "sensitivities to pressure.dP are not implemented yet",
+        ),
+        ("growth.Gama", "", "\"growth.Gama\" is not a scene key"),
+        ("growth.eta0,growth.eta0", "", "growth.eta0 is listed twice"),
+        (
+            "growth.eta0",
+            "solver.integrator=cvode",
+            "--sensitivities needs solver.integrator = \"ida\"",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let mut args = vec![
+            "grow",
+            "scenes/const.toml",
+            "--sensitivities",
+            keys,
+            "--out",
+            s(&out),
+        ];
+        if !sets.is_empty() {
+            args.extend(["--set", sets]);
+        }
+        let run = eyeshell(&args);
+        assert_bad(&run, needle, keys);
+        assert!(!out.exists(), "{keys}: nothing may be written");
+    }
+}
+
+/// One row per recorded time and parameter; zero at t = 0; the scaled column is
+/// (p/L) dL/dp with L from series.csv (to 1e-6: series.csv measures the snapshot's shell,
+/// re-solved, the sensitivities the integrator's state); dL/dη0 at t = 0.1 is the value of a rtol-1e-12 run
+/// (N = 101, 1.847218610e-2, tests/numerics/sensitivities.rs's scene) to 1e-4.
+#[test]
+fn grow_writes_sensitivities_csv_and_their_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    ok(&[
+        "grow",
+        "scenes/const.toml",
+        "--set",
+        "solver.nodes=101",
+        "--set",
+        "solver.rtol=1e-8",
+        "--set",
+        "solver.atol=1e-11",
+        "--set",
+        "output.history_points=0",
+        "--sensitivities",
+        "growth.eta0,growth.Gamma",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    let (header, cells) = csv_cells(&out.join("sensitivities.csv"));
+    assert_eq!(
+        header,
+        [
+            "t",
+            "parameter",
+            "d_axial_length",
+            "d_equatorial_radius",
+            "d_retina_minus_blue",
+            "scaled_axial_length"
+        ]
+    );
+    // series.csv: t, axial_length, ... (its class column is text).
+    let (series_header, series) = csv_cells(&out.join("series.csv"));
+    assert_eq!(&series_header[..2], ["t", "axial_length"]);
+    let times: Vec<f64> = series.iter().map(|r| r[0].parse().unwrap()).collect();
+    let lengths: Vec<f64> = series.iter().map(|r| r[1].parse().unwrap()).collect();
+    assert_eq!(cells.len(), 2 * times.len());
+    for (k, (&t, &l)) in times.iter().zip(&lengths).enumerate() {
+        for (j, (key, p)) in [("growth.eta0", 70.0), ("growth.Gamma", 8.0)]
+            .into_iter()
+            .enumerate()
+        {
+            let row = &cells[2 * k + j];
+            let v = |c: usize| -> f64 { row[c].parse().unwrap() };
+            assert_eq!((v(0), row[1].as_str()), (t, key));
+            let scaled = p / l * v(2);
+            assert!((v(5) - scaled).abs() <= 1e-6 * scaled.abs(), "{row:?}");
+            if t == 0.0 {
+                assert_eq!([v(2), v(3), v(4)], [0.0; 3]);
+            }
+            if t == 0.1 && key == "growth.eta0" {
+                let rel = (v(2) / 1.847218610e-2 - 1.0).abs();
+                assert!(rel < 1e-4, "dL/dη0 at t = 0.1: {} (rel {rel:.1e})", v(2));
+            }
+        }
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let work = summary
+        .pointer("/stats/sensitivities")
+        .or_else(|| summary.pointer("/sensitivities"))
+        .unwrap_or_else(|| panic!("no sensitivities in summary.json: {summary}"));
+    assert_eq!(
+        work["parameters"],
+        serde_json::json!(["growth.eta0", "growth.Gamma"])
+    );
+    assert_eq!(work["error_control"], serde_json::json!(false));
+    assert!(work["residual_evaluations"].as_u64().unwrap() > 0);
+}
