@@ -2,8 +2,9 @@
 //!
 //! Prints the SUNDIALS version linked at run time and the headers the build used, the
 //! SUNDIALS/KLU shared libraries actually loaded (from /proc/self/maps, after creating a
-//! context, dense/band/KLU solvers and KINSOL memory), and solves a 3×3 system with each
-//! linear solver. Exits 1 if a SUNDIALS library is not from /usr/lib or /lib, the version is
+//! context, dense/band/KLU solvers, KINSOL memory and IDAS memory with sensitivities), solves
+//! a 3×3 system with each linear solver and checks one IDAS sensitivity against its exact
+//! value; IDA must come from libsundials_idas, and libsundials_ida must not be loaded too. Exits 1 if a SUNDIALS library is not from /usr/lib or /lib, the version is
 //! not 6.x (or differs from the headers), the build holds a vendored sundials-sys build, or
 //! a solver that was built fails.
 
@@ -11,8 +12,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use eyeshell_sundials::{
-    self, CallbackResult, Context, JacobianMatrix, Kinsol, KinsolOptions, LinearSolver,
-    LinearSolverSpec, MatrixSink, NVector, NonlinearSystem,
+    self, CallbackResult, Context, DaeSystem, Ida, IdaLinearSolver, IdaOptions, JacobianMatrix,
+    Kinsol, KinsolOptions, LinearSolver, LinearSolverSpec, MatrixSink, NVector, NonlinearSystem,
+    SensitivityOptions,
 };
 
 const A: [[f64; 3]; 3] = [[4.0, -1.0, 0.0], [-1.0, 4.0, -1.0], [0.0, -1.0, 4.0]];
@@ -59,6 +61,55 @@ impl NonlinearSystem for Shift {
         (0..u.len()).for_each(|i| jac.set(i, i, 1.0));
         Ok(())
     }
+}
+
+/// y' = −p y, p = 1, as a DAE F = y' + p y, with its sensitivity s = ∂y/∂p (s' = −p s − y):
+/// to make IDAS memory with sensitivities exist (and load libsundials_idas), and check it.
+struct Decay;
+
+impl DaeSystem for Decay {
+    fn residual(&mut self, _t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> CallbackResult {
+        r[0] = yp[0] + y[0];
+        Ok(())
+    }
+
+    fn sensitivity_residual(
+        &mut self,
+        _t: f64,
+        y: &[f64],
+        _yp: &[f64],
+        _r: &[f64],
+        ys: &[&[f64]],
+        yps: &[&[f64]],
+        rs: &mut [&mut [f64]],
+    ) -> CallbackResult {
+        rs[0][0] = yps[0][0] + ys[0][0] + y[0];
+        Ok(())
+    }
+}
+
+/// IDAS's sensitivity of Decay at t = 1 against the exact −t e^{−t}: the error.
+fn idas_sensitivity() -> Result<(Ida<Decay>, f64), eyeshell_sundials::SundialsError> {
+    let options = IdaOptions {
+        rtol: 1e-10,
+        atol: 1e-12,
+        ..IdaOptions::default()
+    };
+    let linear = IdaLinearSolver::Dense {
+        user_jacobian: false,
+    };
+    let mut ida = Ida::new(Decay, 0.0, &[1.0], &[-1.0], linear, &options)?;
+    let sens = SensitivityOptions {
+        error_control: true,
+        scales: vec![1.0],
+    };
+    ida.init_sensitivities(&[vec![0.0]], &[vec![-1.0]], &sens)?;
+    let (mut y, mut yp) = ([0.0], [0.0]);
+    let t = ida.advance_to(1.0, &mut y, &mut yp)?;
+    let mut s = vec![vec![0.0]];
+    ida.sensitivities_at(t, &mut s)?;
+    let err = (s[0][0] + t * (-t).exp()).abs();
+    Ok((ida, err))
 }
 
 fn loaded_libraries() -> Vec<String> {
@@ -167,6 +218,16 @@ fn main() -> ExitCode {
         Ok(_) => println!("KINSOL: memory created"),
         Err(e) => problems.push(format!("KINSOL could not be created: {e}")),
     }
+    let idas = idas_sensitivity();
+    match &idas {
+        Ok((_, err)) if *err < 1e-7 => {
+            println!("IDAS: forward sensitivity of y' = -p y at t = 1 ok ({err:.1e})")
+        }
+        Ok((_, err)) => problems.push(format!(
+            "IDAS gave a wrong sensitivity of y' = -p y (error {err:.1e})"
+        )),
+        Err(e) => problems.push(format!("IDAS with sensitivities failed: {e}")),
+    }
     let libs = loaded_libraries();
     println!("Loaded libraries:");
     for p in &libs {
@@ -186,7 +247,15 @@ fn main() -> ExitCode {
     if !libs.iter().any(|p| p.contains("libsundials_")) {
         problems.push("no libsundials_*.so is loaded (statically linked vendored copy?)".into());
     }
-    drop((kinsol, solvers));
+    // IDA's functions come from IDAS (a superset with the same names); both at once would
+    // leave which one answers to the loader's order.
+    if !libs.iter().any(|p| p.contains("libsundials_idas.")) {
+        problems.push("libsundials_idas is not loaded (IDA must come from IDAS)".into());
+    }
+    if libs.iter().any(|p| p.contains("libsundials_ida.")) {
+        problems.push("libsundials_ida is loaded beside libsundials_idas (link one)".into());
+    }
+    drop((kinsol, solvers, idas));
 
     let vendored = vendored_builds();
     if vendored.is_empty() {

@@ -581,16 +581,29 @@ impl CoupledDae {
         param: SensParam,
         out: &mut [f64],
     ) -> Result<(), RhsError> {
+        self.parameter_residuals(y, &[param], &mut [out])
+    }
+
+    /// [`CoupledDae::parameter_residual`] for several parameters from one evaluation of
+    /// the rates.
+    fn parameter_residuals(
+        &mut self,
+        y: &[f64],
+        params: &[SensParam],
+        out: &mut [&mut [f64]],
+    ) -> Result<(), RhsError> {
         self.load(y)?;
         let local = self.locals(y, None);
         let (rates, _) = self.point_rates(y, &local, None);
         self.check_finite(&rates, None)?;
-        out.fill(0.0);
         let g = self.sys.growth_params();
-        for (k, pr) in rates.iter().enumerate() {
-            let dc = param.capacity_partial(g, self.sys.points.sigma_ref[k]);
-            out[NP * k] = -pr.per_capacity[0] * dc;
-            out[NP * k + 1] = -pr.per_capacity[1] * dc;
+        for (param, out) in params.iter().zip(out.iter_mut()) {
+            out.fill(0.0);
+            for (k, pr) in rates.iter().enumerate() {
+                let dc = param.capacity_partial(g, self.sys.points.sigma_ref[k]);
+                out[NP * k] = -pr.per_capacity[0] * dc;
+                out[NP * k + 1] = -pr.per_capacity[1] * dc;
+            }
         }
         Ok(())
     }
@@ -614,10 +627,11 @@ impl CoupledDae {
             let n = self.len();
             let mut fp = std::mem::take(&mut self.sens_fp);
             fp.resize(self.sens_params.len(), vec![0.0; n]);
-            for (j, &param) in self.sens_params.clone().iter().enumerate() {
-                self.parameter_residual(y, param, &mut fp[j])?;
-            }
+            let params = self.sens_params.clone();
+            let mut outs: Vec<&mut [f64]> = fp.iter_mut().map(|v| v.as_mut_slice()).collect();
+            let done = self.parameter_residuals(y, &params, &mut outs);
             self.sens_fp = fp;
+            done?;
             self.sens_at.extend_from_slice(y);
         }
         for j in 0..rs.len() {

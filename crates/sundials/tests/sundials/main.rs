@@ -9,6 +9,7 @@ mod abd;
 mod band_lu;
 mod cvode;
 mod ida;
+mod idas;
 mod kinsol;
 mod kinsol_block;
 mod kinsol_factorization;
