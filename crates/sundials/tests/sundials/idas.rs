@@ -110,7 +110,9 @@ fn a_panicking_sensitivity_residual_is_an_error_not_an_abort() {
 #[test]
 fn bad_sensitivity_input_is_refused() {
     let mut ida = decay(false);
-    let cases: [(&[Vec<f64>], &[Vec<f64>], Vec<f64>, &str); 4] = [
+    /// s(0), s'(0), the scales, and what the refusal says.
+    type Case<'a> = (&'a [Vec<f64>], &'a [Vec<f64>], Vec<f64>, &'a str);
+    let cases: [Case; 4] = [
         (&[], &[], vec![], "need the same number, ≥ 1"),
         (
             &[vec![0.0]],
