@@ -872,9 +872,78 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 PANEL.1,
                 &stem("timeline"),
             )?);
+            if let Some(panels) = sensitivity_panels(dir)? {
+                push(plot::write_panels(
+                    &panels,
+                    2,
+                    &format!("{}: sensitivities", run.name),
+                    PANEL.0,
+                    PANEL.1,
+                    &stem("sensitivities"),
+                )?);
+            }
         }
     }
     Ok(files)
+}
+
+/// sensitivities.csv of a growth run (`grow --sensitivities`) against t, one line per
+/// parameter: dL/dp, d(equatorial radius)/dp, d(retina − blue)/dp and (p/L) dL/dp. None
+/// without the file.
+fn sensitivity_panels(dir: &Path) -> Result<Option<Vec<Figure>>, ExportError> {
+    let path = dir.join(eyeshell::rundir::growth::SENSITIVITIES_FILE);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let what = |e: &dyn std::fmt::Display| bad(format!("{}: {e}", path.display()));
+    let mut reader = csv::Reader::from_path(&path).map_err(|e| what(&e))?;
+    let header = reader.headers().map_err(|e| what(&e))?.clone();
+    let columns = eyeshell::rundir::growth::SENSITIVITY_COLUMNS;
+    if header.iter().ne(columns.iter().copied()) {
+        return Err(what(&format!("the header is not {}", columns.join(","))));
+    }
+    // Per parameter, in order of first appearance: its (t, value) for each column after the
+    // parameter's.
+    let mut lines: Vec<(String, [Vec<(f64, f64)>; 4])> = vec![];
+    for (k, record) in reader.records().enumerate() {
+        let record = record.map_err(|e| what(&e))?;
+        let num = |c: usize| -> Result<f64, ExportError> {
+            record[c]
+                .parse::<f64>()
+                .map_err(|_| what(&format!("row {}: {:?} is not a number", k + 2, &record[c])))
+        };
+        let t = num(0)?;
+        let key = record[1].to_string();
+        let slot = match lines.iter().position(|(p, _)| *p == key) {
+            Some(i) => i,
+            None => {
+                lines.push((key, Default::default()));
+                lines.len() - 1
+            }
+        };
+        for c in 0..4 {
+            lines[slot].1[c].push((t, num(c + 2)?));
+        }
+    }
+    let labels = [
+        "d(axial length)/dp",
+        "d(equatorial radius)/dp",
+        "d(retina − blue)/dp",
+        "(p/L) dL/dp",
+    ];
+    let panels = labels
+        .iter()
+        .enumerate()
+        .map(|(c, label)| {
+            lines.iter().fold(
+                Figure::new(label.to_string(), "t", label.to_string()),
+                |f, (key, cols)| {
+                    f.with(Series::new(key.clone(), cols[c].clone(), SeriesStyle::Line))
+                },
+            )
+        })
+        .collect();
+    Ok(Some(panels))
 }
 
 /// Does `dir` hold a sweep's output (summary.json with a list of runs)?

@@ -1,5 +1,6 @@
 //! `eyeshell grow --sensitivities` (issue 19): sensitivities.csv, its work in summary.json,
-//! and the keys it refuses (exit 2, one line, nothing written).
+//! its figure from `eyeshell plot`, and the keys it refuses (exit 2, one line, nothing
+//! written).
 
 use crate::support::*;
 
@@ -118,4 +119,15 @@ fn grow_writes_sensitivities_csv_and_their_work() {
     );
     assert_eq!(work["error_control"], serde_json::json!(false));
     assert!(work["residual_evaluations"].as_u64().unwrap() > 0);
+    // `eyeshell plot` draws them against t.
+    let plots = dir.path().join("plots");
+    ok(&["plot", s(&out), "--out", s(&plots), "--quiet"]);
+    for ext in ["png", "svg"] {
+        let f = plots.join(format!("sensitivities.{ext}"));
+        assert!(
+            std::fs::metadata(&f).unwrap().len() > 1000,
+            "{}",
+            f.display()
+        );
+    }
 }
