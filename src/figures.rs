@@ -887,6 +887,9 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     Ok(files)
 }
 
+/// A line of a figure: (t, value) points.
+type Curve = Vec<(f64, f64)>;
+
 /// sensitivities.csv of a growth run (`grow --sensitivities`) against t, one line per
 /// parameter: dL/dp, d(equatorial radius)/dp, d(retina − blue)/dp and (p/L) dL/dp. None
 /// without the file.
@@ -904,7 +907,7 @@ fn sensitivity_panels(dir: &Path) -> Result<Option<Vec<Figure>>, ExportError> {
     }
     // Per parameter, in order of first appearance: its (t, value) for each column after the
     // parameter's.
-    let mut lines: Vec<(String, [Vec<(f64, f64)>; 4])> = vec![];
+    let mut lines: Vec<(String, [Curve; 4])> = vec![];
     for (k, record) in reader.records().enumerate() {
         let record = record.map_err(|e| what(&e))?;
         let num = |c: usize| -> Result<f64, ExportError> {
