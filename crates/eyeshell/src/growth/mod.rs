@@ -396,7 +396,9 @@ pub fn run_with(
     progress: &mut ProgressFn<'_>,
 ) -> Result<GrowthStats, GrowthError> {
     let Some(_) = solver.tol else {
-        return run_on(params, solver, growth, settings, None, sens, output, progress);
+        return run_on(
+            params, solver, growth, settings, None, sens, output, progress,
+        );
     };
     let start = std::time::Instant::now();
     let (mesh, choice) =
@@ -436,6 +438,8 @@ pub fn run_with(
 }
 
 /// The growth run on `mesh` (None: the mesh of `solver.nodes`).
+// The run's settings, its mesh and its three callbacks: bundling them would only rename them.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn run_on(
     params: &crate::model::params::Params,
     solver: &crate::bvp::settings::SolverSettings,

@@ -69,7 +69,7 @@ pub enum GrowthFailure {
     },
     /// The run reached its end, but its summary.json could not be written.
     Unwritten {
-        stats: GrowthStats,
+        stats: Box<GrowthStats>,
         error: OutputError,
     },
 }
@@ -130,7 +130,10 @@ pub fn grow_with(scene: &Scene, mut writer: GrowthWriter, watch: &mut dyn Observ
     let outcome = match outcome {
         Ok(stats) => match writer.finish(&stats) {
             Ok(dir) => Ok((stats, dir)),
-            Err(error) => Err(GrowthFailure::Unwritten { stats, error }),
+            Err(error) => Err(GrowthFailure::Unwritten {
+                stats: Box::new(stats),
+                error,
+            }),
         },
         Err(error) => {
             let summary = writer.fail(&error).err();
