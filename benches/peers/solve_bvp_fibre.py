@@ -25,7 +25,7 @@ piece, through each solver's own continuous interpolant (solve_bvp's `sol.sol`, 
 `--at`). Reported per field (κ, α_s, r, θ, Q) as the largest absolute error and relative to
 the field's largest magnitude.
 
-    python3 benches/peer/solve_bvp_fibre.py [--eyeshell target/release/eyeshell] [--tol 1e-6]
+    python3 benches/peers/solve_bvp_fibre.py [--eyeshell target/release/eyeshell] [--tol 1e-6]
 
 tests/cli/peer.rs runs it once (one repetition each) and checks the errors, not the times.
 """
@@ -42,6 +42,9 @@ import numpy as np
 from scipy.integrate import solve_bvp
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# The cornea's stretch and H(Σ), as the fixture for `eyeshell compare` computes them.
+sys.path.insert(0, os.path.join(ROOT, "tests", "fixtures"))
+import solve_bvp_reference as ref  # noqa: E402
 SCENE = os.path.join(ROOT, "scenes", "fibres-nonuniform.toml")
 
 DP, C, D, EB, R0, F, EPS = 2.0, 100.0, 200.0, 18.0, 10.0, 0.8, 1e-3
@@ -54,26 +57,14 @@ PIECES = [(EPS, A), (A, B), (B, SE), (SE, L)]
 FIELDS = ["kappa", "alpha_s", "r", "theta", "Q"]
 
 
-def cornea_alpha():
-    """ΔP = 4 C_c H_c / (α R_c) (1 − α⁻⁶) on (1, 7^(1/6)), by bisection (§3)."""
-    lo, hi = 1.0, 7 ** (1 / 6)
-    g = lambda a: 4 * CC * HC / (a * RC) * (1 - a ** -6) - DP
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if g(mid) < 0 else (lo, mid)
-    return 0.5 * (lo + hi)
-
-
-ALPHA = cornea_alpha()
+ALPHA = ref.cornea_alpha()
 THETA_STAR = L / RC
 R_STAR = ALPHA * RC * np.sin(L / RC)
 
 
 def thickness(s, piece):
-    """H(Σ), §4: the first formula up to Σ_e (pieces 0-2), the second beyond."""
-    if piece < 3:
-        return 0.65 - 0.2 * np.tanh((s - np.pi * R0 / 6) / 1.5)
-    return 0.475 + 0.025 * np.tanh(s - 0.7 * np.pi * R0)
+    """H(Σ), §4: the reference's first formula up to Σ_e (pieces 0-2), its second beyond."""
+    return ref.thickness(s, 0 if piece < 3 else 1)
 
 
 def psi(s, piece):
