@@ -51,15 +51,18 @@ def test_a_second_thread_runs_during_a_grow_with_progress():
 LONG = {"solver.integrator": "euler", "solver.steps": 4000, "solver.nodes": 2001}
 
 
-def interrupt(script):
-    """Run `script` in a child Python, send it SIGINT once it prints 'started', and return
-    (seconds from the signal to the child's exit, its stdout)."""
+def interrupt(script, signal_after=0.3):
+    """Run `script` in a child Python, send it SIGINT `signal_after` seconds after it prints
+    'started' (None: the script signals itself), and return (seconds from then to the
+    child's exit, its stdout, its stderr, its exit code)."""
     child = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert child.stdout.readline().strip() == "started", child.stderr.read()
-    time.sleep(0.3)
+    if signal_after is not None:
+        time.sleep(signal_after)
     sent = time.perf_counter()
-    child.send_signal(signal.SIGINT)
+    if signal_after is not None:
+        child.send_signal(signal.SIGINT)
     out, err = child.communicate(timeout=60)
     return time.perf_counter() - sent, out, err, child.returncode
 
@@ -99,3 +102,30 @@ def test_ctrl_c_stops_a_long_sweep():
     # The running runs stopped after their step: no thread is left behind.
     assert code == 0 and out.split() == ["interrupted", "1"], (out, err)
     assert seconds < 2.0
+
+
+def test_ctrl_c_at_random_moments_never_hangs_a_sweep():
+    # A KeyboardInterrupt landing inside a lock's `with` leaves the lock held; a sweep that
+    # polled its futures' locks could then deadlock (a worker blocked on a future's lock,
+    # shutdown() waiting for it: seen once in CI). Ctrl-C many times at random moments,
+    # with any sleep of the sweep's waiting loop made a busy wait (so that the old
+    # polling spent its time in futures' locks: it hung within 30 trials).
+    seconds, out, err, code = interrupt(f"""
+        import os, random, signal, threading, time, types, eyeshell, eyeshell._api
+        eyeshell._api.time = types.SimpleNamespace(sleep=lambda s: None,
+            perf_counter=time.perf_counter, monotonic=time.monotonic)
+        scene = eyeshell.Scene.from_file({str(SCENES / 'const.toml')!r},
+            **{{"solver.integrator": "euler", "solver.steps": 200, "solver.nodes": 201}})
+        print("started", flush=True)
+        random.seed(7)
+        for trial in range(60):
+            threading.Timer(random.uniform(0.0, 0.15), os.kill, (os.getpid(), signal.SIGINT)).start()
+            try:
+                eyeshell.sweep(scene, grid={{"fibres.D": [0, 100, 200, 400]}}, jobs=2)
+                time.sleep(0.2)  # the timer fires here instead
+            except KeyboardInterrupt:
+                pass
+        time.sleep(0.3)
+        print("done", threading.active_count())
+        """, signal_after=None)
+    assert code == 0 and out.split() == ["done", "1"], (out, err)

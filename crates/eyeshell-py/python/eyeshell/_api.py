@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import queue
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -522,19 +523,23 @@ def iter_sweep(
     own = executor is None
     cancel = _eyeshell._Cancel() if own else None
     pool = ThreadPoolExecutor(max_workers=jobs or os.cpu_count() or 1) if own else executor
+    # Finished runs arrive through a queue, so that this thread never waits on a future's
+    # lock: a KeyboardInterrupt landing just after such a lock is taken (inside `with`'s
+    # __enter__) leaves it held, and the worker finishing that future then blocks on it
+    # forever while shutdown() waits for the worker.
+    finished: queue.SimpleQueue[Any] = queue.SimpleQueue()
+    pending = []
     try:
-        pending = []
         for i, (name, values, native) in enumerate(plan):
             args = (i, name, dict(values), native.to_toml())
-            pending.append(pool.submit(_run_one, *args, cancel) if own else pool.submit(_run_one, *args))
-        while pending:
-            done = [f for f in pending if f.done()]
-            if not done:
-                time.sleep(0.01)
-                continue
-            for f in done:
-                pending.remove(f)
-                yield f.result()
+            if own:
+                pending.append(pool.submit(_run_into, finished, args, cancel))
+            else:
+                f = pool.submit(_run_one, *args)
+                f.add_done_callback(finished.put)
+                pending.append(f)
+        for _ in range(len(pending)):
+            yield _next_finished(finished).result()
     except BaseException:
         # Ctrl-C (or a run's exception): no new run starts, and our own runs stop after
         # their current step; an executor's running tasks are its own to stop.
@@ -546,6 +551,38 @@ def iter_sweep(
     finally:
         if own:
             pool.shutdown(wait=True, cancel_futures=True)
+
+
+@dataclass(frozen=True)
+class _Finished:
+    """A run of our own pool: its result, or the exception it raised (read like a future)."""
+
+    run: RunResult | None
+    error: BaseException | None
+
+    def result(self) -> RunResult:
+        if self.error is not None:
+            raise self.error
+        assert self.run is not None
+        return self.run
+
+
+def _run_into(finished: queue.SimpleQueue[Any], args: tuple[Any, ...], cancel: Any) -> None:
+    """Run one scene on our own pool and put what came of it on `finished`."""
+    try:
+        finished.put(_Finished(_run_one(*args, cancel), None))
+    except BaseException as e:  # handed to the consuming thread, which raises it
+        finished.put(_Finished(None, e))
+
+
+def _next_finished(finished: queue.SimpleQueue[Any]) -> Any:
+    """The next finished run (a :class:`_Finished`, or an executor's future); waits in
+    short slices so that Ctrl-C is seen promptly."""
+    while True:
+        try:
+            return finished.get(timeout=0.05)
+        except queue.Empty:
+            continue
 
 
 def sweep(
