@@ -294,7 +294,7 @@ pub(crate) struct CompareArgs {
     pub(crate) rtol: f64,
     /// The struct of each reference .mat file that holds the result: NAME, or NAME(K) for element K of a struct array (default: sol, element 1, if present, else the top-level variables)
     #[arg(long, value_name = "NAME[(K)]")]
-    pub(crate) field: Option<crate::interop::compare::FieldSpec>,
+    pub(crate) field: Option<eyeshell::interop::compare::FieldSpec>,
     /// Print only the error line when a field is beyond tolerance, nothing on success
     #[arg(long, short)]
     pub(crate) quiet: bool,

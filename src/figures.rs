@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::style::RGBColor;
 
-use crate::interop::export::{bad, ExportError, RunSnapshot};
+use eyeshell::interop::export::{bad, ExportError, RunSnapshot};
 use eyeshell::model::stimulus::Surface;
 use eyeshell::rundir::rundata::{self, column, RunData, RunKind, SeriesPoint};
 use eyeshell::rundir::Summary;

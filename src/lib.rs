@@ -8,7 +8,8 @@
 //! The crate is the thin binary over the `eyeshell` library: [`run`] parses (clap, `args`),
 //! dispatches to one `cmd_*` function per subcommand (a file per group in `commands/`:
 //! run, sweep, interop, study) and maps the library's one error to the exit code in one
-//! place ([`exit_code`]). Beside them: `interop/` (other people's formats), `study/` (the
+//! place ([`exit_code`]). Other people's formats are the library's `eyeshell::interop`.
+//! Beside the commands: `study/` (the
 //! studies and the paper's figures), `figures.rs` (drawing runs), `progress.rs` (the
 //! growth bar) and `worker/` (a sweep's runs in worker processes, the hidden
 //! `sweep-worker` subcommand).
@@ -16,7 +17,6 @@
 mod args;
 mod commands;
 pub mod figures;
-pub mod interop;
 pub mod progress;
 pub mod study;
 pub mod worker;

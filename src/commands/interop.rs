@@ -6,7 +6,7 @@ use crate::args::{CompareArgs, ExportArgs};
 use crate::{out, plural};
 
 pub(crate) fn cmd_export(a: &ExportArgs) -> Result<(), Error> {
-    use crate::interop::export::{export, Format};
+    use eyeshell::interop::export::{export, Format};
     let mut jobs = Vec::new();
     if let Some(p) = &a.mat {
         jobs.push((
@@ -30,7 +30,7 @@ pub(crate) fn cmd_export(a: &ExportArgs) -> Result<(), Error> {
     }
     // Every target is checked before anything is written.
     for (path, format) in &jobs {
-        crate::interop::export::precheck(&a.run, path, *format, a.force)?;
+        eyeshell::interop::export::precheck(&a.run, path, *format, a.force)?;
     }
     for (path, format) in jobs {
         let done = export(&a.run, path, format, a.force)?;
@@ -57,7 +57,7 @@ pub(crate) fn cmd_export(a: &ExportArgs) -> Result<(), Error> {
 }
 
 pub(crate) fn cmd_compare(a: &CompareArgs) -> Result<(), Error> {
-    use crate::interop::compare::{compare_paths, format_reports};
+    use eyeshell::interop::compare::{compare_paths, format_reports};
     for (name, v) in [("--tol", a.tol), ("--rtol", a.rtol)] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(Error::input(format!(

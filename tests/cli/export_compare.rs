@@ -3,7 +3,7 @@
 //! interpolates to the reference's points, and refuses bad input with exit 2.
 
 use crate::support::*;
-use eyeshell_cli::interop::mat::{self, MatValue};
+use eyeshell::interop::mat::{self, MatValue};
 
 fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
     std::fs::create_dir_all(to).unwrap();

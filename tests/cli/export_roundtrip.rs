@@ -3,8 +3,8 @@
 //! run's CSV files bit for bit; bad targets are refused cleanly.
 
 use crate::support::*;
-use eyeshell_cli::interop::mat::{self, MatValue};
-use eyeshell_cli::interop::npz;
+use eyeshell::interop::mat::{self, MatValue};
+use eyeshell::interop::npz;
 use std::path::Path;
 
 fn var<'a>(vars: &'a [(String, MatValue)], name: &str) -> &'a MatValue {

@@ -248,7 +248,7 @@ print(json.dumps({}))
         "miCOMPRESSED"
     );
     // Our reader: the same values.
-    let vars = eyeshell_cli::interop::mat::read(&good).unwrap();
+    let vars = eyeshell::interop::mat::read(&good).unwrap();
     let sol = &vars.iter().find(|(n, _)| n == "sol").unwrap().1;
     assert_bits(
         sol.field("x").unwrap().data().unwrap(),

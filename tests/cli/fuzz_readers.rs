@@ -12,8 +12,8 @@
 //! fuzz_readers` multiplies every case count (the first cases stay the same).
 
 use crate::support::repo;
-use eyeshell_cli::interop::mat::{self, MatValue};
-use eyeshell_cli::interop::npz::{self, NpyArray};
+use eyeshell::interop::mat::{self, MatValue};
+use eyeshell::interop::npz::{self, NpyArray};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::io::{Read, Write};

@@ -29,6 +29,7 @@ use proptest::test_runner::TestCaseError;
 
 use crate::fuzz_readers::{mutation, runner, Mutation};
 use crate::support::*;
+use eyeshell::interop::{compare, export};
 use eyeshell::rundir::read::read_run;
 use eyeshell::rundir::rundata::{self, read_series};
 use eyeshell::rundir::summary::{
@@ -37,7 +38,6 @@ use eyeshell::rundir::summary::{
 use eyeshell::rundir::table::read_csv;
 use eyeshell::rundir::Summary;
 use eyeshell::Scene;
-use eyeshell_cli::interop::{compare, export};
 
 /// The bound on one call in process (generous: a case may be a 50 MB file of megabyte
 /// lines, read in about a second on a busy machine; a reader that is slower than linear

@@ -3,8 +3,8 @@
 //! formulas give it, bit for bit; and `eyeshell compare` reading them end to end.
 
 use crate::support::*;
-use eyeshell_cli::interop::mat::{self, MatValue};
-use eyeshell_cli::interop::npz::{self, NpyArray};
+use eyeshell::interop::mat::{self, MatValue};
+use eyeshell::interop::npz::{self, NpyArray};
 use std::path::PathBuf;
 
 fn fixture(name: &str) -> PathBuf {

@@ -18,10 +18,10 @@ use std::sync::Arc;
 
 use eyeshell::bvp::{FieldRow, Solution, COLUMNS};
 use eyeshell::growth::{Observer, ObserverError, SeriesRow, Snapshot, GROWTH_COLUMNS};
+use eyeshell::interop::export::{elastic_mat_vars, ElasticExtras, Table};
+use eyeshell::interop::mat::MatValue;
 use eyeshell::scene::{KeyValue, Scene, KEYS};
 use eyeshell::{Error, Sweep};
-use eyeshell_cli::interop::export::{elastic_mat_vars, ElasticExtras, Table};
-use eyeshell_cli::interop::mat::MatValue;
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2};
 use pyo3::create_exception;
@@ -531,7 +531,7 @@ fn compare<'py>(
     rtol: f64,
     field: Option<String>,
 ) -> PyResult<(Bound<'py, PyList>, String)> {
-    use eyeshell_cli::interop::compare::{compare_paths, format_reports, FieldSpec};
+    use eyeshell::interop::compare::{compare_paths, format_reports, FieldSpec};
     for (name, v) in [("tol", tol), ("rtol", rtol)] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(input_err(format!(

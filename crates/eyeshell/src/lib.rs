@@ -25,7 +25,8 @@
 //! [`Scene::grow`]), [`Solution`], [`Growth`], [`Sweep`] and the one [`Error`]. Below them
 //! the layers are public for those who need them (studies, custom observers, other
 //! integrators): [`model`] (physics only), [`mesh`], [`bvp`], [`growth`], [`scene`],
-//! [`rundir`] (run directories on disk) and [`sweep`]. Data flows one way: scene → model →
+//! [`rundir`] (run directories on disk), [`sweep`] and [`interop`] (other people's formats:
+//! MAT v5 and NPZ files, the bvp4c-shaped export, comparisons against them). Data flows one way: scene → model →
 //! mesh → discretisation → SUNDIALS (the `eyeshell-sundials` crate) → results. The library
 //! prints nothing.
 
@@ -35,6 +36,7 @@ pub mod deadline;
 pub mod error;
 pub mod growth;
 pub mod hash;
+pub mod interop;
 mod json;
 pub mod mesh;
 pub mod model;

@@ -17,7 +17,7 @@
 use std::io::{Read, Write};
 use std::path::Path;
 
-use eyeshell::rundir::write_atomic;
+use crate::rundir::write_atomic;
 
 use super::mat::values;
 use super::{human_bytes, printable, read_exact_capped, Budget, ReadLimits};

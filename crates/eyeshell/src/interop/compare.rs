@@ -42,11 +42,11 @@ impl std::fmt::Display for CompareError {
 
 impl std::error::Error for CompareError {}
 
-impl From<CompareError> for eyeshell::Error {
+impl From<CompareError> for crate::Error {
     /// A comparison that cannot be made is about the files the user named (a result
     /// beyond tolerance is not an error of this kind: the command reports it itself).
     fn from(e: CompareError) -> Self {
-        eyeshell::Error::input(e.0)
+        crate::Error::input(e.0)
     }
 }
 
@@ -147,8 +147,8 @@ pub fn load_with(path: &Path, field: Option<&FieldSpec>) -> Result<Vec<Sample>, 
 fn from_run(dir: &Path) -> Result<Vec<Sample>, CompareError> {
     let run = read_run(dir).map_err(|e| CompareError(e.message))?;
     // Without a scene (a summary that cannot be rebuilt) only repeated points cut the data.
-    let breaks = eyeshell::rundir::rundata::scene(dir)
-        .map(|s| eyeshell::model::profiles::breakpoints(&s.params))
+    let breaks = crate::rundir::rundata::scene(dir)
+        .map(|s| crate::model::profiles::breakpoints(&s.params))
         .unwrap_or_default();
     let sample = |label: String, time: Option<f64>, t: &super::export::Table| Sample {
         label,

@@ -23,11 +23,11 @@ use std::path::{Path, PathBuf};
 
 use super::mat::{self, MatValue};
 use super::npz::{self, NpyArray};
-pub use eyeshell::rundir::read::{
+pub use crate::rundir::read::{
     bad, is_run_dir, read_csv, read_run, ReadError as ExportError, Run, RunSnapshot, Table,
     GROWTH_VARS,
 };
-use eyeshell::rundir::{self, Marker, OutputDir, OutputError, MARKER_FILE};
+use crate::rundir::{self, Marker, OutputDir, OutputError, MARKER_FILE};
 
 /// The rows of `sol.y`, in order (bvp4c's unknowns of the published scripts).
 pub const Y_ROWS: [&str; 5] = ["kappa", "alpha_s", "r", "theta", "Q"];
@@ -59,7 +59,7 @@ fn col(table: &Table, name: &str) -> Vec<f64> {
 #[derive(Clone, Debug, Default)]
 pub struct ElasticExtras {
     pub breaks: Vec<f64>,
-    pub stats: Option<eyeshell::bvp::SolveStats>,
+    pub stats: Option<crate::bvp::SolveStats>,
 }
 
 impl ElasticExtras {
@@ -70,8 +70,8 @@ impl ElasticExtras {
             Ok(rundir::Summary::Elastic(e)) => Some(e.stats),
             _ => None,
         };
-        let breaks = eyeshell::rundir::rundata::scene(run_dir)
-            .map(|s| eyeshell::model::profiles::breakpoints(&s.params))
+        let breaks = crate::rundir::rundata::scene(run_dir)
+            .map(|s| crate::model::profiles::breakpoints(&s.params))
             .unwrap_or_default();
         ElasticExtras { breaks, stats }
     }
@@ -93,7 +93,7 @@ pub fn yp_rows(table: &Table, breaks: &[f64]) -> [Vec<f64>; 5] {
 /// norm: eyeshell's measure, not bvp4c's residual control), nODEevals (residual
 /// evaluations × nodes: each evaluates the equations at every node), nBCevals (residual
 /// evaluations).
-fn stats_struct(nodes: usize, stats: &eyeshell::bvp::SolveStats) -> MatValue {
+fn stats_struct(nodes: usize, stats: &crate::bvp::SolveStats) -> MatValue {
     let evals = stats.residual_evaluations as f64;
     MatValue::Struct(vec![
         ("nmeshpoints".to_string(), MatValue::scalar(nodes as f64)),

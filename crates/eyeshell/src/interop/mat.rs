@@ -39,7 +39,7 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use eyeshell::rundir::write_atomic;
+use crate::rundir::write_atomic;
 
 use super::{printable, read_exact_capped, Budget, ReadLimits};
 
