@@ -293,6 +293,14 @@ pub struct DaeCounters {
     pub residual_seconds: f64,
     /// Factorisations a Schur path handed to its pivoting fallback.
     pub fallbacks: usize,
+    /// Forward sensitivities: [`CoupledDae::sensitivity_residual`]'s calls, its
+    /// assemblies of F_y (one per new y), and its seconds in them, in ∂F/∂p and in the
+    /// products F_y s.
+    pub sensitivity_residuals: usize,
+    pub sensitivity_jacobians: usize,
+    pub sensitivity_jacobian_seconds: f64,
+    pub sensitivity_parameter_seconds: f64,
+    pub sensitivity_product_seconds: f64,
 }
 
 /// Why the coupled system could not be evaluated or solved.
@@ -618,12 +626,17 @@ impl CoupledDae {
         yps: &[&[f64]],
         rs: &mut [&mut [f64]],
     ) -> Result<(), DaeError> {
+        self.counters.sensitivity_residuals += 1;
         if self.sens_at.as_slice() != y {
+            let start = std::time::Instant::now();
+            self.counters.sensitivity_jacobians += 1;
             self.sens_at.clear();
             std::mem::swap(&mut self.jac, &mut self.sens_jac);
             let assembled = self.assemble(0.0, y);
             std::mem::swap(&mut self.jac, &mut self.sens_jac);
             assembled?;
+            let mid = std::time::Instant::now();
+            self.counters.sensitivity_jacobian_seconds += (mid - start).as_secs_f64();
             let n = self.len();
             let mut fp = std::mem::take(&mut self.sens_fp);
             fp.resize(self.sens_params.len(), vec![0.0; n]);
@@ -633,10 +646,12 @@ impl CoupledDae {
             self.sens_fp = fp;
             done?;
             self.sens_at.extend_from_slice(y);
+            self.counters.sensitivity_parameter_seconds += mid.elapsed().as_secs_f64();
         }
+        let start = std::time::Instant::now();
+        self.sens_jac.mul_many(ys, rs);
         for j in 0..rs.len() {
             let r = &mut *rs[j];
-            self.sens_jac.mul(ys[j], r);
             for k in 0..self.n_p {
                 r[k] += yps[j][k];
             }
@@ -644,6 +659,7 @@ impl CoupledDae {
                 *a += b;
             }
         }
+        self.counters.sensitivity_product_seconds += start.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -935,21 +951,22 @@ impl CoupledDae {
         rates: &[PointRates],
         deriv: Option<&[RateDeriv]>,
     ) -> Result<(), RhsError> {
+        // No allocation per point: this runs at every residual and assembly.
+        let finite = |v: &f64| v.is_finite();
         let bad = |k: usize| {
             let pr = &rates[k];
-            let mut values = vec![pr.rho, pr.gamma, pr.depth];
-            if let Some(rd) = deriv {
-                values.extend(
-                    rd[k]
-                        .rate
-                        .iter()
-                        .flatten()
-                        .chain(&rd[k].rate_d)
-                        .chain(&rd[k].depth)
-                        .chain(&rd[k].angle),
-                );
-            }
-            values.iter().any(|v| !v.is_finite())
+            let own = [pr.rho, pr.gamma, pr.depth].iter().all(finite);
+            let derivatives = deriv.is_none_or(|rd| {
+                let d = &rd[k];
+                d.rate
+                    .iter()
+                    .flatten()
+                    .chain(&d.rate_d)
+                    .chain(&d.depth)
+                    .chain(&d.angle)
+                    .all(finite)
+            });
+            !(own && derivatives)
         };
         match (0..rates.len()).find(|&k| bad(k)) {
             None => Ok(()),
@@ -1069,12 +1086,15 @@ impl CoupledDae {
                 .jac
                 .add_span(row, w0 + NW * h, &span[NW * h..NW * h + NW]),
         }
+        // Every column the row's pattern holds gets its addition, zero or not: the matrix
+        // replays the last assembly's positions in call order (`Csr`'s trail), and an
+        // addition skipped because a value happened to vanish (a growth point switching off
+        // at a kink) would shift every later one into a search (measured: 7 000 of 21 700).
+        // A half row holds its own point's columns only.
         for (slot, k) in self.window_points(i).into_iter().enumerate() {
-            if let Some(k) = k {
+            if let Some(k) = k.filter(|_| half.is_none_or(|h| h == slot)) {
                 let v = g.p[slot];
-                if v != [0.0, 0.0] {
-                    self.jac.add_span(row, NP * k, &[a * v[0], a * v[1]]);
-                }
+                self.jac.add_span(row, NP * k, &[a * v[0], a * v[1]]);
             }
         }
     }
@@ -1190,7 +1210,8 @@ impl CoupledDae {
         _rates: &[PointRates],
     ) {
         let d = self.d();
-        for (k, &site) in self.sites.clone().iter().enumerate() {
+        for k in 0..self.sites.len() {
+            let site = self.sites[k];
             let i = site.interval();
             let (half, own) = match site {
                 Site::Left(_) => (Some(0), L),
@@ -1208,9 +1229,8 @@ impl CoupledDae {
                 g.p[own][1] -= dr[5];
                 g.p[own][a] += c;
                 self.add_grad(row, i, 1.0, &g, half);
-                if rd[k].rate_d[a] != 0.0 {
-                    self.jac.add(row, d, -rd[k].rate_d[a]);
-                }
+                // Zero or not (see add_grad): d is in every growth row's pattern.
+                self.jac.add(row, d, -rd[k].rate_d[a]);
             }
         }
     }
@@ -1332,17 +1352,44 @@ impl MatrixSink for WSink<'_> {
     }
 
     fn set(&mut self, i: usize, j: usize, v: f64) {
+        let (row, col) = (self.row(i), Self::col(j));
+        self.csr.add(self.n_p + row, self.n_p + col, v);
+    }
+
+    /// A block row's columns of one node (NY of them) are consecutive in W too: one span
+    /// each, instead of an addition per entry.
+    fn set_block(&mut self, row0: usize, col0: usize, ncols: usize, values: &[f64]) {
+        for (a, vals) in values.chunks_exact(ncols).enumerate() {
+            let row = self.n_p + self.row(row0 + a);
+            let mut b = 0;
+            while b < ncols {
+                let j = col0 + b;
+                let len = (NY - j % NY).min(ncols - b);
+                self.csr
+                    .add_span(row, self.n_p + Self::col(j), &vals[b..b + len]);
+                b += len;
+            }
+        }
+    }
+}
+
+impl WSink<'_> {
+    /// The W row of elastic row i.
+    fn row(&self, i: usize) -> usize {
         let n = NY * self.m;
-        let row = if i < POLE_ROWS {
+        if i < POLE_ROWS {
             i
         } else if i >= n - 2 {
             NW * self.m - 3 + (i + 2 - n)
         } else {
             let k = i - POLE_ROWS;
             POLE_ROWS + NW * (k / NY) + k % NY
-        };
-        let col = NW * (j / NY) + j % NY;
-        self.csr.add(self.n_p + row, self.n_p + col, v);
+        }
+    }
+
+    /// The W column of elastic column j.
+    fn col(j: usize) -> usize {
+        NW * (j / NY) + j % NY
     }
 }
 

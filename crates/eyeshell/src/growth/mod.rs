@@ -230,6 +230,14 @@ pub struct SensitivityWork {
     pub nonlinear_failures: usize,
     pub error_test_failures: usize,
     pub linear_setups: usize,
+    /// Assemblies of F_y for the sensitivity residual (one per state it is evaluated at:
+    /// IDAS's staggered corrector evaluates it at each step's converged state), and the
+    /// seconds the sensitivity residual spent assembling F_y, forming ∂F/∂p and the
+    /// products F_y s (docs/MODEL.md §5; the linear solves are the state's, counted there).
+    pub jacobian_assemblies: usize,
+    pub jacobian_seconds: f64,
+    pub parameter_seconds: f64,
+    pub product_seconds: f64,
 }
 
 /// One row of sensitivities.csv: how the eye at time `t` moves with one parameter.
@@ -615,6 +623,10 @@ fn run_ida(
                     nonlinear_failures: sst.nonlinear_convergence_failures,
                     error_test_failures: sst.error_test_failures,
                     linear_setups: sst.linear_setups,
+                    jacobian_assemblies: dae.counters.sensitivity_jacobians,
+                    jacobian_seconds: dae.counters.sensitivity_jacobian_seconds,
+                    parameter_seconds: dae.counters.sensitivity_parameter_seconds,
+                    product_seconds: dae.counters.sensitivity_product_seconds,
                 });
             }
             stats.steps = st.steps;
