@@ -5,7 +5,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::growth::dae::{CoupledDae, DaeLinear};
+use eyeshell::growth::dae::{CoupledDae, DaeLinear, SensParam};
 use eyeshell::growth::system::GrowthSystem;
 use eyeshell::growth::*;
 use eyeshell::model::params::Params;
@@ -243,5 +243,63 @@ fn reduced_on_cpu(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, const_scene, pieces, dae_pieces, reduced_on_cpu);
+/// The parameter lists [`sensitivities_on_cpu`] times when EYESHELL_BENCH_SENSITIVITIES
+/// is not set: k = 1, 2, 3.
+const DEFAULT_SENSITIVITIES: &str =
+    "growth.eta0;growth.eta0,growth.Gamma;growth.eta0,growth.Gamma,growth.delta";
+
+/// The const scene's IDA run (rtol 1e-6, N = 501, to t = 1) without and with forward
+/// sensitivities, in on-CPU time (see [`on_cpu`]); BENCHMARKS.md "Forward sensitivities"
+/// divides each by the plain run. The parameter lists come from the environment variable
+/// EYESHELL_BENCH_SENSITIVITIES (lists separated by `;`, scene keys by `,`), by default
+/// [`DEFAULT_SENSITIVITIES`]:
+///   EYESHELL_BENCH_SENSITIVITIES="growth.eta0;KEY,KEY,KEY,KEY" \
+///     cargo bench --bench growth -- sensitivities
+fn sensitivities_on_cpu(c: &mut Criterion) {
+    let lists = std::env::var("EYESHELL_BENCH_SENSITIVITIES")
+        .unwrap_or_else(|_| DEFAULT_SENSITIVITIES.to_string());
+    let mut group = c.benchmark_group("sensitivities_on_cpu_n501");
+    group.sample_size(10);
+    let (p, g) = (Params::default(), GrowthParams::default());
+    let plain = GrowthSettings {
+        integrator: Integrator::Ida,
+        rtol: 1e-6,
+        atol: 1e-8,
+        ..GrowthSettings::default()
+    };
+    let mut time = |name: String, s: GrowthSettings| {
+        group.bench_function(name, |b| {
+            b.iter_custom(|k| {
+                on_cpu(k, || {
+                    grow(&p, &settings(), &g, &s, &mut Discard).unwrap();
+                })
+            })
+        });
+    };
+    time("plain".into(), plain.clone());
+    for list in lists.split(';').filter(|l| !l.trim().is_empty()) {
+        let params: Vec<SensParam> = list
+            .split(',')
+            .map(|key| SensParam::from_key(key.trim()).unwrap_or_else(|why| panic!("{why}")))
+            .collect();
+        let name = format!("k{}_{}", params.len(), list.trim());
+        time(
+            name,
+            GrowthSettings {
+                sensitivities: params,
+                ..plain.clone()
+            },
+        );
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    const_scene,
+    pieces,
+    dae_pieces,
+    reduced_on_cpu,
+    sensitivities_on_cpu
+);
 criterion_main!(benches);

@@ -220,7 +220,7 @@ mod tests {
             a.mul(x, &mut one);
             assert_eq!(y.as_slice(), &one);
         }
-        assert_eq!(ys[2], [-1.0, 0.0, 1.0 + 2.0 * 2.0 - 3.0]);
+        assert_eq!(ys[2], [-2.0, 0.0, 1.0 + 2.0 * 2.0 - 3.0]);
         if cfg!(not(debug_assertions)) {
             a.add(1, 0, 1.0);
             a.add_span(0, 0, &[1.0, 1.0]); // column 1 is not in row 0
