@@ -58,7 +58,7 @@ def main():
                 if keys not in best or cpu < best[keys][0]:
                     best[keys] = (cpu, summary)
                 sens = summary.get("sensitivities")
-                if sens:
+                if sens and "jacobian_seconds" in sens:  # (binaries before issue 19 B lack it)
                     fy[keys] = min(fy.get(keys, float("inf")), sens["jacobian_seconds"])
     plain = best[""][0]
     print("| k | parameters | on-CPU | ratio to plain | k + 1 | steps "
@@ -71,7 +71,7 @@ def main():
         print(f"| {k} | {keys or '(plain run)'} | {cpu:.3f} s | {cpu / plain:.2f} | {k + 1} "
               f"| {s['steps']} | {sens.get('nonlinear_iterations', '–')} "
               f"| {sens.get('jacobian_assemblies', '–')} "
-              f"| {fy[keys]:.3f} s |" if sens else
+              f"| {fy.get(keys, float('nan')):.3f} s |" if sens else
               f"| {k} | (plain run) | {cpu:.3f} s | 1 | 1 | {s['steps']} | – | – | – |")
     return 0
 
