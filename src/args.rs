@@ -46,6 +46,8 @@ pub(crate) enum Command {
     Figures(FiguresArgs),
     /// Draw the output of any run or sweep (shells, profiles, axial length) as PNG and SVG
     Plot(PlotArgs),
+    /// Fit growth parameters to measured axial lengths (Levenberg–Marquardt on IDAS's sensitivities): fit.json, scene.toml, fit.png
+    Fit(FitArgs),
     /// Run the runs of a sweep that `eyeshell sweep` sends on stdin (its worker processes)
     #[command(name = "sweep-worker", hide = true)]
     SweepWorker(SweepWorkerArgs),
@@ -241,6 +243,33 @@ pub(crate) struct GrowArgs {
     #[arg(long, requires = "sensitivities")]
     pub(crate) sensitivity_error_control: bool,
     /// Print nothing on success and draw no progress bar
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
+/// `eyeshell fit SCENE --data DATA.csv --fit KEY,KEY,... --out DIR`.
+#[derive(Args, Debug)]
+pub(crate) struct FitArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// The observations: a CSV file with the header t,axial_length[,sigma] (t in [0, growth.t_end], lengths and σ in mm)
+    #[arg(long, value_name = "DATA.csv")]
+    pub(crate) data: PathBuf,
+    /// The parameters to fit, starting from the scene's values (growth.eta0, growth.Gamma, growth.delta)
+    #[arg(
+        long,
+        value_name = "KEY,KEY,...",
+        value_delimiter = ',',
+        required = true
+    )]
+    pub(crate) fit: Vec<String>,
+    /// Output directory: fit.json, scene.toml (the fitted scene), residuals.csv, curve.csv, fit.png and fit.svg (created whole or not at all; a previous eyeshell output is replaced)
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+    /// The most Levenberg–Marquardt iterations (1 to 1000)
+    #[arg(long, value_name = "N", default_value_t = 50, value_parser = clap::value_parser!(u16).range(1..=1000))]
+    pub(crate) max_iterations: u16,
+    /// Print nothing on success
     #[arg(long, short)]
     pub(crate) quiet: bool,
 }

@@ -949,6 +949,62 @@ fn sensitivity_panels(dir: &Path) -> Result<Option<Vec<Figure>>, ExportError> {
     Ok(Some(panels))
 }
 
+/// The figure of `eyeshell fit`: the observations (with ±σ bars when given) against the
+/// fitted curve and the curve of the start values, as `<stem>.png` and `<stem>.svg`.
+pub fn fit_figure(
+    r: &eyeshell::fit::FitReport,
+    fitted: &[(f64, f64)],
+    initial: &[(f64, f64)],
+    stem: &Path,
+) -> Result<(PathBuf, PathBuf), FigureError> {
+    let estimates: Vec<String> = r
+        .parameters
+        .iter()
+        .map(|p| {
+            format!(
+                "{} = {} ± {}",
+                p.key,
+                trim(p.estimate),
+                trim(p.standard_error)
+            )
+        })
+        .collect();
+    let mut fig = Figure::new("axial length: data and fit", "t", "axial length (mm)")
+        .with(Series::new("initial", initial.to_vec(), SeriesStyle::DashedLine).color(GREY))
+        .with(Series::new("fitted", fitted.to_vec(), SeriesStyle::Line).color(BLUE))
+        .with(
+            Series::new(
+                "data",
+                r.residuals.iter().map(|x| (x.t, x.axial_length)).collect(),
+                SeriesStyle::Markers,
+            )
+            .color(RED),
+        );
+    for e in estimates {
+        fig = fig.note(e);
+    }
+    // The ±σ bars, one short line each (at most a few hundred: beyond, the markers alone).
+    if r.residuals.len() <= 500 {
+        for x in &r.residuals {
+            if let Some(s) = x.sigma {
+                fig = fig.with(
+                    Series::new(
+                        "±σ",
+                        vec![(x.t, x.axial_length - s), (x.t, x.axial_length + s)],
+                        SeriesStyle::Line,
+                    )
+                    .color(RED)
+                    .width(1)
+                    .no_legend(),
+                );
+            }
+        }
+    }
+    fig.width = PANEL.0;
+    fig.height = PANEL.1;
+    Ok(plot::write(&fig, stem)?)
+}
+
 /// Does `dir` hold a sweep's output (summary.json with a list of runs)?
 pub fn is_sweep(dir: &Path) -> bool {
     matches!(Summary::read(dir), Ok(Summary::Sweep(_)))

@@ -1,5 +1,5 @@
 //! The command line: `eyeshell solve | grow | check | keys | export | compare | converge |
-//! wpd | refinement | extremes | sweep | figures | plot`.
+//! wpd | refinement | extremes | sweep | figures | plot | fit`.
 //!
 //! Every failure is printed as one line `eyeshell: error: <message>` on stderr. Exit codes:
 //! 0 success, 2 bad input (usage, scene, validation, `--at`, an output path that may not be
@@ -73,6 +73,7 @@ where
         Command::Sweep(a) => cmd_sweep(a),
         Command::Figures(a) => cmd_figures(a),
         Command::Plot(a) => cmd_plot(a),
+        Command::Fit(a) => commands::fit::cmd_fit(a),
         Command::SweepWorker(a) => worker::serve(&a.out),
     };
     match result {

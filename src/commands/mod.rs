@@ -1,5 +1,6 @@
 //! The subcommands' bodies, a file per group; each `cmd_*` returns the library's one error.
 
+pub(crate) mod fit;
 pub(crate) mod interop;
 pub(crate) mod run;
 pub(crate) mod shards;

@@ -12,6 +12,7 @@ mod export_roundtrip;
 mod export_scipy;
 mod extremes;
 mod figures;
+mod fit;
 mod fuzz_readers;
 mod fuzz_run_files;
 mod fuzz_scene;

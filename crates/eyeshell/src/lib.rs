@@ -34,6 +34,7 @@ mod api;
 pub mod bvp;
 pub mod deadline;
 pub mod error;
+pub mod fit;
 pub mod growth;
 pub mod hash;
 pub mod interop;

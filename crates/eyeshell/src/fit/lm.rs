@@ -1,0 +1,409 @@
+//! Levenberg–Marquardt with bounds, on our residuals and our Jacobian.
+//!
+//! Hand-written on nalgebra: the `levenberg-marquardt` crate (a MINPACK port on nalgebra)
+//! has no bounds, and a fit must keep every trial inside each key's validity range (a
+//! growth run at δ ≤ 0 has no meaning). A dozen lines of linear algebra are the whole of it.
+//!
+//! Each iteration solves (JᵀJ + λ D) δ = −Jᵀr, D = diag(JᵀJ) (Marquardt's scaling, its
+//! largest value so far, as MINPACK keeps it: the step is invariant to the parameters'
+//! units). The trial p + δ is **projected** onto the range: onto a closed bound exactly
+//! (≥ 0), and towards an open bound (> 0) at most 90 % of the remaining distance, so that
+//! it is never reached. A trial the scene refuses (a cross-key limit) or whose growth run
+//! fails counts as a rejected step. A step is accepted when it lowers the cost; λ follows
+//! Nielsen's rule: × max(1/3, 1 − (2ρ − 1)³) after an accepted step (ρ the actual over the
+//! predicted reduction of the projected step), × ν (ν doubling) after a rejected one.
+//!
+//! The iteration stops ([`Convergence`]) when, after an accepted step,
+//! - every parameter moved less than `xtol` relative to its magnitude (`step`), or
+//! - the cost fell by less than `ftol` relative (`cost`), or
+//! - the largest scaled gradient |Jⱼᵀr| / (‖Jⱼ‖ ‖r‖) (the cosine between the residuals and a
+//!   column, MINPACK's gtol) is below `gtol`, free parameters only (`gradient`);
+//! - the full Gauss–Newton step is below `setol` (1e-2) standard errors for every parameter
+//!   (`standard-error`): the estimate is within a hundredth of its uncertainty of the
+//!   optimum. This is the test that ends a fit in practice: the cost is a growth run's, exact
+//!   only to the run's tolerance (solver.rtol), so relative changes below ~1e-5 of χ² are
+//!   noise, and the tests on the step and the cost alone would chase it;
+//!
+//! or when no step lowers the cost any more (λ beyond 1e16: `stalled`, the cost is at the
+//! accuracy of the growth run), or after `max_iterations` (`iterations`, reported, not an
+//! error: the report says so).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{Bounds, FitParam};
+use crate::Error;
+
+/// The stopping tolerances of [`minimise`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FitOptions {
+    pub max_iterations: usize,
+    /// Relative step of every parameter.
+    pub xtol: f64,
+    /// Relative reduction of the cost.
+    pub ftol: f64,
+    /// Scaled gradient (cosine between the residuals and each column of J).
+    pub gtol: f64,
+    /// The Gauss–Newton step in standard errors: below it for every parameter, the
+    /// estimate is that close to the optimum, far inside its uncertainty.
+    pub setol: f64,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            max_iterations: 50,
+            xtol: 1e-6,
+            ftol: 1e-10,
+            gtol: 1e-8,
+            setol: 1e-2,
+        }
+    }
+}
+
+/// Why the iteration stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Convergence {
+    Step,
+    Cost,
+    Gradient,
+    #[serde(rename = "standard-error")]
+    StandardError,
+    Stalled,
+    Iterations,
+}
+
+impl Convergence {
+    /// Did the fit converge (every reason but the iteration limit)?
+    pub fn converged(self) -> bool {
+        self != Convergence::Iterations
+    }
+
+    /// The reason in words.
+    pub fn describe(self, o: &FitOptions) -> String {
+        match self {
+            Convergence::Step => format!("converged: every parameter moved less than {:e} of its value", o.xtol),
+            Convergence::Cost => format!("converged: the cost fell by less than {:e} relative", o.ftol),
+            Convergence::Gradient => format!("converged: the scaled gradient is below {:e}", o.gtol),
+            Convergence::StandardError => format!("converged: the Gauss–Newton step is below {:e} standard errors for every parameter", o.setol),
+            Convergence::Stalled => "converged: no step lowers the cost further (it is at the accuracy of the growth runs)".into(),
+            Convergence::Iterations => format!("not converged: stopped after {} iterations (the estimates are the last accepted)", o.max_iterations),
+        }
+    }
+}
+
+/// One iteration: the step tried and what came of it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct IterationRecord {
+    pub iteration: usize,
+    /// The parameters after it (the accepted trial, or unchanged).
+    pub values: Vec<f64>,
+    /// Σ r² after it.
+    pub chi2: f64,
+    /// λ used for the step.
+    pub lambda: f64,
+    pub accepted: bool,
+    /// Why a trial was rejected: a higher cost, or the scene's or the run's refusal.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rejected: Option<String>,
+}
+
+/// What [`minimise`] found.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    pub values: Vec<f64>,
+    pub residuals: DVector<f64>,
+    pub jacobian: DMatrix<f64>,
+    /// The model's axial lengths at the estimate.
+    pub model: Vec<f64>,
+    pub initial_chi2: f64,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub convergence: Convergence,
+    pub history: Vec<IterationRecord>,
+}
+
+/// (weighted residuals, weighted Jacobian, model values) at a parameter vector.
+pub type Evaluation = (DVector<f64>, DMatrix<f64>, Vec<f64>);
+
+/// `key = value, ...` for messages.
+pub fn show(names: &[&str], values: &[f64]) -> String {
+    names
+        .iter()
+        .zip(values)
+        .map(|(n, v)| format!("{n} = {v:.6}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Is `x` on a closed bound of `b`?
+pub fn at_closed_bound(b: &Bounds, x: f64) -> bool {
+    (!b.lower_open && b.lower == Some(x)) || (!b.upper_open && b.upper == Some(x))
+}
+
+/// `from + step` kept in `b`: onto a closed bound, 90 % of the way towards an open one.
+fn project(b: &Bounds, from: f64, step: f64) -> f64 {
+    let mut x = from + step;
+    if let Some(lo) = b.lower {
+        if x < lo || (b.lower_open && x <= lo) {
+            x = if b.lower_open {
+                from - 0.9 * (from - lo)
+            } else {
+                lo
+            };
+        }
+    }
+    if let Some(hi) = b.upper {
+        if x > hi || (b.upper_open && x >= hi) {
+            x = if b.upper_open {
+                from + 0.9 * (hi - from)
+            } else {
+                hi
+            };
+        }
+    }
+    x
+}
+
+/// Minimise ½‖r(p)‖² from `p0` within the parameters' ranges; `eval` gives r, J and the
+/// model at p; `variance(χ²)` is the s² of the covariance (for the standard-error test). An evaluation that fails at the start is the error; later ones reject the
+/// step. The identifiability at the start is checked before the first step.
+pub fn minimise(
+    eval: &mut dyn FnMut(&[f64]) -> Result<Evaluation, Error>,
+    params: &[FitParam],
+    p0: &[f64],
+    o: &FitOptions,
+    variance: &dyn Fn(f64) -> f64,
+    each: &mut dyn FnMut(&IterationRecord),
+) -> Result<Outcome, Error> {
+    let k = params.len();
+    let names: Vec<&str> = params.iter().map(|p| p.key()).collect();
+    let (mut r, mut j, mut model) = eval(p0)?;
+    let mut evaluations = 1;
+    if let Some(why) = super::identifiability(&j, params, p0) {
+        return Err(Error::input(format!(
+            "at the start ({}): {why}",
+            show(&names, p0)
+        )));
+    }
+    let initial_chi2 = r.norm_squared();
+    let mut p = p0.to_vec();
+    let mut chi2 = initial_chi2;
+    let mut d = DVector::<f64>::zeros(k);
+    let mut lambda = 1e-3;
+    let mut nu = 2.0;
+    let mut history = Vec::new();
+    let mut convergence = Convergence::Iterations;
+    for iteration in 1..=o.max_iterations {
+        let jtj = j.transpose() * &j;
+        let g = j.transpose() * &r;
+        for c in 0..k {
+            d[c] = d[c].max(jtj[(c, c)]).max(f64::MIN_POSITIVE);
+        }
+        // Scaled gradient on the free parameters (a parameter held at a closed bound with
+        // the gradient pushing it out of the range does not count).
+        let rnorm = r.norm();
+        let gradient = (0..k)
+            .filter(|&c| {
+                let b = &params[c].bounds;
+                let held_low = !b.lower_open && b.lower == Some(p[c]) && g[c] > 0.0;
+                let held_high = !b.upper_open && b.upper == Some(p[c]) && g[c] < 0.0;
+                !(held_low || held_high)
+            })
+            .map(|c| {
+                let cn = j.column(c).norm();
+                if cn > 0.0 && rnorm > 0.0 {
+                    g[c].abs() / (cn * rnorm)
+                } else {
+                    0.0
+                }
+            })
+            .fold(0.0_f64, f64::max);
+        if gradient <= o.gtol {
+            convergence = Convergence::Gradient;
+            break;
+        }
+        // The full Gauss–Newton step, measured in standard errors s²(JᵀJ)⁻¹ (free
+        // parameters only, as above).
+        if let Some(inv) = jtj.clone().try_inverse() {
+            let gn = -(&inv * &g);
+            let s2 = variance(chi2);
+            let within = (0..k).all(|c| {
+                let se = (s2 * inv[(c, c)]).max(0.0).sqrt();
+                let moved = project(&params[c].bounds, p[c], gn[c]) - p[c];
+                moved.abs() <= o.setol * se
+            });
+            if within {
+                convergence = Convergence::StandardError;
+                break;
+            }
+        }
+        let mut a = jtj.clone();
+        for c in 0..k {
+            a[(c, c)] += lambda * d[c];
+        }
+        let step = match a.cholesky() {
+            Some(ch) => ch.solve(&(-&g)),
+            None => {
+                return Err(Error::failed(format!(
+                    "Levenberg–Marquardt: the damped normal matrix is not positive definite at {}",
+                    show(&names, &p)
+                )))
+            }
+        };
+        let trial: Vec<f64> = (0..k)
+            .map(|c| project(&params[c].bounds, p[c], step[c]))
+            .collect();
+        let delta = DVector::from_iterator(k, (0..k).map(|c| trial[c] - p[c]));
+        // The reduction of ½‖r‖² the linear model predicts for the projected step.
+        let predicted = -(g.dot(&delta) + 0.5 * delta.dot(&(&jtj * &delta)));
+        let tried = eval(&trial);
+        evaluations += 1;
+        let (accepted, rejected) = match tried {
+            Ok((r2, j2, m2)) => {
+                let chi2_new = r2.norm_squared();
+                if chi2_new < chi2 {
+                    let rho = if predicted > 0.0 {
+                        0.5 * (chi2 - chi2_new) / predicted
+                    } else {
+                        0.0
+                    };
+                    let small_cost = (chi2 - chi2_new) <= o.ftol * chi2;
+                    let small_step =
+                        (0..k).all(|c| delta[c].abs() <= o.xtol * (p[c].abs() + o.xtol));
+                    p = trial;
+                    (r, j, model) = (r2, j2, m2);
+                    chi2 = chi2_new;
+                    lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+                    nu = 2.0;
+                    if small_step {
+                        convergence = Convergence::Step;
+                    } else if small_cost {
+                        convergence = Convergence::Cost;
+                    }
+                    (true, None)
+                } else {
+                    (false, Some(format!("χ² {chi2_new:.6e} ≥ {chi2:.6e}")))
+                }
+            }
+            Err(e) => (false, Some(e.to_string())),
+        };
+        if !accepted {
+            lambda *= nu;
+            nu *= 2.0;
+        }
+        let record = IterationRecord {
+            iteration,
+            values: p.clone(),
+            chi2,
+            lambda,
+            accepted,
+            rejected,
+        };
+        each(&record);
+        history.push(record);
+        if accepted && convergence != Convergence::Iterations {
+            break;
+        }
+        if lambda > 1e16 {
+            convergence = Convergence::Stalled;
+            break;
+        }
+    }
+    let iterations = history.len();
+    Ok(Outcome {
+        values: p,
+        residuals: r,
+        jacobian: j,
+        model,
+        initial_chi2,
+        iterations,
+        evaluations,
+        convergence,
+        history,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::growth::dae::SensParam;
+
+    fn param(bounds: Bounds) -> FitParam {
+        FitParam {
+            param: SensParam::Eta0,
+            bounds,
+        }
+    }
+
+    #[test]
+    fn projection_stops_short_of_an_open_bound_and_on_a_closed_one() {
+        let open = Bounds {
+            lower: Some(0.0),
+            lower_open: true,
+            ..Bounds::NONE
+        };
+        let closed = Bounds {
+            lower: Some(0.0),
+            ..Bounds::NONE
+        };
+        assert!((project(&open, 1.0, -5.0) - 0.1).abs() < 1e-15);
+        assert_eq!(project(&closed, 1.0, -5.0), 0.0);
+        assert_eq!(project(&open, 1.0, 0.5), 1.5);
+        assert_eq!(project(&Bounds::NONE, 1.0, -5.0), -4.0);
+    }
+
+    /// y = a·exp(b·x) on exact data: LM finds (a, b) from far away.
+    #[test]
+    fn an_exponential_is_fitted_to_round_off() {
+        let xs: Vec<f64> = (0..8).map(|i| i as f64 / 4.0).collect();
+        let (a0, b0) = (2.0, -1.3);
+        let mut eval = |p: &[f64]| -> Result<Evaluation, Error> {
+            let model: Vec<f64> = xs.iter().map(|x| p[0] * (p[1] * x).exp()).collect();
+            let r = DVector::from_iterator(
+                xs.len(),
+                xs.iter().zip(&model).map(|(x, m)| m - a0 * (b0 * x).exp()),
+            );
+            let j = DMatrix::from_fn(xs.len(), 2, |i, c| {
+                let e = (p[1] * xs[i]).exp();
+                if c == 0 {
+                    e
+                } else {
+                    p[0] * xs[i] * e
+                }
+            });
+            Ok((r, j, model))
+        };
+        let params = [
+            param(Bounds {
+                lower: Some(0.0),
+                lower_open: true,
+                ..Bounds::NONE
+            }),
+            param(Bounds::NONE),
+        ];
+        let out = minimise(
+            &mut eval,
+            &params,
+            &[0.5, 0.5],
+            &FitOptions {
+                setol: 0.0,
+                ..FitOptions::default()
+            },
+            &|_| 1.0,
+            &mut |_| {},
+        )
+        .unwrap();
+        assert!(
+            (out.values[0] - a0).abs() < 1e-8 && (out.values[1] - b0).abs() < 1e-8,
+            "{:?}",
+            out.values
+        );
+        assert!(
+            out.convergence.converged() && out.iterations < 30,
+            "{:?} {}",
+            out.convergence,
+            out.iterations
+        );
+    }
+}

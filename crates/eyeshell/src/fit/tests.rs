@@ -1,0 +1,251 @@
+//! The fit on synthetic data from known parameters, and its refusals.
+
+use super::*;
+
+/// A deterministic N(0, 1) stream: SplitMix64 and Box–Muller (no dependency, same numbers
+/// on every platform).
+pub(crate) struct Normal(u64);
+
+impl Normal {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    pub(crate) fn sample(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+}
+
+/// The const scene on 101 nodes (the fit's test size: a run with three sensitivities in
+/// about 0.1 s).
+pub(crate) fn const_scene() -> Scene {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/const.toml");
+    let mut s = Scene::from_path(path).unwrap();
+    s.set("solver.nodes", 101).unwrap();
+    s.set("output.history_points", 0).unwrap();
+    s
+}
+
+/// Axial lengths of `scene` at t = 0.1, 0.2, …, 1 with N(0, σ²) noise (seed `seed`).
+pub(crate) fn synthetic(scene: &Scene, sigma: f64, seed: u64) -> Observations {
+    let times: Vec<f64> = (1..=10).map(|i| i as f64 / 10.0).collect();
+    let exact = Observations::from_columns(&times, &vec![20.0; 10], None, "times").unwrap();
+    let params = parse_keys(&["growth.eta0"], "test").unwrap();
+    let m = evaluate(scene, &params, &exact).unwrap();
+    let mut noise = Normal(seed);
+    let y: Vec<f64> = m
+        .axial_length
+        .iter()
+        .map(|l| l + sigma * noise.sample())
+        .collect();
+    Observations::from_columns(&times, &y, Some(&vec![sigma; 10]), "synthetic").unwrap()
+}
+
+#[test]
+fn the_fit_recovers_eta0_gamma_delta_from_noisy_data_within_two_standard_errors() {
+    let truth = const_scene(); // η0 = 70, Γ = 8, δ = 4
+    let data = synthetic(&truth, 0.05, 19);
+    let mut start = truth.clone();
+    start.set("growth.eta0", 60).unwrap();
+    start.set("growth.Gamma", 9).unwrap();
+    start.set("growth.delta", 3.5).unwrap();
+    let params = parse_keys(&["growth.eta0", "growth.Gamma", "growth.delta"], "--fit").unwrap();
+    let fit = fit(&start, &data, &params, &FitOptions::default(), &mut |_| {}).unwrap();
+    let r = &fit.report;
+    assert!(r.convergence.converged(), "{}", r.convergence_reason);
+    assert!(
+        r.iterations <= 12,
+        "{} iterations: {:?}",
+        r.iterations,
+        r.history
+    );
+    for (p, truth) in r.parameters.iter().zip([70.0, 8.0, 4.0]) {
+        let z = (p.estimate - truth) / p.standard_error;
+        assert!(
+            z.abs() < 2.0,
+            "{}: {} ± {} against {truth} (z = {z:.2})",
+            p.key,
+            p.estimate,
+            p.standard_error
+        );
+        assert!(
+            p.standard_error > 0.0 && p.standard_error < 0.5 * truth,
+            "{p:?}"
+        );
+    }
+    // σ = 0.05 describes the noise: χ²/dof near 1 (10 observations, 3 parameters).
+    assert!(
+        r.reduced_chi2 > 0.1 && r.reduced_chi2 < 3.0,
+        "{}",
+        r.reduced_chi2
+    );
+    assert_eq!(r.covariance_scaling, "sigma");
+    assert_eq!(r.residuals.len(), 10);
+    for a in 0..3 {
+        assert_eq!(r.correlation[a][a], 1.0);
+        for b in 0..3 {
+            assert!((r.correlation[a][b] - r.correlation[b][a]).abs() < 1e-12);
+            assert!(r.correlation[a][b].abs() <= 1.0 + 1e-12);
+        }
+    }
+    // The fitted scene holds the estimates.
+    assert_eq!(
+        value_in(&fit.scene, SensParam::Gamma),
+        r.parameters[1].estimate
+    );
+    // The cost history falls.
+    let accepted: Vec<f64> = r
+        .history
+        .iter()
+        .filter(|h| h.accepted)
+        .map(|h| h.chi2)
+        .collect();
+    assert!(accepted.windows(2).all(|w| w[1] <= w[0]) && accepted[0] < r.initial_chi2);
+}
+
+#[test]
+fn without_sigma_the_covariance_takes_the_residual_variance() {
+    let truth = const_scene();
+    let noisy = synthetic(&truth, 0.05, 7);
+    let t: Vec<f64> = noisy.rows.iter().map(|r| r.t).collect();
+    let y: Vec<f64> = noisy.rows.iter().map(|r| r.axial_length).collect();
+    let data = Observations::from_columns(&t, &y, None, "no sigma").unwrap();
+    let params = parse_keys(&["growth.Gamma"], "--fit").unwrap();
+    let mut start = truth.clone();
+    start.set("growth.Gamma", 7).unwrap();
+    let r = fit(&start, &data, &params, &FitOptions::default(), &mut |_| {})
+        .unwrap()
+        .report;
+    assert_eq!(r.covariance_scaling, "residual variance");
+    assert!((r.residual_variance - r.chi2 / 9.0).abs() < 1e-15);
+    let p = &r.parameters[0];
+    assert!((p.estimate - 8.0).abs() < 2.0 * p.standard_error, "{p:?}");
+}
+
+#[test]
+fn a_parameter_the_data_cannot_see_is_refused_by_name() {
+    // Γ far beyond the shell (Σ ≤ L ≈ 25 mm) and a narrow δ: the capacity is η0 everywhere,
+    // and the growth does not depend on Γ at all.
+    let mut scene = const_scene();
+    scene.set("growth.Gamma", 80).unwrap();
+    scene.set("growth.delta", 1).unwrap();
+    let data = synthetic(&scene, 0.05, 3);
+    let params = parse_keys(&["growth.eta0", "growth.Gamma"], "--fit").unwrap();
+    let e = fit(&scene, &data, &params, &FitOptions::default(), &mut |_| {}).unwrap_err();
+    let text = e.to_string();
+    assert!(e.is_user_error(), "{text}");
+    assert!(
+        text.contains("the data cannot identify growth.Gamma:"),
+        "{text}"
+    );
+    assert!(!text.contains("identify growth.eta0"), "{text}");
+    assert!(
+        text.starts_with("at the start (growth.eta0 = 70.000000, growth.Gamma = 80.000000)"),
+        "{text}"
+    );
+}
+
+#[test]
+fn data_at_t_0_alone_identify_nothing() {
+    let scene = const_scene();
+    let data = Observations::parse("t,axial_length\n0,19.9\n0,20.0\n0,20.1\n", "t0.csv").unwrap();
+    let params = parse_keys(&["growth.eta0", "growth.delta"], "--fit").unwrap();
+    let e = fit(&scene, &data, &params, &FitOptions::default(), &mut |_| {}).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("cannot identify growth.eta0, growth.delta:"),
+        "{e}"
+    );
+}
+
+#[test]
+fn bad_requests_are_refused_before_any_run() {
+    let scene = const_scene();
+    let data = Observations::parse("t,axial_length\n0.5,22\n", "one.csv").unwrap();
+    let params = parse_keys(&["growth.eta0"], "--fit").unwrap();
+    let e = fit(&scene, &data, &params, &FitOptions::default(), &mut |_| {}).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("1 observation for 1 parameter: a fit needs at least 2"),
+        "{e}"
+    );
+    let late = Observations::parse("t,axial_length\n0.5,22\n2,23\n3,23\n", "late.csv").unwrap();
+    let e = fit(&scene, &late, &params, &FitOptions::default(), &mut |_| {}).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("late.csv: observation 2 (t = 2) is after"),
+        "{e}"
+    );
+    for (keys, want) in [
+        (
+            vec!["growth.eta0", "growth.eta0"],
+            "--fit: growth.eta0 is listed twice",
+        ),
+        (
+            vec!["growth.nope"],
+            "--fit: \"growth.nope\" is not a scene key",
+        ),
+        (
+            vec!["stimulus.red.offset"],
+            "only affects the classification",
+        ),
+    ] {
+        let e = parse_keys(&keys, "--fit").unwrap_err();
+        assert!(e.is_user_error() && e.to_string().contains(want), "{e}");
+    }
+    let mut cvode = scene.clone();
+    cvode.set("solver.integrator", "cvode").unwrap();
+    let e = fit(&cvode, &late, &params, &FitOptions::default(), &mut |_| {}).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("a fit needs solver.integrator = \"ida\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_model_records_exactly_the_observation_times() {
+    let scene = const_scene();
+    // Unsorted, a replicate, t = 0 and t_end.
+    let data =
+        Observations::parse("t,axial_length\n0.35,1\n0,1\n1,1\n0.35,1\n0.05,1\n", "d").unwrap();
+    let params = parse_keys(&["growth.eta0", "growth.delta"], "--fit").unwrap();
+    let m = evaluate(&scene, &params, &data).unwrap();
+    assert_eq!(m.axial_length[0], m.axial_length[3]);
+    assert!(m.axial_length[1] < m.axial_length[4] && m.axial_length[4] < m.axial_length[0]);
+    assert_eq!(m.jacobian[(1, 0)], 0.0); // nothing has grown at t = 0
+    assert!(m.jacobian[(2, 0)] > 0.0);
+    // The same values as `grow --sensitivities` at those times.
+    let mut s = scene.clone();
+    s.growth_settings.output_times = vec![0.05, 0.35];
+    s.growth_settings.sensitivities = vec![SensParam::Eta0, SensParam::Delta];
+    let mut rows = vec![];
+    growth::run_with(
+        &s.params,
+        &s.solver,
+        s.growth.as_ref().unwrap(),
+        &s.growth_settings,
+        &mut |r| {
+            rows.extend_from_slice(r);
+            Ok(())
+        },
+        &mut |_, _, _| Ok(()),
+        &mut |_| Ok(()),
+    )
+    .unwrap();
+    let at = |t: f64, j: usize| {
+        rows.iter()
+            .filter(|r| r.t == t)
+            .nth(j)
+            .unwrap()
+            .d_axial_length
+    };
+    assert_eq!(m.jacobian[(0, 1)], at(0.35, 1));
+    assert_eq!(m.jacobian[(4, 0)], at(0.05, 0));
+}

@@ -1,0 +1,244 @@
+//! `eyeshell fit` (issue 19, calibration): the command end to end on a small case, and the
+//! inputs it refuses (exit 2, one line, nothing written): hostile data files, bad keys, an
+//! unidentifiable parameter, a foreign output directory.
+
+use crate::support::*;
+
+const DATA: &str = "examples/fit/const_synthetic.csv";
+
+fn fit_args<'a>(data: &'a str, keys: &'a str, out: &'a str) -> Vec<&'a str> {
+    vec![
+        "fit",
+        "scenes/const.toml",
+        "--set",
+        "solver.nodes=101",
+        "--data",
+        data,
+        "--fit",
+        keys,
+        "--out",
+        out,
+    ]
+}
+
+#[test]
+fn fit_writes_the_report_the_fitted_scene_and_the_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut args = fit_args(DATA, "growth.Gamma,growth.delta", s(&out));
+    args.extend(["--set", "growth.Gamma=9", "--set", "growth.delta=3"]);
+    let run = ok(&args);
+    // The table on stdout.
+    for needle in [
+        "eyeshell: fitted scenes/const.toml (const) to examples/fit/const_synthetic.csv (10 observations, σ given)",
+        "parameter",
+        "growth.Gamma",
+        "(2) growth.delta",
+        "χ²",
+        "converged",
+    ] {
+        assert!(run.stdout.contains(needle), "{needle:?} not in {}", run.stdout);
+    }
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            ".eyeshell",
+            "curve.csv",
+            "fit.json",
+            "fit.png",
+            "fit.svg",
+            "residuals.csv",
+            "scene.toml"
+        ]
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("fit.json")).unwrap()).unwrap();
+    let p = &report["parameters"];
+    assert_eq!(p[0]["key"], "growth.Gamma");
+    assert_eq!(p[0]["initial"], 9.0);
+    let (gamma, se) = (
+        p[0]["estimate"].as_f64().unwrap(),
+        p[0]["standard_error"].as_f64().unwrap(),
+    );
+    assert!((gamma - 8.0).abs() < 2.0 * se, "Γ = {gamma} ± {se}");
+    assert_eq!(report["data"]["observations"], 10);
+    assert_eq!(report["data"]["fnv1a64"].as_str().unwrap().len(), 16);
+    assert_eq!(report["covariance_scaling"], "sigma");
+    assert!(report["iterations"].as_u64().unwrap() >= 1);
+    assert_eq!(report["residuals"].as_array().unwrap().len(), 10);
+    assert!(report["convergence_reason"]
+        .as_str()
+        .unwrap()
+        .starts_with("converged"));
+    // The fitted scene reads back with the estimate, and `check` accepts it.
+    let scene = std::fs::read_to_string(out.join("scene.toml")).unwrap();
+    assert!(scene.contains(&format!("Gamma = {gamma:?}")), "{scene}");
+    ok(&["check", s(&out.join("scene.toml"))]);
+    let (header, rows) = csv(&out.join("residuals.csv"));
+    assert_eq!(
+        header,
+        [
+            "t",
+            "axial_length",
+            "sigma",
+            "model",
+            "residual",
+            "weighted_residual"
+        ]
+    );
+    assert_eq!(rows.len(), 10);
+    assert!(rows.iter().all(|r| (r[4] - (r[3] - r[1])).abs() < 1e-12));
+    assert_eq!(column(&out.join("curve.csv"), "t").len(), 201);
+    assert!(std::fs::metadata(out.join("fit.png")).unwrap().len() > 1000);
+    // A second fit replaces the first (an eyeshell output).
+    ok(&args);
+}
+
+/// Every hostile data file: exit 2, one line naming the file (and the line and column), and
+/// nothing written.
+#[test]
+fn hostile_data_files_are_refused_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = format!("t,axial_length\n{}", "0.5,23.0\n".repeat(100_001));
+    let cases: Vec<(&str, String, &str)> = vec![
+        ("empty", String::new(), "empty file"),
+        (
+            "header only",
+            "t,axial_length,sigma\n".into(),
+            "no observations after the header",
+        ),
+        (
+            "wrong header",
+            "time,length\n0.1,22\n".into(),
+            "line 1: the header must be",
+        ),
+        (
+            "non-numeric",
+            "t,axial_length\n0.1,22\n0.2,long\n".into(),
+            "line 3: column 2 (axial_length): \"long\" is not a number",
+        ),
+        (
+            "NaN",
+            "t,axial_length\n0.1,NaN\n".into(),
+            "line 2: column 2 (axial_length) = NaN must be a finite number",
+        ),
+        (
+            "negative sigma",
+            "t,axial_length,sigma\n0.1,22,-0.05\n".into(),
+            "line 2: column 3 (sigma) = -0.05 must be positive",
+        ),
+        (
+            "negative t",
+            "t,axial_length\n-1,22\n".into(),
+            "line 2: column 1 (t) = -1 must be ≥ 0",
+        ),
+        (
+            "ragged",
+            "t,axial_length,sigma\n0.1,22\n".into(),
+            "line 2: 2 values for 3 columns",
+        ),
+        (
+            "after t_end",
+            "t,axial_length\n0.5,23\n1.5,24\n".into(),
+            "observation 2 (t = 1.5) is after the scene's run ends",
+        ),
+        (
+            "too few",
+            "t,axial_length\n0.5,23\n".into(),
+            "1 observation for 2 parameters",
+        ),
+        ("huge", huge, "line 100002: more than 100000 observations"),
+        (
+            "binary",
+            "t,axial_length\n0.1,\u{0}\u{1}\n".into(),
+            "is not a number",
+        ),
+    ];
+    for (what, text, needle) in cases {
+        let data = dir.path().join(format!("{}.csv", what.replace(' ', "_")));
+        std::fs::write(&data, text).unwrap();
+        let out = dir.path().join("out");
+        let run = eyeshell(&fit_args(s(&data), "growth.Gamma,growth.delta", s(&out)));
+        assert_bad(&run, needle, what);
+        assert!(
+            run.stderr.contains(s(&data)),
+            "{what}: the file is named: {}",
+            run.stderr
+        );
+        assert!(!out.exists(), "{what}: nothing may be written");
+    }
+    // Beyond the size limit (16 MiB), before any parsing.
+    let big = dir.path().join("big.csv");
+    std::fs::write(&big, vec![b'9'; (1 << 24) + 1]).unwrap();
+    let out = dir.path().join("out");
+    assert_bad(
+        &eyeshell(&fit_args(s(&big), "growth.Gamma", s(&out))),
+        "more than 16777216 bytes",
+        "big",
+    );
+    assert!(!out.exists());
+    let missing = dir.path().join("none.csv");
+    assert_bad(
+        &eyeshell(&fit_args(s(&missing), "growth.Gamma", s(&out))),
+        "none.csv",
+        "missing",
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn bad_keys_and_unidentifiable_parameters_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    for (keys, needle) in [
+        ("growth.Gama", "--fit: \"growth.Gama\" is not a scene key"),
+        (
+            "growth.eta0,growth.eta0",
+            "--fit: growth.eta0 is listed twice",
+        ),
+        ("stimulus.red.offset", "only affects the classification"),
+        (
+            "solver.nodes",
+            "--fit: sensitivities to solver.nodes are not available",
+        ),
+    ] {
+        assert_bad(&eyeshell(&fit_args(DATA, keys, s(&out))), needle, keys);
+        assert!(!out.exists(), "{keys}: nothing may be written");
+    }
+    // Γ far beyond the shell with a narrow fall: the growth does not depend on Γ.
+    let mut args = fit_args(DATA, "growth.eta0,growth.Gamma", s(&out));
+    args.extend(["--set", "growth.Gamma=80", "--set", "growth.delta=1"]);
+    assert_bad(
+        &eyeshell(&args),
+        "the data cannot identify growth.Gamma:",
+        "Γ beyond the shell",
+    );
+    assert!(!out.exists());
+    let mut args = fit_args(DATA, "growth.eta0", s(&out));
+    args.extend(["--set", "solver.integrator=cvode"]);
+    assert_bad(
+        &eyeshell(&args),
+        "a fit needs solver.integrator = \"ida\"",
+        "cvode",
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_foreign_output_directory_is_refused_before_the_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mine");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "keep").unwrap();
+    let run = eyeshell(&fit_args(DATA, "growth.Gamma", s(&out)));
+    assert_bad(&run, "refusing to overwrite", "foreign");
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "keep"
+    );
+}
