@@ -47,9 +47,7 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
         let path = dir.file(name);
         rundir::write_atomic(&path, bytes).map_err(|e| io(&path, e))
     };
-    let json =
-        serde_json::to_string_pretty(r).map_err(|e| Error::failed(format!("fit.json: {e}")))?;
-    write(FIT_FILE, format!("{json}\n").as_bytes())?;
+    write(FIT_FILE, fit::report_json(r).as_bytes())?;
     write(
         SCENE_FILE,
         format!(

@@ -17,7 +17,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use eyeshell::bvp::{FieldRow, Solution, COLUMNS};
-use eyeshell::growth::{Observer, ObserverError, SeriesRow, Snapshot, GROWTH_COLUMNS};
+use eyeshell::growth::{
+    Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot, GROWTH_COLUMNS,
+};
 use eyeshell::interop::export::{elastic_mat_vars, ElasticExtras, Table};
 use eyeshell::interop::mat::MatValue;
 use eyeshell::scene::{KeyValue, Scene, KEYS};
@@ -450,17 +452,51 @@ fn snapshot_dict<'py>(py: Python<'py>, s: &Snapshot) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
+/// sensitivities.csv's columns of `rows` (`parameter` as a list of str; the scaled column
+/// computed as the command line computes it, so the values are the file's bit for bit).
+fn sensitivities_dict<'py>(
+    py: Python<'py>,
+    rows: &[SensitivityRow],
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("t", column(py, rows, |r| r.t))?;
+    let names: Vec<&str> = rows.iter().map(|r| r.parameter).collect();
+    d.set_item("parameter", PyList::new(py, names)?)?;
+    d.set_item("d_axial_length", column(py, rows, |r| r.d_axial_length))?;
+    d.set_item(
+        "d_equatorial_radius",
+        column(py, rows, |r| r.d_equatorial_radius),
+    )?;
+    d.set_item(
+        "d_retina_minus_blue",
+        column(py, rows, |r| r.d_retina_minus_blue),
+    )?;
+    d.set_item(
+        "scaled_axial_length",
+        column(py, rows, SensitivityRow::scaled_axial_length),
+    )?;
+    Ok(d)
+}
+
 /// Grow the eye of `scene` with the GIL released, calling `progress(t, t_end)` after each
-/// step; returns a dict: series, history, snapshots (a list of (t, fields)), summary_text.
+/// step; returns a dict: series, history, snapshots (a list of (t, fields)), sensitivities
+/// (with `sensitivities`: the keys, as `eyeshell grow --sensitivities`), summary_text.
 #[pyfunction]
-#[pyo3(signature = (scene, progress = None, cancel = None))]
+#[pyo3(signature = (scene, progress = None, cancel = None, sensitivities = Vec::new(), sensitivity_error_control = false))]
 fn grow<'py>(
     py: Python<'py>,
     scene: PyScene,
     progress: Option<Py<PyAny>>,
     cancel: Option<Py<Cancel>>,
+    sensitivities: Vec<String>,
+    sensitivity_error_control: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let scene = scene.inner;
+    let mut scene = scene.inner;
+    if !sensitivities.is_empty() {
+        scene
+            .set_sensitivities(&sensitivities, sensitivity_error_control)
+            .map_err(py_err)?;
+    }
     let flag = cancel.map(|c| c.get().raised.clone());
     let (result, raised) = py.detach(|| {
         let mut watch = Watch {
@@ -489,8 +525,60 @@ fn grow<'py>(
         )?)?;
     }
     d.set_item("snapshots", snapshots)?;
+    d.set_item(
+        "sensitivities",
+        sensitivities_dict(py, &growth.sensitivities)?,
+    )?;
     d.set_item("summary_text", scene.grow_summary(&growth))?;
     Ok(d)
+}
+
+// ---------------------------------------------------------------------------------------
+// Calibration
+
+/// Fit the parameters `keys` of `scene` to observations (the CSV file `path`, or the
+/// columns `t`, `axial_length` and `sigma`), with the GIL released, as `eyeshell fit`:
+/// returns (fit.json's text, the fitted scene).
+#[pyfunction]
+#[pyo3(signature = (scene, keys, path = None, t = None, axial_length = None, sigma = None, max_iterations = 50))]
+#[allow(clippy::too_many_arguments)]
+fn fit(
+    py: Python<'_>,
+    scene: PyScene,
+    keys: Vec<String>,
+    path: Option<std::path::PathBuf>,
+    t: Option<Vec<f64>>,
+    axial_length: Option<Vec<f64>>,
+    sigma: Option<Vec<f64>>,
+    max_iterations: usize,
+) -> PyResult<(String, PyScene)> {
+    use eyeshell::fit::{FitOptions, Observations};
+    if !(1..=1000).contains(&max_iterations) {
+        return Err(input_err(format!(
+            "max_iterations = {max_iterations}: must lie between 1 and 1000"
+        )));
+    }
+    let scene = scene.inner;
+    let data = match (path, t, axial_length) {
+        (Some(p), None, None) => Observations::read(&p).map_err(py_err)?,
+        (None, Some(t), Some(l)) => {
+            Observations::from_columns(&t, &l, sigma.as_deref(), "data").map_err(py_err)?
+        }
+        _ => {
+            return Err(input_err(
+                "data: give a CSV file's path, or the columns t and axial_length (and sigma)",
+            ))
+        }
+    };
+    let options = FitOptions {
+        max_iterations,
+        ..FitOptions::default()
+    };
+    let done = py
+        .detach(|| scene.fit(&data, &keys, &options))
+        .map_err(py_err)?;
+    let json = eyeshell::fit::report_json(&done.report);
+    Ok((json, PyScene { inner: done.scene }))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -595,6 +683,7 @@ fn _eyeshell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(keys, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(grow, m)?)?;
+    m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(expand_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
     m.add_function(wrap_pyfunction!(sundials_version, m)?)?;

@@ -17,7 +17,9 @@
 use std::path::Path;
 
 use crate::bvp::{self, Solution, COLUMNS};
-use crate::growth::{self, GrowthStats, Observer, ObserverError, SeriesRow, Snapshot};
+use crate::growth::{
+    self, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
+};
 use crate::rundir::growth::{snapshot_name, SNAPSHOT_DIR};
 use crate::rundir::summary::{ElasticSummary, GrowthSummary, RunStatus, SnapshotEntry, Summary};
 use crate::scene::sweep::Sweep;
@@ -98,6 +100,7 @@ impl Scene {
             inner: observer,
             snapshots: Vec::new(),
             history: Vec::new(),
+            sensitivities: Vec::new(),
         };
         let stats = growth::grow(
             &self.params,
@@ -112,7 +115,62 @@ impl Scene {
             last: record.snapshots.last().cloned(),
             snapshots: record.snapshots,
             history: record.history,
+            sensitivities: record.sensitivities,
         })
+    }
+
+    /// Ask the growth run for its forward sensitivities to the scene keys `keys` (each once;
+    /// [`crate::growth::dae::SensParam`] lists the supported ones), as `eyeshell grow
+    /// --sensitivities` does: [`Growth::sensitivities`] then holds one row per recorded
+    /// time and key. `error_control`: include them in IDAS's local error test. An empty
+    /// list turns them off. Refused (bad input, naming the key) for an unsupported or
+    /// repeated key, or an integrator other than IDA.
+    ///
+    /// ```
+    /// let mut scene = eyeshell::Scene::from_path(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/const.toml"))?;
+    /// scene.set("solver.nodes", 101)?;
+    /// scene.set_sensitivities(&["growth.Gamma"], false)?;
+    /// let growth = scene.grow(&mut ())?;
+    /// let last = growth.sensitivities.last().unwrap();
+    /// assert_eq!((last.t, last.parameter), (1.0, "growth.Gamma"));
+    /// assert!(last.d_axial_length > 0.0); // a later fall of the capacity: a longer eye
+    /// # Ok::<(), eyeshell::Error>(())
+    /// ```
+    pub fn set_sensitivities(
+        &mut self,
+        keys: &[impl AsRef<str>],
+        error_control: bool,
+    ) -> Result<(), Error> {
+        if keys.is_empty() {
+            self.growth_settings.sensitivities = vec![];
+            self.growth_settings.sensitivity_error_control = false;
+            return Ok(());
+        }
+        let params = crate::fit::parse_keys(keys, "sensitivities")?;
+        let integrator = self.growth_settings.integrator;
+        if integrator != growth::Integrator::Ida {
+            return Err(Error::input(format!(
+                "sensitivities need solver.integrator = \"ida\" ({} has \"{}\")",
+                self.origin,
+                integrator.name()
+            )));
+        }
+        self.growth_settings.sensitivities = params.iter().map(|p| p.param).collect();
+        self.growth_settings.sensitivity_error_control = error_control;
+        Ok(())
+    }
+
+    /// Fit the parameters `keys` of this growth scene to the observations `data` (start
+    /// values: the scene's) by Levenberg–Marquardt on the weighted residuals, the Jacobian
+    /// being the run's forward sensitivities, as `eyeshell fit` does ([`crate::fit`]).
+    pub fn fit(
+        &self,
+        data: &crate::fit::Observations,
+        keys: &[impl AsRef<str>],
+        options: &crate::fit::FitOptions,
+    ) -> Result<crate::fit::Fit, Error> {
+        let params = crate::fit::parse_keys(keys, "fit")?;
+        crate::fit::fit(self, data, &params, options, &mut |_| {})
     }
 
     /// The text of the summary.json `eyeshell solve` writes for `solution`, a solve of this
@@ -162,13 +220,17 @@ pub struct Growth {
     /// The series row at every recorded time when `output.history_points` > 0 (history.csv);
     /// empty otherwise.
     pub history: Vec<SeriesRow>,
+    /// With [`Scene::set_sensitivities`]: one row per recorded time and parameter, in the
+    /// order of sensitivities.csv; empty otherwise.
+    pub sensitivities: Vec<SensitivityRow>,
 }
 
-/// Keeps the snapshots and the history rows, and passes everything on.
+/// Keeps the snapshots, the history rows and the sensitivities, and passes everything on.
 struct Record<'a> {
     inner: &'a mut dyn Observer,
     snapshots: Vec<Snapshot>,
     history: Vec<SeriesRow>,
+    sensitivities: Vec<SensitivityRow>,
 }
 
 impl Observer for Record<'_> {
@@ -186,6 +248,12 @@ impl Observer for Record<'_> {
 
     fn progress(&mut self, t: f64, t_end: f64) -> Result<(), ObserverError> {
         self.inner.progress(t, t_end)
+    }
+
+    fn sensitivities(&mut self, rows: &[SensitivityRow]) -> Result<(), ObserverError> {
+        self.inner.sensitivities(rows)?;
+        self.sensitivities.extend_from_slice(rows);
+        Ok(())
     }
 }
 

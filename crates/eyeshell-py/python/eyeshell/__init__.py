@@ -12,8 +12,10 @@ True
 True
 
 Entry points: :class:`Scene`, :func:`keys`, :func:`solve` (a :class:`Solution`),
-:func:`grow` (a :class:`Growth`), :func:`sweep` and :func:`iter_sweep` (a list, or an
-iterator, of :class:`RunResult`), :func:`compare` (a :class:`Comparison`). Errors are
+:func:`grow` (a :class:`Growth`, with sensitivities on request), :func:`fit` (a
+:class:`FitResult`: calibration to measured axial lengths), :func:`sweep` and
+:func:`iter_sweep` (a list, or an iterator, of :class:`RunResult`), :func:`compare` (a
+:class:`Comparison`). Errors are
 :class:`InputError` (bad input: the command line exits 2) and :class:`SolverError` (a failed
 computation: exit 1), both :class:`EyeshellError`.
 """
@@ -24,11 +26,13 @@ from ._eyeshell import EyeshellError, InputError, SolverError, __version__
 from ._eyeshell import sundials_version as _sundials_version
 from ._api import (
     Comparison,
+    FitResult,
     Growth,
     RunResult,
     Scene,
     Solution,
     compare,
+    fit,
     grow,
     iter_sweep,
     keys,
@@ -39,6 +43,7 @@ from ._api import (
 __all__ = [
     "Comparison",
     "EyeshellError",
+    "FitResult",
     "Growth",
     "InputError",
     "RunResult",
@@ -46,6 +51,7 @@ __all__ = [
     "Solution",
     "SolverError",
     "compare",
+    "fit",
     "grow",
     "iter_sweep",
     "keys",

@@ -329,16 +329,22 @@ class Growth:
     - ``history``: the same at every recorded time when ``output.history_points`` > 0
       (history.csv), else empty;
     - ``snapshots``: {t: every field at every node (the snapshot files' columns)};
+    - ``sensitivities``: with ``grow(..., sensitivities=[...])``, sensitivities.csv's
+      columns (t, parameter, d_axial_length, d_equatorial_radius, d_retina_minus_blue,
+      scaled_axial_length), one row per recorded time and parameter; else empty;
     - ``summary``: summary.json's content.
 
-    ``series`` and ``history`` are pandas DataFrames when pandas is installed (or
-    ``frames=True``), else dicts of arrays (``frames=False``).
+    ``series``, ``history`` and ``sensitivities`` are pandas DataFrames when pandas is
+    installed (or ``frames=True``), else dicts of arrays (``frames=False``).
     """
 
     def __init__(self, raw: dict[str, Any], scene_toml: str, frames: bool | None) -> None:
         self._scene_toml = scene_toml
         self.series = _frame(_series_columns(raw["series"]), frames)
         self.history = _frame(_series_columns(raw["history"]), frames)
+        sens = dict(raw.get("sensitivities") or _NO_SENSITIVITIES)
+        sens["parameter"] = np.array(sens["parameter"], dtype=str)
+        self.sensitivities = _frame(sens, frames)
         self.snapshots: dict[float, dict[str, np.ndarray]] = dict(raw["snapshots"])
         self.summary: dict[str, Any] = json.loads(raw["summary_text"])
 
@@ -363,6 +369,16 @@ class Growth:
             f"<eyeshell.Growth to t = {last.get('t')}: axial length "
             f"{last.get('axial_length')} mm, {last.get('class')}, {len(self.snapshots)} snapshots>"
         )
+
+
+_NO_SENSITIVITIES: dict[str, Any] = {
+    "t": np.zeros(0),
+    "parameter": [],
+    "d_axial_length": np.zeros(0),
+    "d_equatorial_radius": np.zeros(0),
+    "d_retina_minus_blue": np.zeros(0),
+    "scaled_axial_length": np.zeros(0),
+}
 
 
 def _series_columns(raw: dict[str, Any]) -> dict[str, Any]:
@@ -403,6 +419,8 @@ def grow(
     /,
     progress: Progress = None,
     frames: bool | None = None,
+    sensitivities: Sequence[str] = (),
+    sensitivity_error_control: bool = False,
     **overrides: Any,
 ) -> Growth:
     """Grow the eye of ``scene`` (as :func:`solve` takes it; the scene must grow: set a
@@ -412,6 +430,15 @@ def grow(
     after every step (an exception it raises stops the run and is raised). Ctrl-C stops the
     run after the current step and raises KeyboardInterrupt.
 
+    ``sensitivities=["growth.eta0", ...]``: the forward sensitivities of the run to those
+    scene keys (IDAS, as ``eyeshell grow --sensitivities``), in :attr:`Growth.sensitivities`;
+    ``sensitivity_error_control=True`` includes them in the local error test.
+
+    >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101,
+    ...                   sensitivities=["growth.eta0", "growth.Gamma"])
+    >>> list(g.sensitivities["parameter"][-2:]), float(g.sensitivities["t"][-1])
+    (['growth.eta0', 'growth.Gamma'], 1.0)
+
     >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101)
     >>> float(g.series["t"][-1]), g.summary["status"], len(g.snapshots)
     (1.0, 'ok', 5)
@@ -419,8 +446,121 @@ def grow(
     True
     """
     s = _as_scene(scene, overrides)
-    raw = _eyeshell.grow(s._s, _progress_callable(progress))
+    if isinstance(sensitivities, str):
+        sensitivities = [k for k in sensitivities.split(",") if k.strip()]
+    raw = _eyeshell.grow(
+        s._s, _progress_callable(progress), None, list(sensitivities), bool(sensitivity_error_control)
+    )
     return Growth(raw, s.to_toml(), frames)
+
+
+DataLike = Union[PathLike, Mapping[str, Any]]
+
+
+class FitResult:
+    """What :func:`fit` found (``eyeshell fit``'s fit.json, shaped):
+
+    - ``estimates``, ``standard_errors``, ``initial``: {key: value} in the order fitted;
+    - ``correlation``, ``covariance``: k×k arrays in that order;
+    - ``residuals``: each observation against the fitted model (t, axial_length, sigma,
+      model, residual, weighted), a DataFrame with pandas, else a dict of arrays;
+    - ``scene``: the scene with the estimates (:class:`Scene`);
+    - ``report``: fit.json's content (χ², iterations, cost history, convergence, data hash);
+    - ``converged``, ``iterations``, ``chi2``.
+    """
+
+    def __init__(self, report_text: str, scene: Scene, frames: bool | None) -> None:
+        self.report: dict[str, Any] = json.loads(report_text)
+        self.scene = scene
+        params = self.report["parameters"]
+        self.keys: list[str] = [p["key"] for p in params]
+        self.estimates: dict[str, float] = {p["key"]: p["estimate"] for p in params}
+        self.standard_errors: dict[str, float] = {p["key"]: p["standard_error"] for p in params}
+        self.initial: dict[str, float] = {p["key"]: p["initial"] for p in params}
+        self.correlation = np.array(self.report["correlation"], dtype=float)
+        self.covariance = np.array(self.report["covariance"], dtype=float)
+        rows = self.report["residuals"]
+        columns = {
+            k: np.array([math.nan if r[k] is None else r[k] for r in rows], dtype=float)
+            for k in ["t", "axial_length", "sigma", "model", "residual", "weighted"]
+        }
+        self.residuals = _frame(columns, frames)
+
+    @property
+    def converged(self) -> bool:
+        """Did the iteration converge (rather than stop at max_iterations)?"""
+        return self.report["convergence"] != "iterations"
+
+    @property
+    def iterations(self) -> int:
+        return self.report["iterations"]
+
+    @property
+    def chi2(self) -> float:
+        """Σ ((model − data)/σ)² at the estimates (σ = 1 without a sigma column)."""
+        return self.report["chi2"]
+
+    def curve(self, points: int = 200) -> dict[str, np.ndarray]:
+        """The fitted model's axial length at ``points`` + 1 times over [0, t_end]:
+        {"t": ..., "axial_length": ...} (one growth run of :attr:`scene`)."""
+        h = grow(self.scene, frames=False, output__history_points=points).history
+        return {"t": np.asarray(h["t"]), "axial_length": np.asarray(h["axial_length"])}
+
+    def __repr__(self) -> str:
+        est = ", ".join(
+            f"{k} = {self.estimates[k]:.6g} ± {self.standard_errors[k]:.2g}" for k in self.keys
+        )
+        return f"<eyeshell.FitResult {est}; χ² {self.chi2:.4g}, {self.iterations} iterations>"
+
+
+def fit(
+    scene: SceneLike,
+    data: DataLike,
+    /,
+    fit: Sequence[str],
+    max_iterations: int = 50,
+    frames: bool | None = None,
+    **overrides: Any,
+) -> FitResult:
+    """``eyeshell fit``: fit the scene keys ``fit`` (start values: the scene's) to measured
+    axial lengths by Levenberg–Marquardt, the Jacobian being the growth run's forward
+    sensitivities (IDAS), each step kept in the key's validity range. ``data`` is a CSV
+    file's path (header ``t,axial_length[,sigma]``, as the command line reads it) or a
+    mapping with the columns ``t``, ``axial_length`` and optionally ``sigma`` (a dict of
+    sequences or a pandas DataFrame). ``overrides`` are set on a copy of ``scene``.
+
+    Standard errors come from the Gauss–Newton covariance s²(JᵀWJ)⁻¹: s² = 1 with σ (taken
+    as known), the residual variance χ²/(n − k) without. Raises :class:`InputError` for bad
+    data or keys, and when the data cannot identify a parameter (naming it).
+
+    >>> r = eyeshell.fit(SCENES + "/const.toml", SCENES + "/../examples/fit/const_synthetic.csv",
+    ...                  fit=["growth.Gamma"], solver__nodes=101, growth__Gamma=9)
+    >>> r.converged, abs(r.estimates["growth.Gamma"] - 8) < 2 * r.standard_errors["growth.Gamma"]
+    (True, True)
+    >>> r.scene["growth.Gamma"] == r.estimates["growth.Gamma"]
+    True
+    """
+    s = _as_scene(scene, overrides)
+    if isinstance(fit, str):
+        fit = [k for k in fit.split(",") if k.strip()]
+    if isinstance(data, (str, os.PathLike)):
+        text, native = _eyeshell.fit(s._s, list(fit), path=os.fspath(data), max_iterations=max_iterations)
+    elif isinstance(data, Mapping) or hasattr(data, "columns"):
+        def col(name: str) -> list[float] | None:
+            if name not in data:
+                return None
+            return [float(x) for x in np.asarray(data[name], dtype=float).ravel()]
+
+        t, length = col("t"), col("axial_length")
+        if t is None or length is None:
+            raise InputError("data: the columns t and axial_length are required")
+        text, native = _eyeshell.fit(
+            s._s, list(fit), t=t, axial_length=length, sigma=col("sigma"),
+            max_iterations=max_iterations,
+        )
+    else:
+        raise TypeError("data must be a CSV file's path or a mapping of columns t, axial_length[, sigma]")
+    return FitResult(text, Scene._wrap(native), frames)
 
 
 @dataclass
@@ -665,6 +805,7 @@ def compare(
 __all__ = [
     "Comparison",
     "EyeshellError",
+    "FitResult",
     "Growth",
     "InputError",
     "RunResult",
@@ -672,6 +813,7 @@ __all__ = [
     "Solution",
     "SolverError",
     "compare",
+    "fit",
     "grow",
     "iter_sweep",
     "keys",

@@ -48,7 +48,18 @@ def grow(
     scene: _Scene,
     progress: Callable[[float, float], Any] | None = None,
     cancel: _Cancel | None = None,
+    sensitivities: list[str] = ...,
+    sensitivity_error_control: bool = False,
 ) -> dict[str, Any]: ...
+def fit(
+    scene: _Scene,
+    keys: list[str],
+    path: str | None = None,
+    t: list[float] | None = None,
+    axial_length: list[float] | None = None,
+    sigma: list[float] | None = None,
+    max_iterations: int = 50,
+) -> tuple[str, _Scene]: ...
 def expand_sweep(
     text: str, origin: str, overrides: list[str] = ...
 ) -> list[tuple[str, list[tuple[str, str]], _Scene]]: ...

@@ -608,6 +608,13 @@ pub fn fit(
     })
 }
 
+/// fit.json's text: the report as pretty JSON (non-finite numbers as null), newline-ended.
+pub fn report_json(report: &FitReport) -> String {
+    let mut text = serde_json::to_string_pretty(report).unwrap_or_default();
+    text.push('\n');
+    text
+}
+
 /// The model's axial length at `points` + 1 evenly spaced times in [0, t_end] (the fitted
 /// curve of the plot): one growth run without sensitivities.
 pub fn curve(scene: &Scene, points: usize) -> Result<Vec<(f64, f64)>, Error> {

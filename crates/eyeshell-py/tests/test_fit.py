@@ -1,0 +1,88 @@
+"""eyeshell.grow(..., sensitivities=[...]) against `eyeshell grow --sensitivities`, bit for
+bit, and eyeshell.fit: recovery on synthetic data, the command line's fit, refusals."""
+
+import json
+
+import numpy as np
+import pytest
+
+import eyeshell
+from conftest import ROOT, SCENES, read_csv
+
+DATA = ROOT / "examples" / "fit" / "const_synthetic.csv"
+KEYS = ["growth.eta0", "growth.Gamma", "growth.delta"]
+
+
+def test_sensitivities_equal_the_command_lines_file_bit_for_bit(cli, tmp_path):
+    run = tmp_path / "run"
+    cli("grow", SCENES / "const.toml", "--set", "solver.nodes=101", "--sensitivities",
+        ",".join(KEYS), "--out", run, "--quiet")
+    g = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=101, sensitivities=KEYS)
+    written = read_csv(run / "sensitivities.csv")
+    assert list(written) == list(g.sensitivities)
+    for column, values in written.items():
+        assert list(g.sensitivities[column]) == values, column
+    assert len(values) == 3 * len(g.history["t"])  # every recorded time, every key
+    summary = json.loads((run / "summary.json").read_text())
+    assert g.summary["sensitivities"]["parameters"] == summary["sensitivities"]["parameters"] == KEYS
+
+
+def test_without_sensitivities_the_table_is_empty_and_bad_keys_are_refused():
+    g = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=101)
+    assert len(g.sensitivities["t"]) == 0 and list(g.sensitivities["parameter"]) == []
+    with pytest.raises(eyeshell.InputError, match="only affects the classification"):
+        eyeshell.grow(SCENES / "const.toml", sensitivities=["stimulus.red.offset"])
+    with pytest.raises(eyeshell.InputError, match='need solver.integrator = "ida"'):
+        eyeshell.grow(SCENES / "const.toml", sensitivities=["growth.eta0"],
+                      solver__integrator="cvode")
+
+
+def test_fit_recovers_eta0_gamma_delta_from_synthetic_data():
+    truth = eyeshell.Scene.from_file(SCENES / "const.toml", solver__nodes=101)
+    times = np.arange(1, 11) / 10
+    g = eyeshell.grow(truth, frames=False, output__history_points=10)
+    exact = np.asarray(g.history["axial_length"])[1:]
+    assert np.allclose(np.asarray(g.history["t"])[1:], times)
+    rng = np.random.default_rng(5)
+    data = {"t": times, "axial_length": exact + 0.05 * rng.standard_normal(10),
+            "sigma": np.full(10, 0.05)}
+    r = eyeshell.fit(truth, data, fit=KEYS, frames=False,
+                     growth__eta0=60, growth__Gamma=9, growth__delta=3.5)
+    assert r.converged and r.iterations <= 12, r.report["convergence_reason"]
+    for key, value in zip(KEYS, [70.0, 8.0, 4.0]):
+        assert abs(r.estimates[key] - value) < 2 * r.standard_errors[key], (key, r)
+        assert r.initial[key] != value
+        assert r.scene[key] == r.estimates[key]
+    assert r.correlation.shape == (3, 3) and np.allclose(np.diag(r.correlation), 1)
+    assert np.allclose(r.residuals["residual"], r.residuals["model"] - r.residuals["axial_length"])
+    c = r.curve(20)
+    # Another run (other output times, so other steps): the same to the run's tolerance.
+    assert len(c["t"]) == 21 and abs(c["axial_length"][-1] - r.residuals["model"][-1]) < 1e-4
+    assert "growth.eta0 = " in repr(r)
+
+
+def test_fit_of_a_file_is_the_command_lines(cli, tmp_path):
+    out = tmp_path / "fit"
+    cli("fit", SCENES / "const.toml", "--set", "solver.nodes=101", "--set", "growth.Gamma=9",
+        "--data", DATA, "--fit", "growth.Gamma,growth.delta", "--out", out, "--quiet")
+    written = json.loads((out / "fit.json").read_text())
+    r = eyeshell.fit(SCENES / "const.toml", DATA, fit="growth.Gamma,growth.delta",
+                     solver__nodes=101, growth__Gamma=9)
+    for a, b in zip(written["parameters"], r.report["parameters"]):
+        assert a["estimate"] == b["estimate"] and a["standard_error"] == b["standard_error"]
+    assert written["correlation"] == r.report["correlation"]
+    assert written["data"]["fnv1a64"] == r.report["data"]["fnv1a64"]
+    assert r.scene.to_toml() == eyeshell.Scene.from_file(out / "scene.toml").to_toml()
+
+
+def test_fit_refusals_are_input_errors():
+    with pytest.raises(eyeshell.InputError, match="cannot identify growth.Gamma"):
+        eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.eta0", "growth.Gamma"],
+                     solver__nodes=101, growth__Gamma=80, growth__delta=1)
+    with pytest.raises(eyeshell.InputError, match="line 2: column 2 \\(axial_length\\) = NaN"):
+        eyeshell.fit(SCENES / "const.toml", {"t": [0.5, 1], "axial_length": [float("nan"), 23]},
+                     fit=["growth.Gamma"])
+    with pytest.raises(eyeshell.InputError, match="is listed twice"):
+        eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma", "growth.Gamma"])
+    with pytest.raises(eyeshell.InputError, match="the columns t and axial_length are required"):
+        eyeshell.fit(SCENES / "const.toml", {"t": [0.5]}, fit=["growth.Gamma"])
