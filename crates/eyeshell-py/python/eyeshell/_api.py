@@ -436,7 +436,7 @@ def grow(
 
     >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101,
     ...                   sensitivities=["growth.eta0", "growth.Gamma"])
-    >>> list(g.sensitivities["parameter"][-2:]), float(g.sensitivities["t"][-1])
+    >>> g.sensitivities["parameter"][-2:].tolist(), float(g.sensitivities["t"][-1])
     (['growth.eta0', 'growth.Gamma'], 1.0)
 
     >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101)

@@ -335,7 +335,7 @@ pub fn identifiability(j: &DMatrix<f64>, params: &[FitParam], values: &[f64]) ->
         .map(|&c| format!("{:+.3} {}", v[c], params[c].key()))
         .collect();
     Some(format!(
-        "the data cannot identify {}: the information matrix JᵀWJ is near-singular (smallest eigenvalue of its correlation form {:.2e} ≤ {IDENTIFIABILITY_THRESHOLD:e}, along {}): only that combination's complement is determined; fix {} in the scene, or add observations that separate them",
+        "the data cannot identify {}: the information matrix JᵀWJ is near-singular (smallest eigenvalue of its correlation form {:.2e} ≤ {IDENTIFIABILITY_THRESHOLD:e}, along {}): the data do not determine that combination of them; fix {} in the scene, or add observations that separate them",
         named.join(" from ").replace(" from ", if named.len() > 2 { ", " } else { " from " }),
         lambda.max(0.0),
         direction.join(" "),
@@ -490,7 +490,7 @@ pub fn fit(
     }
     let p0: Vec<f64> = params.iter().map(|p| value_in(scene, p.param)).collect();
     let mut model_seconds = 0.0;
-    let mut eval = |values: &[f64]| -> Result<(DVector<f64>, DMatrix<f64>, Vec<f64>), Error> {
+    let mut eval = |values: &[f64]| -> Result<lm::Evaluation, Error> {
         let s = with_values(scene, params, values)?;
         let m = evaluate(&s, params, data)?;
         model_seconds += m.seconds;
