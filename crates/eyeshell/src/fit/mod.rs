@@ -154,12 +154,15 @@ pub fn value_in(scene: &Scene, p: SensParam) -> f64 {
 pub fn with_values(scene: &Scene, params: &[FitParam], values: &[f64]) -> Result<Scene, Error> {
     let mut s = scene.clone();
     for (p, &x) in params.iter().zip(values) {
-        keys::find(p.key())
-            .map(|k| match k.access {
-                keys::Access::Float { set, .. } => set(&mut s, x),
-                _ => unreachable!("a SensParam's key is a float key"),
-            })
-            .ok_or_else(|| Error::input(format!("{} is not a scene key", p.key())))?;
+        match keys::find(p.key()).map(|k| k.access) {
+            Some(keys::Access::Float { set, .. }) => set(&mut s, x),
+            _ => {
+                return Err(Error::input(format!(
+                    "{} is not a real-valued scene key: it cannot be fitted",
+                    p.key()
+                )))
+            }
+        }
     }
     s.validate()?;
     Ok(s)
