@@ -356,6 +356,70 @@ pub fn data_partials(mp: &MaterialPoint, y: &Vec5, e: &PointEval) -> DataPartial
     }
 }
 
+/// A constant of the shell that the equations can be differentiated by (issue 19's forward
+/// sensitivities): the membrane's C and D (docs/MODEL.md §2), E_b and ΔP (§3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShellConstant {
+    Modulus,
+    FibreStiffness,
+    Bending,
+    Pressure,
+}
+
+/// ∂f and ∂α_s with respect to one shell constant at fixed y (and fixed material data).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ConstantPartials {
+    pub f: Vec5,
+    pub alpha_s: f64,
+}
+
+/// The partials of f and α_s in the shell constant `which`, from the evaluation `e` of f at
+/// (`mp`, `y`) with the shell's constants. The tensions are linear in C and D at fixed
+/// stretches, t = C T_C(α_s, φ) + D T_D(α_s, φ), so their partials at fixed (α_s, φ) are the
+/// law's own tensions with (C, D) = (1, 0) or (0, 1); α_s solves t_s(α_s, φ; C, D) = t_s, so
+///   ∂α_s/∂C = −(∂t_s/∂C)/(∂t_s/∂α_s)   (implicit function theorem, as [`data_partials`]),
+/// and t_φ follows along. E_b enters only f_κ ∋ −γ α_s q_s / E_b, ΔP only f_{q_s} ∋ γ α_s ΔP.
+pub fn constant_partials(
+    shell: &Shell,
+    which: ShellConstant,
+    mp: &MaterialPoint,
+    y: &Vec5,
+    e: &PointEval,
+) -> ConstantPartials {
+    let (a, g) = (e.alpha_s, mp.gamma);
+    let mut out = ConstantPartials::default();
+    let unit = match which {
+        ShellConstant::Bending => {
+            out.f[KAPPA] = g * a * y[QS] / (shell.e_b * shell.e_b);
+            return out;
+        }
+        ShellConstant::Pressure => {
+            out.f[QS] = g * a;
+            return out;
+        }
+        ShellConstant::Modulus => Law {
+            c: 1.0,
+            d: shell.law.d.map(|_| 0.0),
+        },
+        ShellConstant::FibreStiffness => Law {
+            c: 0.0,
+            d: Some(1.0),
+        },
+    };
+    let (r, theta) = (y[R], y[THETA]);
+    let fibre = shell.law.d.and(mp.fibre);
+    let per = unit.tensions(mp.zeta, fibre, a, r / mp.rho);
+    let t = &e.tensions;
+    let a_x = -per.ts * e.alpha_s_ts;
+    let p_x = per.tphi + t.tphi_a * a_x;
+    let (sn, cs) = theta.sin_cos();
+    let g_of_y = e.f / (g * a);
+    let dg_dp = Vec5::new(0.0, 0.0, 0.0, -sn / r, cs / r);
+    out.f = g * (a_x * g_of_y + (a * p_x) * dg_dp);
+    out.alpha_s = a_x;
+    out
+}
+
 /// The first integral divided by r, q_s cos θ + t_s sin θ − r ΔP / 2: the pole condition.
 pub fn first_integral_over_r(dp: f64, y: &Vec5) -> f64 {
     let (sn, cs) = y[THETA].sin_cos();
@@ -454,6 +518,54 @@ mod tests {
                     let fd = (eu.alpha_s - ed.alpha_s) / (2.0 * h);
                     assert!((a - fd).abs() < 1e-7, "d={d:?} data {k}: α_s {a} vs {fd}");
                 }
+            }
+        }
+    }
+
+    /// ∂f/∂(C, D, E_b, ΔP) and ∂α_s/∂(C, D) against central differences of the shell's
+    /// constants, with and without fibres (D only with them).
+    #[test]
+    fn constant_partials_match_differences() {
+        for d in [None, Some(200.0)] {
+            let (shell, mp, y) = test_point(d);
+            let e = evaluate(&shell, &mp, &y, 1.0).unwrap();
+            let mut which = vec![
+                ShellConstant::Modulus,
+                ShellConstant::Bending,
+                ShellConstant::Pressure,
+            ];
+            if d.is_some() {
+                which.push(ShellConstant::FibreStiffness);
+            }
+            for w in which {
+                let cp = constant_partials(&shell, w, &mp, &y, &e);
+                let bumped = |h: f64| {
+                    let mut s = shell;
+                    match w {
+                        ShellConstant::Modulus => s.law.c += h,
+                        ShellConstant::FibreStiffness => s.law.d = s.law.d.map(|v| v + h),
+                        ShellConstant::Bending => s.e_b += h,
+                        ShellConstant::Pressure => s.dp += h,
+                    }
+                    evaluate(&s, &mp, &y, 1.0).unwrap()
+                };
+                let h = 1e-5;
+                let (eu, ed) = (bumped(h), bumped(-h));
+                let fd = (eu.f - ed.f) / (2.0 * h);
+                for row in 0..5 {
+                    assert!(
+                        (cp.f[row] - fd[row]).abs() < 1e-7 * (1.0 + fd[row].abs()),
+                        "d={d:?} {w:?} row {row}: {} vs {}",
+                        cp.f[row],
+                        fd[row]
+                    );
+                }
+                let fa = (eu.alpha_s - ed.alpha_s) / (2.0 * h);
+                assert!(
+                    (cp.alpha_s - fa).abs() < 1e-9 * (1.0 + fa.abs()),
+                    "d={d:?} {w:?}: α_s {} vs {fa}",
+                    cp.alpha_s
+                );
             }
         }
     }

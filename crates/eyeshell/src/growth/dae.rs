@@ -32,8 +32,10 @@ use super::system::{GrowthSystem, RhsError};
 use super::ThicknessLaw;
 use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, POLE_ROWS};
 use crate::bvp::equations::{
-    data_partials, Mat5, MaterialPoint, PointError, PointEval, Vec5, R, THETA, TS,
+    constant_partials, data_partials, ConstantPartials, Mat5, MaterialPoint, PointError,
+    PointEval, ShellConstant, Vec5, KAPPA, R, THETA, TS,
 };
+use crate::model::params::Params;
 use crate::bvp::settings::Scheme;
 use crate::model::growth_law::positive_smooth;
 use eyeshell_sundials::linalg::{
@@ -215,9 +217,12 @@ pub struct CoupledDae {
     sens_at: Vec<f64>,
 }
 
-/// A parameter the growth run's forward sensitivities are taken with respect to
-/// (docs/MODEL.md §5: g_c(Σ) = η0/2 (1 + tanh((Γ − Σ)/δ))). These enter only the growth
-/// rates, through the capacity, so ∂F/∂p is exact and analytic: the rates are linear in g_c.
+/// A parameter the growth run's forward sensitivities are taken with respect to (issue 19).
+/// η0, Γ, δ enter only the growth rates, through the capacity g_c(Σ) = η0/2 (1 + tanh((Γ −
+/// Σ)/δ)) (docs/MODEL.md §5), linearly. C, D, E_b and ΔP enter the elastic equations
+/// (docs/MODEL.md §2–3; ΔP the cornea's edge too, §3) and through α_s the z rows, the
+/// retina and the rates; z_B moves the blue surface the retina is compared with (§6). Every
+/// ∂F/∂p is analytic ([`CoupledDae::parameter_residual`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SensParam {
     /// growth.eta0.
@@ -226,10 +231,33 @@ pub enum SensParam {
     Gamma,
     /// growth.delta.
     Delta,
+    /// fibres.D (only in a scene with fibres).
+    FibreStiffness,
+    /// material.C.
+    Modulus,
+    /// material.bending.
+    Bending,
+    /// pressure.dP.
+    Pressure,
+    /// stimulus.blue.z_B: the blue best-focus surface's polar centre, which moves the
+    /// surface along the axis.
+    BlueCentre,
 }
 
 impl SensParam {
-    pub const ALL: [SensParam; 3] = [SensParam::Eta0, SensParam::Gamma, SensParam::Delta];
+    pub const ALL: [SensParam; 8] = [
+        SensParam::Eta0,
+        SensParam::Gamma,
+        SensParam::Delta,
+        SensParam::FibreStiffness,
+        SensParam::Modulus,
+        SensParam::Bending,
+        SensParam::Pressure,
+        SensParam::BlueCentre,
+    ];
+
+    /// The scene keys sensitivities can be taken to, for messages and help.
+    pub const SUPPORTED: &'static str = "growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B";
 
     /// The scene key.
     pub fn key(self) -> &'static str {
@@ -237,6 +265,11 @@ impl SensParam {
             SensParam::Eta0 => "growth.eta0",
             SensParam::Gamma => "growth.Gamma",
             SensParam::Delta => "growth.delta",
+            SensParam::FibreStiffness => "fibres.D",
+            SensParam::Modulus => "material.C",
+            SensParam::Bending => "material.bending",
+            SensParam::Pressure => "pressure.dP",
+            SensParam::BlueCentre => "stimulus.blue.z_B",
         }
     }
 
@@ -245,13 +278,10 @@ impl SensParam {
         if let Some(p) = Self::ALL.into_iter().find(|p| p.key() == key) {
             return Ok(p);
         }
-        let supported = "supported: growth.eta0, growth.Gamma, growth.delta";
+        let supported = format!("supported: {}", Self::SUPPORTED);
         Err(match key {
             "stimulus.red.offset" => format!(
                 "{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero ({supported})"
-            ),
-            "fibres.D" | "material.C" | "material.bending" | "pressure.dP" | "stimulus.blue.z_B" => format!(
-                "sensitivities to {key} are not implemented yet (it enters the elastic equations or the stimulus, not only the growth rates; {supported})"
             ),
             _ => match crate::scene::keys::find(key) {
                 Some(_) => format!("sensitivities to {key} are not available ({supported})"),
@@ -260,16 +290,64 @@ impl SensParam {
         })
     }
 
-    /// Its value in `g`.
-    pub fn value(self, g: &super::GrowthParams) -> f64 {
+    /// Why the parameter cannot be taken in a model of `params`, if it cannot: fibres.D in
+    /// a scene without fibres (D = 0 leaves the fibres out of the model, docs/MODEL.md §2).
+    pub fn check(self, params: &Params) -> Result<(), String> {
+        match self {
+            SensParam::FibreStiffness if !params.has_fibres() => Err(format!(
+                "{} = 0: the scene has no fibres, so there is no sensitivity to their stiffness",
+                self.key()
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// True for η0, Γ, δ: the parameters that enter the growth rates alone.
+    pub fn is_growth(self) -> bool {
+        matches!(self, SensParam::Eta0 | SensParam::Gamma | SensParam::Delta)
+    }
+
+    /// The shell constant this is, for C, D, E_b and ΔP.
+    pub fn shell_constant(self) -> Option<ShellConstant> {
+        match self {
+            SensParam::FibreStiffness => Some(ShellConstant::FibreStiffness),
+            SensParam::Modulus => Some(ShellConstant::Modulus),
+            SensParam::Bending => Some(ShellConstant::Bending),
+            SensParam::Pressure => Some(ShellConstant::Pressure),
+            _ => None,
+        }
+    }
+
+    /// Its value in the model (`params`, `g`).
+    pub fn value(self, params: &Params, g: &super::GrowthParams) -> f64 {
         match self {
             SensParam::Eta0 => g.eta0,
             SensParam::Gamma => g.gamma,
             SensParam::Delta => g.delta,
+            SensParam::FibreStiffness => params.d,
+            SensParam::Modulus => params.c,
+            SensParam::Bending => params.e_b,
+            SensParam::Pressure => params.dp,
+            SensParam::BlueCentre => g.blue.z_b,
         }
     }
 
-    /// ∂g_c/∂p at Σ = `sigma` (docs/MODEL.md §5).
+    /// Set its value in the model to `v` (the scene's own key does the same, with the red
+    /// surface following the blue one where the scene says so: `Scene::set`).
+    pub fn set(self, params: &mut Params, g: &mut super::GrowthParams, v: f64) {
+        match self {
+            SensParam::Eta0 => g.eta0 = v,
+            SensParam::Gamma => g.gamma = v,
+            SensParam::Delta => g.delta = v,
+            SensParam::FibreStiffness => params.d = v,
+            SensParam::Modulus => params.c = v,
+            SensParam::Bending => params.e_b = v,
+            SensParam::Pressure => params.dp = v,
+            SensParam::BlueCentre => g.blue.z_b = v,
+        }
+    }
+
+    /// ∂g_c/∂p at Σ = `sigma` (docs/MODEL.md §5); zero for the parameters g_c does not hold.
     pub fn capacity_partial(self, g: &super::GrowthParams, sigma: f64) -> f64 {
         let u = (g.gamma - sigma) / g.delta;
         let (th, sech2) = (u.tanh(), 1.0 - u.tanh() * u.tanh());
@@ -277,6 +355,7 @@ impl SensParam {
             SensParam::Eta0 => 0.5 * (1.0 + th),
             SensParam::Gamma => 0.5 * g.eta0 * sech2 / g.delta,
             SensParam::Delta => -0.5 * g.eta0 * sech2 * u / g.delta,
+            _ => 0.0,
         }
     }
 }
@@ -581,8 +660,9 @@ impl CoupledDae {
         &self.sens_params
     }
 
-    /// ∂F/∂p at y for parameter `param`: only the growth rows, −(∂rates/∂g_c) ∂g_c/∂p; the
-    /// elastic rows and the border do not hold g_c.
+    /// ∂F/∂p at y for parameter `param` (at fixed y and y'): for η0, Γ, δ only the growth
+    /// rows, −(∂rates/∂g_c) ∂g_c/∂p; for the others every row that holds the parameter
+    /// ([`CoupledDae::model_parameter_residual`]).
     pub fn parameter_residual(
         &mut self,
         y: &[f64],
@@ -602,11 +682,17 @@ impl CoupledDae {
     ) -> Result<(), RhsError> {
         self.load(y)?;
         let local = self.locals(y, None);
-        let (rates, _) = self.point_rates(y, &local, None);
-        self.check_finite(&rates, None)?;
+        let model = params.iter().any(|p| !p.is_growth());
+        let mut rd = Vec::with_capacity(local.len());
+        let (rates, crossing) = self.point_rates(y, &local, model.then_some(&mut rd));
+        self.check_finite(&rates, model.then_some(rd.as_slice()))?;
         let g = self.sys.growth_params();
-        for (param, out) in params.iter().zip(out.iter_mut()) {
+        for (&param, out) in params.iter().zip(out.iter_mut()) {
             out.fill(0.0);
+            if !param.is_growth() {
+                self.model_parameter_residual(param, &rd, crossing, out);
+                continue;
+            }
             for (k, pr) in rates.iter().enumerate() {
                 let dc = param.capacity_partial(g, self.sys.points.sigma_ref[k]);
                 out[NP * k] = -pr.per_capacity[0] * dc;
@@ -614,6 +700,142 @@ impl CoupledDae {
             }
         }
         Ok(())
+    }
+
+    /// Each point's ∂f/∂c and ∂α_s/∂c in the shell constant c at fixed y, from the
+    /// evaluation at its site (as [`CoupledDae::data_derivs`]).
+    fn constant_derivs(&self, c: ShellConstant) -> Vec<ConstantPartials> {
+        let disc = self.sys.elastic.discretisation();
+        let (ev, data, shell) = (disc.evaluations(), &disc.data, &disc.shell);
+        let y = |j: usize| Vec5::from_column_slice(&self.u[NY * j..NY * j + NY]);
+        self.sites
+            .iter()
+            .map(|&site| match site {
+                Site::Left(i) => constant_partials(shell, c, &data.above[i], &y(i), ev.left(i)),
+                Site::Right(i) => {
+                    constant_partials(shell, c, &data.below[i + 1], &y(i + 1), ev.right(i))
+                }
+                Site::Mid(i) => constant_partials(shell, c, &data.mid[i], ev.y_mid(i), ev.mid(i)),
+            })
+            .collect()
+    }
+
+    /// ∂F/∂p for a parameter of the model (C, D, E_b, ΔP, z_B) at the y last loaded, with
+    /// the rates' derivatives `rd` and the crossing there, by the chain rule:
+    /// - the elastic rows through f (and α_s at the pole), with the Hermite–Simpson midpoint
+    ///   y_m = (y_i + y_{i+1})/2 + h/8 (f_i − f_{i+1}) moving with f_i, f_{i+1}:
+    ///   ∂f_m/∂p = f_m,p + J_m h/8 (f_i,p − f_{i+1,p}); ΔP in the pole's first integral and
+    ///   the cornea's edge (r*, z* ∝ the cornea's stretch α, dα/dΔP from its law);
+    /// - the z rows through the slopes −γ α_s sin θ;
+    /// - each point's local state (r, θ, z, α_s): at a node only α_s moves; at a midpoint
+    ///   y_m, α_s there and z_m (through the end slopes) too; the growth rows and the border
+    ///   follow through the rates' and the crossing's derivatives in the local state;
+    /// - z_B: the stimulus reads the retina's z − z_B only, so moving z_B is moving every
+    ///   point's z the other way: the local state's derivative is (0, 0, −1, 0).
+    fn model_parameter_residual(
+        &self,
+        param: SensParam,
+        rd: &[RateDeriv],
+        crossing: Option<Crossing>,
+        out: &mut [f64],
+    ) {
+        let disc = self.sys.elastic.discretisation();
+        let (ev, data) = (disc.evaluations(), &disc.data);
+        let pd = match param.shell_constant() {
+            Some(c) => self.constant_derivs(c),
+            None => vec![ConstantPartials::default(); self.sites.len()],
+        };
+        let n_p = self.n_p;
+        // ∂(r, θ, z, α_s)/∂p of every point.
+        let mut dlocal: Vec<[f64; 4]> = pd.iter().map(|c| [0.0, 0.0, 0.0, c.alpha_s]).collect();
+        // The pole: r − σ_ε α_s, θ − σ_ε α_s κ, and the first integral's −r ΔP / 2.
+        let k0 = self.sys.points.above[0];
+        let se = data.above[0].sigma;
+        out[n_p] = -se * pd[k0].alpha_s;
+        out[n_p + 1] = -se * pd[k0].alpha_s * self.u[KAPPA];
+        if param == SensParam::Pressure {
+            out[n_p + 2] = -0.5 * self.u[R];
+        }
+        for i in 0..self.m - 1 {
+            let h = disc.mesh.step(i);
+            let [pl, pr, pm] = self.window_points(i);
+            let (pl, pr) = (
+                pl.expect("every interval has ends"),
+                pr.expect("every interval has ends"),
+            );
+            let (fl, fr) = (pd[pl].f, pd[pr].f);
+            // The z slopes w = −γ α_s sin θ at the ends, at fixed y.
+            let wl = -data.above[i].gamma * ev.left(i).sin_theta * pd[pl].alpha_s;
+            let wr = -data.below[i + 1].gamma * ev.right(i).sin_theta * pd[pr].alpha_s;
+            let (rows, zrow) = match pm {
+                None => (-(0.5 * h) * (fl + fr), -(0.5 * h) * (wl + wr)),
+                Some(pm) => {
+                    let ym = (h / 8.0) * (fl - fr);
+                    let em = ev.mid(i);
+                    let fm = pd[pm].f + em.jac * ym;
+                    let am = pd[pm].alpha_s + em.alpha_s_r * ym[R] + em.alpha_s_ts * ym[TS];
+                    let wm = -data.mid[i].gamma
+                        * (em.sin_theta * am + em.alpha_s * em.cos_theta * ym[THETA]);
+                    dlocal[pm] = [ym[R], ym[THETA], (h / 8.0) * (wl - wr), am];
+                    (
+                        -(h / 6.0) * (fl + 4.0 * fm + fr),
+                        -(h / 6.0) * (wl + 4.0 * wm + wr),
+                    )
+                }
+            };
+            for a in 0..NY {
+                out[self.interval_row(i, a)] = rows[a];
+            }
+            out[self.interval_row(i, Z)] = zrow;
+        }
+        let d = self.d();
+        if param == SensParam::Pressure {
+            // r* = α R_c sin(L/R_c), z* = α R_c (1 + cos(L/R_c)): both ∝ α.
+            let cornea = self.sys.elastic.params().cornea;
+            let edge = &disc.edge;
+            let da = crate::model::cornea::stretch_per_pressure(&cornea, edge.alpha);
+            out[d - 3] = -edge.r / edge.alpha * da;
+            out[d - 1] = -edge.z / edge.alpha * da;
+        }
+        if param == SensParam::BlueCentre {
+            dlocal.fill([0.0, 0.0, -1.0, 0.0]);
+        }
+        let dot = |v: &[f64; 6], dl: &[f64; 4]| (0..4).map(|q| v[q] * dl[q]).sum::<f64>();
+        for (k, dl) in dlocal.iter().enumerate() {
+            out[NP * k] = -dot(&rd[k].rate[0], dl);
+            out[NP * k + 1] = -dot(&rd[k].rate[1], dl);
+        }
+        // The border d − D*: ∂D* = Σ L_k (∂depth_k − p'(φ_k) ∂φ_k), as in the Jacobian.
+        if let Some(cr) = crossing {
+            for &(k, wgt, slope) in cr.points() {
+                out[d] -= wgt * (dot(&rd[k].depth, &dlocal[k]) - slope * dot(&rd[k].angle, &dlocal[k]));
+            }
+        }
+    }
+
+    /// Whether the measurement of the eye (`GrowthSystem::series`) reads `param` itself, at
+    /// fixed y: C and D through α_s (the retina's loaded thickness), z_B through the blue
+    /// surface. The others reach it only through y.
+    pub fn measurement_reads(&self, param: SensParam) -> bool {
+        matches!(
+            param,
+            SensParam::Modulus | SensParam::FibreStiffness | SensParam::BlueCentre
+        )
+    }
+
+    /// Set the value of `param` where the measurement reads it (see
+    /// [`CoupledDae::measurement_reads`]; nothing for the others), for the directional
+    /// difference of the measurement. The caller restores the value; the next
+    /// [`CoupledDae::adopt`] drops the evaluations made with the other.
+    pub fn set_measured_parameter(&mut self, param: SensParam, v: f64) {
+        let shell = &mut self.sys.elastic.discretisation_mut().shell;
+        match param {
+            SensParam::Modulus => shell.law.c = v,
+            SensParam::FibreStiffness => shell.law.d = Some(v),
+            SensParam::BlueCentre => self.sys.set_blue_centre(v),
+            _ => {}
+        }
+        self.at_p.clear();
     }
 
     /// The sensitivity residuals rs_j = F_y ys_j + F_y' yps_j + ∂F/∂p_j at y (F_y' is the
@@ -663,28 +885,50 @@ impl CoupledDae {
         Ok(())
     }
 
-    /// The consistent initial sensitivities at the consistent y(0) = `y`: s(0) = 0 (the
-    /// initial shell and its equilibrium do not hold the growth parameters), and s'(0) from
-    /// F_y' s' = −F_p on the growth rows, the algebraic rows' derivative as in
-    /// [`CoupledDae::derivative`] (so the history IDAS starts from is consistent).
-    pub fn initial_sensitivities(&mut self, y: &[f64]) -> Result<Vec<Vec<f64>>, DaeError> {
-        let n = self.len();
-        let mut out = Vec::with_capacity(self.sens_params.len());
+    /// The consistent initial sensitivities (s(0), s'(0)) at the consistent y(0) = `y`:
+    /// - s(0): the initial growth state does not hold any parameter, so s_P(0) = 0; the
+    ///   algebraic part (the elastic unknowns, z and d) moves with the t = 0 equilibrium:
+    ///   s_W(0) = −A⁻¹ F_p,W, A the algebraic block of F_y (one back-substitution per
+    ///   parameter with the factored block; zero for η0, Γ, δ, which no algebraic row holds);
+    /// - s'(0): on the growth rows s'_P = −(F_y s + F_p)_P; on the algebraic rows the
+    ///   derivative of the linearised constraints, A s'_W = −C s'_P, as in
+    ///   [`CoupledDae::derivative`]. For η0, Γ, δ this is exact; for the model's parameters
+    ///   it leaves out the second-order terms (∂F_y/∂t) s and ∂F_p/∂t of the algebraic rows.
+    ///   IDAS does not need the algebraic s' (its residual holds no s'_W): they seed only
+    ///   the first step's predictor.
+    pub fn initial_sensitivities(
+        &mut self,
+        y: &[f64],
+    ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), DaeError> {
+        let (n, n_p) = (self.len(), self.n_p);
+        let params = self.sens_params.clone();
         self.assemble(0.0, y)?;
-        let mut schur = SchurSolver::new(&self.jac, self.n_p, true, Reduced::Band)?;
+        let mut schur = SchurSolver::new(&self.jac, n_p, true, Reduced::Band)?;
         schur.factor_algebraic(&self.jac)?;
-        for &param in &self.sens_params.clone() {
-            let mut fp = vec![0.0; n];
-            self.parameter_residual(y, param, &mut fp)?;
-            let mut sp = vec![0.0; n];
-            for k in 0..self.n_p {
-                sp[k] = -fp[k];
-            }
-            let (p_dot, w_dot) = sp.split_at_mut(self.n_p);
-            schur.solve_algebraic(p_dot, w_dot)?;
-            out.push(sp);
+        let mut fp = vec![vec![0.0; n]; params.len()];
+        {
+            let mut outs: Vec<&mut [f64]> = fp.iter_mut().map(|v| v.as_mut_slice()).collect();
+            self.parameter_residuals(y, &params, &mut outs)?;
         }
-        Ok(out)
+        let (mut s0, mut sp0) = (Vec::with_capacity(params.len()), Vec::new());
+        let zero_p = vec![0.0; n_p];
+        let mut js = vec![0.0; n];
+        for fpj in &fp {
+            let mut s = vec![0.0; n];
+            if fpj[n_p..].iter().any(|&v| v != 0.0) {
+                schur.solve_algebraic_with(&zero_p, &fpj[n_p..], &mut s[n_p..])?;
+            }
+            self.jac.mul(&s, &mut js);
+            let mut sp = vec![0.0; n];
+            for k in 0..n_p {
+                sp[k] = -(js[k] + fpj[k]);
+            }
+            let (p_dot, w_dot) = sp.split_at_mut(n_p);
+            schur.solve_algebraic(p_dot, w_dot)?;
+            s0.push(s);
+            sp0.push(sp);
+        }
+        Ok((s0, sp0))
     }
 
     /// The local state of every point; with `grads`, each one's derivatives in its window.
@@ -1411,6 +1655,169 @@ mod tests {
     use crate::bvp::settings::SolverSettings;
     use crate::growth::GrowthParams;
     use crate::model::params::Params;
+
+    /// The const and fibre scenes (the fibre scene: non-uniform thickness, D = 200, so
+    /// jump nodes and two growth points at them) under both schemes, N = 31, rounded kinks.
+    fn sensitivity_cases() -> Vec<(String, Params, SolverSettings, GrowthParams)> {
+        use crate::model::params::Thickness;
+        let mut out = vec![];
+        for (thickness, d) in [(Thickness::Uniform, 0.0), (Thickness::NonUniform, 200.0)] {
+            for scheme in [Scheme::Trapezoid, Scheme::HermiteSimpson] {
+                let p = Params {
+                    thickness,
+                    d,
+                    ..Params::default()
+                };
+                let s = SolverSettings {
+                    nodes: 31,
+                    scheme,
+                    newton_tol: 1e-13,
+                    ..SolverSettings::default()
+                };
+                let g = GrowthParams {
+                    kink_width: 0.01,
+                    ..GrowthParams::default()
+                };
+                out.push((format!("D = {d}, {scheme:?}"), p, s, g));
+            }
+        }
+        out
+    }
+
+    /// The coupled system of the model with `param` set to `v`, and its consistent y(0).
+    fn dae_with(
+        p: &Params,
+        s: &SolverSettings,
+        g: &GrowthParams,
+        param: SensParam,
+        v: f64,
+    ) -> (CoupledDae, Vec<f64>) {
+        let (mut p, mut g) = (*p, g.clone());
+        param.set(&mut p, &mut g, v);
+        let mut dae = CoupledDae::new(GrowthSystem::new(&p, s, &g).unwrap());
+        let y = dae.initial_state().unwrap();
+        (dae, y)
+    }
+
+    /// The model's parameters a scene of `p` takes sensitivities to.
+    fn model_params(p: &Params) -> Vec<SensParam> {
+        SensParam::ALL
+            .into_iter()
+            .filter(|q| !q.is_growth() && q.check(p).is_ok())
+            .collect()
+    }
+
+    /// ∂F/∂p for C, D, E_b, ΔP and z_B against central differences of the residual itself
+    /// (the model rebuilt at p ± h, evaluated at the same y and y' = 0): every row, the
+    /// elastic, z, cornea, growth and border rows, both schemes, with and without fibres and
+    /// jumps, to 1e-7 of the column's largest entry (beside the differences' round-off);
+    /// and each column moves some row besides the growth rows, and the growth rows exactly
+    /// where the parameter reaches the rates (so that the check cannot pass on zeros).
+    #[test]
+    fn model_parameter_residuals_match_differences_of_the_residual() {
+        for (what, p, s, g) in sensitivity_cases() {
+            let mut dae = CoupledDae::new(GrowthSystem::new(&p, &s, &g).unwrap());
+            let y = dae.initial_state().unwrap();
+            let n = dae.len();
+            let yp = vec![0.0; n];
+            let y_max = y.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            for param in model_params(&p) {
+                let mut fp = vec![0.0; n];
+                dae.parameter_residual(&y, param, &mut fp).unwrap();
+                let v = param.value(&p, &g);
+                let h = 1e-3 * v.abs().max(1.0);
+                let residual_at = |v: f64| {
+                    let (mut other, _) = dae_with(&p, &s, &g, param, v);
+                    let mut r = vec![0.0; n];
+                    other.residual(&y, &yp, &mut r).unwrap();
+                    r
+                };
+                let central = |h: f64| -> Vec<f64> {
+                    let (up, down) = (residual_at(v + h), residual_at(v - h));
+                    up.iter().zip(&down).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+                };
+                // Richardson: (4 D(h) − D(2h))/3 leaves O(h⁴) = 1e-12 relative.
+                let (d1, d2) = (central(h), central(2.0 * h));
+                let fd: Vec<f64> = d1.iter().zip(&d2).map(|(a, b)| (4.0 * a - b) / 3.0).collect();
+                let scale = fd.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+                let at = residual_at(v);
+                for (i, (a, b)) in fp.iter().zip(&fd).enumerate() {
+                    // The difference's round-off: ulps of the row's terms (the unknowns, or
+                    // the rates ~ η0 at y' = 0) over h; the α_s solves agree to an ulp or
+                    // two whatever their seed, and γ_s' ∝ [α_s − 1]⁺ amplifies that by
+                    // 1/(α_s − 1) ~ 30.
+                    let noise = 100.0 * f64::EPSILON * at[i].abs().max(y_max) / h;
+                    assert!(
+                        (a - b).abs() <= 1e-7 * scale + noise,
+                        "{what}, {}: row {i}: {a} vs {b} (largest {scale:e})",
+                        param.key()
+                    );
+                }
+                let moved = |rows: std::ops::Range<usize>| rows.into_iter().any(|i| fp[i] != 0.0);
+                // At fixed y, E_b and ΔP do not reach the rates: they move f_κ and f_{q_s},
+                // and so y_m's κ and q_s, which no local state (r, θ, z, α_s) reads.
+                let reaches_rates = !matches!(param, SensParam::Bending | SensParam::Pressure);
+                assert_eq!(
+                    moved(0..dae.n_p),
+                    reaches_rates,
+                    "{what}, {}: growth rows",
+                    param.key()
+                );
+                assert!(moved(dae.n_p..n), "{what}, {}: no other row", param.key());
+            }
+        }
+    }
+
+    /// s(0) against central differences of the t = 0 equilibrium (KINSOL to 1e-13, the
+    /// model rebuilt at p ± 1e-4 relative): every unknown to 1e-6 of the column's largest,
+    /// for all eight parameters (η0, Γ, δ: exactly zero), both schemes, with and without
+    /// fibres.
+    #[test]
+    fn initial_sensitivities_match_differences_of_the_elastic_solve() {
+        for (what, p, s, g) in sensitivity_cases() {
+            let params: Vec<SensParam> = SensParam::ALL
+                .into_iter()
+                .filter(|q| q.check(&p).is_ok())
+                .collect();
+            let mut dae = CoupledDae::new(GrowthSystem::new(&p, &s, &g).unwrap());
+            dae.set_linear(DaeLinear::SchurBlock).unwrap();
+            dae.set_sensitivities(&params);
+            let y = dae.initial_state().unwrap();
+            let (s0, sp0) = dae.initial_sensitivities(&y).unwrap();
+            assert_eq!((s0.len(), sp0.len()), (params.len(), params.len()));
+            for (j, &param) in params.iter().enumerate() {
+                let v = param.value(&p, &g);
+                let h = 1e-2 * v.abs().max(1.0);
+                let central = |h: f64| -> Vec<f64> {
+                    let (_, up) = dae_with(&p, &s, &g, param, v + h);
+                    let (_, down) = dae_with(&p, &s, &g, param, v - h);
+                    up.iter().zip(&down).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+                };
+                // Richardson: (4 D(h) − D(2h))/3 leaves O(h⁴) = 1e-8 relative.
+                let (d1, d2) = (central(h), central(2.0 * h));
+                let fd: Vec<f64> = d1.iter().zip(&d2).map(|(a, b)| (4.0 * a - b) / 3.0).collect();
+                let scale = fd.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+                if param.is_growth() {
+                    assert!(s0[j].iter().chain(&fd).all(|&x| x == 0.0), "{what}, {}", param.key());
+                    continue;
+                }
+                assert!(scale > 0.0, "{what}, {}: the equilibrium does not move", param.key());
+                let mut worst = 0.0_f64;
+                for (i, (a, b)) in s0[j].iter().zip(&fd).enumerate() {
+                    // The equilibria's own error (KINSOL at 1e-13, measured ~2e-13 of an
+                    // unknown's size) over the steps, as Richardson's sum amplifies it.
+                    let noise = 1.5 * 2e-13 * y[i].abs().max(1.0) / h;
+                    worst = worst.max((a - b).abs() / scale);
+                    assert!(
+                        (a - b).abs() <= 1e-6 * scale + noise,
+                        "{what}, {}: unknown {i}: {a} vs {b} (largest {scale:e})",
+                        param.key()
+                    );
+                }
+                println!("{what}, {}: s(0) within {worst:.1e} of the largest", param.key());
+            }
+        }
+    }
 
     /// The structure the docs state: the Schur complement leaves the elastic band (lower 8,
     /// upper 8, with z in it) while the interleaved whole system has lower 14, upper 12,

@@ -465,6 +465,13 @@ pub(crate) fn run_on(
         reason,
         stats: Box::new(stats),
     };
+    if let Some(why) = settings
+        .sensitivities
+        .iter()
+        .find_map(|s| s.check(params).err())
+    {
+        return Err(fail(0.0, why, GrowthStats::default()));
+    }
     if !settings.sensitivities.is_empty() && settings.integrator != Integrator::Ida {
         return Err(fail(
             0.0,
@@ -558,7 +565,7 @@ fn run_ida(
         .and_then(|y| dae.derivative(&y).map(|yp| (y, yp)))
         .and_then(|(y, yp)| {
             let s = match settings.sensitivities.is_empty() {
-                true => vec![],
+                true => (vec![], vec![]),
                 false => dae.initial_sensitivities(&y)?,
             };
             Ok((y, yp, s))
@@ -568,7 +575,7 @@ fn run_ida(
             0.0,
             format!("the consistent start of the coupled system: {e}"),
         )),
-        Ok((y0, yp0, sp0)) => {
+        Ok((y0, yp0, (s0, sp0))) => {
             let n_p = dae.differential_len();
             let mut out = |dae: &mut dae::CoupledDae, t: f64, y: &[f64]| {
                 dae.adopt(y);
@@ -580,19 +587,18 @@ fn run_ida(
             };
             let mut sensitivities = None;
             if !sp0.is_empty() {
-                let zero = vec![vec![0.0; y0.len()]; sp0.len()];
-                // s(0) = 0: the rows at t = 0 are zero (written by the caller's output there).
-                if let Err(e) = sens_out(&mut dae, 0.0, &y0, &zero) {
+                // The rows at t = 0: zero for η0, Γ, δ; the t = 0 equilibrium's for the rest.
+                if let Err(e) = sens_out(&mut dae, 0.0, &y0, &s0) {
                     return (dae.sys, Err((0.0, e)));
                 }
-                let g = dae.sys.growth_params().clone();
+                let (p, g) = (dae.sys.elastic.params(), dae.sys.growth_params().clone());
                 sensitivities = Some(ida::Sensitivities {
                     scales: settings
                         .sensitivities
                         .iter()
-                        .map(|p| p.value(&g).abs().max(f64::MIN_POSITIVE))
+                        .map(|s| s.value(&p, &g).abs().max(f64::MIN_POSITIVE))
                         .collect(),
-                    ys0: zero,
+                    ys0: s0,
                     yps0: sp0,
                     error_control: settings.sensitivity_error_control,
                     output: &mut sens_out,
@@ -644,11 +650,13 @@ fn run_ida(
 }
 
 /// The measured eye's derivatives along each sensitivity s_j = ∂y/∂p_j at the state y:
-/// the measurement (retina, stimulus, largest radius) is a function of y alone, and its
-/// derivative along s_j is taken as a central difference M(y ± ε s_j) — the one place a
-/// directional difference stands in for an analytic derivative (the measurement reads the
-/// retina through the stimulus code, which has no derivative). ε moves y by 1e-6 of its
-/// largest entry: truncation (ε²) and round-off (u/ε) both stay below 1e-9 relative.
+/// the measurement (retina, stimulus, largest radius) is a function of y and of the
+/// parameters it reads itself (C and D through α_s in the retina's loaded thickness, z_B
+/// through the blue surface), and its total derivative is taken as a central difference
+/// M(y ± ε s_j, p_j ± ε) — the one place a directional difference stands in for an
+/// analytic derivative (the measurement reads the retina through the stimulus code, which
+/// has no derivative). ε moves y by at most 1e-6 of its largest entry and p_j by at most
+/// 1e-6 of max(|p_j|, 1): truncation (ε²) and round-off (u/ε) both stay below 1e-9 relative.
 fn sensitivity_rows(
     dae: &mut dae::CoupledDae,
     t: f64,
@@ -661,19 +669,32 @@ fn sensitivity_rows(
         dae.sys.series(t, &y[..n_p]).map_err(|e| e.to_string())
     };
     let at = measure(dae, y)?;
-    let g = dae.sys.growth_params().clone();
+    let (p, g) = (dae.sys.elastic.params(), dae.sys.growth_params().clone());
     let y_max = y.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
     let mut rows = Vec::with_capacity(s.len());
     for (sj, &param) in s.iter().zip(dae.sensitivity_params().to_vec().iter()) {
+        let value = param.value(&p, &g);
+        let reads = dae.measurement_reads(param);
         let s_max = sj.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        let mut eps = if s_max > 0.0 {
+            1e-6 * y_max / s_max
+        } else {
+            f64::INFINITY
+        };
+        if reads {
+            eps = eps.min(1e-6 * value.abs().max(1.0));
+        }
         let mut d = [0.0; 3];
-        if s_max > 0.0 {
-            let eps = 1e-6 * y_max / s_max;
-            let shifted = |sign: f64| -> Vec<f64> {
-                y.iter().zip(sj).map(|(a, b)| a + sign * eps * b).collect()
+        if eps.is_finite() {
+            let shifted = |dae: &mut dae::CoupledDae, sign: f64| -> Result<SeriesRow, String> {
+                let ys: Vec<f64> = y.iter().zip(sj).map(|(a, b)| a + sign * eps * b).collect();
+                dae.set_measured_parameter(param, value + sign * eps);
+                let m = measure(dae, &ys);
+                dae.set_measured_parameter(param, value);
+                m
             };
-            let plus = measure(dae, &shifted(1.0))?;
-            let minus = measure(dae, &shifted(-1.0))?;
+            let plus = shifted(dae, 1.0)?;
+            let minus = shifted(dae, -1.0)?;
             let diff = |f: fn(&SeriesRow) -> f64| (f(&plus) - f(&minus)) / (2.0 * eps);
             d = [
                 diff(|r| r.axial_length),
@@ -684,7 +705,7 @@ fn sensitivity_rows(
         rows.push(SensitivityRow {
             t,
             parameter: param.key(),
-            value: param.value(&g),
+            value,
             axial_length: at.axial_length,
             d_axial_length: d[0],
             d_equatorial_radius: d[1],

@@ -486,6 +486,12 @@ impl GrowthSystem {
         self.growth.blue
     }
 
+    /// Move the blue surface's polar centre to `z_b` (forward sensitivities measure the eye
+    /// at a shifted surface: `CoupledDae::set_measured_parameter`).
+    pub(crate) fn set_blue_centre(&mut self, z_b: f64) {
+        self.growth.blue.z_b = z_b;
+    }
+
     /// The width the growth laws' kinks are rounded over (0: exact).
     pub fn kink_width(&self) -> f64 {
         self.growth.kink_width

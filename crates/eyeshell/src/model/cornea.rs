@@ -71,6 +71,13 @@ pub fn stretch(c: &CorneaParams, dp: f64) -> Result<f64, ModelError> {
     Ok(1.0 + e)
 }
 
+/// dα/dΔP at stretch `alpha`: the reciprocal of the law's slope,
+/// dΔP/dα = 4 C_c H_c / R_c · (7 α⁻⁸ − α⁻²) (> 0 below 7^(1/6)); for forward sensitivities.
+pub fn stretch_per_pressure(c: &CorneaParams, alpha: f64) -> f64 {
+    let k = 4.0 * c.c * c.h / c.r0;
+    1.0 / (k * (7.0 * alpha.powi(-8) - alpha.powi(-2)))
+}
+
 /// Where the cornea holds the shell's front edge (docs/MODEL.md §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CorneaEdge {

@@ -474,6 +474,25 @@ impl SchurSolver {
         self.reduced_solve(w)
     }
 
+    /// w = −[A a; cᵀ s]⁻¹ ([C; cᵀ] p' + b) after [`SchurSolver::factor_algebraic`]: the
+    /// algebraic block's solve with a right side of its own too (the initial forward
+    /// sensitivities of parameters that enter the algebraic rows); `b` and `w` have the
+    /// length of W and d together.
+    pub fn solve_algebraic_with(
+        &mut self,
+        p_dot: &[f64],
+        b: &[f64],
+        w: &mut [f64],
+    ) -> Result<(), LinalgError> {
+        let n = self.reduced_len();
+        let w = &mut w[..n];
+        for (wi, bi) in w.iter_mut().zip(&b[..n]) {
+            *wi = -bi;
+        }
+        self.coupling.subtract_from(p_dot, w);
+        self.reduced_solve(w)
+    }
+
     /// The largest |entry| of each P column (rows list columns in order, P's first).
     fn measure_columns(&mut self, a: &Csr) {
         let n_p = self.n_p;
