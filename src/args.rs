@@ -236,7 +236,7 @@ pub(crate) struct GrowArgs {
     /// Output directory, written as results come (a previous eyeshell output is replaced; on failure the results so far stay)
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
-    /// Forward sensitivities of the run (IDAS) with respect to these scene keys, into sensitivities.csv (growth.eta0, growth.Gamma, growth.delta)
+    /// Forward sensitivities of the run (IDAS) with respect to these scene keys, into sensitivities.csv: growth.eta0, growth.Gamma, growth.delta, fibres.D (scenes with fibres), material.C, material.bending, pressure.dP, stimulus.blue.z_B (stimulus.red.offset only moves the classification: refused)
     #[arg(long, value_name = "KEY,KEY,...", value_delimiter = ',')]
     pub(crate) sensitivities: Vec<String>,
     /// Include the sensitivities in the local error test (IDASetSensErrCon; slower: see BENCHMARKS.md)

@@ -154,7 +154,8 @@ fn set_sensitivities(scene: &mut Scene, keys: &[String], error_control: bool) ->
     for key in keys {
         let key = key.trim();
         let p = SensParam::from_key(key)
-            .map_err(|why| Error::input(format!("--sensitivities: {why}")))?;
+            .and_then(|p| p.check(&scene.params).map(|_| p))
+            .map_err(|why| Error::input(format!("--sensitivities: {why} ({})", scene.origin)))?;
         if params.contains(&p) {
             return Err(Error::input(format!(
                 "--sensitivities: {key} is listed twice"

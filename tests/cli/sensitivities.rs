@@ -9,14 +9,14 @@ fn bad_sensitivity_keys_are_refused_and_nothing_is_written() {
     for (keys, sets, needle) in [
         ("stimulus.red.offset", "", "only affects the classification"),
         (
-            "material.C",
+            "growth.eta0,fibres.D",
             "",
-            "sensitivities to material.C are not implemented yet",
+            "fibres.D = 0: the scene has no fibres",
         ),
         (
-            "pressure.dP",
+            "material.H0",
             "",
-            "sensitivities to pressure.dP are not implemented yet",
+            "sensitivities to material.H0 are not available",
         ),
         ("growth.Gama", "", "\"growth.Gama\" is not a scene key"),
         ("growth.eta0,growth.eta0", "", "growth.eta0 is listed twice"),
@@ -45,7 +45,9 @@ fn bad_sensitivity_keys_are_refused_and_nothing_is_written() {
     }
 }
 
-/// One row per recorded time and parameter; zero at t = 0; the scaled column is
+/// One row per recorded time and parameter; zero at t = 0 for the growth parameters, and
+/// for ΔP the inflation of the t = 0 equilibrium (the eye lengthens: dL/dΔP > 0); the
+/// scaled column is
 /// (p/L) dL/dp with L from series.csv (to 1e-6: series.csv measures the snapshot's shell,
 /// re-solved, the sensitivities the integrator's state); dL/dη0 at t = 0.1 is the value of a rtol-1e-12 run
 /// (N = 101, 1.847218610e-2, tests/numerics/sensitivities.rs's scene) to 1e-4.
@@ -65,7 +67,7 @@ fn grow_writes_sensitivities_csv_and_their_work() {
         "--set",
         "output.history_points=0",
         "--sensitivities",
-        "growth.eta0,growth.Gamma",
+        "growth.eta0,growth.Gamma,pressure.dP",
         "--out",
         s(&out),
         "--quiet",
@@ -87,19 +89,25 @@ fn grow_writes_sensitivities_csv_and_their_work() {
     assert_eq!(&series_header[..2], ["t", "axial_length"]);
     let times: Vec<f64> = series.iter().map(|r| r[0].parse().unwrap()).collect();
     let lengths: Vec<f64> = series.iter().map(|r| r[1].parse().unwrap()).collect();
-    assert_eq!(cells.len(), 2 * times.len());
+    assert_eq!(cells.len(), 3 * times.len());
     for (k, (&t, &l)) in times.iter().zip(&lengths).enumerate() {
-        for (j, (key, p)) in [("growth.eta0", 70.0), ("growth.Gamma", 8.0)]
-            .into_iter()
-            .enumerate()
+        for (j, (key, p)) in [
+            ("growth.eta0", 70.0),
+            ("growth.Gamma", 8.0),
+            ("pressure.dP", 2.0),
+        ]
+        .into_iter()
+        .enumerate()
         {
-            let row = &cells[2 * k + j];
+            let row = &cells[3 * k + j];
             let v = |c: usize| -> f64 { row[c].parse().unwrap() };
             assert_eq!((v(0), row[1].as_str()), (t, key));
             let scaled = p / l * v(2);
             assert!((v(5) - scaled).abs() <= 1e-6 * scaled.abs(), "{row:?}");
-            if t == 0.0 {
-                assert_eq!([v(2), v(3), v(4)], [0.0; 3]);
+            match (t, key) {
+                (0.0, "pressure.dP") => assert!(v(2) > 0.0 && v(3) > 0.0, "{row:?}"),
+                (0.0, _) => assert_eq!([v(2), v(3), v(4)], [0.0; 3]),
+                _ => {}
             }
             if t == 0.1 && key == "growth.eta0" {
                 let rel = (v(2) / 1.847218610e-2 - 1.0).abs();
@@ -115,7 +123,7 @@ fn grow_writes_sensitivities_csv_and_their_work() {
         .unwrap_or_else(|| panic!("no sensitivities in summary.json: {summary}"));
     assert_eq!(
         work["parameters"],
-        serde_json::json!(["growth.eta0", "growth.Gamma"])
+        serde_json::json!(["growth.eta0", "growth.Gamma", "pressure.dP"])
     );
     assert_eq!(work["error_control"], serde_json::json!(false));
     assert!(work["residual_evaluations"].as_u64().unwrap() > 0);

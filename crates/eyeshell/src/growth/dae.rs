@@ -814,13 +814,11 @@ impl CoupledDae {
     }
 
     /// Whether the measurement of the eye (`GrowthSystem::series`) reads `param` itself, at
-    /// fixed y: C and D through α_s (the retina's loaded thickness), z_B through the blue
-    /// surface. The others reach it only through y.
+    /// fixed y: C and D through α_s (the retina's loaded thickness), ΔP through the cornea's
+    /// edge (the measurement integrates z from z* = α R_c (1 + cos(L/R_c)) anew), z_B
+    /// through the blue surface. E_b and the growth parameters reach it only through y.
     pub fn measurement_reads(&self, param: SensParam) -> bool {
-        matches!(
-            param,
-            SensParam::Modulus | SensParam::FibreStiffness | SensParam::BlueCentre
-        )
+        !param.is_growth() && param != SensParam::Bending
     }
 
     /// Set the value of `param` where the measurement reads it (see
@@ -828,10 +826,18 @@ impl CoupledDae {
     /// difference of the measurement. The caller restores the value; the next
     /// [`CoupledDae::adopt`] drops the evaluations made with the other.
     pub fn set_measured_parameter(&mut self, param: SensParam, v: f64) {
-        let shell = &mut self.sys.elastic.discretisation_mut().shell;
+        let params = self.sys.elastic.params();
+        let disc = self.sys.elastic.discretisation_mut();
         match param {
-            SensParam::Modulus => shell.law.c = v,
-            SensParam::FibreStiffness => shell.law.d = Some(v),
+            SensParam::Modulus => disc.shell.law.c = v,
+            SensParam::FibreStiffness => disc.shell.law.d = Some(v),
+            SensParam::Pressure => {
+                disc.shell.dp = v;
+                // ΔP within the cornea's limit: the caller's shifts are 1e-6 of it.
+                if let Ok(edge) = crate::model::cornea::edge(&params.cornea, v, params.length()) {
+                    disc.edge = edge;
+                }
+            }
             SensParam::BlueCentre => self.sys.set_blue_centre(v),
             _ => {}
         }
