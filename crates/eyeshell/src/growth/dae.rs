@@ -32,12 +32,12 @@ use super::system::{GrowthSystem, RhsError};
 use super::ThicknessLaw;
 use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, POLE_ROWS};
 use crate::bvp::equations::{
-    constant_partials, data_partials, ConstantPartials, Mat5, MaterialPoint, PointError,
-    PointEval, ShellConstant, Vec5, KAPPA, R, THETA, TS,
+    constant_partials, data_partials, ConstantPartials, Mat5, MaterialPoint, PointError, PointEval,
+    ShellConstant, Vec5, KAPPA, R, THETA, TS,
 };
-use crate::model::params::Params;
 use crate::bvp::settings::Scheme;
 use crate::model::growth_law::positive_smooth;
+use crate::model::params::Params;
 use eyeshell_sundials::linalg::{
     Csr, DirectSolver, Fallback, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
 };
@@ -359,6 +359,9 @@ impl SensParam {
         }
     }
 }
+
+/// (s_j(0), s_j'(0)) for every parameter j, from [`CoupledDae::initial_sensitivities`].
+pub type InitialSensitivities = (Vec<Vec<f64>>, Vec<Vec<f64>>);
 
 /// Work done by the coupled system's callbacks.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -808,7 +811,8 @@ impl CoupledDae {
         // The border d − D*: ∂D* = Σ L_k (∂depth_k − p'(φ_k) ∂φ_k), as in the Jacobian.
         if let Some(cr) = crossing {
             for &(k, wgt, slope) in cr.points() {
-                out[d] -= wgt * (dot(&rd[k].depth, &dlocal[k]) - slope * dot(&rd[k].angle, &dlocal[k]));
+                out[d] -=
+                    wgt * (dot(&rd[k].depth, &dlocal[k]) - slope * dot(&rd[k].angle, &dlocal[k]));
             }
         }
     }
@@ -902,10 +906,7 @@ impl CoupledDae {
     ///   it leaves out the second-order terms (∂F_y/∂t) s and ∂F_p/∂t of the algebraic rows.
     ///   IDAS does not need the algebraic s' (its residual holds no s'_W): they seed only
     ///   the first step's predictor.
-    pub fn initial_sensitivities(
-        &mut self,
-        y: &[f64],
-    ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), DaeError> {
+    pub fn initial_sensitivities(&mut self, y: &[f64]) -> Result<InitialSensitivities, DaeError> {
         let (n, n_p) = (self.len(), self.n_p);
         let params = self.sens_params.clone();
         self.assemble(0.0, y)?;
@@ -1740,11 +1741,18 @@ mod tests {
                 };
                 let central = |h: f64| -> Vec<f64> {
                     let (up, down) = (residual_at(v + h), residual_at(v - h));
-                    up.iter().zip(&down).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+                    up.iter()
+                        .zip(&down)
+                        .map(|(a, b)| (a - b) / (2.0 * h))
+                        .collect()
                 };
                 // Richardson: (4 D(h) − D(2h))/3 leaves O(h⁴) = 1e-12 relative.
                 let (d1, d2) = (central(h), central(2.0 * h));
-                let fd: Vec<f64> = d1.iter().zip(&d2).map(|(a, b)| (4.0 * a - b) / 3.0).collect();
+                let fd: Vec<f64> = d1
+                    .iter()
+                    .zip(&d2)
+                    .map(|(a, b)| (4.0 * a - b) / 3.0)
+                    .collect();
                 let scale = fd.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
                 let at = residual_at(v);
                 for (i, (a, b)) in fp.iter().zip(&fd).enumerate() {
@@ -1797,17 +1805,32 @@ mod tests {
                 let central = |h: f64| -> Vec<f64> {
                     let (_, up) = dae_with(&p, &s, &g, param, v + h);
                     let (_, down) = dae_with(&p, &s, &g, param, v - h);
-                    up.iter().zip(&down).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+                    up.iter()
+                        .zip(&down)
+                        .map(|(a, b)| (a - b) / (2.0 * h))
+                        .collect()
                 };
                 // Richardson: (4 D(h) − D(2h))/3 leaves O(h⁴) = 1e-8 relative.
                 let (d1, d2) = (central(h), central(2.0 * h));
-                let fd: Vec<f64> = d1.iter().zip(&d2).map(|(a, b)| (4.0 * a - b) / 3.0).collect();
+                let fd: Vec<f64> = d1
+                    .iter()
+                    .zip(&d2)
+                    .map(|(a, b)| (4.0 * a - b) / 3.0)
+                    .collect();
                 let scale = fd.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
                 if param.is_growth() {
-                    assert!(s0[j].iter().chain(&fd).all(|&x| x == 0.0), "{what}, {}", param.key());
+                    assert!(
+                        s0[j].iter().chain(&fd).all(|&x| x == 0.0),
+                        "{what}, {}",
+                        param.key()
+                    );
                     continue;
                 }
-                assert!(scale > 0.0, "{what}, {}: the equilibrium does not move", param.key());
+                assert!(
+                    scale > 0.0,
+                    "{what}, {}: the equilibrium does not move",
+                    param.key()
+                );
                 let mut worst = 0.0_f64;
                 for (i, (a, b)) in s0[j].iter().zip(&fd).enumerate() {
                     // The equilibria's own error (KINSOL at 1e-13, measured ~2e-13 of an
@@ -1820,7 +1843,10 @@ mod tests {
                         param.key()
                     );
                 }
-                println!("{what}, {}: s(0) within {worst:.1e} of the largest", param.key());
+                println!(
+                    "{what}, {}: s(0) within {worst:.1e} of the largest",
+                    param.key()
+                );
             }
         }
     }

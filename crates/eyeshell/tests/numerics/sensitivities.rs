@@ -158,9 +158,11 @@ fn check(
                 row.d_retina_minus_blue,
             ];
             let span = |c: usize| {
-                diffs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
-                    (lo.min(d[k][c]), hi.max(d[k][c]))
-                })
+                diffs
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+                        (lo.min(d[k][c]), hi.max(d[k][c]))
+                    })
             };
             let scale = (0..3).fold(0.0_f64, |m, c| m.max(span(c).1.abs()));
             let unmoved = 1e-6 * row.axial_length / p0.abs();
