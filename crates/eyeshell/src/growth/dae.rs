@@ -1663,6 +1663,36 @@ mod tests {
     use crate::growth::GrowthParams;
     use crate::model::params::Params;
 
+    /// Every parameter round-trips through its scene key, `set` and `value` touch the
+    /// field the key names (as the scene's own key does), and the refusals name the key.
+    #[test]
+    fn sensitivity_parameters_and_their_keys() {
+        use crate::scene::Scene;
+        for param in SensParam::ALL {
+            assert_eq!(SensParam::from_key(param.key()), Ok(param));
+            let mut scene = Scene::default_scene();
+            scene.params.d = 200.0;
+            let mut g = GrowthParams::default();
+            param.set(&mut scene.params, &mut g, 0.75);
+            assert_eq!(param.value(&scene.params, &g), 0.75, "{}", param.key());
+            scene.growth = Some(GrowthParams::default());
+            scene.set(param.key(), 0.75).unwrap();
+            let ours = (scene.params, scene.growth.clone().unwrap());
+            assert_eq!(param.value(&ours.0, &ours.1), 0.75, "{}", param.key());
+            assert!(SensParam::SUPPORTED.contains(param.key()));
+        }
+        let why = SensParam::from_key("stimulus.red.offset").unwrap_err();
+        assert!(why.contains("only affects the classification"), "{why}");
+        let why = SensParam::FibreStiffness
+            .check(&Params::default())
+            .unwrap_err();
+        assert!(
+            why.starts_with("fibres.D = 0: the scene has no fibres"),
+            "{why}"
+        );
+        assert!(SensParam::Modulus.check(&Params::default()).is_ok());
+    }
+
     /// The const and fibre scenes (the fibre scene: non-uniform thickness, D = 200, so
     /// jump nodes and two growth points at them) under both schemes, N = 31, rounded kinks.
     fn sensitivity_cases() -> Vec<(String, Params, SolverSettings, GrowthParams)> {

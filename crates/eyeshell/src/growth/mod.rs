@@ -651,8 +651,9 @@ fn run_ida(
 
 /// The measured eye's derivatives along each sensitivity s_j = ∂y/∂p_j at the state y:
 /// the measurement (retina, stimulus, largest radius) is a function of y and of the
-/// parameters it reads itself (C and D through α_s in the retina's loaded thickness, z_B
-/// through the blue surface), and its total derivative is taken as a central difference
+/// parameters it reads itself (C and D through α_s in the retina's loaded thickness, ΔP
+/// through the cornea's z* that z is integrated from, z_B through the blue surface), and
+/// its total derivative is taken as a central difference
 /// M(y ± ε s_j, p_j ± ε) — the one place a directional difference stands in for an
 /// analytic derivative (the measurement reads the retina through the stimulus code, which
 /// has no derivative). ε moves y by at most 1e-6 of its largest entry and p_j by at most
