@@ -951,6 +951,9 @@ const AXIS_DESC_SIZE: f64 = 20.0;
 const TICK_SIZE: f64 = 16.0;
 const COLORBAR_TICK_SIZE: f64 = 14.0;
 const LEGEND_SIZE: f64 = 16.0;
+/// The legend box's distance from the plot's corner, and the width of its icon column (px).
+const LEGEND_MARGIN: f64 = 12.0;
+const LEGEND_AREA: f64 = 36.0;
 const NOTE_SIZE: f64 = 16.0;
 const STROKE: u32 = 2;
 /// The widest stroke drawn, in pixels (wider requests are clamped).
@@ -1139,21 +1142,57 @@ fn marker_shape(k: usize) -> Vec<Px> {
     }
 }
 
-/// The legend corner with fewest points near it (upper right first on ties). The upper
-/// left is left to the notes when there are any.
-fn legend_corner(fig: &Figure, prep: &Prepared) -> SeriesLabelPosition {
+/// The legend corner whose box would cover the least of the curves (upper right first on
+/// ties). The box's size is estimated in pixels from the entries and the longest name (as
+/// plotters lays it out: `legend_area_size` for the icon, the label font's em for the
+/// text); the curves are sampled along their segments, so that a steep stretch drawn
+/// between two far-apart points still counts. The upper left is left to the notes when
+/// there are any.
+fn legend_corner(fig: &Figure, prep: &Prepared, area_px: (u32, u32)) -> SeriesLabelPosition {
     let norm = |v: f64, r: (f64, f64), s: Scale| match s {
         Scale::Linear => (v - r.0) / (r.1 - r.0),
         Scale::Log10 => (v.log10() - r.0.log10()) / (r.1.log10() - r.0.log10()),
     };
-    let mut count = [0usize; 4]; // UR, UL, LR, LL
-    for &(x, y) in prep.curves.iter().flat_map(|c| c.points.iter()) {
-        let (u, v) = (norm(x, prep.x, fig.x_scale), norm(y, prep.y, fig.y_scale));
-        let (right, left, up, down) = (u > 0.55, u < 0.45, v > 0.55, v < 0.45);
-        count[0] += (right && up) as usize;
-        count[1] += (left && up) as usize;
-        count[2] += (right && down) as usize;
-        count[3] += (left && down) as usize;
+    let listed: Vec<&Series> = fig.series.iter().filter(|s| s.legend).collect();
+    let chars = listed
+        .iter()
+        .map(|s| s.name.chars().count())
+        .max()
+        .unwrap_or(0);
+    let (w_px, h_px) = (f64::from(area_px.0.max(1)), f64::from(area_px.1.max(1)));
+    let box_w = ((LEGEND_AREA + 16.0 + 0.6 * LEGEND_SIZE * chars as f64) / w_px).min(1.0);
+    let box_h = ((1.35 * LEGEND_SIZE * listed.len() as f64 + 16.0) / h_px).min(1.0);
+    let (mx, my) = (LEGEND_MARGIN / w_px, LEGEND_MARGIN / h_px);
+    // The boxes as (u0, u1, v0, v1) in the unit square, v upwards: UR, UL, LR, LL.
+    let boxes = [
+        (1.0 - mx - box_w, 1.0 - mx, 1.0 - my - box_h, 1.0 - my),
+        (mx, mx + box_w, 1.0 - my - box_h, 1.0 - my),
+        (1.0 - mx - box_w, 1.0 - mx, my, my + box_h),
+        (mx, mx + box_w, my, my + box_h),
+    ];
+    let mut count = [0usize; 4];
+    let mut tally = |u: f64, v: f64| {
+        for (c, b) in count.iter_mut().zip(&boxes) {
+            *c += (b.0..=b.1).contains(&u) as usize * (b.2..=b.3).contains(&v) as usize;
+        }
+    };
+    for c in &prep.curves {
+        let unit: Vec<(f64, f64)> = c
+            .points
+            .iter()
+            .map(|&(x, y)| (norm(x, prep.x, fig.x_scale), norm(y, prep.y, fig.y_scale)))
+            .collect();
+        for (i, &(u, v)) in unit.iter().enumerate() {
+            tally(u, v);
+            // Up to 50 samples inside a long segment (about one per 2 % of the square).
+            if let Some(&(u1, v1)) = unit.get(i + 1) {
+                let steps = (((u1 - u).abs().max((v1 - v).abs())) / 0.02).min(50.0) as usize;
+                for k in 1..steps {
+                    let f = k as f64 / steps as f64;
+                    tally(u + f * (u1 - u), v + f * (v1 - v));
+                }
+            }
+        }
     }
     let best = (0..4)
         .filter(|&i| i != 1 || fig.notes.is_empty())
@@ -1560,11 +1599,12 @@ where
         draw_notes(&chart.plotting_area().strip_coord_spec(), &fig.notes)?;
     }
     if fig.series.iter().any(listed) {
+        let corner = legend_corner(fig, prep, chart.plotting_area().dim_in_pixel());
         chart
             .configure_series_labels()
-            .position(legend_corner(fig, prep))
-            .margin(12)
-            .legend_area_size(36)
+            .position(corner)
+            .margin(LEGEND_MARGIN as u32)
+            .legend_area_size(LEGEND_AREA as u32)
             .label_font(text(LEGEND_SIZE))
             .background_style(WHITE.mix(0.9))
             .border_style(RGBColor(160, 160, 160))
@@ -1577,6 +1617,29 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A steep stretch drawn between two far-apart samples (a sensitivity diving between
+    /// history times) keeps the legend off it, and points away from a corner do not: by
+    /// points per quadrant the lower left (one sample) would win.
+    #[test]
+    fn the_legend_avoids_a_sparsely_sampled_dive() {
+        let row = |x0: f64, y: f64| (0..=10).map(|i| (x0 + 0.01 * i as f64, y)).collect();
+        let fig = Figure::new("dive", "t", "s")
+            .with(Series::new(
+                "dive",
+                vec![(0.0, 0.0), (0.06, -1.0), (0.3, 0.0)],
+                SeriesStyle::Line,
+            ))
+            .with(Series::new("high", row(0.9, 1.0), SeriesStyle::Line))
+            .with(Series::new("low", row(0.9, -1.0), SeriesStyle::Line))
+            .with(Series::new("middle", row(0.3, 0.7), SeriesStyle::Line));
+        let prep = Prepared::new(&fig);
+        let corner = legend_corner(&fig, &prep, (800, 600));
+        assert!(
+            matches!(corner, SeriesLabelPosition::UpperLeft),
+            "{corner:?}"
+        );
+    }
 
     #[test]
     fn log_ranges_are_whole_decades_around_the_data() {
