@@ -1721,6 +1721,23 @@ mod tests {
         out
     }
 
+    /// The derivative of a vector function at v by Richardson extrapolation of central
+    /// differences: (4 D(h) − D(2h))/3, whose error is O(h⁴).
+    fn richardson_derivative(f: impl Fn(f64) -> Vec<f64>, v: f64, h: f64) -> Vec<f64> {
+        let central = |h: f64| -> Vec<f64> {
+            let (up, down) = (f(v + h), f(v - h));
+            up.iter()
+                .zip(&down)
+                .map(|(a, b)| (a - b) / (2.0 * h))
+                .collect()
+        };
+        let (d1, d2) = (central(h), central(2.0 * h));
+        d1.iter()
+            .zip(&d2)
+            .map(|(a, b)| (4.0 * a - b) / 3.0)
+            .collect()
+    }
+
     /// The coupled system of the model with `param` set to `v`, and its consistent y(0).
     fn dae_with(
         p: &Params,
@@ -1769,20 +1786,8 @@ mod tests {
                     other.residual(&y, &yp, &mut r).unwrap();
                     r
                 };
-                let central = |h: f64| -> Vec<f64> {
-                    let (up, down) = (residual_at(v + h), residual_at(v - h));
-                    up.iter()
-                        .zip(&down)
-                        .map(|(a, b)| (a - b) / (2.0 * h))
-                        .collect()
-                };
-                // Richardson: (4 D(h) − D(2h))/3 leaves O(h⁴) = 1e-12 relative.
-                let (d1, d2) = (central(h), central(2.0 * h));
-                let fd: Vec<f64> = d1
-                    .iter()
-                    .zip(&d2)
-                    .map(|(a, b)| (4.0 * a - b) / 3.0)
-                    .collect();
+                // O(h⁴) = 1e-12 relative.
+                let fd = richardson_derivative(residual_at, v, h);
                 let scale = fd.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
                 let at = residual_at(v);
                 for (i, (a, b)) in fp.iter().zip(&fd).enumerate() {
@@ -1832,21 +1837,8 @@ mod tests {
             for (j, &param) in params.iter().enumerate() {
                 let v = param.value(&p, &g);
                 let h = 1e-2 * v.abs().max(1.0);
-                let central = |h: f64| -> Vec<f64> {
-                    let (_, up) = dae_with(&p, &s, &g, param, v + h);
-                    let (_, down) = dae_with(&p, &s, &g, param, v - h);
-                    up.iter()
-                        .zip(&down)
-                        .map(|(a, b)| (a - b) / (2.0 * h))
-                        .collect()
-                };
-                // Richardson: (4 D(h) − D(2h))/3 leaves O(h⁴) = 1e-8 relative.
-                let (d1, d2) = (central(h), central(2.0 * h));
-                let fd: Vec<f64> = d1
-                    .iter()
-                    .zip(&d2)
-                    .map(|(a, b)| (4.0 * a - b) / 3.0)
-                    .collect();
+                // O(h⁴) = 1e-8 relative.
+                let fd = richardson_derivative(|x| dae_with(&p, &s, &g, param, x).1, v, h);
                 let scale = fd.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
                 if param.is_growth() {
                     assert!(
