@@ -332,6 +332,20 @@ impl SensParam {
         }
     }
 
+    /// The scale |p̄| IDAS weighs its sensitivity by (tolerances atol/|p̄|): the value's
+    /// size, or where the value is 0 (η0 = 0, ΔP = 0, Γ or z_B at 0) the size of its
+    /// default (docs/MODEL.md §8), else 1 in the key's units. A scale of 0 would make every
+    /// weight of s zero, so that the sensitivity's Newton iteration passed its test with
+    /// s uncorrected (ΔP = 0 gave ∂L/∂ΔP ≈ −1e7).
+    pub fn scale(self, params: &Params, g: &super::GrowthParams) -> f64 {
+        let defaults = (Params::default(), super::GrowthParams::default());
+        [self.value(params, g), self.value(&defaults.0, &defaults.1)]
+            .into_iter()
+            .map(f64::abs)
+            .find(|v| *v > 0.0 && v.is_finite())
+            .unwrap_or(1.0)
+    }
+
     /// Set its value in the model to `v` (the scene's own key does the same, with the red
     /// surface following the blue one where the scene says so: `Scene::set`).
     pub fn set(self, params: &mut Params, g: &mut super::GrowthParams, v: f64) {

@@ -596,7 +596,7 @@ fn run_ida(
                     scales: settings
                         .sensitivities
                         .iter()
-                        .map(|s| s.value(&p, &g).abs().max(f64::MIN_POSITIVE))
+                        .map(|s| s.scale(&p, &g))
                         .collect(),
                     ys0: s0,
                     yps0: sp0,

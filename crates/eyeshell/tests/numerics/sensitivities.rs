@@ -234,3 +234,44 @@ fn sensitivities_of_the_exact_kink_model_match_early() {
         1e-4,
     );
 }
+
+/// A parameter whose value is 0 (Γ at the pole, the blue surface through z = 0) still has
+/// its sensitivity under IDAS's control: the weights are 1/(rtol |s| + atol/|p̄|), and a
+/// scale |p̄| = |p| = 0 made them vanish, so the sensitivity passed its Newton test
+/// uncorrected (∂L/∂z_B was 0.21 instead of 0.96, ∂L/∂ΔP at ΔP = 0 −1e7). Against central
+/// differences with an absolute step of 1e-3 at t = 1.
+#[test]
+fn a_parameter_at_zero_keeps_its_sensitivity_controlled() {
+    let p = Params::default();
+    let mut g = GrowthParams {
+        gamma: 0.0,
+        ..GrowthParams::default()
+    };
+    g.blue.z_b = 0.0;
+    let params = [SensParam::Gamma, SensParam::BlueCentre];
+    let length_at_end = |param: SensParam, v: f64| {
+        let (p, g) = with(&p, &g, param, v);
+        let (keep, _) = run(&p, &g, &[1.0], 1e-9, &[]);
+        keep.series
+            .last()
+            .expect("a snapshot at t = 1")
+            .axial_length
+    };
+    let (keep, _) = run(&p, &g, &[1.0], 1e-9, &params);
+    for param in params {
+        let row = keep
+            .sens
+            .iter()
+            .find(|r| r.parameter == param.key() && r.t == 1.0)
+            .expect("a row at t = 1");
+        let h = 1e-3;
+        let fd = (length_at_end(param, h) - length_at_end(param, -h)) / (2.0 * h);
+        let rel = (row.d_axial_length - fd).abs() / fd.abs();
+        assert!(
+            rel < 1e-3,
+            "{}: IDAS {} against the difference {fd} ({rel:.1e} relative)",
+            param.key(),
+            row.d_axial_length
+        );
+    }
+}
