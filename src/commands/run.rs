@@ -1,7 +1,5 @@
 //! `eyeshell solve`, `grow`, `check` and `keys`: one scene.
 
-use eyeshell::growth::dae::SensParam;
-use eyeshell::growth::Integrator;
 use eyeshell::rundir::run::GrowthFailure;
 use eyeshell::rundir::{self, GrowthWriter};
 use eyeshell::scene::{Scene, SceneError, KEYS};
@@ -144,36 +142,19 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// `--sensitivities KEY,KEY,...`: the parameters, each once, and only with IDA; refused
-/// before anything is written.
+/// `--sensitivities KEY,KEY,...`: the library's checks (`Scene::set_sensitivities`: known
+/// keys with sensitivities, each once, fibres.D only with fibres, IDA only), its one-line
+/// refusals named after the flag.
 fn set_sensitivities(scene: &mut Scene, keys: &[String], error_control: bool) -> Result<(), Error> {
     if keys.is_empty() {
         return Ok(());
     }
-    let mut params = Vec::with_capacity(keys.len());
-    for key in keys {
-        let key = key.trim();
-        let p = SensParam::from_key(key)
-            .and_then(|p| p.check(&scene.params).map(|_| p))
-            .map_err(|why| Error::input(format!("--sensitivities: {why} ({})", scene.origin)))?;
-        if params.contains(&p) {
-            return Err(Error::input(format!(
-                "--sensitivities: {key} is listed twice"
-            )));
-        }
-        params.push(p);
-    }
-    let integrator = scene.growth_settings.integrator;
-    if integrator != Integrator::Ida {
-        return Err(Error::input(format!(
-            "--sensitivities needs solver.integrator = \"ida\" ({} has \"{}\")",
-            scene.origin,
-            integrator.name()
-        )));
-    }
-    scene.growth_settings.sensitivities = params;
-    scene.growth_settings.sensitivity_error_control = error_control;
-    Ok(())
+    scene
+        .set_sensitivities(keys, error_control)
+        .map_err(|e| match e {
+            Error::Input(why) => Error::input(format!("--{why}")),
+            e => e,
+        })
 }
 
 pub(crate) fn cmd_check(a: &SceneArgs) -> Result<(), Error> {

@@ -23,7 +23,7 @@ fn bad_sensitivity_keys_are_refused_and_nothing_is_written() {
         (
             "growth.eta0",
             "solver.integrator=cvode",
-            "--sensitivities needs solver.integrator = \"ida\"",
+            "--sensitivities need solver.integrator = \"ida\"",
         ),
     ] {
         let dir = tempfile::tempdir().unwrap();

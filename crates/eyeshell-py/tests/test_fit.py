@@ -35,6 +35,9 @@ def test_without_sensitivities_the_table_is_empty_and_bad_keys_are_refused():
     with pytest.raises(eyeshell.InputError, match='need solver.integrator = "ida"'):
         eyeshell.grow(SCENES / "const.toml", sensitivities=["growth.eta0"],
                       solver__integrator="cvode")
+    # Bad input, not a solver failure: the scene has no fibres.
+    with pytest.raises(eyeshell.InputError, match="fibres.D = 0: the scene has no fibres"):
+        eyeshell.grow(SCENES / "const.toml", sensitivities=["fibres.D"])
 
 
 def test_fit_recovers_eta0_gamma_delta_from_synthetic_data():

@@ -147,6 +147,11 @@ impl Scene {
             return Ok(());
         }
         let params = crate::fit::parse_keys(keys, "sensitivities")?;
+        for p in &params {
+            p.param
+                .check(&self.params)
+                .map_err(|why| Error::input(format!("sensitivities: {why} ({})", self.origin)))?;
+        }
         let integrator = self.growth_settings.integrator;
         if integrator != growth::Integrator::Ida {
             return Err(Error::input(format!(
