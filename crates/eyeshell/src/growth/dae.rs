@@ -188,6 +188,16 @@ struct RateDeriv {
     angle: [f64; 6],
 }
 
+/// The per-point buffers of an evaluation (local states, rates, their derivatives), kept
+/// between calls so that a residual or an assembly allocates nothing (N = 501: ~0.5 MB a
+/// call). The outputs are bit-identical; the smallest on-CPU time of a run did not move.
+#[derive(Default)]
+struct PointScratch {
+    local: Vec<Local>,
+    rates: Vec<PointRates>,
+    rd: Vec<RateDeriv>,
+}
+
 /// The layout of y and the fixed data of the coupled system.
 pub struct CoupledDae {
     pub sys: GrowthSystem,
@@ -206,6 +216,7 @@ pub struct CoupledDae {
     /// derivatives of its elastic right side in its data (computed once per assembly).
     grads: Vec<[Grad; 4]>,
     derivs: Vec<DataDeriv>,
+    scratch: PointScratch,
     /// The (p, u) the discretisation's data and evaluations were last set for.
     at_p: Vec<f64>,
     pub counters: DaeCounters,
@@ -443,6 +454,7 @@ impl CoupledDae {
             dz: vec![0.0; m - 1],
             grads: vec![],
             derivs: vec![],
+            scratch: PointScratch::default(),
             at_p: vec![],
             counters: DaeCounters::default(),
             sens_params: vec![],
@@ -641,8 +653,10 @@ impl CoupledDae {
         }
         self.at_p.clear();
         self.load(&y)?;
-        let local = self.locals(&y, None);
-        let (_, crossing) = self.point_rates(&y, &local, None);
+        let mut s = std::mem::take(&mut self.scratch);
+        self.locals(&y, None, &mut s.local);
+        let crossing = self.point_rates(&y, &s.local, None, &mut s.rates);
+        self.scratch = s;
         let d = self.d();
         y[d] = crossing.map_or(0.0, |c| c.value);
         Ok(y)
@@ -698,25 +712,28 @@ impl CoupledDae {
         out: &mut [&mut [f64]],
     ) -> Result<(), RhsError> {
         self.load(y)?;
-        let local = self.locals(y, None);
+        let mut s = std::mem::take(&mut self.scratch);
+        self.locals(y, None, &mut s.local);
         let model = params.iter().any(|p| !p.is_growth());
-        let mut rd = Vec::with_capacity(local.len());
-        let (rates, crossing) = self.point_rates(y, &local, model.then_some(&mut rd));
-        self.check_finite(&rates, model.then_some(rd.as_slice()))?;
-        let g = self.sys.growth_params();
-        for (&param, out) in params.iter().zip(out.iter_mut()) {
-            out.fill(0.0);
-            if !param.is_growth() {
-                self.model_parameter_residual(param, &rd, crossing, out);
-                continue;
-            }
-            for (k, pr) in rates.iter().enumerate() {
-                let dc = param.capacity_partial(g, self.sys.points.sigma_ref[k]);
-                out[NP * k] = -pr.per_capacity[0] * dc;
-                out[NP * k + 1] = -pr.per_capacity[1] * dc;
+        let crossing = self.point_rates(y, &s.local, model.then_some(&mut s.rd), &mut s.rates);
+        let finite = self.check_finite(&s.rates, model.then_some(s.rd.as_slice()));
+        if finite.is_ok() {
+            let g = self.sys.growth_params();
+            for (&param, out) in params.iter().zip(out.iter_mut()) {
+                out.fill(0.0);
+                if !param.is_growth() {
+                    self.model_parameter_residual(param, &s.rd, crossing, out);
+                    continue;
+                }
+                for (k, pr) in s.rates.iter().enumerate() {
+                    let dc = param.capacity_partial(g, self.sys.points.sigma_ref[k]);
+                    out[NP * k] = -pr.per_capacity[0] * dc;
+                    out[NP * k + 1] = -pr.per_capacity[1] * dc;
+                }
             }
         }
-        Ok(())
+        self.scratch = s;
+        finite
     }
 
     /// Each point's ∂f/∂c and ∂α_s/∂c in the shell constant c at fixed y, from the
@@ -953,10 +970,11 @@ impl CoupledDae {
     }
 
     /// The local state of every point; with `grads`, each one's derivatives in its window.
-    fn locals(&self, y: &[f64], mut grad: Option<&mut Vec<[Grad; 4]>>) -> Vec<Local> {
+    fn locals(&self, y: &[f64], mut grad: Option<&mut Vec<[Grad; 4]>>, local: &mut Vec<Local>) {
         let disc = self.sys.elastic.discretisation();
         let ev = disc.evaluations();
-        let mut local = vec![Local::default(); self.sites.len()];
+        local.clear();
+        local.resize(self.sites.len(), Local::default());
         if let Some(g) = grad.as_deref_mut() {
             g.resize(self.sites.len(), [Grad::default(); 4]);
         }
@@ -1012,7 +1030,6 @@ impl CoupledDae {
                 }
             }
         }
-        local
     }
 
     /// z at interval i's midpoint, from the cubic Hermite through its ends (the slopes from
@@ -1121,13 +1138,17 @@ impl CoupledDae {
         y: &[f64],
         local: &[Local],
         mut deriv: Option<&mut Vec<RateDeriv>>,
-    ) -> (Vec<PointRates>, Option<Crossing>) {
+        out: &mut Vec<PointRates>,
+    ) -> Option<Crossing> {
         let pts = &self.sys.points;
         let law = self.sys.points_law();
         let blue = self.sys.blue();
         let w = self.sys.kink_width();
         let d_unknown = y[self.d()];
-        let mut out: Vec<PointRates> = Vec::with_capacity(local.len());
+        out.clear();
+        if let Some(dv) = deriv.as_deref_mut() {
+            dv.clear();
+        }
         for (k, s) in local.iter().enumerate() {
             let (rho, gam) = (y[NP * k], y[NP * k + 1]);
             let zeta = pts.zeta(k, &y[..self.n_p]);
@@ -1166,7 +1187,7 @@ impl CoupledDae {
             }
         }
         // Beyond φ_max the depth is the unknown d (docs/MODEL.md §6).
-        let crossing = self.crossing_depth(&out);
+        let crossing = self.crossing_depth(out);
         let has_crossing = crossing.is_some();
         for (k, pr) in out.iter_mut().enumerate() {
             let s = &local[k];
@@ -1205,7 +1226,7 @@ impl CoupledDae {
                 rd.rate_d = [cap * gv_d * pr_, cap * gv_d * gam * pa];
             }
         }
-        (out, crossing)
+        crossing
     }
 
     /// Rates (and, with `deriv`, their derivatives) that are not finite fail the evaluation
@@ -1265,13 +1286,16 @@ impl CoupledDae {
         let start = std::time::Instant::now();
         self.counters.residuals += 1;
         self.load(y)?;
-        let local = self.locals(y, None);
-        let (rates, crossing) = self.point_rates(y, &local, None);
-        self.check_finite(&rates, None)?;
-        for (k, pr) in rates.iter().enumerate() {
+        let mut s = std::mem::take(&mut self.scratch);
+        self.locals(y, None, &mut s.local);
+        let crossing = self.point_rates(y, &s.local, None, &mut s.rates);
+        let finite = self.check_finite(&s.rates, None);
+        for (k, pr) in s.rates.iter().enumerate() {
             r[NP * k] = yp[NP * k] - pr.rho;
             r[NP * k + 1] = yp[NP * k + 1] - pr.gamma;
         }
+        self.scratch = s;
+        finite?;
         let (n_p, m) = (self.n_p, self.m);
         let (mut f, mut dz) = (std::mem::take(&mut self.f), std::mem::take(&mut self.dz));
         let disc = self.sys.elastic.discretisation_mut();
@@ -1303,7 +1327,9 @@ impl CoupledDae {
     /// Assemble ∂F/∂y + c ∂F/∂y' at y into the CSR matrix.
     pub fn assemble(&mut self, c: f64, y: &[f64]) -> Result<(), DaeError> {
         self.load(y)?;
-        self.derivs = self.data_derivs();
+        let mut derivs = std::mem::take(&mut self.derivs);
+        self.data_derivs(&mut derivs);
+        self.derivs = derivs;
         self.jac.zero();
         let n_p = self.n_p;
         // The elastic rows in the elastic unknowns: the discretisation's own Jacobian.
@@ -1324,16 +1350,16 @@ impl CoupledDae {
         self.assemble_data_columns();
         self.assemble_z_rows();
         let mut grads = std::mem::take(&mut self.grads);
-        let local = self.locals(y, Some(&mut grads));
-        let mut rd = Vec::with_capacity(local.len());
-        let (rates, crossing) = self.point_rates(y, &local, Some(&mut rd));
-        if let Err(e) = self.check_finite(&rates, Some(&rd)) {
-            self.grads = grads;
-            return Err(e.into());
+        let mut s = std::mem::take(&mut self.scratch);
+        self.locals(y, Some(&mut grads), &mut s.local);
+        let crossing = self.point_rates(y, &s.local, Some(&mut s.rd), &mut s.rates);
+        let finite = self.check_finite(&s.rates, Some(&s.rd));
+        if finite.is_ok() {
+            self.assemble_growth_rows(c, &grads, &s.rd, &s.rates);
+            self.assemble_border(&grads, &s.rd, crossing);
         }
-        self.assemble_growth_rows(c, &grads, &rd, &rates);
-        self.assemble_border(&grads, &rd, crossing);
-        self.grads = grads;
+        (self.grads, self.scratch) = (grads, s);
+        finite?;
         match self.jac.take_outside() {
             0 => Ok(()),
             k => Err(DaeError::Linear(LinalgError::OutsidePattern(k))),
@@ -1366,18 +1392,16 @@ impl CoupledDae {
 
     /// Each point's ∂f/∂(ρ, γ_s) and ∂α_s/∂(ρ, γ_s), from the evaluation at its site (the
     /// interval end or midpoint it belongs to; a node shared by two intervals has one).
-    fn data_derivs(&self) -> Vec<DataDeriv> {
+    fn data_derivs(&self, out: &mut Vec<DataDeriv>) {
         let disc = self.sys.elastic.discretisation();
         let (ev, data, law) = (disc.evaluations(), &disc.data, self.sys.points_law());
         let y = |j: usize| Vec5::from_column_slice(&self.u[NY * j..NY * j + NY]);
-        self.sites
-            .iter()
-            .map(|&site| match site {
-                Site::Left(i) => data_deriv(law, &data.above[i], &y(i), ev.left(i)),
-                Site::Right(i) => data_deriv(law, &data.below[i + 1], &y(i + 1), ev.right(i)),
-                Site::Mid(i) => data_deriv(law, &data.mid[i], ev.y_mid(i), ev.mid(i)),
-            })
-            .collect()
+        out.clear();
+        out.extend(self.sites.iter().map(|&site| match site {
+            Site::Left(i) => data_deriv(law, &data.above[i], &y(i), ev.left(i)),
+            Site::Right(i) => data_deriv(law, &data.below[i + 1], &y(i + 1), ev.right(i)),
+            Site::Mid(i) => data_deriv(law, &data.mid[i], ev.y_mid(i), ev.mid(i)),
+        }));
     }
 
     /// The elastic rows' derivatives in the growth data: the pole rows in above[0]'s data
