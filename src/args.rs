@@ -46,7 +46,7 @@ pub(crate) enum Command {
     Figures(FiguresArgs),
     /// Draw the output of any run or sweep (shells, profiles, axial length) as PNG and SVG
     Plot(PlotArgs),
-    /// Fit growth parameters to measured axial lengths (Levenberg–Marquardt on IDAS's sensitivities): fit.json, scene.toml, fit.png
+    /// Fit model parameters to measured axial lengths (Levenberg–Marquardt on IDAS's sensitivities): fit.json, scene.toml, fit.png
     Fit(FitArgs),
     /// Run the runs of a sweep that `eyeshell sweep` sends on stdin (its worker processes)
     #[command(name = "sweep-worker", hide = true)]
@@ -255,7 +255,7 @@ pub(crate) struct FitArgs {
     /// The observations: a CSV file with the header t,axial_length[,sigma] (t in [0, growth.t_end], lengths and σ in mm)
     #[arg(long, value_name = "DATA.csv")]
     pub(crate) data: PathBuf,
-    /// The parameters to fit, starting from the scene's values (growth.eta0, growth.Gamma, growth.delta)
+    /// The parameters to fit, starting from the scene's values (any key --sensitivities takes: growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B)
     #[arg(
         long,
         value_name = "KEY,KEY,...",
