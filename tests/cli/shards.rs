@@ -501,6 +501,23 @@ fn shards_started_together_into_a_fresh_directory_all_succeed() {
     }
 }
 
+/// Many shards starting at once, many times: one may look at `out` while another writes
+/// the marker (its temporary file there, the marker not yet renamed into place). That was
+/// refused as "not an eyeshell output directory" (seen once in CI); it is retried now.
+#[test]
+fn shards_racing_for_a_fresh_directory_never_refuse_it() {
+    let dir = scene_dir(&format!("{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 8]\n"));
+    let d = dir.path();
+    for attempt in 0..25 {
+        let _ = std::fs::remove_dir_all(d.join("out"));
+        let children: Vec<_> = (1..=8).map(|k| spawn_shard(d, &format!("{k}/8"))).collect();
+        for child in children {
+            let r = Run::from(child.wait_with_output().unwrap());
+            assert_eq!(r.code, Some(0), "attempt {attempt}: {}", r.stderr);
+        }
+    }
+}
+
 #[test]
 fn more_shards_than_runs_leave_the_extra_shards_empty() {
     let dir = scene_dir(&format!("{SMALL}[sweep.grid]\n\"growth.Gamma\" = [4, 8]\n"));

@@ -66,37 +66,24 @@ pub fn prepare_shard(
     shard: Shard,
 ) -> Result<(PathBuf, DirLock), Error> {
     let out = &rundir::owner::normalise(out);
-    wait_for_marker(out);
-    rundir::check_target(out)?;
-    refuse_links(out)?;
-    no_link(&out.join(SHARDS_DIR))?;
-    refuse_other_outputs(out, SHARD_INSTEAD)?;
-    refuse_other_runs(is_run, out, SHARD_INSTEAD)?;
+    // A shard started beside others may look at `out` while another is writing the
+    // marker (its temporary file present, the marker not yet renamed into place): such a
+    // refusal is retried once the marker is there, for up to a second.
+    let mut tries = 0;
+    loop {
+        wait_for_marker(out);
+        match check_and_mark(is_run, out) {
+            Err(_) if tries < 50 && (sweep_marked(out) || marker_pending(out)) => {
+                tries += 1;
+                std::thread::sleep(std::time::Duration::from_millis(20));
+            }
+            done => break done?,
+        }
+    }
     let io = |path: &Path, source: std::io::Error| Error::Io {
         path: path.to_path_buf(),
         source,
     };
-    fs::create_dir_all(out).map_err(|e| io(out, e))?;
-    // The marker first, before any entry it must list: another shard checking `out` in
-    // between sees an empty directory or a marked one, never unlisted entries. Shards that
-    // race here write the same marker.
-    match Marker::read(out) {
-        Some(marker) if marker.kind == "sweep" => rundir::owner::claim(out, &ENTRIES)?,
-        Some(marker) => {
-            return Err(OutputError::OtherKind {
-                path: out.clone(),
-                found: marker.kind,
-                wanted: "sweep".into(),
-            }
-            .into())
-        }
-        None => {
-            rundir::owner::inspect(out)?;
-            let mut marker = Marker::new("sweep");
-            marker.entries = ENTRIES.iter().map(|e| e.to_string()).collect();
-            marker.write(out)?;
-        }
-    }
     for name in [RUNS_DIR, SHARDS_DIR] {
         let path = out.join(name);
         match fs::create_dir(&path) {
@@ -153,22 +140,65 @@ pub fn refuse_running_shards(out: &Path) -> Result<(), Error> {
 /// while another shard, started at the same moment, writes the marker: a check now would
 /// take it for a directory that is not eyeshell's.
 fn wait_for_marker(out: &Path) {
-    let pending = || {
-        Marker::read(out).is_none()
-            && fs::read_dir(out).is_ok_and(|entries| {
-                let names: Vec<String> = entries
-                    .flatten()
-                    .map(|e| e.file_name().to_string_lossy().into_owned())
-                    .collect();
-                !names.is_empty() && names.iter().all(|n| rundir::atomic::is_litter(n))
-            })
-    };
     for _ in 0..50 {
-        if !pending() {
+        if !marker_pending(out) {
             return;
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
+}
+
+/// Whether `out` has a sweep's marker (written by a shard racing this one).
+fn sweep_marked(out: &Path) -> bool {
+    Marker::read(out).is_some_and(|m| m.kind == "sweep")
+}
+
+/// Whether `out` holds nothing but the temporary files of atomic writes and no marker yet:
+/// another shard is writing the marker.
+fn marker_pending(out: &Path) -> bool {
+    Marker::read(out).is_none()
+        && fs::read_dir(out).is_ok_and(|entries| {
+            let names: Vec<String> = entries
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            !names.is_empty() && names.iter().all(|n| rundir::atomic::is_litter(n))
+        })
+}
+
+/// The checks of [`prepare_shard`] on `out`, then its marker: an existing sweep's claimed,
+/// or a new one written into an empty (or new) directory.
+fn check_and_mark(is_run: &dyn Fn(&str) -> bool, out: &PathBuf) -> Result<(), Error> {
+    rundir::check_target(out)?;
+    refuse_links(out)?;
+    no_link(&out.join(SHARDS_DIR))?;
+    refuse_other_outputs(out, SHARD_INSTEAD)?;
+    refuse_other_runs(is_run, out, SHARD_INSTEAD)?;
+    fs::create_dir_all(out).map_err(|source| Error::Io {
+        path: out.clone(),
+        source,
+    })?;
+    // The marker first, before any entry it must list: another shard checking `out` in
+    // between sees an empty directory or a marked one, never unlisted entries. Shards that
+    // race here write the same marker.
+    match Marker::read(out) {
+        Some(marker) if marker.kind == "sweep" => rundir::owner::claim(out, &ENTRIES)?,
+        Some(marker) => {
+            return Err(OutputError::OtherKind {
+                path: out.clone(),
+                found: marker.kind,
+                wanted: "sweep".into(),
+            }
+            .into())
+        }
+        None => {
+            rundir::owner::inspect(out)?;
+            let mut marker = Marker::new("sweep");
+            marker.entries = ENTRIES.iter().map(|e| e.to_string()).collect();
+            marker.write(out)?;
+        }
+    }
+    Ok(())
 }
 
 /// Refuse `path` if it is a symbolic link (a missing path is fine).
