@@ -71,7 +71,11 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         Some(_) => None,
         None => Some(eyeshell::scene::sweep::Sweep::from_file(scene, &a.set)?),
     };
-    rundir::check_target(out_dir)?;
+    // A shard's directory is checked by `prepare_shard`, which waits out a shard started
+    // beside it that is writing the marker; checked here, that moment was refused.
+    if shard.is_none() {
+        rundir::check_target(out_dir)?;
+    }
     install_interrupt();
     // Each run in a worker process: one that aborts fails alone (src/worker).
     let workers = crate::worker::Workers::new(out_dir)?;
