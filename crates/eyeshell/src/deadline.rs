@@ -2,7 +2,10 @@
 //! a whole, so that no call into SUNDIALS can run for minutes on a hopeless problem.
 //!
 //! A [`Deadline`] is set when a solver is made ([`crate::bvp::solve::ElasticSolver`]; a
-//! growth run's elastic solver lives for the whole run, so the run has one deadline). The
+//! growth run's elastic solver lives for the whole run, so the run has one deadline). A job
+//! of several stages (an adaptive solve's passes; a growth run with `solver.tol`: the
+//! adaptation at t = 0, the test runs and their estimates, then the run) starts the clock
+//! once (`SolverSettings::clock_start`), so that the bound is on the job as a whole. The
 //! SUNDIALS callbacks check it (KINSOL's residual, CVODE's right side, IDA's residual, and
 //! Euler between steps): once it has passed, the callback returns a fatal flag, the solver
 //! stops, and the error is an [`OutOfTime`] saying where. A callback never panics for it:
@@ -34,12 +37,19 @@ impl Deadline {
 
     /// `seconds` from now; None (no `solver.max_seconds`) is no bound.
     pub fn after(seconds: Option<f64>) -> Deadline {
+        Deadline::since(None, seconds)
+    }
+
+    /// `seconds` from `start` (None: now), the clock a job's stages share
+    /// (`SolverSettings::clock_start`); None is no bound.
+    pub fn since(start: Option<Instant>, seconds: Option<f64>) -> Deadline {
         let Some(seconds) = seconds else {
             return Deadline::NONE;
         };
+        let start = start.unwrap_or_else(Instant::now);
         let at = Duration::try_from_secs_f64(seconds)
             .ok()
-            .and_then(|d| Instant::now().checked_add(d));
+            .and_then(|d| start.checked_add(d));
         Deadline { at, seconds }
     }
 

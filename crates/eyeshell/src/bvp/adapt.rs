@@ -476,7 +476,8 @@ fn pass(
 }
 
 /// The solves of an adaptive solve: the Newton work summed over them, and
-/// `solver.max_seconds`, which bounds them all together (each solve gets what is left).
+/// `solver.max_seconds`, which bounds them all together (their clock starts with the first,
+/// or earlier with the job's: `SolverSettings::clock_start`).
 struct Work {
     start: Instant,
     max_seconds: Option<f64>,
@@ -486,10 +487,10 @@ struct Work {
 }
 
 impl Work {
-    fn new(max_seconds: Option<f64>) -> Work {
+    fn new(settings: &SolverSettings) -> Work {
         Work {
-            start: Instant::now(),
-            max_seconds,
+            start: settings.clock_start.unwrap_or_else(Instant::now),
+            max_seconds: settings.max_seconds,
             iterations: 0,
             residuals: 0,
             jacobians: 0,
@@ -511,18 +512,13 @@ impl Work {
                 place: format!("in the solve on {nodes} nodes of solver.tol's adaptation"),
             })
         };
-        let left = match self.max_seconds {
-            Some(total) => {
-                let left = total - self.start.elapsed().as_secs_f64();
-                if !(left > 0.0) {
-                    return Err(out_of_time(total));
-                }
-                Some(left)
+        if let Some(total) = self.max_seconds {
+            if !(self.start.elapsed().as_secs_f64() < total) {
+                return Err(out_of_time(total));
             }
-            None => None,
-        };
+        }
         let s = SolverSettings {
-            max_seconds: left,
+            clock_start: Some(self.start),
             ..*s
         };
         let sol =
@@ -557,7 +553,7 @@ pub fn solve_to_tolerance(
         ..*settings
     };
     let floors = Floors::of(params, &s);
-    let mut work = Work::new(settings.max_seconds);
+    let mut work = Work::new(settings);
     let start = if tol.is_some() {
         start_mesh(params, &s)?
     } else {

@@ -59,6 +59,10 @@ pub struct SolverSettings {
     /// solver.max_seconds: the wall-clock bound on one solve (on a whole growth run, whose
     /// solves share it); None, the default, is no bound. See [`crate::deadline`].
     pub max_seconds: Option<f64>,
+    /// When `max_seconds` counts from: None, each solver's creation; set by a job of
+    /// several stages (an adaptive solve, a growth run with `tol`) to its start, so that
+    /// all its solvers share one bound. Not a scene key.
+    pub clock_start: Option<std::time::Instant>,
     /// solver.tol: the global error asked for; None, the default, lets `nodes` lay the mesh.
     /// When set, the mesh is adapted until the estimated error of every reported field
     /// (κ, α_s, r, θ, Q, absolute, in fields.csv's units) is at most tol
@@ -86,6 +90,7 @@ impl Default for SolverSettings {
             pole_grading: true,
             cornea_grading: true,
             max_seconds: None,
+            clock_start: None,
             tol: None,
             max_nodes: DEFAULT_MAX_NODES,
             richardson: false,

@@ -498,7 +498,7 @@ impl ElasticSolver {
                 failure: None,
                 evaluations: 0,
                 max_evaluations: usize::MAX,
-                deadline: Deadline::after(settings.max_seconds),
+                deadline: Deadline::since(settings.clock_start, settings.max_seconds),
                 out_of_time: false,
             },
             n,

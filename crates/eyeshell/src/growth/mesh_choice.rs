@@ -24,7 +24,8 @@
 //! on the chosen mesh with the run's own settings), is at most tol. What it does not: the
 //! error of the time integration (solver.rtol's), the elastic error between snapshot
 //! times, and anything about the growth fields beyond the elastic ones. `solver.max_seconds`
-//! bounds the adaptation at t = 0, each test run and the final run each on its own.
+//! bounds the whole: the adaptation at t = 0, the test runs, their estimates and the final
+//! run share one clock (started by [`super::run_with`]).
 
 use crate::bvp::adapt::{self, PassEstimate};
 use crate::bvp::discretisation::{MaterialData, NY};

@@ -4,7 +4,7 @@
 //!
 //! The integrators' callbacks are reached deterministically: the observer sleeps past the
 //! deadline at t = 0, after the elastic solve there, so the first callback the integrator
-//! makes finds it passed.
+//! makes finds it passed. With `solver.tol` the stages of a growth run share the bound.
 
 use std::time::Duration;
 
@@ -140,4 +140,81 @@ fn a_bound_not_reached_changes_nothing() {
             assert_eq!(x.growth, y.growth, "{integrator:?} at t = {}", x.t);
         }
     }
+}
+
+/// Sleeps at the first snapshot until `until`, and records when that snapshot came.
+struct SleepUntil {
+    start: std::time::Instant,
+    until: std::time::Instant,
+    first_after: Option<f64>,
+}
+
+impl Observer for SleepUntil {
+    fn snapshot(&mut self, _: &Snapshot) -> Result<(), ObserverError> {
+        if self.first_after.is_none() {
+            self.first_after = Some(self.start.elapsed().as_secs_f64());
+            std::thread::sleep(
+                self.until
+                    .saturating_duration_since(std::time::Instant::now()),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// With `solver.tol`, the mesh choice (the adaptation at t = 0, the test runs and their
+/// estimates) and the run on the chosen mesh share one bound: the observer, at the run's
+/// t = 0 (the first snapshot: the choice is over), sleeps until the bound counted from the
+/// start of `grow` has passed, and the run stops at IDA's first residual. Counted from the
+/// run's own start (each stage on its own, as before), the bound would still leave the run
+/// the choice's time, and it would end normally.
+#[test]
+fn with_tol_the_mesh_choice_and_the_run_share_one_bound() {
+    // At tol 1e-6 the choice takes about a second (1039 nodes), the run a few tenths.
+    let solver = SolverSettings {
+        tol: Some(1e-6),
+        max_seconds: Some(4.0),
+        ..SolverSettings::default()
+    };
+    let start = std::time::Instant::now();
+    let mut obs = SleepUntil {
+        start,
+        until: start + Duration::from_secs_f64(4.05),
+        first_after: None,
+    };
+    let r = grow(
+        &Params::default(),
+        &solver,
+        &GrowthParams::default(),
+        &GrowthSettings::default(),
+        &mut obs,
+    );
+    let choice = obs.first_after.expect("the run reached t = 0");
+    let e = r.expect_err("the bound has passed");
+    assert!(
+        e.reason
+            .starts_with("solver.max_seconds = 4 s reached in IDA's residual at t = "),
+        "{e} (the mesh choice took {choice:.3} s)"
+    );
+}
+
+/// A job's clock started earlier (`clock_start`) counts: a growth run with `solver.tol`
+/// whose bound passed before it began stops in the first solve of the adaptation, with the
+/// bound as given, and hands nothing on.
+#[test]
+fn a_bound_counted_from_an_earlier_start_stops_the_first_stage() {
+    let solver = SolverSettings {
+        tol: Some(1e-4),
+        max_seconds: Some(1.0),
+        clock_start: std::time::Instant::now().checked_sub(Duration::from_secs(5)),
+        ..SolverSettings::default()
+    };
+    let (kept, r) = grow_with(&solver, &GrowthSettings::default(), Duration::ZERO);
+    let e = r.expect_err("the bound had passed");
+    assert_eq!(
+        e.reason,
+        "solver.max_seconds = 1 s reached in the solve on 18 nodes of solver.tol's adaptation"
+    );
+    assert_eq!(e.t, 0.0);
+    assert!(kept.is_empty());
 }
