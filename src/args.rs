@@ -239,7 +239,7 @@ pub(crate) struct GrowArgs {
     /// Forward sensitivities of the run (IDAS) with respect to these scene keys, into sensitivities.csv: growth.eta0, growth.Gamma, growth.delta, fibres.D (scenes with fibres), material.C, material.bending, pressure.dP, stimulus.blue.z_B (stimulus.red.offset only moves the classification: refused)
     #[arg(long, value_name = "KEY,KEY,...", value_delimiter = ',')]
     pub(crate) sensitivities: Vec<String>,
-    /// Include the sensitivities in the local error test (IDASetSensErrCon; slower: see BENCHMARKS.md)
+    /// Include the sensitivities in the local error test (IDASetSensErrCon): 4–75× slower, and the sensitivities converge with solver.rtol (see BENCHMARKS.md)
     #[arg(long, requires = "sensitivities")]
     pub(crate) sensitivity_error_control: bool,
     /// Print nothing on success and draw no progress bar

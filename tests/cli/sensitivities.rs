@@ -139,3 +139,51 @@ fn grow_writes_sensitivities_csv_and_their_work() {
         );
     }
 }
+
+/// `--sensitivity-error-control` at rtol 1e-8 runs to the end (the step used to collapse to
+/// 1e-314 at t = 0.053: the border d's sensitivity jumps, and the error test now leaves d
+/// out), summary.json says so, and its dL/dη0 at t = 0.1 is the converged value (the
+/// uncontrolled rtol-1e-8 run of the test above agrees with it to 1e-4).
+#[test]
+fn error_control_on_the_sensitivities_runs_at_tight_tolerances() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    ok(&[
+        "grow",
+        "scenes/const.toml",
+        "--set",
+        "solver.nodes=101",
+        "--set",
+        "solver.rtol=1e-8",
+        "--set",
+        "solver.atol=1e-10",
+        "--set",
+        "output.history_points=0",
+        "--sensitivities",
+        "growth.eta0",
+        "--sensitivity-error-control",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    let (_, cells) = csv_cells(&out.join("sensitivities.csv"));
+    let last: f64 = cells.last().unwrap()[0].parse().unwrap();
+    assert_eq!(last, 1.0, "the run reached t_end");
+    let at = |t: f64| -> f64 {
+        let row = cells
+            .iter()
+            .find(|r| r[0].parse::<f64>().unwrap() == t)
+            .unwrap_or_else(|| panic!("no row at t = {t}"));
+        row[2].parse().unwrap()
+    };
+    let rel = (at(0.1) / 1.847218610e-2 - 1.0).abs();
+    assert!(rel < 1e-4, "dL/dη0 at t = 0.1: {} (rel {rel:.1e})", at(0.1));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "ok");
+    let work = summary
+        .pointer("/stats/sensitivities")
+        .or_else(|| summary.pointer("/sensitivities"))
+        .unwrap_or_else(|| panic!("no sensitivities in summary.json: {summary}"));
+    assert_eq!(work["error_control"], serde_json::json!(true));
+}

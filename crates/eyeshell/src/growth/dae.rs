@@ -1608,6 +1608,21 @@ impl CoupledDae {
             .collect()
     }
 
+    /// The local error test's mask when the sensitivities take part in it: every unknown
+    /// but the border d (IDAS reads its id only for the suppressed error test and for
+    /// IDACalcIC, which this system does not use: its consistent values come from the
+    /// elastic solve). d is the blue surface's depth where the retina crosses φ_max,
+    /// interpolated between the two points that bracket the crossing (docs/MODEL.md §6):
+    /// continuous, but ∂d/∂y jumps whenever the bracketing pair changes, so its sensitivity
+    /// s_d jumps there, and an error test on s_d asks for steps no h resolves (measured:
+    /// const, N = 101, rtol 1e-8: h cut to 1e-314 at t = 0.053). d is algebraic, determined by
+    /// the unknowns that stay in the test.
+    pub fn sensitivity_error_mask(&self) -> Vec<f64> {
+        let mut mask = vec![1.0; self.len()];
+        mask[self.d()] = 0.0;
+        mask
+    }
+
     /// Absolute tolerances. The growth state and d take `atol` (mm for ρ and d, 1 for γ_s),
     /// as CVODE's growth state does. Each elastic unknown takes the error `rtol` allows on
     /// its typical size (κ ~ 1/R0, r and z ~ R0, θ ~ 1, q_s and t_s ~ the Laplace tension,

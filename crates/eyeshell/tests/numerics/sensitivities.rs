@@ -275,3 +275,71 @@ fn a_parameter_at_zero_keeps_its_sensitivity_controlled() {
         );
     }
 }
+
+/// Error control on the sensitivities (IDASetSensErrCon) on the exact-kink model: the runs
+/// finish at every rtol, and the sensitivities converge with it. The error test leaves out
+/// the border d (its sensitivity jumps whenever the pair of points bracketing the crossing
+/// of φ_max changes; with d in the test the step collapsed to 1e-314 at t = 0.053 at rtol
+/// 1e-8). Measured (const, N = 101, η0, Γ, δ, C; the largest over the parameters of
+/// max_t |∂L/∂p − ref| / max_t |ref|, ref at rtol 1e-10 with error control): 1.2e-4 at
+/// rtol 1e-6, 1.3e-6 at 1e-8; without error control 3.7e-3, 4.5e-4 and 1.9e-4 at rtol 1e-6,
+/// 1e-8 and 1e-10 (BENCHMARKS.md, "Error control and accuracy"); for this test's η0 and Γ,
+/// 1.5e-4 and 2.0e-6.
+#[test]
+fn sensitivity_error_control_converges_with_rtol() {
+    let params = [SensParam::Eta0, SensParam::Gamma];
+    let times = [0.1, 0.2, 0.4, 1.0];
+    let run_controlled = |rtol: f64| {
+        let settings = GrowthSettings {
+            rtol,
+            atol: rtol * 1e-2,
+            output_times: times.to_vec(),
+            sensitivities: params.to_vec(),
+            sensitivity_error_control: true,
+            ..GrowthSettings::default()
+        };
+        let solver = SolverSettings {
+            nodes: NODES,
+            ..SolverSettings::default()
+        };
+        let mut keep = Keep::default();
+        let stats = grow(
+            &Params::default(),
+            &solver,
+            &GrowthParams::default(),
+            &settings,
+            &mut keep,
+        )
+        .unwrap_or_else(|e| panic!("rtol {rtol:e}: {e}"));
+        assert!(stats.sensitivities.expect("recorded").error_control);
+        keep.sens
+    };
+    let reference = run_controlled(1e-10);
+    let error = |rows: &[SensitivityRow]| {
+        params
+            .iter()
+            .map(|param| {
+                let of = |rs: &[SensitivityRow]| -> Vec<f64> {
+                    rs.iter()
+                        .filter(|r| r.parameter == param.key())
+                        .map(|r| r.d_axial_length)
+                        .collect()
+                };
+                let (got, want) = (of(rows), of(&reference));
+                assert_eq!(got.len(), times.len() + 1);
+                let scale = want.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                got.iter()
+                    .zip(&want)
+                    .map(|(a, b)| (a - b).abs() / scale)
+                    .fold(0.0_f64, f64::max)
+            })
+            .fold(0.0_f64, f64::max)
+    };
+    let (e6, e8) = (error(&run_controlled(1e-6)), error(&run_controlled(1e-8)));
+    assert!(e6 < 5e-4, "rtol 1e-6: {e6:.1e}");
+    assert!(e8 < 1e-5, "rtol 1e-8: {e8:.1e}");
+    assert!(
+        e8 < e6 / 20.0,
+        "no convergence: {e6:.1e} at rtol 1e-6, {e8:.1e} at 1e-8"
+    );
+}
