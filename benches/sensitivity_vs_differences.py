@@ -7,8 +7,11 @@ The alternative to `--sensitivities` is k + 1 runs (forward differences) or 2k r
 tolerance and the step, so this measures both ways' error in dL/dp (L the axial length,
 every output time, every parameter) against a reference, with their on-CPU cost:
 
-- the reference: a sensitivity run at rtol 1e-11, atol 1e-13;
-- sensitivity runs at rtol 1e-6, 1e-8, 1e-10;
+- the reference: a sensitivity run at rtol 1e-11, atol 1e-13 (with
+  `--reference-error-control`: with error control on the sensitivities, at
+  `--reference-rtol`, which converges where the uncontrolled sensitivities stall near 1e-4);
+- sensitivity runs at rtol 1e-6, 1e-8, 1e-10 (with `--error-control-rows`: also with
+  error control, at rtol 1e-6 and 1e-8);
 - forward and central differences of runs at rtol 1e-6, 1e-8, 1e-10 with relative steps
   1e-2, 1e-3, 1e-4, 1e-5.
 
@@ -19,6 +22,8 @@ of their runs. Printed: two Markdown tables.
 
     cargo build --release
     python3 benches/sensitivity_vs_differences.py
+    python3 benches/sensitivity_vs_differences.py --reference-error-control \
+        --reference-rtol 1e-10 --error-control-rows
 """
 
 import argparse
@@ -34,13 +39,15 @@ KEYS = {
 }
 
 
-def grow(binary, scene, sets, out, keys=None):
+def grow(binary, scene, sets, out, keys=None, error_control=False):
     """One run: (on-CPU seconds, {t: L}, {(key, t): dL/dp})."""
     args = [binary, "grow", scene, "--set", "output.history_points=0", "--out", out, "-q"]
     for s in sets:
         args += ["--set", s]
     if keys:
         args += ["--sensitivities", ",".join(keys)]
+    if error_control:
+        args += ["--sensitivity-error-control"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     subprocess.run(args, check=True)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -68,12 +75,16 @@ def main():
     ap.add_argument("--binary", default="target/release/eyeshell")
     ap.add_argument("--scene", default="scenes/const.toml")
     ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--reference-rtol", type=float, default=1e-11)
+    ap.add_argument("--reference-error-control", action="store_true")
+    ap.add_argument("--error-control-rows", action="store_true")
     a = ap.parse_args()
     keys = list(KEYS)
     tol = lambda r: [f"solver.rtol={r}", f"solver.atol={r * 1e-2}"]
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "run")
-        _, _, ref = grow(a.binary, a.scene, tol(1e-11), out, keys)
+        _, _, ref = grow(a.binary, a.scene, tol(a.reference_rtol), out, keys,
+                         a.reference_error_control)
         times = sorted({t for (_, t) in ref if t > 0})
         # The parameters' values: scaled = (p/L) dL/dp is in the files; p is also in KEYS.
         values = dict(KEYS)
@@ -90,6 +101,9 @@ def main():
                 cpu, _, s = grow(a.binary, a.scene, tol(rtol), out, keys)
                 best, sens = min(cpu, best or cpu), s
             print(f"| sensitivities (k = {len(keys)}) | {rtol:g} | – | 1 | {best:.3f} s | {error(sens, ref, keys, times):.1e} |")
+        for rtol in (1e-6, 1e-8) if a.error_control_rows else ():
+            cpu, _, s = grow(a.binary, a.scene, tol(rtol), out, keys, True)
+            print(f"| sensitivities with error control (k = {len(keys)}) | {rtol:g} | – | 1 | {cpu:.3f} s | {error(s, ref, keys, times):.1e} |", flush=True)
         for rtol in (1e-6, 1e-8, 1e-10):
             cpu0, base, _ = grow(a.binary, a.scene, tol(rtol), out)
             for h in (1e-2, 1e-3, 1e-4, 1e-5):
