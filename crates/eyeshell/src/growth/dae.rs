@@ -1405,89 +1405,92 @@ impl CoupledDae {
     }
 
     /// The elastic rows' derivatives in the growth data: the pole rows in above[0]'s data
-    /// (σ_ε = ε γ_s and α_s there), each interval's rows in its points' data.
+    /// (σ_ε = ε γ_s and α_s there), each interval's rows in its points' data. Added as they
+    /// are computed (no list per call), in the order the trail replays.
     fn assemble_data_columns(&mut self) {
-        let disc = self.sys.elastic.discretisation();
-        let ev = disc.evaluations();
         let n_p = self.n_p;
-        let mut adds: Vec<(usize, usize, [f64; 2])> = Vec::with_capacity(2 + NY * 3 * self.m);
         // Pole: f0 = r − σ_ε α_s, f1 = θ − σ_ε α_s κ, σ_ε = ε γ_s.
         let k0 = self.sys.points.above[0];
-        let y0 = Vec5::from_column_slice(&self.u[..NY]);
-        let mp0 = &disc.data.above[0];
-        let e0 = ev.left(0);
-        let dd0 = self.derivs[k0];
-        let eps = disc.mesh.nodes[0];
-        let se = mp0.sigma;
-        let d_f0 = [
-            -se * dd0.alpha_s[0],
-            -eps * e0.alpha_s - se * dd0.alpha_s[1],
-        ];
-        adds.push((n_p, k0, d_f0));
-        adds.push((n_p + 1, k0, [d_f0[0] * y0[0], d_f0[1] * y0[0]]));
+        let d_f0 = {
+            let disc = self.sys.elastic.discretisation();
+            let (mp0, e0, dd0) = (&disc.data.above[0], disc.evaluations().left(0), &self.derivs[k0]);
+            let (eps, se) = (disc.mesh.nodes[0], mp0.sigma);
+            [
+                -se * dd0.alpha_s[0],
+                -eps * e0.alpha_s - se * dd0.alpha_s[1],
+            ]
+        };
+        let y0 = self.u[0];
+        self.jac.add_span(n_p, NP * k0, &d_f0);
+        self.jac
+            .add_span(n_p + 1, NP * k0, &[d_f0[0] * y0, d_f0[1] * y0]);
         for i in 0..self.m - 1 {
-            let h = disc.mesh.step(i);
-            let [pl, pr, pm] = self.window_points(i);
-            let (pl, pr) = (
-                pl.expect("every interval has ends"),
-                pr.expect("every interval has ends"),
-            );
-            let (fl, fr) = (&self.derivs[pl], &self.derivs[pr]);
-            // At most three points' columns per interval (ends, and a midpoint).
-            let mut cols: [Option<(usize, [Vec5; 2])>; 3] = [None; 3];
-            match self.hermite_simpson {
-                false => {
-                    cols[0] = Some((pl, fl.f.map(|v| -0.5 * h * v)));
-                    cols[1] = Some((pr, fr.f.map(|v| -0.5 * h * v)));
-                }
-                true => {
-                    let jm = &ev.mid(i).jac;
-                    let fm = &self.derivs[pm.expect("Hermite–Simpson has midpoints")];
-                    cols[0] = Some((pl, fl.f.map(|v| -(h / 6.0) * v - (h * h / 12.0) * (jm * v))));
-                    cols[1] = Some((pr, fr.f.map(|v| -(h / 6.0) * v + (h * h / 12.0) * (jm * v))));
-                    cols[2] = Some((
-                        pm.expect("Hermite–Simpson has midpoints"),
-                        fm.f.map(|v| -(2.0 * h / 3.0) * v),
-                    ));
-                }
-            }
-            for (k, dv) in cols.into_iter().flatten() {
+            for (k, dv) in self.interval_data_columns(i).into_iter().flatten() {
                 for a in 0..NY {
-                    adds.push((self.interval_row(i, a), k, [dv[0][a], dv[1][a]]));
+                    self.jac
+                        .add_span(self.interval_row(i, a), NP * k, &[dv[0][a], dv[1][a]]);
                 }
             }
         }
-        for (row, k, v) in adds {
-            self.jac.add_span(row, NP * k, &v);
+    }
+
+    /// Interval i's rows' derivatives in the data (ρ, γ_s) of each of its points (ends, and
+    /// a midpoint): the scheme's weights on ∂f/∂(ρ, γ_s), through y_m for Hermite–Simpson.
+    fn interval_data_columns(&self, i: usize) -> [Option<(usize, [Vec5; 2])>; 3] {
+        let disc = self.sys.elastic.discretisation();
+        let h = disc.mesh.step(i);
+        let [pl, pr, pm] = self.window_points(i);
+        let (pl, pr) = (
+            pl.expect("every interval has ends"),
+            pr.expect("every interval has ends"),
+        );
+        let (fl, fr) = (&self.derivs[pl], &self.derivs[pr]);
+        let mut cols: [Option<(usize, [Vec5; 2])>; 3] = [None; 3];
+        match self.hermite_simpson {
+            false => {
+                cols[0] = Some((pl, fl.f.map(|v| -0.5 * h * v)));
+                cols[1] = Some((pr, fr.f.map(|v| -0.5 * h * v)));
+            }
+            true => {
+                let jm = &disc.evaluations().mid(i).jac;
+                let pm = pm.expect("Hermite–Simpson has midpoints");
+                let fm = &self.derivs[pm];
+                cols[0] = Some((pl, fl.f.map(|v| -(h / 6.0) * v - (h * h / 12.0) * (jm * v))));
+                cols[1] = Some((pr, fr.f.map(|v| -(h / 6.0) * v + (h * h / 12.0) * (jm * v))));
+                cols[2] = Some((pm, fm.f.map(|v| -(2.0 * h / 3.0) * v)));
+            }
         }
+        cols
     }
 
     /// The z rows: z_{i+1} − z_i − Δz_i with Δz_i the scheme's quadrature of the slopes.
     fn assemble_z_rows(&mut self) {
+        for i in 0..self.m - 1 {
+            let g = self.z_row(i);
+            self.add_grad(self.interval_row(i, Z), i, 1.0, &g, None);
+        }
+    }
+
+    /// Interval i's z row's gradient in its window.
+    fn z_row(&self, i: usize) -> Grad {
         let disc = self.sys.elastic.discretisation();
         let ev = disc.evaluations();
-        let mut rows: Vec<(usize, usize, Grad)> = Vec::with_capacity(self.m - 1);
-        for i in 0..self.m - 1 {
-            let h = disc.mesh.step(i);
-            let (_, gl) = self.slope(disc, ev, i, L);
-            let (_, gr) = self.slope(disc, ev, i, RT);
-            let mut g = Grad::default();
-            g.w[Z] = -1.0;
-            g.w[NW + Z] = 1.0;
-            if self.hermite_simpson {
-                let (_, gm) = self.slope(disc, ev, i, M);
-                g.axpy(-h / 6.0, &gl);
-                g.axpy(-4.0 * h / 6.0, &gm);
-                g.axpy(-h / 6.0, &gr);
-            } else {
-                g.axpy(-0.5 * h, &gl);
-                g.axpy(-0.5 * h, &gr);
-            }
-            rows.push((self.interval_row(i, Z), i, g));
+        let h = disc.mesh.step(i);
+        let (_, gl) = self.slope(disc, ev, i, L);
+        let (_, gr) = self.slope(disc, ev, i, RT);
+        let mut g = Grad::default();
+        g.w[Z] = -1.0;
+        g.w[NW + Z] = 1.0;
+        if self.hermite_simpson {
+            let (_, gm) = self.slope(disc, ev, i, M);
+            g.axpy(-h / 6.0, &gl);
+            g.axpy(-4.0 * h / 6.0, &gm);
+            g.axpy(-h / 6.0, &gr);
+        } else {
+            g.axpy(-0.5 * h, &gl);
+            g.axpy(-0.5 * h, &gr);
         }
-        for (row, i, g) in rows {
-            self.add_grad(row, i, 1.0, &g, None);
-        }
+        g
     }
 
     /// The growth rows: c I − ∂rates/∂y, through each point's local state.
