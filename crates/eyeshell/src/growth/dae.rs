@@ -130,6 +130,37 @@ impl Grad {
     }
 }
 
+/// gᵀ ∂y_m/∂(window) for a row vector g over interval i's Hermite–Simpson midpoint,
+/// y_m = (y_i + y_{i+1})/2 + h/8 (f_L − f_R): the two 5×5 factors are made once per
+/// interval for its four uses (the midpoint's r, θ, α_s and the midpoint slope).
+struct MidMap<'a> {
+    h: f64,
+    /// (I/2 + h/8 J_L)ᵀ and (I/2 − h/8 J_R)ᵀ.
+    dlt: Mat5,
+    drt: Mat5,
+    /// The end points' data derivatives (f_L, f_R move with their data).
+    fl: &'a DataDeriv,
+    fr: &'a DataDeriv,
+}
+
+impl MidMap<'_> {
+    fn apply(&self, g: &Vec5) -> Grad {
+        let h = self.h;
+        let gl = self.dlt * g;
+        let gr = self.drt * g;
+        let mut out = Grad::default();
+        for c in 0..NY {
+            out.w[c] = gl[c];
+            out.w[NW + c] = gr[c];
+        }
+        for q in 0..2 {
+            out.p[L][q] = (h / 8.0) * g.dot(&self.fl.f[q]);
+            out.p[RT][q] = -(h / 8.0) * g.dot(&self.fr.f[q]);
+        }
+        out
+    }
+}
+
 /// What the rates saw at one point, with the derivatives the Jacobian needs.
 #[derive(Clone, Copy, Debug, Default)]
 struct Local {
@@ -654,7 +685,7 @@ impl CoupledDae {
         self.at_p.clear();
         self.load(&y)?;
         let mut s = std::mem::take(&mut self.scratch);
-        self.locals(&y, None, &mut s.local);
+        self.locals(&y, &mut s.local);
         let crossing = self.point_rates(&y, &s.local, None, &mut s.rates);
         self.scratch = s;
         let d = self.d();
@@ -713,7 +744,7 @@ impl CoupledDae {
     ) -> Result<(), RhsError> {
         self.load(y)?;
         let mut s = std::mem::take(&mut self.scratch);
-        self.locals(y, None, &mut s.local);
+        self.locals(y, &mut s.local);
         let model = params.iter().any(|p| !p.is_growth());
         let crossing = self.point_rates(y, &s.local, model.then_some(&mut s.rd), &mut s.rates);
         let finite = self.check_finite(&s.rates, model.then_some(s.rd.as_slice()));
@@ -969,85 +1000,56 @@ impl CoupledDae {
         Ok((s0, sp0))
     }
 
-    /// The local state of every point; with `grads`, each one's derivatives in its window.
-    fn locals(&self, y: &[f64], mut grad: Option<&mut Vec<[Grad; 4]>>, local: &mut Vec<Local>) {
+    /// The local state (r, θ, z, α_s) of every point. Their derivatives in the windows come
+    /// from [`CoupledDae::node_grads`] (nodes) and [`CoupledDae::assemble_z_rows`]
+    /// (midpoints, which share the slopes' derivatives with the z rows).
+    fn locals(&self, y: &[f64], local: &mut Vec<Local>) {
         let disc = self.sys.elastic.discretisation();
         let ev = disc.evaluations();
-        local.clear();
-        local.resize(self.sites.len(), Local::default());
-        if let Some(g) = grad.as_deref_mut() {
-            g.resize(self.sites.len(), [Grad::default(); 4]);
-        }
-        let grads = grad.is_some();
-        for (k, &site) in self.sites.iter().enumerate() {
-            let (node, slot, e, off) = match site {
-                Site::Left(i) => (i, L, ev.left(i), 0),
-                Site::Right(i) => (i + 1, RT, ev.right(i), NW),
-                Site::Mid(i) => {
-                    let ym = ev.y_mid(i);
-                    let e = ev.mid(i);
-                    let z = if grads {
-                        let (z, gz) = self.z_mid(y, disc, ev, i);
-                        if let Some(g) = grad.as_deref_mut() {
-                            g[k] = self.mid_grads(disc, ev, i, &gz);
-                        }
-                        z
-                    } else {
-                        self.z_mid_value(y, disc, ev, i)
-                    };
-                    local[k] = Local {
-                        r: ym[R],
-                        z,
-                        alpha_s: e.alpha_s,
-                        sin_theta: e.sin_theta,
-                        cos_theta: e.cos_theta,
-                    };
-                    continue;
-                }
-            };
+        let at = |e: &PointEval, r: f64, z: f64| Local {
+            r,
+            z,
+            alpha_s: e.alpha_s,
+            sin_theta: e.sin_theta,
+            cos_theta: e.cos_theta,
+        };
+        let at_node = |e: &PointEval, node: usize| {
             let w = self.n_p + NW * node;
-            let yv = Vec5::from_column_slice(&y[w..w + NY]);
-            local[k] = Local {
-                r: yv[R],
-                z: y[w + Z],
-                alpha_s: e.alpha_s,
-                sin_theta: e.sin_theta,
-                cos_theta: e.cos_theta,
+            at(e, y[w + R], y[w + Z])
+        };
+        local.clear();
+        local.extend(self.sites.iter().map(|&site| match site {
+            Site::Left(i) => at_node(ev.left(i), i),
+            Site::Right(i) => at_node(ev.right(i), i + 1),
+            Site::Mid(i) => at(ev.mid(i), ev.y_mid(i)[R], self.z_mid_value(y, disc, ev, i)),
+        }));
+    }
+
+    /// The derivatives of each node point's (r, θ, z, α_s) in its window, in place: r, θ, z
+    /// are its node's own unknowns; α_s moves with r, t_s and the point's data.
+    fn node_grads(&self, grads: &mut [[Grad; 4]]) {
+        let ev = self.sys.elastic.discretisation().evaluations();
+        for (k, &site) in self.sites.iter().enumerate() {
+            let (slot, e, off) = match site {
+                Site::Left(i) => (L, ev.left(i), 0),
+                Site::Right(i) => (RT, ev.right(i), NW),
+                Site::Mid(_) => continue,
             };
-            if grads {
-                let dd = self.derivs[k];
-                let mut ga = Grad::default();
-                ga.w[off + R] = e.alpha_s_r;
-                ga.w[off + TS] = e.alpha_s_ts;
-                ga.p[slot] = dd.alpha_s;
-                if let Some(g) = grad.as_deref_mut() {
-                    g[k] = [
-                        Grad::unit(off + R),
-                        Grad::unit(off + THETA),
-                        Grad::unit(off + Z),
-                        ga,
-                    ];
-                }
-            }
+            let mut ga = Grad::default();
+            ga.w[off + R] = e.alpha_s_r;
+            ga.w[off + TS] = e.alpha_s_ts;
+            ga.p[slot] = self.derivs[k].alpha_s;
+            grads[k] = [
+                Grad::unit(off + R),
+                Grad::unit(off + THETA),
+                Grad::unit(off + Z),
+                ga,
+            ];
         }
     }
 
-    /// z at interval i's midpoint, from the cubic Hermite through its ends (the slopes from
-    /// inside the interval), with its derivatives in the window.
-    fn z_mid(&self, y: &[f64], disc: &Discretisation, ev: &Evaluations, i: usize) -> (f64, Grad) {
-        let h = disc.mesh.step(i);
-        let (wl, gl) = self.slope(disc, ev, i, L);
-        let (wr, gr) = self.slope(disc, ev, i, RT);
-        let (zi, zj) = (y[self.wcol(i, Z)], y[self.wcol(i + 1, Z)]);
-        let mut g = Grad::default();
-        g.w[Z] = 0.5;
-        g.w[NW + Z] = 0.5;
-        g.axpy(h / 8.0, &gl);
-        g.axpy(-h / 8.0, &gr);
-        (0.5 * (zi + zj) + h / 8.0 * (wl - wr), g)
-    }
-
-    /// [`CoupledDae::z_mid`]'s value alone (the residual's path).
+    /// z at interval i's midpoint, from the cubic Hermite through its ends (the slopes
+    /// −γ α_s sin θ from inside the interval).
     fn z_mid_value(&self, y: &[f64], disc: &Discretisation, ev: &Evaluations, i: usize) -> f64 {
         let h = disc.mesh.step(i);
         let (el, er) = (ev.left(i), ev.right(i));
@@ -1056,9 +1058,10 @@ impl CoupledDae {
         0.5 * (y[self.wcol(i, Z)] + y[self.wcol(i + 1, Z)]) + h / 8.0 * (wl - wr)
     }
 
-    /// dz/dΣ = −γ α_s sin θ at interval i's end `slot` (L or RT) or midpoint (M), with its
-    /// derivatives in the window (for M: through y_m too).
-    fn slope(&self, disc: &Discretisation, ev: &Evaluations, i: usize, slot: usize) -> (f64, Grad) {
+    /// The derivatives of dz/dΣ = −γ α_s sin θ in the window at interval i's end `slot` (L
+    /// or RT) or midpoint (M, through y_m: `mid` is the interval's [`MidMap`]).
+    fn slope(&self, disc: &Discretisation, i: usize, slot: usize, mid: Option<&MidMap>) -> Grad {
+        let ev = disc.evaluations();
         let (e, mp, off) = match slot {
             L => (ev.left(i), &disc.data.above[i], Some(0)),
             RT => (ev.right(i), &disc.data.below[i + 1], Some(NW)),
@@ -1066,7 +1069,6 @@ impl CoupledDae {
         };
         let (sn, cs) = (e.sin_theta, e.cos_theta);
         let (g, a) = (mp.gamma, e.alpha_s);
-        let w = -g * a * sn;
         // ∂w/∂y at the point, and ∂w/∂(ρ, γ_s) of its own data.
         let mut dy = Vec5::zeros();
         dy[R] = -g * e.alpha_s_r * sn;
@@ -1083,51 +1085,47 @@ impl CoupledDae {
                 grad.p[slot] = dp;
             }
             None => {
-                grad = self.through_mid(disc, ev, i, &dy);
+                grad = mid.expect("a midpoint's slope goes through y_m").apply(&dy);
                 grad.p[M] = dp;
             }
         }
-        (w, grad)
+        grad
     }
 
-    /// gᵀ ∂y_m/∂(window) for a row vector g over y_m: y_m = (y_i + y_{i+1})/2 + h/8 (f_L − f_R).
-    fn through_mid(&self, disc: &Discretisation, ev: &Evaluations, i: usize, g: &Vec5) -> Grad {
+    /// Interval i's [`MidMap`] (Hermite–Simpson).
+    fn mid_map(&self, i: usize) -> MidMap<'_> {
+        let disc = self.sys.elastic.discretisation();
+        let ev = disc.evaluations();
         let h = disc.mesh.step(i);
         let id = Mat5::identity();
         let dl = 0.5 * id + (h / 8.0) * ev.left(i).jac;
         let dr = 0.5 * id - (h / 8.0) * ev.right(i).jac;
-        let gl = dl.transpose() * g;
-        let gr = dr.transpose() * g;
-        let mut out = Grad::default();
-        for c in 0..NY {
-            out.w[c] = gl[c];
-            out.w[NW + c] = gr[c];
-        }
         let pts = &self.sys.points;
-        let (fl, fr) = (&self.derivs[pts.above[i]], &self.derivs[pts.below[i + 1]]);
-        for q in 0..2 {
-            out.p[L][q] = (h / 8.0) * g.dot(&fl.f[q]);
-            out.p[RT][q] = -(h / 8.0) * g.dot(&fr.f[q]);
+        MidMap {
+            h,
+            dlt: dl.transpose(),
+            drt: dr.transpose(),
+            fl: &self.derivs[pts.above[i]],
+            fr: &self.derivs[pts.below[i + 1]],
         }
-        out
     }
 
-    /// The derivatives of a midpoint's (r, θ, z, α_s) in its window.
-    fn mid_grads(&self, disc: &Discretisation, ev: &Evaluations, i: usize, gz: &Grad) -> [Grad; 4] {
-        let e = ev.mid(i);
+    /// The derivatives of interval i's midpoint's (r, θ, z, α_s) in its window, `gz` z's.
+    fn mid_grads(&self, i: usize, map: &MidMap, gz: &Grad, out: &mut [Grad; 4]) {
+        let e = self.sys.elastic.discretisation().evaluations().mid(i);
         let unit = |c: usize| {
             let mut v = Vec5::zeros();
             v[c] = 1.0;
             v
         };
-        let gr = self.through_mid(disc, ev, i, &unit(R));
-        let gt = self.through_mid(disc, ev, i, &unit(THETA));
+        out[0] = map.apply(&unit(R));
+        out[1] = map.apply(&unit(THETA));
+        out[2] = *gz;
         let mut ga_y = Vec5::zeros();
         ga_y[R] = e.alpha_s_r;
         ga_y[TS] = e.alpha_s_ts;
-        let mut ga = self.through_mid(disc, ev, i, &ga_y);
-        ga.p[M] = self.derivs[self.sys.points.mid[i]].alpha_s;
-        [gr, gt, *gz, ga]
+        out[3] = map.apply(&ga_y);
+        out[3].p[M] = self.derivs[self.sys.points.mid[i]].alpha_s;
     }
 
     /// The retina, the stimulus and the rates at every point, and the crossing of φ_max
@@ -1287,7 +1285,7 @@ impl CoupledDae {
         self.counters.residuals += 1;
         self.load(y)?;
         let mut s = std::mem::take(&mut self.scratch);
-        self.locals(y, None, &mut s.local);
+        self.locals(y, &mut s.local);
         let crossing = self.point_rates(y, &s.local, None, &mut s.rates);
         let finite = self.check_finite(&s.rates, None);
         for (k, pr) in s.rates.iter().enumerate() {
@@ -1343,15 +1341,18 @@ impl CoupledDae {
             disc.jacobian(&self.u, &mut sink)
                 .map_err(RhsError::Evaluation)?;
         }
+
         // The cornea's z and the border's own entry.
         let d = self.d();
         self.jac.add(d - 1, self.wcol(self.m - 1, Z), 1.0);
         self.jac.add(d, d, 1.0);
         self.assemble_data_columns();
-        self.assemble_z_rows();
         let mut grads = std::mem::take(&mut self.grads);
+        grads.resize(self.sites.len(), [Grad::default(); 4]);
+        self.assemble_z_rows(&mut grads);
         let mut s = std::mem::take(&mut self.scratch);
-        self.locals(y, Some(&mut grads), &mut s.local);
+        self.locals(y, &mut s.local);
+        self.node_grads(&mut grads);
         let crossing = self.point_rates(y, &s.local, Some(&mut s.rd), &mut s.rates);
         let finite = self.check_finite(&s.rates, Some(&s.rd));
         if finite.is_ok() {
@@ -1413,7 +1414,11 @@ impl CoupledDae {
         let k0 = self.sys.points.above[0];
         let d_f0 = {
             let disc = self.sys.elastic.discretisation();
-            let (mp0, e0, dd0) = (&disc.data.above[0], disc.evaluations().left(0), &self.derivs[k0]);
+            let (mp0, e0, dd0) = (
+                &disc.data.above[0],
+                disc.evaluations().left(0),
+                &self.derivs[k0],
+            );
             let (eps, se) = (disc.mesh.nodes[0], mp0.sigma);
             [
                 -se * dd0.alpha_s[0],
@@ -1463,32 +1468,46 @@ impl CoupledDae {
         cols
     }
 
-    /// The z rows: z_{i+1} − z_i − Δz_i with Δz_i the scheme's quadrature of the slopes.
-    fn assemble_z_rows(&mut self) {
+    /// The z rows: z_{i+1} − z_i − Δz_i with Δz_i the scheme's quadrature of the slopes;
+    /// and, from the same slopes, each midpoint's derivatives into `grads` (its z is the
+    /// cubic Hermite through the interval's ends).
+    fn assemble_z_rows(&mut self, grads: &mut [[Grad; 4]]) {
         for i in 0..self.m - 1 {
-            let g = self.z_row(i);
+            let mid = self
+                .hermite_simpson
+                .then(|| &mut grads[self.sys.points.mid[i]]);
+            let g = self.z_row(i, mid);
             self.add_grad(self.interval_row(i, Z), i, 1.0, &g, None);
         }
     }
 
-    /// Interval i's z row's gradient in its window.
-    fn z_row(&self, i: usize) -> Grad {
+    /// Interval i's z row's gradient in its window; with `mid`, its midpoint's derivatives.
+    fn z_row(&self, i: usize, mid: Option<&mut [Grad; 4]>) -> Grad {
         let disc = self.sys.elastic.discretisation();
-        let ev = disc.evaluations();
         let h = disc.mesh.step(i);
-        let (_, gl) = self.slope(disc, ev, i, L);
-        let (_, gr) = self.slope(disc, ev, i, RT);
+        let map = self.hermite_simpson.then(|| self.mid_map(i));
+        let gl = self.slope(disc, i, L, None);
+        let gr = self.slope(disc, i, RT, None);
         let mut g = Grad::default();
         g.w[Z] = -1.0;
         g.w[NW + Z] = 1.0;
-        if self.hermite_simpson {
-            let (_, gm) = self.slope(disc, ev, i, M);
+        if let Some(map) = &map {
+            let gm = self.slope(disc, i, M, Some(map));
             g.axpy(-h / 6.0, &gl);
             g.axpy(-4.0 * h / 6.0, &gm);
             g.axpy(-h / 6.0, &gr);
         } else {
             g.axpy(-0.5 * h, &gl);
             g.axpy(-0.5 * h, &gr);
+        }
+        if let (Some(map), Some(out)) = (&map, mid) {
+            // z_m = (z_i + z_{i+1})/2 + h/8 (w_L − w_R).
+            let mut gz = Grad::default();
+            gz.w[Z] = 0.5;
+            gz.w[NW + Z] = 0.5;
+            gz.axpy(h / 8.0, &gl);
+            gz.axpy(-h / 8.0, &gr);
+            self.mid_grads(i, map, &gz, out);
         }
         g
     }
