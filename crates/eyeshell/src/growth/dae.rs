@@ -1367,16 +1367,15 @@ impl CoupledDae {
         }
     }
 
-    /// Add a window gradient `g` of interval i times `a` to row `row`; `half` restricts the
-    /// W part to the nodes the row's pattern holds (0: node i, 1: node i+1, None: both).
-    fn add_grad(&mut self, row: usize, i: usize, a: f64, g: &Grad, half: Option<usize>) {
+    /// Add a window gradient `g` of interval i to row `row`; `half` restricts the W part
+    /// to the nodes the row's pattern holds (0: node i, 1: node i+1, None: both).
+    fn add_grad(&mut self, row: usize, i: usize, g: &Grad, half: Option<usize>) {
         let w0 = self.wcol(i, 0);
-        let span = g.w.map(|v| a * v);
         match half {
-            None => self.jac.add_span(row, w0, &span),
+            None => self.jac.add_span(row, w0, &g.w),
             Some(h) => self
                 .jac
-                .add_span(row, w0 + NW * h, &span[NW * h..NW * h + NW]),
+                .add_span(row, w0 + NW * h, &g.w[NW * h..NW * h + NW]),
         }
         // Every column the row's pattern holds gets its addition, zero or not: the matrix
         // replays the last assembly's positions in call order (`Csr`'s trail), and an
@@ -1385,8 +1384,7 @@ impl CoupledDae {
         // A half row holds its own point's columns only.
         for (slot, k) in self.window_points(i).into_iter().enumerate() {
             if let Some(k) = k.filter(|_| half.is_none_or(|h| h == slot)) {
-                let v = g.p[slot];
-                self.jac.add_span(row, NP * k, &[a * v[0], a * v[1]]);
+                self.jac.add_span(row, NP * k, &g.p[slot]);
             }
         }
     }
@@ -1477,7 +1475,7 @@ impl CoupledDae {
                 .hermite_simpson
                 .then(|| &mut grads[self.sys.points.mid[i]]);
             let g = self.z_row(i, mid);
-            self.add_grad(self.interval_row(i, Z), i, 1.0, &g, None);
+            self.add_grad(self.interval_row(i, Z), i, &g, None);
         }
     }
 
@@ -1529,19 +1527,42 @@ impl CoupledDae {
                 Site::Right(_) => (Some(1), RT),
                 Site::Mid(_) => (None, M),
             };
+            let (gk, rdk) = (&grads[k], &rd[k]);
             for a in 0..2 {
                 let row = NP * k + a;
-                let dr = &rd[k].rate[a];
+                let dr = &rdk.rate[a];
+                // −Σ_q dr_q ∂local_q, summed in q order, over the part of the window the
+                // row's pattern holds (a node's half and its own point, or all of it).
+                let cols = match half {
+                    Some(h) => NW * h..NW * h + NW,
+                    None => 0..2 * NW,
+                };
                 let mut g = Grad::default();
-                for q in 0..4 {
-                    g.axpy(-dr[q], &grads[k][q]);
+                for c in cols {
+                    let mut v = 0.0;
+                    for q in 0..4 {
+                        v += -dr[q] * gk[q].w[c];
+                    }
+                    g.w[c] = v;
+                }
+                for slot in [L, RT, M] {
+                    if half.is_some() && slot != own {
+                        continue;
+                    }
+                    for e in 0..2 {
+                        let mut v = 0.0;
+                        for q in 0..4 {
+                            v += -dr[q] * gk[q].p[slot][e];
+                        }
+                        g.p[slot][e] = v;
+                    }
                 }
                 g.p[own][0] -= dr[4];
                 g.p[own][1] -= dr[5];
                 g.p[own][a] += c;
-                self.add_grad(row, i, 1.0, &g, half);
+                self.add_grad(row, i, &g, half);
                 // Zero or not (see add_grad): d is in every growth row's pattern.
-                self.jac.add(row, d, -rd[k].rate_d[a]);
+                self.jac.add(row, d, -rdk.rate_d[a]);
             }
         }
     }
@@ -1575,7 +1596,7 @@ impl CoupledDae {
                 g.p[own][s] -= wgt * (rd[k].depth[q] - slope * rd[k].angle[q]);
             }
             let i = self.sites[k].interval();
-            self.add_grad(d, i, 1.0, &g, None);
+            self.add_grad(d, i, &g, None);
         }
     }
 
