@@ -121,12 +121,60 @@ impl Grad {
             s[1] += a * v[1];
         }
     }
+}
 
-    /// Unit derivative in W column `c` of the window.
-    fn unit(c: usize) -> Grad {
-        let mut g = Grad::default();
-        g.w[c] = 1.0;
-        g
+/// −Σ_q coef_q x_q, summed in q order from 0 (as `Grad::axpy` sums the four local
+/// derivatives, so that the entries are the same to the bit).
+#[inline]
+fn neg_combination(coef: &[f64; 6], x: [f64; 4]) -> f64 {
+    let mut v = 0.0;
+    for q in 0..4 {
+        v += -coef[q] * x[q];
+    }
+    v
+}
+
+/// The four local derivatives of a point as arrays of one entry each.
+trait EachLocal {
+    fn each(&self, entry: impl Fn(&Grad) -> f64) -> [f64; 4];
+}
+
+impl EachLocal for [Grad; 4] {
+    #[inline]
+    fn each(&self, entry: impl Fn(&Grad) -> f64) -> [f64; 4] {
+        [
+            entry(&self[0]),
+            entry(&self[1]),
+            entry(&self[2]),
+            entry(&self[3]),
+        ]
+    }
+}
+
+/// A node point's local derivatives, which are a few numbers: r, θ, z are the node's own
+/// unknowns (unit derivatives in its half `off` of the window), and α_s moves with r, t_s
+/// and the point's own data (slot `slot`).
+struct NodeGrads {
+    slot: usize,
+    off: usize,
+    alpha_s_r: f64,
+    alpha_s_ts: f64,
+    alpha_s_data: [f64; 2],
+}
+
+impl NodeGrads {
+    /// The four derivatives (r, θ, z, α_s) in window column c, zeros and ones included.
+    #[inline]
+    fn w(&self, c: usize) -> [f64; 4] {
+        let unit = |at: usize| if c == self.off + at { 1.0 } else { 0.0 };
+        let alpha = if c == self.off + R {
+            self.alpha_s_r
+        } else if c == self.off + TS {
+            self.alpha_s_ts
+        } else {
+            0.0
+        };
+        [unit(R), unit(THETA), unit(Z), alpha]
     }
 }
 
@@ -144,11 +192,13 @@ struct MidMap<'a> {
 }
 
 impl MidMap<'_> {
-    fn apply(&self, g: &Vec5) -> Grad {
+    /// gᵀ ∂y_m/∂(window) into `out`, every entry written (M's data: zero), in place: a
+    /// `Grad` returned by value was a 144-byte copy per use.
+    fn apply(&self, g: &Vec5, out: &mut Grad) {
         let h = self.h;
         let gl = self.dlt * g;
         let gr = self.drt * g;
-        let mut out = Grad::default();
+        *out = Grad::default();
         for c in 0..NY {
             out.w[c] = gl[c];
             out.w[NW + c] = gr[c];
@@ -157,7 +207,6 @@ impl MidMap<'_> {
             out.p[L][q] = (h / 8.0) * g.dot(&self.fl.f[q]);
             out.p[RT][q] = -(h / 8.0) * g.dot(&self.fr.f[q]);
         }
-        out
     }
 }
 
@@ -253,8 +302,10 @@ pub struct CoupledDae {
     u: Vec<f64>,
     f: Vec<f64>,
     dz: Vec<f64>,
-    /// Scratch of the Jacobian: each point's local state's derivatives, and the
-    /// derivatives of its elastic right side in its data (computed once per assembly).
+    /// Scratch of the Jacobian: each interval's midpoint's local state's derivatives
+    /// (Hermite–Simpson; a node point's are a few numbers, [`CoupledDae::node_grads`]), and
+    /// each point's derivatives of its elastic right side in its data (computed once per
+    /// assembly).
     grads: Vec<[Grad; 4]>,
     derivs: Vec<DataDeriv>,
     scratch: PointScratch,
@@ -1035,26 +1086,43 @@ impl CoupledDae {
         }));
     }
 
-    /// The derivatives of each node point's (r, θ, z, α_s) in its window, in place: r, θ, z
-    /// are its node's own unknowns; α_s moves with r, t_s and the point's data.
-    fn node_grads(&self, grads: &mut [[Grad; 4]]) {
+    /// The derivatives of node point k's (r, θ, z, α_s) in its window: r, θ, z are its
+    /// node's own unknowns, α_s moves with r, t_s and the point's data. The growth rows use
+    /// the few numbers directly ([`NodeGrads`]); this full form is the border row's.
+    fn node_grads(&self, k: usize) -> [Grad; 4] {
+        let n = self.node_grad(k);
+        let mut g = [Grad::default(); 4];
+        g[0].w[n.off + R] = 1.0;
+        g[1].w[n.off + THETA] = 1.0;
+        g[2].w[n.off + Z] = 1.0;
+        g[3].w[n.off + R] = n.alpha_s_r;
+        g[3].w[n.off + TS] = n.alpha_s_ts;
+        g[3].p[n.slot] = n.alpha_s_data;
+        g
+    }
+
+    /// Node point k's [`NodeGrads`]; panics at a midpoint.
+    fn node_grad(&self, k: usize) -> NodeGrads {
         let ev = self.sys.elastic.discretisation().evaluations();
-        for (k, &site) in self.sites.iter().enumerate() {
-            let (slot, e, off) = match site {
-                Site::Left(i) => (L, ev.left(i), 0),
-                Site::Right(i) => (RT, ev.right(i), NW),
-                Site::Mid(_) => continue,
-            };
-            let mut ga = Grad::default();
-            ga.w[off + R] = e.alpha_s_r;
-            ga.w[off + TS] = e.alpha_s_ts;
-            ga.p[slot] = self.derivs[k].alpha_s;
-            grads[k] = [
-                Grad::unit(off + R),
-                Grad::unit(off + THETA),
-                Grad::unit(off + Z),
-                ga,
-            ];
+        let (slot, e, off) = match self.sites[k] {
+            Site::Left(i) => (L, ev.left(i), 0),
+            Site::Right(i) => (RT, ev.right(i), NW),
+            Site::Mid(_) => unreachable!("a midpoint's derivatives are stored"),
+        };
+        NodeGrads {
+            slot,
+            off,
+            alpha_s_r: e.alpha_s_r,
+            alpha_s_ts: e.alpha_s_ts,
+            alpha_s_data: self.derivs[k].alpha_s,
+        }
+    }
+
+    /// The derivatives of point k's local state in its window (a midpoint's from `mids`).
+    fn point_grads(&self, k: usize, mids: &[[Grad; 4]]) -> [Grad; 4] {
+        match self.sites[k] {
+            Site::Mid(i) => mids[i],
+            _ => self.node_grads(k),
         }
     }
 
@@ -1095,7 +1163,8 @@ impl CoupledDae {
                 grad.p[slot] = dp;
             }
             None => {
-                grad = mid.expect("a midpoint's slope goes through y_m").apply(&dy);
+                let map = mid.expect("a midpoint's slope goes through y_m");
+                map.apply(&dy, &mut grad);
                 grad.p[M] = dp;
             }
         }
@@ -1120,21 +1189,21 @@ impl CoupledDae {
         }
     }
 
-    /// The derivatives of interval i's midpoint's (r, θ, z, α_s) in its window, `gz` z's.
-    fn mid_grads(&self, i: usize, map: &MidMap, gz: &Grad, out: &mut [Grad; 4]) {
+    /// The derivatives of interval i's midpoint's r, θ and α_s in its window (z's, out[2], are
+    /// the caller's).
+    fn mid_grads(&self, i: usize, map: &MidMap, out: &mut [Grad; 4]) {
         let e = self.sys.elastic.discretisation().evaluations().mid(i);
         let unit = |c: usize| {
             let mut v = Vec5::zeros();
             v[c] = 1.0;
             v
         };
-        out[0] = map.apply(&unit(R));
-        out[1] = map.apply(&unit(THETA));
-        out[2] = *gz;
+        map.apply(&unit(R), &mut out[0]);
+        map.apply(&unit(THETA), &mut out[1]);
         let mut ga_y = Vec5::zeros();
         ga_y[R] = e.alpha_s_r;
         ga_y[TS] = e.alpha_s_ts;
-        out[3] = map.apply(&ga_y);
+        map.apply(&ga_y, &mut out[3]);
         out[3].p[M] = self.derivs[self.sys.points.mid[i]].alpha_s;
     }
 
@@ -1354,11 +1423,11 @@ impl CoupledDae {
         self.jac.add(d, d, 1.0);
         self.assemble_data_columns();
         let mut grads = std::mem::take(&mut self.grads);
-        grads.resize(self.sites.len(), [Grad::default(); 4]);
+        let mids = if self.hermite_simpson { self.m - 1 } else { 0 };
+        grads.resize(mids, [Grad::default(); 4]);
         self.assemble_z_rows(&mut grads);
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(y, &mut s.local);
-        self.node_grads(&mut grads);
         let crossing = self.point_rates(y, &s.local, Some(&mut s.rd), &mut s.rates);
         let finite = self.check_finite(&s.rates, Some(&s.rd));
         if finite.is_ok() {
@@ -1477,9 +1546,7 @@ impl CoupledDae {
     /// cubic Hermite through the interval's ends).
     fn assemble_z_rows(&mut self, grads: &mut [[Grad; 4]]) {
         for i in 0..self.m - 1 {
-            let mid = self
-                .hermite_simpson
-                .then(|| &mut grads[self.sys.points.mid[i]]);
+            let mid = self.hermite_simpson.then(|| &mut grads[i]);
             let g = self.z_row(i, mid);
             self.add_grad(self.interval_row(i, Z), i, &g, None);
         }
@@ -1506,12 +1573,13 @@ impl CoupledDae {
         }
         if let (Some(map), Some(out)) = (&map, mid) {
             // z_m = (z_i + z_{i+1})/2 + h/8 (w_L − w_R).
-            let mut gz = Grad::default();
+            let gz = &mut out[2];
+            *gz = Grad::default();
             gz.w[Z] = 0.5;
             gz.w[NW + Z] = 0.5;
             gz.axpy(h / 8.0, &gl);
             gz.axpy(-h / 8.0, &gr);
-            self.mid_grads(i, map, &gz, out);
+            self.mid_grads(i, map, out);
         }
         g
     }
@@ -1533,7 +1601,8 @@ impl CoupledDae {
                 Site::Right(_) => (Some(1), RT),
                 Site::Mid(_) => (None, M),
             };
-            let (gk, rdk) = (&grads[k], &rd[k]);
+            let rdk = &rd[k];
+            let node = half.map(|_| self.node_grad(k));
             for a in 0..2 {
                 let row = NP * k + a;
                 let dr = &rdk.rate[a];
@@ -1544,23 +1613,25 @@ impl CoupledDae {
                     None => 0..2 * NW,
                 };
                 let mut g = Grad::default();
-                for c in cols {
-                    let mut v = 0.0;
-                    for q in 0..4 {
-                        v += -dr[q] * gk[q].w[c];
-                    }
-                    g.w[c] = v;
-                }
-                for slot in [L, RT, M] {
-                    if half.is_some() && slot != own {
-                        continue;
-                    }
-                    for e in 0..2 {
-                        let mut v = 0.0;
-                        for q in 0..4 {
-                            v += -dr[q] * gk[q].p[slot][e];
+                match &node {
+                    Some(n) => {
+                        for c in cols {
+                            g.w[c] = neg_combination(dr, n.w(c));
                         }
-                        g.p[slot][e] = v;
+                        for e in 0..2 {
+                            g.p[own][e] = neg_combination(dr, [0.0, 0.0, 0.0, n.alpha_s_data[e]]);
+                        }
+                    }
+                    None => {
+                        let gk = &grads[site.interval()];
+                        for c in cols {
+                            g.w[c] = neg_combination(dr, gk.each(|x| x.w[c]));
+                        }
+                        for slot in [L, RT, M] {
+                            for e in 0..2 {
+                                g.p[slot][e] = neg_combination(dr, gk.each(|x| x.p[slot][e]));
+                            }
+                        }
                     }
                 }
                 g.p[own][0] -= dr[4];
@@ -1592,11 +1663,9 @@ impl CoupledDae {
                 Site::Right(_) => RT,
                 Site::Mid(_) => M,
             };
+            let gk = self.point_grads(k, grads);
             for q in 0..4 {
-                g.axpy(
-                    -wgt * (rd[k].depth[q] - slope * rd[k].angle[q]),
-                    &grads[k][q],
-                );
+                g.axpy(-wgt * (rd[k].depth[q] - slope * rd[k].angle[q]), &gk[q]);
             }
             for (s, q) in [(0usize, 4usize), (1, 5)] {
                 g.p[own][s] -= wgt * (rd[k].depth[q] - slope * rd[k].angle[q]);
