@@ -2,6 +2,16 @@
 //! adding entries (a Jacobian's pieces add up where two terms meet).
 
 /// CSR storage: row i's columns are `col_idx[row_ptr[i]..row_ptr[i + 1]]`, increasing.
+/// A trail entry: the position k an addition of `len` values at column j found, that span
+/// having been checked against the pattern (which never changes). Holding j here, the replay
+/// reads the trail in order and no column index.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Found {
+    k: usize,
+    j: usize,
+    len: usize,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Csr {
     n: usize,
@@ -14,7 +24,7 @@ pub struct Csr {
     /// and the next call's index: an assembler adds in the same order every time, so each
     /// addition first tries the position its predecessor in the last assembly found (checked
     /// against the row and column, so a different order only costs the search).
-    trail: Vec<usize>,
+    trail: Vec<Found>,
     cursor: usize,
 }
 
@@ -88,35 +98,51 @@ impl Csr {
         self.col_idx[lo..hi].binary_search(&j).ok().map(|k| lo + k)
     }
 
-    /// [`Csr::position`] for an addition: the trail's guess if it is (i, j), else a search,
-    /// remembered for the next assembly (the trail stops growing at 4 entries per nonzero,
-    /// for callers that add without ever zeroing).
+    /// The position of a span of `len` columns from j in row i, all in the pattern: the
+    /// trail's guess if it is that span in row i, else a search, remembered for the next
+    /// assembly (the trail stops growing at 4 entries per nonzero, for callers that add
+    /// without ever zeroing).
     #[inline]
-    fn locate(&mut self, i: usize, j: usize) -> Option<usize> {
+    fn locate(&mut self, i: usize, j: usize, len: usize) -> Result<usize, usize> {
         let c = self.cursor;
         self.cursor += 1;
-        if let Some(&k) = self.trail.get(c) {
-            if k >= self.row_ptr[i] && k < self.row_ptr[i + 1] && self.col_idx[k] == j {
-                return Some(k);
+        if let Some(&t) = self.trail.get(c) {
+            if t.j == j && t.len == len && t.k >= self.row_ptr[i] && t.k < self.row_ptr[i + 1] {
+                return Ok(t.k);
             }
         }
-        let found = self.position(i, j);
-        let k = found.unwrap_or(usize::MAX);
+        let found = self.span_position(i, j, len);
+        let t = Found {
+            k: found.unwrap_or(usize::MAX),
+            j,
+            len,
+        };
         if c < self.trail.len() {
-            self.trail[c] = k;
+            self.trail[c] = t;
         } else if c == self.trail.len() && c < 4 * self.col_idx.len() + 64 {
-            self.trail.push(k);
+            self.trail.push(t);
         }
         found
+    }
+
+    /// Where the span of `len` consecutive columns from j starts in row i, or the column
+    /// outside the pattern.
+    fn span_position(&self, i: usize, j: usize, len: usize) -> Result<usize, usize> {
+        let k = self.position(i, j).ok_or(j)?;
+        let end = k + len;
+        if end > self.row_ptr[i + 1] || self.col_idx[end - 1] != j + len - 1 {
+            return Err(j + len - 1);
+        }
+        Ok(k)
     }
 
     /// A(i, j) += v. Outside the pattern nothing is written and the miss is counted
     /// ([`Csr::take_outside`]); debug builds panic.
     #[inline]
     pub fn add(&mut self, i: usize, j: usize, v: f64) {
-        match self.locate(i, j) {
-            Some(k) => self.values[k] += v,
-            None => self.miss(i, j),
+        match self.locate(i, j, 1) {
+            Ok(k) => self.values[k] += v,
+            Err(col) => self.miss(i, col),
         }
     }
 
@@ -124,15 +150,13 @@ impl Csr {
     /// search for the whole span.
     #[inline]
     pub fn add_span(&mut self, i: usize, j0: usize, v: &[f64]) {
-        let Some(k) = self.locate(i, j0) else {
-            return self.miss(i, j0);
-        };
-        let end = k + v.len();
-        if end > self.row_ptr[i + 1] || self.col_idx[end - 1] != j0 + v.len() - 1 {
-            return self.miss(i, j0 + v.len() - 1);
-        }
-        for (a, b) in self.values[k..end].iter_mut().zip(v) {
-            *a += b;
+        match self.locate(i, j0, v.len()) {
+            Ok(k) => {
+                for (a, b) in self.values[k..k + v.len()].iter_mut().zip(v) {
+                    *a += b;
+                }
+            }
+            Err(col) => self.miss(i, col),
         }
     }
 
