@@ -292,4 +292,29 @@ mod tests {
         assert_eq!(a.get(0, 1), 100.0);
         assert!(a.trail.len() <= 4 * a.nnz() + 64);
     }
+
+    /// The trail replays a span only as it was checked: the same start in another row, or
+    /// a longer span from it, is searched and checked again (and refused where it leaves
+    /// the pattern), never written past the row.
+    #[test]
+    fn a_remembered_span_is_replayed_only_as_checked() {
+        let mut a = Csr::from_rows(vec![vec![0, 1, 3], vec![0, 1], vec![], vec![]]);
+        for _ in 0..2 {
+            a.zero();
+            a.add_span(0, 0, &[1.0, 2.0]);
+            assert_eq!(a.row(0).1, &[1.0, 2.0, 0.0]);
+        }
+        a.zero();
+        a.add_span(1, 0, &[4.0, 5.0]);
+        assert_eq!((a.row(0).1, a.row(1).1), (&[0.0; 3][..], &[4.0, 5.0][..]));
+        if cfg!(not(debug_assertions)) {
+            a.zero();
+            a.add_span(0, 0, &[1.0, 2.0, 3.0]); // column 2 is not in row 0
+            assert_eq!(a.take_outside(), 1);
+            assert_eq!(a.row(0).1, &[0.0; 3]);
+            a.add_span(1, 0, &[1.0, 2.0, 3.0]); // past row 1's end
+            assert_eq!(a.take_outside(), 1);
+            assert_eq!(a.row(1).1, &[0.0; 2]);
+        }
+    }
 }
