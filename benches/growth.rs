@@ -243,6 +243,20 @@ fn reduced_on_cpu(c: &mut Criterion) {
     group.finish();
 }
 
+/// One analytic assembly of the coupled DAE's F_y (c = 0, as the forward sensitivities
+/// assemble it once per step) at the consistent start, in on-CPU time (see [`on_cpu`]):
+/// BENCHMARKS.md "Forward sensitivities", "What changed".
+fn assembly_on_cpu(c: &mut Criterion) {
+    let mut group = c.benchmark_group("assembly_on_cpu_n501");
+    let sys = GrowthSystem::new(&Params::default(), &settings(), &GrowthParams::default()).unwrap();
+    let mut dae = CoupledDae::new(sys);
+    let y = dae.initial_state().unwrap();
+    group.bench_function("fy", |b| {
+        b.iter_custom(|k| on_cpu(k, || dae.assemble(black_box(0.0), &y).unwrap()))
+    });
+    group.finish();
+}
+
 /// The parameter lists [`sensitivities_on_cpu`] times when EYESHELL_BENCH_SENSITIVITIES
 /// is not set: k = 1, 2, 3.
 const DEFAULT_SENSITIVITIES: &str =
@@ -300,6 +314,7 @@ criterion_group!(
     pieces,
     dae_pieces,
     reduced_on_cpu,
+    assembly_on_cpu,
     sensitivities_on_cpu
 );
 criterion_main!(benches);
