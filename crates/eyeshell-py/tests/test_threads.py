@@ -52,11 +52,19 @@ def test_a_second_thread_runs_during_a_grow_with_progress():
 LONG = {"solver.integrator": "euler", "solver.steps": 4000, "solver.nodes": 2001}
 
 
+# The child's first line: Python raises KeyboardInterrupt on SIGINT only if SIGINT was not
+# ignored when it started, and a shell running the suite in the background (`cmd &`) starts
+# it with SIGINT ignored (then every run here "finished" before it noticed a Ctrl-C).
+DEFAULT_SIGINT = "import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+
+
 def interrupt(script, signal_after=0.3):
-    """Run `script` in a child Python, send it SIGINT `signal_after` seconds after it prints
-    'started' (None: the script signals itself), and return (seconds from then to the
-    child's exit, its stdout, its stderr, its exit code)."""
-    child = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)],
+    """Run `script` in a child Python (with Python's own SIGINT handler, whatever this
+    process inherited), send it SIGINT `signal_after` seconds after it prints 'started'
+    (None: the script signals itself), and return (seconds from then to the child's exit,
+    its stdout, its stderr, its exit code)."""
+    code = DEFAULT_SIGINT + textwrap.dedent(script)
+    child = subprocess.Popen([sys.executable, "-c", code],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert child.stdout.readline().strip() == "started", child.stderr.read()
     if signal_after is not None:
