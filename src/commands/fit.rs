@@ -106,6 +106,48 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// The correlation matrix, its labels "(i) key" in a column as wide as the longest.
+fn correlation_table(r: &fit::FitReport) -> String {
+    let labels: Vec<String> = (r.parameters.iter().enumerate())
+        .map(|(i, p)| format!("({}) {}", i + 1, p.key))
+        .collect();
+    let width = labels
+        .iter()
+        .map(|l| l.chars().count())
+        .chain(["correlation".len()])
+        .max()
+        .unwrap_or(0);
+    let mut text = format!("  {:width$}", "correlation");
+    for j in 0..labels.len() {
+        text.push_str(&format!("  {:>10}", format!("({})", j + 1)));
+    }
+    text.push('\n');
+    for (label, row) in labels.iter().zip(&r.correlation) {
+        text.push_str(&format!("  {label:width$}"));
+        for c in row {
+            text.push_str(&format!("  {c:>10.4}"));
+        }
+        text.push('\n');
+    }
+    text
+}
+
+/// The pairs of fitted parameters correlated at |ρ| ≥ 0.99, with ρ: their standard errors
+/// are mostly the width of a valley along which the data barely change (BENCHMARKS.md,
+/// "Calibration": η0 and Γ on plateau data).
+fn strongly_correlated(r: &fit::FitReport) -> Vec<(&str, &str, f64)> {
+    let mut pairs = vec![];
+    for (i, p) in r.parameters.iter().enumerate() {
+        for (j, q) in r.parameters.iter().enumerate().skip(i + 1) {
+            let c = r.correlation[i][j];
+            if c.abs() >= 0.99 {
+                pairs.push((p.key.as_str(), q.key.as_str(), c));
+            }
+        }
+    }
+    pairs
+}
+
 /// The table `eyeshell fit` prints.
 pub fn report_text(
     scene: &eyeshell::Scene,
@@ -149,21 +191,20 @@ pub fn report_text(
         ));
     }
     if n > 1 {
+        text.push_str(&correlation_table(r));
+    }
+    let pairs = strongly_correlated(r);
+    if !pairs.is_empty() {
+        let list: Vec<String> = pairs
+            .iter()
+            .map(|(a, b, c)| format!("{a} and {b} at {c:.4}"))
+            .collect();
         text.push_str(&format!(
-            "  correlation{}",
-            " ".repeat(width.saturating_sub(11))
+            "  note             strongly correlated (|ρ| ≥ 0.99): {}; the data determine a \
+             combination of such a pair far better than either (fix one with --set, or add \
+             observations that separate them)\n",
+            list.join(", ")
         ));
-        for j in 0..n {
-            text.push_str(&format!("  {:>12}", format!("({})", j + 1)));
-        }
-        text.push('\n');
-        for (i, p) in r.parameters.iter().enumerate() {
-            text.push_str(&format!("  {:width$}", format!("({}) {}", i + 1, p.key)));
-            for j in 0..n {
-                text.push_str(&format!("  {:>12.4}", r.correlation[i][j]));
-            }
-            text.push('\n');
-        }
     }
     text.push_str(&format!(
         "  χ²               {:.4} (from {:.4}), {} degree{} of freedom, χ²/dof {:.4}; rms residual {:.4} mm\n",

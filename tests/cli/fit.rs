@@ -39,6 +39,20 @@ fn fit_writes_the_report_the_fitted_scene_and_the_figure() {
     ] {
         assert!(run.stdout.contains(needle), "{needle:?} not in {}", run.stdout);
     }
+    // The correlation table's rows line up with its header; Γ and δ are not a valley.
+    let table: Vec<usize> = run
+        .stdout
+        .lines()
+        .filter(|l| l.starts_with("  correlation") || l.starts_with("  ("))
+        .map(|l| l.chars().count())
+        .collect();
+    assert_eq!(table.len(), 3, "{}", run.stdout);
+    assert!(table.iter().all(|&w| w == table[0]), "{}", run.stdout);
+    assert!(
+        !run.stdout.contains("strongly correlated"),
+        "{}",
+        run.stdout
+    );
     let mut names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().into_string().unwrap())
@@ -241,4 +255,33 @@ fn a_foreign_output_directory_is_refused_before_the_fit() {
         std::fs::read_to_string(out.join("notes.txt")).unwrap(),
         "keep"
     );
+}
+
+/// η0 and Γ from plateau data are a valley (correlation −0.99): the report says which pair,
+/// and what to do about it, under the correlation table.
+#[test]
+fn a_strongly_correlated_pair_is_pointed_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut args = fit_args(DATA, "growth.eta0,growth.Gamma,growth.delta", s(&out));
+    args.extend([
+        "--set",
+        "growth.eta0=60",
+        "--set",
+        "growth.Gamma=9",
+        "--set",
+        "growth.delta=3.5",
+    ]);
+    let run = ok(&args);
+    let note = run
+        .stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("note"))
+        .unwrap_or_else(|| panic!("no note in {}", run.stdout));
+    assert!(
+        note.contains("strongly correlated (|ρ| ≥ 0.99): growth.eta0 and growth.Gamma at -0.99"),
+        "{note}"
+    );
+    assert!(!note.contains("growth.delta"), "{note}");
+    assert!(note.contains("fix one with --set"), "{note}");
 }
