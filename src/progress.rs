@@ -20,7 +20,9 @@ pub struct GrowthProgress {
 
 impl GrowthProgress {
     /// A bar on stderr when `show` (see [`wanted`]), else a hidden one that draws nothing.
-    pub fn new(show: bool) -> Self {
+    /// `before` is what it says until the run reports (with `solver.tol` the mesh choice
+    /// comes first, and can take longer than the run): its spinner turns meanwhile.
+    pub fn new(show: bool, before: Option<&str>) -> Self {
         let bar = if show {
             let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
             if let Ok(style) = ProgressStyle::with_template(
@@ -28,10 +30,16 @@ impl GrowthProgress {
             ) {
                 bar.set_style(style.progress_chars("=> "));
             }
+            if before.is_some() {
+                bar.enable_steady_tick(std::time::Duration::from_millis(120));
+            }
             bar
         } else {
             ProgressBar::hidden()
         };
+        if let Some(message) = before {
+            bar.set_message(message.to_string());
+        }
         GrowthProgress { bar }
     }
 
@@ -88,7 +96,8 @@ mod tests {
             growth: vec![],
             series: row,
         };
-        let mut bar = GrowthProgress::new(false);
+        let mut bar = GrowthProgress::new(false, Some("choosing the mesh"));
+        assert_eq!(bar.bar.message(), "choosing the mesh");
         bar.snapshot(&snap).unwrap();
         bar.progress(0.25, 1.0).unwrap();
         assert_eq!(bar.bar.position(), 250);

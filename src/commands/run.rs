@@ -86,7 +86,10 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
     }
     set_sensitivities(&mut scene, &a.sensitivities, a.sensitivity_error_control)?;
     let writer = GrowthWriter::create(&a.out, &scene)?;
-    let mut bar = progress::GrowthProgress::new(progress::wanted(a.quiet));
+    let choosing = scene.solver.tol.map(|tol| {
+        format!("choosing the mesh for solver.tol = {tol:e} (test runs on halved meshes)")
+    });
+    let mut bar = progress::GrowthProgress::new(progress::wanted(a.quiet), choosing.as_deref());
     let run = rundir::run::grow_with(&scene, writer, &mut bar);
     match &run.outcome {
         Ok(_) => bar.finish(),
