@@ -132,15 +132,18 @@ fn correlation_table(r: &fit::FitReport) -> String {
     text
 }
 
-/// The pairs of fitted parameters correlated at |ρ| ≥ 0.99, with ρ: their standard errors
-/// are mostly the width of a valley along which the data barely change (BENCHMARKS.md,
-/// "Calibration": η0 and Γ on plateau data).
+/// |ρ| from which the report points a pair out.
+const STRONG_CORRELATION: f64 = 0.99;
+
+/// The pairs of fitted parameters correlated at |ρ| ≥ [`STRONG_CORRELATION`], with ρ: their
+/// standard errors are mostly the width of a valley along which the data barely change
+/// (BENCHMARKS.md, "Calibration": η0 and Γ on plateau data).
 fn strongly_correlated(r: &fit::FitReport) -> Vec<(&str, &str, f64)> {
     let mut pairs = vec![];
     for (i, p) in r.parameters.iter().enumerate() {
         for (j, q) in r.parameters.iter().enumerate().skip(i + 1) {
             let c = r.correlation[i][j];
-            if c.abs() >= 0.99 {
+            if c.abs() >= STRONG_CORRELATION {
                 pairs.push((p.key.as_str(), q.key.as_str(), c));
             }
         }
@@ -200,7 +203,7 @@ pub fn report_text(
             .map(|(a, b, c)| format!("{a} and {b} at {c:.4}"))
             .collect();
         text.push_str(&format!(
-            "  note             strongly correlated (|ρ| ≥ 0.99): {}; the data determine a \
+            "  note             strongly correlated (|ρ| ≥ {STRONG_CORRELATION}): {}; the data determine a \
              combination of such a pair far better than either (fix one with --set, or add \
              observations that separate them)\n",
             list.join(", ")

@@ -43,6 +43,7 @@
 use super::solve::{cornea_layer, mesh_of, solve_on_mesh, BvpError, Solution};
 use super::{ErrorEstimate, FieldRow};
 use crate::bvp::settings::{Scheme, SolverSettings};
+use crate::deadline::Deadline;
 use crate::mesh::{Mesh, POLE_RATIO};
 use crate::model::params::Params;
 use crate::text::number;
@@ -479,8 +480,11 @@ fn pass(
 /// `solver.max_seconds`, which bounds them all together (their clock starts with the first,
 /// or earlier with the job's: `SolverSettings::clock_start`).
 struct Work {
+    /// When this adaptive solve began (its wall time).
     start: Instant,
-    max_seconds: Option<f64>,
+    /// The clock started ([`SolverSettings::clock_started`]) and the bound it gives.
+    clock_start: Option<Instant>,
+    deadline: Deadline,
     iterations: usize,
     residuals: usize,
     jacobians: usize,
@@ -488,9 +492,11 @@ struct Work {
 
 impl Work {
     fn new(settings: &SolverSettings) -> Work {
+        let started = settings.clock_started();
         Work {
-            start: settings.clock_start.unwrap_or_else(Instant::now),
-            max_seconds: settings.max_seconds,
+            start: Instant::now(),
+            clock_start: started.clock_start,
+            deadline: Deadline::since(started.clock_start, started.max_seconds),
             iterations: 0,
             residuals: 0,
             jacobians: 0,
@@ -506,26 +512,23 @@ impl Work {
         warm: Option<&Solution>,
     ) -> Result<Solution, BvpError> {
         let nodes = mesh.len();
-        let out_of_time = |total: f64| {
-            BvpError::OutOfTime(crate::deadline::OutOfTime {
-                seconds: total,
-                place: format!("in the solve on {nodes} nodes of solver.tol's adaptation"),
-            })
+        let deadline = self.deadline;
+        let out_of_time = || {
+            BvpError::OutOfTime(deadline.reached(format!(
+                "in the solve on {nodes} nodes of solver.tol's adaptation"
+            )))
         };
-        if let Some(total) = self.max_seconds {
-            if !(self.start.elapsed().as_secs_f64() < total) {
-                return Err(out_of_time(total));
-            }
+        if deadline.passed() {
+            return Err(out_of_time());
         }
         let s = SolverSettings {
-            clock_start: Some(self.start),
+            clock_start: self.clock_start,
             ..*s
         };
-        let sol =
-            solve_on_mesh(params, &s, mesh, warm).map_err(|e| match (e, self.max_seconds) {
-                (BvpError::OutOfTime(_), Some(total)) => out_of_time(total),
-                (e, _) => e,
-            })?;
+        let sol = solve_on_mesh(params, &s, mesh, warm).map_err(|e| match e {
+            BvpError::OutOfTime(_) => out_of_time(),
+            e => e,
+        })?;
         self.iterations += sol.stats.newton_iterations;
         self.residuals += sol.stats.residual_evaluations;
         self.jacobians += sol.stats.jacobian_evaluations;

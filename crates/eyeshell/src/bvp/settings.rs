@@ -76,6 +76,17 @@ pub struct SolverSettings {
     pub richardson: bool,
 }
 
+impl SolverSettings {
+    /// These settings with `solver.max_seconds`' clock started: now, unless a job started
+    /// it earlier. A job of several stages calls this once and hands the result on.
+    pub fn clock_started(&self) -> SolverSettings {
+        SolverSettings {
+            clock_start: Some(self.clock_start.unwrap_or_else(std::time::Instant::now)),
+            ..*self
+        }
+    }
+}
+
 impl Default for SolverSettings {
     fn default() -> Self {
         SolverSettings {

@@ -410,10 +410,7 @@ pub fn run_with(
     };
     let start = std::time::Instant::now();
     // solver.max_seconds bounds the choice and the run together: one clock for all stages.
-    let solver = &crate::bvp::settings::SolverSettings {
-        clock_start: Some(solver.clock_start.unwrap_or(start)),
-        ..*solver
-    };
+    let solver = &solver.clock_started();
     let (mesh, choice) =
         mesh_choice::choose(params, solver, growth, settings).map_err(|reason| GrowthError {
             t: 0.0,
