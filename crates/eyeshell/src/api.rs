@@ -124,7 +124,9 @@ impl Scene {
     /// --sensitivities` does: [`Growth::sensitivities`] then holds one row per recorded
     /// time and key. `error_control`: include them in IDAS's local error test. An empty
     /// list turns them off. Refused (bad input, naming the key) for an unsupported or
-    /// repeated key, or an integrator other than IDA.
+    /// repeated key, an integrator other than IDA, or error control without a key (it
+    /// would be silently without effect; the command line's `--sensitivity-error-control`
+    /// requires `--sensitivities` for the same reason).
     ///
     /// ```
     /// let mut scene = eyeshell::Scene::from_path(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/const.toml"))?;
@@ -141,6 +143,11 @@ impl Scene {
         keys: &[impl AsRef<str>],
         error_control: bool,
     ) -> Result<(), Error> {
+        if keys.is_empty() && error_control {
+            return Err(Error::input(
+                "sensitivity error control needs sensitivities: name the scene keys to differentiate (e.g. growth.eta0)",
+            ));
+        }
         if keys.is_empty() {
             self.growth_settings.sensitivities = vec![];
             self.growth_settings.sensitivity_error_control = false;
@@ -174,8 +181,23 @@ impl Scene {
         keys: &[impl AsRef<str>],
         options: &crate::fit::FitOptions,
     ) -> Result<crate::fit::Fit, Error> {
+        self.fit_observed(data, keys, options, &mut ())
+    }
+
+    /// [`Scene::fit`], calling `observer.progress(t, t_end)` after every step of every
+    /// growth run of the fit: an error from it stops the fit there (a caller's Ctrl-C).
+    pub fn fit_observed(
+        &self,
+        data: &crate::fit::Observations,
+        keys: &[impl AsRef<str>],
+        options: &crate::fit::FitOptions,
+        observer: &mut dyn Observer,
+    ) -> Result<crate::fit::Fit, Error> {
         let params = crate::fit::parse_keys(keys, "fit")?;
-        crate::fit::fit(self, data, &params, options, &mut |_| {})
+        let t_end = self.growth.as_ref().map_or(f64::NAN, |g| g.t_end);
+        crate::fit::fit_watched(self, data, &params, options, &mut |_| {}, &mut |t| {
+            observer.progress(t, t_end)
+        })
     }
 
     /// The text of the summary.json `eyeshell solve` writes for `solution`, a solve of this
@@ -342,6 +364,36 @@ mod tests {
         assert_eq!(stop.seen.len(), 3);
         assert_eq!(e.t, stop.seen[2]);
         assert!(e.t > 0.0 && e.t < 1.0 && e.reason.contains("stopped by the caller"));
+    }
+
+    #[test]
+    fn an_error_from_progress_stops_a_fit_at_that_step() {
+        let scene = small_growth();
+        let data = crate::fit::Observations::from_columns(
+            &[0.5, 1.0],
+            &[24.0, 25.0],
+            Some(&[0.1, 0.1]),
+            "data",
+        )
+        .unwrap();
+        let mut stop = StopAt { n: 5, seen: vec![] };
+        let options = crate::fit::FitOptions::default();
+        let e = scene
+            .fit_observed(&data, &["growth.eta0"], &options, &mut stop)
+            .unwrap_err();
+        // Stopped within the first growth run, at the step the observer refused.
+        assert_eq!(stop.seen.len(), 5);
+        assert!(e.to_string().contains("stopped by the caller"), "{e}");
+    }
+
+    #[test]
+    fn error_control_without_sensitivities_is_refused() {
+        let mut scene = small_growth();
+        let e = scene.set_sensitivities(&[] as &[&str], true).unwrap_err();
+        assert!(e.is_user_error());
+        assert!(e.to_string().contains("needs sensitivities"), "{e}");
+        assert!(!scene.growth_settings.sensitivity_error_control);
+        scene.set_sensitivities(&[] as &[&str], false).unwrap();
     }
 
     #[test]

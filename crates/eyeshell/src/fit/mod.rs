@@ -187,6 +187,17 @@ pub fn evaluate(
     params: &[FitParam],
     data: &Observations,
 ) -> Result<ModelValues, Error> {
+    evaluate_watched(scene, params, data, &mut |_| Ok(()))
+}
+
+/// [`evaluate`], calling `step(t)` after every step of the growth run: an error from it
+/// stops the run there (a caller's Ctrl-C).
+pub fn evaluate_watched(
+    scene: &Scene,
+    params: &[FitParam],
+    data: &Observations,
+    step: &mut growth::ProgressFn<'_>,
+) -> Result<ModelValues, Error> {
     let Some(g) = &scene.growth else {
         return Err(Error::input(format!(
             "{}: the scene has no [growth] section (a fit needs a growth run)",
@@ -226,7 +237,7 @@ pub fn evaluate(
         &settings,
         &mut take,
         &mut |_, _, _| Ok(()),
-        &mut |_| Ok(()),
+        step,
     )?;
     let seconds = start.elapsed().as_secs_f64();
     let n = data.rows.len();
@@ -457,6 +468,19 @@ pub fn fit(
     options: &FitOptions,
     each: &mut dyn FnMut(&IterationRecord),
 ) -> Result<Fit, Error> {
+    fit_watched(scene, data, params, options, each, &mut |_| Ok(()))
+}
+
+/// [`fit`], calling `step(t)` after every step of every growth run: an error from it stops
+/// the fit there (a caller's Ctrl-C is acted on within a step, not after the whole fit).
+pub fn fit_watched(
+    scene: &Scene,
+    data: &Observations,
+    params: &[FitParam],
+    options: &FitOptions,
+    each: &mut dyn FnMut(&IterationRecord),
+    step: &mut growth::ProgressFn<'_>,
+) -> Result<Fit, Error> {
     let start = std::time::Instant::now();
     let Some(g) = &scene.growth else {
         return Err(Error::input(format!(
@@ -495,7 +519,7 @@ pub fn fit(
     let mut model_seconds = 0.0;
     let mut eval = |values: &[f64]| -> Result<lm::Evaluation, Error> {
         let s = with_values(scene, params, values)?;
-        let m = evaluate(&s, params, data)?;
+        let m = evaluate_watched(&s, params, data, step)?;
         model_seconds += m.seconds;
         let (r, j) = weighted(&m, data);
         Ok((r, j, m.axial_length))
