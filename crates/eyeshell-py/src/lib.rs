@@ -2,19 +2,16 @@
 //! extension module. The Python package around it (python/eyeshell/) shapes the results
 //! into `Solution`, `Growth` and sweep results; this module only converts.
 //!
-//! - Every computation runs with the GIL released ([`Python::detach`]); a growth run
-//!   takes the GIL back briefly after each step to call the progress callback and to let
-//!   Python handle a pending signal (Ctrl-C stops the run there and raises
-//!   KeyboardInterrupt), and stops as well when its [`Cancel`] flag is raised (a sweep's
-//!   Ctrl-C, from another thread).
+//! - Every computation runs with the GIL released ([`Python::detach`]); a growth run, and
+//!   each growth run of a fit, takes the GIL back briefly after each step to call the
+//!   progress callback and to let Python handle a pending signal (Ctrl-C stops the run
+//!   there and raises KeyboardInterrupt). A sweep's runs are in worker processes
+//!   (python/eyeshell/_worker.py), which Ctrl-C ends.
 //! - Arrays are handed to NumPy without a copy: each column is gathered once from the
 //!   library's rows (which are per node, not per field) into a `Vec`, whose buffer NumPy
 //!   then owns (`PyArray1::from_vec`, `PyArray2::from_owned_array`).
 //! - Errors keep the library's class: bad input (exit 2 on the command line) is
 //!   `InputError`, everything else (exit 1) `SolverError`, with the same one-line message.
-
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 
 use eyeshell::bvp::{FieldRow, Solution, COLUMNS};
 use eyeshell::growth::{
@@ -29,7 +26,9 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyKeyError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use pyo3::types::{
+    PyBool, PyByteArray, PyBytes, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple,
+};
 
 create_exception!(
     eyeshell,
@@ -90,13 +89,21 @@ fn fields_dict<'py>(py: Python<'py>, rows: &[FieldRow]) -> PyResult<Bound<'py, P
 // ---------------------------------------------------------------------------------------
 // Scenes
 
-/// A Python value as the TOML value a scene key takes.
+/// A Python value as the TOML value a scene key takes (one conversion for `Scene.set` and
+/// the TOML of a sweep's grid, [`toml_literal`]):
+/// - a NumPy scalar or 0-d array counts as the Python value it holds (`.item()`), so
+///   `np.int64(301)` and `np.array(301)` are integers, `np.True_` is a bool;
+/// - an integer is anything integral (`int`, or with `__index__`); a float is never taken
+///   for an integer, even 301.0, as in a scene file and `--set`: the key then says it
+///   wants an integer, and no computed value passes or fails on its last bit;
+/// - a float is a `float` or anything with `__float__`; a string is a `str`; a list is
+///   any other iterable (bytes are refused: their items would be taken for numbers).
 fn toml_value(v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
     if v.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(v.extract()?));
     }
     if v.is_instance_of::<PyInt>() {
-        return Ok(toml::Value::Integer(v.extract()?));
+        return integer(v);
     }
     if v.is_instance_of::<PyFloat>() {
         return Ok(toml::Value::Float(v.extract()?));
@@ -104,20 +111,65 @@ fn toml_value(v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
     if v.is_instance_of::<PyString>() {
         return Ok(toml::Value::String(v.extract()?));
     }
-    if let Ok(x) = v.extract::<f64>() {
-        // NumPy scalars and anything else with __float__.
-        return Ok(toml::Value::Float(x));
+    let type_name = || v.get_type().name().map(|n| n.to_string());
+    if v.is_instance_of::<PyBytes>() || v.is_instance_of::<PyByteArray>() {
+        return Err(PyTypeError::new_err(format!(
+            "a scene value must be a number, a bool, a string or a list of numbers, not {} (decode it to a str)",
+            type_name()?
+        )));
     }
+    if is_numpy_scalar(v)? {
+        return toml_value(&v.call_method0("item")?);
+    }
+    // Before __index__ and __float__, which NumPy's arrays have too (and refuse unless 0-d).
     if let Ok(items) = v.try_iter() {
         let values = items
             .map(|item| toml_value(&item?))
             .collect::<PyResult<Vec<_>>>()?;
         return Ok(toml::Value::Array(values));
     }
+    if v.get_type().hasattr("__index__")? {
+        let operator = v.py().import("operator")?;
+        return integer(&operator.getattr("index")?.call1((v,))?);
+    }
+    if v.get_type().hasattr("__float__")? {
+        return Ok(toml::Value::Float(v.extract()?));
+    }
     Err(PyTypeError::new_err(format!(
         "a scene value must be a number, a bool, a string or a list of numbers, not {}",
-        v.get_type().name()?
+        type_name()?
     )))
+}
+
+/// A Python int as a TOML integer (64 bits, as TOML's).
+fn integer(v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+    v.extract::<i64>().map(toml::Value::Integer).map_err(|_| {
+        input_err(format!(
+            "{}: an integer beyond TOML's 64 bits (±9223372036854775807)",
+            v.str().map_or_else(|_| "?".into(), |s| s.to_string())
+        ))
+    })
+}
+
+/// A NumPy scalar (`np.int64(3)`, `np.True_`) or 0-d array, told apart without importing
+/// NumPy: its type comes from the module `numpy` and it has no dimension.
+fn is_numpy_scalar(v: &Bound<'_, PyAny>) -> PyResult<bool> {
+    let module: String = v
+        .get_type()
+        .getattr("__module__")?
+        .extract()
+        .unwrap_or_default();
+    if module != "numpy" {
+        return Ok(false);
+    }
+    Ok(v.getattr("ndim").and_then(|n| n.extract::<usize>()).ok() == Some(0))
+}
+
+/// `value` as a TOML literal (`3`, `2.5`, `"text"`, `[1, 2]`), converted as
+/// [`PyScene::set`] converts it: how the Python package writes a sweep's grid and runs.
+#[pyfunction]
+fn toml_literal(value: &Bound<'_, PyAny>) -> PyResult<String> {
+    Ok(toml_value(value)?.to_string())
 }
 
 /// A scene key's value as a Python object.
@@ -348,30 +400,6 @@ impl Solved {
 // ---------------------------------------------------------------------------------------
 // Growth
 
-/// A flag that stops growth runs from another thread (a sweep's Ctrl-C).
-#[pyclass(name = "_Cancel", module = "eyeshell._eyeshell", frozen)]
-#[derive(Default)]
-struct Cancel {
-    raised: Arc<AtomicBool>,
-}
-
-#[pymethods]
-impl Cancel {
-    #[new]
-    fn new() -> Self {
-        Cancel::default()
-    }
-
-    /// Stop every run that watches this flag, after its current step.
-    fn set(&self) {
-        self.raised.store(true, Ordering::SeqCst);
-    }
-
-    fn is_set(&self) -> bool {
-        self.raised.load(Ordering::SeqCst)
-    }
-}
-
 /// Why a run stopped early on the caller's behalf.
 #[derive(Debug)]
 struct Stopped(&'static str);
@@ -385,10 +413,9 @@ impl std::fmt::Display for Stopped {
 impl std::error::Error for Stopped {}
 
 /// The observer of a growth run from Python: after each step, with the GIL taken back
-/// briefly, the progress callback and Python's pending signals; the cancel flag.
+/// briefly, Python's pending signals (Ctrl-C) and the progress callback.
 struct Watch<'a> {
     progress: Option<&'a Py<PyAny>>,
-    cancel: Option<&'a AtomicBool>,
     /// The Python exception that stopped the run (KeyboardInterrupt, or the callback's).
     raised: Option<PyErr>,
 }
@@ -399,9 +426,6 @@ impl Observer for Watch<'_> {
     }
 
     fn progress(&mut self, t: f64, t_end: f64) -> Result<(), ObserverError> {
-        if self.cancel.is_some_and(|c| c.load(Ordering::SeqCst)) {
-            return Err(Box::new(Stopped("cancelled")));
-        }
         let outcome = Python::attach(|py| {
             py.check_signals()?;
             if let Some(f) = self.progress {
@@ -482,26 +506,21 @@ fn sensitivities_dict<'py>(
 /// step; returns a dict: series, history, snapshots (a list of (t, fields)), sensitivities
 /// (with `sensitivities`: the keys, as `eyeshell grow --sensitivities`), summary_text.
 #[pyfunction]
-#[pyo3(signature = (scene, progress = None, cancel = None, sensitivities = Vec::new(), sensitivity_error_control = false))]
+#[pyo3(signature = (scene, progress = None, sensitivities = Vec::new(), sensitivity_error_control = false))]
 fn grow<'py>(
     py: Python<'py>,
     scene: PyScene,
     progress: Option<Py<PyAny>>,
-    cancel: Option<Py<Cancel>>,
     sensitivities: Vec<String>,
     sensitivity_error_control: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut scene = scene.inner;
-    if !sensitivities.is_empty() {
-        scene
-            .set_sensitivities(&sensitivities, sensitivity_error_control)
-            .map_err(py_err)?;
-    }
-    let flag = cancel.map(|c| c.get().raised.clone());
+    scene
+        .set_sensitivities(&sensitivities, sensitivity_error_control)
+        .map_err(py_err)?;
     let (result, raised) = py.detach(|| {
         let mut watch = Watch {
             progress: progress.as_ref(),
-            cancel: flag.as_deref(),
             raised: None,
         };
         let result = scene.grow(&mut watch);
@@ -538,7 +557,8 @@ fn grow<'py>(
 
 /// Fit the parameters `keys` of `scene` to observations (the CSV file `path`, or the
 /// columns `t`, `axial_length` and `sigma`), with the GIL released, as `eyeshell fit`:
-/// returns (fit.json's text, the fitted scene).
+/// returns (fit.json's text, the fitted scene). Ctrl-C stops it within a step of its
+/// current growth run, as it stops `grow`.
 #[pyfunction]
 #[pyo3(signature = (scene, keys, path = None, t = None, axial_length = None, sigma = None, max_iterations = 50))]
 #[allow(clippy::too_many_arguments)]
@@ -574,9 +594,18 @@ fn fit(
         max_iterations,
         ..FitOptions::default()
     };
-    let done = py
-        .detach(|| scene.fit(&data, &keys, &options))
-        .map_err(py_err)?;
+    let (result, raised) = py.detach(|| {
+        let mut watch = Watch {
+            progress: None,
+            raised: None,
+        };
+        let result = scene.fit_observed(&data, &keys, &options, &mut watch);
+        (result, watch.raised)
+    });
+    if let Some(e) = raised {
+        return Err(e);
+    }
+    let done = result.map_err(py_err)?;
     let json = eyeshell::fit::report_json(&done.report);
     Ok((json, PyScene { inner: done.scene }))
 }
@@ -677,10 +706,14 @@ fn _eyeshell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("InputError", py.get_type::<InputError>())?;
     m.add("SolverError", py.get_type::<SolverError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add(
+        "MAX_HISTORY_POINTS",
+        eyeshell::scene::keys::MAX_HISTORY_POINTS,
+    )?;
     m.add_class::<PyScene>()?;
     m.add_class::<Solved>()?;
-    m.add_class::<Cancel>()?;
     m.add_function(wrap_pyfunction!(keys, m)?)?;
+    m.add_function(wrap_pyfunction!(toml_literal, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(grow, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;

@@ -1,10 +1,15 @@
 """Every kind of bad input raises InputError (the command line's exit 2) with the command
 line's one-line message; a failed computation raises SolverError (exit 1)."""
 
+import os
+import pathlib
+import shutil
+
+import numpy as np
 import pytest
 
 import eyeshell
-from conftest import SCENES
+from conftest import ROOT, SCENES
 
 
 @pytest.mark.parametrize(
@@ -76,3 +81,168 @@ def test_a_failed_run_of_a_sweep_is_recorded_and_the_others_go_on():
     assert [r.status for r in runs] == ["failed", "ok"]
     assert "Newton did not converge" in runs[0].error and runs[0].result is None
     assert runs[1].result.summary["newton_iterations"] > 1
+
+
+# Integer keys take any integral number; floats (even whole ones) are refused, as in a
+# scene file and `--set`.
+
+
+@pytest.mark.parametrize(
+    "value",
+    [301, np.int64(301), np.int32(301), np.uint16(301), np.array(301), np.array(301, dtype=np.int16)],
+    ids=["int", "int64", "int32", "uint16", "0-d int64", "0-d int16"],
+)
+def test_an_integer_key_takes_any_integral_number(value):
+    s = eyeshell.Scene(solver__nodes=value)
+    assert s["solver.nodes"] == 301 and type(s["solver.nodes"]) is int
+    assert eyeshell.Scene({"output": {"history_points": value}})["output.history_points"] == 301
+
+
+def test_an_integral_object_of_another_library_is_an_integer():
+    class Count:
+        def __index__(self):
+            return 301
+
+    assert eyeshell.Scene(solver__nodes=Count())["solver.nodes"] == 301
+
+
+@pytest.mark.parametrize(
+    "value, needle",
+    [
+        (301.0, "must be an integer, found float 301"),
+        (np.float64(301.0), "must be an integer, found float 301"),
+        (np.array(301.0), "must be an integer, found float 301"),
+        (np.float32(301.5), "must be an integer, found float 301.5"),
+        (True, "must be an integer, found boolean true"),
+        (np.True_, "must be an integer, found boolean true"),
+        ("301", "must be an integer, found string"),
+        (np.array([301]), "must be an integer, found an array"),
+        (10**30, "beyond TOML's 64 bits"),
+        (np.uint64(2**64 - 1), "beyond TOML's 64 bits"),
+        (-1, "solver.nodes"),
+        (np.int64(-1), "solver.nodes"),
+    ],
+    ids=lambda v: repr(v),
+)
+def test_an_integer_key_refuses_what_is_not_integral(value, needle):
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.Scene(solver__nodes=value)
+    assert needle in str(e.value) and "\n" not in str(e.value)
+
+
+def test_numpy_values_for_float_and_bool_keys():
+    s = eyeshell.Scene(fibres__D=np.float32(2.5), pressure__dP=np.array(2.0),
+                       material__C=np.int64(3), solver__pole_grading=np.False_)
+    assert (s["fibres.D"], s["pressure.dP"], s["material.C"]) == (2.5, 2.0, 3.0)
+    assert s["solver.pole_grading"] is False
+    s = eyeshell.Scene(output__times=np.array([0.25, 0.5]))
+    assert s["output.times"] == [0.25, 0.5]
+    with pytest.raises(TypeError, match="not bytes"):
+        eyeshell.Scene(name=b"sphere")
+    with pytest.raises(TypeError, match="not complex"):
+        eyeshell.Scene(fibres__D=np.complex128(1))
+
+
+def test_a_sweep_takes_numpy_values_for_its_grid_and_overrides():
+    scene = eyeshell.Scene.from_file(SCENES / "default.toml")
+    runs = eyeshell.sweep(scene, grid={"solver.nodes": np.arange(101, 302, 100)},
+                          pressure__dP=np.float64(2.5), solver__max_newton=np.int64(40))
+    assert [r.name for r in runs] == ["nodes=101", "nodes=201", "nodes=301"]
+    assert [r.result.scene["solver.nodes"] for r in runs] == [101, 201, 301]
+    assert all(r.result.scene["solver.max_newton"] == 40 for r in runs)
+    with pytest.raises(eyeshell.InputError, match="must be an integer, found float 101"):
+        eyeshell.sweep(scene, grid={"solver.nodes": np.linspace(101, 301, 3)})
+    with pytest.raises(eyeshell.InputError, match="grid: solver.nodes: give a list of values"):
+        eyeshell.sweep(scene, grid={"solver.nodes": np.int64(101)})
+    with pytest.raises(eyeshell.InputError, match="jobs = 1.0: must be a whole number"):
+        eyeshell.sweep(scene, grid={"solver.nodes": [101]}, jobs=1.0)
+    with pytest.raises(eyeshell.InputError, match="jobs = True: must be a whole number"):
+        eyeshell.sweep(scene, grid={"solver.nodes": [101]}, jobs=True)
+    # Each job is a process: as many as `eyeshell sweep --jobs` allows.
+    with pytest.raises(eyeshell.InputError, match="jobs = 1025: must be a whole number from 1 to 1,024"):
+        eyeshell.sweep(scene, grid={"solver.nodes": [101]}, jobs=1025)
+    assert len(eyeshell.sweep(scene, grid={"solver.nodes": [101]}, jobs=np.int64(1))) == 1
+
+
+# Paths: a str, bytes or os.PathLike (of either) everywhere a file is named, as the
+# messages say.
+
+class BytesPath:
+    def __init__(self, path):
+        self.path = os.fsencode(path)
+
+    def __fspath__(self):
+        return self.path
+
+
+PATH_KINDS = [str, os.fsencode, pathlib.Path, BytesPath]
+
+
+@pytest.mark.parametrize("kind", PATH_KINDS, ids=["str", "bytes", "Path", "PathLike of bytes"])
+def test_every_kind_of_path_names_a_file(kind, tmp_path):
+    default = SCENES / "default.toml"
+    sol = eyeshell.solve(kind(default), solver__nodes=101)
+    assert sol.scene["solver.nodes"] == 101 and sol.summary["residual_norm"] < 1e-8
+    assert eyeshell.Scene.from_file(kind(default)) == eyeshell.Scene.from_file(default)
+    r = eyeshell.fit(kind(SCENES / "const.toml"), kind(ROOT / "examples" / "fit" / "const_synthetic.csv"),
+                     fit=["growth.Gamma"], solver__nodes=101, max_iterations=1)
+    assert r.report["data"]["observations"] > 0
+    sweep = eyeshell.sweep(kind(SCENES / "grow.toml"), solver__nodes=101, jobs=2)
+    assert len(sweep) > 1 and all(r.ok for r in sweep)
+
+
+def test_a_file_name_that_is_not_utf8_reaches_the_file_system(tmp_path):
+    odd = os.fsencode(tmp_path) + b"/scene-\xff.toml"
+    with open(odd, "wb") as f:
+        f.write(b"[solver]\nnodes = 101\n")
+    assert eyeshell.solve(odd).scene["solver.nodes"] == 101
+
+
+@pytest.mark.parametrize("call", [
+    lambda: eyeshell.solve(5),
+    lambda: eyeshell.grow(3.5),
+    lambda: eyeshell.Scene.from_file(5),
+    lambda: eyeshell.compare(5, SCENES),
+    lambda: eyeshell.fit(SCENES / "const.toml", 5, fit=["growth.Gamma"]),
+])
+def test_what_is_not_a_path_is_refused_saying_what_a_path_is(call):
+    with pytest.raises(TypeError, match=r"a str, bytes or os.PathLike"):
+        call()
+
+
+# Sensitivity error control without sensitivities does nothing: refused, as on the
+# command line.
+
+@pytest.mark.parametrize("sensitivities", [(), [], ""])
+def test_error_control_without_sensitivities_is_refused(cli, tmp_path, sensitivities):
+    with pytest.raises(eyeshell.InputError, match="sensitivity error control needs sensitivities"):
+        eyeshell.grow(SCENES / "const.toml", sensitivities=sensitivities,
+                      sensitivity_error_control=True)
+    r = cli("grow", SCENES / "const.toml", "--sensitivity-error-control", "--out", tmp_path / "g",
+            check=False)
+    assert r.returncode == 2 and not (tmp_path / "g").exists()
+    with pytest.raises(TypeError, match="must be True or False, not str"):
+        eyeshell.grow(SCENES / "const.toml", sensitivities=["growth.eta0"],
+                      sensitivity_error_control="no")
+
+
+# compare's docstring names what it compares: every kind it lists is compared, and a CSV
+# file (which it says is not a reference) is refused.
+
+def test_compare_takes_what_its_docstring_lists_and_refuses_csv(cli, tmp_path):
+    doc = eyeshell.compare.__doc__
+    assert "a CSV file is not a reference" in doc
+    assert ".csv" not in doc
+    run = tmp_path / "run"
+    cli("solve", SCENES / "default.toml", "--set", "solver.nodes=101", "--out", run, "--quiet")
+    cli("export", run, "--mat", tmp_path / "r.mat", "--npz", tmp_path / "r.npz")
+    refs = tmp_path / "refs"
+    refs.mkdir()
+    shutil.copy(tmp_path / "r.mat", refs / "a.mat")
+    shutil.copy(tmp_path / "r.npz", refs / "b.npz")
+    for reference in [tmp_path / "r.mat", tmp_path / "r.npz", refs, run]:
+        c = eyeshell.compare(run, reference)
+        assert c.passed and len(c.pairs) >= 1, reference
+    assert eyeshell.compare(tmp_path / "r.npz", run).passed  # an export as the run
+    with pytest.raises(eyeshell.InputError, match="fields.csv"):
+        eyeshell.compare(run, run / "fields.csv")

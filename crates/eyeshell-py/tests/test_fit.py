@@ -58,7 +58,7 @@ def test_fit_recovers_eta0_gamma_delta_from_synthetic_data():
         assert r.scene[key] == r.estimates[key]
     assert r.correlation.shape == (3, 3) and np.allclose(np.diag(r.correlation), 1)
     assert np.allclose(r.residuals["residual"], r.residuals["model"] - r.residuals["axial_length"])
-    c = r.curve(20)
+    c = r.curve(21)
     # Another run (other output times, so other steps): the same to the run's tolerance.
     assert len(c["t"]) == 21 and abs(c["axial_length"][-1] - r.residuals["model"][-1]) < 1e-4
     assert "growth.eta0 = " in repr(r)
@@ -89,3 +89,43 @@ def test_fit_refusals_are_input_errors():
         eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma", "growth.Gamma"])
     with pytest.raises(eyeshell.InputError, match="the columns t and axial_length are required"):
         eyeshell.fit(SCENES / "const.toml", {"t": [0.5]}, fit=["growth.Gamma"])
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    # const.toml writes snapshots at t = 0.1, 0.2, 0.4: a curve must not take them in.
+    return eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma"], solver__nodes=101)
+
+
+@pytest.mark.parametrize("n", [2, 3, 5, 7, 21, np.int64(4)])
+def test_the_curve_has_n_evenly_spaced_points_with_both_ends(fitted, n):
+    c = fitted.curve(n)
+    t_end = fitted.scene["growth.t_end"]
+    # t_end·k/(n − 1), as the growth run computes its history times, bit for bit.
+    assert np.array_equal(c["t"], t_end * np.arange(int(n)) / (int(n) - 1))
+    assert len(c["axial_length"]) == n and np.all(np.isfinite(c["axial_length"]))
+    assert np.all(np.diff(c["axial_length"]) > 0)
+    # The fit's own scene is left as it was.
+    assert fitted.scene["output.times"] == [0.1, 0.2, 0.4, 1.0]
+    assert fitted.scene["output.history_points"] == 100
+
+
+def test_the_curve_is_the_command_lines_fitted_curve(fitted):
+    # The command line plots fit::curve at 201 points; the default here is the same.
+    c = fitted.curve()
+    assert len(c["t"]) == 201 and c["t"][100] == 0.5
+
+
+@pytest.mark.parametrize("n, needle", [
+    (0, "points = 0: must be a whole number from 2 to 1,000,001"),
+    (1, "points = 1: must be a whole number from 2 to 1,000,001"),
+    (-5, "points = -5: must be a whole number from 2"),
+    (10**7, "points = 10000000: must be a whole number from 2 to 1,000,001"),
+    (True, "points = True: must be a whole number"),
+    (3.0, "points = 3.0: must be a whole number"),
+    ("3", "points = '3': must be a whole number"),
+])
+def test_a_curve_of_fewer_than_two_points_or_not_a_count_is_refused(fitted, n, needle):
+    with pytest.raises(eyeshell.InputError) as e:
+        fitted.curve(n)
+    assert needle in str(e.value)

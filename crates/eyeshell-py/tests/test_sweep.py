@@ -1,7 +1,13 @@
 """eyeshell.sweep: the command line's sweep, run on threads, in processes and on Dask."""
 
 import concurrent.futures
+import concurrent.futures.process
 import json
+import pathlib
+import subprocess
+import sys
+import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -76,3 +82,130 @@ def test_dask_gives_the_local_results():
             assert np.array_equal(a.result.series[column], b.result.series[column])
         for t, fields in a.result.snapshots.items():
             assert np.array_equal(fields["r"], b.result.snapshots[t]["r"])
+
+
+# A run that aborts its process (an allocation that fails, a stack overflow: no exception
+# to catch) fails alone. EYESHELL_TEST_ABORT_RUN makes the worker given that run abort.
+
+ABORTED = "the run's process ended abnormally (killed by signal 6: SIGABRT; out of memory or a stack overflow?)"
+
+
+def test_a_run_that_aborts_fails_alone_and_the_others_are_kept(monkeypatch):
+    monkeypatch.setenv("EYESHELL_TEST_ABORT_RUN", "D=100")
+    results = eyeshell.sweep(small(), grid=FIBRES, jobs=2)
+    assert [r.status for r in results] == ["ok", "failed", "ok", "ok"]
+    assert results[1].error == ABORTED and results[1].result is None
+    assert results[1].values == {"fibres.D": "100"}
+    monkeypatch.delenv("EYESHELL_TEST_ABORT_RUN")
+    for r in [results[0], results[2], results[3]]:
+        alone = eyeshell.grow(small(), frames=False, fibres__D=float(r.values["fibres.D"]))
+        assert np.array_equal(r.result.series["axial_length"], alone.series["axial_length"])
+
+
+@pytest.mark.parametrize("jobs", [1, 3])
+def test_after_an_abort_the_next_runs_get_a_new_process(monkeypatch, jobs):
+    # The first run aborts: with one job, every other run goes to the worker started after.
+    monkeypatch.setenv("EYESHELL_TEST_ABORT_RUN", "D=0")
+    results = eyeshell.sweep(small(), grid=FIBRES, jobs=jobs)
+    assert [r.status for r in results] == ["failed", "ok", "ok", "ok"]
+    assert results[0].error == ABORTED
+
+
+def test_a_sweep_whose_only_run_aborts_returns_its_failure(monkeypatch):
+    monkeypatch.setenv("EYESHELL_TEST_ABORT_RUN", "lone")
+    results = eyeshell.sweep(small(), runs=[{"name": "lone"}], jobs=1)
+    assert [(r.name, r.status, r.error) for r in results] == [("lone", "failed", ABORTED)]
+    # The iterator yields it as well, and the next sweep starts afresh.
+    assert [r.status for r in eyeshell.iter_sweep(small(), runs=[{"name": "lone"}])] == ["failed"]
+    monkeypatch.delenv("EYESHELL_TEST_ABORT_RUN")
+    assert [r.status for r in eyeshell.sweep(small(), runs=[{"name": "lone"}])] == ["ok"]
+
+
+def test_an_abort_in_a_process_pool_is_a_failed_run_not_a_broken_pool(monkeypatch):
+    monkeypatch.setenv("EYESHELL_TEST_ABORT_RUN", "D=200")
+    with concurrent.futures.ProcessPoolExecutor(max_workers=2) as pool:
+        results = eyeshell.sweep(small(), grid=FIBRES, executor=pool)
+        # The pool is whole: it runs another sweep.
+        again = eyeshell.sweep(small(), grid={"fibres.D": [200, 400]}, executor=pool)
+    assert [r.status for r in results] == ["ok", "ok", "failed", "ok"]
+    assert results[2].error == ABORTED
+    assert [r.status for r in again] == ["failed", "ok"]
+    assert np.array_equal(again[1].result.series["axial_length"],
+                          results[3].result.series["axial_length"])
+
+
+def test_a_run_the_executor_loses_is_a_failed_run():
+    # An executor whose task dies with its process (here: a pool whose process exits).
+    class Losing(concurrent.futures.ThreadPoolExecutor):
+        def submit(self, fn, *args):
+            if args[1] == "D=100":
+                return super().submit(lambda: (_ for _ in ()).throw(
+                    concurrent.futures.process.BrokenProcessPool("a process died")))
+            return super().submit(fn, *args)
+
+    with Losing(max_workers=2) as pool:
+        results = eyeshell.sweep(small(), grid=FIBRES, executor=pool)
+    assert [r.status for r in results] == ["ok", "failed", "ok", "ok"]
+    assert results[1].error == "the executor did not run it: BrokenProcessPool: a process died"
+
+
+def test_dask_records_an_aborted_run_as_failed(monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setenv("EYESHELL_TEST_ABORT_RUN", "D=100")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=True,
+                                  dashboard_address=None, host="127.0.0.1") as cluster, \
+            distributed.Client(cluster) as client:
+        results = eyeshell.sweep(small(), grid=FIBRES, executor=client)
+        assert len(client.scheduler_info()["workers"]) == 1  # the Dask worker lives on
+    assert [r.status for r in results] == ["ok", "failed", "ok", "ok"]
+    assert results[1].error == ABORTED
+
+
+def children_of(pid):
+    """The pids of the processes whose parent is `pid` (from /proc)."""
+    found = []
+    for entry in pathlib.Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                found.append(int(entry.name))
+    return found
+
+
+def alive(pid):
+    try:
+        stat = pathlib.Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
+
+
+@pytest.mark.skipif(not pathlib.Path("/proc/self/stat").exists(), reason="needs /proc")
+def test_the_workers_end_with_a_sweep_that_is_killed():
+    # A long sweep killed with SIGKILL (no cleanup runs): its workers see the end of their
+    # input and exit, instead of computing on for nobody.
+    code = textwrap.dedent(f"""
+        import eyeshell
+        scene = eyeshell.Scene.from_file({str(SCENES / 'const.toml')!r}, solver__integrator="euler",
+                                         solver__steps=100000, solver__nodes=2001)
+        print("started", flush=True)
+        eyeshell.sweep(scene, grid={{"fibres.D": [0, 100]}}, jobs=2)
+    """)
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "started"
+    deadline = time.monotonic() + 30
+    while len(children_of(child.pid)) < 2 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    workers = children_of(child.pid)
+    assert len(workers) == 2
+    time.sleep(1.0)  # the runs are under way
+    assert all(alive(w) for w in workers)
+    child.kill()
+    child.wait()
+    deadline = time.monotonic() + 10
+    while any(alive(w) for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(alive(w) for w in workers)

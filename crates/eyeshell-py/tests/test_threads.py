@@ -98,7 +98,7 @@ def test_ctrl_c_stops_a_long_grow():
 
 def test_ctrl_c_stops_a_long_sweep():
     seconds, out, err, code = interrupt(f"""
-        import threading, eyeshell
+        import os, threading, eyeshell
         LONG = {LONG!r}
         scene = eyeshell.Scene.from_file({str(SCENES / 'const.toml')!r}, **LONG)
         print("started", flush=True)
@@ -106,11 +106,38 @@ def test_ctrl_c_stops_a_long_sweep():
             eyeshell.sweep(scene, grid={{"fibres.D": [0, 100, 200, 400]}}, jobs=2)
             print("finished")
         except KeyboardInterrupt:
-            print("interrupted", threading.active_count())
+            try:
+                os.waitpid(-1, os.WNOHANG)
+                children = "some"
+            except ChildProcessError:
+                children = "none"
+            print("interrupted", threading.active_count(), children)
     """)
-    # The running runs stopped after their step: no thread is left behind.
-    assert code == 0 and out.split() == ["interrupted", "1"], (out, err)
+    # The running runs stopped at once: no thread is left behind, and no process (the
+    # runs' workers are ended and reaped).
+    assert code == 0 and out.split() == ["interrupted", "1", "none"], (out, err)
     assert seconds < 2.0
+
+
+def test_ctrl_c_stops_a_long_fit():
+    # Every growth run of a fit polls for Ctrl-C after each step, as grow does: the fit
+    # stops within a step, not after its last iteration. This fit takes far longer than
+    # the test waits (its first run alone: ~1 s per 0.1 of t at this mesh and rtol).
+    seconds, out, err, code = interrupt(f"""
+        import time, eyeshell
+        data = {{"t": [0.25, 0.5, 0.75, 1.0], "axial_length": [23.0, 23.5, 24.0, 24.5]}}
+        print("started", flush=True)
+        start = time.perf_counter()
+        try:
+            eyeshell.fit({str(SCENES / 'const.toml')!r}, data,
+                         fit=["growth.eta0", "growth.Gamma", "growth.delta"],
+                         solver__nodes=4001, solver__rtol=1e-10)
+            print(f"finished after {{time.perf_counter() - start:.2f}} s")
+        except KeyboardInterrupt:
+            print(f"interrupted after {{time.perf_counter() - start:.2f}} s")
+    """, signal_after=1.0)
+    assert code == 0 and out.startswith("interrupted"), (out, err)
+    assert seconds < 2.0, (seconds, out)
 
 
 def test_ctrl_c_at_random_moments_never_hangs_a_sweep():
@@ -135,6 +162,12 @@ def test_ctrl_c_at_random_moments_never_hangs_a_sweep():
             except KeyboardInterrupt:
                 pass
         time.sleep(0.3)
-        print("done", threading.active_count())
+        try:
+            os.waitpid(-1, os.WNOHANG)
+            children = "some"
+        except ChildProcessError:
+            children = "none"
+        print("done", threading.active_count(), children)
         """, signal_after=None)
-    assert code == 0 and out.split() == ["done", "1"], (out, err)
+    # No thread, and no worker process, is left behind.
+    assert code == 0 and out.split() == ["done", "1", "none"], (out, err)

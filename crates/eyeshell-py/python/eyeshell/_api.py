@@ -2,13 +2,15 @@
 
 The extension converts (scenes, arrays, errors) and runs the computations with the GIL
 released; this module shapes the results (Solution, Growth, RunResult), formats progress,
-and runs sweeps on threads or on any ``concurrent.futures.Executor``-like object.
+and runs sweeps in worker processes (``_worker``), from threads of its own or from any
+``concurrent.futures.Executor``-like object.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import operator
 import os
 import queue
 import sys
@@ -19,12 +21,23 @@ from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence, Union
 
 import numpy as np
 
-from . import _eyeshell
+from . import _eyeshell, _worker
 from ._eyeshell import EyeshellError, InputError, SolverError
 
-PathLike = Union[str, "os.PathLike[str]"]
+PathLike = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
+# What names a file: a str, bytes (the file system's encoding), or an os.PathLike of either.
+_PATH_TYPES = (str, bytes, os.PathLike)
 SceneLike = Union["Scene", PathLike, Mapping[str, Any], None]
 Progress = Union[bool, Callable[[float, float], Any], None]
+
+
+def _path(path: Any, what: str) -> str:
+    """`path` (a str, bytes or os.PathLike of either) as the str the extension takes
+    (bytes decoded as ``os.fsdecode`` does, so a name that is not UTF-8 reaches the file
+    system unchanged)."""
+    if not isinstance(path, _PATH_TYPES):
+        raise TypeError(f"{what} must be a path (a str, bytes or os.PathLike), not {type(path).__name__}")
+    return os.fsdecode(path)
 
 
 def _key(name: str) -> str:
@@ -51,6 +64,12 @@ class Scene:
     (``Scene(fibres__D=200)``). Every value is checked as ``eyeshell check`` checks it: a
     bad key or value raises :class:`InputError` naming it.
 
+    Values: a number, a bool, a string, or a list of numbers; NumPy scalars and 0-d arrays
+    count as the value they hold. An integer key (``solver.nodes``, ...) takes any
+    integral number: an ``int``, a NumPy integer (``np.int64(301)``, ``np.array(301)``),
+    anything with ``__index__``; a float is refused even when whole (301.0), as in a scene
+    file and ``--set``, so that no computed value passes or fails on its last bit.
+
     >>> s = eyeshell.Scene({"fibres": {"D": 200}}, solver__nodes=301)
     >>> s["fibres.D"], s["solver.nodes"]
     (200.0, 301)
@@ -60,6 +79,8 @@ class Scene:
     Traceback (most recent call last):
     ...
     eyeshell.InputError: defaults: fibres.D = -1 must be non-negative
+    >>> eyeshell.Scene(solver__nodes=np.int64(301))["solver.nodes"]
+    301
     """
 
     __slots__ = ("_s",)
@@ -76,14 +97,14 @@ class Scene:
 
     @classmethod
     def from_file(cls, path: PathLike, /, **overrides: Any) -> "Scene":
-        """Read and validate the scene file ``path`` (TOML, as ``eyeshell solve`` reads it),
-        then set ``overrides``.
+        """Read and validate the scene file ``path`` (TOML, as ``eyeshell solve`` reads it;
+        a str, bytes or os.PathLike), then set ``overrides``.
 
         >>> s = eyeshell.Scene.from_file(SCENES + "/const.toml")
         >>> s.grows, s.name
         (True, 'const')
         """
-        return cls._wrap(_eyeshell._Scene.from_file(os.fspath(path))).update(**overrides)
+        return cls._wrap(_eyeshell._Scene.from_file(_path(path, "a scene file"))).update(**overrides)
 
     @classmethod
     def from_toml(cls, text: str, /, **overrides: Any) -> "Scene":
@@ -165,8 +186,13 @@ def _as_scene(scene: SceneLike, overrides: Mapping[str, Any]) -> Scene:
         result = scene.copy()
     elif isinstance(scene, Mapping):
         result = Scene(scene)
-    else:
+    elif isinstance(scene, _PATH_TYPES):
         result = Scene.from_file(scene)
+    else:
+        raise TypeError(
+            "scene must be a Scene, a mapping of keys, a scene file's path (a str, bytes or "
+            f"os.PathLike) or None, not {type(scene).__name__}"
+        )
     return result.update(**overrides)
 
 
@@ -292,8 +318,9 @@ class Solution:
 
 
 def solve(scene: SceneLike = None, /, **overrides: Any) -> Solution:
-    """Solve the loaded elastic shell of ``scene`` (a :class:`Scene`, a scene file's path,
-    a mapping of keys, or None for the default scene), with ``overrides`` set on a copy
+    """Solve the loaded elastic shell of ``scene`` (a :class:`Scene`, a scene file's path
+    as a str, bytes or os.PathLike, a mapping of keys, or None for the default scene),
+    with ``overrides`` set on a copy
     (``solve(scene, fibres__D=200)`` or ``solve(scene, **{"fibres.D": 200})``). The GIL is
     released while it solves.
 
@@ -435,7 +462,9 @@ def grow(
     ``sensitivity_error_control=True`` includes them in the local error test: 4–75× slower,
     and the sensitivities then converge with ``solver.rtol`` (without it their error is
     set by the state's steps: 4e-3 relative at rtol 1e-6, 2e-4 at 1e-10 on the const scene
-    at 101 nodes, from the growth switching off point by point).
+    at 101 nodes, from the growth switching off point by point). Without sensitivities it
+    would do nothing, so it is refused (:class:`InputError`), as the command line refuses
+    ``--sensitivity-error-control`` without ``--sensitivities``.
 
     >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101,
     ...                   sensitivities=["growth.eta0", "growth.Gamma"])
@@ -451,8 +480,12 @@ def grow(
     s = _as_scene(scene, overrides)
     if isinstance(sensitivities, str):
         sensitivities = [k for k in sensitivities.split(",") if k.strip()]
+    if not isinstance(sensitivity_error_control, (bool, np.bool_)):
+        raise TypeError(
+            f"sensitivity_error_control must be True or False, not {type(sensitivity_error_control).__name__}"
+        )
     raw = _eyeshell.grow(
-        s._s, _progress_callable(progress), None, list(sensitivities), bool(sensitivity_error_control)
+        s._s, _progress_callable(progress), list(sensitivities), bool(sensitivity_error_control)
     )
     return Growth(raw, s.to_toml(), frames)
 
@@ -503,10 +536,23 @@ class FitResult:
         """Σ ((model − data)/σ)² at the estimates (σ = 1 without a sigma column)."""
         return self.report["chi2"]
 
-    def curve(self, points: int = 200) -> dict[str, np.ndarray]:
-        """The fitted model's axial length at ``points`` + 1 times over [0, t_end]:
-        {"t": ..., "axial_length": ...} (one growth run of :attr:`scene`)."""
-        h = grow(self.scene, frames=False, output__history_points=points).history
+    def curve(self, points: int = 201) -> dict[str, np.ndarray]:
+        """The fitted model's axial length at ``points`` evenly spaced times over
+        [0, t_end], both ends included (t = t_end·k/(points − 1)): {"t": ...,
+        "axial_length": ...}, from one growth run of :attr:`scene` (the curve ``eyeshell
+        fit`` plots). ``points``: a whole number from 2 (the two ends) to 1,000,001;
+        Ctrl-C stops the run as it stops :func:`grow`.
+
+        >>> r = eyeshell.fit(SCENES + "/const.toml", SCENES + "/../examples/fit/const_synthetic.csv",
+        ...                  fit=["growth.Gamma"], solver__nodes=101)
+        >>> r.curve(5)["t"].tolist()
+        [0.0, 0.25, 0.5, 0.75, 1.0]
+        """
+        # Both ends, and the run's history holds t = 0 and output.history_points more.
+        n = _whole(points, "curve: points", 2, _eyeshell.MAX_HISTORY_POINTS + 1)
+        # No snapshot between the ends (t_end is always one), so no time but the history's.
+        scene = self.scene.copy(output__times=[self.scene["growth.t_end"]], output__history_points=n - 1)
+        h = grow(scene, frames=False).history
         return {"t": np.asarray(h["t"]), "axial_length": np.asarray(h["axial_length"])}
 
     def __repr__(self) -> str:
@@ -528,9 +574,11 @@ def fit(
     """``eyeshell fit``: fit the scene keys ``fit`` (start values: the scene's) to measured
     axial lengths by Levenberg–Marquardt, the Jacobian being the growth run's forward
     sensitivities (IDAS), each step kept in the key's validity range. ``data`` is a CSV
-    file's path (header ``t,axial_length[,sigma]``, as the command line reads it) or a
-    mapping with the columns ``t``, ``axial_length`` and optionally ``sigma`` (a dict of
-    sequences or a pandas DataFrame). ``overrides`` are set on a copy of ``scene``.
+    file's path (a str, bytes or os.PathLike; header ``t,axial_length[,sigma]``, as the
+    command line reads it) or a mapping with the columns ``t``, ``axial_length`` and
+    optionally ``sigma`` (a dict of sequences or a pandas DataFrame). ``overrides`` are
+    set on a copy of ``scene``. The GIL is released while it fits; Ctrl-C stops it within
+    a step of its current growth run and raises KeyboardInterrupt, as in :func:`grow`.
 
     Standard errors come from the Gauss–Newton covariance s²(JᵀWJ)⁻¹: s² = 1 with σ (taken
     as known), the residual variance χ²/(n − k) without. Raises :class:`InputError` for bad
@@ -546,8 +594,8 @@ def fit(
     s = _as_scene(scene, overrides)
     if isinstance(fit, str):
         fit = [k for k in fit.split(",") if k.strip()]
-    if isinstance(data, (str, os.PathLike)):
-        text, native = _eyeshell.fit(s._s, list(fit), path=os.fspath(data), max_iterations=max_iterations)
+    if isinstance(data, _PATH_TYPES):
+        text, native = _eyeshell.fit(s._s, list(fit), path=_path(data, "data"), max_iterations=max_iterations)
     elif isinstance(data, Mapping) or hasattr(data, "columns"):
         def col(name: str) -> list[float] | None:
             if name not in data:
@@ -562,7 +610,10 @@ def fit(
             max_iterations=max_iterations,
         )
     else:
-        raise TypeError("data must be a CSV file's path or a mapping of columns t, axial_length[, sigma]")
+        raise TypeError(
+            "data must be a CSV file's path (a str, bytes or os.PathLike) or a mapping of "
+            f"columns t, axial_length[, sigma], not {type(data).__name__}"
+        )
     return FitResult(text, Scene._wrap(native), frames)
 
 
@@ -591,37 +642,65 @@ class RunResult:
         return None if self.result is None else self.result.summary
 
 
-def _run_one(
-    index: int, name: str, values: dict[str, str], scene_toml: str, cancel: Any = None
-) -> RunResult:
-    """Run one scene of a sweep (in a thread, or in a process an executor ships this to):
-    a failed run is recorded, not raised, as ``eyeshell sweep`` records it."""
+def _run_here(index: int, name: str, values: dict[str, str], scene_toml: str) -> RunResult:
+    """Run one scene of a sweep in this process (a worker's): a failed run is recorded,
+    not raised, as ``eyeshell sweep`` records it."""
     start = time.perf_counter()
-    s = Scene.from_toml(scene_toml)
     try:
+        s = Scene.from_toml(scene_toml)
         if s.grows:
-            raw = _eyeshell.grow(s._s, None, cancel)
-            result: Solution | Growth = Growth(raw, scene_toml, False)
+            result: Solution | Growth = Growth(_eyeshell.grow(s._s), scene_toml, False)
         else:
             result = Solution(_eyeshell.solve(s._s))
-    except EyeshellError as e:
-        return RunResult(name, values, "failed", None, str(e), time.perf_counter() - start, index)
+    except Exception as e:
+        message = str(e) if isinstance(e, EyeshellError) else _internal(e)
+        return RunResult(name, values, "failed", None, message, time.perf_counter() - start, index)
     return RunResult(name, values, "ok", result, None, time.perf_counter() - start, index)
 
 
+def _internal(e: BaseException) -> str:
+    return f"internal error (a bug; please report it): {type(e).__name__}: {e}"
+
+
+def _run_in(
+    workers: _worker.Workers, index: int, name: str, values: dict[str, str], scene_toml: str
+) -> RunResult:
+    """Run one scene of a sweep in a worker process of `workers`: a run whose process
+    ends without a result (an abort) is recorded as failed, saying how it ended."""
+    start = time.perf_counter()
+
+    def failed(message: str) -> RunResult:
+        return RunResult(name, values, "failed", None, message, time.perf_counter() - start, index)
+
+    try:
+        return workers.run((index, name, values, scene_toml))
+    except _worker.Lost as e:
+        return failed(str(e))
+    except OSError as e:
+        return failed(f"could not start a process for the run: {e}")
+    except _worker.Cancelled:
+        raise
+    except Exception as e:
+        return failed(_internal(e))
+
+
+def _run_one(index: int, name: str, values: dict[str, str], scene_toml: str) -> RunResult:
+    """What an executor runs for one run of a sweep: the run, in a worker process beside
+    the executor's (its pool lives as long as the executor's process), so that a run that
+    aborts never takes the executor's process down."""
+    return _run_in(_worker.shared(), index, name, values, scene_toml)
+
+
 def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    if isinstance(v, (float, np.floating)):
-        x = float(v)
-        return repr(x) if math.isfinite(x) else ("nan" if x != x else ("inf" if x > 0 else "-inf"))
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    raise TypeError(f"a sweep value must be a number, a bool, a string or a list, not {type(v).__name__}")
+    """A sweep value as TOML, converted as :meth:`Scene.set` converts it."""
+    return _eyeshell.toml_literal(v)
+
+
+def _values(key: str, v: Any) -> list[Any]:
+    """The values of a grid's key: a list, a tuple, an array, any iterable but a string."""
+    if isinstance(v, (str, bytes, Mapping)) or not hasattr(v, "__iter__") or getattr(v, "ndim", 1) == 0:
+        raise InputError(f"grid: {key}: give a list of values, not {type(v).__name__} {v!r}")
+    return list(v)
 
 
 def _sweep_text(
@@ -629,8 +708,8 @@ def _sweep_text(
 ) -> tuple[str, str]:
     """The sweep's TOML text and origin: a sweep file as it is, or a scene with a grid
     and/or a list of runs added as its [sweep] table."""
-    if isinstance(scene, (str, os.PathLike)) and not grid and not runs:
-        path = os.fspath(scene)
+    if isinstance(scene, _PATH_TYPES) and not grid and not runs:
+        path = _path(scene, "a sweep file")
         try:
             with open(path, encoding="utf-8") as f:
                 return f.read(), path
@@ -640,7 +719,7 @@ def _sweep_text(
     lines = [base.to_toml()]
     if grid:
         lines.append("[sweep.grid]")
-        lines += [f"{json.dumps(k)} = {_toml_value(list(v))}" for k, v in _flatten(grid)]
+        lines += [f"{json.dumps(k)} = {_toml_value(_values(k, v))}" for k, v in _flatten(grid)]
     for run in runs or ():
         lines.append("[[sweep.runs]]")
         lines += [f"{json.dumps(k)} = {_toml_value(v)}" for k, v in _flatten(run)]
@@ -661,10 +740,10 @@ def iter_sweep(
     text, origin = _sweep_text(scene, grid, runs)
     sets = [f"{_key(k)}={_toml_value(v)}" for k, v in overrides.items()]
     plan = _eyeshell.expand_sweep(text, origin, sets)
-    if jobs is not None and (not isinstance(jobs, int) or jobs < 1):
-        raise InputError(f"jobs = {jobs!r}: must be a whole number ≥ 1")
+    if jobs is not None:
+        jobs = _whole(jobs, "jobs", 1, _MAX_JOBS)
     own = executor is None
-    cancel = _eyeshell._Cancel() if own else None
+    workers = _worker.Workers() if own else None
     pool = ThreadPoolExecutor(max_workers=jobs or os.cpu_count() or 1) if own else executor
     # Finished runs arrive through a queue, so that this thread never waits on a future's
     # lock: a KeyboardInterrupt landing just after such a lock is taken (inside `with`'s
@@ -676,24 +755,41 @@ def iter_sweep(
         for i, (name, values, native) in enumerate(plan):
             args = (i, name, dict(values), native.to_toml())
             if own:
-                pending.append(pool.submit(_run_into, finished, args, cancel))
+                pending.append(pool.submit(_run_into, finished, workers, args))
             else:
                 f = pool.submit(_run_one, *args)
-                f.add_done_callback(finished.put)
+                f.add_done_callback(lambda f, args=args: finished.put(_Remote(f, args)))
                 pending.append(f)
         for _ in range(len(pending)):
             yield _next_finished(finished).result()
     except BaseException:
-        # Ctrl-C (or a run's exception): no new run starts, and our own runs stop after
-        # their current step; an executor's running tasks are its own to stop.
-        if cancel is not None:
-            cancel.set()
+        # Ctrl-C (or a bug): no new run starts, and our own runs stop at once (their
+        # processes are killed); an executor's running tasks are its own to stop.
+        if workers is not None:
+            workers.close(kill=True)
         for f in pending:
             f.cancel()
         raise
     finally:
         if own:
             pool.shutdown(wait=True, cancel_futures=True)
+            workers.close()
+
+
+# At most this many runs at a time, as `eyeshell sweep --jobs`: each is a process.
+_MAX_JOBS = 1024
+
+
+def _whole(value: Any, name: str, least: int, most: int) -> int:
+    """`value` as an int in [least, most]: any integral number (int, NumPy integer, ...),
+    not a bool or a float."""
+    try:
+        n = operator.index(value)
+    except TypeError:
+        n = None
+    if n is None or isinstance(value, (bool, np.bool_)) or not least <= n <= most:
+        raise InputError(f"{name} = {value!r}: must be a whole number from {least} to {most:,}")
+    return n
 
 
 @dataclass(frozen=True)
@@ -710,10 +806,27 @@ class _Finished:
         return self.run
 
 
-def _run_into(finished: queue.SimpleQueue[Any], args: tuple[Any, ...], cancel: Any) -> None:
+@dataclass(frozen=True)
+class _Remote:
+    """An executor's future and the run it was for: the run failed if the executor lost
+    it (its process died, it was cancelled), so that the other runs' results are kept."""
+
+    future: Any
+    args: tuple[Any, ...]
+
+    def result(self) -> RunResult:
+        try:
+            return self.future.result()
+        except Exception as e:
+            index, name, values, _ = self.args
+            message = f"the executor did not run it: {type(e).__name__}: {e}".rstrip(": ")
+            return RunResult(name, values, "failed", None, message, 0.0, index)
+
+
+def _run_into(finished: queue.SimpleQueue[Any], workers: _worker.Workers, args: tuple[Any, ...]) -> None:
     """Run one scene on our own pool and put what came of it on `finished`."""
     try:
-        finished.put(_Finished(_run_one(*args, cancel), None))
+        finished.put(_Finished(_run_in(workers, *args), None))
     except BaseException as e:  # handed to the consuming thread, which raises it
         finished.put(_Finished(None, e))
 
@@ -746,13 +859,22 @@ def sweep(
     ``runs`` (a list of mappings of keys). ``overrides`` are set on every run. The runs are
     named as ``eyeshell sweep`` names them.
 
-    Runs go ``jobs`` at a time on threads of this process (default: one per core; the GIL
-    is released while they compute), or to ``executor``: anything with
-    ``submit(fn, *args)`` returning futures with ``done()`` and ``result()`` — a
-    ``concurrent.futures.ProcessPoolExecutor``, an ``mpi4py.futures.MPIPoolExecutor``, a
-    Dask ``distributed.Client``. A failed run is recorded (``status == "failed"``,
-    ``error``) and the others go on. Ctrl-C stops the sweep: no run starts, the local runs
-    stop after their current step, and KeyboardInterrupt is raised.
+    Each run goes to a worker process (``sys.executable`` importing this package, reused
+    run after run), as ``eyeshell sweep`` runs its runs: a run that aborts its process (an
+    allocation that fails, a stack overflow: the native code aborts, with no exception to
+    catch) fails alone, and the interpreter and the other runs' results are kept. Runs go
+    ``jobs`` at a time (1 to 1,024; default: one per core), or to ``executor``: anything with
+    ``submit(fn, *args)`` returning futures with ``add_done_callback()`` and ``result()``
+    — a ``concurrent.futures.ProcessPoolExecutor``, an ``mpi4py.futures.MPIPoolExecutor``,
+    a Dask ``distributed.Client``; each task then runs its run in a worker process beside
+    the executor's own, so that an abort never breaks the executor (no
+    ``BrokenProcessPool``).
+
+    A failed run is recorded (``status == "failed"``, ``error`` saying why: the solver's
+    message, or how its process ended, e.g. ``the run's process ended abnormally (killed
+    by signal 6: SIGABRT; out of memory or a stack overflow?)``; a run the executor lost
+    says so) and the others go on. Ctrl-C stops the sweep: no run starts, the local runs
+    stop at once (their processes are ended), and KeyboardInterrupt is raised.
 
     >>> rs = eyeshell.sweep(eyeshell.Scene(solver__nodes=101), grid={"fibres.D": [0, 200]}, jobs=2)
     >>> [(r.name, r.values, r.status) for r in rs]
@@ -792,16 +914,20 @@ def compare(
     rtol: float = 1e-8,
     field: str | None = None,
 ) -> Comparison:
-    """``eyeshell compare RUN REFERENCE``: compare a run directory (or an export) against a
-    reference (.mat, .npz, .csv or another run), interpolating the run at the reference's
-    points; a point fails when |run − ref| > tol + rtol·|ref|. ``field`` names the struct
-    of a .mat reference that holds the result (default: ``sol`` if present).
+    """``eyeshell compare RUN REFERENCE``: compare a run directory (or its .mat or .npz
+    export) against a reference, interpolating the run at the reference's points; a point
+    fails when |run − ref| > tol + rtol·|ref|. The reference is a .mat file (eyeshell's,
+    MATLAB's, Octave's or SciPy's ``savemat``), a .npz file, a directory of .mat and .npz
+    files, or another eyeshell run directory; a CSV file is not a reference (compare the
+    run directory that holds it, or its export). Paths are str, bytes or os.PathLike.
+    ``field`` names the struct of a .mat reference that holds the result (default:
+    ``sol`` if present).
 
     Unlike the command line, a comparison beyond tolerance is not an error: it returns a
     :class:`Comparison` whose ``passed`` is False. Unreadable or mismatched inputs raise
     :class:`InputError`.
     """
-    pairs, text = _eyeshell.compare(os.fspath(run), os.fspath(reference), tol, rtol, field)
+    pairs, text = _eyeshell.compare(_path(run, "run"), _path(reference, "reference"), tol, rtol, field)
     return Comparison(all(p["passed"] for p in pairs), pairs, text)
 
 
