@@ -209,3 +209,38 @@ def test_the_workers_end_with_a_sweep_that_is_killed():
     while any(alive(w) for w in workers) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not any(alive(w) for w in workers)
+
+
+def test_a_worker_s_last_words_are_its_message_not_its_backtrace():
+    from eyeshell._worker import _last_line
+
+    text = ("memory allocation of 800000800 bytes failed\nstack backtrace:\n"
+            "   0: std::alloc::rust_oom\n             at /rustc/x/alloc.rs:424:5\n"
+            "note: Some details are omitted, run with `RUST_BACKTRACE=full` for a verbose backtrace.\n")
+    assert _last_line(text) == "memory allocation of 800000800 bytes failed"
+    assert _last_line("thread 'main' has overflowed its stack\nfatal runtime error: stack overflow\n\n") \
+        == "fatal runtime error: stack overflow"
+    assert _last_line("a\x1b[31mred\x07\n") == "a [31mred"
+    assert len(_last_line("x" * 1000)) == 300 and _last_line("") == ""
+
+
+def test_a_run_out_of_memory_fails_alone():
+    # A real abort: the richardson solve at 10⁶ nodes allocates more than the 1 GiB the
+    # sweep's processes may map (the limit is inherited by its workers).
+    code = textwrap.dedent("""
+        import resource, eyeshell
+        resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+        runs = [{"name": "big", "solver.richardson": True, "solver.nodes": 1000000},
+                {"name": "small", "solver.nodes": 101}]
+        for r in eyeshell.sweep(eyeshell.Scene(), runs=runs, jobs=2):
+            print(r.name, r.status, r.error)
+    """)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    big, small = r.stdout.splitlines()
+    assert small == "small ok None"
+    assert big.startswith("big failed ")
+    if "ended abnormally" in big:
+        # Unless a bound refuses it before it allocates, it aborts, saying why.
+        assert "(killed by signal 6: SIGABRT; out of memory or a stack overflow?); its last " \
+               "words: memory allocation of " in big and big.endswith(" bytes failed"), big

@@ -208,10 +208,17 @@ class _Worker:
 
 
 def _last_line(text: str) -> str:
-    """The last non-empty line of `text`, printable and at most 300 characters."""
-    for line in reversed(text.splitlines()):
+    """The last non-empty line of `text` before any Rust backtrace (an allocation that
+    fails prints its message, then a backtrace whose last line is a note about
+    RUST_BACKTRACE), printable and at most 300 characters."""
+    lines = text.splitlines()
+    for i in range(len(lines) - 1, -1, -1):
+        if lines[i].strip() == "stack backtrace:":
+            lines = lines[:i]
+            break
+    for line in reversed(lines):
         line = "".join(c if c.isprintable() else " " for c in line).strip()
-        if line:
+        if line and not (line.startswith("note: ") and "RUST_BACKTRACE" in line):
             return line[:300]
     return ""
 
