@@ -3,6 +3,7 @@
 import concurrent.futures
 import concurrent.futures.process
 import json
+import os
 import pathlib
 import subprocess
 import sys
@@ -244,3 +245,31 @@ def test_a_run_out_of_memory_fails_alone():
         # Unless a bound refuses it before it allocates, it aborts, saying why.
         assert "(killed by signal 6: SIGABRT; out of memory or a stack overflow?); its last " \
                "words: memory allocation of " in big and big.endswith(" bytes failed"), big
+
+
+@pytest.mark.skipif(not pathlib.Path("/proc/self/stat").exists(), reason="needs /proc")
+def test_leaving_iter_sweep_early_stops_its_runs_at_once():
+    before = set(children_of(os.getpid()))
+    scene = eyeshell.Scene.from_file(SCENES / "const.toml", solver__integrator="euler",
+                                     solver__nodes=2001, solver__steps=100000)
+    runs = [{"name": "quick", "solver.steps": 10, "solver.nodes": 101}] + \
+        [{"name": f"long{i}"} for i in range(3)]
+    it = eyeshell.iter_sweep(scene, runs=runs, jobs=2)
+    assert next(it).name == "quick"
+    start = time.perf_counter()
+    it.close()
+    assert time.perf_counter() - start < 2.0
+    # Its workers are ended and reaped: no process of it is left.
+    assert set(children_of(os.getpid())) - before == set()
+
+
+@pytest.mark.parametrize("executable, needle", [
+    ("/nonexistent/python", "could not start a process for the run: [Errno 2] No such file or directory"),
+    ("/bin/false", "the run's process ended abnormally (exit status 1)"),
+    ("", "could not start a process for the run: Python's executable is unknown"),
+])
+def test_a_worker_that_cannot_start_fails_every_run_with_the_reason(monkeypatch, executable, needle):
+    monkeypatch.setattr(sys, "executable", executable)
+    results = eyeshell.sweep(small(), grid={"fibres.D": [0, 100]}, jobs=2)
+    assert [r.status for r in results] == ["failed", "failed"]
+    assert all(r.error.startswith(needle) for r in results), results[0].error
