@@ -89,6 +89,12 @@ def test_fit_refusals_are_input_errors():
         eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma", "growth.Gamma"])
     with pytest.raises(eyeshell.InputError, match="the columns t and axial_length are required"):
         eyeshell.fit(SCENES / "const.toml", {"t": [0.5]}, fit=["growth.Gamma"])
+    for bad in [0, 1001, True, 2.0]:
+        with pytest.raises(eyeshell.InputError, match=f"max_iterations = {bad!r}: must be a whole number from 1 to 1,000"):
+            eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma"], max_iterations=bad)
+    r = eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma"], solver__nodes=101,
+                     growth__Gamma=9, max_iterations=np.int64(1))
+    assert r.iterations == 1 and not r.converged
 
 
 @pytest.fixture(scope="module")

@@ -594,6 +594,7 @@ def fit(
     s = _as_scene(scene, overrides)
     if isinstance(fit, str):
         fit = [k for k in fit.split(",") if k.strip()]
+    max_iterations = _whole(max_iterations, "max_iterations", 1, 1000)
     if isinstance(data, _PATH_TYPES):
         text, native = _eyeshell.fit(s._s, list(fit), path=_path(data, "data"), max_iterations=max_iterations)
     elif isinstance(data, Mapping) or hasattr(data, "columns"):
