@@ -273,3 +273,13 @@ def test_a_worker_that_cannot_start_fails_every_run_with_the_reason(monkeypatch,
     results = eyeshell.sweep(small(), grid={"fibres.D": [0, 100]}, jobs=2)
     assert [r.status for r in results] == ["failed", "failed"]
     assert all(r.error.startswith(needle) for r in results), results[0].error
+
+
+def test_an_unexpected_error_is_a_failed_run_on_one_line():
+    class Broken:
+        def run(self, request):
+            raise ValueError("two\nlines")
+
+    r = eyeshell._api._run_in(Broken(), 3, "x", {"k": "1"}, "")
+    assert (r.name, r.status, r.index) == ("x", "failed", 3)
+    assert r.error == "internal error (a bug; please report it): ValueError: two lines"

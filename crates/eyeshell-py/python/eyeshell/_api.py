@@ -660,7 +660,8 @@ def _run_here(index: int, name: str, values: dict[str, str], scene_toml: str) ->
 
 
 def _internal(e: BaseException) -> str:
-    return f"internal error (a bug; please report it): {type(e).__name__}: {e}"
+    """An unexpected exception as a run's error, on one line."""
+    return " ".join(f"internal error (a bug; please report it): {type(e).__name__}: {e}".split())
 
 
 def _run_in(
