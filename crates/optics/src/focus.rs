@@ -338,19 +338,28 @@ pub(crate) fn wavefront(
         .tracer
         .trace(beam.ray(0.0, v_chief))
         .map_err(|e| beam.err(e))?;
-    let targets = pupil_grid(pupil.diameter / 2.0, settings.rays_across);
+    // The beam lies in the y–z plane of a rotationally symmetric system, so it is symmetric
+    // under x → −x: the rays of the half pupil x ≥ 0 are traced and mirrored.
+    let targets: Vec<(f64, f64)> = pupil_grid(pupil.diameter / 2.0, settings.rays_across)
+        .into_iter()
+        .filter(|p| p.0 >= 0.0)
+        .collect();
     let launches = beam.aim(v_chief, &targets)?;
     let n_image = beam.tracer.n_image();
     let dc = chief.direction;
     let es = Vec3::new(1.0, 0.0, 0.0);
     let et = dc.cross(es);
     let q = chief.position;
-    let mut samples = Vec::with_capacity(launches.len());
-    for &(u, v) in &launches {
+    let mut samples = Vec::with_capacity(2 * launches.len());
+    for (&(u, v), &(x, _)) in launches.iter().zip(&targets) {
         let r = beam.tracer.trace(beam.ray(u, v)).map_err(|e| beam.err(e))?;
         let d = r.direction;
         let phi = r.opl + n_image * d.dot(q - r.position) - chief.opl;
-        samples.push([d.dot(es), d.dot(et), phi, d.dot(dc)]);
+        let sample = [d.dot(es), d.dot(et), phi, d.dot(dc)];
+        samples.push(sample);
+        if x > 0.0 {
+            samples.push([-sample[0], sample[1], sample[2], sample[3]]);
+        }
     }
     Ok(Wavefront {
         n_image,
@@ -422,16 +431,48 @@ fn strehl_at(k: f64, n: f64, r0: &[f64], r1: &[f64], s: f64) -> f64 {
     (re * re + im * im) / (m * m)
 }
 
-/// Maximises a function on [lo, hi] by a scan of `scan` points then golden-section search
-/// around the best one.
-fn maximise(f: impl Fn(f64) -> f64, lo: f64, hi: f64, scan: usize) -> (f64, f64) {
+/// The Strehl ratio at `scan` evenly spaced distances from `lo` to `hi`: each ray's phasor is
+/// advanced by a fixed rotation per step, so the scan costs one complex product per ray and
+/// point instead of a sine and cosine.
+fn strehl_scan(k: f64, n: f64, r0: &[f64], r1: &[f64], lo: f64, hi: f64, scan: usize) -> Vec<f64> {
     let h = (hi - lo) / (scan - 1) as f64;
+    let mut z: Vec<(f64, f64)> = r0
+        .iter()
+        .zip(r1)
+        .map(|(a, b)| {
+            let (s, c) = (k * (a + lo * n * b)).sin_cos();
+            (c, s)
+        })
+        .collect();
+    let w: Vec<(f64, f64)> = r1
+        .iter()
+        .map(|b| {
+            let (s, c) = (k * h * n * b).sin_cos();
+            (c, s)
+        })
+        .collect();
+    let m = r0.len() as f64;
+    (0..scan)
+        .map(|_| {
+            let (mut re, mut im) = (0.0, 0.0);
+            for (zi, wi) in z.iter_mut().zip(&w) {
+                re += zi.0;
+                im += zi.1;
+                *zi = (zi.0 * wi.0 - zi.1 * wi.1, zi.0 * wi.1 + zi.1 * wi.0);
+            }
+            (re * re + im * im) / (m * m)
+        })
+        .collect()
+}
+
+/// Maximises `f` on [lo, hi] given its values `scan` at evenly spaced points: golden-section
+/// search around the best of them.
+fn maximise(f: impl Fn(f64) -> f64, lo: f64, hi: f64, scan: &[f64]) -> (f64, f64) {
+    let h = (hi - lo) / (scan.len() - 1) as f64;
     let (mut best, mut fbest) = (lo, f64::NEG_INFINITY);
-    for i in 0..scan {
-        let x = lo + i as f64 * h;
-        let v = f(x);
+    for (i, &v) in scan.iter().enumerate() {
         if v > fbest {
-            best = x;
+            best = lo + i as f64 * h;
             fbest = v;
         }
     }
@@ -440,7 +481,7 @@ fn maximise(f: impl Fn(f64) -> f64, lo: f64, hi: f64, scan: usize) -> (f64, f64)
     let mut c = b - g * (b - a);
     let mut d = a + g * (b - a);
     let (mut fc, mut fd) = (f(c), f(d));
-    while (b - a).abs() > 1e-9 {
+    while (b - a).abs() > 1e-8 {
         if fc > fd {
             b = d;
             d = c;
@@ -511,7 +552,8 @@ pub fn best_focus_with(
             let dof = (wavelength_nm * 1e-6 / (n * a2.max(1e-12))).min(5.0);
             let lo = (ss.min(st) - 2.0 * dof - 0.25 * (ss - st).abs()).max(1e-3);
             let hi = ss.max(st) + 2.0 * dof + 0.25 * (ss - st).abs();
-            maximise(strehl, lo, hi, 81)
+            let scan = strehl_scan(k, n, &r0, &r1, lo, hi, 81);
+            maximise(strehl, lo, hi, &scan)
         }
     };
     let p = w.chief.position + w.chief.direction * distance;

@@ -42,6 +42,7 @@ pub struct Tracer<'a> {
     pub(crate) vertices: Vec<f64>,
     pub(crate) media: Vec<Resolved>,
     pub(crate) n_object: f64,
+    object: Resolved,
     pub(crate) grin: GrinSettings,
 }
 
@@ -52,11 +53,13 @@ impl<'a> Tracer<'a> {
         let media = (0..system.elements.len())
             .map(|i| system.medium_at(i, wavelength_nm))
             .collect();
+        let n_object = system.object.at(wavelength_nm, 0.0).index_at(0.0, 0.0);
         Self {
             system,
             vertices,
             media,
-            n_object: system.object.at(wavelength_nm, 0.0).index_at(0.0, 0.0),
+            n_object,
+            object: Resolved::Constant(n_object),
             grin,
         }
     }
@@ -66,11 +69,11 @@ impl<'a> Tracer<'a> {
         self.media.last().map_or(1.0, |m| m.index_at(0.0, 0.0))
     }
 
-    fn before(&self, i: usize) -> Resolved {
+    fn before(&self, i: usize) -> &Resolved {
         if i == 0 {
-            Resolved::Constant(self.n_object)
+            &self.object
         } else {
-            self.media[i - 1].clone()
+            &self.media[i - 1]
         }
     }
 
@@ -102,7 +105,7 @@ impl<'a> Tracer<'a> {
                 failure,
             };
             let before = self.before(i);
-            match &before {
+            match before {
                 Resolved::Constant(n) => {
                     let (q, t) = surface.intersect(self.vertices[i], p, d).map_err(err)?;
                     opl += n * t;
