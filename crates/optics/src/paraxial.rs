@@ -113,6 +113,21 @@ pub fn paraxial(system: &OpticalSystem, wavelength_nm: f64) -> Result<Paraxial, 
     })
 }
 
+impl Paraxial {
+    /// The ocular refraction (D): the vergence, at the first vertex, of the light from an
+    /// object whose paraxial image lies at `image_z` (the retina's vertex); negative for a
+    /// myopic eye. The difference between two wavelengths is the chromatic difference of
+    /// refraction that the Indiana eye's formula gives.
+    pub fn ocular_refraction(&self, image_z: f64) -> f64 {
+        let [[a, b], [c, d]] = self.matrix;
+        let last = self.focus - self.back_focal_distance;
+        let t = (image_z - last) / self.n_image;
+        // A ray from an object of vergence V enters with n·u = −V·y; it must reach y = 0 at
+        // the image: A − B V + t (C − D V) = 0.
+        (a + t * c) / (b + t * d) * 1000.0
+    }
+}
+
 /// The paraxial focus found with half the GRIN step count: how far the fixed-step paraxial
 /// GRIN transfer is from converged (mm), for the convergence table.
 pub fn paraxial_grin_error(system: &OpticalSystem, wavelength_nm: f64) -> f64 {

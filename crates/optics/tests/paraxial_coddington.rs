@@ -91,3 +91,28 @@ fn strehl_focus_lies_between_the_astigmatic_foci_for_a_small_pupil() {
         );
     }
 }
+
+#[test]
+fn ocular_refraction_images_the_object_on_the_retina() {
+    let eye = four_surface_eye();
+    let p = paraxial(&eye, 589.0).unwrap();
+    assert!(p.ocular_refraction(p.focus).abs() < 1e-9);
+    // A retina 1 mm behind the focus: myopic by about F²·1 mm / n′ ≈ 2.7 D.
+    let retina = p.focus + 1.0;
+    let v = p.ocular_refraction(retina);
+    assert!(v < -2.0 && v > -3.5, "{v}");
+    // Check with the test's own paraxial trace: a ray from the object of vergence V (at
+    // distance 1000/V mm in front) through height 1 at the cornea crosses the axis at the retina.
+    let (mut y, mut u) = (1.0_f64, -v / 1000.0);
+    for (i, e) in eye.elements.iter().enumerate() {
+        let c = 1.0 / e.surface.radius;
+        u = (N[i] * u - y * (N[i + 1] - N[i]) * c) / N[i + 1];
+        let t = if i + 1 < eye.elements.len() {
+            e.thickness
+        } else {
+            retina - p.focus + p.back_focal_distance
+        };
+        y += t * u;
+    }
+    assert!(y.abs() < 1e-9, "{y}");
+}
