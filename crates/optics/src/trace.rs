@@ -107,6 +107,10 @@ impl<'a> Tracer<'a> {
                 failure,
             };
             let before = self.before(i);
+            // Leaving a GRIN medium, the ray's optical direction T = n dR/ds is what Snell's law
+            // conserves across the surface: its length stands for n₁, so the integration error
+            // in |T| does not leak into the refracted direction.
+            let mut n_optical = None;
             match before {
                 Resolved::Constant(n) => {
                     let (q, t) = surface.intersect(self.vertices[i], p, d).map_err(err)?;
@@ -133,7 +137,8 @@ impl<'a> Tracer<'a> {
                         failure,
                     })?;
                     p = q;
-                    d = dir;
+                    d = dir.unit();
+                    n_optical = Some(dir.norm());
                     opl += dl;
                 }
             }
@@ -141,7 +146,8 @@ impl<'a> Tracer<'a> {
                 path.push(p);
             }
             let r2 = p.x * p.x + p.y * p.y;
-            let n1 = physical(before.index_at(r2, p.z), p).map_err(err)?;
+            let n1 =
+                physical(n_optical.unwrap_or_else(|| before.index_at(r2, p.z)), p).map_err(err)?;
             let n2 = physical(self.media[i].index_at(r2, p.z), p).map_err(err)?;
             let normal = surface.normal(p).ok_or(RayFailure::Miss).map_err(err)?;
             d = refract(d, normal, n1, n2).map_err(err)?;
@@ -294,8 +300,8 @@ fn step(g: &GrinAt, y: &State, k1: &State, h: f64) -> Result<(State, f64), RayFa
 
 /// Integrates a ray through a GRIN medium from `p` (on the medium's front surface, unit
 /// direction `d` already refracted into it) until it meets `exit` (vertex at `exit_z`).
-/// Returns the exit point, the unit direction there and the optical path; on failure, whether
-/// it is the exit surface's fault (a miss) and why.
+/// Returns the exit point, the optical direction T = n dR/ds there and the optical path; on
+/// failure, whether it is the exit surface's fault (a miss) and why.
 fn integrate_grin(
     g: &GrinAt,
     p: Vec3,
@@ -384,7 +390,7 @@ fn integrate_grin(
             if let Some(path) = path.as_deref_mut() {
                 path.push(q);
             }
-            let dir = Vec3::new(yb[3], yb[4], yb[5]).unit();
+            let dir = Vec3::new(yb[3], yb[4], yb[5]);
             return Ok((q, dir, yb[6]));
         }
         y = y1;
