@@ -147,7 +147,7 @@ pub(crate) fn check_request(
         ));
     }
     let tol = settings.grin.tolerance;
-    if !(tol >= 1e-14 && tol <= 1e-2) {
+    if !(1e-14..=1e-2).contains(&tol) {
         return Err(OpticsError::input(
             "the GRIN integration tolerance (mm)",
             tol,
@@ -452,57 +452,62 @@ impl Wavefront {
     }
 }
 
-/// |⟨exp(i k (r₀ + s n′ r₁))⟩|², the mean over the pupil with weights `w` summing to 1.
-fn strehl_at(k: f64, n: f64, r0: &[f64], r1: &[f64], w: &[f64], s: f64) -> f64 {
-    let (mut re, mut im) = (0.0, 0.0);
-    for ((a, b), w) in r0.iter().zip(r1).zip(w) {
-        let (sn, cs) = (k * (a + s * n * b)).sin_cos();
-        re += w * cs;
-        im += w * sn;
-    }
-    re * re + im * im
-}
-
-/// The Strehl ratio at `scan` evenly spaced distances from `lo` to `hi`: each ray's phasor is
-/// advanced by a fixed rotation per step, so the scan costs one complex product per ray and
-/// point instead of a sine and cosine.
-fn strehl_scan(
+/// The Strehl ratio along the chief ray: with r₀, r₁ the residuals of Φ(Q) and dᵢ·d꜀ after
+/// piston and tilt, W(s) = r₀ + s n′ r₁ and S(s) = |Σ wᵢ exp(i k Wᵢ(s))|² (weights summing to 1).
+struct StrehlModel {
     k: f64,
     n: f64,
-    r0: &[f64],
-    r1: &[f64],
-    wt: &[f64],
-    lo: f64,
-    hi: f64,
-    scan: usize,
-) -> Vec<f64> {
-    let h = (hi - lo) / (scan - 1) as f64;
-    let mut z: Vec<(f64, f64)> = r0
-        .iter()
-        .zip(r1)
-        .map(|(a, b)| {
-            let (s, c) = (k * (a + lo * n * b)).sin_cos();
-            (c, s)
-        })
-        .collect();
-    let w: Vec<(f64, f64)> = r1
-        .iter()
-        .map(|b| {
-            let (s, c) = (k * h * n * b).sin_cos();
-            (c, s)
-        })
-        .collect();
-    (0..scan)
-        .map(|_| {
-            let (mut re, mut im) = (0.0, 0.0);
-            for ((zi, wi), a) in z.iter_mut().zip(&w).zip(wt) {
-                re += a * zi.0;
-                im += a * zi.1;
-                *zi = (zi.0 * wi.0 - zi.1 * wi.1, zi.0 * wi.1 + zi.1 * wi.0);
-            }
-            re * re + im * im
-        })
-        .collect()
+    r0: Vec<f64>,
+    r1: Vec<f64>,
+    w: Vec<f64>,
+}
+
+impl StrehlModel {
+    fn at(&self, s: f64) -> f64 {
+        let (mut re, mut im) = (0.0, 0.0);
+        for ((a, b), w) in self.r0.iter().zip(&self.r1).zip(&self.w) {
+            let (sn, cs) = (self.k * (a + s * self.n * b)).sin_cos();
+            re += w * cs;
+            im += w * sn;
+        }
+        re * re + im * im
+    }
+
+    /// S at `count` evenly spaced distances from `lo` to `hi`: each ray's phasor is advanced by
+    /// a fixed rotation per step, so the scan costs one complex product per ray and point
+    /// instead of a sine and cosine.
+    fn scan(&self, lo: f64, hi: f64, count: usize) -> Vec<f64> {
+        let h = (hi - lo) / (count - 1) as f64;
+        let (k, n) = (self.k, self.n);
+        let mut z: Vec<(f64, f64)> = self
+            .r0
+            .iter()
+            .zip(&self.r1)
+            .map(|(a, b)| {
+                let (s, c) = (k * (a + lo * n * b)).sin_cos();
+                (c, s)
+            })
+            .collect();
+        let rot: Vec<(f64, f64)> = self
+            .r1
+            .iter()
+            .map(|b| {
+                let (s, c) = (k * h * n * b).sin_cos();
+                (c, s)
+            })
+            .collect();
+        (0..count)
+            .map(|_| {
+                let (mut re, mut im) = (0.0, 0.0);
+                for ((zi, ri), a) in z.iter_mut().zip(&rot).zip(&self.w) {
+                    re += a * zi.0;
+                    im += a * zi.1;
+                    *zi = (zi.0 * ri.0 - zi.1 * ri.1, zi.0 * ri.1 + zi.1 * ri.0);
+                }
+                re * re + im * im
+            })
+            .collect()
+    }
 }
 
 /// Maximises `f` on [lo, hi] given its values `scan` at evenly spaced points: golden-section
@@ -580,8 +585,14 @@ pub fn best_focus_with(
         .strehl_model()
         .ok_or_else(|| no_focus("the wavefront's tilt cannot be fitted"))?;
     let total: f64 = w.samples.iter().map(|s| s[4]).sum();
-    let weights: Vec<f64> = w.samples.iter().map(|s| s[4] / total).collect();
-    let strehl = |s: f64| strehl_at(k, n, &r0, &r1, &weights, s);
+    let model = StrehlModel {
+        k,
+        n,
+        r0,
+        r1,
+        w: w.samples.iter().map(|s| s[4] / total).collect(),
+    };
+    let strehl = |s: f64| model.at(s);
     let (distance, strehl_best) = match criterion {
         Criterion::MeanSphere => (mean, strehl(mean)),
         Criterion::Strehl => {
@@ -594,7 +605,7 @@ pub fn best_focus_with(
             let dof = (wavelength_nm * 1e-6 / (n * a2.max(1e-12))).min(5.0);
             let lo = (ss.min(st) - 2.0 * dof - 0.25 * (ss - st).abs()).max(1e-3);
             let hi = ss.max(st) + 2.0 * dof + 0.25 * (ss - st).abs();
-            let scan = strehl_scan(k, n, &r0, &r1, &weights, lo, hi, 81);
+            let scan = model.scan(lo, hi, 81);
             maximise(strehl, lo, hi, &scan)
         }
     };
