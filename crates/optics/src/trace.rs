@@ -271,9 +271,7 @@ const E: [f64; 7] = [
 /// One Dormand–Prince step of size h from y (whose derivative is k1): the 5th-order solution
 /// and the norm of the embedded error estimate.
 fn step(g: &GrinAt, y: &State, k1: &State, h: f64) -> Result<(State, f64), RayFailure> {
-    let mut k = [[0.0; 7]; 7];
-    k[0] = *k1;
-    for s in 1..7 {
+    let stage = |k: &[State; 7], s: usize| {
         let mut ys = *y;
         for (j, kj) in k.iter().enumerate().take(s) {
             let a = A[s][j];
@@ -283,19 +281,22 @@ fn step(g: &GrinAt, y: &State, k1: &State, h: f64) -> Result<(State, f64), RayFa
                 }
             }
         }
-        if s == 6 {
-            // The 7th stage is evaluated at the 5th-order solution itself.
-            k[6] = derivative(g, &ys)?;
-            let mut err = 0.0_f64;
-            for m in 0..7 {
-                let e: f64 = (0..7).map(|j| E[j] * k[j][m]).sum::<f64>() * h;
-                err = err.max(e.abs());
-            }
-            return Ok((ys, err));
-        }
-        k[s] = derivative(g, &ys)?;
+        ys
+    };
+    let mut k = [[0.0; 7]; 7];
+    k[0] = *k1;
+    for s in 1..6 {
+        k[s] = derivative(g, &stage(&k, s))?;
     }
-    unreachable!("the loop returns at its last stage")
+    // The 7th stage is evaluated at the 5th-order solution itself.
+    let y5 = stage(&k, 6);
+    k[6] = derivative(g, &y5)?;
+    let mut err = 0.0_f64;
+    for m in 0..7 {
+        let e: f64 = (0..7).map(|j| E[j] * k[j][m]).sum::<f64>() * h;
+        err = err.max(e.abs());
+    }
+    Ok((y5, err))
 }
 
 /// Integrates a ray through a GRIN medium from `p` (on the medium's front surface, unit
@@ -387,9 +388,6 @@ fn integrate_grin(
                 }
             }
             let q = Vec3::new(yb[0], yb[1], yb[2]);
-            if let Some(path) = path.as_deref_mut() {
-                path.push(q);
-            }
             let dir = Vec3::new(yb[3], yb[4], yb[5]);
             return Ok((q, dir, yb[6]));
         }

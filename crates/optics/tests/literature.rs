@@ -94,3 +94,48 @@ fn builtin_eyes_trace_to_forty_degrees() {
         }
     }
 }
+
+#[test]
+fn the_paraxial_grin_transfer_agrees_with_the_exact_grin_trace() {
+    // On axis with a 0.1 mm pupil, the real rays' focus (the GRIN integrated exactly) is the
+    // paraxial focus (the paraxial GRIN equation integrated by RK4): two independent routes
+    // through the gradient-index lens.
+    for name in ["atchison-2006", "liou-brennan-1997"] {
+        let eye = eyes::builtin(name).unwrap();
+        let pupil = Pupil {
+            diameter: 0.1,
+            position: eye.pupil_position.unwrap(),
+        };
+        for w in [400.0, 600.0] {
+            let p = paraxial(&eye, w).unwrap();
+            let f = best_focus(&eye, w, 0.0, &pupil, Criterion::MeanSphere).unwrap();
+            assert!(
+                (f.z - p.focus).abs() < 2e-3,
+                "{name} {w}: real {} paraxial {}",
+                f.z,
+                p.focus
+            );
+            assert!(eyeshell_optics::paraxial_grin_error(&eye, w) < 1e-6);
+        }
+    }
+}
+
+#[test]
+fn a_traced_path_runs_through_the_gradient_lens() {
+    use eyeshell_optics::{GrinSettings, Ray, Tracer, Vec3};
+    let eye = eyes::liou_brennan_1997();
+    let tr = Tracer::new(&eye, 555.0, GrinSettings::default());
+    let ray = Ray {
+        position: Vec3::new(0.0, 1.0, -1.0),
+        direction: Vec3::new(0.0, 0.0, 1.0),
+        opl: 0.0,
+    };
+    let mut path = Vec::new();
+    let end = tr
+        .trace_surfaces(ray, eye.elements.len(), Some(&mut path))
+        .unwrap();
+    assert_eq!(path.last().copied(), Some(end.position));
+    let inside = path.iter().filter(|p| p.z > 3.7 && p.z < 7.5).count();
+    assert!(inside >= 3, "{path:?}");
+    assert!(path.windows(2).all(|w| w[1].z > w[0].z), "{path:?}");
+}
