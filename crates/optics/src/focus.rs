@@ -718,3 +718,73 @@ pub fn coddington(
     }
     Ok((s_out, t_out))
 }
+
+/// A meridional fan of `rays` rays of the beam at `field_deg`, spread evenly across the pupil's
+/// diameter (the chief ray in the middle when `rays` is odd), for figures: each ray's path in
+/// the meridional plane as (z, y) points, from 1 mm in front of the corneal apex through every
+/// surface (and the GRIN steps), continued straight in the image space to the plane
+/// z = `end_z`.
+pub fn ray_fan(
+    system: &OpticalSystem,
+    wavelength_nm: f64,
+    field_deg: f64,
+    pupil: &Pupil,
+    rays: usize,
+    end_z: f64,
+) -> Result<Vec<Vec<(f64, f64)>>, OpticsError> {
+    let settings = FocusSettings::default();
+    check_request(system, wavelength_nm, field_deg, pupil, &settings)?;
+    if !(1..=1000).contains(&rays) {
+        return Err(OpticsError::input(
+            "the rays of a fan",
+            rays as f64,
+            "must be between 1 and 1000",
+        ));
+    }
+    if !(end_z > system.last_vertex() && end_z.is_finite()) {
+        return Err(OpticsError::input(
+            "the end of the fan (mm from the corneal apex)",
+            end_z,
+            "must lie behind the last surface",
+        ));
+    }
+    let beam = Beam::new(
+        system,
+        wavelength_nm,
+        field_deg,
+        pupil.position,
+        settings.grin,
+    );
+    let v_chief = beam.chief()?;
+    let a = pupil.diameter / 2.0;
+    let targets: Vec<(f64, f64)> = (0..rays)
+        .map(|i| {
+            let t = if rays == 1 {
+                0.0
+            } else {
+                i as f64 / (rays - 1) as f64 * 2.0 - 1.0
+            };
+            (0.0, t * a)
+        })
+        .collect();
+    let launches = beam.aim(v_chief, &targets)?;
+    launches
+        .iter()
+        .map(|&(u, v)| {
+            let mut ray = beam.ray(u, v);
+            // Start the drawn path 1 mm in front of the apex.
+            let t0 = (-1.0 - ray.position.z) / ray.direction.z;
+            ray.position = ray.position + ray.direction * t0;
+            let mut path = Vec::new();
+            let end = beam
+                .tracer
+                .trace_surfaces(ray, system.elements.len(), Some(&mut path))
+                .map_err(|e| beam.err(e))?;
+            let t = (end_z - end.position.z) / end.direction.z;
+            if t.is_finite() && t > 0.0 {
+                path.push(end.position + end.direction * t);
+            }
+            Ok(path.iter().map(|p| (p.z, p.y)).collect())
+        })
+        .collect()
+}

@@ -21,7 +21,8 @@ mod vec3;
 
 pub use error::{OpticsError, RayError, RayFailure};
 pub use focus::{
-    best_focus, best_focus_with, coddington, Criterion, Focus, FocusSettings, Pupil, MAX_FIELD_DEG,
+    best_focus, best_focus_with, coddington, ray_fan, Criterion, Focus, FocusSettings, Pupil,
+    MAX_FIELD_DEG,
 };
 pub use medium::{Dispersion, Grin, GrinDispersion, Medium, MediumKind};
 pub use paraxial::{paraxial, paraxial_grin_error, Paraxial};

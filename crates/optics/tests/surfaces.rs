@@ -138,3 +138,44 @@ fn best_focus_converges_with_rays_across_the_pupil() {
     assert!((b - c).abs() < (a - c).abs().max(1e-6), "{a} {b} {c}");
     assert!((b - c).abs() < 1e-4, "{b} {c}");
 }
+
+#[test]
+fn a_ray_fan_converges_near_the_best_focus() {
+    let eye = eyes::atchison_2006();
+    let pupil = Pupil {
+        diameter: 1.0,
+        position: 3.7,
+    };
+    for field in [0.0, 30.0] {
+        let focus =
+            eyeshell_optics::best_focus(&eye, 555.0, field, &pupil, Criterion::MeanSphere).unwrap();
+        let fan = eyeshell_optics::ray_fan(&eye, 555.0, field, &pupil, 5, focus.z).unwrap();
+        assert_eq!(fan.len(), 5);
+        for path in &fan {
+            assert!(
+                path[0].0 < 0.0 && (path.last().unwrap().0 - focus.z).abs() < 1e-9,
+                "{path:?}"
+            );
+            assert!(path.windows(2).all(|w| w[1].0 > w[0].0));
+        }
+        // The middle ray is the chief ray, which passes through the best focus.
+        let chief_end = fan[2].last().unwrap().1;
+        assert!(
+            (chief_end.abs() - focus.r).abs() < 1e-6,
+            "{chief_end} {}",
+            focus.r
+        );
+        // The fan's rays meet the focal plane within the tangential blur of a 1 mm pupil.
+        let spread = fan
+            .iter()
+            .map(|p| p.last().unwrap().1)
+            .fold(f64::NEG_INFINITY, f64::max)
+            - fan
+                .iter()
+                .map(|p| p.last().unwrap().1)
+                .fold(f64::INFINITY, f64::min);
+        assert!(spread < 0.05, "{field}°: {spread}");
+    }
+    let e = eyeshell_optics::ray_fan(&eye, 555.0, 0.0, &pupil, 0, 30.0).unwrap_err();
+    assert!(e.to_string().contains("rays of a fan"));
+}
