@@ -774,7 +774,7 @@ pub fn ray_fan(
             let mut ray = beam.ray(u, v);
             // Start the drawn path 1 mm in front of the apex.
             let t0 = (-1.0 - ray.position.z) / ray.direction.z;
-            ray.position = ray.position + ray.direction * t0;
+            ray.position += ray.direction * t0;
             let mut path = Vec::new();
             let end = beam
                 .tracer
