@@ -11,11 +11,12 @@
 //! * `Strehl`: the Strehl ratio |⟨exp(i k W)⟩|² over the pupil samples, W the aberration at s with
 //!   its least-squares piston and tilt removed (the peak of the test plane perpendicular to the
 //!   chief ray at s), maximised in s (a scan, then golden-section search).
-//! * `MeanSphere`: Φᵢ(Q) fitted by least squares with 1, αₓ, α_y, αₓ², α_y², αₓα_y (the span of
-//!   the Zernike terms up to defocus and astigmatism); its curvatures give the sagittal and
-//!   tangential foci sₛ = 2aₓₓ/n′, sₜ = 2a_yy/n′ along the chief ray, and the best focus is at
-//!   the mean of their vergences, s = 2/(1/sₛ + 1/sₜ). For a small pupil these are Coddington's
-//!   foci.
+//! * `MeanSphere`: Φᵢ(Q) and ψᵢ = dᵢ·d꜀ (the exact phase change per unit s) fitted by least
+//!   squares with 1, αₓ, α_y, αₓ², α_y², αₓα_y (the span of the Zernike terms up to defocus and
+//!   astigmatism); the sagittal and tangential foci are the s where the αₓ² and α_y²
+//!   coefficients of Φ + s n′ψ vanish (≈ 2aₓₓ/n′, 2a_yy/n′), and the best focus is at the mean
+//!   of their vergences, s = 2/(1/sₛ + 1/sₜ). For a small pupil these are Coddington's foci; a
+//!   perfect spherical wave gives its centre at any aperture.
 
 use crate::error::{OpticsError, RayError, RayFailure};
 use crate::linalg;
@@ -411,8 +412,11 @@ impl Wavefront {
             .max(1e-300)
     }
 
-    /// Sagittal and tangential foci (distances along the chief ray from Q) from the quadratic
-    /// least-squares fit of Φ(Q).
+    /// Sagittal and tangential foci (distances along the chief ray from Q): where the
+    /// αₓ² and α_y² coefficients of the aberration W(s) = Φ(Q) + s n′ψ vanish, ψᵢ = dᵢ·d꜀ being
+    /// the exact change of phase as the reference point moves along the chief ray. Both are
+    /// fitted with the same basis, so a perfect spherical wave gives its centre exactly at any
+    /// aperture (ψ's own α⁴ content, which a fit of Φ alone would read as defocus, cancels).
     pub(crate) fn astigmatic_foci(&self) -> Option<(f64, f64)> {
         let a = self.alpha_scale();
         let rows: Vec<[f64; 6]> = self
@@ -423,10 +427,13 @@ impl Wavefront {
                 [w, w * x, w * y, w * x * x, w * y * y, w * x * y]
             })
             .collect();
-        let rhs: Vec<f64> = self.samples.iter().map(|s| s[4].sqrt() * s[2]).collect();
-        let c = linalg::least_squares::<6>(&rows, &rhs)?;
-        let (axx, ayy) = (c[3] / (a * a), c[4] / (a * a));
-        Some((2.0 * axx / self.n_image, 2.0 * ayy / self.n_image))
+        let fit = |col: usize| {
+            let rhs: Vec<f64> = self.samples.iter().map(|s| s[4].sqrt() * s[col]).collect();
+            linalg::least_squares::<6>(&rows, &rhs)
+        };
+        let (phi, psi) = (fit(2)?, fit(3)?);
+        let n = self.n_image;
+        Some((-phi[3] / (n * psi[3]), -phi[4] / (n * psi[4])))
     }
 
     /// The Strehl ratio as a function of the distance s along the chief ray: residuals of Φ(Q)
@@ -596,16 +603,18 @@ pub fn best_focus_with(
     let (distance, strehl_best) = match criterion {
         Criterion::MeanSphere => (mean, strehl(mean)),
         Criterion::Strehl => {
-            // The scan spans both astigmatic foci and a few depths of focus λ/(n′ α²) around.
+            // The scan spans both astigmatic foci, four depths of focus λ/(n′ α²) and 1 % of the
+            // distance around them.
             let a2 = w
                 .samples
                 .iter()
                 .map(|s| s[0] * s[0] + s[1] * s[1])
                 .fold(0.0, f64::max);
             let dof = (wavelength_nm * 1e-6 / (n * a2.max(1e-12))).min(5.0);
-            let lo = (ss.min(st) - 2.0 * dof - 0.25 * (ss - st).abs()).max(1e-3);
-            let hi = ss.max(st) + 2.0 * dof + 0.25 * (ss - st).abs();
-            let scan = model.scan(lo, hi, 81);
+            let margin = 4.0 * dof + 0.5 * (ss - st).abs() + 0.01 * mean;
+            let lo = (ss.min(st) - margin).max(1e-3);
+            let hi = ss.max(st) + margin;
+            let scan = model.scan(lo, hi, 161);
             maximise(strehl, lo, hi, &scan)
         }
     };

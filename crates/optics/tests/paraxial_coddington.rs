@@ -116,3 +116,45 @@ fn ocular_refraction_images_the_object_on_the_retina() {
     }
     assert!(y.abs() < 1e-9, "{y}");
 }
+
+#[test]
+fn a_perfect_refracting_ellipsoid_has_strehl_one_at_its_geometric_focus() {
+    // An ellipsoid of conic k = −1/n′² images a distant axial point perfectly, at
+    // f′ = n′R/(n′ − 1) behind its vertex: every ray's optical path to that point is the same.
+    use eyeshell_optics::{Element, Medium, OpticalSystem, Pupil, Surface};
+    let n = 1.5;
+    let eye = OpticalSystem::new(
+        "ellipsoid",
+        Medium::constant("air", 1.0),
+        vec![
+            Element::new(
+                Surface::new("ellipsoid", 10.0, -1.0 / (n * n)),
+                10.0,
+                Medium::constant("glass", n),
+            ),
+            Element::new(
+                Surface::plane("dummy"),
+                40.0,
+                Medium::constant("glass behind", n),
+            ),
+        ],
+    )
+    .unwrap();
+    let f = n * 10.0 / (n - 1.0);
+    let pupil = Pupil {
+        diameter: 8.0,
+        position: 5.0,
+    };
+    for criterion in [Criterion::Strehl, Criterion::MeanSphere] {
+        let b = best_focus(&eye, 555.0, 0.0, &pupil, criterion).unwrap();
+        assert!((b.z - f).abs() < 1e-6, "{criterion:?}: {} vs {f}", b.z);
+        assert!(b.strehl > 1.0 - 1e-9, "{}", b.strehl);
+        assert!((b.sagittal - b.tangential).abs() < 1e-9);
+    }
+    // A sphere of the same radius has spherical aberration: its Strehl focus moves in front of
+    // the paraxial one and its Strehl ratio drops.
+    let mut sphere = eye.clone();
+    sphere.elements[0].surface.conic = 0.0;
+    let b = best_focus(&sphere, 555.0, 0.0, &pupil, Criterion::Strehl).unwrap();
+    assert!(b.z < f - 0.01 && b.strehl < 0.9, "{} {}", b.z, b.strehl);
+}
