@@ -603,7 +603,7 @@ pub fn best_focus_with(
     let (distance, strehl_best) = match criterion {
         Criterion::MeanSphere => (mean, strehl(mean)),
         Criterion::Strehl => {
-            // The scan spans both astigmatic foci, four depths of focus λ/(n′ α²) and 1 % of the
+            // The scan spans both astigmatic foci, two depths of focus λ/(n′ α²) and 1 % of the
             // distance around them.
             let a2 = w
                 .samples
@@ -611,7 +611,7 @@ pub fn best_focus_with(
                 .map(|s| s[0] * s[0] + s[1] * s[1])
                 .fold(0.0, f64::max);
             let dof = (wavelength_nm * 1e-6 / (n * a2.max(1e-12))).min(5.0);
-            let margin = 4.0 * dof + 0.5 * (ss - st).abs() + 0.01 * mean;
+            let margin = 2.0 * dof + 0.5 * (ss - st).abs() + 0.01 * mean;
             let lo = (ss.min(st) - margin).max(1e-3);
             let hi = ss.max(st) + margin;
             let scan = model.scan(lo, hi, 161);
