@@ -1,0 +1,61 @@
+//! The few dense solves the optics needs (least squares with a handful of unknowns).
+
+/// Solves the square system `a x = b` by Gaussian elimination with partial pivoting; `None`
+/// when it is singular to working precision.
+pub(crate) fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
+    let scale = a
+        .iter()
+        .flat_map(|r| r.iter())
+        .fold(0.0_f64, |m, v| m.max(v.abs()));
+    if !(scale > 0.0) || !scale.is_finite() {
+        return None;
+    }
+    for k in 0..N {
+        let p = (k..N).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+        if !(a[p][k].abs() > 1e-14 * scale) {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        for i in k + 1..N {
+            let f = a[i][k] / a[k][k];
+            for j in k..N {
+                a[i][j] -= f * a[k][j];
+            }
+            b[i] -= f * b[k];
+        }
+    }
+    let mut x = [0.0; N];
+    for k in (0..N).rev() {
+        let s: f64 = (k + 1..N).map(|j| a[k][j] * x[j]).sum();
+        x[k] = (b[k] - s) / a[k][k];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// Least squares `min |A x − b|` through the normal equations of the column-scaled matrix
+/// (the unknowns here are few and well separated, so this is accurate enough).
+pub(crate) fn least_squares<const N: usize>(rows: &[[f64; N]], rhs: &[f64]) -> Option<[f64; N]> {
+    let mut scale = [0.0_f64; N];
+    for r in rows {
+        for j in 0..N {
+            scale[j] = scale[j].max(r[j].abs());
+        }
+    }
+    if scale.iter().any(|s| !(*s > 0.0)) {
+        return None;
+    }
+    let mut m = [[0.0; N]; N];
+    let mut v = [0.0; N];
+    for (r, &b) in rows.iter().zip(rhs) {
+        let s: [f64; N] = std::array::from_fn(|j| r[j] / scale[j]);
+        for i in 0..N {
+            v[i] += s[i] * b;
+            for j in 0..N {
+                m[i][j] += s[i] * s[j];
+            }
+        }
+    }
+    let x = solve(m, v)?;
+    Some(std::array::from_fn(|j| x[j] / scale[j]))
+}
