@@ -502,6 +502,11 @@ fn every_block_names_its_language_and_rust_blocks_are_doctests() {
                 "{origin}: fence language `{}`",
                 block.info
             );
+            // CommonMark: a backtick in a fence's info string makes it no fence at all.
+            assert!(
+                !block.info.contains('`'),
+                "{origin}: a backtick in the fence's info string"
+            );
             if block.lang() == "rust" {
                 let include = format!("include_str!(\"../../../{}\")", rel(&file));
                 assert!(
