@@ -14,25 +14,28 @@
 //!   commands print, all of them in order.
 //! - ` ```sh synopsis `: usage lines, not run; each line's subcommand must exist and each
 //!   `--flag` must be one its `--help` lists.
-//! - ` ```toml file=PATH `: the file PATH of the repository, verbatim.
-//! - ` ```sh skip-test: REASON `: not run (installs packages, needs MATLAB or Slurm, or runs
-//!   the whole suite); counted, and the count is pinned below so that a new one is a choice.
+//! - ` ```toml file=PATH `: the file PATH of the repository, verbatim; ` ```toml scene `: a
+//!   scene (or sweep) that `eyeshell check` accepts.
+//! - ` ```sh skip-test: REASON ` (or `matlab`, `toml`): not run (installs packages, needs
+//!   MATLAB or its files, or runs the whole suite); counted, and the count is pinned below so
+//!   that a new one is a choice. Every other `sh`, `console`, `toml` or `matlab` block must be
+//!   one of the kinds above.
 //!
 //! Shown output is compared line by line: a line `…` stands for any lines, `…` within a line
 //! for any text, whitespace runs are equal, and numbers are equal within a relative 1e-6
 //! (` ```text numbers=any `: any number, for timings). The Python blocks are pytest's
 //! (crates/eyeshell-py/tests/test_docs.py), which reads the same fences.
 
-use crate::support::repo;
+use crate::support::{repo, s};
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-/// Blocks marked ` ```sh skip-test: ... ` in README.md and docs/guide: the README's two
-/// set-up lines, the pip line of the Python chapter and the bvp4c comparison (MATLAB's
-/// files).
-const SKIPPED: usize = 4;
+/// Blocks marked `skip-test` in README.md and docs/guide: the README's two set-up lines,
+/// the pip line of the Python chapter, and the bvp4c comparison (the MATLAB code and the
+/// commands that read its files).
+const SKIPPED: usize = 5;
 
 /// The Markdown files whose commands run: README.md and every chapter of the guide.
 fn documents() -> Vec<PathBuf> {
@@ -382,14 +385,6 @@ fn every_command_in_the_readme_and_the_guide_runs() {
         for (block, shown) in blocks(&text) {
             let origin = format!("{}:{}", rel(&file), block.line);
             match (block.lang(), block.options()) {
-                ("sh", opts) if opts.starts_with("skip-test") => {
-                    let reason = opts.trim_start_matches("skip-test").trim_start_matches(':');
-                    assert!(
-                        !reason.trim().is_empty(),
-                        "{origin}: skip-test needs a reason"
-                    );
-                    skipped.push(format!("{origin}: {}", reason.trim()));
-                }
                 ("sh", "synopsis") => {
                     for line in command_lines(&block.text) {
                         let (words, _) = words(&line);
@@ -469,7 +464,32 @@ fn every_command_in_the_readme_and_the_guide_runs() {
                     let file = std::fs::read_to_string(&path).expect("the file a block shows");
                     assert_eq!(block.text, file, "{origin}: not {} verbatim", rel(&path));
                 }
-                ("sh" | "console", opts) => panic!("{origin}: unknown fence options `{opts}`"),
+                ("toml", "scene") => {
+                    let path = dir.path().join(format!("block-{}.toml", block.line));
+                    std::fs::write(&path, &block.text).expect("write the scene");
+                    let r = crate::support::eyeshell_in(dir.path(), &["check", s(&path)]);
+                    assert_eq!(
+                        r.code,
+                        Some(0),
+                        "{origin}: eyeshell check refuses it: {}",
+                        r.stderr
+                    );
+                    commands += 1;
+                }
+                ("sh" | "toml" | "matlab", opts) if opts.starts_with("skip-test") => {
+                    let reason = opts.trim_start_matches("skip-test").trim_start_matches(':');
+                    assert!(
+                        !reason.trim().is_empty(),
+                        "{origin}: skip-test needs a reason"
+                    );
+                    skipped.push(format!("{origin}: {}", reason.trim()));
+                }
+                ("sh" | "console" | "toml" | "matlab", opts) => {
+                    panic!(
+                        "{origin}: a {} block must run (fence options `{opts}`)",
+                        block.lang()
+                    )
+                }
                 _ => {}
             }
         }
