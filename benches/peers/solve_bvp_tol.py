@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """eyeshell's `solver.tol` against SciPy's solve_bvp at the same tolerance, side by side in
-one run (the README's table "Against solve_bvp at a requested tolerance").
+one run (the table "Against SciPy's solve_bvp at a requested tolerance" of docs/guide/accuracy.md).
 
 The shell is the one of tests/fixtures/solve_bvp_reference.py (whose equations, split at
 the thickness jump Σ_e = πR0/2, this script imports): the default scene with

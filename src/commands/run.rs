@@ -42,12 +42,19 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
         let s = &solution.stats;
         let nodes = match (&s.pass_nodes, &s.error_estimate) {
             (Some(passes), Some(e)) => format!(
-                "{} (adapted to solver.tol = {} in {} pass{}: {})\n  error estimate  {:.3e} (κ {:.2e}, α_s {:.2e}, r {:.2e}, θ {:.2e}, Q {:.2e})",
+                "{} ({})\n  error estimate  {:.3e} (κ {:.2e}, α_s {:.2e}, r {:.2e}, θ {:.2e}, Q {:.2e})",
                 s.nodes,
-                scene.solver.tol.map_or(String::new(), eyeshell::text::number),
-                passes.len(),
-                if passes.len() == 1 { "" } else { "es" },
-                passes.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", "),
+                // solver.richardson alone extrapolates once on solver.nodes' mesh: no tol.
+                match scene.solver.tol {
+                    Some(tol) => format!(
+                        "adapted to solver.tol = {} in {} pass{}: {}",
+                        eyeshell::text::number(tol),
+                        passes.len(),
+                        if passes.len() == 1 { "" } else { "es" },
+                        passes.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")
+                    ),
+                    None => "solver.richardson: extrapolated once on the mesh of solver.nodes".into(),
+                },
                 e.overall,
                 e.kappa,
                 e.alpha_s,

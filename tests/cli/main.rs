@@ -7,6 +7,7 @@ mod support;
 
 mod absurd;
 mod bad_input;
+mod docs;
 mod export_compare;
 mod export_roundtrip;
 mod export_scipy;

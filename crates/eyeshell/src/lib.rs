@@ -52,7 +52,12 @@ pub use error::Error;
 pub use scene::sweep::Sweep;
 pub use scene::Scene;
 
-// The README's library example is compiled and run with the doctests.
+// The Rust examples of the README and the user guide are compiled and run with the doctests
+// (tests/cli/docs.rs checks that every file holding a ```rust block is included here).
 #[cfg(doctest)]
 #[doc = include_str!("../../../README.md")]
 struct ReadmeDoctests;
+
+#[cfg(doctest)]
+#[doc = include_str!("../../../docs/guide/rust.md")]
+struct GuideRustDoctests;

@@ -511,7 +511,7 @@ pub static KEYS: &[KeySpec] = &[
         key: "solver.tol",
         access: Access::OptionalFloat { get: |s| s.solver.tol, set: |s, v| s.solver.tol = Some(v) },
         rule: Rule::OpenUnit,
-        doc: "the global error asked for: the mesh is adapted until the estimated error of each of κ, α_s, r, θ, Q (absolute, in fields.csv's units) is at most tol (Richardson on the halved mesh); in a growth scene it picks the material mesh once, from t = 0 and a test run to t_end (README); unset: solver.nodes lays the mesh",
+        doc: "the global error asked for: the mesh is adapted until the estimated error of each of κ, α_s, r, θ, Q (absolute, in fields.csv's units) is at most tol (Richardson on the halved mesh); in a growth scene it picks the material mesh once, from t = 0 and a test run to t_end (docs/guide/accuracy.md); unset: solver.nodes lays the mesh",
         growth: false,
     },
     KeySpec {
