@@ -13,7 +13,7 @@ import pytest
 
 import eyeshell
 import eyeshell._api
-from conftest import ROOT, SCENES
+from conftest import ROOT, SCENES, optional
 
 PY = ROOT / "crates" / "eyeshell-py"
 
@@ -40,7 +40,7 @@ def readme_block(after):
 
 
 def test_the_readme_notebook_example_runs(tmp_path, monkeypatch):
-    pytest.importorskip("matplotlib")
+    optional("matplotlib")
     monkeypatch.setenv("MPLBACKEND", "Agg")
     monkeypatch.chdir(tmp_path)
     code = readme_block("### A notebook example")
@@ -50,7 +50,7 @@ def test_the_readme_notebook_example_runs(tmp_path, monkeypatch):
 
 
 def test_the_readme_shows_the_side_by_side_script_and_it_runs():
-    pytest.importorskip("scipy")
+    optional("scipy")
     script = PY / "examples" / "solve_bvp_side_by_side.py"
     assert readme_block("### eyeshell.solve beside SciPy's solve_bvp") == script.read_text()
     r = subprocess.run([sys.executable, script], capture_output=True, text=True, check=True,
