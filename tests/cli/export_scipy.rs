@@ -2,18 +2,11 @@
 //! numpy.load on .npz), with the right shapes and the same values bit for bit; and eyeshell
 //! reads a compressed file written by scipy.io.savemat(do_compression=True), as MATLAB
 //! writes them by default. Runs only where `python3 -c 'import scipy'` works (.ci/run
-//! installs scipy); elsewhere it prints a note and passes.
+//! installs scipy); elsewhere it says SKIPPED, and with `EYESHELL_REQUIRE_SCIPY=1` (set by
+//! .ci/run) it fails instead.
 
 use crate::support::*;
 use std::process::Command;
-
-fn have_scipy() -> bool {
-    Command::new("python3")
-        .args(["-c", "import scipy.io, numpy"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false)
-}
 
 /// Run a Python script with arguments; return its stdout (JSON).
 fn python(script: &str, args: &[&str]) -> serde_json::Value {
@@ -90,8 +83,7 @@ fn shape(v: &serde_json::Value) -> Vec<usize> {
 
 #[test]
 fn scipy_loads_what_eyeshell_writes() {
-    if !have_scipy() {
-        eprintln!("note: python3 with scipy and numpy not found; skipping the SciPy check (.ci/run installs them)");
+    if !scipy_available("scipy_loads_what_eyeshell_writes") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -215,8 +207,7 @@ fn scipy_loads_what_eyeshell_writes() {
 
 #[test]
 fn eyeshell_reads_compressed_files_written_by_scipy() {
-    if !have_scipy() {
-        eprintln!("note: python3 with scipy and numpy not found; skipping the SciPy check (.ci/run installs them)");
+    if !scipy_available("eyeshell_reads_compressed_files_written_by_scipy") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

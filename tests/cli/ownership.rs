@@ -226,6 +226,21 @@ fn wait_for(path: &Path) {
     }
 }
 
+/// Wait until `dir` holds an entry whose name starts with `prefix` (a writer's temporary,
+/// `.NAME.tmp-<pid>-<nonce>`).
+fn wait_for_entry(dir: &Path, prefix: &str) {
+    let start = Instant::now();
+    let present = || {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .any(|e| e.unwrap().file_name().to_string_lossy().starts_with(prefix))
+    };
+    while !present() {
+        assert!(start.elapsed() < Duration::from_secs(30), "{prefix}");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 /// The hidden entries of a directory (litter, locks), sorted.
 fn hidden(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -319,7 +334,7 @@ fn kills_mid_write_leave_nothing_the_next_run_cannot_clean() {
     ];
     let mut victim = start(root, &big);
     let pid = victim.id();
-    wait_for(&root.join(format!(".out.tmp-{pid}")));
+    wait_for_entry(root, &format!(".out.tmp-{pid}-"));
     victim.kill().unwrap();
     victim.wait().unwrap();
     assert!(!root.join("out").exists(), "solve is all or nothing");

@@ -3,21 +3,14 @@
 //! reach the same solution, each within 1e-9 of eyeshell at N = 12801 relative to every
 //! field's size. The times are BENCHMARKS.md's; here only the numbers that must hold. Runs
 //! only where `python3 -c 'import scipy'` works (.ci/run installs scipy); elsewhere it
-//! prints a note and passes.
+//! says SKIPPED, and with `EYESHELL_REQUIRE_SCIPY=1` (set by .ci/run) it fails instead.
 
+use crate::support::scipy_available;
 use std::process::Command;
-
-fn have_scipy() -> bool {
-    Command::new("python3")
-        .args(["-c", "import scipy.integrate, numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success())
-}
 
 #[test]
 fn solve_bvp_and_eyeshell_agree_on_the_fibre_shell() {
-    if !have_scipy() {
-        eprintln!("note: python3 with scipy and numpy not found; skipping the solve_bvp peer (.ci/run installs them)");
+    if !scipy_available("the solve_bvp peer") {
         return;
     }
     let script = concat!(

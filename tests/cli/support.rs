@@ -24,6 +24,26 @@ impl From<std::process::Output> for Run {
     }
 }
 
+/// Whether `python3` can import SciPy and NumPy, for the tests that check eyeshell against
+/// them (`what` names the test in the note). Without them a test skips with a note on
+/// stderr, unless `EYESHELL_REQUIRE_SCIPY=1` (set by `.ci/run`, which installs them): then a
+/// skip would hide a check CI promises, so it is a failure.
+pub fn scipy_available(what: &str) -> bool {
+    let found = Command::new("python3")
+        .args(["-c", "import scipy.io, scipy.integrate, numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        if std::env::var_os("EYESHELL_REQUIRE_SCIPY").is_some_and(|v| v == "1") {
+            panic!("{what} needs python3 with scipy and numpy, and EYESHELL_REQUIRE_SCIPY=1");
+        }
+        eprintln!(
+            "SKIPPED: {what}: python3 with scipy and numpy not found (.ci/run installs them)"
+        );
+    }
+    found
+}
+
 /// The repository root (where `scenes/` lives).
 pub fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))

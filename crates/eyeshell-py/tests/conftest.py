@@ -1,5 +1,6 @@
 """Shared fixtures: the repository's folders and the command line's release binary."""
 
+import importlib
 import os
 import pathlib
 import subprocess
@@ -7,6 +8,21 @@ import subprocess
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
+
+# .ci/run installs every optional package these tests use and sets this: a skip there would
+# hide a check CI promises, so it is a failure instead.
+REQUIRE_OPTIONAL = os.environ.get("EYESHELL_REQUIRE_SCIPY") == "1"
+
+
+def optional(module: str):
+    """Import an optional test dependency (SciPy, pandas, matplotlib, Dask): skip the test
+    without it, or fail it when EYESHELL_REQUIRE_SCIPY=1."""
+    if REQUIRE_OPTIONAL:
+        try:
+            return importlib.import_module(module)
+        except ImportError as e:
+            pytest.fail(f"{module} is needed and EYESHELL_REQUIRE_SCIPY=1: {e}")
+    return pytest.importorskip(module)
 SCENES = ROOT / "scenes"
 
 

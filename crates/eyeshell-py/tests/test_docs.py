@@ -23,7 +23,7 @@ import pytest
 
 import eyeshell
 import eyeshell._api
-from conftest import ROOT, SCENES
+from conftest import ROOT, SCENES, optional
 
 PY = ROOT / "crates" / "eyeshell-py"
 
@@ -200,7 +200,7 @@ def test_the_side_by_side_script_runs():
     """crates/eyeshell-py/examples/solve_bvp_side_by_side.py, shown in docs/guide/python.md
     (the test above checks it is shown verbatim): both solvers within 1e-8, eyeshell the more
     accurate in r."""
-    pytest.importorskip("scipy")
+    optional("scipy")
     script = PY / "examples" / "solve_bvp_side_by_side.py"
     r = subprocess.run([sys.executable, script], capture_output=True, text=True, check=True,
                        cwd=ROOT)

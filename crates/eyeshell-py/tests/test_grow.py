@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import eyeshell
-from conftest import SCENES, read_csv
+from conftest import SCENES, optional, read_csv
 
 
 def test_the_const_scene_matches_the_command_lines_series(cli, tmp_path):
@@ -60,7 +60,7 @@ def test_progress_true_draws_a_bar_on_stderr(capfd):
 
 
 def test_series_are_data_frames_with_pandas():
-    pandas = pytest.importorskip("pandas")
+    pandas = optional("pandas")
     g = eyeshell.grow(SCENES / "const.toml", solver__nodes=101)
     assert isinstance(g.series, pandas.DataFrame)
     assert list(g.series.columns) == ["t", "axial_length", "equatorial_radius",

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import eyeshell
-from conftest import SCENES, read_csv
+from conftest import SCENES, optional, read_csv
 
 
 def test_the_exact_sphere_to_1e_10():
@@ -67,7 +67,7 @@ def test_yp_is_the_derivative_of_y():
 
 
 def test_to_bvp4c_saved_by_scipy_is_read_back_by_eyeshell_compare(cli, tmp_path):
-    scipy_io = pytest.importorskip("scipy.io")
+    scipy_io = optional("scipy.io")
     sol = eyeshell.solve(SCENES / "fibres-nonuniform.toml", solver__nodes=401)
     sol4c = sol.to_bvp4c()
     assert sol4c["solver"] == "bvp4c" and sol4c["y"].shape == (5, len(sol))

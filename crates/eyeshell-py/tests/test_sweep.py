@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import eyeshell
-from conftest import SCENES, read_csv
+from conftest import SCENES, optional, read_csv
 
 # Four short growth runs (the fibre stiffness D), each as the command line would run it.
 FIBRES = {"fibres.D": [0, 100, 200, 400]}
@@ -69,7 +69,7 @@ def test_a_process_pool_gives_the_local_results():
 
 
 def test_dask_gives_the_local_results():
-    distributed = pytest.importorskip("distributed")
+    distributed = optional("distributed")
     local = eyeshell.sweep(SCENES / "grow.toml", jobs=2, solver__nodes=101)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None, host="127.0.0.1") as cluster, \
@@ -151,7 +151,7 @@ def test_a_run_the_executor_loses_is_a_failed_run():
 
 
 def test_dask_records_an_aborted_run_as_failed(monkeypatch):
-    distributed = pytest.importorskip("distributed")
+    distributed = optional("distributed")
     monkeypatch.setenv("EYESHELL_TEST_ABORT_RUN", "D=100")
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=True,
                                   dashboard_address=None, host="127.0.0.1") as cluster, \

@@ -291,10 +291,11 @@ impl Mesh {
         }
     }
 
-    /// Index of the node at exactly Σ, if any.
+    /// Index of the node at exactly Σ, if any (none for a NaN: the nodes are finite, and
+    /// the total order puts NaN past them all).
     pub fn node_at(&self, sigma_ref: f64) -> Option<usize> {
         self.nodes
-            .binary_search_by(|x| x.partial_cmp(&sigma_ref).unwrap())
+            .binary_search_by(|x| x.total_cmp(&sigma_ref))
             .ok()
     }
 }

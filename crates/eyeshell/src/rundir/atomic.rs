@@ -1,12 +1,20 @@
 //! Files and directories that appear whole or not at all: the one atomic writer of eyeshell.
 //!
-//! - A file is written to a temporary sibling `.NAME.tmp-<pid>` and renamed into place
-//!   ([`write_atomic`]): a reader sees the old file or the new one, never half of one.
-//! - A directory is filled in a temporary sibling `.NAME.tmp-<pid>` ([`AtomicDir`]) and
-//!   renamed into place by [`AtomicDir::commit`]. A directory already at the target is moved
-//!   aside to `.NAME.old-<pid>` first and removed after the rename, so the target is never
-//!   half-replaced. Dropping an [`AtomicDir`] uncommitted removes the temporary directory
-//!   and the parents it created.
+//! - A file is written to a temporary sibling `.NAME.tmp-<pid>-<nonce>` and renamed into
+//!   place ([`write_atomic`]): a reader sees the old file or the new one, never half of one.
+//! - A directory is filled in a temporary sibling `.NAME.tmp-<pid>-<nonce>` ([`AtomicDir`])
+//!   and renamed into place by [`AtomicDir::commit`]. A directory already at the target is
+//!   moved aside to `.NAME.old-<pid>-<nonce>` first and removed after the rename, so the
+//!   target is never half-replaced. Dropping an [`AtomicDir`] uncommitted removes the
+//!   temporary directory and the parents it created.
+//! - Durable, not only atomic: what is renamed into place is on disk first (the file, or
+//!   every file and directory of the tree, `fsync`ed), and the directory that holds the new
+//!   name is `fsync`ed after the rename. After a power cut a target is the old one or the
+//!   new one whole, never a new name over empty or missing contents.
+//! - The pid tells a dead writer's litter from a live one's (`/proc/<pid>`); the nonce (a
+//!   per-process count and a hash of the host name and the clock) keeps two writers apart
+//!   that share a pid: two threads of one process, or processes of one pid on two hosts of
+//!   a cluster writing one shared file system.
 //! - An [`AtomicDir`] holds the target's advisory lock ([`super::lock::DirLock`]) from
 //!   creation to commit, so two processes never write one target at once; holding it, any
 //!   `.NAME.tmp-*` or `.NAME.old-*` beside the target is the litter of a process that was
@@ -46,14 +54,41 @@ pub fn hidden_base(name: &OsStr) -> String {
     format!("{}~{hash:016x}", &name[..cut])
 }
 
-/// The hidden sibling `.BASE.<tag>-<pid>` of `path` (`tag`: `tmp` or `old`), BASE being
-/// [`hidden_base`] of its name.
+/// The hidden sibling `.BASE.<tag>-<pid>-<nonce>` of `path` (`tag`: `tmp` or `old`), BASE
+/// being [`hidden_base`] of its name: a new name at every call.
 pub fn sibling(path: &Path, tag: &str) -> PathBuf {
     let base = hidden_base(path.file_name().unwrap_or_default());
-    path.with_file_name(format!(".{base}.{tag}-{}", std::process::id()))
+    path.with_file_name(format!(".{base}.{tag}-{}-{}", std::process::id(), nonce()))
 }
 
-/// The hidden siblings `.BASE.<tag>-<pid>` of `path` that exist now, with their pids.
+/// Eight hex digits that differ between calls in this process (a counter) and, with high
+/// probability, between processes of one pid on different hosts or at different times.
+fn nonce() -> String {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNT: AtomicU64 = AtomicU64::new(0);
+    let count = COUNT.fetch_add(1, Ordering::Relaxed);
+    let host = fs::read("/proc/sys/kernel/hostname").unwrap_or_default();
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    let mut bytes = host;
+    bytes.extend_from_slice(&nanos.to_le_bytes());
+    bytes.extend_from_slice(&count.to_le_bytes());
+    let h = crate::hash::fnv1a64(&bytes);
+    format!("{:08x}", (h ^ (h >> 32)) as u32)
+}
+
+/// The pid in a hidden sibling's suffix `<pid>` or `<pid>-<nonce>` (the form without a
+/// nonce is an older eyeshell's litter, still recognised and cleaned).
+fn suffix_pid(suffix: &str) -> Option<u32> {
+    let (pid, nonce) = suffix.split_once('-').unwrap_or((suffix, "0"));
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    let hex = !nonce.is_empty() && nonce.bytes().all(|b| b.is_ascii_hexdigit());
+    (digits(pid) && hex).then(|| pid.parse().ok()).flatten()
+}
+
+/// The hidden siblings `.BASE.<tag>-<pid>[-<nonce>]` of `path` that exist now, with their
+/// pids.
 pub fn siblings(path: &Path, tag: &str) -> Vec<(PathBuf, u32)> {
     let prefix = format!(
         ".{}.{tag}-",
@@ -67,7 +102,7 @@ pub fn siblings(path: &Path, tag: &str) -> Vec<(PathBuf, u32)> {
         .filter_map(|e| e.ok())
         .filter_map(|e| {
             let name = e.file_name().to_string_lossy().into_owned();
-            let pid = name.strip_prefix(&prefix)?.parse::<u32>().ok()?;
+            let pid = suffix_pid(name.strip_prefix(&prefix)?)?;
             Some((e.path(), pid))
         })
         .collect()
@@ -84,7 +119,7 @@ pub fn is_litter(name: &str) -> bool {
     }
     ["tmp-", "old-"].iter().any(|tag| {
         name.rsplit_once(&format!(".{tag}"))
-            .is_some_and(|(_, pid)| !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit()))
+            .is_some_and(|(_, suffix)| suffix_pid(suffix).is_some())
     })
 }
 
@@ -113,13 +148,30 @@ pub fn remove_dead_temporaries(path: &Path) {
     }
 }
 
-/// Write `bytes` to `path` through a temporary sibling and a rename: never half-written.
+/// Write `bytes` to `path` through a temporary sibling and a rename: never half-written,
+/// and on disk (the file, then its directory) when this returns.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), std::io::Error> {
+    write_renamed(path, bytes, true)
+}
+
+/// [`write_atomic`] without the `fsync`s, for a file inside a directory that is synced
+/// whole ([`sync_tree`]) before the record that says it is complete is written (a growth
+/// run's snapshots before its summary.json): a reader never sees half a file, and after
+/// a power cut the completion record is not there to vouch for a lost one.
+pub fn write_atomic_unsynced(path: &Path, bytes: &[u8]) -> Result<(), std::io::Error> {
+    write_renamed(path, bytes, false)
+}
+
+fn write_renamed(path: &Path, bytes: &[u8], durable: bool) -> std::io::Result<()> {
     let tmp = sibling(path, "tmp");
     let write = || -> std::io::Result<()> {
         let mut f = fs::File::create(&tmp)?;
         f.write_all(bytes)?;
-        f.flush()
+        if durable {
+            f.sync_all()
+        } else {
+            f.flush()
+        }
     };
     if let Err(e) = write() {
         let _ = fs::remove_file(&tmp);
@@ -127,7 +179,32 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), std::io::Error> {
     }
     fs::rename(&tmp, path).inspect_err(|_| {
         let _ = fs::remove_file(&tmp);
-    })
+    })?;
+    if durable {
+        sync_dir(&parent_of(path))?;
+    }
+    Ok(())
+}
+
+/// `fsync` a directory: its entries (names created, renamed or removed in it) reach the
+/// disk.
+pub fn sync_dir(dir: &Path) -> std::io::Result<()> {
+    fs::File::open(dir)?.sync_all()
+}
+
+/// `fsync` every file and directory under `dir`, the files first, then each directory
+/// after its contents (symbolic links are not followed).
+pub fn sync_tree(dir: &Path) -> std::io::Result<()> {
+    for entry in fs::read_dir(dir)? {
+        let entry = entry?;
+        let kind = entry.file_type()?;
+        if kind.is_dir() {
+            sync_tree(&entry.path())?;
+        } else if kind.is_file() {
+            fs::File::open(entry.path())?.sync_all()?;
+        }
+    }
+    sync_dir(dir)
 }
 
 /// A directory being written: files go into a temporary sibling of the target, which
@@ -192,10 +269,17 @@ impl AtomicDir {
     /// Move the finished directory into place. Whatever is at the target (the caller has
     /// checked that it may be replaced) is moved aside first and removed after.
     pub fn commit(mut self) -> Result<PathBuf, OutputError> {
+        sync_tree(&self.tmp).map_err(|e| OutputError::io(&self.tmp, e))?;
+        let parent = parent_of(&self.target);
+        let synced = |target: PathBuf| {
+            sync_dir(&parent)
+                .map(|()| target)
+                .map_err(|e| OutputError::io(&parent, e))
+        };
         if fs::symlink_metadata(&self.target).is_err() {
             fs::rename(&self.tmp, &self.target).map_err(|e| OutputError::io(&self.target, e))?;
             self.committed = true;
-            return Ok(self.target.clone());
+            return synced(self.target.clone());
         }
         let old = sibling(&self.tmp.with_file_name(self.target_name()), "old");
         // Not `remove_dir_all` on a symlink's target: a symlink here is removed as a file.
@@ -209,7 +293,7 @@ impl AtomicDir {
         }
         self.committed = true;
         fs::remove_dir_all(&old).map_err(|e| OutputError::io(&old, e))?;
-        Ok(self.target.clone())
+        synced(self.target.clone())
     }
 
     fn target_name(&self) -> std::ffi::OsString {
@@ -280,18 +364,67 @@ mod tests {
     }
 
     #[test]
-    fn the_temporary_names_follow_the_pattern() {
+    fn the_temporary_names_follow_the_pattern_and_never_repeat() {
         let pid = std::process::id();
-        assert_eq!(
-            sibling(Path::new("out/run"), "tmp"),
-            PathBuf::from(format!("out/.run.tmp-{pid}"))
+        let prefix = format!(".run.tmp-{pid}-");
+        let name = |p: &Path| p.file_name().unwrap().to_string_lossy().into_owned();
+        let a = sibling(Path::new("out/run"), "tmp");
+        assert_eq!(a.parent(), Some(Path::new("out")));
+        let nonce = name(&a).strip_prefix(&prefix).unwrap().to_string();
+        assert!(
+            nonce.len() == 8 && nonce.bytes().all(|b| b.is_ascii_hexdigit()),
+            "{a:?}"
         );
+        assert!(is_litter(&name(&a)));
+        assert_eq!(suffix_pid(&format!("{pid}-{nonce}")), Some(pid));
+        // An older eyeshell's `<pid>` alone is still litter; other suffixes are not.
+        assert!(is_litter(".run.tmp-42") && is_litter(".run.old-42-00ff00ff"));
+        for keep in [
+            ".run.tmp-",
+            ".run.tmp-x1",
+            ".run.tmp-1-",
+            ".run.tmp-1-zz",
+            ".run.tmp--1",
+        ] {
+            assert!(!is_litter(keep), "{keep}");
+        }
+        // Many names from many threads of one process: all distinct.
+        let names: std::collections::BTreeSet<PathBuf> = std::thread::scope(|s| {
+            let hs: Vec<_> = (0..8)
+                .map(|_| {
+                    s.spawn(|| {
+                        (0..500)
+                            .map(|_| sibling(Path::new("run"), "tmp"))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            hs.into_iter().flat_map(|h| h.join().unwrap()).collect()
+        });
+        assert_eq!(names.len(), 4000);
         let dir = tempfile::tempdir().unwrap();
         let w = AtomicDir::create(&dir.path().join("run")).unwrap();
-        assert_eq!(
-            w.path(),
-            dir.path().join(format!(".run.tmp-{pid}")).as_path()
-        );
+        assert!(name(w.path()).starts_with(&prefix), "{:?}", w.path());
+    }
+
+    #[test]
+    fn a_killed_writers_litter_of_either_form_is_found_with_its_pid() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out");
+        for n in [
+            ".out.tmp-999999998",
+            ".out.tmp-999999997-0123abcd",
+            ".out.tmp-x",
+            ".other.tmp-5",
+        ] {
+            fs::create_dir(dir.path().join(n)).unwrap();
+        }
+        let mut found: Vec<u32> = siblings(&target, "tmp")
+            .into_iter()
+            .map(|(_, p)| p)
+            .collect();
+        found.sort();
+        assert_eq!(found, [999999997, 999999998]);
     }
 
     #[test]

@@ -21,9 +21,10 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use super::atomic::sync_tree;
 use super::summary::{GrowthSummary, RunStatus, SnapshotEntry, Summary};
 use super::table::{csv_writer, QuoteStyle};
-use super::{format_value, write_atomic, OutputError, OwnedDir, SUMMARY_FILE};
+use super::{format_value, write_atomic_unsynced, OutputError, OwnedDir, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
 use crate::growth::{
     GrowthError, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
@@ -200,7 +201,7 @@ impl GrowthWriter {
             ));
         }
         snapshot_csv(s)
-            .and_then(|text| write_atomic(&path, &text))
+            .and_then(|text| write_atomic_unsynced(&path, &text))
             .map_err(|e| OutputError::io(&path, e))?;
         let series_path = self.dir.join(SERIES_FILE);
         append(&mut self.series, &s.series).map_err(|e| OutputError::io(&series_path, e))?;
@@ -213,6 +214,12 @@ impl GrowthWriter {
     }
 
     fn write_summary(&self, status: RunStatus<'_>) -> Result<(), OutputError> {
+        // A finished run's summary.json says what the run holds: its data must be on disk
+        // before it is (one pass over the directory, instead of two fsyncs per snapshot as
+        // it comes). The summary at the start vouches for nothing yet.
+        if !matches!(status, RunStatus::Running) {
+            sync_tree(&self.dir).map_err(|e| OutputError::io(&self.dir, e))?;
+        }
         Summary::Growth(GrowthSummary::new(
             &self.scene,
             status,

@@ -36,7 +36,7 @@ use std::path::{Path, PathBuf};
 
 use crate::bvp::{FieldRow, COLUMNS};
 
-pub use atomic::{write_atomic, AtomicDir};
+pub use atomic::{write_atomic, write_atomic_unsynced, AtomicDir};
 pub use growth::GrowthWriter;
 pub use owner::{check_file, check_target, Marker, OutputDir, OwnedDir, MARKER_FILE};
 pub use summary::Summary;

@@ -6,6 +6,7 @@
 mod common;
 
 mod adapt;
+mod api_never_panics;
 mod block_solver;
 mod convergence;
 mod dae_jacobian;
