@@ -305,6 +305,27 @@ fn compare_is_as_accurate_as_the_solutions() {
     }
 }
 
+/// A MAT v5 element: the 1×1 cell array `name` holding `inner` (eyeshell's writer writes
+/// no cells; the layout is MATLAB's: array flags with class mxCELL_CLASS, dimensions, name,
+/// then each cell as an element of its own).
+fn cell_var(name: &str, inner: &MatValue) -> Vec<u8> {
+    let word = |v: &mut Vec<u8>, x: u32| v.extend(x.to_le_bytes());
+    // The inner value as an element: eyeshell's encoding of it, past the 128-byte header.
+    let inner = mat::encode(&[("c".into(), inner.clone())], false).unwrap()[128..].to_vec();
+    let mut body = Vec::new();
+    for x in [6, 8, 1, 0, 5, 8, 1, 1, 1, name.len() as u32] {
+        word(&mut body, x); // miUINT32 flags (cell), miINT32 dims 1×1, miINT8 name
+    }
+    body.extend(name.as_bytes());
+    body.resize(body.len().div_ceil(8) * 8, 0);
+    body.extend(inner);
+    let mut element = Vec::new();
+    word(&mut element, 14); // miMATRIX
+    word(&mut element, body.len() as u32);
+    element.extend(body);
+    element
+}
+
 /// The solve's own export with one field of `sol` replaced (or removed when `value` is
 /// None), written to `dir/NAME.mat`.
 fn with_sol_field(
@@ -377,10 +398,6 @@ fn compare_refuses_a_reference_it_cannot_compare_whole() {
     let mut six_rows = rows.clone();
     six_rows.push(rows[0].clone());
     let six = MatValue::from_rows(&six_rows);
-    let cell = MatValue::Cell {
-        dims: vec![1, 1],
-        cells: vec![y.clone()],
-    };
     let one = MatValue::row(&x[..1]);
     let mut nan_x = x.clone();
     nan_x[3] = f64::NAN;
@@ -389,7 +406,7 @@ fn compare_refuses_a_reference_it_cannot_compare_whole() {
             "transposed",
             "y",
             Some(transposed),
-            format!("sol.y is a {n}×5 numeric array (it looks transposed)"),
+            format!("sol.y is a {n}×5 array (it looks transposed)"),
         ),
         (
             "short",
@@ -397,19 +414,8 @@ fn compare_refuses_a_reference_it_cannot_compare_whole() {
             Some(short),
             format!("sol.y has {} columns but sol.x has {n} points", n - 3),
         ),
-        (
-            "four",
-            "y",
-            Some(four),
-            format!("sol.y is a 4×{n} numeric array"),
-        ),
-        (
-            "six",
-            "y",
-            Some(six),
-            format!("sol.y is a 6×{n} numeric array"),
-        ),
-        ("cell", "y", Some(cell), "sol.y is a 1×1 cell array".into()),
+        ("four", "y", Some(four), format!("sol.y is a 4×{n} array")),
+        ("six", "y", Some(six), format!("sol.y is a 6×{n} array")),
         (
             "text",
             "y",
@@ -478,15 +484,23 @@ fn compare_refuses_a_reference_it_cannot_compare_whole() {
         "worst: r in",
     );
 
-    // `sol` that is not a struct is not read as the top level.
-    let cellsol = d.join("cell-sol.mat");
-    let cell = MatValue::Cell {
-        dims: vec![1, 1],
-        cells: vec![sol.clone()],
-    };
-    mat::write(&cellsol, &[("sol".into(), cell)], false).unwrap();
+    // Cell arrays (eyeshell writes none: encoded here): a y in a cell, and a `sol` in a
+    // cell, which is not read as the top level instead.
+    let mut cells = mat::encode(&[("x".into(), MatValue::row(&x))], false).unwrap();
+    cells.extend(cell_var("y", &y));
+    let cell_y = d.join("cell-y.mat");
+    std::fs::write(&cell_y, cells).unwrap();
     assert_fails(
-        &eyeshell(&["compare", s(&solve), s(&cellsol)]),
+        &eyeshell(&["compare", s(&solve), s(&cell_y)]),
+        2,
+        "y is a 1×1 cell array: expected a 5×N numeric array",
+    );
+    let mut cells = mat::header();
+    cells.extend(cell_var("sol", sol));
+    let cell_sol = d.join("cell-sol.mat");
+    std::fs::write(&cell_sol, cells).unwrap();
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&cell_sol)]),
         2,
         "sol is a 1×1 cell array, not bvp4c's solution struct",
     );
@@ -510,7 +524,7 @@ fn compare_refuses_a_reference_it_cannot_compare_whole() {
     assert_fails(
         &eyeshell(&["compare", s(&solve), s(&p)]),
         2,
-        &format!("y is a {n}×5 numeric array (it looks transposed)"),
+        &format!("y is a {n}×5 array (it looks transposed)"),
     );
     let p = npz_of("zero-d", NpyArray::scalar(x[0]), good_y.clone());
     assert_fails(
