@@ -182,13 +182,14 @@ pub fn report_text(
         "  {:width$}  {:>12}  {:>12}  {:>12}  range\n",
         "parameter", "initial", "estimate", "std. error"
     ));
+    let d6 = eyeshell::text::decimals6;
     for p in &r.parameters {
         text.push_str(&format!(
-            "  {:width$}  {:>12.6}  {:>12.6}  {:>12.6}  {}{}\n",
+            "  {:width$}  {:>12}  {:>12}  {:>12}  {}{}\n",
             p.key,
-            p.initial,
-            p.estimate,
-            p.standard_error,
+            d6(p.initial),
+            d6(p.estimate),
+            d6(p.standard_error),
             p.range,
             if p.at_bound { " (at its bound)" } else { "" }
         ));
@@ -196,6 +197,7 @@ pub fn report_text(
     if n > 1 {
         text.push_str(&correlation_table(r));
     }
+    let d4 = |x: f64| eyeshell::text::decimals(x, 4);
     let pairs = strongly_correlated(r);
     if !pairs.is_empty() {
         let list: Vec<String> = pairs
@@ -210,13 +212,13 @@ pub fn report_text(
         ));
     }
     text.push_str(&format!(
-        "  χ²               {:.4} (from {:.4}), {} degree{} of freedom, χ²/dof {:.4}; rms residual {:.4} mm\n",
-        r.chi2,
-        r.initial_chi2,
+        "  χ²               {} (from {}), {} degree{} of freedom, χ²/dof {}; rms residual {} mm\n",
+        d4(r.chi2),
+        d4(r.initial_chi2),
         r.degrees_of_freedom,
         plural(r.degrees_of_freedom),
-        r.reduced_chi2,
-        r.rms_residual
+        d4(r.reduced_chi2),
+        d4(r.rms_residual)
     ));
     text.push_str(&format!(
         "  iterations       {} ({} growth run{} with sensitivities); {}\n  time             {:.3} s\n  output           {}\n",

@@ -61,7 +61,8 @@ pub(crate) fn cmd_compare(a: &CompareArgs) -> Result<(), Error> {
     for (name, v) in [("--tol", a.tol), ("--rtol", a.rtol)] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(Error::input(format!(
-                "{name} = {v}: must be a finite number ≥ 0"
+                "{name} = {}: must be a finite number ≥ 0",
+                eyeshell::text::number(v)
             )));
         }
     }
@@ -83,16 +84,16 @@ pub(crate) fn cmd_compare(a: &CompareArgs) -> Result<(), Error> {
         .max_by(|x, y| x.1.worst_ratio.total_cmp(&y.1.worst_ratio))
     {
         return Err(Error::failed(format!(
-            "{} field comparison{} beyond |Δ| ≤ {:e} + {:e}·|ref|; worst: {} in {} (max |Δ| {:.3e} at {} = {})",
+            "{} field comparison{} beyond |Δ| ≤ {} + {}·|ref|; worst: {} in {} (max |Δ| {:.3e} at {} = {})",
             failed.len(),
             plural(failed.len()),
-            a.tol,
-            a.rtol,
+            eyeshell::text::number(a.tol),
+            eyeshell::text::number(a.rtol),
             worst.field,
             r.reference,
             worst.max_abs,
             r.coordinate,
-            worst.at_abs
+            eyeshell::text::number(worst.at_abs)
         )));
     }
     Ok(())

@@ -118,3 +118,77 @@ fn growth_to_absurd_times_keeps_short_names() {
     let r = bounded(dir.path(), &["export", "out", "--npz", "x", "-q"]);
     succeeded(&r, "export");
 }
+
+/// growth.t_end too short for the integrators to step (their time × step products
+/// underflow below about 1e-160) is refused with the limit, before any output; every
+/// number in the message is short (1e-250 was printed with 250 digits).
+#[test]
+fn growth_too_short_to_step_is_refused_with_the_limit() {
+    for t in ["1e-101", "1e-200", "5e-324"] {
+        refused_before_output(
+            &["grow"],
+            &[&format!("growth.t_end={t}"), &format!("output.times=[{t}]")],
+            &format!("growth.t_end = {t} must be at least 1e-100"),
+        );
+    }
+    // Output times after a tiny t_end: named in short numbers.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("s.toml"),
+        "[growth]\nt_end = 1e-50\n[output]\ntimes = [0.1, 0.2]\n",
+    )
+    .unwrap();
+    let r = bounded(dir.path(), &["grow", "s.toml", "--out", "out"]);
+    refused(&r, "0.2 is after growth.t_end = 1e-50", "output.times");
+    assert!(r.stderr.len() < 200, "{}", r.stderr);
+}
+
+/// Growth rates too fast for the integrators (growth.eta0 = 1e150, 1e300: IDA used to stop
+/// with "IDASolve … IDA_ILL_INPUT … tstop = 1 is behind current t = 0"): a clean failure
+/// at t = 0 in the scene's terms, with every integrator, in bounded time.
+#[test]
+fn growth_rates_too_fast_fail_in_the_scenes_terms() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("g.toml"),
+        "[solver]\nnodes = 21\n[growth]\nt_end = 1\n[output]\ntimes = [0.5]\n",
+    )
+    .unwrap();
+    for integrator in ["ida", "cvode", "euler"] {
+        for eta0 in ["1e150", "1e300"] {
+            let what = format!("{integrator}, η0 = {eta0}");
+            let r = bounded(
+                dir.path(),
+                &[
+                    "grow",
+                    "g.toml",
+                    "-q",
+                    "--set",
+                    &format!("solver.integrator={integrator}"),
+                    "--set",
+                    &format!("growth.eta0={eta0}"),
+                    "--out",
+                    "out",
+                ],
+            );
+            assert_eq!(r.code, Some(1), "{what}: {}", r.stderr);
+            one_clean_line(&r, &what);
+            for needle in [
+                "growth failed at t = 0",
+                "the growth rates at t = 0 are too fast for the integrators",
+                &format!("growth.eta0 = {eta0}"),
+            ] {
+                assert!(
+                    r.stderr.contains(needle),
+                    "{what}: {needle:?} not in {}",
+                    r.stderr
+                );
+            }
+            for raw in ["IDA", "CVode", "tstop", "ILL_INPUT"] {
+                assert!(!r.stderr.contains(raw), "{what}: {}", r.stderr);
+            }
+            assert!(r.stderr.len() < 500, "{what}: {}", r.stderr);
+            let _ = std::fs::remove_dir_all(dir.path().join("out"));
+        }
+    }
+}

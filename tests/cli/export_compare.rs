@@ -304,3 +304,256 @@ fn compare_is_as_accurate_as_the_solutions() {
         assert!(r.stderr.contains("kappa"), "{}", r.stderr);
     }
 }
+
+/// A MAT v5 element: the 1×1 cell array `name` holding `inner` (eyeshell's writer writes
+/// no cells; the layout is MATLAB's: array flags with class mxCELL_CLASS, dimensions, name,
+/// then each cell as an element of its own).
+fn cell_var(name: &str, inner: &MatValue) -> Vec<u8> {
+    let word = |v: &mut Vec<u8>, x: u32| v.extend(x.to_le_bytes());
+    // The inner value as an element: eyeshell's encoding of it, past the 128-byte header.
+    let inner = mat::encode(&[("c".into(), inner.clone())], false).unwrap()[128..].to_vec();
+    let mut body = Vec::new();
+    for x in [6, 8, 1, 0, 5, 8, 1, 1, 1, name.len() as u32] {
+        word(&mut body, x); // miUINT32 flags (cell), miINT32 dims 1×1, miINT8 name
+    }
+    body.extend(name.as_bytes());
+    body.resize(body.len().div_ceil(8) * 8, 0);
+    body.extend(inner);
+    let mut element = Vec::new();
+    word(&mut element, 14); // miMATRIX
+    word(&mut element, body.len() as u32);
+    element.extend(body);
+    element
+}
+
+/// The solve's own export with one field of `sol` replaced (or removed when `value` is
+/// None), written to `dir/NAME.mat`.
+fn with_sol_field(
+    dir: &std::path::Path,
+    solve_mat: &std::path::Path,
+    name: &str,
+    field: &str,
+    value: Option<MatValue>,
+) -> std::path::PathBuf {
+    let mut vars = mat::read(solve_mat).unwrap();
+    let MatValue::Struct(fields) = &mut vars[0].1 else {
+        panic!("sol is not a struct")
+    };
+    match value {
+        Some(v) => fields.iter_mut().find(|(n, _)| n == field).unwrap().1 = v,
+        None => fields.retain(|(n, _)| n != field),
+    }
+    let path = dir.join(format!("{name}.mat"));
+    mat::write(&path, &vars, false).unwrap();
+    path
+}
+
+/// A reference that cannot be compared whole is refused (exit 2) with what is wrong in it,
+/// never passed on the fields that are left: `sol.y` transposed, short, with 4 or 6 rows,
+/// a cell or text; an empty, 0-d or one-point x (never replaced by the other coordinate);
+/// a NaN in x; a field the run has with the wrong length; a `sol` that is not a struct; a
+/// `time` that is not one number. y with wrong values fails (exit 1). Variables the run
+/// has no field for are listed as not compared.
+#[test]
+fn compare_refuses_a_reference_it_cannot_compare_whole() {
+    use eyeshell::interop::npz::{self, NpyArray};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (solve, grow) = small_runs(d);
+    let solve_mat = d.join("solve.mat");
+    ok(&["export", s(&solve), "--mat", s(&solve_mat), "--quiet"]);
+    let vars = mat::read(&solve_mat).unwrap();
+    let sol = &vars[0].1;
+    let y = sol.field("y").unwrap().clone();
+    let n = y.dims().unwrap()[1];
+    let rows: Vec<Vec<f64>> = (0..5).map(|i| y.row_of(i).unwrap()).collect();
+    let x = sol.field("x").unwrap().data().unwrap().to_vec();
+
+    // The export itself: everything compared or said not to be.
+    let r = ok(&["compare", s(&solve), s(&solve_mat)]);
+    let line = r
+        .stdout
+        .lines()
+        .find(|l| l.contains("not compared:"))
+        .unwrap_or_else(|| panic!("{}", r.stdout));
+    for name in [
+        "solver (text",
+        "stats (a struct)",
+        &format!("yp (a 5×{n} array, not a vector over the points)"),
+    ] {
+        assert!(line.contains(name), "{line}");
+    }
+    assert!(
+        r.stdout.contains("13 of 13 field comparisons"),
+        "{}",
+        r.stdout
+    );
+
+    let transposed = MatValue::Double {
+        dims: vec![n, 5],
+        data: rows.iter().flatten().copied().collect(),
+    };
+    let short = MatValue::from_rows(&rows.iter().map(|r| r[..n - 3].to_vec()).collect::<Vec<_>>());
+    let four = MatValue::from_rows(&rows[..4]);
+    let mut six_rows = rows.clone();
+    six_rows.push(rows[0].clone());
+    let six = MatValue::from_rows(&six_rows);
+    let one = MatValue::row(&x[..1]);
+    let mut nan_x = x.clone();
+    nan_x[3] = f64::NAN;
+    let cases: Vec<(&str, &str, Option<MatValue>, String)> = vec![
+        (
+            "transposed",
+            "y",
+            Some(transposed),
+            format!("sol.y is a {n}×5 array (it looks transposed)"),
+        ),
+        (
+            "short",
+            "y",
+            Some(short),
+            format!("sol.y has {} columns but sol.x has {n} points", n - 3),
+        ),
+        ("four", "y", Some(four), format!("sol.y is a 4×{n} array")),
+        ("six", "y", Some(six), format!("sol.y is a 6×{n} array")),
+        (
+            "text",
+            "y",
+            Some(MatValue::Char("kappa".into())),
+            "sol.y is text".into(),
+        ),
+        (
+            "empty-x",
+            "x",
+            Some(MatValue::row(&[])),
+            "sol.x is empty".into(),
+        ),
+        ("one-x", "x", Some(one), "sol.x has a single point".into()),
+        (
+            "nan-x",
+            "x",
+            Some(MatValue::row(&nan_x)),
+            format!("sol.x has nan at point 4 of {n}"),
+        ),
+        ("no-x", "x", None, "sigma".into()),
+        (
+            "short-sigma",
+            "sigma",
+            Some(MatValue::row(&x[..n - 1])),
+            format!(
+                "sigma is {} values, but sol.x has {n} points, so it cannot be compared",
+                n - 1
+            ),
+        ),
+    ];
+    for (name, field, value, needle) in cases {
+        let bad = with_sol_field(d, &solve_mat, name, field, value);
+        let r = eyeshell(&["compare", s(&solve), s(&bad)]);
+        if name == "no-x" {
+            // Without x the reference's own coordinate sigma is used, and said.
+            assert!(
+                r.stdout.contains(&format!("{n} points in sigma")),
+                "{name}: {}",
+                r.stdout
+            );
+            continue;
+        }
+        one_clean_line(&r, name);
+        assert_fails(&r, 2, &needle);
+        assert!(r.stdout.is_empty(), "{name}: {}", r.stdout);
+    }
+
+    // Well-formed y with wrong values fails the comparison: every row, all 123, and a NaN.
+    let all = MatValue::from_rows(&vec![vec![123.0; n]; 5]);
+    let bad = with_sol_field(d, &solve_mat, "all-123", "y", Some(all));
+    let r = eyeshell(&["compare", s(&solve), s(&bad)]);
+    assert_fails(&r, 1, "5 field comparisons beyond");
+    assert_eq!(r.stdout.matches("FAIL").count(), 5, "{}", r.stdout);
+    let mut nan_rows = rows.clone();
+    nan_rows[2][7] = f64::NAN;
+    let bad = with_sol_field(
+        d,
+        &solve_mat,
+        "nan-y",
+        "y",
+        Some(MatValue::from_rows(&nan_rows)),
+    );
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&bad)]),
+        1,
+        "worst: r in",
+    );
+
+    // Cell arrays (eyeshell writes none: encoded here): a y in a cell, and a `sol` in a
+    // cell, which is not read as the top level instead.
+    let mut cells = mat::encode(&[("x".into(), MatValue::row(&x))], false).unwrap();
+    cells.extend(cell_var("y", &y));
+    let cell_y = d.join("cell-y.mat");
+    std::fs::write(&cell_y, cells).unwrap();
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&cell_y)]),
+        2,
+        "y is a 1×1 cell array: expected a 5×N numeric array",
+    );
+    let mut cells = mat::header();
+    cells.extend(cell_var("sol", sol));
+    let cell_sol = d.join("cell-sol.mat");
+    std::fs::write(&cell_sol, cells).unwrap();
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&cell_sol)]),
+        2,
+        "sol is a 1×1 cell array, not bvp4c's solution struct",
+    );
+
+    // The same in .npz: (N, 5) y, 0-d x, one-point x.
+    let npz_of = |name: &str, x: NpyArray, y: NpyArray| {
+        let p = d.join(format!("{name}.npz"));
+        npz::write(&p, &[("x".into(), x), ("y".into(), y)]).unwrap();
+        p
+    };
+    let good_y = NpyArray::from_rows(&rows);
+    let p = npz_of("ok", NpyArray::vector(&x), good_y.clone());
+    ok(&["compare", s(&solve), s(&p), "--quiet"]);
+    let t = NpyArray {
+        shape: vec![n, 5],
+        data: (0..n)
+            .flat_map(|j| rows.iter().map(move |r| r[j]))
+            .collect(),
+    };
+    let p = npz_of("t", NpyArray::vector(&x), t);
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&p)]),
+        2,
+        &format!("y is a {n}×5 array (it looks transposed)"),
+    );
+    let p = npz_of("zero-d", NpyArray::scalar(x[0]), good_y.clone());
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&p)]),
+        2,
+        "x is a 0-d array (one number)",
+    );
+    let p = npz_of("one", NpyArray::vector(&x[..1]), good_y);
+    assert_fails(
+        &eyeshell(&["compare", s(&solve), s(&p)]),
+        2,
+        "x has a single point",
+    );
+
+    // A growth snapshot whose time is text.
+    let odd = d.join("odd-time.mat");
+    mat::write(
+        &odd,
+        &[
+            ("Sigma".into(), MatValue::row(&[0.5, 1.0])),
+            ("rho".into(), MatValue::row(&[1.0, 2.0])),
+            ("time".into(), MatValue::Char("0.1".into())),
+        ],
+        false,
+    )
+    .unwrap();
+    assert_fails(
+        &eyeshell(&["compare", s(&grow), s(&odd)]),
+        2,
+        "time is text (a char array): expected one finite number",
+    );
+}

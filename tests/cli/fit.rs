@@ -172,6 +172,18 @@ fn hostile_data_files_are_refused_and_nothing_is_written() {
             "t,axial_length\n0.1,\u{0}\u{1}\n".into(),
             "is not a number",
         ),
+        // Finite values whose weighted squares overflow: the cause named, not "converged"
+        // with χ² = inf, nor "does not depend on growth.delta".
+        (
+            "overflow",
+            "t,axial_length\n0.5,23\n0.6,1e308\n0.7,24\n".into(),
+            "observation 2 (t = 0.6, axial_length = 1e308 mm, σ = 1 (none given)) gives the weighted residual",
+        ),
+        (
+            "tiny sigma",
+            "t,axial_length,sigma\n0.5,23,1e-170\n0.6,24,1e-170\n".into(),
+            "σ = 1e-170 mm) gives the weighted residual",
+        ),
     ];
     for (what, text, needle) in cases {
         let data = dir.path().join(format!("{}.csv", what.replace(' ', "_")));
@@ -219,6 +231,11 @@ fn bad_keys_and_unidentifiable_parameters_are_refused_by_name() {
         (
             "solver.nodes",
             "--fit: sensitivities to solver.nodes are not available",
+        ),
+        // The check `grow --sensitivities` makes, before any run (exit 2, not 1 at t = 0).
+        (
+            "fibres.D",
+            "fibres.D = 0: the scene has no fibres, so there is no sensitivity to their stiffness",
         ),
     ] {
         assert_bad(&eyeshell(&fit_args(DATA, keys, s(&out))), needle, keys);

@@ -9,7 +9,10 @@ fn bad_growth_values() {
     for (line, key) in [
         ("growth.eta0 = -1", "growth.eta0 = -1 must be non-negative"),
         ("growth.delta = 0", "growth.delta = 0 must be positive"),
-        ("growth.t_end = -1", "growth.t_end = -1 must be positive"),
+        (
+            "growth.t_end = -1",
+            "growth.t_end = -1 must be at least 1e-100",
+        ),
         ("growth.t_end = 0", "growth.t_end"),
         (
             "growth.Gamma = nan",

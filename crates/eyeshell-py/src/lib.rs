@@ -674,6 +674,11 @@ fn compare<'py>(
         d.set_item("coordinate", &r.coordinate)?;
         d.set_item("points", r.points)?;
         d.set_item("outside", r.outside)?;
+        let not_compared = PyDict::new(py);
+        for (name, why) in &r.not_compared {
+            not_compared.set_item(name, why)?;
+        }
+        d.set_item("not_compared", not_compared)?;
         d.set_item("passed", !r.failed())?;
         let fields = PyDict::new(py);
         for f in &r.fields {

@@ -154,19 +154,7 @@ impl Scene {
             return Ok(());
         }
         let params = crate::fit::parse_keys(keys, "sensitivities")?;
-        for p in &params {
-            p.param
-                .check(&self.params)
-                .map_err(|why| Error::input(format!("sensitivities: {why} ({})", self.origin)))?;
-        }
-        let integrator = self.growth_settings.integrator;
-        if integrator != growth::Integrator::Ida {
-            return Err(Error::input(format!(
-                "sensitivities need solver.integrator = \"ida\" ({} has \"{}\")",
-                self.origin,
-                integrator.name()
-            )));
-        }
+        crate::fit::check_params(self, &params, "sensitivities")?;
         self.growth_settings.sensitivities = params.iter().map(|p| p.param).collect();
         self.growth_settings.sensitivity_error_control = error_control;
         Ok(())

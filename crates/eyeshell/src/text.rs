@@ -16,10 +16,17 @@ pub fn number(x: f64) -> String {
 /// `x` with 6 decimals where that shows it (|x| in [1e-4, 1e9), or 0), else 6 significant
 /// digits in scientific notation: `5.932091`, `1.234568e-7`. At most about 17 characters.
 pub fn decimals6(x: f64) -> String {
+    decimals(x, 6)
+}
+
+/// `x` with `places` decimals where that shows it (|x| in [1e-4, 1e9), or 0), else
+/// `places` significant digits after the point in scientific notation: `decimals(2.5, 4)`
+/// is `2.5000`, `decimals(1e300, 4)` is `1.0000e300`.
+pub fn decimals(x: f64, places: usize) -> String {
     if x == 0.0 || !x.is_finite() || (1e-4..1e9).contains(&x.abs()) {
-        format!("{x:.6}")
+        format!("{x:.places$}")
     } else {
-        format!("{x:.6e}")
+        format!("{x:.places$e}")
     }
 }
 
@@ -83,6 +90,8 @@ mod tests {
         assert_eq!(decimals6(0.0), "0.000000");
         assert_eq!(decimals6(1.2345678e-7), "1.234568e-7");
         assert_eq!(decimals6(1e300), "1.000000e300");
+        assert_eq!(decimals(1e300, 4), "1.0000e300");
+        assert_eq!(decimals(2.5, 4), "2.5000");
         for x in [f64::MIN_POSITIVE, 1e-310, 1e308, -1e-100, 123456789012.0] {
             assert!(number(x).len() <= 24 && decimals6(x).len() <= 17, "{x:e}");
         }

@@ -33,6 +33,11 @@ pub enum SundialsError {
     Invalid(String),
 }
 
+/// What joins, in a [`SundialsError::Flag`]'s message, SUNDIALS' own words and the last
+/// recoverable error our callbacks reported during the failed call (the caller's words for
+/// why an evaluation failed), so that a caller can tell them apart.
+pub const RECOVERABLE_NOTE: &str = "; last recoverable callback error: ";
+
 /// ": message" on one line, or nothing when the message is empty.
 struct Colon<'a>(&'a str);
 

@@ -459,7 +459,8 @@ impl Mem {
         }
         let mut message = logged.unwrap_or_else(|| family.describe(flag).1.to_string());
         if let Some(r) = recoverable {
-            message.push_str(&format!("; last recoverable callback error: {r}"));
+            message.push_str(crate::error::RECOVERABLE_NOTE);
+            message.push_str(&r);
         }
         Err(flag_error(function, flag, family, Some(message)))
     }

@@ -35,7 +35,7 @@ mod nvector;
 pub use callback::{CallbackError, CallbackResult};
 pub use context::Context;
 pub use cvode::{Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem};
-pub use error::SundialsError;
+pub use error::{SundialsError, RECOVERABLE_NOTE};
 pub use ida::{DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats};
 pub use idas::{IdaSensStats, SensitivityOptions};
 pub use kinsol::{Kinsol, KinsolOptions, KinsolStats, NonlinearSystem, Strategy};

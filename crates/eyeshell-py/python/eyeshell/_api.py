@@ -524,8 +524,9 @@ class FitResult:
 
     @property
     def converged(self) -> bool:
-        """Did the iteration converge (rather than stop at max_iterations)?"""
-        return self.report["convergence"] != "iterations"
+        """Did the iteration converge (rather than stop at max_iterations, or at steps that
+        could not be evaluated: ``"refused"``)?"""
+        return self.report["convergence"] not in ("iterations", "refused")
 
     @property
     def iterations(self) -> int:
@@ -894,8 +895,9 @@ def sweep(
 @dataclass
 class Comparison:
     """What :func:`compare` found: ``passed``, one report per compared pair (``pairs``:
-    dicts with reference, run, time, coordinate, points, passed and per-field ``fields``
-    maxima), and ``text``, the table ``eyeshell compare`` prints."""
+    dicts with reference, run, time, coordinate, points, passed, per-field ``fields``
+    maxima and ``not_compared``: the reference's variables left out, name → why), and
+    ``text``, the table ``eyeshell compare`` prints."""
 
     passed: bool
     pairs: list[dict[str, Any]]

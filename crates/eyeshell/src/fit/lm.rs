@@ -30,7 +30,9 @@
 //!
 //! or when no step lowers the cost any more (λ beyond 1e16: `stalled`, the cost is at the
 //! accuracy of the growth run), or after `max_iterations` (`iterations`, reported, not an
-//! error: the report says so).
+//! error: the report says so). When the steps that drove λ there include one the scene
+//! refused or whose growth run failed (`refused`), the cost was not found lower nowhere
+//! near the estimate: it could not be evaluated there, and the fit has not converged.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -80,13 +82,15 @@ pub enum Convergence {
     #[serde(rename = "standard-error")]
     StandardError,
     Stalled,
+    /// λ beyond 1e16 after rejected steps of which at least one could not be evaluated.
+    Refused,
     Iterations,
 }
 
 impl Convergence {
-    /// Did the fit converge (every reason but the iteration limit)?
+    /// Did the fit converge (every reason but the iteration limit and refused steps)?
     pub fn converged(self) -> bool {
-        self != Convergence::Iterations
+        !matches!(self, Convergence::Iterations | Convergence::Refused)
     }
 
     /// The reason in words.
@@ -101,6 +105,7 @@ impl Convergence {
                 (o.setol * o.setol * 1e12).round() / 1e12
             ),
             Convergence::Stalled => "converged: no step lowers the cost further (it is at the accuracy of the growth runs)".into(),
+            Convergence::Refused => "not converged: the last steps were rejected, some because the scene refused them or their growth run failed, until the damping passed 1e16 (the estimates are the last accepted)".into(),
             Convergence::Iterations => format!("not converged: stopped after {} iterations (the estimates are the last accepted)", o.max_iterations),
         }
     }
@@ -134,6 +139,8 @@ pub struct Outcome {
     pub iterations: usize,
     pub evaluations: usize,
     pub convergence: Convergence,
+    /// Why the last step that could not be evaluated was refused, since the last accepted.
+    pub last_refusal: Option<String>,
     pub history: Vec<IterationRecord>,
 }
 
@@ -145,7 +152,7 @@ pub fn show(names: &[&str], values: &[f64]) -> String {
     names
         .iter()
         .zip(values)
-        .map(|(n, v)| format!("{n} = {v:.6}"))
+        .map(|(n, v)| format!("{n} = {}", crate::text::decimals6(*v)))
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -153,6 +160,30 @@ pub fn show(names: &[&str], values: &[f64]) -> String {
 /// Is `x` on a closed bound of `b`?
 pub fn at_closed_bound(b: &Bounds, x: f64) -> bool {
     (!b.lower_open && b.lower == Some(x)) || (!b.upper_open && b.upper == Some(x))
+}
+
+/// Which parameters their range holds at `p`: on a closed bound, or with the full
+/// Gauss–Newton step from `p` (residuals `r`, Jacobian `j`) leaving the range: the data
+/// pull them beyond it (towards an open bound the steps only approach it), so the estimate
+/// is the bound's, not the data's optimum, and its standard error means little.
+pub fn held_by_bounds(
+    params: &[FitParam],
+    p: &[f64],
+    r: &DVector<f64>,
+    j: &DMatrix<f64>,
+) -> Vec<bool> {
+    let step = (j.transpose() * j)
+        .cholesky()
+        .map(|ch| ch.solve(&(-(j.transpose() * r))));
+    (0..params.len())
+        .map(|c| {
+            let b = &params[c].bounds;
+            at_closed_bound(b, p[c])
+                || step
+                    .as_ref()
+                    .is_some_and(|s| s[c].is_finite() && b.excludes(p[c] + s[c]))
+        })
+        .collect()
 }
 
 /// `from + step` kept in `b`: onto a closed bound, 90 % of the way towards an open one.
@@ -208,6 +239,7 @@ pub fn minimise(
     let mut nu = 2.0;
     let mut history = Vec::new();
     let mut convergence = Convergence::Iterations;
+    let mut last_refusal: Option<String> = None;
     for iteration in 1..=o.max_iterations {
         let jtj = j.transpose() * &j;
         let g = j.transpose() * &r;
@@ -289,6 +321,7 @@ pub fn minimise(
                         (0..k).all(|c| delta[c].abs() <= o.xtol * (p[c].abs() + o.xtol));
                     p = trial;
                     (r, j, model) = (r2, j2, m2);
+                    last_refusal = None;
                     chi2 = chi2_new;
                     lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 9.0);
                     nu = 2.0;
@@ -302,7 +335,10 @@ pub fn minimise(
                     (false, Some(format!("χ² {chi2_new:.6e} ≥ {chi2:.6e}")))
                 }
             }
-            Err(e) => (false, Some(e.to_string())),
+            Err(e) => {
+                last_refusal = Some(e.to_string());
+                (false, last_refusal.clone())
+            }
         };
         if !accepted {
             lambda *= nu;
@@ -322,7 +358,11 @@ pub fn minimise(
             break;
         }
         if lambda > 1e16 {
-            convergence = Convergence::Stalled;
+            convergence = if last_refusal.is_some() {
+                Convergence::Refused
+            } else {
+                Convergence::Stalled
+            };
             break;
         }
     }
@@ -336,6 +376,7 @@ pub fn minimise(
         iterations,
         evaluations,
         convergence,
+        last_refusal,
         history,
     })
 }
@@ -367,6 +408,67 @@ mod tests {
         assert_eq!(project(&closed, 1.0, -5.0), 0.0);
         assert_eq!(project(&open, 1.0, 0.5), 1.5);
         assert_eq!(project(&Bounds::NONE, 1.0, -5.0), -4.0);
+    }
+
+    /// Steps that cannot be evaluated (the scene refuses them, their run fails) are
+    /// rejected; when they drive the damping to its limit the fit has not converged, and
+    /// the last refusal is kept to say why.
+    #[test]
+    fn a_fit_stopped_by_refused_steps_has_not_converged() {
+        let p0 = [1.0];
+        let mut eval = |p: &[f64]| -> Result<Evaluation, Error> {
+            if p != p0 {
+                return Err(Error::input("the scene refuses it"));
+            }
+            let r = DVector::from_vec(vec![p[0] - 3.0, p[0] - 3.5]);
+            Ok((r, DMatrix::from_element(2, 1, 1.0), vec![p[0]; 2]))
+        };
+        let out = minimise(
+            &mut eval,
+            &[param(Bounds::NONE)],
+            &p0,
+            &FitOptions::default(),
+            &|_| 1.0,
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(out.convergence, Convergence::Refused);
+        assert!(!out.convergence.converged());
+        assert!(out
+            .convergence
+            .describe(&FitOptions::default())
+            .starts_with("not converged"));
+        assert_eq!(out.last_refusal.as_deref(), Some("the scene refuses it"));
+        assert_eq!(out.values, p0);
+    }
+
+    /// The range holds a parameter on a closed bound, or one the Gauss–Newton step would
+    /// take beyond an open bound; not one at an interior optimum.
+    #[test]
+    fn held_by_bounds_tells_the_range_from_the_data() {
+        let open_above = Bounds {
+            upper: Some(2.0),
+            upper_open: true,
+            ..Bounds::NONE
+        };
+        let j = DMatrix::from_element(2, 1, 1.0);
+        // The data want p = 3.25, beyond the open bound 2: held at p = 1.99.
+        let r = DVector::from_vec(vec![1.99 - 3.0, 1.99 - 3.5]);
+        assert_eq!(
+            held_by_bounds(&[param(open_above)], &[1.99], &r, &j),
+            [true]
+        );
+        // The data want p = 1.5, inside: not held.
+        let r = DVector::from_vec(vec![1.5 - 1.25, 1.5 - 1.75]);
+        assert_eq!(
+            held_by_bounds(&[param(open_above)], &[1.5], &r, &j),
+            [false]
+        );
+        let closed = Bounds {
+            lower: Some(0.0),
+            ..Bounds::NONE
+        };
+        assert_eq!(held_by_bounds(&[param(closed)], &[0.0], &r, &j), [true]);
     }
 
     /// y = a·exp(b·x) on exact data: LM finds (a, b) from far away.

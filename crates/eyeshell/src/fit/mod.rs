@@ -22,6 +22,7 @@ use crate::growth::dae::SensParam;
 use crate::growth::{self, SensitivityRow};
 use crate::scene::keys::{self, KeyValue, Rule};
 use crate::scene::Scene;
+use crate::text::number;
 use crate::Error;
 
 pub use data::{Observation, Observations};
@@ -97,7 +98,8 @@ impl Bounds {
 
     /// The range as text: `> 0`, `[0, 1)`, `any`.
     pub fn describe(&self) -> String {
-        match (self.lower, self.upper) {
+        let (lo, hi) = (self.lower.map(number), self.upper.map(number));
+        match (lo, hi) {
             (None, None) => "any".into(),
             (Some(lo), None) => format!("{} {lo}", if self.lower_open { ">" } else { "≥" }),
             (None, Some(hi)) => format!("{} {hi}", if self.upper_open { "<" } else { "≤" }),
@@ -107,6 +109,17 @@ impl Bounds {
                 if self.upper_open { ")" } else { "]" }
             ),
         }
+    }
+
+    /// Whether `x` lies outside the range (on an open bound counts as outside).
+    pub fn excludes(&self, x: f64) -> bool {
+        let below = self
+            .lower
+            .is_some_and(|lo| x < lo || (self.lower_open && x <= lo));
+        let above = self
+            .upper
+            .is_some_and(|hi| x > hi || (self.upper_open && x >= hi));
+        below || above
     }
 }
 
@@ -121,6 +134,45 @@ impl FitParam {
     pub fn key(&self) -> &'static str {
         self.param.key()
     }
+
+    /// The parameter's range in `scene`: its key's range narrowed by the limits that tie
+    /// it to other keys (`Scene::validate`), so that a step never leaves what the scene
+    /// accepts. pressure.dP stays below the cornea's limit, the largest admissible ΔP
+    /// (docs/MODEL.md §3), an open bound: at the limit the cornea's stretch has an infinite
+    /// derivative in ΔP, so neither the model nor its sensitivity can be evaluated there.
+    pub fn in_scene(self, scene: &Scene) -> FitParam {
+        let mut bounds = self.bounds;
+        if self.param == SensParam::Pressure {
+            let limit = crate::model::cornea::max_pressure(&scene.params.cornea);
+            if bounds.upper.is_none_or(|hi| limit <= hi) {
+                bounds.upper = Some(limit);
+                bounds.upper_open = true;
+            }
+        }
+        FitParam { bounds, ..self }
+    }
+}
+
+/// Why `params` cannot be taken in `scene`, if they cannot: a parameter the model of the
+/// scene does not have (fibres.D without fibres), or an integrator without sensitivities.
+/// The one check of every caller (`grow --sensitivities`, `Scene::set_sensitivities`,
+/// `fit`), made before any run; `what` names the option in the message.
+pub fn check_params(scene: &Scene, params: &[FitParam], what: &str) -> Result<(), Error> {
+    if let Some(why) = params
+        .iter()
+        .find_map(|p| p.param.check(&scene.params).err())
+    {
+        return Err(Error::input(format!("{what}: {why} ({})", scene.origin)));
+    }
+    let integrator = scene.growth_settings.integrator;
+    if integrator != growth::Integrator::Ida {
+        return Err(Error::input(format!(
+            "{what} need solver.integrator = \"ida\" ({} has \"{}\")",
+            scene.origin,
+            integrator.name()
+        )));
+    }
+    Ok(())
 }
 
 /// Parse `keys` (the `--fit` or `--sensitivities` list): each a parameter, each once.
@@ -253,7 +305,7 @@ pub fn evaluate_watched(
         if !l.is_finite() || dl.iter().any(|x| !x.is_finite()) {
             return Err(Error::failed(format!(
                 "the growth run recorded no finite axial length or sensitivity at t = {}",
-                times[d]
+                number(times[d])
             )));
         }
         axial_length.push(*l);
@@ -281,6 +333,31 @@ pub fn weighted(m: &ModelValues, data: &Observations) -> (DVector<f64>, DMatrix<
         }
     }
     (r, j)
+}
+
+/// Why χ² = Σ rᵢ² or the information matrix JᵀJ cannot be computed in floating point, if
+/// so: a weighted residual or sensitivity whose square overflows (an axial length of 1e308
+/// mm, or a σ of 1e-160 that makes the weights 1/σ overflow). Names the observation that
+/// carries the largest value, as the data file gives it.
+pub fn overflow(r: &DVector<f64>, j: &DMatrix<f64>, data: &Observations) -> Option<String> {
+    let columns_finite = (0..j.ncols()).all(|c| j.column(c).norm_squared().is_finite());
+    if r.norm_squared().is_finite() && columns_finite {
+        return None;
+    }
+    let largest = |i: usize| j.row(i).iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+    let size = |i: usize| r[i].abs().max(largest(i));
+    let i = (0..r.len()).max_by(|&a, &b| size(a).total_cmp(&size(b)))?;
+    let o = &data.rows[i];
+    Some(format!(
+        "{}: observation {} (t = {}, axial_length = {} mm, σ = {}) gives the weighted residual (L − y)/σ = {} and weighted sensitivities (∂L/∂p)/σ up to {}: their squares overflow the largest floating-point number (about 1.8e308), so χ² and JᵀWJ cannot be computed; give the axial lengths and σ in mm",
+        data.origin,
+        i + 1,
+        number(o.t),
+        number(o.axial_length),
+        o.sigma.map_or("1 (none given)".to_string(), |s| format!("{} mm", number(s))),
+        crate::text::decimals6(r[i]),
+        crate::text::decimals6(largest(i)),
+    ))
 }
 
 /// Why the data cannot identify the parameters, as one line naming them, or None.
@@ -392,8 +469,9 @@ pub struct ParameterReport {
     pub standard_error: f64,
     /// The validity range the steps were kept in.
     pub range: String,
-    /// Whether the estimate lies on a closed bound (its standard error is then the
-    /// unconstrained one and means little).
+    /// Whether the range holds the estimate: on a closed bound, or the data pull it beyond
+    /// a bound (the Gauss–Newton step from it leaves the range: [`lm::held_by_bounds`]).
+    /// Its standard error is then the unconstrained one and means little.
     pub at_bound: bool,
 }
 
@@ -498,6 +576,8 @@ pub fn fit_watched(
     if params.is_empty() {
         return Err(Error::input("no parameter to fit"));
     }
+    check_params(scene, params, "fit")?;
+    let params: &[FitParam] = &params.iter().map(|p| p.in_scene(scene)).collect::<Vec<_>>();
     data.check_times(g.t_end)?;
     let (n, k) = (data.rows.len(), params.len());
     let has_sigma = data.has_sigma();
@@ -522,6 +602,9 @@ pub fn fit_watched(
         let m = evaluate_watched(&s, params, data, step)?;
         model_seconds += m.seconds;
         let (r, j) = weighted(&m, data);
+        if let Some(why) = overflow(&r, &j, data) {
+            return Err(Error::input(why));
+        }
         Ok((r, j, m.axial_length))
     };
     let dof = n - k;
@@ -535,6 +618,13 @@ pub fn fit_watched(
         )));
     }
     let chi2 = outcome.residuals.norm_squared();
+    if !chi2.is_finite() || outcome.values.iter().any(|v| !v.is_finite()) {
+        return Err(Error::failed(format!(
+            "the fit ended at χ² = {} ({}): not a result",
+            number(chi2),
+            lm::show(&names, &outcome.values)
+        )));
+    }
     let (scaling, s2) = (
         if has_sigma {
             "sigma"
@@ -552,6 +642,14 @@ pub fn fit_watched(
     })?;
     let cov = inverse * s2;
     let se: Vec<f64> = (0..k).map(|a| cov[(a, a)].max(0.0).sqrt()).collect();
+    if let Some(a) = (0..k).find(|&a| !se[a].is_finite()) {
+        return Err(Error::failed(format!(
+            "the standard error of {} at the estimate is {} ({}): the information matrix JᵀWJ is too close to singular to invert",
+            params[a].key(),
+            number(se[a]),
+            lm::show(&names, &outcome.values)
+        )));
+    }
     let correlation = (0..k)
         .map(|a| {
             (0..k)
@@ -588,6 +686,12 @@ pub fn fit_watched(
         .sum::<f64>()
         / n as f64)
         .sqrt();
+    let held = lm::held_by_bounds(
+        params,
+        &outcome.values,
+        &outcome.residuals,
+        &outcome.jacobian,
+    );
     let parameters = params
         .iter()
         .enumerate()
@@ -597,7 +701,7 @@ pub fn fit_watched(
             estimate: outcome.values[a],
             standard_error: se[a],
             range: p.bounds.describe(),
-            at_bound: lm::at_closed_bound(&p.bounds, outcome.values[a]),
+            at_bound: held[a],
         })
         .collect();
     let fitted = with_values(scene, params, &outcome.values)?;
@@ -623,7 +727,14 @@ pub fn fit_watched(
         iterations: outcome.iterations,
         model_runs: outcome.evaluations,
         convergence: outcome.convergence,
-        convergence_reason: outcome.convergence.describe(options),
+        convergence_reason: match &outcome.last_refusal {
+            Some(why) if outcome.convergence == Convergence::Refused => format!(
+                "{} (the last: {})",
+                outcome.convergence.describe(options),
+                crate::text::excerpt(why, 300)
+            ),
+            _ => outcome.convergence.describe(options),
+        },
         history: outcome.history,
         residuals,
         wall_seconds: start.elapsed().as_secs_f64(),

@@ -272,3 +272,91 @@ fn the_model_records_exactly_the_observation_times() {
     assert_eq!(m.jacobian[(0, 1)], at(0.35, 1));
     assert_eq!(m.jacobian[(4, 0)], at(0.05, 0));
 }
+
+/// χ² and JᵀWJ must be finite numbers: an axial length of 1e308 mm, or a σ so small that the
+/// weights 1/σ overflow, is refused before any step, naming the observation and the
+/// overflow (not "the data cannot identify").
+#[test]
+fn an_overflowing_cost_is_refused_with_its_cause() {
+    let scene = const_scene();
+    let data = synthetic(&scene, 0.05, 3);
+    let params = parse_keys(&["growth.delta"], "--fit").unwrap();
+    let mut big = data.clone();
+    big.rows[4].axial_length = 1e308;
+    let mut tiny = data.clone();
+    for r in &mut tiny.rows {
+        r.sigma = Some(1e-170);
+    }
+    for (what, d, needle) in [
+        (
+            "1e308",
+            &big,
+            "observation 5 (t = 0.5, axial_length = 1e308 mm, σ = 0.05 mm)",
+        ),
+        ("tiny σ", &tiny, "σ = 1e-170 mm"),
+    ] {
+        let e = fit(&scene, d, &params, &FitOptions::default(), &mut |_| {}).unwrap_err();
+        let text = e.to_string();
+        assert!(e.is_user_error(), "{what}: {text}");
+        assert!(
+            text.contains(needle) && text.contains("overflow"),
+            "{what}: {text}"
+        );
+        assert!(!text.contains("cannot identify"), "{what}: {text}");
+    }
+}
+
+/// pressure.dP's range in a fit ends at the cornea's limit (an open bound); data that
+/// want more are fitted at the bound, and the report says so.
+#[test]
+fn pressure_is_fitted_below_the_corneas_limit_and_reported_at_it() {
+    let scene = const_scene();
+    let data = synthetic(&scene, 0.05, 5);
+    let mut longer = data.clone();
+    for r in &mut longer.rows {
+        r.axial_length += 8.0;
+    }
+    let params = parse_keys(&["pressure.dP"], "--fit").unwrap();
+    let done = fit(
+        &scene,
+        &longer,
+        &params,
+        &FitOptions::default(),
+        &mut |_| {},
+    )
+    .unwrap();
+    let p = &done.report.parameters[0];
+    let limit = crate::model::cornea::max_pressure(&scene.params.cornea);
+    assert_eq!(p.range, format!("[0, {})", crate::text::number(limit)));
+    assert!(
+        p.estimate < limit && p.estimate > limit * (1.0 - 1e-5),
+        "{p:?}"
+    );
+    assert!(p.at_bound, "{p:?}");
+    // Data the range allows: an interior estimate, not at its bound.
+    let done = fit(&scene, &data, &params, &FitOptions::default(), &mut |_| {}).unwrap();
+    let p = &done.report.parameters[0];
+    assert!(!p.at_bound && (p.estimate - 2.0).abs() < 0.5, "{p:?}");
+}
+
+/// fibres.D in a scene without fibres: refused before any run, by the check that grow's
+/// sensitivities use, as the user's error.
+#[test]
+fn fibre_stiffness_without_fibres_is_refused_as_for_sensitivities() {
+    let scene = const_scene();
+    let data = synthetic(&scene, 0.05, 7);
+    let params = parse_keys(&["fibres.D"], "--fit").unwrap();
+    let e = fit(&scene, &data, &params, &FitOptions::default(), &mut |_| {}).unwrap_err();
+    assert!(e.is_user_error(), "{e}");
+    assert!(
+        e.to_string()
+            .contains("fibres.D = 0: the scene has no fibres, so there is no sensitivity"),
+        "{e}"
+    );
+    let mut s = scene.clone();
+    let e2 = s.set_sensitivities(&["fibres.D"], false).unwrap_err();
+    assert_eq!(
+        e.to_string().replacen("fit:", "", 1),
+        e2.to_string().replacen("sensitivities:", "", 1)
+    );
+}

@@ -69,14 +69,19 @@ pub fn integrate(
         user_product: true,
         preconditioned: false,
     };
+    let run = super::RunTerms::of(settings, t_end);
     let mut cv = match Cvode::new(GrowthOde { sys }, 0.0, p0, linear, &options) {
         Ok(cv) => cv,
-        Err(e) => return (CvodeStats::default(), Err((0.0, e.to_string()))),
+        Err(e) => {
+            let why = super::integrator_words(&e, 0.0, run);
+            return (CvodeStats::default(), Err((0.0, why)));
+        }
     };
     let result = super::march(
         &mut CvodeStepper {
             cv: &mut cv,
             output,
+            run,
         },
         p0.len(),
         t_end,
@@ -90,20 +95,28 @@ pub fn integrate(
 struct CvodeStepper<'a, 'b, 'c> {
     cv: &'a mut Cvode<GrowthOde<'b>>,
     output: &'a mut super::OutputFn<'c>,
+    /// The run's terms, for CVODE's failures.
+    run: super::RunTerms,
 }
 
 impl super::Stepper for CvodeStepper<'_, '_, '_> {
     fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
         self.cv.step(t_end, y).map_err(|e| {
+            let stats = self.cv.stats();
             // The deadline's own message rather than CVODE's "the right side failed".
             let why = self.cv.system_mut().sys.take_out_of_time();
-            let why = why.map_or_else(|| e.to_string(), |o| o.to_string());
-            (self.cv.stats().current_time, why)
+            let why = why.map_or_else(
+                || super::integrator_words(&e, stats.last_step, self.run),
+                |o| o.to_string(),
+            );
+            (stats.current_time, why)
         })
     }
 
     fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {
-        self.cv.interpolate(t, y).map_err(|e| e.to_string())
+        self.cv
+            .interpolate(t, y)
+            .map_err(|e| super::integrator_words(&e, 0.0, self.run))
     }
 
     fn output(&mut self, t: f64, y: &[f64]) -> Result<(), String> {

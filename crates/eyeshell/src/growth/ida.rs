@@ -171,6 +171,7 @@ pub fn integrate(
         initial_step: h0,
         ..IdaOptions::default()
     };
+    let run = super::RunTerms::of(settings, t_end);
     let mut ida = match Ida::new(
         GrowthDae { dae },
         0.0,
@@ -184,7 +185,7 @@ pub fn integrate(
             return (
                 IdaStats::default(),
                 IdaSensStats::default(),
-                Err((0.0, e.to_string())),
+                Err((0.0, super::integrator_words(&e, 0.0, run))),
             )
         }
     };
@@ -199,7 +200,7 @@ pub fn integrate(
             return (
                 IdaStats::default(),
                 IdaSensStats::default(),
-                Err((0.0, e.to_string())),
+                Err((0.0, super::integrator_words(&e, 0.0, run))),
             );
         }
         sens_output = Some(sens.output);
@@ -211,6 +212,7 @@ pub fn integrate(
             output,
             sens_output,
             s: vec![],
+            run,
         },
         n,
         t_end,
@@ -231,20 +233,28 @@ struct IdaStepper<'a, 'b, 'c, 'd> {
     sens_output: Option<&'d mut SensOutput<'d>>,
     /// The sensitivities at the output time (scratch).
     s: Vec<Vec<f64>>,
+    /// The run's terms, for IDA's failures.
+    run: super::RunTerms,
 }
 
 impl super::Stepper for IdaStepper<'_, '_, '_, '_> {
     fn step(&mut self, t_end: f64, y: &mut [f64]) -> Result<f64, (f64, String)> {
         self.ida.step(t_end, y, &mut self.yp).map_err(|e| {
+            let stats = self.ida.stats();
             // The deadline's own message rather than IDA's "the residual failed".
             let why = self.ida.system_mut().dae.sys.take_out_of_time();
-            let why = why.map_or_else(|| e.to_string(), |o| o.to_string());
-            (self.ida.stats().current_time, why)
+            let why = why.map_or_else(
+                || super::integrator_words(&e, stats.current_step, self.run),
+                |o| o.to_string(),
+            );
+            (stats.current_time, why)
         })
     }
 
     fn interpolate(&self, t: f64, y: &mut [f64]) -> Result<(), String> {
-        self.ida.interpolate(t, y).map_err(|e| e.to_string())
+        self.ida
+            .interpolate(t, y)
+            .map_err(|e| super::integrator_words(&e, 0.0, self.run))
     }
 
     fn output(&mut self, t: f64, y: &[f64]) -> Result<(), String> {
@@ -253,7 +263,7 @@ impl super::Stepper for IdaStepper<'_, '_, '_, '_> {
             self.s.resize(ns, vec![0.0; n]);
             self.ida
                 .sensitivities_at(t, &mut self.s)
-                .map_err(|e| e.to_string())?;
+                .map_err(|e| super::integrator_words(&e, 0.0, self.run))?;
             sens_output(self.ida.system_mut().dae, t, y, &self.s)?;
         }
         (self.output)(self.ida.system_mut().dae, t, y)

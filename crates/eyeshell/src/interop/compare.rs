@@ -61,6 +61,8 @@ pub struct Sample {
     /// Breakpoints of the data in Σ (an eyeshell run's thickness jumps and fibre kinks),
     /// which interpolation does not cross.
     pub breaks: Vec<f64>,
+    /// Variables of the file that are not vectors over its points: name, and what it is.
+    pub not_compared: Vec<(String, String)>,
 }
 
 /// The coordinates, in order of preference.
@@ -154,6 +156,7 @@ fn from_run(dir: &Path) -> Result<Vec<Sample>, CompareError> {
         label,
         time,
         breaks: breaks.clone(),
+        not_compared: Vec::new(),
         vars: t
             .columns
             .iter()
@@ -177,51 +180,97 @@ struct Raw {
     column_major: bool,
 }
 
+/// A variable of a reference file: numbers, or something else, described.
+enum Item {
+    Numbers(Raw),
+    Other(String),
+}
+
+/// What a MATLAB value is, in a few words, for a message.
+fn describe(v: &MatValue) -> String {
+    match v {
+        MatValue::Double { dims, .. } => format!("a {} numeric array", shape_text(dims)),
+        MatValue::Struct(_) => "a struct".into(),
+        MatValue::StructArray { dims, .. } => format!("a {} struct array", shape_text(dims)),
+        MatValue::Char(_) => "text (a char array)".into(),
+        MatValue::Cell { dims, .. } => format!("a {} cell array", shape_text(dims)),
+        MatValue::Unread(what) => what.clone(),
+    }
+}
+
+/// `5×401`, or `0-d` for a NumPy scalar.
+fn shape_text(shape: &[usize]) -> String {
+    if shape.is_empty() {
+        return "0-d".into();
+    }
+    shape
+        .iter()
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join("×")
+}
+
 fn load_file(path: &Path, field: Option<&FieldSpec>) -> Result<Sample, CompareError> {
     let is_npz = path.extension().is_some_and(|x| x == "npz");
-    let vars: Vec<(String, Raw)> = if is_npz {
-        npz::read(path)
-            .map_err(|e| CompareError(e.to_string()))?
+    let (prefix, vars): (String, Vec<(String, Item)>) = if is_npz {
+        let arrays = npz::read(path).map_err(|e| CompareError(e.to_string()))?;
+        let items = arrays
             .into_iter()
             .map(|(n, a)| {
                 (
                     n,
-                    Raw {
+                    Item::Numbers(Raw {
                         shape: a.shape,
                         data: a.data,
                         column_major: false,
-                    },
+                    }),
                 )
             })
-            .collect()
+            .collect();
+        (String::new(), items)
     } else {
         let vars = mat::read(path).map_err(|e| CompareError(e.to_string()))?;
-        let container = match field {
-            Some(spec) => named_struct(path, &vars, spec)?,
+        let (prefix, container) = match field {
+            Some(spec) => (
+                format!("{}.", spec.name),
+                named_struct(path, &vars, spec)?,
+            ),
             // bvp4c's solution struct (element 1 of a struct array), if there is one; else
-            // the top level.
-            None => vars
-                .iter()
-                .find_map(|(n, v)| (n == "sol").then(|| v.struct_element(0)).flatten())
-                .map(<[_]>::to_vec)
-                .unwrap_or(vars),
+            // the top level. A `sol` that is not a struct is not read as something else.
+            None => match vars.iter().find(|(n, _)| n == "sol") {
+                Some((_, v)) => (
+                    "sol.".to_string(),
+                    v.struct_element(0).map(<[_]>::to_vec).ok_or_else(|| {
+                        CompareError(format!(
+                            "{}: sol is {}, not bvp4c's solution struct (name the struct that holds the result with --field)",
+                            path.display(),
+                            describe(v)
+                        ))
+                    })?,
+                ),
+                None => (String::new(), vars),
+            },
         };
-        container
+        let items = container
             .into_iter()
-            .filter_map(|(n, v)| match v {
-                MatValue::Double { dims, data } => Some((
+            .map(|(n, v)| match v {
+                MatValue::Double { dims, data } => (
                     n,
-                    Raw {
+                    Item::Numbers(Raw {
                         shape: dims,
                         data,
                         column_major: true,
-                    },
-                )),
-                _ => None,
+                    }),
+                ),
+                other => {
+                    let what = describe(&other);
+                    (n, Item::Other(what))
+                }
             })
-            .collect()
+            .collect();
+        (prefix, items)
     };
-    sample_from(path, vars)
+    sample_from(path, &prefix, vars)
 }
 
 /// The element of the struct variable that `spec` names, or why there is none.
@@ -252,28 +301,142 @@ fn named_struct(
         })
 }
 
-fn sample_from(path: &Path, raw: Vec<(String, Raw)>) -> Result<Sample, CompareError> {
+/// The sample of one file's variables (`prefix` is how the file names their container,
+/// `sol.`, for messages). The variables compare gives a meaning to are checked whole, and
+/// a reference that breaks them is refused with what is wrong: `x` / `Sigma` / `sigma`
+/// (a vector of at least two finite points), `y` (5 rows, one column per point) and `time`
+/// (one finite number). Every other variable that is not a vector over the points is kept
+/// in [`Sample::not_compared`] with what it is, so that the report can say so, and
+/// [`compare_pair`] refuses it when the run has a field of that name.
+fn sample_from(
+    path: &Path,
+    prefix: &str,
+    raw: Vec<(String, Item)>,
+) -> Result<Sample, CompareError> {
+    let file = path.display().to_string();
+    let refuse = |name: &str, why: String| CompareError(format!("{file}: {prefix}{name} {why}"));
     let mut time = None;
     let mut vectors: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut not_compared: Vec<(String, String)> = Vec::new();
     let mut y: Option<Raw> = None;
-    for (name, r) in raw {
+    // Σ is stored as `Sigma`; messages name it as the file does.
+    let mut sigma_from_x = false;
+    for (name, item) in raw {
+        let coordinate = name == "x" || COORDINATES.contains(&name.as_str());
+        let r = match item {
+            Item::Numbers(r) => r,
+            Item::Other(what) => {
+                if coordinate || name == "y" || name == "time" {
+                    return Err(refuse(
+                        &name,
+                        format!("is {what}: expected {}", expected(&name)),
+                    ));
+                }
+                not_compared.push((name, what));
+                continue;
+            }
+        };
         let n: usize = r.shape.iter().product();
         let non_unit = r.shape.iter().filter(|&&d| d != 1).count();
-        if name == "time" && n == 1 {
-            time = Some(r.data[0]);
-        } else if name == "y" && r.shape.len() == 2 && r.shape[0] == Y_ROWS.len() {
+        let vector = non_unit <= 1 && !r.shape.is_empty() && n > 1;
+        let shape = shape_text(&r.shape);
+        if name == "time" {
+            match r.data[..] {
+                [t] if t.is_finite() => time = Some(t),
+                [t] => {
+                    return Err(refuse(
+                        &name,
+                        format!("= {}: expected {}", crate::text::number(t), expected(&name)),
+                    ))
+                }
+                _ => {
+                    return Err(refuse(
+                        &name,
+                        format!("is a {shape} array: expected {}", expected(&name)),
+                    ))
+                }
+            }
+        } else if name == "y" {
+            if r.shape.len() != 2 || r.shape[0] != Y_ROWS.len() {
+                let hint = if r.shape.len() == 2 && r.shape[1] == Y_ROWS.len() {
+                    " (it looks transposed)"
+                } else {
+                    ""
+                };
+                return Err(refuse(
+                    &name,
+                    format!("is a {shape} array{hint}: expected {}", expected(&name)),
+                ));
+            }
             y = Some(r);
-        } else if non_unit <= 1 && n > 1 {
-            let name = if name == "x" {
-                "Sigma".to_string()
-            } else {
-                name
-            };
+        } else if coordinate {
+            if !vector {
+                let what = if r.shape.is_empty() {
+                    "is a 0-d array (one number)".to_string()
+                } else if n == 0 {
+                    "is empty".to_string()
+                } else if n == 1 {
+                    "has a single point".to_string()
+                } else {
+                    format!("is a {shape} array")
+                };
+                return Err(refuse(
+                    &name,
+                    format!("{what}: expected {}", expected(&name)),
+                ));
+            }
+            if let Some(k) = r.data.iter().position(|v| !v.is_finite()) {
+                return Err(refuse(
+                    &name,
+                    format!(
+                        "has {} at point {} of {n}: a material coordinate must be finite",
+                        crate::text::number(r.data[k]),
+                        k + 1
+                    ),
+                ));
+            }
+            sigma_from_x |= name == "x";
+            let name = if name == "x" { "Sigma".into() } else { name };
+            if vectors.iter().any(|(m, _)| *m == name) {
+                return Err(CompareError(format!(
+                    "{file}: both x and Sigma: give the material coordinate once"
+                )));
+            }
             vectors.push((name, r.data));
+        } else if vector {
+            vectors.push((name, r.data));
+        } else {
+            not_compared.push((
+                name,
+                format!("a {shape} array, not a vector over the points"),
+            ));
         }
     }
+    let (coord, len) = COORDINATES
+        .iter()
+        .find_map(|c| vectors.iter().find(|(n, _)| n == c))
+        .map(|(n, v)| (n.clone(), v.len()))
+        .ok_or_else(|| {
+            CompareError(format!(
+                "{file}: no material coordinate (a vector named Sigma, x or sigma)"
+            ))
+        })?;
+    let coord_name = if coord == "Sigma" && sigma_from_x {
+        format!("{prefix}x")
+    } else {
+        format!("{prefix}{coord}")
+    };
     if let Some(y) = y {
         let cols = y.shape[1];
+        if cols != len {
+            return Err(refuse(
+                "y",
+                format!(
+                    "has {cols} columns but {coord_name} has {len} points: expected {}",
+                    expected("y")
+                ),
+            ));
+        }
         for (i, name) in Y_ROWS.iter().enumerate() {
             let row: Vec<f64> = (0..cols)
                 .map(|j| {
@@ -284,29 +447,42 @@ fn sample_from(path: &Path, raw: Vec<(String, Raw)>) -> Result<Sample, CompareEr
                     }
                 })
                 .collect();
+            if vectors.iter().any(|(n, _)| n == name) {
+                return Err(CompareError(format!(
+                    "{file}: both {prefix}y and {prefix}{name}: give {name} once"
+                )));
+            }
             vectors.push((name.to_string(), row));
         }
     }
-    let coord = COORDINATES
-        .iter()
-        .find_map(|c| vectors.iter().find(|(n, _)| n == c))
-        .ok_or_else(|| {
-            CompareError(format!(
-                "{}: no material coordinate (a vector named Sigma, x or sigma)",
-                path.display()
-            ))
-        })?;
-    let len = coord.1.len();
-    let vars: BTreeMap<String, Vec<f64>> = vectors
-        .into_iter()
-        .filter(|(_, v)| v.len() == len)
-        .collect();
+    let mut vars = BTreeMap::new();
+    for (name, v) in vectors {
+        if v.len() == len {
+            vars.insert(name, v);
+        } else {
+            let what = format!("{} values, but {coord_name} has {len} points", v.len());
+            not_compared.push((name, what));
+        }
+    }
     Ok(Sample {
-        label: path.display().to_string(),
+        label: file,
         time,
         vars,
         breaks: Vec::new(),
+        not_compared,
     })
+}
+
+/// What compare expects of a variable it gives a meaning to.
+fn expected(name: &str) -> String {
+    match name {
+        "y" => format!(
+            "a 5×N numeric array (rows {}), one column per point of x",
+            Y_ROWS.join(", ")
+        ),
+        "time" => "one finite number".into(),
+        _ => "a numeric vector of at least two finite points (the material coordinate)".into(),
+    }
 }
 
 /// The differences of one field.
@@ -338,6 +514,9 @@ pub struct PairReport {
     /// Reference points left out (outside the run's range).
     pub outside: usize,
     pub fields: Vec<FieldDiff>,
+    /// The reference's variables that were not compared (the run has no field of that
+    /// name, or they are not vectors over the points): name, and why.
+    pub not_compared: Vec<(String, String)>,
 }
 
 impl PairReport {
@@ -363,11 +542,28 @@ pub fn compare_pair(
             ))
         })?
         .to_string();
-    let fields: Vec<&String> = reference
-        .vars
-        .keys()
-        .filter(|k| **k != coordinate && run.vars.contains_key(*k))
-        .collect();
+    // A variable the run has a field for is compared, or the reference is refused: it is
+    // never passed over because its shape is wrong.
+    if let Some((name, what)) = reference
+        .not_compared
+        .iter()
+        .find(|(n, _)| run.vars.contains_key(n))
+    {
+        return Err(CompareError(format!(
+            "{}: {name} is {what}, so it cannot be compared with the run's {name} ({})",
+            reference.label, run.label
+        )));
+    }
+    let mut not_compared = reference.not_compared.clone();
+    let mut fields: Vec<&String> = Vec::new();
+    for k in reference.vars.keys().filter(|k| **k != coordinate) {
+        if run.vars.contains_key(k) {
+            fields.push(k);
+        } else {
+            not_compared.push((k.clone(), "the run has no such field".into()));
+        }
+    }
+    not_compared.sort();
     if fields.is_empty() {
         return Err(CompareError(format!(
             "{} and {}: no variable in common besides {coordinate}",
@@ -396,8 +592,12 @@ pub fn compare_pair(
         .collect();
     if inside.is_empty() {
         return Err(CompareError(format!(
-            "{}: no point of {} lies inside the run's range [{lo}, {hi}] ({})",
-            reference.label, coordinate, run.label
+            "{}: no point of {} lies inside the run's range [{}, {}] ({})",
+            reference.label,
+            coordinate,
+            crate::text::number(lo),
+            crate::text::number(hi),
+            run.label
         )));
     }
     let mut diffs = Vec::new();
@@ -473,6 +673,7 @@ pub fn compare_pair(
         points: inside.len(),
         outside: xref.len() - inside.len(),
         fields: diffs,
+        not_compared,
     })
 }
 
@@ -516,11 +717,12 @@ pub fn pair<'a>(run: &'a [Sample], reference: &Sample) -> Result<&'a Sample, Com
         .ok_or_else(|| {
             let times: Vec<String> = run
                 .iter()
-                .filter_map(|s| s.time.map(|u| format!("{u}")))
+                .filter_map(|s| s.time.map(crate::text::number))
                 .collect();
             CompareError(format!(
-                "{}: time = {t}, but the run has no output at that time (it has t = {})",
+                "{}: time = {}, but the run has no output at that time (it has t = {})",
                 reference.label,
+                crate::text::number(t),
                 times.join(", ")
             ))
         })
@@ -550,7 +752,10 @@ pub fn compare_paths(
 pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
     let mut s = String::new();
     for r in reports {
-        let time = r.time.map(|t| format!(" at t = {t}")).unwrap_or_default();
+        let time = r
+            .time
+            .map(|t| format!(" at t = {}", crate::text::number(t)))
+            .unwrap_or_default();
         s.push_str(&format!(
             "{} vs {}{}: {} points in {}{}\n",
             r.reference,
@@ -594,6 +799,14 @@ pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
                 }
             ));
         }
+        if !r.not_compared.is_empty() {
+            let list: Vec<String> = r
+                .not_compared
+                .iter()
+                .map(|(n, why)| format!("{n} ({why})"))
+                .collect();
+            s.push_str(&format!("  not compared: {}\n", list.join("; ")));
+        }
     }
     let failed: usize = reports
         .iter()
@@ -601,9 +814,11 @@ pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
         .sum();
     let total: usize = reports.iter().map(|r| r.fields.len()).sum();
     s.push_str(&format!(
-        "{} of {} field comparisons within |Δ| ≤ {tol:e} + {rtol:e}·|ref|\n",
+        "{} of {} field comparisons within |Δ| ≤ {} + {}·|ref|\n",
         total - failed,
-        total
+        total,
+        crate::text::number(tol),
+        crate::text::number(rtol)
     ));
     let interp = reports
         .iter()
@@ -628,6 +843,7 @@ mod tests {
             time,
             vars,
             breaks: Vec::new(),
+            not_compared: Vec::new(),
         }
     }
 

@@ -74,7 +74,15 @@ pub enum Rule {
     OpenHalfTurn,
     /// A non-empty list of positive numbers in strictly increasing order.
     PositiveIncreasing,
+    /// A span of time at least [`MIN_T_END`].
+    Duration,
 }
+
+/// The shortest growth run (growth.t_end). SUNDIALS compares times by multiplying a
+/// distance in time by a step, and below about 1e-160 that product underflows: IDA and CVODE
+/// then refuse to step at all ("tstop is behind t") however small the step. 1e-100 leaves
+/// steps 1e60 times shorter than the run room; a run that short does not grow anyway.
+pub const MIN_T_END: f64 = 1e-100;
 
 impl Rule {
     /// A short description for `eyeshell keys`.
@@ -89,6 +97,7 @@ impl Rule {
             Rule::UnitFromZero => "in [0, 1)".into(),
             Rule::OpenHalfTurn => "in (0, π)".into(),
             Rule::PositiveIncreasing => "each > 0, strictly increasing".into(),
+            Rule::Duration => format!(">= {}", crate::text::number(MIN_T_END)),
         }
     }
 
@@ -113,6 +122,10 @@ impl Rule {
                 Err("must lie strictly between 0 and π (radians)".into())
             }
             Rule::PositiveIncreasing if x <= 0.0 => Err("must be positive".into()),
+            Rule::Duration if x < MIN_T_END => Err(format!(
+                "must be at least {}: the integrators multiply times by their steps, and for a shorter run that product underflows",
+                crate::text::number(MIN_T_END)
+            )),
             _ => Ok(()),
         }
     }
@@ -128,7 +141,7 @@ impl Rule {
                 return Err(format!(
                     "must hold finite numbers only (item {} is {})",
                     i + 1,
-                    x
+                    crate::text::number(x)
                 ));
             }
             if self == Rule::PositiveIncreasing {
@@ -136,14 +149,14 @@ impl Rule {
                     return Err(format!(
                         "must hold positive numbers only (item {} is {})",
                         i + 1,
-                        x
+                        crate::text::number(x)
                     ));
                 }
                 if i > 0 && x <= xs[i - 1] {
                     return Err(format!(
                         "must be strictly increasing (they are not sorted for you): {} follows {}",
-                        x,
-                        xs[i - 1]
+                        crate::text::number(x),
+                        crate::text::number(xs[i - 1])
                     ));
                 }
             }
@@ -559,7 +572,7 @@ pub static KEYS: &[KeySpec] = &[
     KeySpec {
         key: "growth.t_end",
         access: Access::Float { get: |s| growth(s).t_end, set: |s, v| s.growth_mut().t_end = v },
-        rule: Rule::Positive,
+        rule: Rule::Duration,
         doc: "end of the growth run (dimensionless time; the paper's t ∈ [0, 1], docs/MODEL.md §8)",
         growth: true,
     },

@@ -574,7 +574,8 @@ impl Scene {
                     show(&KeyValue::Floats(times.clone())),
                     format!(
                         "must lie in (0, growth.t_end]: {} is after growth.t_end = {}",
-                        last, g.t_end
+                        number(last),
+                        number(g.t_end)
                     ),
                 ));
             }

@@ -705,8 +705,26 @@ fn bad_growth_values_name_the_key() {
         ("growth.eta0 = -1", "growth.eta0", "must be non-negative"),
         ("growth.delta = 0", "growth.delta", "must be positive"),
         ("growth.delta = -2", "growth.delta", "must be positive"),
-        ("growth.t_end = 0", "growth.t_end", "must be positive"),
-        ("growth.t_end = -1", "growth.t_end", "must be positive"),
+        (
+            "growth.t_end = 0",
+            "growth.t_end",
+            "must be at least 1e-100",
+        ),
+        (
+            "growth.t_end = -1",
+            "growth.t_end",
+            "must be at least 1e-100",
+        ),
+        (
+            "growth.t_end = 1e-200",
+            "growth.t_end",
+            "must be at least 1e-100",
+        ),
+        (
+            "growth.t_end = 5e-324",
+            "growth.t_end",
+            "must be at least 1e-100",
+        ),
         (
             "growth.Gamma = nan",
             "growth.Gamma",
