@@ -4,9 +4,13 @@
 //! has no bounds, and a fit must keep every trial inside each key's validity range (a
 //! growth run at δ ≤ 0 has no meaning). A dozen lines of linear algebra are the whole of it.
 //!
-//! Each iteration solves (JᵀJ + λ D) δ = −Jᵀr, D = diag(JᵀJ) (Marquardt's scaling, its
-//! largest value so far, as MINPACK keeps it: the step is invariant to the parameters'
-//! units). The trial p + δ is **projected** onto the range: onto a closed bound exactly
+//! Each iteration takes the δ that minimises ‖Jδ + r‖² + λ δᵀDδ, D = diag(JᵀJ) (Marquardt's
+//! scaling, its largest value so far, as MINPACK keeps it: the step is invariant to the
+//! parameters' units): the solution of (JᵀJ + λ D) δ = −Jᵀr, found by a QR factorisation of
+//! the stacked matrix [J; √(λD)] ([`damped_step`]), never by forming JᵀJ, whose condition
+//! number is that of J squared (η0 and Γ correlate at −0.99 on the const scene). The
+//! Gauss–Newton quantities (the full step, the χ² it would gain, the covariance) come from
+//! the QR factors of J the same way ([`GaussNewton`]). The trial p + δ is **projected** onto the range: onto a closed bound exactly
 //! (≥ 0), and towards an open bound (> 0) at most 90 % of the remaining distance, so that
 //! it is never reached. A trial the scene refuses (a cross-key limit) or whose growth run
 //! fails counts as a rejected step. A step is accepted when it lowers the cost; λ follows
@@ -172,9 +176,7 @@ pub fn held_by_bounds(
     r: &DVector<f64>,
     j: &DMatrix<f64>,
 ) -> Vec<bool> {
-    let step = (j.transpose() * j)
-        .cholesky()
-        .map(|ch| ch.solve(&(-(j.transpose() * r))));
+    let step = GaussNewton::of(j).map(|gn| gn.step(r));
     (0..params.len())
         .map(|c| {
             let b = &params[c].bounds;
@@ -184,6 +186,74 @@ pub fn held_by_bounds(
                     .is_some_and(|s| s[c].is_finite() && b.excludes(p[c] + s[c]))
         })
         .collect()
+}
+
+/// The QR factors J = QR of a Jacobian of full column rank: the Gauss–Newton step, the χ²
+/// it gains and the covariance (JᵀJ)⁻¹ = R⁻¹R⁻ᵀ, each to the accuracy of J's own condition
+/// number, where the normal equations would square it.
+pub struct GaussNewton {
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+}
+
+impl GaussNewton {
+    /// The factors of `j` (n × k, n ≥ k), or None when a diagonal entry of R is zero or not
+    /// finite relative to the largest (J's columns dependent to round-off).
+    pub fn of(j: &DMatrix<f64>) -> Option<GaussNewton> {
+        let (n, k) = j.shape();
+        if n < k || k == 0 || j.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        let qr = j.clone().qr();
+        let (q, r) = (qr.q(), qr.r());
+        let top = (0..k).map(|c| r[(c, c)].abs()).fold(0.0_f64, f64::max);
+        let full_rank = (0..k).all(|c| r[(c, c)].abs() > f64::EPSILON * top);
+        (top > 0.0 && full_rank).then_some(GaussNewton { q, r })
+    }
+
+    /// The full Gauss–Newton step −(JᵀJ)⁻¹Jᵀr = −R⁻¹Qᵀr.
+    pub fn step(&self, residuals: &DVector<f64>) -> DVector<f64> {
+        let qtr = self.q.transpose() * residuals;
+        self.r
+            .solve_upper_triangular(&(-qtr))
+            .unwrap_or_else(|| DVector::from_element(self.r.ncols(), f64::NAN))
+    }
+
+    /// The χ² the full step would gain, gᵀ(JᵀJ)⁻¹g with g = Jᵀr: ‖Qᵀr‖².
+    pub fn gain(&self, residuals: &DVector<f64>) -> f64 {
+        (self.q.transpose() * residuals).norm_squared()
+    }
+
+    /// (JᵀJ)⁻¹ = R⁻¹R⁻ᵀ.
+    pub fn inverse_information(&self) -> Option<DMatrix<f64>> {
+        let k = self.r.ncols();
+        let r_inv = self.r.solve_upper_triangular(&DMatrix::identity(k, k))?;
+        Some(&r_inv * r_inv.transpose())
+    }
+}
+
+/// The Levenberg–Marquardt step: argmin ‖Jδ + r‖² + λ δᵀ diag(d) δ, the least-squares
+/// solution of [J; √(λd)] δ = [−r; 0] by QR (None if that matrix is rank-deficient).
+pub fn damped_step(
+    j: &DMatrix<f64>,
+    r: &DVector<f64>,
+    lambda: f64,
+    d: &DVector<f64>,
+) -> Option<DVector<f64>> {
+    let (n, k) = j.shape();
+    let stacked = DMatrix::from_fn(n + k, k, |row, c| {
+        if row < n {
+            j[(row, c)]
+        } else if row - n == c {
+            (lambda * d[c]).sqrt()
+        } else {
+            0.0
+        }
+    });
+    let rhs = DVector::from_fn(n + k, |row, _| if row < n { r[row] } else { 0.0 });
+    let gn = GaussNewton::of(&stacked)?;
+    let step = gn.step(&rhs);
+    step.iter().all(|x| x.is_finite()).then_some(step)
 }
 
 /// `from + step` kept in `b`: onto a closed bound, 90 % of the way towards an open one.
@@ -276,28 +346,19 @@ pub fn minimise(
         // step across a narrow valley of correlated parameters).
         let free: Vec<usize> = (0..k).filter(|&c| !held(c, &p, &g)).collect();
         if !free.is_empty() {
-            let sub = DMatrix::from_fn(free.len(), free.len(), |a, b| jtj[(free[a], free[b])]);
-            let gs = DVector::from_iterator(free.len(), free.iter().map(|&c| g[c]));
-            if let Some(ch) = sub.cholesky() {
-                let gain = gs.dot(&ch.solve(&gs));
-                if gain <= o.setol * o.setol * variance(chi2) {
+            let j_free = DMatrix::from_fn(j.nrows(), free.len(), |row, c| j[(row, free[c])]);
+            if let Some(gn) = GaussNewton::of(&j_free) {
+                if gn.gain(&r) <= o.setol * o.setol * variance(chi2) {
                     convergence = Convergence::StandardError;
                     break;
                 }
             }
         }
-        let mut a = jtj.clone();
-        for c in 0..k {
-            a[(c, c)] += lambda * d[c];
-        }
-        let step = match a.cholesky() {
-            Some(ch) => ch.solve(&(-&g)),
-            None => {
-                return Err(Error::failed(format!(
-                    "Levenberg–Marquardt: the damped normal matrix is not positive definite at {}",
-                    show(&names, &p)
-                )))
-            }
+        let Some(step) = damped_step(&j, &r, lambda, &d) else {
+            return Err(Error::failed(format!(
+                "Levenberg–Marquardt: the damped least-squares problem is rank-deficient at {}",
+                show(&names, &p)
+            )));
         };
         let trial: Vec<f64> = (0..k)
             .map(|c| project(&params[c].bounds, p[c], step[c]))

@@ -398,23 +398,29 @@ pub fn identifiability(j: &DMatrix<f64>, params: &[FitParam], values: &[f64]) ->
     if k < 2 {
         return None;
     }
-    let info = j.transpose() * j;
-    let d: Vec<f64> = (0..k).map(|c| info[(c, c)].sqrt()).collect();
-    let scaled = DMatrix::from_fn(k, k, |a, b| info[(a, b)] / (d[a] * d[b]));
-    let eig = nalgebra::SymmetricEigen::new(scaled);
-    let (i_min, &lambda) = eig
-        .eigenvalues
+    // The correlation form of JᵀWJ is (JD⁻¹)ᵀ(JD⁻¹), D the columns' norms: its eigenvalues
+    // are the squared singular values of JD⁻¹, taken from J's SVD without forming JᵀJ
+    // (whose smallest eigenvalue would carry the round-off of J's condition number squared).
+    let d: Vec<f64> = (0..k).map(|c| j.column(c).norm()).collect();
+    let scaled = DMatrix::from_fn(j.nrows(), k, |row, c| j[(row, c)] / d[c]);
+    let svd = nalgebra::SVD::new(scaled, false, true);
+    let v_t = svd.v_t.as_ref()?;
+    let (i_min, lambda) = svd
+        .singular_values
         .iter()
+        .map(|s| s * s)
         .enumerate()
-        .min_by(|a, b| a.1.total_cmp(b.1))
-        .expect("k ≥ 2");
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
     if lambda > IDENTIFIABILITY_THRESHOLD {
         return None;
     }
-    let v = eig.eigenvectors.column(i_min);
+    let v = v_t.row(i_min).transpose();
     let vmax = v.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
     let mut order: Vec<usize> = (0..k).collect();
-    order.sort_by(|&a, &b| v[b].abs().total_cmp(&v[a].abs()));
+    // Largest components first, as printed (3 decimals); equal ones in the order of the keys,
+    // so that round-off does not reorder the names.
+    let shown = |c: usize| (v[c].abs() * 1e3).round();
+    order.sort_by(|&a, &b| shown(b).total_cmp(&shown(a)).then(a.cmp(&b)));
     let named: Vec<&str> = order
         .iter()
         .filter(|&&c| v[c].abs() >= 0.5 * vmax)
@@ -633,13 +639,14 @@ pub fn fit_watched(
         },
         variance(chi2),
     );
-    let info = outcome.jacobian.transpose() * &outcome.jacobian;
-    let inverse = info.clone().try_inverse().ok_or_else(|| {
-        Error::input(format!(
-            "the information matrix JᵀWJ at the estimate cannot be inverted ({})",
-            lm::show(&names, &outcome.values)
-        ))
-    })?;
+    let inverse = lm::GaussNewton::of(&outcome.jacobian)
+        .and_then(|gn| gn.inverse_information())
+        .ok_or_else(|| {
+            Error::input(format!(
+                "the information matrix JᵀWJ at the estimate cannot be inverted ({})",
+                lm::show(&names, &outcome.values)
+            ))
+        })?;
     let cov = inverse * s2;
     let se: Vec<f64> = (0..k).map(|a| cov[(a, a)].max(0.0).sqrt()).collect();
     if let Some(a) = (0..k).find(|&a| !se[a].is_finite()) {
