@@ -7,6 +7,7 @@ mod support;
 
 mod absurd;
 mod bad_input;
+mod destinations;
 mod export_compare;
 mod export_roundtrip;
 mod export_scipy;
@@ -28,5 +29,6 @@ mod sensitivities;
 mod shards;
 mod slurm;
 mod solve;
+mod status;
 mod study;
 mod sweep;
