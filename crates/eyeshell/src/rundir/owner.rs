@@ -155,8 +155,8 @@ fn existing_ancestor(path: &Path) -> PathBuf {
         .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
 }
 
-/// Refuse `target` if it is `input`, holds it, or lies inside it other than as a nested
-/// output directly in an eyeshell output (`RUN/plots`, `SWEEP/runs/a/plots`), which the
+/// Refuse `target` if it is `input`, holds it, or lies inside it (an eyeshell output)
+/// other than as a nested output directly in an eyeshell output (`RUN/plots`, `SWEEP/runs/a/plots`), which the
 /// input's readers and its owner's checks pass over.
 fn clear_of(target: &Path, kind: &str, input: &Path) -> Result<(), OutputError> {
     let Some(input_id) = identity(input) else {
@@ -177,7 +177,9 @@ fn clear_of(target: &Path, kind: &str, input: &Path) -> Result<(), OutputError> 
             return Err(refuse("holds"));
         }
     }
-    if !fs::metadata(input).is_ok_and(|m| m.is_dir()) {
+    // Only an eyeshell output has insides to keep clear of; any other directory given as
+    // an input is its reader's to refuse, in its terms ("not a run directory").
+    if !fs::metadata(input).is_ok_and(|m| m.is_dir()) || Marker::read(input).is_none() {
         return Ok(());
     }
     let parent = parent_of(target);
