@@ -135,6 +135,23 @@ fn an_export_never_replaces_the_run_it_reads_nor_what_holds_it() {
             );
         }
     }
+    // A one-file export (an elastic solve) onto a file of another output, even forced.
+    for dest in [
+        "grow/series.csv",
+        "sweep/summary.json",
+        "here/sweep/runs/a/result.json",
+        "fit/.eyeshell",
+        "solve/fields.csv",
+    ] {
+        for flag in ["--mat", "--npz"] {
+            intact(
+                root,
+                root,
+                &["export", "solve", flag, dest, "--force"],
+                "refusing to overwrite it, even with --force",
+            );
+        }
+    }
     // What may be written: a new directory, then the same again, and a nested one at the
     // top of the run (as plots/ is).
     for dest in ["exported", "exported", "grow/npz", "sweep/runs/a/npz"] {

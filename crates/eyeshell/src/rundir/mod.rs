@@ -84,6 +84,8 @@ pub enum OutputError {
     Busy { path: PathBuf, pid: Option<u32> },
     #[error("{}: exists and was not written by eyeshell; refusing to overwrite it (--force replaces it)", path.display())]
     NotOurFile { path: PathBuf },
+    #[error("{}: is a file of the eyeshell output {}; refusing to overwrite it, even with --force (choose another file)", path.display(), dir.display())]
+    PartOfOutput { path: PathBuf, dir: PathBuf },
     #[error("{}: exists and is not a regular file; refusing to overwrite it", path.display())]
     NotAFile { path: PathBuf },
     #[error("{}: the output path has no file name", path.display())]

@@ -458,7 +458,8 @@ pub fn claim(dir: &Path, names: &[&str]) -> Result<(), OutputError> {
 }
 
 /// May the file `path` be written? Absent: yes. A regular file: if `ours` recognises it as
-/// eyeshell's, or with `force`. Anything else (a directory, a symlink, a device) is
+/// eyeshell's, or with `force`, but never one that an eyeshell output's marker lists (a
+/// run's fields.csv, a sweep's summary.json), even with `force`. Anything else (a directory, a symlink, a device) is
 /// refused. Litter of killed writers beside it is removed.
 pub fn check_file(
     path: &Path,
@@ -473,6 +474,14 @@ pub fn check_file(
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => absent(&path).map(|_| ())?,
         Err(e) => return Err(OutputError::io(&path, e)),
         Ok(m) if m.is_file() => {
+            // A file of an eyeshell output (its marker lists it) belongs to that output, a
+            // run or a sweep, which it would leave broken: --force is for other files.
+            let dir = parent_of(&path);
+            let name = path.file_name().unwrap_or_default().to_string_lossy();
+            let listed = Marker::read(&dir).is_some_and(|m| m.lists(&name));
+            if listed || name == MARKER_FILE {
+                return Err(OutputError::PartOfOutput { path, dir });
+            }
             if !force && !ours(&path) {
                 return Err(OutputError::NotOurFile { path });
             }
@@ -646,6 +655,16 @@ mod tests {
         assert!(e.is_refusal() && e.to_string().contains("--force"), "{e}");
         check_file(&path, true, ours).unwrap();
         assert!(check_file(dir.path(), true, ours).is_err(), "a directory");
+        // A file of an eyeshell output, and its marker: not even with force.
+        let out = dir.path().join("out");
+        committed(&out, &["fields.csv"]);
+        for name in ["fields.csv", MARKER_FILE] {
+            let e = check_file(&out.join(name), true, |_| true).unwrap_err();
+            assert!(
+                e.to_string().contains("is a file of the eyeshell output"),
+                "{e}"
+            );
+        }
         // Temporary files of dead writers go.
         let dead = dir.path().join(".x.mat.tmp-999999999");
         fs::write(&dead, "").unwrap();
