@@ -43,6 +43,9 @@ fn outputs(root: &Path) {
     ]);
     succeeded(&fit, "the fit");
     std::os::unix::fs::symlink(root, root.join("here")).unwrap();
+    for name in ["grow", "sweep"] {
+        std::os::unix::fs::symlink(root.join(name), root.join(format!("{name}-link"))).unwrap();
+    }
 }
 
 /// `eyeshell ARGS` in `cwd` is refused naming `needle`, and nothing under `root` changed.
@@ -64,6 +67,8 @@ fn spellings(root: &Path, name: &str) -> Vec<(std::path::PathBuf, String)> {
         (root.to_path_buf(), format!("{name}/../{name}")),
         (root.to_path_buf(), format!("{name}/snapshots/../../{name}")),
         (root.to_path_buf(), format!("here/{name}")),
+        (root.to_path_buf(), format!("{name}-link")),
+        (root.to_path_buf(), format!("here/{name}-link/.")),
         (root.to_path_buf(), format!("here/./{name}/")),
         (root.to_path_buf(), s(&abs).to_string()),
         (root.join("sweep/runs"), format!("../../{name}")),
