@@ -37,6 +37,7 @@ fn fibre_sweep(c: &mut Criterion) {
             resume: false,
             cancel: &cancel,
             runner: &eyeshell::sweep::InProcess,
+            inputs: &[],
         };
         group.bench_function(format!("jobs_{jobs}"), |b| {
             b.iter(|| {
@@ -58,6 +59,7 @@ fn draw(c: &mut Criterion) {
         resume: false,
         cancel: &cancel,
         runner: &eyeshell::sweep::InProcess,
+        inputs: &[],
     };
     for (name, _, _) in SCENES {
         run_sweep(&scene(name), &data.join(name), &options, &|_, _, _| {}).expect("the scene runs");

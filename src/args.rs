@@ -82,7 +82,7 @@ pub(crate) struct PlotArgs {
     /// A run directory (of solve or grow) or a sweep directory
     #[arg(value_name = "DIR")]
     pub(crate) dir: PathBuf,
-    /// Where to write the pictures (default: DIR/plots); drawn whole into a new directory, replacing only an earlier plot or an empty directory
+    /// Where to write the pictures (default: DIR/plots); drawn whole into a new directory, replacing only an earlier plot or an empty directory (never the run or sweep drawn, nor a directory holding it)
     #[arg(long, value_name = "OUT")]
     pub(crate) out: Option<PathBuf>,
     /// Print nothing on success
@@ -103,7 +103,7 @@ pub(crate) struct SweepArgs {
     /// Override a scene key, e.g. --set pressure.dP=2.5 (repeatable; later wins; not a swept key)
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub(crate) set: Vec<String>,
-    /// Output directory: runs/<name>/ for each run, sweep.csv, summary.json (a previous eyeshell output is replaced unless --resume or --shard)
+    /// Output directory: runs/<name>/ for each run, sweep.csv, summary.json (an earlier sweep there is replaced unless --resume or --shard; nothing else is)
     #[arg(long, value_name = "DIR", required = true)]
     pub(crate) out: Option<PathBuf>,
     /// Runs at once (default: one per core)
@@ -221,7 +221,7 @@ pub(crate) struct SolveArgs {
         allow_hyphen_values = true
     )]
     pub(crate) at: Vec<String>,
-    /// Output directory (created whole or not at all; a previous eyeshell output is replaced)
+    /// Output directory (created whole or not at all; only an earlier solve output or an empty directory is replaced)
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
     /// Print nothing on success
@@ -233,7 +233,7 @@ pub(crate) struct SolveArgs {
 pub(crate) struct GrowArgs {
     #[command(flatten)]
     pub(crate) scene: SceneArgs,
-    /// Output directory, written as results come (a previous eyeshell output is replaced; on failure the results so far stay)
+    /// Output directory, written as results come (only an earlier growth run or an empty directory is replaced; on failure the results so far stay)
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
     /// Forward sensitivities of the run (IDAS) with respect to these scene keys, into sensitivities.csv: growth.eta0, growth.Gamma, growth.delta, fibres.D (scenes with fibres), material.C, material.bending, pressure.dP, stimulus.blue.z_B (stimulus.red.offset only moves the classification: refused)
@@ -263,7 +263,7 @@ pub(crate) struct FitArgs {
         required = true
     )]
     pub(crate) fit: Vec<String>,
-    /// Output directory: fit.json, scene.toml (the fitted scene), residuals.csv, curve.csv, fit.png and fit.svg (created whole or not at all; a previous eyeshell output is replaced)
+    /// Output directory: fit.json, scene.toml (the fitted scene), residuals.csv, curve.csv, fit.png and fit.svg (created whole or not at all; only an earlier fit output or an empty directory is replaced)
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
     /// The most Levenberg–Marquardt iterations (1 to 1000)

@@ -66,9 +66,13 @@ where
         Command::Compare(a) => cmd_compare(a),
         Command::Converge(a) => cmd_converge(a),
         Command::Wpd(a) => a.scene.load().and_then(|scene| {
-            cmd_study(&a.out, "wpd", |dir| crate::study::report::wpd(&scene, dir))
+            cmd_study(&a.out, "wpd", &[a.scene.scene.as_path()], |dir| {
+                crate::study::report::wpd(&scene, dir)
+            })
         }),
-        Command::Refinement(a) => cmd_study(&a.out, "refinement", crate::study::report::refinement),
+        Command::Refinement(a) => {
+            cmd_study(&a.out, "refinement", &[], crate::study::report::refinement)
+        }
         Command::Extremes(a) => cmd_extremes(a),
         Command::Sweep(a) => cmd_sweep(a),
         Command::Figures(a) => cmd_figures(a),

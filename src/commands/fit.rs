@@ -28,7 +28,7 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
     let params = fit::parse_keys(&a.fit, "--fit")?;
     let data = Observations::read(&a.data)?;
-    let dir = OutputDir::create(&a.out, "fit")?;
+    let dir = OutputDir::create(&a.out, "fit", &[a.scene.scene.as_path(), a.data.as_path()])?;
     let options = FitOptions {
         max_iterations: a.max_iterations as usize,
         ..FitOptions::default()

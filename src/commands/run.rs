@@ -35,7 +35,7 @@ pub(crate) fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Err
 pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
     let at = parse_at(&a.at, &scene)?;
-    let run = rundir::run::solve_into(&scene, &a.out, &at)?;
+    let run = rundir::run::solve_into(&scene, &a.out, &at, &[a.scene.scene.as_path()])?;
     let (solution, target) = (run.solution, run.dir);
 
     if !a.quiet {
@@ -92,7 +92,7 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
         )));
     }
     set_sensitivities(&mut scene, &a.sensitivities, a.sensitivity_error_control)?;
-    let writer = GrowthWriter::create(&a.out, &scene)?;
+    let writer = GrowthWriter::create(&a.out, &scene, &[a.scene.scene.as_path()])?;
     let choosing = scene.solver.tol.map(|tol| {
         format!("choosing the mesh for solver.tol = {tol:e} (test runs on halved meshes)")
     });

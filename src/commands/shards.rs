@@ -31,15 +31,19 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
     let failed: Vec<String> = merged
         .report
         .failed()
-        .map(|r| match &r.status {
-            RunStatus::Failed(m) => format!("{}: {m}", r.name),
-            _ => r.name.clone(),
+        .map(|r| match r.status.message_line() {
+            Some(m) => format!("{}: {m}", r.name),
+            None => r.name.clone(),
         })
         .collect();
     let missing: Vec<String> = merged
         .missing()
         .map(|r| match merged.stale.iter().find(|(n, _)| n == &r.name) {
-            Some((_, why)) => format!("{} (its results cannot be trusted: {why})", r.name),
+            Some((_, why)) => format!(
+                "{} (its results cannot be trusted: {})",
+                r.name,
+                eyeshell::text::excerpt(why, eyeshell::sweep::SHOWN_MESSAGE)
+            ),
             None => r.name.clone(),
         })
         .collect();
@@ -213,7 +217,7 @@ pub(crate) fn print_slurm_script(
         }
     }
     // Refused now rather than in every task.
-    eyeshell::rundir::check_target(out_dir)?;
+    eyeshell::rundir::owner::inspect(&eyeshell::rundir::owner::normalise(out_dir))?;
     let here = std::env::current_dir().map_err(|source| Error::Io {
         path: ".".into(),
         source,

@@ -51,7 +51,7 @@ pub(crate) fn cmd_converge(a: &ConvergeArgs) -> Result<(), Error> {
             scene.origin
         )));
     }
-    cmd_study(&a.out, "converge", |dir| {
+    cmd_study(&a.out, "converge", &[a.scene.scene.as_path()], |dir| {
         crate::study::report::converge(&scene, &a.nodes, a.growth, dir)
     })
 }
@@ -60,9 +60,10 @@ pub(crate) fn cmd_converge(a: &ConvergeArgs) -> Result<(), Error> {
 pub(crate) fn cmd_study(
     out_dir: &std::path::Path,
     name: &str,
+    inputs: &[&std::path::Path],
     study: impl FnOnce(&std::path::Path) -> Result<String, crate::study::StudyError>,
 ) -> Result<(), Error> {
-    let dir = OutputDir::create(out_dir, "study")?;
+    let dir = OutputDir::create(out_dir, "study", inputs)?;
     let text = study(&dir.file(""))?;
     Summary::Study(StudySummary {
         study: name.to_string(),

@@ -73,8 +73,13 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     };
     // A shard's directory is checked by `prepare_shard`, which waits out a shard started
     // beside it that is writing the marker; checked here, that moment was refused.
+    // A resumed sweep keeps what is there (its own checks follow); a fresh one replaces
+    // only an earlier sweep, and never the directory its scene file is in.
     if shard.is_none() {
-        rundir::check_target(out_dir)?;
+        match a.resume {
+            true => rundir::owner::inspect(&rundir::owner::normalise(out_dir)).map(|_| ())?,
+            false => rundir::check_target(out_dir, "sweep", &[scene.as_path()])?,
+        }
     }
     install_interrupt();
     // Each run in a worker process: one that aborts fails alone (src/worker).
@@ -84,6 +89,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         resume: a.resume,
         cancel: &CANCEL,
         runner: &workers,
+        inputs: &[scene.as_path()],
     };
     let quiet = a.quiet;
     let progress = |r: &eyeshell::sweep::RunRecord, n: usize, total: usize| {
@@ -124,9 +130,9 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     };
     let failed: Vec<String> = report
         .failed()
-        .map(|r| match &r.status {
-            RunStatus::Failed(m) => format!("{}: {m}", r.name),
-            _ => r.name.clone(),
+        .map(|r| match r.status.message_line() {
+            Some(m) => format!("{}: {m}", r.name),
+            None => r.name.clone(),
         })
         .collect();
     let finished = report
@@ -231,8 +237,9 @@ pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
     use crate::figures::plot_run;
     let target = a.out.clone().unwrap_or_else(|| a.dir.join("plots"));
     // Drawn into a temporary directory and moved into place whole, with its marker: only an
-    // empty directory or an earlier eyeshell output is replaced.
-    let dir = rundir::OutputDir::create(&target, "plot")?;
+    // empty directory or an earlier plot is replaced, never the run or sweep it is drawn
+    // from, nor a directory that holds it.
+    let dir = rundir::OutputDir::create(&target, "plot", &[a.dir.as_path()])?;
     let files = plot_run(&a.dir, &dir.file(""))?;
     let target = dir.commit()?;
     if !a.quiet {

@@ -10,7 +10,7 @@ use crate::figures::{index_html, paper_figures, PaperRuns, Written};
 use eyeshell::rundir::summary::{FigureEntry, FiguresSummary};
 use eyeshell::rundir::{self, write_atomic, Summary};
 use eyeshell::scene::sweep::Sweep;
-use eyeshell::sweep::{run_sweep, RunStatus, SweepOptions};
+use eyeshell::sweep::{run_sweep, SweepOptions};
 
 /// The scenes behind the figures: (data directory, file shown in captions, text).
 pub const SCENES: [(&str, &str, &str); 4] = [
@@ -89,7 +89,9 @@ pub fn make(
             });
         }
     } else {
-        owned = Some(own(out, rundir::OwnedDir::fresh)?);
+        owned = Some(own(out, &|out, kind, entries| {
+            rundir::OwnedDir::fresh(out, kind, entries, &[])
+        })?);
         write_summary(
             out,
             FiguresSummary {
@@ -105,6 +107,7 @@ pub fn make(
                 resume: false,
                 cancel,
                 runner: &eyeshell::sweep::InProcess,
+                inputs: &[],
             };
             let report = run_sweep(&sweep, &data.join(name), &options, &|r, n, total| {
                 progress(&format!(
@@ -115,10 +118,7 @@ pub fn make(
             })
             .map_err(|e| failed(e.to_string()))?;
             if let Some(r) = report.failed().next() {
-                let why = match &r.status {
-                    RunStatus::Failed(m) => m.clone(),
-                    _ => String::new(),
-                };
+                let why = r.status.message_line().unwrap_or_default();
                 return Err(failed(format!(
                     "{file}: run {} failed: {why} (its output is in {})",
                     r.name,
@@ -134,7 +134,7 @@ pub fn make(
         }
     }
     if owned.is_none() {
-        owned = Some(own(out, rundir::OwnedDir::resume)?);
+        owned = Some(own(out, &rundir::OwnedDir::resume)?);
     }
     // Data given to --replot that does not read is the user's; data just written is not.
     let runs = PaperRuns::read(&data).map_err(|e| FiguresError {
@@ -171,11 +171,11 @@ pub fn make(
     Ok(figures)
 }
 
-type Opener = fn(&Path, &str, &[&str]) -> Result<rundir::OwnedDir, rundir::OutputError>;
+type Opener<'a> = &'a dyn Fn(&Path, &str, &[&str]) -> Result<rundir::OwnedDir, rundir::OutputError>;
 
 /// Own `out` (fresh, or resumed for a replot): its marker lists every file the figures
 /// write, before they are written.
-fn own(out: &Path, open: Opener) -> Result<rundir::OwnedDir, FiguresError> {
+fn own(out: &Path, open: Opener<'_>) -> Result<rundir::OwnedDir, FiguresError> {
     let pictures: Vec<String> = crate::figures::PAPER_STEMS
         .iter()
         .flat_map(|s| [format!("{s}.png"), format!("{s}.svg")])

@@ -7,6 +7,7 @@ mod support;
 
 mod absurd;
 mod bad_input;
+mod destinations;
 mod docs;
 mod export_compare;
 mod export_roundtrip;
@@ -29,5 +30,6 @@ mod sensitivities;
 mod shards;
 mod slurm;
 mod solve;
+mod status;
 mod study;
 mod sweep;

@@ -274,17 +274,24 @@ fn two_writers_of_one_output() {
     args.push("out");
     let first = start(root, &args);
     wait_for(&root.join(".out.lock"));
-    for second in [
-        args.clone(),
-        vec!["solve", "s.toml", "-q", "--out", "out"],
-        vec!["sweep", "w.toml", "-q", "--out", "out"],
+    let r = bounded(root, &args);
+    refused(&r, "another eyeshell process", "a second grow");
+    assert!(
+        r.stderr.contains(&format!("(pid {})", first.id())),
+        "{}",
+        r.stderr
+    );
+    // Writers of another kind are refused for what is there (a growth run, already
+    // marked as one), which waiting would not change.
+    for (second, kind) in [
+        (vec!["solve", "s.toml", "-q", "--out", "out"], "solve"),
+        (vec!["sweep", "w.toml", "-q", "--out", "out"], "sweep"),
     ] {
         let r = bounded(root, &second);
-        refused(&r, "another eyeshell process", &format!("{second:?}"));
-        assert!(
-            r.stderr.contains(&format!("(pid {})", first.id())),
-            "{}",
-            r.stderr
+        refused(
+            &r,
+            &format!("out: holds a grow output; refusing to replace it with a {kind} output"),
+            &format!("{second:?}"),
         );
     }
     let done = first.wait_with_output().unwrap();
@@ -390,10 +397,24 @@ fn awkward_output_paths() {
         "long",
     );
     succeeded(
-        &bounded(root, &["grow", "g.toml", "-q", "--out", &long]),
-        "long grow",
+        &bounded(root, &["solve", "s.toml", "-q", "--out", &long]),
+        "long, again",
     );
-    assert!(root.join(&long).join("series.csv").is_file());
+    let long_grow = "g".repeat(250);
+    for what in ["long grow", "long grow, again"] {
+        succeeded(
+            &bounded(root, &["grow", "g.toml", "-q", "--out", &long_grow]),
+            what,
+        );
+    }
+    assert!(root.join(&long_grow).join("series.csv").is_file());
+    // A solve never replaces a growth run, nor a grow a solve.
+    refused(
+        &bounded(root, &["grow", "g.toml", "-q", "--out", &long]),
+        "holds a solve output; refusing to replace it with a grow output",
+        "grow over a solve",
+    );
+    assert!(root.join(&long).join("fields.csv").is_file());
     // prev/. is prev.
     succeeded(
         &bounded(root, &["solve", "s.toml", "-q", "--out", "prev"]),

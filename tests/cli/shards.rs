@@ -329,7 +329,13 @@ fn a_shard_killed_mid_way_resumes_and_keeps_its_finished_runs() {
         1,
         "3 of 4 runs of the sweep in out are not done (0 failed, 3 missing)",
     );
-    assert!(status.stdout.contains("1/2 running"), "{}", status.stdout);
+    // ... but no process holds its lock: status says it was interrupted, not running.
+    assert!(
+        status.stdout.contains("1/2 interrupted"),
+        "{}",
+        status.stdout
+    );
+    assert!(!status.stdout.contains("running"), "{}", status.stdout);
     assert!(status.stdout.contains("for K = 1, 2"), "{}", status.stdout);
 
     // --resume: the finished run is reused, the other runs.

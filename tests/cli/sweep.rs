@@ -182,6 +182,7 @@ fn an_interrupted_sweep_keeps_its_finished_runs_and_resume_does_the_rest() {
         resume: false,
         cancel: &cancel,
         runner: &eyeshell::sweep::InProcess,
+        inputs: &[],
     };
     let report = run_sweep(&sweep, &out, &options, &|_, _, _| {
         cancel.store(true, Ordering::SeqCst)
@@ -208,6 +209,7 @@ fn an_interrupted_sweep_keeps_its_finished_runs_and_resume_does_the_rest() {
         resume: true,
         cancel: &cancel,
         runner: &eyeshell::sweep::InProcess,
+        inputs: &[],
     };
     let report = run_sweep(&sweep, &out, &options, &|_, _, _| {}).unwrap();
     assert_eq!(report.status(), "ok");

@@ -306,6 +306,7 @@ impl Sweep {
             resume: false,
             cancel: &cancel,
             runner: &crate::sweep::InProcess,
+            inputs: &[],
         };
         run_sweep(self, out.as_ref(), &options, done)
     }

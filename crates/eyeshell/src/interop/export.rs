@@ -266,7 +266,9 @@ pub fn precheck(
     force: bool,
 ) -> Result<(), ExportError> {
     match rundir::Summary::read(run_dir) {
-        Ok(rundir::Summary::Growth(_)) => rundir::check_target(out).map_err(output_error),
+        Ok(rundir::Summary::Growth(_)) => {
+            rundir::check_target(out, "export", &[run_dir]).map_err(output_error)
+        }
         Ok(_) if !out.is_dir() => check_file_target(run_dir, out, format, force),
         _ => Ok(()),
     }
@@ -322,7 +324,7 @@ pub fn export(
             })
         }
         Run::Growth(snapshots) => {
-            let dir = OutputDir::create(out, "export").map_err(output_error)?;
+            let dir = OutputDir::create(out, "export", &[run_dir]).map_err(output_error)?;
             let mut files = Vec::new();
             for s in &snapshots {
                 let stem = s

@@ -125,10 +125,15 @@ pub struct GrowthWriter {
 }
 
 impl GrowthWriter {
-    /// Check `target` (a directory that exists and is not an eyeshell output is refused),
-    /// remove a previous output there, and create the directory with `snapshots/`, the
-    /// header of series.csv and a summary.json that says `"status": "running"`.
-    pub fn create(target: &Path, scene: &Scene) -> Result<GrowthWriter, OutputError> {
+    /// Check `target` (a directory that exists and is not an earlier growth run, or where
+    /// one of `inputs`, the files the run is made from, is, is refused), remove a previous
+    /// run there, and create the directory with `snapshots/`, the header of series.csv and
+    /// a summary.json that says `"status": "running"`.
+    pub fn create(
+        target: &Path,
+        scene: &Scene,
+        inputs: &[&Path],
+    ) -> Result<GrowthWriter, OutputError> {
         let history_points = scene.growth_settings.history_points;
         let mut entries = vec![SERIES_FILE, SNAPSHOT_DIR, SUMMARY_FILE];
         if history_points > 0 {
@@ -138,7 +143,7 @@ impl GrowthWriter {
         if with_sensitivities {
             entries.push(SENSITIVITIES_FILE);
         }
-        let owned = OwnedDir::fresh(target, "grow", &entries)?;
+        let owned = OwnedDir::fresh(target, "grow", &entries, inputs)?;
         let target = owned.path().to_path_buf();
         let snapshots = target.join(SNAPSHOT_DIR);
         fs::create_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
@@ -399,7 +404,7 @@ mod tests {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("run");
         let scene = growing_scene();
-        let mut w = GrowthWriter::create(&dir, &scene).unwrap();
+        let mut w = GrowthWriter::create(&dir, &scene, &[]).unwrap();
         // From the start: the directory, the series header and a running summary.
         assert!(dir.join(SNAPSHOT_DIR).is_dir());
         assert!(read_series(&dir).is_empty());
@@ -505,7 +510,7 @@ mod tests {
     fn failure_keeps_the_results_so_far() {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("run");
-        let mut w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
+        let mut w = GrowthWriter::create(&dir, &growing_scene(), &[]).unwrap();
         w.write_snapshot(&snapshot(0.0, 5)).unwrap();
         w.write_snapshot(&snapshot(0.1, 5)).unwrap();
         let error = GrowthError {
@@ -534,7 +539,7 @@ mod tests {
     fn a_mismatched_snapshot_is_an_error_and_writes_nothing() {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("run");
-        let mut w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
+        let mut w = GrowthWriter::create(&dir, &growing_scene(), &[]).unwrap();
         let mut s = snapshot(0.0, 5);
         s.growth.pop();
         let e = Observer::snapshot(&mut w, &s).unwrap_err().to_string();
@@ -548,17 +553,17 @@ mod tests {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("run");
         // A previous run (even a killed one: its summary says running) is replaced whole.
-        let mut w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
+        let mut w = GrowthWriter::create(&dir, &growing_scene(), &[]).unwrap();
         w.write_snapshot(&snapshot(0.0, 3)).unwrap();
         w.write_snapshot(&snapshot(0.5, 3)).unwrap();
         drop(w);
         // ... unless it holds a file eyeshell did not write, which is never deleted.
         fs::write(dir.join("stray.txt"), "x").unwrap();
-        let e = GrowthWriter::create(&dir, &growing_scene()).unwrap_err();
+        let e = GrowthWriter::create(&dir, &growing_scene(), &[]).unwrap_err();
         assert!(e.to_string().contains("stray.txt"), "{e}");
         assert!(dir.join("stray.txt").exists());
         fs::remove_file(dir.join("stray.txt")).unwrap();
-        let w = GrowthWriter::create(&dir, &growing_scene()).unwrap();
+        let w = GrowthWriter::create(&dir, &growing_scene(), &[]).unwrap();
         assert!(read_series(&dir).is_empty());
         assert_eq!(fs::read_dir(dir.join(SNAPSHOT_DIR)).unwrap().count(), 0);
         drop(w);
@@ -566,14 +571,14 @@ mod tests {
         let data = tmp.path().join("data");
         fs::create_dir(&data).unwrap();
         fs::write(data.join("precious.txt"), "keep").unwrap();
-        let e = GrowthWriter::create(&data, &growing_scene()).unwrap_err();
+        let e = GrowthWriter::create(&data, &growing_scene(), &[]).unwrap_err();
         assert!(e.is_refusal(), "{e}");
         assert_eq!(fs::read_dir(&data).unwrap().count(), 1);
         // An empty directory and missing parents are fine.
         let empty = tmp.path().join("empty");
         fs::create_dir(&empty).unwrap();
-        GrowthWriter::create(&empty, &growing_scene()).unwrap();
-        GrowthWriter::create(&tmp.path().join("a/b/c"), &growing_scene()).unwrap();
+        GrowthWriter::create(&empty, &growing_scene(), &[]).unwrap();
+        GrowthWriter::create(&tmp.path().join("a/b/c"), &growing_scene(), &[]).unwrap();
         assert!(tmp.path().join("a/b/c").join(SERIES_FILE).is_file());
     }
 }

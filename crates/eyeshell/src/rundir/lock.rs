@@ -77,6 +77,25 @@ impl Drop for DirLock {
     }
 }
 
+/// Does a live process hold the lock of `target`? Asked without taking it over: the lock
+/// file is opened (never created) and locked shared for an instant, which fails only
+/// while a holder has it. A holder that died, however it died, holds nothing, so a
+/// record that says "running" with no holder is the record of a process that was killed.
+/// When the lock cannot be probed, the answer is yes (nothing is said to be dead that
+/// might not be).
+pub fn is_held(target: &Path) -> bool {
+    let file = match File::open(lock_path(target)) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return false,
+        Err(_) => return true,
+    };
+    match file.try_lock_shared() {
+        Ok(()) => false, // released when `file` closes, at once
+        Err(std::fs::TryLockError::WouldBlock) => true,
+        Err(std::fs::TryLockError::Error(_)) => true,
+    }
+}
+
 /// `.NAME.lock` beside `target`.
 pub fn lock_path(target: &Path) -> PathBuf {
     let base = hidden_base(target.file_name().unwrap_or_default());
@@ -138,6 +157,26 @@ mod tests {
             std::process::id().to_string()
         );
         drop(lock);
+    }
+
+    #[test]
+    fn a_holder_is_seen_alive_and_a_dead_one_is_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("3.json");
+        assert!(!is_held(&target), "no lock file");
+        let lock = DirLock::acquire(&target).unwrap();
+        assert!(is_held(&target));
+        // Probing takes nothing: the holder keeps it, and a second writer is still refused.
+        assert!(matches!(
+            DirLock::acquire(&target),
+            Err(OutputError::Busy { .. })
+        ));
+        drop(lock);
+        assert!(!is_held(&target));
+        // The file of a holder that was killed (left behind, unlocked) holds nothing.
+        fs::write(lock_path(&target), "999999999").unwrap();
+        assert!(!is_held(&target));
+        assert!(DirLock::acquire(&target).is_ok());
     }
 
     #[test]

@@ -66,16 +66,42 @@ pub enum OutputError {
         found: String,
         wanted: String,
     },
+    #[error("{}: holds {} {found} output; refusing to replace it with {} {wanted} output, which replaces only an earlier {wanted} output or an empty directory (choose another output)", path.display(), article(found), article(wanted))]
+    NotItsKind {
+        path: PathBuf,
+        found: String,
+        wanted: String,
+    },
+    #[error("{}: {how} {}, which this {kind} is made from; refusing to write there (choose an output outside it)", path.display(), input.display())]
+    Input {
+        path: PathBuf,
+        /// "is", "holds" or "is inside".
+        how: &'static str,
+        input: PathBuf,
+        kind: String,
+    },
     #[error("{}: another eyeshell process{} is writing it; wait for it to finish or choose another output", path.display(), pid.map(|p| format!(" (pid {p})")).unwrap_or_default())]
     Busy { path: PathBuf, pid: Option<u32> },
     #[error("{}: exists and was not written by eyeshell; refusing to overwrite it (--force replaces it)", path.display())]
     NotOurFile { path: PathBuf },
+    #[error("{}: is a file of the eyeshell output {}; refusing to overwrite it, even with --force (choose another file)", path.display(), dir.display())]
+    PartOfOutput { path: PathBuf, dir: PathBuf },
     #[error("{}: exists and is not a regular file; refusing to overwrite it", path.display())]
     NotAFile { path: PathBuf },
     #[error("{}: the output path has no file name", path.display())]
     NoName { path: PathBuf },
     #[error("{}: a parent of the output path is not a directory", path.display())]
     NoParent { path: PathBuf },
+    #[error("{}: the output path climbs (..) out of a directory that does not exist; give it without the ..", path.display())]
+    Unresolved { path: PathBuf },
+}
+
+/// "a" or "an", for a kind of output in a message.
+fn article(word: &str) -> &'static str {
+    match word.chars().next() {
+        Some('a' | 'e' | 'i' | 'o' | 'u') => "an",
+        _ => "a",
+    }
 }
 
 impl OutputError {
@@ -394,14 +420,14 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let target = dir.path().join("out");
         // Fresh target.
-        let out = OutputDir::create(&target, "solve").unwrap();
+        let out = OutputDir::create(&target, "solve", &[]).unwrap();
         fs::write(out.file(SUMMARY_FILE), "{}").unwrap();
         fs::write(out.file("old-only"), "x").unwrap();
         assert!(!target.exists());
         out.commit().unwrap();
         assert!(target.join(SUMMARY_FILE).is_file());
         // A previous output is replaced wholesale.
-        let out = OutputDir::create(&target, "solve").unwrap();
+        let out = OutputDir::create(&target, "solve", &[]).unwrap();
         fs::write(out.file(SUMMARY_FILE), "{\"new\":1}").unwrap();
         out.commit().unwrap();
         assert!(!target.join("old-only").exists());
@@ -422,7 +448,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let target = dir.path().join("out");
         {
-            let out = OutputDir::create(&target, "solve").unwrap();
+            let out = OutputDir::create(&target, "solve", &[]).unwrap();
             fs::write(out.file(FIELDS_FILE), "partial").unwrap();
         }
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
@@ -434,7 +460,7 @@ mod tests {
         let target = dir.path().join("data");
         fs::create_dir(&target).unwrap();
         fs::write(target.join("precious.txt"), "keep").unwrap();
-        let e = OutputDir::create(&target, "solve").unwrap_err();
+        let e = OutputDir::create(&target, "solve", &[]).unwrap_err();
         assert!(e.is_refusal());
         assert!(
             e.to_string().contains("data") && e.to_string().contains("refusing"),
@@ -446,20 +472,22 @@ mod tests {
         );
         let file = dir.path().join("file");
         fs::write(&file, "x").unwrap();
-        assert!(OutputDir::create(&file, "solve").unwrap_err().is_refusal());
-        // A parent that is a file is refused; missing parents are created, and removed
-        // again when the run does not commit.
-        assert!(OutputDir::create(&file.join("out"), "solve")
+        assert!(OutputDir::create(&file, "solve", &[])
             .unwrap_err()
             .is_refusal());
-        let nested = OutputDir::create(&dir.path().join("no/such/out"), "solve").unwrap();
+        // A parent that is a file is refused; missing parents are created, and removed
+        // again when the run does not commit.
+        assert!(OutputDir::create(&file.join("out"), "solve", &[])
+            .unwrap_err()
+            .is_refusal());
+        let nested = OutputDir::create(&dir.path().join("no/such/out"), "solve", &[]).unwrap();
         assert!(dir.path().join("no/such").is_dir());
         drop(nested);
         assert!(!dir.path().join("no").exists());
         // An empty directory is fine.
         let empty = dir.path().join("empty");
         fs::create_dir(&empty).unwrap();
-        let out = OutputDir::create(&empty, "solve").unwrap();
+        let out = OutputDir::create(&empty, "solve", &[]).unwrap();
         fs::write(out.file(SUMMARY_FILE), "{}").unwrap();
         out.commit().unwrap();
         assert!(empty.join(SUMMARY_FILE).is_file());

@@ -8,6 +8,15 @@
 //!   entry, its own temporary litter, or a directory with a marker of its own, such as
 //!   `plots/`). A file called summary.json proves nothing. Anything else is refused, and
 //!   named: a user's file in an output directory is never deleted with it.
+//! - **Kinds.** An output replaces only an earlier output of its own kind (a plot an
+//!   earlier plot, an export an earlier export): never another run, a sweep or a fit's
+//!   output, whatever eyeshell wrote.
+//! - **Inputs.** Every writer names what its output is made from (the run an export or a
+//!   plot reads, the scene, the fit's data), and the target may not be one of them, hold
+//!   one, or lie inside one except as a nested output at the top of an eyeshell output
+//!   (`RUN/plots`). Paths are compared by what they are, device and inode along their
+//!   canonical ancestors, never by how they are spelled: `RUN/.`, `RUN/../RUN`, an absolute
+//!   path, a symlinked parent or a bind mount all name the same directory.
 //! - **Files** (`export --mat FILE`, `extremes --out FILE`): an existing file is replaced
 //!   only when eyeshell wrote it (recognised by its own header) or with `--force`.
 //!
@@ -16,6 +25,7 @@
 //! results come). Both hold the target's lock ([`DirLock`]) while they write.
 
 use std::fs;
+use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -92,11 +102,93 @@ pub fn normalise(target: &Path) -> PathBuf {
     target.components().collect()
 }
 
-/// May `target` be written? Refuses files, symlinks, directories that are not eyeshell
-/// outputs and outputs that hold somebody else's files. Call it before a long
-/// computation, so that a refusal comes first; the writers check again under the lock.
-pub fn check_target(target: &Path) -> Result<(), OutputError> {
-    inspect(&normalise(target)).map(|_| ())
+/// May `target` be written as an output of `kind` made from `inputs`? Refuses files,
+/// symlinks, directories that are not eyeshell outputs, outputs that hold somebody else's
+/// files, outputs of another kind, and any target that is, holds or lies inside one of the
+/// inputs ([`admit`]). Call it before a long computation, so that a refusal comes first;
+/// the writers check again under the lock.
+pub fn check_target(target: &Path, kind: &str, inputs: &[&Path]) -> Result<(), OutputError> {
+    admit(&normalise(target), kind, inputs).map(|_| ())
+}
+
+/// What is at `target`, or why an output of `kind` made from `inputs` may not replace it:
+/// [`inspect`], then the two rules every writer shares (see the module doc): only an
+/// earlier output of the same kind is replaced, and never where an input is.
+pub fn admit(target: &Path, kind: &str, inputs: &[&Path]) -> Result<Target, OutputError> {
+    let found = inspect(target)?;
+    if let Target::Ours(marker) = &found {
+        if marker.kind != kind {
+            return Err(OutputError::NotItsKind {
+                path: target.to_path_buf(),
+                found: marker.kind.clone(),
+                wanted: kind.to_string(),
+            });
+        }
+    }
+    for input in inputs {
+        clear_of(target, kind, input)?;
+    }
+    Ok(found)
+}
+
+/// A directory's identity: device and inode (following links), which no spelling of its
+/// path changes.
+type Identity = (u64, u64);
+
+fn identity(path: &Path) -> Option<Identity> {
+    fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+}
+
+/// The identities of `path` and of every directory above it, from its canonical path (no
+/// `.`, `..` or links left, so its lexical ancestors are its real ones).
+fn lineage(path: &Path) -> Vec<Identity> {
+    fs::canonicalize(path)
+        .map(|c| c.ancestors().filter_map(identity).collect())
+        .unwrap_or_default()
+}
+
+/// The nearest of `path` and its ancestors that exists (where a missing output's parents
+/// will be created from).
+fn existing_ancestor(path: &Path) -> PathBuf {
+    path.ancestors()
+        .find(|a| !a.as_os_str().is_empty() && fs::symlink_metadata(a).is_ok())
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+}
+
+/// Refuse `target` if it is `input`, holds it, or lies inside it (an eyeshell output)
+/// other than as a nested output directly in an eyeshell output (`RUN/plots`, `SWEEP/runs/a/plots`), which the
+/// input's readers and its owner's checks pass over.
+fn clear_of(target: &Path, kind: &str, input: &Path) -> Result<(), OutputError> {
+    let Some(input_id) = identity(input) else {
+        return Ok(()); // a missing input is its reader's error, said in its terms
+    };
+    let refuse = |how: &'static str| OutputError::Input {
+        path: target.to_path_buf(),
+        how,
+        input: input.to_path_buf(),
+        kind: kind.to_string(),
+    };
+    if let Some(target_id) = identity(target) {
+        let above = lineage(input);
+        if above.first() == Some(&target_id) {
+            return Err(refuse("is"));
+        }
+        if above.contains(&target_id) {
+            return Err(refuse("holds"));
+        }
+    }
+    // Only an eyeshell output has insides to keep clear of; any other directory given as
+    // an input is its reader's to refuse, in its terms ("not a run directory").
+    if !fs::metadata(input).is_ok_and(|m| m.is_dir()) || Marker::read(input).is_none() {
+        return Ok(());
+    }
+    let parent = parent_of(target);
+    let inside = lineage(&existing_ancestor(&parent)).contains(&input_id);
+    let nested = fs::metadata(&parent).is_ok_and(|m| m.is_dir()) && Marker::read(&parent).is_some();
+    if inside && !nested {
+        return Err(refuse("is inside"));
+    }
+    Ok(())
 }
 
 /// What is at `target`, or why it may not be written.
@@ -139,19 +231,30 @@ pub fn inspect(target: &Path) -> Result<Target, OutputError> {
     }
 }
 
-/// A missing target: fine if every parent that exists is a directory.
+/// A missing target: fine if every parent that exists is a directory, and the path does
+/// not climb (`..`) out of a directory that does not exist yet (`RUN/new/../x`: where that
+/// lands is decided only once `new` is created, after every check).
 fn absent(target: &Path) -> Result<Target, OutputError> {
     let blocked = target
         .ancestors()
         .skip(1)
         .any(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir());
     if blocked {
-        Err(OutputError::NoParent {
+        return Err(OutputError::NoParent {
             path: target.to_path_buf(),
-        })
-    } else {
-        Ok(Target::Absent)
+        });
     }
+    let existing = existing_ancestor(target);
+    let missing = target.strip_prefix(&existing).unwrap_or(target);
+    if missing
+        .components()
+        .any(|c| c == std::path::Component::ParentDir)
+    {
+        return Err(OutputError::Unresolved {
+            path: target.to_path_buf(),
+        });
+    }
+    Ok(Target::Absent)
 }
 
 /// The entry names of a directory, sorted.
@@ -182,19 +285,27 @@ fn is_ours(dir: &Path, marker: &Marker, name: &str) -> bool {
 pub struct OutputDir {
     dir: AtomicDir,
     kind: String,
+    inputs: Vec<PathBuf>,
 }
 
 impl OutputDir {
-    /// Check the target, lock it and create the temporary directory next to it.
-    pub fn create(target: &Path, kind: &str) -> Result<OutputDir, OutputError> {
+    /// Check the target for an output of `kind` made from `inputs` ([`admit`]), lock it and
+    /// create the temporary directory next to it.
+    pub fn create(target: &Path, kind: &str, inputs: &[&Path]) -> Result<OutputDir, OutputError> {
         let target = normalise(target);
-        inspect(&target)?;
+        admit(&target, kind, inputs)?;
         let dir = AtomicDir::create(&target)?;
-        inspect(&target)?; // again, under the lock
+        admit(&target, kind, inputs)?; // again, under the lock
         Ok(OutputDir {
             dir,
             kind: kind.to_string(),
+            inputs: inputs.iter().map(|p| p.to_path_buf()).collect(),
         })
+    }
+
+    fn admit(&self) -> Result<Target, OutputError> {
+        let inputs: Vec<&Path> = self.inputs.iter().map(PathBuf::as_path).collect();
+        admit(self.dir.target(), &self.kind, &inputs)
     }
 
     /// The final path of the directory.
@@ -210,7 +321,7 @@ impl OutputDir {
     /// Write the marker (listing what was written) and move the finished directory into
     /// place, replacing an empty directory or an eyeshell output (checked again).
     pub fn commit(self) -> Result<PathBuf, OutputError> {
-        inspect(self.dir.target())?;
+        self.admit()?;
         let mut marker = Marker::new(&self.kind);
         marker.entries = entry_names(self.dir.path())?;
         marker.write(self.dir.path())?;
@@ -230,10 +341,16 @@ pub struct OwnedDir {
 }
 
 impl OwnedDir {
-    /// Lock `target`, remove a previous eyeshell output there (refusing anything else), and
-    /// create it afresh with a marker listing `entries`.
-    pub fn fresh(target: &Path, kind: &str, entries: &[&str]) -> Result<OwnedDir, OutputError> {
-        let (path, lock, found) = Self::lock(target)?;
+    /// Lock `target`, remove a previous eyeshell output of the same `kind` there (refusing
+    /// anything else, and any target where one of `inputs` is: [`admit`]), and create it
+    /// afresh with a marker listing `entries`.
+    pub fn fresh(
+        target: &Path,
+        kind: &str,
+        entries: &[&str],
+        inputs: &[&Path],
+    ) -> Result<OwnedDir, OutputError> {
+        let (path, lock, found) = Self::lock(target, &|p| admit(p, kind, inputs))?;
         if let Target::Ours(_) = found {
             fs::remove_dir_all(&path).map_err(|e| OutputError::io(&path, e))?;
         }
@@ -244,7 +361,7 @@ impl OwnedDir {
     /// (a resumed sweep); an empty or missing target starts fresh. Another kind of output
     /// is refused.
     pub fn resume(target: &Path, kind: &str, entries: &[&str]) -> Result<OwnedDir, OutputError> {
-        let (path, lock, found) = Self::lock(target)?;
+        let (path, lock, found) = Self::lock(target, &inspect)?;
         match found {
             Target::Ours(marker) if marker.kind == kind => Self::start(path, lock, marker, entries),
             Target::Ours(marker) => Err(OutputError::OtherKind {
@@ -256,15 +373,19 @@ impl OwnedDir {
         }
     }
 
-    /// Check, create the parents, lock, clean litter, check again under the lock.
-    fn lock(target: &Path) -> Result<(PathBuf, DirLock, Target), OutputError> {
+    /// Check (`check`: [`admit`] or [`inspect`]), create the parents, lock, clean litter,
+    /// check again under the lock.
+    fn lock(
+        target: &Path,
+        check: &dyn Fn(&Path) -> Result<Target, OutputError>,
+    ) -> Result<(PathBuf, DirLock, Target), OutputError> {
         let path = normalise(target);
-        inspect(&path)?;
+        check(&path)?;
         let parent = parent_of(&path);
         fs::create_dir_all(&parent).map_err(|e| OutputError::io(&parent, e))?;
         let lock = DirLock::acquire(&path)?;
         remove_litter(&path)?;
-        let found = inspect(&path)?;
+        let found = check(&path)?;
         Ok((path, lock, found))
     }
 
@@ -337,7 +458,8 @@ pub fn claim(dir: &Path, names: &[&str]) -> Result<(), OutputError> {
 }
 
 /// May the file `path` be written? Absent: yes. A regular file: if `ours` recognises it as
-/// eyeshell's, or with `force`. Anything else (a directory, a symlink, a device) is
+/// eyeshell's, or with `force`, but never one that an eyeshell output's marker lists (a
+/// run's fields.csv, a sweep's summary.json), even with `force`. Anything else (a directory, a symlink, a device) is
 /// refused. Litter of killed writers beside it is removed.
 pub fn check_file(
     path: &Path,
@@ -352,6 +474,14 @@ pub fn check_file(
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => absent(&path).map(|_| ())?,
         Err(e) => return Err(OutputError::io(&path, e)),
         Ok(m) if m.is_file() => {
+            // A file of an eyeshell output (its marker lists it) belongs to that output, a
+            // run or a sweep, which it would leave broken: --force is for other files.
+            let dir = parent_of(&path);
+            let name = path.file_name().unwrap_or_default().to_string_lossy();
+            let listed = Marker::read(&dir).is_some_and(|m| m.lists(&name));
+            if listed || name == MARKER_FILE {
+                return Err(OutputError::PartOfOutput { path, dir });
+            }
             if !force && !ours(&path) {
                 return Err(OutputError::NotOurFile { path });
             }
@@ -382,7 +512,7 @@ mod tests {
     }
 
     fn committed(target: &Path, files: &[&str]) {
-        let out = OutputDir::create(target, "solve").unwrap();
+        let out = OutputDir::create(target, "solve", &[]).unwrap();
         for f in files {
             fs::write(out.file(f), "x").unwrap();
         }
@@ -396,9 +526,9 @@ mod tests {
         fs::create_dir(&target).unwrap();
         fs::write(target.join("summary.json"), "{}").unwrap();
         fs::write(target.join("thesis.tex"), "keep").unwrap();
-        let e = OutputDir::create(&target, "solve").unwrap_err();
+        let e = OutputDir::create(&target, "solve", &[]).unwrap_err();
         assert!(e.is_refusal() && e.to_string().contains(".eyeshell"), "{e}");
-        let e = OwnedDir::fresh(&target, "grow", &[]).unwrap_err();
+        let e = OwnedDir::fresh(&target, "grow", &[], &[]).unwrap_err();
         assert!(e.is_refusal(), "{e}");
         assert_eq!(names(&target), vec!["summary.json", "thesis.tex"]);
         // A forged marker that does not carry the signature, or is a symlink, is not ours.
@@ -407,7 +537,7 @@ mod tests {
             r#"{"written_by":"me","kind":"solve"}"#,
         )
         .unwrap();
-        assert!(OutputDir::create(&target, "solve").is_err());
+        assert!(OutputDir::create(&target, "solve", &[]).is_err());
     }
 
     #[test]
@@ -420,7 +550,7 @@ mod tests {
         assert_eq!(marker.entries, vec!["fields.csv", "summary.json"]);
         assert!(marker.written_by.starts_with("eyeshell "));
         fs::write(target.join("notes.txt"), "mine").unwrap();
-        let e = OutputDir::create(&target, "solve").unwrap_err();
+        let e = OutputDir::create(&target, "solve", &[]).unwrap_err();
         assert!(e.to_string().contains("\"notes.txt\""), "{e}");
         fs::remove_file(target.join("notes.txt")).unwrap();
         // A nested eyeshell output (plots/) and eyeshell litter are ours.
@@ -434,7 +564,7 @@ mod tests {
     fn in_place_outputs_claim_entries_before_writing() {
         let dir = tempfile::tempdir().unwrap();
         let target = dir.path().join("grow");
-        let mut owned = OwnedDir::fresh(&target, "grow", &["series.csv"]).unwrap();
+        let mut owned = OwnedDir::fresh(&target, "grow", &["series.csv"], &[]).unwrap();
         let p = owned.claim("snapshots").unwrap();
         fs::create_dir(&p).unwrap();
         assert_eq!(
@@ -443,7 +573,7 @@ mod tests {
         );
         assert!(owned.claim("../escape").is_err());
         // Locked while it lives: a second writer is refused, and told who holds it.
-        let e = OwnedDir::fresh(&target, "grow", &[]).unwrap_err();
+        let e = OwnedDir::fresh(&target, "grow", &[], &[]).unwrap_err();
         assert!(matches!(e, OutputError::Busy { .. }), "{e}");
         assert!(e.to_string().contains("another eyeshell process"), "{e}");
         drop(owned);
@@ -459,7 +589,7 @@ mod tests {
             "resume keeps what is there"
         );
         drop(again);
-        OwnedDir::fresh(&target, "grow", &[]).unwrap();
+        OwnedDir::fresh(&target, "grow", &[], &[]).unwrap();
         assert_eq!(names(&target), vec![".eyeshell"]);
     }
 
@@ -474,7 +604,7 @@ mod tests {
         let tmp = dir.path().join(".out.tmp-999999998");
         fs::create_dir(&tmp).unwrap();
         fs::write(tmp.join("fields.csv"), "half").unwrap();
-        let out = OutputDir::create(&target, "solve").unwrap();
+        let out = OutputDir::create(&target, "solve", &[]).unwrap();
         assert!(
             target.join("fields.csv").is_file(),
             "the old output is back"
@@ -493,7 +623,7 @@ mod tests {
         committed(&prev, &["a"]);
         committed(&prev.join("."), &["b"]);
         assert_eq!(names(&prev), vec![".eyeshell", "b"]);
-        assert!(OutputDir::create(&prev.join(".."), "solve").is_err());
+        assert!(OutputDir::create(&prev.join(".."), "solve", &[]).is_err());
         // A legal 250-byte name gets short hidden names beside it.
         let long = dir.path().join("n".repeat(250));
         committed(&long, &["a"]);
@@ -505,8 +635,10 @@ mod tests {
         fs::write(elsewhere.join("keep"), "k").unwrap();
         let link = dir.path().join("link");
         std::os::unix::fs::symlink(&elsewhere, &link).unwrap();
-        assert!(OutputDir::create(&link, "solve").unwrap_err().is_refusal());
-        assert!(OwnedDir::fresh(&link, "grow", &[]).is_err());
+        assert!(OutputDir::create(&link, "solve", &[])
+            .unwrap_err()
+            .is_refusal());
+        assert!(OwnedDir::fresh(&link, "grow", &[], &[]).is_err());
         assert_eq!(names(&elsewhere), vec!["keep"]);
     }
 
@@ -523,6 +655,16 @@ mod tests {
         assert!(e.is_refusal() && e.to_string().contains("--force"), "{e}");
         check_file(&path, true, ours).unwrap();
         assert!(check_file(dir.path(), true, ours).is_err(), "a directory");
+        // A file of an eyeshell output, and its marker: not even with force.
+        let out = dir.path().join("out");
+        committed(&out, &["fields.csv"]);
+        for name in ["fields.csv", MARKER_FILE] {
+            let e = check_file(&out.join(name), true, |_| true).unwrap_err();
+            assert!(
+                e.to_string().contains("is a file of the eyeshell output"),
+                "{e}"
+            );
+        }
         // Temporary files of dead writers go.
         let dead = dir.path().join(".x.mat.tmp-999999999");
         fs::write(&dead, "").unwrap();

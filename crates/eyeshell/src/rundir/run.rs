@@ -27,11 +27,17 @@ pub struct SolvedRun {
 }
 
 /// Solve the loaded shell of `scene` into the run directory `target`: the target is
-/// checked and locked before the computation (a foreign directory, or one another process
-/// is writing, is refused first), the files are written into a temporary sibling and
-/// renamed into place with their marker.
-pub fn solve_into(scene: &Scene, target: &Path, at: &[f64]) -> Result<SolvedRun, Error> {
-    let dir = OutputDir::create(target, "solve")?;
+/// checked and locked before the computation (a foreign directory, one another process
+/// is writing, or one where `inputs`, the files the scene came from, are, is refused
+/// first), the files are written into a temporary sibling and renamed into place with
+/// their marker.
+pub fn solve_into(
+    scene: &Scene,
+    target: &Path,
+    at: &[f64],
+    inputs: &[&Path],
+) -> Result<SolvedRun, Error> {
+    let dir = OutputDir::create(target, "solve", inputs)?;
     let solution = crate::bvp::solve(&scene.params, &scene.solver, None)?;
     let at_rows = at
         .iter()

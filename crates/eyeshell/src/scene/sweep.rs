@@ -283,19 +283,33 @@ impl SweepPlan {
         (name, values)
     }
 
-    /// Every run's directory name, unique in sweep order (`name`, `name-2`, ...).
+    /// Every run's directory name, unique: the first run of each name keeps it, and a
+    /// later run of the same name becomes `name-2`, `name-3`, ..., skipping every name a
+    /// run was given (a user's own `a-2` stays `a-2`, and no two runs share a name).
     fn unique_names(&self) -> Vec<String> {
         let n = self.len();
-        let mut names = Vec::with_capacity(n);
-        let mut taken = std::collections::HashSet::with_capacity(n);
-        for i in 0..n {
-            let (given, values) = self.combination(i);
-            let name = unique(
-                shorten(given.unwrap_or_else(|| generated_name(&values))),
-                &taken,
-            );
-            taken.insert(name.clone());
-            names.push(name);
+        let mut names: Vec<String> = (0..n)
+            .map(|i| {
+                let (given, values) = self.combination(i);
+                shorten(given.unwrap_or_else(|| generated_name(&values)))
+            })
+            .collect();
+        let repeated: Vec<bool> = {
+            let mut seen = std::collections::HashSet::with_capacity(n);
+            names
+                .iter()
+                .map(|name| !seen.insert(name.as_str()))
+                .collect()
+        };
+        if !repeated.contains(&true) {
+            return names; // the usual case: no second set of a million names
+        }
+        let mut taken: std::collections::HashSet<String> = names.iter().cloned().collect();
+        for (name, repeated) in names.iter_mut().zip(repeated) {
+            if repeated {
+                *name = unique(std::mem::take(name), &taken);
+                taken.insert(name.clone());
+            }
         }
         names
     }
@@ -731,5 +745,34 @@ mod tests {
             .unwrap();
         assert_eq!(s.runs[0].name, "D=1");
         assert_eq!(s.runs[1].name, "D=1-2");
+    }
+
+    /// A name the user gave is never taken by another run's de-duplication, whatever the
+    /// order: `a`, `a`, `a-2` keep `a` and `a-2` and the second `a` becomes `a-3`.
+    #[test]
+    fn deduplication_never_takes_a_name_a_run_was_given() {
+        let runs = |names: &[&str]| {
+            let text: String = names
+                .iter()
+                .enumerate()
+                .map(|(i, n)| format!("[[sweep.runs]]\nname = \"{n}\"\n\"fibres.D\" = {}\n", i + 1))
+                .collect();
+            let s = sweep(&text).unwrap();
+            let got: Vec<(String, f64)> = s
+                .runs
+                .iter()
+                .map(|r| (r.name.clone(), r.scene.params.d))
+                .collect();
+            let unique: std::collections::HashSet<&String> = got.iter().map(|(n, _)| n).collect();
+            assert_eq!(unique.len(), got.len(), "{got:?}");
+            got
+        };
+        let got = runs(&["a", "a", "a-2"]);
+        assert_eq!(got[0], ("a".into(), 1.0));
+        assert_eq!(got[1], ("a-3".into(), 2.0));
+        assert_eq!(got[2], ("a-2".into(), 3.0), "the user's a-2 keeps its name");
+        let got = runs(&["a-2", "a", "a", "a", "a-3"]);
+        let names: Vec<&str> = got.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["a-2", "a", "a-4", "a-5", "a-3"]);
     }
 }

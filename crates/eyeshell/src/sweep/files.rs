@@ -66,6 +66,46 @@ pub fn verify(dir: &Path, files: &[RunFile]) -> Option<String> {
     files.iter().find_map(|f| verify_one(dir, f))
 }
 
+/// Why the run in `dir` names a file that `files` does not record (None: it names none):
+/// the run's own marker (every entry eyeshell wrote there) and its summary.json (series,
+/// history and snapshot files) say what the run is made of, and each must be recorded,
+/// so that [`verify`] has checked it. A result.json that dropped a file the run still
+/// names (the file deleted, or its record edited) is not to be trusted; nor is a run
+/// without its marker, which is no longer an eyeshell output.
+pub fn unrecorded(dir: &Path, files: &[RunFile]) -> Option<String> {
+    use crate::rundir::{owner::Marker, Summary, MARKER_FILE};
+    let listed: std::collections::HashSet<&str> = files.iter().map(|f| f.path.as_str()).collect();
+    // A file by its path, a directory (snapshots/) by a file inside it.
+    let covers = |name: &str| {
+        listed.contains(name)
+            || files.iter().any(|f| {
+                f.path
+                    .strip_prefix(name)
+                    .is_some_and(|rest| rest.starts_with('/'))
+            })
+    };
+    let Some(marker) = Marker::read(dir) else {
+        return Some(format!("its {MARKER_FILE} marker is missing"));
+    };
+    let mut named: Vec<String> = marker.entries.into_iter().filter(|e| recorded(e)).collect();
+    match Summary::read(dir) {
+        Ok(Summary::Growth(g)) => {
+            named.push(g.series_file);
+            named.extend(g.history_file);
+            named.extend(g.snapshots.into_iter().map(|s| s.file));
+        }
+        Ok(_) => {}
+        Err(e) => return Some(e.to_string()),
+    }
+    named.into_iter().find(|name| !covers(name)).map(|name| {
+        format!(
+            "{} is named by the run but not recorded in its {}",
+            crate::text::one_line(&name),
+            super::RESULT_FILE
+        )
+    })
+}
+
 fn verify_one(dir: &Path, f: &RunFile) -> Option<String> {
     let shown = crate::text::one_line(&f.path);
     let path = match locate(dir, &f.path) {

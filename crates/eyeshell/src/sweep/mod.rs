@@ -69,6 +69,9 @@ pub struct SweepOptions<'a> {
     pub cancel: &'a AtomicBool,
     /// How each run is executed: `&InProcess`, or a runner that isolates runs.
     pub runner: &'a dyn Runner,
+    /// What the sweep is made from (its scene file): a fresh sweep's directory may not be,
+    /// hold or lie inside one of them ([`crate::rundir::owner::admit`]).
+    pub inputs: &'a [&'a Path],
 }
 
 /// The final state of one run, for the table (and its result.json).
@@ -86,7 +89,20 @@ pub enum RunStatus {
     Failed(String),
 }
 
+/// The most characters of a failed run's message (or of why a run ran again) that a line
+/// of the command line quotes; the run's summary.json and sweep.csv keep it whole.
+pub const SHOWN_MESSAGE: usize = 300;
+
 impl RunStatus {
+    /// A failed run's message as one bounded line ([`crate::text::excerpt`]): what every
+    /// report of a sweep prints, however many lines or characters the message has.
+    pub fn message_line(&self) -> Option<String> {
+        match self {
+            RunStatus::Failed(m) => Some(crate::text::excerpt(m.trim(), SHOWN_MESSAGE)),
+            _ => None,
+        }
+    }
+
     fn as_str(&self) -> &'static str {
         match self {
             RunStatus::Pending => "not run",
@@ -118,14 +134,19 @@ impl RunRecord {
     pub fn status_text(&self) -> String {
         let status = self.outcome_text();
         match &self.rerun {
-            Some(why) => format!("{status}; ran again: {why}"),
+            Some(why) => format!(
+                "{status}; ran again: {}",
+                crate::text::excerpt(why, SHOWN_MESSAGE)
+            ),
             None => status,
         }
     }
 
     fn outcome_text(&self) -> String {
         match (&self.status, &self.result) {
-            (RunStatus::Failed(m), _) => format!("FAILED: {m}"),
+            (status @ RunStatus::Failed(_), _) => {
+                format!("FAILED: {}", status.message_line().unwrap_or_default())
+            }
             (s, Some(x)) => format!(
                 "{}: axial length {:.4} mm, {} ({:.2} s)",
                 s.as_str(),
@@ -181,7 +202,7 @@ pub fn run_sweep(
     // The sweep's directory, owned and locked until the sweep ends.
     let names: std::collections::HashSet<&str> =
         sweep.runs.iter().map(|r| r.name.as_str()).collect();
-    let _owned = target::prepare(&|n| names.contains(n), out, options.resume)?;
+    let _owned = target::prepare(&|n| names.contains(n), out, options.resume, options.inputs)?;
     let all: Vec<usize> = (0..sweep.runs.len()).collect();
     run_some(
         sweep,

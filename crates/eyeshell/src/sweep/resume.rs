@@ -2,7 +2,9 @@
 //!
 //! A run is reused when its directory holds a result.json, a scene.toml identical to the
 //! run's effective scene, and every file result.json lists with the size and checksum it
-//! had when the run ended ([`super::files`]). A run that never finished simply runs; one
+//! had when the run ended ([`super::files`]), and result.json lists every file the run
+//! itself names (its marker's entries, its summary.json's series, history and snapshots:
+//! [`files::unrecorded`]). A run that never finished simply runs; one
 //! that finished but fails a check runs again, and [`Reuse::Stale`] says why (the command
 //! line prints it with the run's line).
 
@@ -42,7 +44,7 @@ pub fn reusable(run: &SweepRun, dir: &Path) -> Reuse {
         Ok(_) => return Reuse::Stale("its scene changed".into()),
         Err(e) => return Reuse::Stale(format!("its {SCENE_FILE}: {e}")),
     }
-    match files::verify(dir, &result.files) {
+    match files::verify(dir, &result.files).or_else(|| files::unrecorded(dir, &result.files)) {
         None => Reuse::Yes(result),
         Some(why) => Reuse::Stale(why),
     }

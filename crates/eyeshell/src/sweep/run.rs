@@ -78,7 +78,7 @@ pub fn execute(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
 }
 
 fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
-    let writer = GrowthWriter::create(dir, scene).map_err(|e| (e.to_string(), None))?;
+    let writer = GrowthWriter::create(dir, scene, &[]).map_err(|e| (e.to_string(), None))?;
     // scene.toml first, so a failed run can still be reproduced.
     rundir::owner::claim(dir, &[SCENE_FILE, RESULT_FILE]).map_err(|e| (e.to_string(), None))?;
     let path = dir.join(SCENE_FILE);
@@ -120,7 +120,7 @@ fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
 }
 
 fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
-    let run = rundir::run::solve_into(scene, dir, &[]).map_err(|e| (e.to_string(), None))?;
+    let run = rundir::run::solve_into(scene, dir, &[], &[]).map_err(|e| (e.to_string(), None))?;
     let s = &run.solution.stats;
     let eye = unloaded_eye(scene, &run.solution.rows);
     Ok(RunResult {

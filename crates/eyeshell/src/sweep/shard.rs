@@ -252,6 +252,9 @@ pub fn overrides_of(sweep: &Sweep) -> Vec<String> {
         .unwrap_or_default()
 }
 
+/// What a record that says "running" is called when no process holds its lock.
+pub const INTERRUPTED: &str = "interrupted";
+
 /// The largest shard record read (a record lists one shard's runs; this bounds a corrupt
 /// or foreign file).
 const MAX_RECORD_BYTES: u64 = 1 << 30;
@@ -260,6 +263,8 @@ const MAX_RECORD_BYTES: u64 = 1 << 30;
 /// not a shard's record.
 pub fn read_records(out: &Path) -> Result<Vec<(PathBuf, ShardRecord)>, Error> {
     let dir = out.join(SHARDS_DIR);
+    // Not through a link: it would read (and merge) another sweep's shards.
+    super::target::no_link(&dir)?;
     let listed = match fs::read_dir(&dir) {
         Ok(d) => d,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -300,6 +305,12 @@ pub fn read_records(out: &Path) -> Result<Vec<(PathBuf, ShardRecord)>, Error> {
                 "is not a shard's record (it says shard {} of {})",
                 record.shard, record.shards
             )));
+        }
+        let mut record = record;
+        if record.status == "running" && !crate::rundir::lock::is_held(&path) {
+            // Its process holds no lock: it was killed (or its machine went down) before it
+            // could say so.
+            record.status = INTERRUPTED.into();
         }
         records.push((path, record));
     }
@@ -362,8 +373,9 @@ impl Merged {
 
 /// Assemble the sweep in `out` from its shards' runs: every run with a trustworthy
 /// result.json is `ok`, a run a shard recorded as failed is `failed` with its message,
-/// anything else is `not run`. With `write`, sweep.csv and summary.json are written
-/// (under the sweep's lock, its directory checked as `--resume` checks it).
+/// anything else is `not run`. The directory is checked as `--resume` checks it, with or
+/// without `write`; with it, sweep.csv and summary.json are written (under the sweep's
+/// lock). A record that says "running" but whose shard holds no lock is `interrupted`.
 pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
     let found = read_records(out)?;
     let (first_path, first) = &found[0];
@@ -387,13 +399,17 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
         ))
     })?;
     let plan = SweepPlan::from_toml_str(&text, &first.scene, &first.overrides)?;
+    // The same checks of the directory for both: status says done only where merge
+    // accepts it; merge also locks it.
+    let names: std::collections::HashSet<&str> = plan.names().iter().map(String::as_str).collect();
+    let is_run = |n: &str| names.contains(n);
     let _owned = if write {
-        let names: std::collections::HashSet<&str> =
-            plan.names().iter().map(String::as_str).collect();
-        Some(super::target::prepare(&|n| names.contains(n), out, true)?)
+        Some(super::target::prepare(&is_run, out, true, &[])?)
     } else {
+        super::target::check_kept(&is_run, out)?;
         None
     };
+    drop(names);
     // The failed runs the shards recorded, by name (a later shard's record wins).
     let failures: std::collections::HashMap<&str, &SweepRunEntry> = found
         .iter()

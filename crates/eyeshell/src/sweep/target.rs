@@ -5,8 +5,8 @@
 //! directory is locked while the sweep runs). With `--resume`
 //! what is there is kept, so it is checked first, and refused (bad input, nothing
 //! changed) when:
-//! - `summary.json`, `sweep.csv`, `runs`, anything directly in `runs/`, or a run's
-//!   `result.json` or `scene.toml` is a symbolic link: the sweep would read or write
+//! - `summary.json`, `sweep.csv`, `runs`, `shards`, anything directly in `runs/`, or a
+//!   run's `result.json` or `scene.toml` is a symbolic link: the sweep would read or write
 //!   outside its directory through it;
 //! - its summary.json is not a sweep's (a solve, grow, study or figures output);
 //! - `runs/` holds runs that are not in this sweep: resuming would leave them beside the
@@ -42,16 +42,26 @@ pub fn prepare(
     is_run: &dyn Fn(&str) -> bool,
     out: &Path,
     resume: bool,
+    inputs: &[&Path],
 ) -> Result<rundir::OwnedDir, Error> {
     let entries = [RUNS_DIR, TABLE_FILE, SUMMARY_FILE];
     if !resume {
-        return Ok(rundir::OwnedDir::fresh(out, "sweep", &entries)?);
+        return Ok(rundir::OwnedDir::fresh(out, "sweep", &entries, inputs)?);
     }
-    rundir::check_target(out)?;
-    refuse_links(out)?;
-    refuse_other_outputs(out, INSTEAD)?;
-    refuse_other_runs(is_run, out, INSTEAD)?;
+    check_kept(is_run, out)?;
     Ok(rundir::OwnedDir::resume(out, "sweep", &entries)?)
+}
+
+/// The checks of a sweep directory that is kept (`--resume`, `sweep merge`) as the module
+/// says, without locking or writing anything: `sweep status` runs exactly these, so that
+/// it says "done" only where `merge` would accept the directory.
+pub fn check_kept(is_run: &dyn Fn(&str) -> bool, out: &Path) -> Result<(), Error> {
+    // Kept, not replaced: what is there is checked by the rules below, not by kind.
+    rundir::owner::inspect(&rundir::owner::normalise(out))?;
+    refuse_links(out)?;
+    no_link(&out.join(SHARDS_DIR))?;
+    refuse_other_outputs(out, INSTEAD)?;
+    refuse_other_runs(is_run, out, INSTEAD)
 }
 
 /// Make `out` ready for one shard of a sweep whose run names `is_run` accepts
@@ -169,7 +179,7 @@ fn marker_pending(out: &Path) -> bool {
 /// The checks of [`prepare_shard`] on `out`, then its marker: an existing sweep's claimed,
 /// or a new one written into an empty (or new) directory.
 fn check_and_mark(is_run: &dyn Fn(&str) -> bool, out: &PathBuf) -> Result<(), Error> {
-    rundir::check_target(out)?;
+    rundir::owner::inspect(out)?;
     refuse_links(out)?;
     no_link(&out.join(SHARDS_DIR))?;
     refuse_other_outputs(out, SHARD_INSTEAD)?;
@@ -202,7 +212,7 @@ fn check_and_mark(is_run: &dyn Fn(&str) -> bool, out: &PathBuf) -> Result<(), Er
 }
 
 /// Refuse `path` if it is a symbolic link (a missing path is fine).
-fn no_link(path: &Path) -> Result<(), Error> {
+pub(crate) fn no_link(path: &Path) -> Result<(), Error> {
     match fs::symlink_metadata(path) {
         Ok(m) if m.file_type().is_symlink() => Err(Error::input(format!(
             "{}: is a symbolic link; a sweep never follows links inside its directory (remove it, or give another --out)",
