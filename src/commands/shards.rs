@@ -198,6 +198,21 @@ pub(crate) fn print_slurm_script(
         path: ".".into(),
         source,
     })?;
+    // Slurm opens each task's output file (`--output`, relative) in the working directory
+    // and reads `\` and `%` in that path as an escape and a pattern: the task could not
+    // start (slurmd: "Could not open stdout file").
+    if let Some(&c) = here
+        .as_os_str()
+        .as_bytes()
+        .iter()
+        .find(|b| b"\\%".contains(b))
+    {
+        return Err(Error::input(format!(
+            "--slurm-script: the working directory {} holds '{}', which Slurm reads in a task's output file name as an escape or a pattern: make the script from a directory without one (the script runs there)",
+            eyeshell::text::one_line(&here.display().to_string()),
+            c as char
+        )));
+    }
     let absolute = |p: &Path| {
         if p.is_absolute() {
             p.to_path_buf()

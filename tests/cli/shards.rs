@@ -738,9 +738,16 @@ pub(crate) const CANARY: &str = "EYESHELL_CANARY";
 /// backslash. Each command it holds creates `$EYESHELL_CANARY-<how>`: a canary file that
 /// must never appear.
 pub(crate) fn hostile_name() -> String {
+    format!("{} \\", hostile_slurm_name())
+}
+
+/// [`hostile_name`] without its backslash: Slurm takes a backslash in a job's working
+/// directory as an escape of its `--output` pattern, and cannot open the file, so
+/// `--slurm-script` refuses such a directory.
+pub(crate) fn hostile_slurm_name() -> String {
     let c = format!("\"${CANARY}\"");
     format!(
-        "it's \"a\" $(touch {c}-dollar)`touch {c}-tick`;touch {c}-semi #\\\n#SBATCH --array=1-99\ntouch {c}-line\r\n'$(touch {c}-quoted)'\t$HOME"
+        "it's \"a\" $(touch {c}-dollar)`touch {c}-tick`;touch {c}-semi #\n#SBATCH --array=1-99\ntouch {c}-line\r\n'$(touch {c}-quoted)'\t$HOME"
     )
 }
 
@@ -791,19 +798,20 @@ pub(crate) fn eyeshell_at(dir: &Path, name: &str) -> std::path::PathBuf {
     exe
 }
 
-/// `--slurm-script` with the working directory, DIR, the binary's folder and a --set value
-/// all hostile ([`hostile_name`]): the script, run by bash as Slurm runs a task (fake
+/// `--slurm-script` with the working directory ([`hostile_slurm_name`]), DIR, the
+/// binary's folder and a --set value all hostile ([`hostile_name`]): the script, run by bash as Slurm runs a task (fake
 /// array variables), executes only eyeshell, which runs its shard into exactly DIR;
 /// sbatch reads every `#SBATCH` line; the merge command and the `sbatch --wrap` command
 /// printed in its comments, pasted into bash (the --wrap text then run by sh, as sbatch
-/// runs it), merge exactly DIR. No canary file appears.
+/// runs it), merge exactly DIR. No canary file appears. A working directory holding `\`
+/// or `%` (which Slurm reads in a task's output file name) is refused.
 #[test]
 fn a_slurm_script_with_hostile_paths_runs_nothing_but_eyeshell() {
     let base = tempfile::tempdir_in(env!("CARGO_TARGET_TMPDIR")).unwrap();
     let root = base.path();
     let evil = hostile_name();
     let exe = eyeshell_at(root, &format!("bin {evil}"));
-    let work = root.join(format!("work {evil}"));
+    let work = root.join(format!("work {}", hostile_slurm_name()));
     std::fs::create_dir(&work).unwrap();
     std::fs::write(
         work.join(format!("s {evil}.toml")),
@@ -844,6 +852,15 @@ fn a_slurm_script_with_hostile_paths_runs_nothing_but_eyeshell() {
         head.iter().all(|l| l.is_empty() || l.starts_with('#')),
         "{text}"
     );
+    // A working directory that Slurm cannot place a task's output in: refused, saying why.
+    for bad in ["back\\slash", "per%cent"] {
+        let dir = root.join(bad);
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::copy(work.join(format!("s {evil}.toml")), dir.join("s.toml")).unwrap();
+        let r = eyeshell_in(&dir, &["sweep", "s.toml", "--out", "out", "--slurm-script"]);
+        assert_bad(&r, "which Slurm reads in a task's output file name", bad);
+        assert!(r.stdout.is_empty(), "{bad}: {}", r.stdout);
+    }
     let file = root.join("job.sh");
     std::fs::write(&file, text).unwrap();
 

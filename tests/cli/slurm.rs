@@ -16,7 +16,8 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::shards::{
-    canaries, eyeshell_at, hostile_name, sbatch_options, table_without_timings, CANARY, SMALL,
+    canaries, eyeshell_at, hostile_name, hostile_slurm_name, sbatch_options, table_without_timings,
+    CANARY, SMALL,
 };
 use crate::support::*;
 
@@ -156,7 +157,7 @@ fn a_slurm_job_array_of_shards_merges_to_the_plain_sweeps_table() {
     // shell reads them unquoted, and break comment lines (crate::shards::hostile_name).
     let evil = hostile_name();
     let exe = eyeshell_at(base.path(), &format!("bin {evil}"));
-    let work = base.path().join(format!("work {evil}"));
+    let work = base.path().join(format!("work {}", hostile_slurm_name()));
     std::fs::create_dir(&work).unwrap();
     let out = format!("out {evil}");
     let canary = base.path().join("canary");
