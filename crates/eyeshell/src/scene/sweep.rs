@@ -373,8 +373,11 @@ impl SweepPlan {
 
     /// Run `index`'s scene, built and validated now (an error names the run).
     pub fn run(&self, index: usize) -> Result<SweepRun, SceneError> {
-        let (_, mut values) = self.combination(index);
-        let run_name = self.run_name(index);
+        let (given, mut values) = self.combination(index);
+        let run_name = match self.direct {
+            Some(_) => given.unwrap_or_else(|| generated_name(&values)),
+            None => self.names()[index].clone(),
+        };
         let run_origin = format!("{} [sweep] run {run_name}", self.origin);
         let assignments: Vec<(String, toml::Value, String)> = values
             .iter()
