@@ -18,6 +18,7 @@ mod args;
 mod commands;
 pub mod figures;
 pub mod progress;
+mod shell;
 pub mod study;
 pub mod worker;
 

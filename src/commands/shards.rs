@@ -2,6 +2,7 @@
 //! sweep) and `eyeshell sweep SCENE --out DIR --slurm-script` (an sbatch job array, one
 //! shard per task). The shards themselves are `eyeshell sweep --shard` (sweep.rs).
 
+use std::os::unix::ffi::OsStrExt;
 use std::path::Path;
 
 use eyeshell::scene::sweep::{SweepPlan, MAX_RUNS};
@@ -9,7 +10,7 @@ use eyeshell::sweep::{RunStatus, TABLE_FILE};
 use eyeshell::Error;
 
 use crate::args::{SweepAction, SweepArgs};
-use crate::out;
+use crate::{out, shell};
 
 /// Runs named on a line of the merge's report before "and N more".
 const SHOWN: usize = 5;
@@ -113,14 +114,11 @@ fn resume_hint(merged: &eyeshell::sweep::shard::Merged, dir: &Path) -> String {
     } else {
         &record.scene_path
     };
-    let mut command = format!("eyeshell sweep {}", shell_word(scene));
+    let mut command = format!("eyeshell sweep {}", shell::word(scene));
     for set in &record.overrides {
-        command.push_str(&format!(" --set {}", shell_word(set)));
+        command.push_str(&format!(" --set {}", shell::word(set)));
     }
-    command.push_str(&format!(
-        " --out {} --resume",
-        shell_word(&dir.display().to_string())
-    ));
+    command.push_str(&format!(" --out {} --resume", shell::word(dir)));
     // A sweep larger than one process holds runs only in shards.
     let whole = merged.plan.len() <= MAX_RUNS;
     let mut text = match whole {
@@ -142,23 +140,11 @@ fn resume_hint(merged: &eyeshell::sweep::shard::Merged, dir: &Path) -> String {
     text
 }
 
-/// `word` as one shell word: as it is when it holds only safe characters, else quoted.
-pub(crate) fn shell_word(word: &str) -> String {
-    let safe = !word.is_empty()
-        && word
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || "/._-=+:,@%".contains(c));
-    if safe {
-        word.to_string()
-    } else {
-        format!("'{}'", word.replace('\'', r"'\''"))
-    }
-}
-
 /// `--slurm-script`: print an sbatch script running `plan` as a job array, one shard per
-/// task, each with `--jobs` from the CPUs Slurm grants it; nothing is run or written. Every
-/// run is validated first (one scene at a time), and no shard may hold more than
-/// [`MAX_RUNS`] runs.
+/// task, each with `--jobs` from the CPUs Slurm grants it; nothing is run or written. The
+/// plan is validated first ([`eyeshell::sweep::shard::costs_of`]), and no shard may hold
+/// more than [`MAX_RUNS`] runs. Every word of the user's (paths, `--set` values) reaches
+/// the script through [`shell::word`].
 pub(crate) fn print_slurm_script(
     a: &SweepArgs,
     plan: &SweepPlan,
@@ -167,13 +153,7 @@ pub(crate) fn print_slurm_script(
 ) -> Result<(), Error> {
     let runs = plan.len();
     let costs = eyeshell::sweep::shard::costs_of(plan)?;
-    let largest_share = |n: usize| {
-        let mut count = vec![0usize; n];
-        for s in eyeshell::sweep::shard::partition(&costs, n) {
-            count[s] += 1;
-        }
-        count.into_iter().max().unwrap_or(0)
-    };
+    let largest_share = |n: usize| costs.largest_share(n);
     let shards = match a.shards {
         // The default, or as many more as keep every shard within MAX_RUNS.
         None => {
@@ -222,6 +202,21 @@ pub(crate) fn print_slurm_script(
         path: ".".into(),
         source,
     })?;
+    // Slurm opens each task's output file (`--output`, relative) in the working directory
+    // and reads `\` and `%` in that path as an escape and a pattern: the task could not
+    // start (slurmd: "Could not open stdout file").
+    if let Some(&c) = here
+        .as_os_str()
+        .as_bytes()
+        .iter()
+        .find(|b| b"\\%".contains(b))
+    {
+        return Err(Error::input(format!(
+            "--slurm-script: the working directory {} holds '{}', which Slurm reads in a task's output file name as an escape or a pattern: make the script from a directory without one (the script runs there)",
+            eyeshell::text::one_line(&here.display().to_string()),
+            c as char
+        )));
+    }
     let absolute = |p: &Path| {
         if p.is_absolute() {
             p.to_path_buf()
@@ -235,7 +230,6 @@ pub(crate) fn print_slurm_script(
             path: "eyeshell".into(),
             source,
         })?;
-    let word = |p: &Path| shell_word(&p.display().to_string());
     let out_abs = absolute(out_dir);
     let job = format!(
         "eyeshell-{}",
@@ -249,48 +243,80 @@ pub(crate) fn print_slurm_script(
             .take(40)
             .collect::<String>()
     );
-    let mut sets = String::new();
+    // Every word from the user (paths, --set values) goes through shell::word: quoted, and
+    // on one line, so that none of it runs and none ends a comment line early.
+    use std::ffi::OsStr;
+    let mut task: Vec<&OsStr> = vec![exe.as_os_str(), OsStr::new("sweep"), scene.as_os_str()];
     for set in &a.set {
-        sets.push_str(&format!(" --set {}", shell_word(set)));
+        task.extend([OsStr::new("--set"), OsStr::new(set)]);
     }
+    task.extend([
+        OsStr::new("--out"),
+        out_abs.as_os_str(),
+        OsStr::new("--resume"),
+    ]);
+    let merge = shell::command([
+        exe.as_os_str(),
+        OsStr::new("sweep"),
+        OsStr::new("merge"),
+        out_abs.as_os_str(),
+    ]);
+    // sbatch --wrap hands its text to sh: the command is quoted for sh first, then the
+    // whole of it as one word for the shell the user pastes into.
+    let mut wrapped = shell::posix_word(&exe);
+    wrapped.extend_from_slice(b" sweep merge ");
+    wrapped.extend(shell::posix_word(&out_abs));
+    let wrapped = shell::word(OsStr::from_bytes(&wrapped));
+    let out_word = shell::word(&out_abs);
     let time_line = match &a.time {
-        Some(t) => format!("#SBATCH --time={t}\n"),
+        Some(t) => format!("#SBATCH --time={t}"),
         None => {
-            "##SBATCH --time=1:00:00          # each task's limit: set it (remove one #)\n".into()
+            "##SBATCH --time=1:00:00          # each task's limit: set it (remove one #)".into()
         }
     };
-    let script = format!(
-        r#"#!/bin/bash
-# The sweep {origin} ({runs} run{s}) as a Slurm job array: {shards} shard{ss}, one per task.
-# Each task runs its shard's runs into {out}/runs/<name>/ and writes
-# {out}/shards/<task>.json; no task writes a file another one writes.
-#
-#   submit:  sbatch THIS_FILE            (edit the #SBATCH lines first if need be)
-#   then:    eyeshell sweep merge {out}
-#            (sweep.csv and summary.json, as a plain `eyeshell sweep` writes them; it
-#            lists runs that failed or are missing, and the command that runs them)
-#   or, merged by Slurm when every task has ended:
-#            sbatch --dependency=afterany:JOBID --wrap '{exe} sweep merge {out}'
-#
-# --resume: a task submitted again (or the whole array) keeps the runs that finished.
-#SBATCH --job-name={job}
-#SBATCH --array=1-{shards}
-#SBATCH --cpus-per-task={cpus}
-{time_line}#SBATCH --output={job}-%A_%a.out
-
-set -euo pipefail
-cd {here}
-exec {exe} sweep {scene}{sets} --out {out} --resume \
-    --shard slurm --jobs "${{SLURM_CPUS_PER_TASK:-1}}"
-"#,
-        origin = plan.origin,
-        s = crate::plural(runs),
-        ss = crate::plural(shards),
-        out = word(&out_abs),
-        exe = word(&exe),
-        here = word(&here),
-        scene = word(scene),
-    );
+    // The comments and #SBATCH lines: sbatch reads `#SBATCH` lines up to the first command,
+    // so each of these must stay one line whatever the words in it hold.
+    let header = [
+        format!(
+            "# The sweep {} ({runs} run{}) as a Slurm job array: {shards} shard{}, one per task.",
+            plan.origin,
+            crate::plural(runs),
+            crate::plural(shards)
+        ),
+        "# Each task runs its shard's runs into DIR/runs/<name>/ and writes".into(),
+        "# DIR/shards/<task>.json (no task writes a file another one writes), where DIR is".into(),
+        format!("#   {out_word}"),
+        "#".into(),
+        "#   submit:  sbatch THIS_FILE            (edit the #SBATCH lines first if need be)".into(),
+        format!("#   then:    {merge}"),
+        "#            (sweep.csv and summary.json, as a plain `eyeshell sweep` writes them; it"
+            .into(),
+        "#            lists runs that failed or are missing, and the command that runs them)"
+            .into(),
+        "#   or, merged by Slurm when every task has ended:".into(),
+        format!("#            sbatch --dependency=afterany:JOBID --wrap {wrapped}"),
+        "#".into(),
+        "# --resume: a task submitted again (or the whole array) keeps the runs that finished."
+            .into(),
+        format!("#SBATCH --job-name={job}"),
+        format!("#SBATCH --array=1-{shards}"),
+        format!("#SBATCH --cpus-per-task={cpus}"),
+        time_line,
+        format!("#SBATCH --output={job}-%A_%a.out"),
+    ];
+    let mut script = String::from("#!/bin/bash\n");
+    for line in header {
+        // shell::word never breaks a line, and plan.origin is one_line'd: a break here
+        // would be a bug that runs text as a command.
+        debug_assert!(!line.contains(['\n', '\r']), "{line}");
+        script.push_str(&eyeshell::text::one_line(&line));
+        script.push('\n');
+    }
+    script.push_str(&format!(
+        "\nset -euo pipefail\ncd {}\nexec {} \\\n    --shard slurm --jobs \"${{SLURM_CPUS_PER_TASK:-1}}\"\n",
+        shell::word(&here),
+        shell::command(task),
+    ));
     out(&script);
     Ok(())
 }

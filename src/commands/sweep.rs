@@ -177,7 +177,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
             Some(_) => text.push_str(&format!(
                 "  record          {}\n  once every shard has run: eyeshell sweep merge {}\n",
                 table.display(),
-                crate::commands::shards::shell_word(&out_dir.display().to_string())
+                crate::shell::word(out_dir)
             )),
             None => text.push_str(&format!("  table           {}\n", table.display())),
         }

@@ -210,7 +210,9 @@ impl Drop for Worker {
     }
 }
 
-/// The last non-empty line of `reader` (at most 300 characters of it), read to its end.
+/// The last non-empty line of `reader` (at most 300 characters of it), read to its end,
+/// leaving out Rust's notes after a panic (`note: run with `RUST_BACKTRACE=1` ...`): the
+/// line before them says what happened.
 fn last_line(mut reader: impl BufRead) -> String {
     let (mut last, mut buf) = (String::new(), Vec::new());
     loop {
@@ -220,7 +222,7 @@ fn last_line(mut reader: impl BufRead) -> String {
             Ok(_) => {
                 let line = String::from_utf8_lossy(&buf);
                 let line = line.trim();
-                if !line.is_empty() {
+                if !line.is_empty() && !line.starts_with("note: ") {
                     last = line.chars().take(300).collect();
                 }
             }
@@ -268,6 +270,8 @@ mod tests {
             last_line(text.as_bytes()),
             "fatal runtime error: stack overflow"
         );
+        let panic = "thread 'main' panicked at src/a.rs:1:2:\ncapacity overflow\nnote: run with `RUST_BACKTRACE=1` environment variable to display a backtrace\n";
+        assert_eq!(last_line(panic.as_bytes()), "capacity overflow");
         let long = "x".repeat(1000);
         assert_eq!(last_line(long.as_bytes()).len(), 300);
         assert_eq!(last_line(&b""[..]), "");

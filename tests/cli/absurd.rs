@@ -192,3 +192,147 @@ fn growth_rates_too_fast_fail_in_the_scenes_terms() {
         }
     }
 }
+
+/// `eyeshell ARGS` in `dir` must be refused (exit 2, one line naming `needle`) in well
+/// under a second, within the memory limit, leaving `dir` as it was: no output, and no
+/// `.out.tmp` or `.out.lock` beside it.
+fn refused_at_once(dir: &std::path::Path, args: &[&str], needle: &str) {
+    let before = World::of(dir);
+    let start = std::time::Instant::now();
+    let r = bounded(dir, args);
+    let took = start.elapsed();
+    refused(&r, needle, &format!("{args:?}"));
+    assert!(took.as_secs_f64() < 1.0, "{args:?} took {took:?}");
+    assert_eq!(World::of(dir), before, "{args:?} left something");
+}
+
+/// Sizes legal one key at a time whose run would allocate or write too much are counted
+/// before the run starts and refused with the limit in the message: solver.richardson
+/// solves on the mesh halved twice (300 000 nodes became 1.2 million: "memory allocation
+/// failed", SIGABRT, `.out.tmp` and `.out.lock` left behind); output.times is a file a
+/// time (20 000 times wrote 20 001 files, 319 MB), and the bytes of all the snapshots are
+/// bounded too. In a sweep, the run that would is named and nothing runs.
+#[test]
+fn what_a_run_would_allocate_or_write_is_refused_before_it_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("e.toml"), "").unwrap();
+    let richardson = |nodes: &str| {
+        [
+            "solve",
+            "e.toml",
+            "--out",
+            "out",
+            "--set",
+            "solver.richardson=true",
+            "--set",
+            nodes,
+        ]
+        .map(String::from)
+    };
+    for (nodes, needle) in [
+        (
+            "solver.nodes=300000",
+            "solver.nodes = 300000 is too large with solver.richardson: its solve on the mesh halved twice would lay 120",
+        ),
+        ("solver.nodes=1000000", "more than the 1000000 nodes (2.4 GB) a solve may"),
+        ("solver.nodes=250000", "give solver.nodes at most about 2499"),
+    ] {
+        let args = richardson(nodes);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        refused_at_once(d, &args, needle);
+    }
+    // With solver.tol, the adapted mesh halved twice: up to 2·max_nodes + 1.
+    refused_at_once(
+        d,
+        &[
+            "solve", "e.toml", "--out", "out", "--set", "solver.richardson=true", "--set",
+            "solver.tol=1e-8", "--set", "solver.max_nodes=600000",
+        ],
+        "solver.max_nodes = 600000 is too large with solver.richardson: its solve on the mesh halved twice would lay 1200001 nodes",
+    );
+    // Just inside the bound: accepted (checked, not solved).
+    let r = bounded(
+        d,
+        &[
+            "check",
+            "e.toml",
+            "--set",
+            "solver.richardson=true",
+            "--set",
+            "solver.nodes=240000",
+        ],
+    );
+    succeeded(&r, "richardson at 240000 nodes");
+
+    // output.times: a file a time, at most 1000 of them.
+    let times = |n: usize| {
+        (1..=n)
+            .map(|i| format!("{}", i as f64 / n as f64 * 0.2))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    std::fs::write(
+        d.join("g.toml"),
+        format!(
+            "[solver]\nnodes = 21\n[growth]\nt_end = 0.2\n[output]\ntimes = [{}]\n",
+            times(20_000)
+        ),
+    )
+    .unwrap();
+    refused_at_once(
+        d,
+        &["grow", "g.toml", "--out", "out"],
+        "lists 20000 times, more than the 1000 allowed (each time is a snapshot file",
+    );
+    let r = bounded(d, &["grow", "g.toml", "--out", "out"]);
+    assert!(
+        r.stderr.contains("(20000 values)"),
+        "shown short: {}",
+        r.stderr
+    );
+    assert!(r.stderr.len() < 600, "{}", r.stderr);
+    // 1000 times are legal, but not on a million nodes: 1001 snapshots of 520 bytes a node.
+    std::fs::write(
+        d.join("g.toml"),
+        format!(
+            "[growth]\nt_end = 0.2\n[output]\ntimes = [{}]\n",
+            times(1000)
+        ),
+    )
+    .unwrap();
+    refused_at_once(
+        d,
+        &[
+            "grow",
+            "g.toml",
+            "--out",
+            "out",
+            "--set",
+            "solver.nodes=100000",
+        ],
+        "would have the run write about 52.1 GB (1001 snapshot files of up to 100",
+    );
+    refused_at_once(
+        d,
+        &[
+            "grow",
+            "g.toml",
+            "--out",
+            "out",
+            "--set",
+            "solver.nodes=100000",
+        ],
+        "more than the 8.6 GB a growth run may write",
+    );
+    let r = bounded(d, &["check", "g.toml", "--set", "solver.nodes=101"]);
+    succeeded(&r, "1000 times at 101 nodes");
+
+    // In a sweep: the run that would is named, before anything runs.
+    std::fs::write(
+        d.join("s.toml"),
+        "[solver]\nrichardson = true\n[sweep.grid]\n\"solver.nodes\" = [101, 300000]\n",
+    )
+    .unwrap();
+    refused_at_once(d, &["sweep", "s.toml", "--out", "out"], "run nodes=300000");
+}

@@ -1,8 +1,11 @@
 //! On a real Slurm: tests/slurm/cluster.sh starts munged, slurmctld and slurmd on this
 //! machine (one node, 2 CPUs, its files under /var/tmp), the script of `eyeshell sweep
-//! --slurm-script` runs a six-run growth sweep as a three-task job array (`sbatch --wait`),
-//! `eyeshell sweep merge` assembles it, and sweep.csv must be a plain sweep's (timings
-//! aside). The daemons are stopped by their pid files however the test ends.
+//! --slurm-script` runs a six-run growth sweep as a three-task job array, the merge job its
+//! comment suggests (`sbatch --dependency=afterany:JOBID --wrap ...`, pasted into bash)
+//! assembles it, and sweep.csv must be a plain sweep's (timings aside). The working
+//! directory, DIR and the binary's folder hold line breaks, quotes, `$(...)` and
+//! backticks: nothing they say may run (no canary file appears). The daemons are stopped
+//! by their pid files however the test ends.
 //!
 //! It needs root and Debian's slurm-wlm and munge (`.ci/run` installs them). Without them
 //! it prints `SKIPPED: <why>` on stderr and returns; with `EYESHELL_REQUIRE_SLURM=1` (set
@@ -12,7 +15,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::shards::{table_without_timings, SMALL};
+use crate::shards::{
+    canaries, eyeshell_at, hostile_name, hostile_slurm_name, sbatch_options, table_without_timings,
+    CANARY, SMALL,
+};
 use crate::support::*;
 
 /// The whole test, cluster included, stays well under this.
@@ -146,63 +152,105 @@ fn a_slurm_job_array_of_shards_merges_to_the_plain_sweeps_table() {
         Ok(c) => c,
         Err(why) => return skip(&why),
     };
-    // The paper's grow sweep (Γ × δ, six runs), made small: 41 nodes, t_end = 0.2.
-    let work = base.path().join("work");
+    // The paper's grow sweep (Γ × δ, six runs), made small: 41 nodes, t_end = 0.2. The
+    // working directory, DIR and the binary's folder have names that run commands if a
+    // shell reads them unquoted, and break comment lines (crate::shards::hostile_name).
+    let evil = hostile_name();
+    let exe = eyeshell_at(base.path(), &format!("bin {evil}"));
+    let work = base.path().join(format!("work {}", hostile_slurm_name()));
     std::fs::create_dir(&work).unwrap();
+    let out = format!("out {evil}");
+    let canary = base.path().join("canary");
     let grid = "[sweep.grid]\n\"growth.Gamma\" = [4, 8, 12]\n\"growth.delta\" = [2, 6]\n";
     let scene = SMALL.replace("nodes = 21", "nodes = 41");
     std::fs::write(work.join("s.toml"), format!("{scene}{grid}")).unwrap();
-    let script = eyeshell_in(
-        &work,
-        &[
-            "sweep",
-            "s.toml",
-            "--out",
-            "out",
-            "--slurm-script",
-            "--shards",
-            "3",
-            "--time",
-            "5:00",
-        ],
+    let script = Run::from(
+        Command::new(&exe)
+            .args(["sweep", "s.toml", "--out", &out, "--slurm-script"])
+            .args(["--shards", "3", "--time", "5:00"])
+            .current_dir(&work)
+            .output()
+            .unwrap(),
     );
     assert_eq!(script.code, Some(0), "{}", script.stderr);
+    assert!(
+        sbatch_options(&script.stdout).contains(&"--array=1-3".to_string()),
+        "{}",
+        script.stdout
+    );
     std::fs::write(work.join("job.sh"), &script.stdout).unwrap();
-    let job = run_with_limit(
-        Command::new("sbatch")
-            .args(["--wait", "job.sh"])
-            .current_dir(&work)
-            .env("SLURM_CONF", cluster.conf()),
-        JOB_LIMIT,
-    )
-    .unwrap_or_else(|e| panic!("{e}\n{}", logs(&work, &cluster)));
+    let sbatch = |args: &[&str]| {
+        run_with_limit(
+            Command::new("sbatch")
+                .args(args)
+                .current_dir(&work)
+                .env("SLURM_CONF", cluster.conf())
+                .env(CANARY, &canary),
+            JOB_LIMIT,
+        )
+        .unwrap_or_else(|e| panic!("{e}\n{}", logs(&work, &cluster)))
+    };
+    let job = sbatch(&["--parsable", "job.sh"]);
     assert_eq!(
         job.code,
         Some(0),
-        "sbatch --wait: {}{}\n{}",
+        "sbatch: {}{}\n{}",
         job.stdout,
         job.stderr,
         logs(&work, &cluster)
     );
+    let id = job.stdout.trim().split(';').next().unwrap().to_string();
+    // The merge as the script's comment suggests it, pasted into bash: a job that waits
+    // for the array (afterany) and runs `eyeshell sweep merge DIR` through sbatch --wrap.
+    let wrap = script
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("#            sbatch "))
+        .unwrap_or_else(|| panic!("no --wrap line in {}", script.stdout))
+        .replace("JOBID", &id);
+    let merge = run_with_limit(
+        Command::new("bash")
+            .arg("-c")
+            .arg(format!("sbatch --wait {wrap}"))
+            .current_dir(&work)
+            .env("SLURM_CONF", cluster.conf())
+            .env(CANARY, &canary),
+        JOB_LIMIT,
+    )
+    .unwrap_or_else(|e| panic!("{e}\n{}", logs(&work, &cluster)));
+    assert_eq!(
+        merge.code,
+        Some(0),
+        "sbatch --wait {wrap}: {}{}\n{}",
+        merge.stdout,
+        merge.stderr,
+        logs(&work, &cluster)
+    );
     for k in 1..=3 {
         assert!(
-            work.join(format!("out/shards/{k}.json")).is_file(),
+            work.join(&out).join(format!("shards/{k}.json")).is_file(),
             "shard {k}: {}",
             logs(&work, &cluster)
         );
     }
-    let merge = eyeshell_in(&work, &["sweep", "merge", "out"]);
+    assert!(
+        work.join(&out).join("sweep.csv").is_file(),
+        "the merge job: {}",
+        logs(&work, &cluster)
+    );
+    let merge = eyeshell_in(&work, &["sweep", "merge", &out]);
     assert_eq!(merge.code, Some(0), "{}{}", merge.stdout, merge.stderr);
     assert!(merge.stdout.contains("6 of 6 runs ok"), "{}", merge.stdout);
     let plain = eyeshell_in(&work, &["sweep", "s.toml", "--out", "plain", "-q"]);
     assert_eq!(plain.code, Some(0), "{}", plain.stderr);
     assert_eq!(
-        table_without_timings(&work.join("out")),
+        table_without_timings(&work.join(&out)),
         table_without_timings(&work.join("plain"))
     );
+    assert_eq!(canaries(base.path()), Vec::<String>::new());
     drop(cluster);
     eprintln!(
-        "the real Slurm test ran: 3 array tasks, merged, in {:.1} s",
+        "the real Slurm test ran: 3 array tasks and the merge job, hostile paths, in {:.1} s",
         start.elapsed().as_secs_f64()
     );
 }

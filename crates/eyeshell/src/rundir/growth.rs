@@ -67,6 +67,26 @@ pub fn snapshot_name(k: usize, t: f64) -> String {
     format!("snapshot_{k:05}_t{}.csv", crate::text::decimals6(t))
 }
 
+/// The most bytes one number takes in a run's CSV files ([`format_value`]: a sign, 17
+/// digits, the point, `e-308`) with its separator.
+pub const CELL_BYTES: u64 = 26;
+/// The most bytes the files of one growth run may take together, as counted before it
+/// starts ([`planned_bytes`]; `Scene` validation refuses more).
+pub const MAX_RUN_BYTES: u64 = 8 << 30;
+
+/// The most bytes a growth run writes: a snapshot of every node at t = 0 and at each of
+/// `times` output times, and the series and history rows (summary.json and the marker
+/// are small beside them).
+pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
+    let row = |cells: usize| cells as u64 * CELL_BYTES;
+    let snapshot = (nodes as u64 + 1) * row(COLUMNS.len() + GROWTH_COLUMNS.len());
+    let series_rows = times as u64 + 2;
+    let history_rows = (history_points + times) as u64 + 2;
+    (times as u64 + 1)
+        .saturating_mul(snapshot)
+        .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len()))
+}
+
 /// The header of a snapshot file: the elastic [`COLUMNS`], then the [`GROWTH_COLUMNS`].
 pub fn snapshot_header() -> String {
     COLUMNS

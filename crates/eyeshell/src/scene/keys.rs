@@ -72,8 +72,9 @@ pub enum Rule {
     UnitFromZero,
     /// An angle strictly between 0 and π.
     OpenHalfTurn,
-    /// A non-empty list of positive numbers in strictly increasing order.
-    PositiveIncreasing,
+    /// A list of 1 to n positive numbers in strictly increasing order (times, each one a
+    /// file written: the length is bounded).
+    PositiveIncreasing(usize),
     /// A span of time at least [`MIN_T_END`].
     Duration,
 }
@@ -96,7 +97,9 @@ impl Rule {
             Rule::OpenUnit => "in (0, 1)".into(),
             Rule::UnitFromZero => "in [0, 1)".into(),
             Rule::OpenHalfTurn => "in (0, π)".into(),
-            Rule::PositiveIncreasing => "each > 0, strictly increasing".into(),
+            Rule::PositiveIncreasing(n) => {
+                format!("1 to {n} values, each > 0, strictly increasing")
+            }
             Rule::Duration => format!(">= {}", crate::text::number(MIN_T_END)),
         }
     }
@@ -121,7 +124,7 @@ impl Rule {
             Rule::OpenHalfTurn if x <= 0.0 || x >= std::f64::consts::PI => {
                 Err("must lie strictly between 0 and π (radians)".into())
             }
-            Rule::PositiveIncreasing if x <= 0.0 => Err("must be positive".into()),
+            Rule::PositiveIncreasing(_) if x <= 0.0 => Err("must be positive".into()),
             Rule::Duration if x < MIN_T_END => Err(format!(
                 "must be at least {}: the integrators multiply times by their steps, and for a shorter run that product underflows",
                 crate::text::number(MIN_T_END)
@@ -133,8 +136,16 @@ impl Rule {
     /// The reason the list `xs` breaks this rule. Lists are never sorted for the user: an
     /// unsorted list is an error, since it is more likely a typo than a wish.
     pub fn check_floats(self, xs: &[f64]) -> Result<(), String> {
-        if self == Rule::PositiveIncreasing && xs.is_empty() {
-            return Err("must list at least one time".into());
+        if let Rule::PositiveIncreasing(max) = self {
+            if xs.is_empty() {
+                return Err("must list at least one time".into());
+            }
+            if xs.len() > max {
+                return Err(format!(
+                    "lists {} times, more than the {max} allowed (each time is a snapshot file of every node): for a curve at many times use output.history_points",
+                    xs.len()
+                ));
+            }
         }
         for (i, &x) in xs.iter().enumerate() {
             if !x.is_finite() {
@@ -144,7 +155,7 @@ impl Rule {
                     crate::text::number(x)
                 ));
             }
-            if self == Rule::PositiveIncreasing {
+            if matches!(self, Rule::PositiveIncreasing(_)) {
                 if x <= 0.0 {
                     return Err(format!(
                         "must hold positive numbers only (item {} is {})",
@@ -320,6 +331,9 @@ pub const MAX_NEWTON: usize = 10_000;
 pub const MAX_STEPS: usize = 1_000_000;
 /// The most history rows (history.csv: about 100 bytes each).
 pub const MAX_HISTORY_POINTS: usize = 1_000_000;
+/// The most output times (snapshot files) of a growth run; the bytes they take together
+/// are bounded too ([`crate::rundir::growth::MAX_RUN_BYTES`]).
+pub const MAX_OUTPUT_TIMES: usize = 1_000;
 
 const THICKNESS: &[&str] = &["uniform", "nonuniform"];
 const SCHEMES: &[&str] = &["trapezoid", "hermite-simpson"];
@@ -638,7 +652,7 @@ pub static KEYS: &[KeySpec] = &[
     KeySpec {
         key: "output.times",
         access: Access::Floats { get: |s| s.growth_settings.output_times.clone(), set: |s, v| s.growth_settings.output_times = v },
-        rule: Rule::PositiveIncreasing,
+        rule: Rule::PositiveIncreasing(MAX_OUTPUT_TIMES),
         doc: "times of the growth snapshots, in (0, growth.t_end], strictly increasing; t = 0 is always written",
         growth: true,
     },

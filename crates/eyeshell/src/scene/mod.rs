@@ -559,6 +559,7 @@ impl Scene {
             ));
         }
         self.validate_mesh(sources)?;
+        self.validate_sizes(sources)?;
         if self.solver.richardson && self.growth.is_some() {
             return Err(invalid(
                 &["solver.richardson"],
@@ -585,6 +586,83 @@ impl Scene {
 }
 
 impl Scene {
+    /// What a run of this scene will allocate and write, counted before it starts: the
+    /// largest mesh any of its solves lays (with solver.richardson, the mesh halved twice)
+    /// must fit [`crate::mesh::MAX_NODES`], which bounds a solve's memory
+    /// ([`crate::mesh::BYTES_PER_NODE`] a node); a growth run's files together must fit
+    /// [`crate::rundir::growth::MAX_RUN_BYTES`]. The mesh itself is valid by now.
+    fn validate_sizes(&self, sources: &Sources) -> Result<(), SceneError> {
+        use crate::mesh::{BYTES_PER_NODE, MAX_NODES};
+        let invalid = |keys: &[&str], value: String, problem: String| SceneError::Invalid {
+            origin: self.origin_of(sources, keys),
+            key: keys[0].to_string(),
+            value,
+            problem,
+        };
+        let gb = |bytes: u64| format!("{:.1} GB", bytes as f64 / 1e9);
+        // The nodes of the mesh solver.nodes lays (breakpoints at most 3 more).
+        let planned = crate::bvp::solve::mesh_plan(&self.params, &self.solver)
+            .map(|plan| plan.nodes(3))
+            .unwrap_or(MAX_NODES);
+        if self.solver.richardson {
+            // Without solver.tol: solves on M, M halved and M halved twice (4M − 3 nodes).
+            // With it, the adapted mesh M has at most ⌈max_nodes / 2⌉ nodes, so M halved
+            // twice at most 2·max_nodes + 1.
+            let (keys, value, finest, fix): (&[&str], usize, usize, String) = match self.solver.tol
+            {
+                None => (
+                    &["solver.nodes", "solver.richardson"],
+                    self.solver.nodes,
+                    4 * planned.saturating_sub(1) + 1,
+                    format!(
+                        "solver.nodes at most about {}",
+                        (MAX_NODES - 1) / 4 + 1 - (planned - self.solver.nodes.min(planned))
+                    ),
+                ),
+                Some(_) => (
+                    &["solver.max_nodes", "solver.richardson"],
+                    self.solver.max_nodes,
+                    2 * self.solver.max_nodes + 1,
+                    format!("solver.max_nodes at most {}", (MAX_NODES - 1) / 2),
+                ),
+            };
+            if finest > MAX_NODES {
+                return Err(invalid(
+                    keys,
+                    value.to_string(),
+                    format!(
+                        "is too large with solver.richardson: its solve on the mesh halved twice would lay {finest} nodes, about {} of memory, more than the {MAX_NODES} nodes ({}) a solve may: give {fix}, or leave out solver.richardson",
+                        gb(finest as u64 * BYTES_PER_NODE),
+                        gb(MAX_NODES as u64 * BYTES_PER_NODE)
+                    ),
+                ));
+            }
+        }
+        if self.growth.is_some() {
+            use crate::rundir::growth::{planned_bytes, MAX_RUN_BYTES};
+            let g = &self.growth_settings;
+            // With solver.tol the mesh is chosen as the run starts: at most max_nodes.
+            let (nodes, keys): (usize, &[&str]) = match self.solver.tol {
+                None => (planned, &["output.times", "solver.nodes"]),
+                Some(_) => (self.solver.max_nodes, &["output.times", "solver.max_nodes"]),
+            };
+            let bytes = planned_bytes(nodes, g.output_times.len(), g.history_points);
+            if bytes > MAX_RUN_BYTES {
+                return Err(invalid(
+                    keys,
+                    show(&KeyValue::Floats(g.output_times.clone())),
+                    format!(
+                        "would have the run write about {} ({} snapshot files of up to {nodes} nodes each, and the series), more than the {} a growth run may write: give fewer output.times or fewer nodes",
+                        gb(bytes),
+                        g.output_times.len() + 1,
+                        gb(MAX_RUN_BYTES)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The mesh the solver will lay, counted before anything is allocated: every derived
     /// size (the shell's length, the pole's and the cornea's graded nodes, the total) must
     /// be finite and bounded (docs/MODEL.md §3–4, [`crate::mesh::plan`]).
@@ -745,9 +823,24 @@ fn levenshtein(a: &str, b: &str) -> usize {
 }
 
 /// A value as shown in messages: like TOML, but whole numbers without ".0" (`C = -1`).
+/// The most items of a list a message shows.
+const SHOWN_ITEMS: usize = 6;
+
 pub(crate) fn show(v: &KeyValue) -> String {
     match v {
         KeyValue::Float(x) => number(*x),
+        // A long list (output.times may hold a thousand) as its ends and its length: a
+        // message stays one readable line.
+        KeyValue::Floats(xs) if xs.len() > SHOWN_ITEMS => format!(
+            "[{}, …, {}] ({} values)",
+            xs[..SHOWN_ITEMS - 1]
+                .iter()
+                .map(|x| number(*x))
+                .collect::<Vec<_>>()
+                .join(", "),
+            number(xs[xs.len() - 1]),
+            xs.len()
+        ),
         KeyValue::Floats(xs) => format!(
             "[{}]",
             xs.iter()

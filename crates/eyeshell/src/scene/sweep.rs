@@ -57,6 +57,9 @@ pub struct Sweep {
     pub runs: Vec<SweepRun>,
     /// The base scene's name (the file's `name`, else its stem).
     pub name: String,
+    /// The scene file, as given, when the sweep was read from one: `origin` is only its
+    /// name as messages show it (control characters escaped), which may name no file.
+    pub path: Option<std::path::PathBuf>,
 }
 
 impl Sweep {
@@ -92,8 +95,8 @@ impl Sweep {
 }
 
 /// The most runs one sweep may plan (a typo such as a grid of many long lists is caught
-/// early). A plan holds only each run's name (about 50 bytes a run); its scenes are built
-/// one at a time.
+/// early). A plan holds no run's scene; it holds each run's name (about 50 bytes a run)
+/// only when names must be made unique in sweep order, and only once they are asked for.
 pub const MAX_PLANNED_RUNS: usize = 10_000_000;
 
 /// A sweep's run list as a recipe: run i's values and name come from its index (the list
@@ -107,12 +110,21 @@ pub struct SweepPlan {
     pub keys: Vec<String>,
     /// The base scene's name (the file's `name`, else its stem).
     pub name: String,
+    /// The scene file, as given, when the plan was read from one ([`Sweep::path`]).
+    pub path: Option<std::path::PathBuf>,
     table: toml::Table,
     overrides: Vec<String>,
     list: Vec<ListEntry>,
     grid: Vec<Axis>,
-    /// Every run's name, made unique in sweep order.
-    names: Vec<String>,
+    /// When run i's name is its given or generated name as it is, unique by construction
+    /// ([`SweepPlan::direct_names`]), so that a name is made from its index alone: each
+    /// grid axis's parts (`Gamma=4`) and their positions, to read a name back.
+    direct: Option<Vec<std::collections::HashMap<String, usize>>>,
+    /// Every run's name, made unique in sweep order: made on first use, never for a plan
+    /// whose names are direct unless every name is asked for.
+    names: std::sync::OnceLock<Vec<String>>,
+    /// The same names as a set, for [`SweepPlan::has_name`] (made on first use).
+    name_set: std::sync::OnceLock<std::collections::HashSet<String>>,
 }
 
 impl SweepPlan {
@@ -122,7 +134,9 @@ impl SweepPlan {
         overrides: &[String],
     ) -> Result<SweepPlan, SceneError> {
         let (origin, text) = super::read_scene_file(path)?;
-        SweepPlan::from_toml_str(&text, &origin, overrides)
+        let mut plan = SweepPlan::from_toml_str(&text, &origin, overrides)?;
+        plan.path = Some(path.to_path_buf());
+        Ok(plan)
     }
 
     /// Parse a sweep, validate its base scene, count its runs and name them; no run's scene
@@ -190,14 +204,84 @@ impl SweepPlan {
             origin,
             keys,
             name,
+            path: None,
             table,
             overrides: overrides.to_vec(),
             list,
             grid,
-            names: Vec::new(),
+            direct: None,
+            names: std::sync::OnceLock::new(),
+            name_set: std::sync::OnceLock::new(),
         };
-        plan.names = plan.unique_names();
+        plan.direct = plan.direct_names();
         Ok(plan)
+    }
+
+    /// Are the runs' names unique by construction, so that run i's name is made from i
+    /// alone, without naming the runs before it? A generated name is the entry's prefix (a
+    /// given name, or the parts of the entry's values), then `_` and each grid axis's part
+    /// (`Gamma=4`). It is when no name is shortened (the longest fits [`MAX_NAME`]), the
+    /// entries' prefixes differ, and within each axis no part is another's, or the end of
+    /// another after a `_` (`tol=1` of `newton_tol=1`): a name then reads back from its end,
+    /// one axis at a time, with one candidate at each step ([`SweepPlan::index_of`]). The
+    /// parts of each axis, or None. O(values), not O(runs).
+    fn direct_names(&self) -> Option<Vec<std::collections::HashMap<String, usize>>> {
+        let mut widest = 0;
+        let mut axes = Vec::with_capacity(self.grid.len());
+        for (key, values) in &self.grid {
+            let parts: Vec<String> = values.iter().map(|v| part(key, v)).collect();
+            let index: std::collections::HashMap<String, usize> = parts
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.clone(), i))
+                .collect();
+            if index.len() != parts.len() {
+                return None;
+            }
+            let ends_another = parts.iter().any(|p| {
+                p.match_indices('_')
+                    .any(|(at, _)| index.contains_key(&p[at + 1..]))
+            });
+            if ends_another {
+                return None;
+            }
+            widest += parts.iter().map(String::len).max().unwrap_or(0) + 1;
+            axes.push(index);
+        }
+        let mut prefixes = self.prefixes();
+        if self.grid.is_empty() {
+            // Then an entry of no values is named "run", as an entry may be.
+            for p in &mut prefixes {
+                p.get_or_insert_with(|| "run".into());
+            }
+        }
+        let distinct: std::collections::HashSet<&Option<String>> = prefixes.iter().collect();
+        if distinct.len() != prefixes.len() {
+            return None;
+        }
+        // Without a grid a run's name is its prefix, or "run".
+        let longest_prefix = prefixes
+            .iter()
+            .map(|p| p.as_ref().map_or(3, |p| p.len() + 1))
+            .max()
+            .unwrap_or(0);
+        (widest + longest_prefix <= MAX_NAME).then_some(axes)
+    }
+
+    /// Each list entry's prefix of its runs' names (its name, or the parts of its values;
+    /// None for an entry of no values, and for the one entry of a plan without a list).
+    fn prefixes(&self) -> Vec<Option<String>> {
+        if self.list.is_empty() {
+            return vec![None];
+        }
+        self.list
+            .iter()
+            .map(|e| match (&e.name, e.values.is_empty()) {
+                (Some(name), _) => Some(name.clone()),
+                (None, true) => None,
+                (None, false) => Some(generated_name(&e.values)),
+            })
+            .collect()
     }
 
     /// The number of runs.
@@ -212,15 +296,88 @@ impl SweepPlan {
         self.len() == 0
     }
 
-    /// Every run's name, in sweep order.
+    /// Every run's name, in sweep order (all of them made now, if they were not yet: for a
+    /// large plan prefer [`SweepPlan::name`] and [`SweepPlan::has_name`]).
     pub fn names(&self) -> &[String] {
-        &self.names
+        self.names.get_or_init(|| self.unique_names())
+    }
+
+    /// Run `index`'s name.
+    pub fn run_name(&self, index: usize) -> String {
+        match self.direct {
+            Some(_) => self.direct_name(index),
+            None => self.names()[index].clone(),
+        }
+    }
+
+    /// Whether a run of this plan has the name `name` (a directory name under `runs/`).
+    /// Direct names are read back ([`SweepPlan::index_of`]) rather than listed.
+    pub fn has_name(&self, name: &str) -> bool {
+        match self.direct {
+            Some(_) => self.index_of(name).is_some(),
+            None => self
+                .name_set
+                .get_or_init(|| self.names().iter().cloned().collect())
+                .contains(name),
+        }
+    }
+
+    /// The index of the run named `name`, for direct names: its grid parts read from the
+    /// end, one axis at a time (one candidate each, [`SweepPlan::direct_names`]), the rest
+    /// its entry's prefix; checked by making the name again.
+    fn index_of(&self, name: &str) -> Option<usize> {
+        let axes = self.direct.as_ref()?;
+        let mut rest = name;
+        // The prefix is there when the first axis's part follows a `_`.
+        let mut prefix: Option<&str> = Some(name);
+        let mut digits = vec![0; axes.len()];
+        for (k, parts) in axes.iter().enumerate().rev() {
+            if let Some(&d) = parts.get(rest) {
+                if k != 0 {
+                    return None;
+                }
+                digits[k] = d;
+                prefix = None;
+                rest = "";
+                continue;
+            }
+            let (at, d) = rest
+                .match_indices('_')
+                .find_map(|(at, _)| parts.get(&rest[at + 1..]).map(|&d| (at, d)))?;
+            digits[k] = d;
+            rest = &rest[..at];
+            prefix = Some(rest);
+        }
+        let prefixes = self.prefixes();
+        let entry = match (axes.is_empty(), prefix) {
+            // Without a grid the name is the prefix, or "run" for an entry of no values.
+            (true, _) => prefixes
+                .iter()
+                .position(|p| p.as_deref().unwrap_or("run") == name)?,
+            (false, p) => prefixes.iter().position(|q| q.as_deref() == p)?,
+        };
+        let within = digits
+            .iter()
+            .zip(&self.grid)
+            .fold(0, |n, (&d, (_, values))| n * values.len() + d);
+        let per_entry: usize = self.grid.iter().map(|(_, v)| v.len()).product();
+        let index = entry * per_entry + within;
+        (index < self.len() && self.direct_name(index) == name).then_some(index)
+    }
+
+    /// Run `index`'s name when names are direct: as given or generated, never shortened.
+    fn direct_name(&self, index: usize) -> String {
+        let (given, values) = self.combination(index);
+        given.unwrap_or_else(|| generated_name(&values))
     }
 
     /// Run `index`'s scene, built and validated now (an error names the run).
     pub fn run(&self, index: usize) -> Result<SweepRun, SceneError> {
-        let (_, mut values) = self.combination(index);
-        let run_name = self.names[index].clone();
+        let (given, mut values) = self.combination(index);
+        let run_name = match self.direct {
+            Some(_) => given.unwrap_or_else(|| generated_name(&values)),
+            None => self.names()[index].clone(),
+        };
         let run_origin = format!("{} [sweep] run {run_name}", self.origin);
         let assignments: Vec<(String, toml::Value, String)> = values
             .iter()
@@ -235,6 +392,57 @@ impl SweepPlan {
             values,
             scene,
         })
+    }
+
+    /// The runs that stand for the whole plan when it is too large to validate run by run:
+    /// for each list entry, the run with every grid axis at its first value, and those
+    /// with one axis at each of its other values. Every list entry and every grid value
+    /// is in one of them; a combination that is invalid only together (ΔP above the
+    /// cornea's limit for one cornea.C) is found by the shard that holds it, which builds
+    /// and validates all its runs before it runs any. |list| · Σ|axis| runs, in sweep
+    /// order.
+    pub fn representatives(&self) -> Vec<usize> {
+        let per_entry: usize = self.grid.iter().map(|(_, v)| v.len()).product();
+        let mut out = Vec::new();
+        for entry in 0..self.list.len().max(1) {
+            let first = entry * per_entry;
+            out.push(first);
+            let mut stride = per_entry;
+            for (_, axis) in &self.grid {
+                stride /= axis.len();
+                out.extend((1..axis.len()).map(|d| first + d * stride));
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// Whether `f` of a run's scene may differ from the base scene's: each list entry's
+    /// values and each grid value set alone on the base (no scene validated; O(values)).
+    /// Exact for an `f` of fields that each key sets alone, as every key's setter does.
+    pub fn varies<T: PartialEq>(&self, f: impl Fn(&Scene) -> T) -> Result<bool, SceneError> {
+        let base = Scene::from_table(&self.table, &self.origin, &[], &self.overrides)?;
+        let shown = f(&base);
+        let alone = |values: &[Assignment]| -> Result<bool, SceneError> {
+            let mut scene = base.clone();
+            for (key, value) in values {
+                scene.set_toml(key, value, &self.origin)?;
+            }
+            Ok(f(&scene) != shown)
+        };
+        for e in &self.list {
+            if alone(&e.values)? {
+                return Ok(true);
+            }
+        }
+        for (key, values) in &self.grid {
+            for v in values {
+                if alone(&[(key.clone(), v.clone())])? {
+                    return Ok(true);
+                }
+            }
+        }
+        Ok(false)
     }
 
     /// Build and validate every run in turn, one scene at a time, and hand each to `f`:
@@ -256,6 +464,7 @@ impl SweepPlan {
                 .map(|&i| self.run(i))
                 .collect::<Result<_, _>>()?,
             name: self.name.clone(),
+            path: self.path.clone(),
         })
     }
 
@@ -737,6 +946,98 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("eyeshell sweep"), "{e}");
+    }
+
+    /// Names made from the index alone ([`SweepPlan::direct_names`]) are the names made
+    /// unique in sweep order, and read back to their runs; a plan whose names could
+    /// collide lists them instead, with the same result.
+    #[test]
+    fn names_from_the_index_are_the_names_made_in_order() {
+        let cases = [
+            // (sweep, names are direct)
+            ("[sweep.grid]\n\"growth.Gamma\" = [4, 8, 12]\n\"growth.delta\" = [2, 6]\n", true),
+            ("[sweep.grid]\n\"solver.newton_tol\" = [1e-9, 1e-10]\n\"growth.t_end\" = [1, 2]\n", true),
+            ("[[sweep.runs]]\nname = \"a_b\"\n[[sweep.runs]]\n\"fibres.D\" = 3\n[[sweep.runs]]\n[sweep.grid]\n\"growth.t_end\" = [1, 2]\n", true),
+            ("[[sweep.runs]]\nname = \"run\"\n[[sweep.runs]]\n\"fibres.D\" = 3\n", true),
+            // 1 and 1.0 both show as D=1.
+            ("[sweep.grid]\n\"fibres.D\" = [1, 1.0, 2]\n", false),
+            // An entry of no values is named "run", as the first one is.
+            ("[[sweep.runs]]\nname = \"run\"\n[[sweep.runs]]\n", false),
+            ("[[sweep.runs]]\nname = \"D=1\"\n[[sweep.runs]]\n\"fibres.D\" = 1\n[sweep.grid]\n\"growth.Gamma\" = [4, 8]\n", false),
+        ];
+        for (extra, direct) in cases {
+            let plan = SweepPlan::from_toml_str(&format!("{BASE}{extra}"), "s.toml", &[]).unwrap();
+            assert_eq!(plan.direct.is_some(), direct, "{extra}");
+            let listed = plan.unique_names();
+            for (i, name) in listed.iter().enumerate() {
+                assert_eq!(&plan.run_name(i), name, "{extra}");
+                assert!(plan.has_name(name), "{name} in {extra}");
+                assert_eq!(plan.run(i).unwrap().name, *name);
+            }
+            for other in [
+                "",
+                "run-2",
+                "Gamma=4",
+                "Gamma=4_delta=2_x",
+                "x_Gamma=4_delta=2",
+                "_Gamma=4_delta=2",
+            ] {
+                assert_eq!(
+                    plan.has_name(other),
+                    listed.iter().any(|n| n == other),
+                    "{other} in {extra}"
+                );
+            }
+        }
+        let long: String = (0..7)
+            .map(|k| {
+                format!(
+                    "\"{}\" = [1.2345678901234567]\n",
+                    [
+                        "material.bending",
+                        "fibres.D",
+                        "growth.t_end",
+                        "solver.epsilon",
+                        "growth.Gamma",
+                        "growth.delta",
+                        "growth.eta0"
+                    ][k]
+                )
+            })
+            .collect();
+        let plan = SweepPlan::from_toml_str(&format!("{BASE}[sweep.grid]\n{long}"), "s.toml", &[])
+            .unwrap();
+        assert!(plan.direct.is_none(), "shortened names are listed");
+        assert!(plan.has_name(&plan.run_name(0)));
+    }
+
+    /// A plan counts its runs before it names any: a sweep of 10⁷ runs is refused as too
+    /// large for one process at once.
+    #[test]
+    fn a_plan_names_no_run_until_asked() {
+        let values: Vec<String> = (0..100)
+            .map(|i| format!("{}", 1.0 + i as f64 / 100.0))
+            .collect();
+        let axis = format!("[{}]", values.join(", "));
+        let text = format!(
+            "{BASE}[sweep.grid]\n\"pressure.dP\" = {axis}\n\"material.C\" = [{}]\n\"fibres.D\" = {axis}\n\"solver.newton_tol\" = [1e-9, 2e-9, 3e-9, 4e-9, 5e-9, 6e-9, 7e-9, 8e-9, 9e-9, 1e-8]\n",
+            (50..150).map(|c| c.to_string()).collect::<Vec<_>>().join(", ")
+        );
+        let start = std::time::Instant::now();
+        let plan = SweepPlan::from_toml_str(&text, "s.toml", &[]).unwrap();
+        assert_eq!(plan.len(), 10_000_000);
+        assert!(plan.direct.is_some());
+        assert!(plan.names.get().is_none(), "no run named yet");
+        let last = plan.run_name(plan.len() - 1);
+        assert_eq!(last, "D=1.99_C=149_dP=1.99_newton_tol=1e-8");
+        assert!(plan.has_name(&last));
+        assert_eq!(plan.index_of(&last), Some(plan.len() - 1));
+        let e = Sweep::from_plan(plan).unwrap_err().to_string();
+        assert!(
+            e.contains("declares 10000000 runs, more than the 10000 allowed"),
+            "{e}"
+        );
+        assert!(start.elapsed().as_secs_f64() < 1.0, "{:?}", start.elapsed());
     }
 
     #[test]

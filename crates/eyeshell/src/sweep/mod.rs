@@ -229,9 +229,7 @@ pub fn run_shard(
     let mine = shard::runs_of(plan, shard)?;
     let sweep = plan.sweep_of(&mine)?;
     // The shard's record, locked until the shard ends (the directory is shared).
-    let names: std::collections::HashSet<&str> = plan.names().iter().map(String::as_str).collect();
-    let (record, _lock) = target::prepare_shard(&|n| names.contains(n), out, shard)?;
-    drop(names);
+    let (record, _lock) = target::prepare_shard(&|n| plan.has_name(n), out, shard)?;
     let write = |report: &SweepReport| ShardRecord::new(&sweep, shard, report).write(&record);
     let all: Vec<usize> = (0..sweep.runs.len()).collect();
     run_some(&sweep, &all, out, options, &write, done)

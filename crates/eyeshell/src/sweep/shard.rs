@@ -15,11 +15,15 @@
 //!   summary.json. Shards take no lock on `DIR`, only on their own record (`shards/.K.json.lock`:
 //!   the same shard twice at once is refused). A shard never removes anything: it cannot
 //!   know that another is not writing; a fresh start is another `--out`.
-//! - **Large sweeps.** A shard plans the sweep ([`SweepPlan`]): every run is built and
-//!   validated one at a time for its cost and dropped, and only the shard's own runs are
-//!   built to run, so a grid of 10⁶ runs (up to `MAX_PLANNED_RUNS`) is planned in seconds
-//!   and a few hundred MB; a shard runs at most [`MAX_RUNS`] runs. Merge and status read
-//!   the runs the same way, holding one row per run.
+//! - **Large sweeps.** A shard plans the sweep ([`SweepPlan`]), and only the shard's own
+//!   runs are built to run; a shard runs at most [`MAX_RUNS`] runs. A plan of at most
+//!   [`MAX_RUNS`] runs has every run built and validated one at a time for its cost. A
+//!   larger one (up to `MAX_PLANNED_RUNS`) is validated by one run per list entry and grid
+//!   value ([`SweepPlan::representatives`]), each shard validating all its own runs before
+//!   it runs any, and when no swept value changes a run's cost the partition is
+//!   round-robin with nothing done per run ([`Costs::Equal`]): a grid of 10⁷ runs is
+//!   planned in milliseconds. Merge and status read the runs one at a time, holding one
+//!   row per run.
 //! - **Merge.** [`merge`] rebuilds the run list from the scene the shards recorded, takes
 //!   each run that finished from its own `result.json` (checked as `--resume` checks it),
 //!   a failed run from its shard's record, and writes sweep.csv and summary.json exactly as
@@ -160,18 +164,83 @@ pub fn partition(costs: &[u64], n: usize) -> Vec<usize> {
     shard_of
 }
 
-/// Every run's cost, in sweep order: each run is built and validated in turn, one scene at
-/// a time (the first invalid run is the error).
-pub fn costs_of(plan: &SweepPlan) -> Result<Vec<u64>, Error> {
-    let mut costs = Vec::with_capacity(plan.len());
+/// What the partition needs of a plan's runs: their costs, or that all cost the same.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Costs {
+    /// This many runs, all of one cost: dealt round-robin ([`partition`] of equal costs).
+    Equal(usize),
+    /// Every run's cost, in sweep order.
+    Each(Vec<u64>),
+}
+
+impl Costs {
+    /// The number of runs.
+    pub fn len(&self) -> usize {
+        match self {
+            Costs::Equal(n) => *n,
+            Costs::Each(c) => c.len(),
+        }
+    }
+
+    /// Whether there are no runs (never, for a plan).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The runs (indices, in sweep order) that shard `k` (1-based) of `n` holds. Equal
+    /// costs need no list of the runs: shard k holds k − 1, k − 1 + m, … (m = min(n, runs)).
+    pub fn runs_of(&self, shard: Shard) -> Vec<usize> {
+        match self {
+            Costs::Equal(runs) => {
+                let m = shard.n.min(*runs).max(1);
+                (shard.k - 1..*runs).step_by(m).collect()
+            }
+            Costs::Each(costs) => shard_runs(&partition(costs, shard.n), shard),
+        }
+    }
+
+    /// The most runs any of `n` shards holds.
+    pub fn largest_share(&self, n: usize) -> usize {
+        match self {
+            Costs::Equal(runs) => runs.div_ceil(n.min(*runs).max(1)),
+            Costs::Each(costs) => {
+                let mut count = vec![0usize; n.min(costs.len()).max(1)];
+                for s in partition(costs, n) {
+                    count[s] += 1;
+                }
+                count.into_iter().max().unwrap_or(0)
+            }
+        }
+    }
+}
+
+/// The costs of a plan's runs, the plan validated on the way. A plan of at most
+/// [`MAX_RUNS`] runs has each run built and validated in turn, one scene at a time (the
+/// first invalid run is the error). A larger one is validated by its
+/// [`SweepPlan::representatives`] (each shard then validates all its own runs before it
+/// runs any), and when no list entry or grid value changes what [`run_cost`] reads (the
+/// nodes, whether the scene grows, growth.t_end), its runs cost the same and nothing is
+/// done per run: a plan of 10⁷ runs is partitioned in milliseconds.
+pub fn costs_of(plan: &SweepPlan) -> Result<Costs, Error> {
+    let runs = plan.len();
+    if runs > MAX_RUNS {
+        for i in plan.representatives() {
+            plan.run(i)?;
+        }
+        let inputs = |s: &Scene| (s.solver.nodes, s.growth.as_ref().map(|g| g.t_end.to_bits()));
+        if !plan.varies(inputs)? {
+            return Ok(Costs::Equal(runs));
+        }
+    }
+    let mut costs = Vec::with_capacity(runs);
     plan.each_run(|_, run| costs.push(run_cost(&run.scene)))?;
-    Ok(costs)
+    Ok(Costs::Each(costs))
 }
 
 /// The runs (indices into the plan, in sweep order) of `shard`; bad input when they are
 /// more than one process holds ([`MAX_RUNS`]).
 pub fn runs_of(plan: &SweepPlan, shard: Shard) -> Result<Vec<usize>, Error> {
-    let mine = shard_runs(&partition(&costs_of(plan)?, shard.n), shard);
+    let mine = costs_of(plan)?.runs_of(shard);
     if mine.len() > MAX_RUNS {
         return Err(Error::input(format!(
             "{}: shard {shard} would hold {} of the sweep's {} runs, more than the {MAX_RUNS} one process runs: split it into more shards (N of at least {})",
@@ -225,7 +294,8 @@ impl ShardRecord {
             shard: shard.k,
             shards: shard.n,
             scene: sweep.origin.clone(),
-            scene_path: fs::canonicalize(&sweep.origin)
+            // The file itself (its name may hold a line break that origin shows escaped).
+            scene_path: fs::canonicalize(sweep.path.as_deref().unwrap_or(Path::new(&sweep.origin)))
                 .map(|p| p.display().to_string())
                 .unwrap_or_else(|_| sweep.origin.clone()),
             overrides: overrides_of(sweep),
@@ -401,15 +471,13 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
     let plan = SweepPlan::from_toml_str(&text, &first.scene, &first.overrides)?;
     // The same checks of the directory for both: status says done only where merge
     // accepts it; merge also locks it.
-    let names: std::collections::HashSet<&str> = plan.names().iter().map(String::as_str).collect();
-    let is_run = |n: &str| names.contains(n);
+    let is_run = |n: &str| plan.has_name(n);
     let _owned = if write {
         Some(super::target::prepare(&is_run, out, true, &[])?)
     } else {
         super::target::check_kept(&is_run, out)?;
         None
     };
-    drop(names);
     // The failed runs the shards recorded, by name (a later shard's record wins).
     let failures: std::collections::HashMap<&str, &SweepRunEntry> = found
         .iter()
