@@ -395,14 +395,31 @@ impl OwnedDir {
         marker: Marker,
         entries: &[&str],
     ) -> Result<OwnedDir, OutputError> {
-        fs::create_dir_all(&path).map_err(|e| OutputError::io(&path, e))?;
         let mut dir = OwnedDir {
             path,
             marker,
             _lock: lock,
         };
         dir.claim_all(entries)?;
-        dir.marker.write(&dir.path)?;
+        if fs::symlink_metadata(&dir.path).is_ok() {
+            dir.marker.write(&dir.path)?;
+            return Ok(dir);
+        }
+        // A new directory appears with its marker or not at all: made and marked under a
+        // temporary name, then renamed into place. A process killed in between leaves only
+        // litter that the next writer removes under the lock, never an unmarked directory
+        // that every later run would have to refuse as somebody else's.
+        let tmp = super::atomic::sibling(&dir.path, "tmp");
+        let made = fs::create_dir(&tmp)
+            .map_err(|e| OutputError::io(&tmp, e))
+            .and_then(|()| dir.marker.write(&tmp))
+            .and_then(|()| fs::rename(&tmp, &dir.path).map_err(|e| OutputError::io(&dir.path, e)));
+        if let Err(e) = made {
+            let _ = fs::remove_dir_all(&tmp);
+            return Err(e);
+        }
+        let parent = parent_of(&dir.path);
+        super::atomic::sync_dir(&parent).map_err(|e| OutputError::io(&parent, e))?;
         Ok(dir)
     }
 
