@@ -348,7 +348,7 @@ def optics(scene: SceneLike = None, /, **overrides: Any) -> dict[str, Any]:
     the surface, the field angle and the wavelength).
 
     >>> o = eyeshell.optics(None, **{"optics.focus": "sagittal", "optics.max_field": 20})
-    >>> o["z"].shape == (42,) and o["field_deg"][20] == 20.0
+    >>> o["z"].shape == (42,) and float(o["field_deg"][20]) == 20.0
     True
     """
     s = _as_scene(scene, overrides)
