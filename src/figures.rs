@@ -1048,13 +1048,16 @@ fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     Ok(files)
 }
 
+/// A ray fan of the optics figure: its field angle (degrees) and each ray's (z, y) path.
+pub type RayFan = (f64, Vec<Vec<(f64, f64)>>);
+
 /// The eye of `eyeshell optics` in its meridional plane, like the paper's ray-trace figure:
 /// each refracting surface across the pupil's height, ray fans of the first wavelength at a
 /// few field angles (`fans`: angle and rays), and the best-focus surfaces (blue, red).
 pub fn optics_figure(
     system: &eyeshell_optics::OpticalSystem,
     computed: &eyeshell::model::optics::ComputedOptics,
-    fans: &[(f64, Vec<Vec<(f64, f64)>>)],
+    fans: &[RayFan],
     stem: &Path,
 ) -> Result<(PathBuf, PathBuf), FigureError> {
     let mut fig = Figure::new(
