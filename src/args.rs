@@ -46,6 +46,8 @@ pub(crate) enum Command {
     Figures(FiguresArgs),
     /// Draw the output of any run or sweep (shells, profiles, axial length) as PNG and SVG
     Plot(PlotArgs),
+    /// The best-focus surfaces of the scene's schematic eye (optics.*): surfaces.csv, optics.json and a figure
+    Optics(OpticsArgs),
     /// Fit model parameters to measured axial lengths (Levenberg–Marquardt on IDAS's sensitivities): fit.json, scene.toml, fit.png
     Fit(FitArgs),
     /// Run the runs of a sweep that `eyeshell sweep` sends on stdin (its worker processes)
@@ -248,6 +250,18 @@ pub(crate) struct GrowArgs {
 }
 
 /// `eyeshell fit SCENE --data DATA.csv --fit KEY,KEY,... --out DIR`.
+#[derive(Args, Debug)]
+pub(crate) struct OpticsArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// Output directory: surfaces.csv, optics.json, optics.png and optics.svg (created whole or not at all; a previous eyeshell output is replaced)
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+    /// Print nothing on success
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+}
+
 #[derive(Args, Debug)]
 pub(crate) struct FitArgs {
     #[command(flatten)]

@@ -1,5 +1,5 @@
 //! The command line: `eyeshell solve | grow | check | keys | export | compare | converge |
-//! wpd | refinement | extremes | sweep | figures | plot | fit`.
+//! wpd | refinement | extremes | sweep | figures | plot | fit | optics`.
 //!
 //! Every failure is printed as one line `eyeshell: error: <message>` on stderr. Exit codes:
 //! 0 success, 2 bad input (usage, scene, validation, `--at`, an output path that may not be
@@ -79,6 +79,7 @@ where
         Command::Figures(a) => cmd_figures(a),
         Command::Plot(a) => cmd_plot(a),
         Command::Fit(a) => commands::fit::cmd_fit(a),
+        Command::Optics(a) => commands::optics::cmd_optics(a),
         Command::SweepWorker(a) => worker::serve(&a.out),
     };
     match result {

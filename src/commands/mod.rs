@@ -2,6 +2,7 @@
 
 pub(crate) mod fit;
 pub(crate) mod interop;
+pub(crate) mod optics;
 pub(crate) mod run;
 pub(crate) mod shards;
 pub(crate) mod study;

@@ -23,6 +23,7 @@ mod grow;
 mod hostile;
 mod keys_check;
 mod max_seconds;
+mod optics;
 mod ownership;
 mod peer;
 mod readers;

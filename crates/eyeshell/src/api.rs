@@ -56,6 +56,7 @@ impl Scene {
         let mut changed = self.clone();
         changed.apply_override(&format!("{key}={value}"))?;
         changed.validate()?;
+        changed.resolve_optics()?;
         *self = changed;
         Ok(())
     }

@@ -42,6 +42,11 @@ pub enum Criterion {
     MeanSphere,
     /// The maximum Strehl ratio along the chief ray (the paper's criterion).
     Strehl,
+    /// The sagittal focus of the wavefront's fit (the sagittal focal line): the surface the
+    /// paper's published blue surface follows (docs/optics.md).
+    Sagittal,
+    /// The tangential focus of the wavefront's fit (the tangential focal line).
+    Tangential,
 }
 
 impl Criterion {
@@ -49,6 +54,8 @@ impl Criterion {
         match self {
             Self::MeanSphere => "mean-sphere",
             Self::Strehl => "strehl",
+            Self::Sagittal => "sagittal",
+            Self::Tangential => "tangential",
         }
     }
 }
@@ -602,6 +609,8 @@ pub fn best_focus_with(
     let strehl = |s: f64| model.at(s);
     let (distance, strehl_best) = match criterion {
         Criterion::MeanSphere => (mean, strehl(mean)),
+        Criterion::Sagittal => (ss, strehl(ss)),
+        Criterion::Tangential => (st, strehl(st)),
         Criterion::Strehl => {
             // The scan spans both astigmatic foci, two depths of focus λ/(n′ α²) and 1 % of the
             // distance around them.

@@ -353,6 +353,27 @@ impl PolarSpline {
         )
     }
 
+    /// R′(φ), the spline's own derivative (exact: the derivative of the cubic pieces), for
+    /// 0 ≤ φ ≤ φ_max (below the first point, that of the even continuation); `None` outside.
+    pub fn slope(&self, phi: f64) -> Option<f64> {
+        let mirrored = phi < self.phi[0] && self.phi[0].abs() < 1e-9;
+        let at = if mirrored { -phi } else { phi };
+        if !(at >= self.phi[0] - 1e-12 && at <= self.phi_max() + 1e-12) {
+            return None;
+        }
+        let i = match self.phi.partition_point(|&p| p <= at) {
+            0 => 0,
+            k => (k - 1).min(self.phi.len() - 2),
+        };
+        let (x0, x1) = (self.phi[i], self.phi[i + 1]);
+        let h = x1 - x0;
+        let (t, u) = ((x1 - at) / h, (at - x0) / h);
+        let (m0, m1) = (self.second[i], self.second[i + 1]);
+        let s = (self.radius[i + 1] - self.radius[i]) / h
+            + h / 6.0 * (-(3.0 * t * t - 1.0) * m0 + (3.0 * u * u - 1.0) * m1);
+        Some(if mirrored { -s } else { s })
+    }
+
     /// The signed distance from the point (z, r) out to the surface along its polar ray,
     /// R(φ) − |(z, r) − (z_c, 0)|: positive when the point lies in front of the surface (the
     /// d of docs/MODEL.md §6). `None` beyond φ_max.

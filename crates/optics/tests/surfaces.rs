@@ -179,3 +179,47 @@ fn a_ray_fan_converges_near_the_best_focus() {
     let e = eyeshell_optics::ray_fan(&eye, 555.0, 0.0, &pupil, 0, 30.0).unwrap_err();
     assert!(e.to_string().contains("rays of a fan"));
 }
+
+/// The spline's slope is the derivative of its radius (central differences, inside pieces,
+/// at the knots, and on the even continuation below φ = 0, where it changes sign).
+#[test]
+fn the_spline_slope_is_the_derivative_of_its_radius() {
+    let s = atchison_surfaces(Criterion::MeanSphere, 3.0);
+    let spline = s.get(400.0).unwrap().interpolant(-0.5).unwrap();
+    let h = 1e-6;
+    let top = spline.phi_max();
+    for phi in [0.0, 0.013, 0.1, 0.2345, 0.3, top * 0.97, top - 2.0 * h] {
+        let slope = spline.slope(phi).unwrap();
+        let fd = (spline.radius(phi + h).unwrap() - spline.radius(phi - h).unwrap()) / (2.0 * h);
+        assert!((slope - fd).abs() < 1e-6, "{phi}: {slope} vs {fd}");
+    }
+    assert!(spline.slope(0.0).unwrap().abs() < 1e-12);
+    let below = spline.slope(-0.05).unwrap();
+    assert!((below + spline.slope(0.05).unwrap()).abs() < 1e-15 && below.abs() > 1e-3);
+    assert!(spline.slope(top * 1.01).is_none());
+}
+
+/// The sagittal and tangential criteria put the focus at the fit's focal lines: the
+/// distances along the chief ray are the foci the mean-sphere focus is the mean of.
+#[test]
+fn the_sagittal_and_tangential_criteria_are_the_focal_lines() {
+    let eye = eyes::atchison_2006();
+    let pupil = Pupil {
+        diameter: 1.0,
+        position: eye.pupil_position.unwrap(),
+    };
+    let settings = FocusSettings::default();
+    let at = |c| best_focus_with(&eye, 400.0, 30.0, &pupil, c, &settings).unwrap();
+    let (mean, sag, tan) = (
+        at(Criterion::MeanSphere),
+        at(Criterion::Sagittal),
+        at(Criterion::Tangential),
+    );
+    assert_eq!(sag.distance, mean.sagittal);
+    assert_eq!(tan.distance, mean.tangential);
+    assert!(mean.sagittal - mean.tangential > 0.5, "{mean:?}");
+    assert_eq!(
+        (Criterion::Sagittal.name(), Criterion::Tangential.name()),
+        ("sagittal", "tangential")
+    );
+}

@@ -12,7 +12,8 @@ True
 True
 
 Entry points: :class:`Scene`, :func:`keys`, :func:`solve` (a :class:`Solution`),
-:func:`grow` (a :class:`Growth`, with sensitivities on request), :func:`fit` (a
+:func:`grow` (a :class:`Growth`, with sensitivities on request), :func:`optics` (the
+best-focus surfaces of a schematic eye, as arrays), :func:`fit` (a
 :class:`FitResult`: calibration to measured axial lengths), :func:`sweep` and
 :func:`iter_sweep` (a list, or an iterator, of :class:`RunResult`), :func:`compare` (a
 :class:`Comparison`). Errors are
@@ -36,6 +37,7 @@ from ._api import (
     grow,
     iter_sweep,
     keys,
+    optics,
     solve,
     sweep,
 )
@@ -55,6 +57,7 @@ __all__ = [
     "grow",
     "iter_sweep",
     "keys",
+    "optics",
     "solve",
     "sundials_version",
     "sweep",

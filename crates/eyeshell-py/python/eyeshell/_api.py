@@ -335,6 +335,26 @@ def solve(scene: SceneLike = None, /, **overrides: Any) -> Solution:
     return Solution(_eyeshell.solve(s._s))
 
 
+def optics(scene: SceneLike = None, /, **overrides: Any) -> dict[str, Any]:
+    """The best-focus surfaces of ``scene``'s schematic eye (its ``optics.*`` keys, with
+    ``overrides`` set on a copy), as ``eyeshell optics`` computes them: a dict of 1-D arrays
+    with one entry per (wavelength, field angle), in wavelength then field order
+    (``wavelength_nm``, ``field_deg``, ``z``, ``r``, ``strehl``, and ``sagittal`` /
+    ``tangential``, the focal lines' distances along the chief ray), and ``criterion``,
+    ``eye``, ``pupil``, ``z_B``, ``phi_max`` (blue, red: where each surface ends about
+    ``z_B``), ``rays_traced`` and ``wall_seconds``. The GIL is released while it traces.
+
+    Raises :class:`InputError` for an optics key that cannot be traced (naming the key,
+    the surface, the field angle and the wavelength).
+
+    >>> o = eyeshell.optics(None, **{"optics.focus": "sagittal", "optics.max_field": 20})
+    >>> o["z"].shape == (42,) and float(o["field_deg"][20]) == 20.0
+    True
+    """
+    s = _as_scene(scene, overrides)
+    return dict(_eyeshell.optics(s._s))
+
+
 def _frame(columns: dict[str, Any], frames: bool | None) -> Any:
     """A dict of arrays, or a pandas DataFrame when asked (None: when pandas imports)."""
     if frames is False:

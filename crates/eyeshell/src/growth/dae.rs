@@ -1351,7 +1351,7 @@ impl CoupledDae {
         for (k, pr) in out.iter_mut().enumerate() {
             let s = &local[k];
             let (rho, gam) = (y[NP * k], y[NP * k + 1]);
-            pr.beyond = has_crossing && pr.angle >= blue.phi_max;
+            pr.beyond = has_crossing && pr.angle >= blue.phi_max();
             let depth = if pr.beyond { d_unknown } else { pr.depth };
             let (dr, da) = (s.r - rho, s.alpha_s - 1.0);
             let ((gv, gv_slope), (pr_, pr_slope), (pa, pa_slope)) = (
@@ -1432,7 +1432,7 @@ impl CoupledDae {
             &self.sys.points.by_sigma,
             |k| rates[k].angle,
             |k| rates[k].depth,
-            self.sys.blue().phi_max,
+            self.sys.blue().phi_max(),
         )
     }
 

@@ -18,7 +18,8 @@ pub(crate) mod points;
 pub mod system;
 
 pub use crate::model::growth_law::ThicknessLaw;
-use crate::model::stimulus::{EyeMeasure, Refraction, Surface};
+use crate::model::optics::{ComputedOptics, OpticsSpec, Source};
+use crate::model::stimulus::{EyeMeasure, Focal, Refraction, Surface};
 
 /// The growth model of one scene (docs/MODEL.md §4–6).
 #[derive(Clone, Debug, PartialEq)]
@@ -40,6 +41,58 @@ pub struct GrowthParams {
     /// growth.kink_width: round the [·]⁺ kinks of the growth laws over this width (0, the
     /// default: the model's exact kinks; an option for measuring what they cost).
     pub kink_width: f64,
+    /// stimulus.source: the polynomial surfaces above, or surfaces computed from `optics`.
+    pub source: Source,
+    /// The optics.* keys (used with `Source::Optics`).
+    pub optics: OpticsSpec,
+    /// The surfaces `optics` gives about `blue.z_b`, traced once ([`GrowthParams::resolved`])
+    /// and shared by every copy of these parameters.
+    pub computed: Option<std::sync::Arc<ComputedOptics>>,
+}
+
+impl GrowthParams {
+    /// The blue surface the stimulus reads: the computed one with `Source::Optics` (once
+    /// [`GrowthParams::resolved`]), else the polynomial.
+    pub fn blue_focal(&self) -> Focal<'_> {
+        match (&self.source, &self.computed) {
+            (Source::Optics, Some(c)) => Focal::Computed(&c.blue),
+            _ => Focal::Polynomial(&self.blue),
+        }
+    }
+
+    /// The red surface of the classification, as [`GrowthParams::blue_focal`].
+    pub fn red_focal(&self) -> Focal<'_> {
+        match (&self.source, &self.computed) {
+            (Source::Optics, Some(c)) => Focal::Computed(&c.red),
+            _ => Focal::Polynomial(&self.red),
+        }
+    }
+
+    /// True when the stimulus can be read as it is: polynomial surfaces, or computed ones
+    /// that are those of the current optics keys and centre.
+    pub fn is_resolved(&self) -> bool {
+        self.source == Source::Polynomial
+            || self
+                .computed
+                .as_ref()
+                .is_some_and(|c| c.is_for(&self.optics, self.blue.z_b))
+    }
+
+    /// These parameters with their surfaces computed if they must be (once: a resolved copy
+    /// is returned as it is). The error names the optics key to change.
+    pub fn resolved(&self) -> Result<std::borrow::Cow<'_, GrowthParams>, String> {
+        if self.is_resolved() {
+            return Ok(std::borrow::Cow::Borrowed(self));
+        }
+        let computed = self
+            .optics
+            .compute(self.blue.z_b)
+            .map_err(|e| e.to_string())?;
+        Ok(std::borrow::Cow::Owned(GrowthParams {
+            computed: Some(std::sync::Arc::new(computed)),
+            ..self.clone()
+        }))
+    }
 }
 
 impl Default for GrowthParams {
@@ -53,6 +106,9 @@ impl Default for GrowthParams {
             blue: Surface::blue(),
             red: Surface::default_red(),
             kink_width: 0.0,
+            source: Source::Polynomial,
+            optics: OpticsSpec::default(),
+            computed: None,
         }
     }
 }
@@ -530,6 +586,13 @@ pub fn run_with(
     output: &mut OutputFn<'_>,
     progress: &mut ProgressFn<'_>,
 ) -> Result<GrowthStats, GrowthError> {
+    // The stimulus's surfaces, when computed from the eye's optics, are traced once here,
+    // before t = 0, and shared by the mesh choice and the run.
+    let growth = &*growth.resolved().map_err(|reason| GrowthError {
+        t: 0.0,
+        reason,
+        stats: Box::default(),
+    })?;
     let Some(_) = solver.tol else {
         return run_on(
             params, solver, growth, settings, None, sens, output, progress,
@@ -600,6 +663,15 @@ pub(crate) fn run_on(
         .find_map(|s| s.check(params).err())
     {
         return Err(fail(0.0, why, GrowthStats::default()));
+    }
+    if growth.source == Source::Optics
+        && settings.sensitivities.contains(&dae::SensParam::BlueCentre)
+    {
+        return Err(fail(
+            0.0,
+            "the sensitivity to stimulus.blue.z_B needs stimulus.source = \"polynomial\" (a computed surface is traced about its centre once)".into(),
+            GrowthStats::default(),
+        ));
     }
     if !settings.sensitivities.is_empty() && settings.integrator != Integrator::Ida {
         return Err(fail(

@@ -19,7 +19,7 @@ use crate::bvp::solve::{linear_spec, BvpError, ElasticSolver, Solution};
 use crate::deadline::OutOfTime;
 use crate::model::growth_law;
 use crate::model::params::Params;
-use crate::model::stimulus::{self, EyeMeasure, Surface};
+use crate::model::stimulus::{self, EyeMeasure, Focal};
 use eyeshell_sundials::{CallbackError, Context, LinearSolver, Matrix, NVector, SundialsError};
 use std::rc::Rc;
 
@@ -59,6 +59,9 @@ pub enum RhsError {
     /// `solver.max_seconds` stopped the run (in an elastic solve or in a callback).
     #[error(transparent)]
     OutOfTime(#[from] OutOfTime),
+    /// The stimulus's surfaces cannot be computed from the scene's optics keys.
+    #[error("{0}")]
+    Optics(String),
 }
 
 impl From<BvpError> for RhsError {
@@ -139,6 +142,9 @@ impl GrowthSystem {
         solver: &SolverSettings,
         growth: &GrowthParams,
     ) -> Result<Self, RhsError> {
+        // Computed surfaces are traced here at most once (a resolved copy is kept as it is).
+        let growth = growth.resolved().map_err(RhsError::Optics)?.into_owned();
+        let growth = &growth;
         let params = elastic.params();
         elastic.solve_cold()?;
         // Successive right sides change the shell a little: modified Newton from the last
@@ -273,7 +279,7 @@ impl GrowthSystem {
             }
         }
         // The retina (inner face) and the depth of the blue surface behind it.
-        let blue = self.growth.blue;
+        let blue = self.growth.blue_focal();
         let mut stim: Vec<PointStimulus> = (0..n_pts)
             .map(|k| {
                 let (r, th, z, a) = local[k];
@@ -289,9 +295,10 @@ impl GrowthSystem {
                 }
             })
             .collect();
-        let depth_at_max = depth_at_angle(pts, &stim, blue.phi_max);
+        let phi_max = blue.phi_max();
+        let depth_at_max = depth_at_angle(pts, &stim, phi_max);
         for (k, s) in stim.iter_mut().enumerate() {
-            let d = if s.angle < blue.phi_max {
+            let d = if s.angle < phi_max {
                 s.depth_blue
             } else {
                 depth_at_max.unwrap_or(s.depth_blue)
@@ -450,8 +457,8 @@ impl GrowthSystem {
         let eye = EyeMeasure::new(
             (pole.z_retina, pole.r_retina),
             radii,
-            &self.growth.blue,
-            &self.growth.red,
+            self.growth.blue_focal(),
+            self.growth.red_focal(),
         );
         SeriesRow::new(t, eye)
     }
@@ -481,9 +488,9 @@ impl GrowthSystem {
         &self.growth
     }
 
-    /// The blue best-focus surface.
-    pub fn blue(&self) -> Surface {
-        self.growth.blue
+    /// The blue best-focus surface the stimulus reads.
+    pub fn blue(&self) -> Focal<'_> {
+        self.growth.blue_focal()
     }
 
     /// Move the blue surface's polar centre to `z_b` (forward sensitivities measure the eye

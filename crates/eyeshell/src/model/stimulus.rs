@@ -5,6 +5,8 @@
 //! R(φ) = P1 φ⁴ + P2 φ² + P3 (+ an offset along the polar rays), for φ < φ_max, with
 //! φ = atan2(r, z − z_B) measured from the +z axis (the posterior pole has φ = 0).
 
+use eyeshell_optics::PolarSpline;
+
 /// A best-focus surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
@@ -89,23 +91,108 @@ impl Surface {
         (4.0 * self.p1 * phi * phi + 2.0 * self.p2) * phi
     }
 
-    /// [`Surface::depth`] and [`Surface::angle`] at (z, r) with their exact gradients: with
-    /// Z = z − z_B and ϱ = |(Z, r)|, φ = atan2(r, Z) has ∇φ = (−r, Z)/ϱ², ∇ϱ = (Z, r)/ϱ, and
-    /// d = R(φ) − ϱ.
+    /// [`Surface::depth`] and [`Surface::angle`] at (z, r) with their exact gradients.
     pub fn depth_gradient(&self, z: f64, r: f64) -> DepthGradient {
-        let zz = z - self.z_b;
-        let dist = r.hypot(zz);
-        let angle = r.atan2(zz);
-        let (inv, inv2) = (1.0 / dist, 1.0 / (dist * dist));
-        let (angle_z, angle_r) = (-r * inv2, zz * inv2);
-        let slope = self.radius_slope(angle);
-        DepthGradient {
-            depth: self.radius(angle) - dist,
-            angle,
-            depth_z: slope * angle_z - zz * inv,
-            depth_r: slope * angle_r - r * inv,
-            angle_z,
-            angle_r,
+        polar_depth_gradient(self.z_b, z, r, |phi| {
+            (self.radius(phi), self.radius_slope(phi))
+        })
+    }
+}
+
+/// The depth d = R(φ) − ϱ of a polar surface about the axis point z_c and the angle φ at
+/// (z, r), with their exact gradients: with Z = z − z_c and ϱ = |(Z, r)|, φ = atan2(r, Z)
+/// has ∇φ = (−r, Z)/ϱ², ∇ϱ = (Z, r)/ϱ. `radius` gives R(φ) and R′(φ).
+fn polar_depth_gradient(
+    z_c: f64,
+    z: f64,
+    r: f64,
+    radius: impl Fn(f64) -> (f64, f64),
+) -> DepthGradient {
+    let zz = z - z_c;
+    let dist = r.hypot(zz);
+    let angle = r.atan2(zz);
+    let (inv, inv2) = (1.0 / dist, 1.0 / (dist * dist));
+    let (angle_z, angle_r) = (-r * inv2, zz * inv2);
+    let (radius, slope) = radius(angle);
+    DepthGradient {
+        depth: radius - dist,
+        angle,
+        depth_z: slope * angle_z - zz * inv,
+        depth_r: slope * angle_r - r * inv,
+        angle_z,
+        angle_r,
+    }
+}
+
+/// A best-focus surface as the stimulus reads it: the polynomial of `stimulus.blue.*` /
+/// `stimulus.red.*`, or a surface computed from a schematic eye (`stimulus.source =
+/// "optics"`), the optics crate's C² spline R(φ) about its centre. Both give d, φ, φ_max
+/// and the exact gradients the growth Jacobian needs.
+#[derive(Clone, Copy, Debug)]
+pub enum Focal<'a> {
+    Polynomial(&'a Surface),
+    Computed(&'a PolarSpline),
+}
+
+impl Focal<'_> {
+    /// The polar centre on the axis.
+    pub fn z_c(&self) -> f64 {
+        match self {
+            Focal::Polynomial(s) => s.z_b,
+            Focal::Computed(s) => s.z_c,
+        }
+    }
+
+    /// The largest polar angle the surface is defined for.
+    pub fn phi_max(&self) -> f64 {
+        match self {
+            Focal::Polynomial(s) => s.phi_max,
+            Focal::Computed(s) => s.phi_max(),
+        }
+    }
+
+    /// R(φ) and R′(φ). A computed surface continues beyond φ_max along its end slope (its
+    /// spline's natural end makes that C²); the growth reads it there only through the
+    /// crossing rule, which needs a finite depth at every point.
+    pub fn radius_and_slope(&self, phi: f64) -> (f64, f64) {
+        match self {
+            Focal::Polynomial(s) => (s.radius(phi), s.radius_slope(phi)),
+            Focal::Computed(s) => match (s.radius(phi), s.slope(phi)) {
+                (Some(r), Some(d)) => (r, d),
+                _ => {
+                    let top = s.phi_max();
+                    let (r, d) = (
+                        s.radius(top).unwrap_or(f64::NAN),
+                        s.slope(top).unwrap_or(f64::NAN),
+                    );
+                    (r + d * (phi - top), d)
+                }
+            },
+        }
+    }
+
+    /// Polar angle of (z, r) about the centre.
+    pub fn angle(&self, z: f64, r: f64) -> f64 {
+        r.atan2(z - self.z_c())
+    }
+
+    /// d = R(φ) − |(z − z_c, r)|: positive when (z, r) lies in front of the surface.
+    pub fn depth(&self, z: f64, r: f64) -> f64 {
+        match self {
+            Focal::Polynomial(s) => s.depth(z, r),
+            Focal::Computed(_) => {
+                self.radius_and_slope(self.angle(z, r)).0 - r.hypot(z - self.z_c())
+            }
+        }
+    }
+
+    /// [`Focal::depth`] and [`Focal::angle`] with their exact gradients in (z, r).
+    pub fn depth_gradient(&self, z: f64, r: f64) -> DepthGradient {
+        match self {
+            Focal::Polynomial(s) => s.depth_gradient(z, r),
+            Focal::Computed(_) => {
+                polar_depth_gradient(self.z_c(), z, r, |phi| self.radius_and_slope(phi))
+            }
         }
     }
 }
@@ -138,8 +225,8 @@ impl EyeMeasure {
     pub fn new(
         pole: (f64, f64),
         radii: impl IntoIterator<Item = f64>,
-        blue: &Surface,
-        red: &Surface,
+        blue: Focal<'_>,
+        red: Focal<'_>,
     ) -> EyeMeasure {
         let depth_blue = blue.depth(pole.0, pole.1);
         let depth_red = red.depth(pole.0, pole.1);
@@ -211,7 +298,12 @@ mod tests {
     fn an_eye_is_measured_at_its_pole_against_both_surfaces() {
         let (blue, red) = (Surface::blue(), Surface::default_red());
         for z in [20.0, 22.5, 23.2, 25.0] {
-            let eye = EyeMeasure::new((z, 0.0), [3.0, 11.5, 9.0], &blue, &red);
+            let eye = EyeMeasure::new(
+                (z, 0.0),
+                [3.0, 11.5, 9.0],
+                Focal::Polynomial(&blue),
+                Focal::Polynomial(&red),
+            );
             assert_eq!(eye.axial_length, z);
             assert_eq!(eye.equatorial_radius, 11.5);
             assert_eq!(eye.retina_minus_blue, -blue.depth(z, 0.0));
@@ -221,7 +313,12 @@ mod tests {
         }
         // The red surface lies behind the blue one: a retina between them is emmetropic.
         let between = 0.5 * (blue.point(0.0).0 + red.point(0.0).0);
-        let eye = EyeMeasure::new((between, 0.0), [10.0], &blue, &red);
+        let eye = EyeMeasure::new(
+            (between, 0.0),
+            [10.0],
+            Focal::Polynomial(&blue),
+            Focal::Polynomial(&red),
+        );
         assert_eq!(eye.class, Refraction::Emmetropic);
     }
 

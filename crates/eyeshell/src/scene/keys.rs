@@ -8,6 +8,7 @@ use super::Scene;
 use crate::bvp::settings::{LinearSolverKind, Scheme};
 use crate::growth::dae::DaeLinear;
 use crate::growth::{GrowthParams, Integrator, ThicknessLaw};
+use crate::model::optics::{Source, EYES, FOCUS_NAMES, SOURCES};
 use crate::model::params::Thickness;
 
 /// How a key is read from and written to a [`Scene`]; the variant is the key's type.
@@ -310,6 +311,12 @@ impl KeySpec {
     /// True when the key is in use in `scene`: every elastic key, and the growth keys
     /// when the scene grows.
     pub fn applies_to(&self, scene: &Scene) -> bool {
+        // The optics keys, and the source that turns them on, apply only to a stimulus
+        // computed from them: a scene of the published surfaces shows and summarises them
+        // as it did before they existed.
+        if self.key == "stimulus.source" || self.section() == Some("optics") {
+            return scene.growth.is_some() && scene.stimulus_source() == Source::Optics;
+        }
         !self.growth || scene.growth.is_some()
     }
 
@@ -340,6 +347,9 @@ const SCHEMES: &[&str] = &["trapezoid", "hermite-simpson"];
 const LINEAR: &[&str] = &["band", "klu", "block"];
 const THICKNESS_LAWS: &[&str] = &["none", "mass"];
 const INTEGRATORS: &[&str] = &Integrator::NAMES;
+const SOURCE_NAMES: &[&str] = &SOURCES;
+const EYE_NAMES: &[&str] = &EYES;
+const FOCI: &[&str] = &FOCUS_NAMES;
 
 /// The growth parameters of `s`, or their defaults when the scene does not grow.
 fn growth(s: &Scene) -> GrowthParams {
@@ -738,6 +748,48 @@ pub static KEYS: &[KeySpec] = &[
         access: Access::Float { get: |s| s.red().offset, set: |s, v| s.set_red(|c| c.offset = v) },
         rule: Rule::Any,
         doc: "red surface pushed back along its polar rays by this (mm): 0.655, the Indiana eye's 400–600 nm chromatic aberration (docs/MODEL.md §6)",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.source",
+        access: Access::Choice { names: SOURCE_NAMES, get: |s| s.stimulus_source() as usize, set: |s, v| s.set_stimulus_source(if v == 1 { Source::Optics } else { Source::Polynomial }) },
+        rule: Rule::Any,
+        doc: "where the best-focus surfaces come from: polynomial (stimulus.blue.* and stimulus.red.*, the published blue surface) or optics (computed once per run from the schematic eye of optics.*: the first wavelength's surface is the stimulus, the second's the red one, both about stimulus.blue.z_B; docs/guide/optics.md)",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.eye",
+        access: Access::Choice { names: EYE_NAMES, get: |s| s.optics().eye, set: |s, v| s.set_optics(|o| o.eye = v) },
+        rule: Rule::Any,
+        doc: "schematic eye of stimulus.source = \"optics\" and `eyeshell optics` (docs/optics.md cites each)",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.pupil",
+        access: Access::Float { get: |s| s.optics().pupil, set: |s, v| s.set_optics(|o| o.pupil = v) },
+        rule: Rule::Positive,
+        doc: "pupil diameter (mm), at most 10; the pupil lies where the eye's source puts it",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.wavelengths",
+        access: Access::Floats { get: |s| s.optics().wavelengths.clone(), set: |s, v| s.set_optics(|o| o.wavelengths = v) },
+        rule: Rule::Any,
+        doc: "wavelengths (nm, 300 to 1200): the first is the stimulus's (blue), the second the classification's (red); `eyeshell optics` computes any further ones too",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.focus",
+        access: Access::Choice { names: FOCI, get: |s| s.optics().focus, set: |s, v| s.set_optics(|o| o.focus = v) },
+        rule: Rule::Any,
+        doc: "best-focus criterion: mean-sphere (the mean of the sagittal and tangential vergences, what peripheral refraction measures), strehl (the paper's stated criterion: the largest Strehl ratio, which jumps between the focal lines for pupils above about 1 mm), sagittal (the sagittal focal line: the one the paper's published blue surface follows) or tangential",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.max_field",
+        access: Access::Float { get: |s| s.optics().max_field, set: |s, v| s.set_optics(|o| o.max_field = v) },
+        rule: Rule::Positive,
+        doc: "largest field angle traced (degrees in air, 5 to 80, one field a degree): φ_max is where the computed surface ends (40° reaches about 0.45 rad)",
         growth: true,
     },
 ];

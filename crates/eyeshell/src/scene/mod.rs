@@ -23,6 +23,7 @@ use std::path::Path;
 
 use crate::bvp::settings::SolverSettings;
 use crate::growth::{GrowthParams, GrowthSettings};
+use crate::model::optics::{OpticsSpec, Source};
 use crate::model::params::Params;
 use crate::model::stimulus::{Surface, RED_OFFSET};
 use crate::text::{decimals6, number};
@@ -59,6 +60,10 @@ pub struct Stimulus {
     /// True while no `stimulus.red.*` key is given: the red surface is then the blue one
     /// pushed back by [`RED_OFFSET`], whatever the blue one is.
     pub red_follows_blue: bool,
+    /// stimulus.source: the polynomial surfaces, or surfaces computed from `optics`.
+    pub source: Source,
+    /// The optics.* keys.
+    pub optics: OpticsSpec,
 }
 
 impl Default for Stimulus {
@@ -67,6 +72,8 @@ impl Default for Stimulus {
             blue: Surface::blue(),
             red: Surface::default_red(),
             red_follows_blue: true,
+            source: Source::Polynomial,
+            optics: OpticsSpec::default(),
         }
     }
 }
@@ -215,6 +222,14 @@ impl Scene {
             scene.apply_override_from(text, &mut sources)?;
         }
         scene.validate_from(&sources)?;
+        if let Err(e) = scene.trace_optics() {
+            return Err(SceneError::Invalid {
+                origin: scene.origin_of(&sources, &[e.key]),
+                key: e.key.to_string(),
+                value: e.value,
+                problem: e.problem,
+            });
+        }
         Ok(scene)
     }
 
@@ -253,10 +268,13 @@ impl Scene {
     /// The growth model, turning growth on (with the defaults and the scene's surfaces) if
     /// the scene did not grow yet.
     pub fn growth_mut(&mut self) -> &mut GrowthParams {
-        let (blue, red) = (self.stimulus.blue, self.stimulus.red);
+        let st = &self.stimulus;
+        let (blue, red, source, optics) = (st.blue, st.red, st.source, st.optics.clone());
         self.growth.get_or_insert_with(|| GrowthParams {
             blue,
             red,
+            source,
+            optics,
             ..GrowthParams::default()
         })
     }
@@ -297,18 +315,68 @@ impl Scene {
         });
     }
 
+    /// The source of the stimulus's surfaces in effect.
+    pub fn stimulus_source(&self) -> Source {
+        self.growth
+            .as_ref()
+            .map_or(self.stimulus.source, |g| g.source)
+    }
+
+    /// The optics keys in effect.
+    pub fn optics(&self) -> &OpticsSpec {
+        self.growth
+            .as_ref()
+            .map_or(&self.stimulus.optics, |g| &g.optics)
+    }
+
+    /// Change the stimulus's source.
+    pub fn set_stimulus_source(&mut self, source: Source) {
+        self.edit_stimulus(|st| st.source = source);
+    }
+
+    /// Change the optics keys.
+    pub fn set_optics(&mut self, change: impl FnOnce(&mut OpticsSpec)) {
+        self.edit_stimulus(|st| change(&mut st.optics));
+    }
+
     /// Edit the surfaces in effect (those of the growth model when the scene grows) and
     /// keep the two copies equal.
     fn edit_stimulus(&mut self, edit: impl FnOnce(&mut Stimulus)) {
         if let Some(g) = &self.growth {
             self.stimulus.blue = g.blue;
             self.stimulus.red = g.red;
+            self.stimulus.source = g.source;
+            self.stimulus.optics = g.optics.clone();
         }
         edit(&mut self.stimulus);
         if let Some(g) = &mut self.growth {
             g.blue = self.stimulus.blue;
             g.red = self.stimulus.red;
+            g.source = self.stimulus.source;
+            g.optics = self.stimulus.optics.clone();
         }
+    }
+
+    /// Trace the surfaces of a growing scene whose stimulus is computed from its optics
+    /// (once: nothing is traced while the keys and the centre stay as they were traced).
+    /// The error names the optics key to change.
+    pub fn resolve_optics(&mut self) -> Result<(), SceneError> {
+        self.trace_optics().map_err(|e| SceneError::Invalid {
+            origin: self.origin.clone(),
+            key: e.key.to_string(),
+            value: e.value,
+            problem: e.problem,
+        })
+    }
+
+    fn trace_optics(&mut self) -> Result<(), crate::model::optics::OpticsKeyError> {
+        let Some(g) = &mut self.growth else {
+            return Ok(());
+        };
+        if !g.is_resolved() {
+            g.computed = Some(std::sync::Arc::new(g.optics.compute(g.blue.z_b)?));
+        }
+        Ok(())
     }
 
     /// The keys in use: every elastic key, and the growth keys when the scene grows.
@@ -560,6 +628,11 @@ impl Scene {
         }
         self.validate_mesh(sources)?;
         self.validate_sizes(sources)?;
+        if self.stimulus_source() == Source::Optics {
+            if let Err(e) = self.optics().check() {
+                return Err(invalid(&[e.key], e.value, e.problem));
+            }
+        }
         if self.solver.richardson && self.growth.is_some() {
             return Err(invalid(
                 &["solver.richardson"],

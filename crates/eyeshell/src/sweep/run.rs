@@ -146,5 +146,15 @@ fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
     let retina = |f: &FieldRow| stimulus::retina(f.z, f.r, f.h, f.theta);
     let pole = rows.first().map(retina).unwrap_or((f64::NAN, f64::NAN));
     let radii = rows.iter().map(|f| retina(f).1);
-    EyeMeasure::new(pole, radii, &scene.blue(), &scene.red())
+    let (blue, red) = (scene.blue(), scene.red());
+    match &scene.growth {
+        // A growing scene's surfaces, computed ones included (traced when it was read).
+        Some(g) if g.is_resolved() => EyeMeasure::new(pole, radii, g.blue_focal(), g.red_focal()),
+        _ => EyeMeasure::new(
+            pole,
+            radii,
+            stimulus::Focal::Polynomial(&blue),
+            stimulus::Focal::Polynomial(&red),
+        ),
+    }
 }

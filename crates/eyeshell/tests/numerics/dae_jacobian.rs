@@ -138,3 +138,32 @@ fn newton_matrix_matches_differences() {
         seed,
     );
 }
+
+/// With the stimulus computed from a schematic eye (`stimulus.source = "optics"`), the
+/// Newton matrix reads the spline's exact derivative R′(φ): it matches differences too, on
+/// both sides of the computed surface's φ_max (the crossing rule beyond it).
+#[test]
+fn newton_matrix_matches_differences_with_computed_surfaces() {
+    use eyeshell::model::optics::{OpticsSpec, Source};
+    let g = GrowthParams {
+        source: Source::Optics,
+        optics: OpticsSpec {
+            // sagittal: the published surface's criterion; 20 fields keep the test quick.
+            focus: 2,
+            max_field: 20.0,
+            ..OpticsSpec::default()
+        },
+        ..GrowthParams::default()
+    };
+    let g = g.resolved().unwrap().into_owned();
+    let phi_max = g.blue_focal().phi_max();
+    assert!(phi_max > 0.2 && phi_max < 0.3, "{phi_max}");
+    for scheme in [Scheme::HermiteSimpson, Scheme::Trapezoid] {
+        let s = SolverSettings {
+            nodes: 21,
+            scheme,
+            ..SolverSettings::default()
+        };
+        check(Params::default(), s, g.clone(), 40);
+    }
+}

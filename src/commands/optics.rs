@@ -1,0 +1,191 @@
+//! `eyeshell optics`: the best-focus surfaces of a scene's schematic eye (docs/guide/optics.md).
+//!
+//! The scene and its `optics.*` keys are checked first (one line naming the key, exit 2),
+//! then the surfaces are traced: a ray that fails is the user's keys' (exit 2, the line
+//! naming the surface, the field angle and the wavelength). The directory is written whole
+//! or not at all: surfaces.csv, optics.json, optics.png and optics.svg.
+
+use eyeshell::model::optics::{OpticsKeyError, OpticsSpec};
+use eyeshell::rundir::{self, OutputDir, OutputError};
+use eyeshell::scene::{Scene, SceneError};
+use eyeshell::Error;
+use eyeshell_optics::{paraxial, ray_fan, Paraxial};
+
+use crate::args::OpticsArgs;
+use crate::out;
+
+/// Every focus: wavelength, field, position, criterion, Strehl ratio.
+pub const SURFACES_FILE: &str = "surfaces.csv";
+/// The eye's paraxial figures, the chromatic aberration, the polar fits, the work.
+pub const OPTICS_FILE: &str = "optics.json";
+/// The figure's stem (optics.png, optics.svg).
+const FIGURE: &str = "optics";
+/// The field angles of the figure's ray fans (degrees), those within `optics.max_field`.
+const FAN_FIELDS: [f64; 3] = [0.0, 20.0, 40.0];
+
+/// A problem with an optics key, as the scene's error (the user's: exit 2).
+fn key_error(scene: &Scene, e: OpticsKeyError) -> Error {
+    Error::from(SceneError::Invalid {
+        origin: scene.origin.clone(),
+        key: e.key.to_string(),
+        value: e.value,
+        problem: e.problem,
+    })
+}
+
+pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
+    let scene = a.scene.load()?;
+    let spec: OpticsSpec = scene.optics().clone();
+    spec.check().map_err(|e| key_error(&scene, e))?;
+    let z_c = scene.blue().z_b;
+    let start = std::time::Instant::now();
+    let computed = spec.compute(z_c).map_err(|e| key_error(&scene, e))?;
+    let system = spec.system();
+    let paraxials: Vec<Paraxial> = spec
+        .wavelengths
+        .iter()
+        .map(|&w| paraxial(&system, w))
+        .collect::<Result<_, _>>()
+        .map_err(|e| key_error(&scene, spec.explain(&e)))?;
+    // Fans of the first wavelength, drawn to just behind the farthest focus.
+    let end_z = computed
+        .surfaces
+        .surfaces
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.z))
+        .fold(0.0, f64::max)
+        + 1.0;
+    let pupil = spec.pupil_stop(&system);
+    let mut fans = Vec::new();
+    for field in FAN_FIELDS.into_iter().filter(|f| *f <= spec.max_field) {
+        let fan = ray_fan(&system, spec.wavelengths[0], field, &pupil, 7, end_z)
+            .map_err(|e| key_error(&scene, spec.explain(&e)))?;
+        fans.push((field, fan));
+    }
+    // Everything traced before the directory is made: a refusal leaves nothing behind.
+    let dir = OutputDir::create(&a.out, "optics")?;
+    let io = |path: &std::path::Path, e: std::io::Error| {
+        Error::from(OutputError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })
+    };
+    let write = |name: &str, bytes: &[u8]| -> Result<(), Error> {
+        let path = dir.file(name);
+        rundir::write_atomic(&path, bytes).map_err(|e| io(&path, e))
+    };
+    let v = rundir::format_value;
+    let rows = computed.surfaces.surfaces.iter().flat_map(|s| {
+        s.points.iter().map(|p| {
+            [
+                v(p.wavelength_nm),
+                v(p.field_deg),
+                v(p.z),
+                v(p.r),
+                p.criterion.name().to_string(),
+                v(p.strehl),
+            ]
+        })
+    });
+    let table = rundir::table::csv_bytes(
+        [
+            "wavelength_nm",
+            "field_deg",
+            "z",
+            "r",
+            "criterion",
+            "strehl",
+        ],
+        rows,
+        rundir::table::QuoteStyle::Necessary,
+    )
+    .map_err(|e| io(&dir.file(SURFACES_FILE), e))?;
+    write(SURFACES_FILE, &table)?;
+    let json = optics_json(
+        &spec,
+        &computed,
+        &paraxials,
+        z_c,
+        start.elapsed().as_secs_f64(),
+    );
+    write(OPTICS_FILE, json.as_bytes())?;
+    crate::figures::optics_figure(&system, &computed, &fans, &dir.file(FIGURE))?;
+    let target = dir.commit()?;
+    if !a.quiet {
+        let blue = &computed.surfaces.surfaces[0];
+        out(&format!(
+            "{} eye, {} mm pupil, {}: {} surfaces of {} fields, {} rays traced\n  written to {}\n",
+            spec.eye_name(),
+            eyeshell::text::number(spec.pupil),
+            spec.criterion().name(),
+            computed.surfaces.surfaces.len(),
+            blue.points.len(),
+            computed.surfaces.rays_traced,
+            target.display()
+        ));
+    }
+    Ok(())
+}
+
+/// optics.json: the request, the paraxial figures at each wavelength, the longitudinal
+/// chromatic aberration between the first two, each surface's polar fit about z_B.
+fn optics_json(
+    spec: &OpticsSpec,
+    c: &eyeshell::model::optics::ComputedOptics,
+    paraxials: &[Paraxial],
+    z_b: f64,
+    wall_seconds: f64,
+) -> String {
+    use serde_json::json;
+    let par: Vec<_> = paraxials
+        .iter()
+        .map(|p| {
+            json!({
+                "wavelength_nm": p.wavelength_nm,
+                "power_dioptres": p.power,
+                "back_focal_distance_mm": p.back_focal_distance,
+                "focus_mm": p.focus,
+            })
+        })
+        .collect();
+    let (a, b) = (&paraxials[0], &paraxials[1]);
+    let surfaces: Vec<_> = c
+        .surfaces
+        .surfaces
+        .iter()
+        .map(|s| {
+            let fit = s.polar_fit_about(z_b).ok().map(|f| {
+                json!({
+                    "P1": f.p1, "P2": f.p2, "P3": f.p3, "z_B": f.z_b, "phi_max": f.phi_max,
+                    "rms_residual_mm": f.rms_residual, "max_residual_mm": f.max_residual,
+                })
+            });
+            json!({
+                "wavelength_nm": s.wavelength_nm,
+                "fields": s.points.len(),
+                "axial_focus_mm": s.points.first().map(|p| p.z),
+                "polar_fit": fit,
+            })
+        })
+        .collect();
+    let doc = json!({
+        "eye": spec.eye_name(),
+        "pupil_mm": spec.pupil,
+        "pupil_position_mm": spec.pupil_stop(&spec.system()).position,
+        "focus": spec.criterion().name(),
+        "max_field_deg": spec.max_field,
+        "wavelengths_nm": spec.wavelengths,
+        "paraxial": par,
+        "chromatic_aberration": {
+            "wavelengths_nm": [a.wavelength_nm, b.wavelength_nm],
+            "power_difference_dioptres": a.power - b.power,
+            "focus_difference_mm": b.focus - a.focus,
+        },
+        "surfaces": surfaces,
+        "rays_traced": c.surfaces.rays_traced,
+        "wall_seconds": wall_seconds,
+    });
+    let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
+    text.push('\n');
+    text
+}

@@ -1,0 +1,118 @@
+//! `eyeshell optics`: the best-focus surfaces of a scene's schematic eye, written whole, and
+//! bad optics keys refused in one line naming the key, leaving nothing behind.
+
+use crate::support::*;
+
+/// The const scene's eye (Atchison 2006) at 400 and 600 nm: 41 fields each, the foci in
+/// the shell's frame, the paraxial figures of docs/optics.md, the polar fits, the figure, and
+/// the ownership marker (so a second run replaces the first).
+#[test]
+fn optics_writes_surfaces_json_and_a_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("eye");
+    for _ in 0..2 {
+        ok(&[
+            "optics",
+            "scenes/const.toml",
+            "--set",
+            "optics.focus=sagittal",
+            "--set",
+            "optics.pupil=1",
+            "--out",
+            s(&out),
+            "--quiet",
+        ]);
+    }
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            ".eyeshell",
+            "optics.json",
+            "optics.png",
+            "optics.svg",
+            "surfaces.csv"
+        ]
+    );
+    let (header, rows) = csv_cells(&out.join("surfaces.csv"));
+    assert_eq!(
+        header,
+        [
+            "wavelength_nm",
+            "field_deg",
+            "z",
+            "r",
+            "criterion",
+            "strehl"
+        ]
+    );
+    assert_eq!(rows.len(), 82);
+    assert!(rows.iter().all(|r| r[4] == "sagittal"));
+    let num = |r: &Vec<String>, i: usize| r[i].parse::<f64>().unwrap();
+    // On the axis at 400 nm, 1 mm pupil: 23.038 mm (docs/optics.md), 0.09 mm in front of
+    // the published blue surface's 23.1285 mm.
+    assert_eq!(
+        (num(&rows[0], 0), num(&rows[0], 1), num(&rows[0], 3)),
+        (400.0, 0.0, 0.0)
+    );
+    assert!((num(&rows[0], 2) - 23.038).abs() < 2e-3, "{:?}", rows[0]);
+    assert_eq!(num(&rows[81], 1), 40.0);
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("optics.json")).unwrap()).unwrap();
+    assert_eq!(j["eye"], "atchison-2006");
+    let lca = &j["chromatic_aberration"];
+    // docs/optics.md's table: F(400) − F(600) = 2.370 D, focus(600) − focus(400) = 0.6049 mm.
+    assert!((lca["power_difference_dioptres"].as_f64().unwrap() - 2.370).abs() < 1e-3);
+    assert!((lca["focus_difference_mm"].as_f64().unwrap() - 0.6049).abs() < 1e-4);
+    let fit = &j["surfaces"][0]["polar_fit"];
+    assert_eq!(fit["z_B"].as_f64().unwrap(), -0.5064886748669879);
+    assert!(fit["rms_residual_mm"].as_f64().unwrap() < 1e-2);
+    assert!(j["rays_traced"].as_u64().unwrap() > 1000);
+}
+
+/// Bad optics keys: one line naming the key (a trace failure names the surface, the field
+/// and the wavelength too), exit 2, no directory.
+#[test]
+fn bad_optics_keys_are_refused_and_nothing_is_written() {
+    let scene = "growth.eta0 = 70\n";
+    fails(
+        "optics",
+        scene,
+        &["optics.pupil=12"],
+        "optics.pupil = 12 must lie in (0, 10] mm",
+        "scene.toml",
+    );
+    fails(
+        "optics",
+        scene,
+        &["optics.eye=gullstrand"],
+        "optics.eye",
+        "--set optics.eye=gullstrand",
+    );
+    fails(
+        "optics",
+        scene,
+        &["optics.wavelengths=[400, 1500]"],
+        "(1500 does not)",
+        "scene.toml",
+    );
+    fails(
+        "optics",
+        scene,
+        &["optics.pupil=8", "optics.max_field=80"],
+        "optics.max_field = 80 cannot be traced in the atchison-2006 eye: the ray at 80° and 400 nm fails at 'posterior lens'",
+        "scene.toml",
+    );
+    // The same keys refuse a growth run that would use them.
+    fails(
+        "grow",
+        "growth.eta0 = 70\nstimulus.source = \"optics\"\n",
+        &["optics.pupil=8", "optics.max_field=80"],
+        "optics.max_field = 80 cannot be traced",
+        "--set optics.max_field=80",
+    );
+}
