@@ -1,8 +1,8 @@
-//! Elastic solve timings (issue: the shell at equilibrium). Run with
+//! Elastic solve timings (the shell at equilibrium). Run with
 //!   cargo bench --bench elastic
 //! and the interleaved fibres-or-not comparison with
 //!   EYESHELL_INTERLEAVED=1 cargo bench --bench elastic -- components
-//! The linear solvers side by side (band, klu, block; issue 15):
+//! The linear solvers side by side (band, klu, block):
 //!   cargo bench --bench elastic -- "factor_and_solve|solve_by_nodes"
 //! Figures go in BENCHMARKS.md.
 

@@ -1,4 +1,4 @@
-//! Sweeps and figures (issue: scenes, sweeps and the paper's figures). Run with
+//! Sweeps and figures (scenes, sweeps and the paper's figures). Run with
 //!   cargo bench --bench figures
 //! Figures go in BENCHMARKS.md. The whole `eyeshell figures` (twelve runs and six figures)
 //! is timed with `time eyeshell figures --out /tmp/figures` instead: one sample is seconds.

@@ -1,4 +1,4 @@
-//! Growth timings (issue: growth in time). Run with
+//! Growth timings (growth in time). Run with
 //!   cargo bench --bench growth
 //! (`reduced_on_cpu` times by the thread's on-CPU time, for the shared machine).
 //! Figures go in BENCHMARKS.md.

@@ -58,7 +58,7 @@ def main():
                 if keys not in best or cpu < best[keys][0]:
                     best[keys] = (cpu, summary)
                 sens = summary.get("sensitivities")
-                if sens and "jacobian_seconds" in sens:  # (binaries before issue 19 B lack it)
+                if sens and "jacobian_seconds" in sens:  # (older binaries lack it)
                     fy[keys] = min(fy.get(keys, float("inf")), sens["jacobian_seconds"])
     plain = best[""][0]
     print("| k | parameters | on-CPU | ratio to plain | k + 1 | steps "

@@ -1,4 +1,4 @@
-//! Convergence ladders (issue: measure the trade of speed for accuracy). On a ladder of
+//! Convergence ladders (the trade of speed for accuracy). On a ladder of
 //! meshes, pole truncations ε, or solver tolerances, each rung's fields are compared with
 //! the finest rung and, for elastic meshes, with the Richardson extrapolation of the two
 //! finest at the scheme's order; the observed order between rungs is

@@ -1,4 +1,4 @@
-//! Numerical stability at the extremes (issue: push every parameter to its edge). Each case
+//! Numerical stability at the extremes (every parameter pushed to its edge). Each case
 //! is a scene pushed in one direction; it must either solve, with its diagnostics inside
 //! stated bounds, or fail with a typed error that says what failed and where — never NaN,
 //! never a panic, never a hang (every iteration in the solvers is bounded).

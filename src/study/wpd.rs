@@ -1,4 +1,4 @@
-//! Work-precision diagrams (issue: measure the trade of speed for accuracy): error against
+//! Work-precision diagrams (the trade of speed for accuracy): error against
 //! CPU seconds, each error taken against a reference computed at much tighter settings.
 //! - Elastic: trapezoid and Hermite–Simpson over a self-similar ladder of meshes (each
 //!   rung the last with every interval halved), and Richardson-extrapolated

@@ -1,4 +1,4 @@
-//! Hostile inputs, family 1 (issue 13): finite but absurd numbers, through the binary, under
+//! Hostile inputs, family 1 (TESTING.md): finite but absurd numbers, through the binary, under
 //! a memory limit and a time limit ([`bounded`]). Each is refused on one line before any
 //! output exists, or (where the scene is legal but the solve cannot succeed) fails cleanly
 //! within the time limit, saying where. The scene-level checks behind them are unit-tested
@@ -143,8 +143,8 @@ fn growth_too_short_to_step_is_refused_with_the_limit() {
     assert!(r.stderr.len() < 200, "{}", r.stderr);
 }
 
-/// Growth rates too fast for the integrators (growth.eta0 = 1e150, 1e300: IDA used to stop
-/// with "IDASolve … IDA_ILL_INPUT … tstop = 1 is behind current t = 0"): a clean failure
+/// Growth rates too fast for the integrators (growth.eta0 = 1e150, 1e300, where IDA itself
+/// says "IDASolve … IDA_ILL_INPUT … tstop = 1 is behind current t = 0"): a clean failure
 /// at t = 0 in the scene's terms, with every integrator, in bounded time.
 #[test]
 fn growth_rates_too_fast_fail_in_the_scenes_terms() {

@@ -227,7 +227,7 @@ fn compare_refuses_bad_input() {
     );
 }
 
-/// compare is as accurate as the solutions it compares (issue 14): a Hermite–Simpson run at
+/// compare is as accurate as the solutions it compares: a Hermite–Simpson run at
 /// N = 801 against a reference at N = 8001 on its own graded, non-uniform mesh (both
 /// accurate to about 1e-10 in κ, r, θ, Q) passes at 1e-7, and a perturbation of 1e-6 at
 /// any single reference point fails, near the pole, the breakpoint and the cornea too.

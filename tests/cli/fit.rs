@@ -1,4 +1,4 @@
-//! `eyeshell fit` (issue 19, calibration): the command end to end on a small case, and the
+//! `eyeshell fit` (calibration): the command end to end on a small case, and the
 //! inputs it refuses (exit 2, one line, nothing written): hostile data files, bad keys, an
 //! unidentifiable parameter, a foreign output directory.
 

@@ -1,5 +1,4 @@
-//! Fuzz of the foreign-file readers (issue 13, "a fuzz target for each foreign-file
-//! reader"): .mat decode, .npy parse and .npz decode on random bytes and on mutations (bit
+//! Fuzz of the foreign-file readers (a fuzz target for each foreign-file reader): .mat decode, .npy parse and .npz decode on random bytes and on mutations (bit
 //! flips, overwritten bytes, length fields set to huge values, truncations, insertions and
 //! deletions) of valid files: eyeshell's own writer's output and the SciPy/NumPy fixtures,
 //! raw and, for compressed containers, inside the compression (the mutated variable or

@@ -1,4 +1,4 @@
-//! Fuzz of the run-file readers (issue 13, family 6): the CSV files of a run directory
+//! Fuzz of the run-file readers (TESTING.md, family 6): the CSV files of a run directory
 //! (fields.csv, at.csv, series.csv, history.csv, the snapshots) and summary.json of every
 //! kind (elastic, growth running / ok / failed, sweep, study, figures), mutated from real
 //! files written by a small solve, grow and sweep: bit flips, overwritten bytes,

@@ -1,7 +1,7 @@
 //! Golden outputs: the files written by `eyeshell solve`, `grow`, `export`, `figures` and
-//! `plot` must stay byte-identical (timings and versions aside) across the house refactor
-//! (issue 12). The test drives only the built binary (`CARGO_BIN_EXE_eyeshell`), never the
-//! library, whose module paths the refactor moves.
+//! `plot` must stay byte-identical (timings and versions aside) across refactors. The test
+//! drives only the built binary (`CARGO_BIN_EXE_eyeshell`), never the library, whose
+//! module paths a refactor moves.
 //!
 //! In a temporary directory (holding copies of the scene files it needs, so that every path
 //! it passes and every path the outputs record is relative) it runs [`COMMANDS`], then

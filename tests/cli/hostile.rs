@@ -1,4 +1,4 @@
-//! Hostile files and values (issue 13): each case runs the binary under a memory and a time
+//! Hostile files and values (TESTING.md): each case runs the binary under a memory and a time
 //! limit ([`bounded`]) and asserts the exit code, one line of stderr with no panic text,
 //! and that nothing was written or lost. The families this
 //! module covers so far: broken run files (6), sweeps that point outside themselves
@@ -36,8 +36,8 @@ fn resume_is_refused(dir: &Path, needle: &str, what: &str) {
     assert!(World::of(dir) == before, "{what}: something changed");
 }
 
-/// A fields.csv that lost a column is refused by export (it used to write a .mat with a
-/// short `y` and an .npz with a missing row, as if nothing were wrong).
+/// A fields.csv that lost a column is refused by export, not written as a .mat with a short
+/// `y` and an .npz with a missing row, as if nothing were wrong.
 #[test]
 fn a_run_missing_a_column_is_not_exported() {
     let dir = tempfile::tempdir().unwrap();
@@ -68,7 +68,7 @@ fn a_run_missing_a_column_is_not_exported() {
 }
 
 /// A sweep's summary.json whose run names the sweep itself (or a path out of it) is
-/// refused by plot, which used to recurse until the stack overflowed.
+/// refused by plot, which would otherwise recurse until the stack overflowed.
 #[test]
 fn a_sweep_run_pointing_outside_the_sweep_is_refused() {
     let dir = tempfile::tempdir().unwrap();

@@ -141,7 +141,7 @@ fn help_and_version_succeed() {
 
 /// A scene name carrying a line break and terminal escape sequences is shown escaped by
 /// `check`, `solve` and in error lines: nothing reaches the terminal raw, `check`'s output
-/// still reads back as the same scene, and an error stays one line (issue 13, family 7).
+/// still reads back as the same scene, and an error stays one line (TESTING.md, family 7).
 #[test]
 fn hostile_names_are_printed_escaped() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,7 +1,6 @@
 //! The command line and what it writes: exit codes, one-line errors, run directories, exports, comparisons, studies and figures.
 //!
-//! One test binary for the group (each module was its own binary before: one link instead of
-//! many).
+//! One test binary for the group: one link instead of one per module.
 
 mod support;
 

@@ -1,4 +1,4 @@
-//! `solver.max_seconds` on the command line (issue 13): a bound reached is exit 1 with one
+//! `solver.max_seconds` on the command line: a bound reached is exit 1 with one
 //! clean line naming the key and where it was reached; a growth run keeps what it wrote; a
 //! bound not reached changes no result; bad bounds are bad input.
 

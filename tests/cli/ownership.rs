@@ -1,4 +1,4 @@
-//! Hostile inputs, families 2–4 (issue 13): somebody else's folders and files, overwrites,
+//! Hostile inputs, families 2–4 (TESTING.md): somebody else's folders and files, overwrites,
 //! concurrency, kills mid-write and litter. Every case runs the binary under a memory limit
 //! and a time limit ([`bounded`]) and asserts the exit code, one clean line of stderr, and
 //! that no file outside the output changed ([`World`]).

@@ -1,4 +1,4 @@
-//! The bvp4c-style peer of issue 15 (`benches/peers/solve_bvp_fibre.py`): SciPy's solve_bvp,
+//! The bvp4c-style peer (`benches/peers/solve_bvp_fibre.py`): SciPy's solve_bvp,
 //! split at the breakpoints, and eyeshell at N = 801 on the non-uniform fibre shell (D = 200)
 //! reach the same solution, each within 1e-9 of eyeshell at N = 12801 relative to every
 //! field's size. The times are BENCHMARKS.md's; here only the numbers that must hold. Runs

@@ -395,7 +395,7 @@ fn nested_mat(depth: usize) -> Vec<u8> {
     file
 }
 
-/// compare against an independent solver (issue 14): SciPy's solve_bvp, split at the
+/// compare against an independent solver: SciPy's solve_bvp, split at the
 /// thickness jump, tol 1e-8 (tests/fixtures/solve_bvp_reference.py), on 8001 points and on
 /// its own non-uniform mesh, against eyeshell at N = 801 (Hermite–Simpson). κ, α_s, r, θ
 /// and Q agree within 1e-7; t_s within 1e-6 relative (the N = 801 run's own error next to

@@ -1,4 +1,4 @@
-//! `eyeshell grow --sensitivities` (issue 19): sensitivities.csv, its work in summary.json,
+//! `eyeshell grow --sensitivities`: sensitivities.csv, its work in summary.json,
 //! its figure from `eyeshell plot`, and the keys it refuses (exit 2, one line, nothing
 //! written).
 
@@ -140,9 +140,9 @@ fn grow_writes_sensitivities_csv_and_their_work() {
     }
 }
 
-/// `--sensitivity-error-control` at rtol 1e-8 runs to the end (the step used to collapse to
-/// 1e-314 at t = 0.053: the border d's sensitivity jumps, and the error test now leaves d
-/// out), summary.json says so, and its dL/dη0 at t = 0.1 is the converged value (the
+/// `--sensitivity-error-control` at rtol 1e-8 runs to the end (with the border d in the
+/// error test the step collapses to 1e-314 at t = 0.053: d's sensitivity jumps; the test
+/// leaves d out), summary.json says so, and its dL/dη0 at t = 0.1 is the converged value (the
 /// uncontrolled rtol-1e-8 run of the test above agrees with it to 1e-4).
 #[test]
 fn error_control_on_the_sensitivities_runs_at_tight_tolerances() {

@@ -441,8 +441,8 @@ fn a_second_ctrl_c_ends_the_workers_too() {
     }
 }
 
-/// `--jobs` is bounded (a typo of 100000 used to spawn threads for seconds and then blame
-/// the output directory): refused first, on one line, exit 2, nothing written.
+/// `--jobs` is bounded (a typo of 100000 would spawn threads for seconds and then blame the
+/// output directory): refused first, on one line, exit 2, nothing written.
 #[test]
 fn absurd_jobs_are_refused_before_anything_else() {
     let dir = tempfile::tempdir().unwrap();

@@ -320,7 +320,7 @@ impl<R: Reinforcement> Equations<R> {
 }
 
 /// ∂f and ∂α_s with respect to a point's data (ρ, ζ, γ) at fixed y: what the coupled growth
-/// Jacobian needs of the elastic equations (issue 11).
+/// Jacobian needs of the elastic equations.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DataPartials {
     pub f_rho: Vec5,
@@ -356,8 +356,8 @@ pub fn data_partials(mp: &MaterialPoint, y: &Vec5, e: &PointEval) -> DataPartial
     }
 }
 
-/// A constant of the shell that the equations can be differentiated by (issue 19's forward
-/// sensitivities): the membrane's C and D (docs/MODEL.md §2), E_b and ΔP (§3).
+/// A constant of the shell that the equations can be differentiated by (for the forward
+/// sensitivities, docs/MODEL.md §10): the membrane's C and D (docs/MODEL.md §2), E_b and ΔP (§3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShellConstant {
     Modulus,

@@ -94,7 +94,7 @@ impl Default for SolverSettings {
             epsilon: 1e-3,
             scheme: Scheme::HermiteSimpson,
             // The fastest at every N from 51 to 20001, cold and warm (BENCHMARKS.md,
-            // "The almost-block-diagonal solver", 2026-11-24).
+            // "The almost-block-diagonal solver").
             linear: LinearSolverKind::Block,
             newton_tol: 1e-10,
             max_newton: 50,

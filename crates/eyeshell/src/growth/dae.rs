@@ -1,4 +1,4 @@
-//! Growth as one coupled DAE (issue 11; docs/MODEL.md §3, §5–6): the growth state and the
+//! Growth as one coupled DAE (docs/MODEL.md §3, §5–6): the growth state and the
 //! elastic state advance together, so a time step costs one Newton iteration of the whole
 //! system instead of a nested elastic solve per right-hand side.
 //!
@@ -320,7 +320,7 @@ pub struct CoupledDae {
     sens_at: Vec<f64>,
 }
 
-/// A parameter the growth run's forward sensitivities are taken with respect to (issue 19).
+/// A parameter the growth run's forward sensitivities are taken with respect to (docs/MODEL.md §10).
 /// η0, Γ, δ enter only the growth rates, through the capacity g_c(Σ) = η0/2 (1 + tanh((Γ −
 /// Σ)/δ)) (docs/MODEL.md §5), linearly. C, D, E_b and ΔP enter the elastic equations
 /// (docs/MODEL.md §2–3; ΔP the cornea's edge too, §3) and through α_s the z rows, the

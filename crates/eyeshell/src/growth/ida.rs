@@ -1,4 +1,4 @@
-//! Growth by IDA (issue 11): the coupled DAE of `dae.rs` (growth rates as differential
+//! Growth by IDA: the coupled DAE of `dae.rs` (growth rates as differential
 //! rows, the elastic equations and z as algebraic rows) by variable-order BDF with one
 //! Newton iteration of the whole system per iterate. The Newton matrix is assembled
 //! analytically and factored by the system's own solver (the Schur complement of the

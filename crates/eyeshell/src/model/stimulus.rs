@@ -72,7 +72,7 @@ impl Surface {
 }
 
 /// The depth of a surface behind a point and the point's polar angle, with their gradients
-/// in the point's (z, r): what the growth Jacobian needs of the stimulus (issue 11).
+/// in the point's (z, r): what the growth Jacobian needs of the stimulus.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DepthGradient {
     pub depth: f64,

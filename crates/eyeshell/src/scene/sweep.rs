@@ -772,7 +772,7 @@ mod tests {
     }
 
     /// A grid of 24 keys with 3 values each (2.8e11 runs) is refused by counting, before
-    /// anything is expanded (it used to take 8 GB and abort).
+    /// anything is expanded (expanding it would take 8 GB and abort).
     #[test]
     fn a_huge_grid_is_counted_not_expanded() {
         let keys = [

@@ -901,7 +901,7 @@ fn shipped_const_scene_grows_with_the_defaults() {
 }
 
 /// Counts that size an allocation or a loop are bounded, and every derived size of the
-/// mesh is checked before anything is allocated (issue 13, family 1).
+/// mesh is checked before anything is allocated (TESTING.md, family 1).
 #[test]
 fn absurd_sizes_are_refused_before_allocation() {
     for (text, key, problem) in [

@@ -1,5 +1,5 @@
 //! The coupled growth DAE's analytic Newton matrix ∂F/∂y + c ∂F/∂y' against central
-//! differences of its residual (issue 11), at grown, off-equilibrium states: both schemes,
+//! differences of its residual, at grown, off-equilibrium states: both schemes,
 //! with and without fibres, both thickness laws.
 
 use eyeshell::bvp::settings::{Scheme, SolverSettings};

@@ -1,4 +1,4 @@
-//! Growth by IDA on the coupled DAE (issue 11): it agrees with CVODE on the paper's scenes,
+//! Growth by IDA on the coupled DAE: it agrees with CVODE on the paper's scenes,
 //! survives the growth extremes of TESTING.md, and every linear solver gives the same run.
 
 use eyeshell::bvp::settings::SolverSettings;

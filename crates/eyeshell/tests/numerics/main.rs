@@ -1,7 +1,6 @@
 //! The numerics: exact solutions, observed orders, analytic against finite-difference Jacobians, the first integral, growth by every integrator.
 //!
-//! One test binary for the group (each module was its own binary before: one link instead of
-//! many).
+//! One test binary for the group: one link instead of one per module.
 
 mod common;
 

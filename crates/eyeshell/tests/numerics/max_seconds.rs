@@ -1,4 +1,4 @@
-//! `solver.max_seconds` (issue 13): an elastic solve and every integrator's callback stop
+//! `solver.max_seconds`: an elastic solve and every integrator's callback stop
 //! once the deadline has passed, with the deadline's own message saying where, and a
 //! growth run keeps what it had handed on; a bound that is not reached changes nothing.
 //!

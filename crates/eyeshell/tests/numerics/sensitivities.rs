@@ -1,4 +1,4 @@
-//! Forward sensitivities of the growth run through IDAS (issue 19): against central
+//! Forward sensitivities of the growth run through IDAS (docs/MODEL.md §10): against central
 //! differences of tight runs.
 //!
 //! The reference needs a run that is differentiable in the parameters and tight enough
@@ -345,9 +345,9 @@ fn sensitivity_error_control_converges_with_rtol() {
 }
 
 /// Error control on the sensitivities to the model's parameters with rounded kinks, at
-/// tight tolerances: the first step used to fail its error test down to h = 1e-13 (material.C,
-/// growth.kink_width 0.05 and 0.2, rtol 1e-9 … 1e-11) because the algebraic s'(0) that
-/// seeds IDAS's first predictor left out the second-order terms. Runs to t = 0.05 (the
+/// tight tolerances (material.C, growth.kink_width 0.05 and 0.2, rtol 1e-9 … 1e-11): the
+/// algebraic s'(0) that seeds IDAS's first predictor must hold the second-order terms, or
+/// the first step fails its error test down to h = 1e-13. Runs to t = 0.05 (the
 /// failure was at t = 0) start, and agree across rtol.
 #[test]
 fn error_control_starts_at_tight_rtol_for_the_models_parameters() {

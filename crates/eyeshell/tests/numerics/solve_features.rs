@@ -147,8 +147,8 @@ fn every_shipped_scene_solves_from_the_default_guess() {
     assert!(count >= 2, "no scenes found in {}", dir.display());
 }
 
-/// A hopeless shell (E_b = 1e-200: a coefficient 1/E_b of 1e200) used to keep KINSOL's line
-/// search evaluating the residual for minutes inside one call. Each Newton solve now may
+/// A hopeless shell (E_b = 1e-200: a coefficient 1/E_b of 1e200) can keep KINSOL's line
+/// search evaluating the residual for minutes inside one call. Each Newton solve may
 /// make at most 20 residual evaluations per allowed iteration, so the whole continuation
 /// fails, saying where, in a bounded number of evaluations (well under a second here; the
 /// limit below only guards against a hang).

@@ -1,4 +1,4 @@
-//! Linear algebra for the Newton systems of the coupled growth DAE (issue 11), knowing
+//! Linear algebra for the Newton systems of the coupled growth DAE, knowing
 //! nothing of eyes: a CSR matrix with a fixed pattern that the Jacobian is assembled into,
 //! a band matrix bordered by one dense row and column, and three direct solvers of the
 //! assembled matrix:

@@ -1,4 +1,4 @@
-//! The Schur complement of the growth unknowns (issue 11). The unknowns are ordered
+//! The Schur complement of the growth unknowns. The unknowns are ordered
 //! [P | W | d]: P in 2×2 blocks (a growth point's ρ and γ_s), W the band unknowns (the
 //! elastic state and z, node by node), d an optional border unknown. In the Newton matrix
 //!   [D  B  e]      D: block lower triangular (each block's rows read its own block and

@@ -1,7 +1,6 @@
 //! The SUNDIALS layer against SUNDIALS itself: every wrapper, flag and callback path, and the linkage to Debian's 6.x.
 //!
-//! One test binary for the group (each module was its own binary before: one link instead of
-//! many).
+//! One test binary for the group: one link instead of one per module.
 
 mod sundials_support;
 
