@@ -63,7 +63,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         fans.push((field, fan));
     }
     // Everything traced before the directory is made: a refusal leaves nothing behind.
-    let dir = OutputDir::create(&a.out, "optics")?;
+    let dir = OutputDir::create(&a.out, "optics", &[a.scene.scene.as_path()])?;
     let io = |path: &std::path::Path, e: std::io::Error| {
         Error::from(OutputError::Io {
             path: path.to_path_buf(),
