@@ -37,16 +37,13 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
     let fitted = fit::curve(&done.scene, CURVE_POINTS)?;
     let initial = fit::curve(&scene, CURVE_POINTS)?;
     let r = &done.report;
-    let io = |path: &std::path::Path, e: std::io::Error| {
+    let io = |name: &str, source: std::io::Error| {
         Error::from(OutputError::Io {
-            path: path.to_path_buf(),
-            source: e,
+            path: dir.file(name),
+            source,
         })
     };
-    let write = |name: &str, bytes: &[u8]| -> Result<(), Error> {
-        let path = dir.file(name);
-        rundir::write_atomic(&path, bytes).map_err(|e| io(&path, e))
-    };
+    let write = |name: &str, bytes: &[u8]| dir.write_file(name, bytes).map_err(Error::from);
     write(FIT_FILE, fit::report_json(r).as_bytes())?;
     write(
         SCENE_FILE,
@@ -86,7 +83,7 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
         rows,
         rundir::table::QuoteStyle::Necessary,
     )
-    .map_err(|e| io(&dir.file(RESIDUALS_FILE), e))?;
+    .map_err(|e| io(RESIDUALS_FILE, e))?;
     write(RESIDUALS_FILE, &table)?;
     let curve = rundir::table::csv_bytes(
         ["t", "fitted_axial_length", "initial_axial_length"],
@@ -96,7 +93,7 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
             .map(|(f, i)| [v(f.0), v(f.1), v(i.1)]),
         rundir::table::QuoteStyle::Necessary,
     )
-    .map_err(|e| io(&dir.file(CURVE_FILE), e))?;
+    .map_err(|e| io(CURVE_FILE, e))?;
     write(CURVE_FILE, &curve)?;
     crate::figures::fit_figure(r, &fitted, &initial, &dir.file("fit"))?;
     let target = dir.commit()?;

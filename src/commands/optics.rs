@@ -64,16 +64,13 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     }
     // Everything traced before the directory is made: a refusal leaves nothing behind.
     let dir = OutputDir::create(&a.out, "optics", &[a.scene.scene.as_path()])?;
-    let io = |path: &std::path::Path, e: std::io::Error| {
+    let io = |name: &str, source: std::io::Error| {
         Error::from(OutputError::Io {
-            path: path.to_path_buf(),
-            source: e,
+            path: dir.file(name),
+            source,
         })
     };
-    let write = |name: &str, bytes: &[u8]| -> Result<(), Error> {
-        let path = dir.file(name);
-        rundir::write_atomic(&path, bytes).map_err(|e| io(&path, e))
-    };
+    let write = |name: &str, bytes: &[u8]| dir.write_file(name, bytes).map_err(Error::from);
     let v = rundir::format_value;
     let rows = computed.surfaces.surfaces.iter().flat_map(|s| {
         s.points.iter().map(|p| {
@@ -99,7 +96,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         rows,
         rundir::table::QuoteStyle::Necessary,
     )
-    .map_err(|e| io(&dir.file(SURFACES_FILE), e))?;
+    .map_err(|e| io(SURFACES_FILE, e))?;
     write(SURFACES_FILE, &table)?;
     let json = optics_json(
         &spec,

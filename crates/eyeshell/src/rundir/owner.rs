@@ -318,6 +318,13 @@ impl OutputDir {
         self.dir.file(name)
     }
 
+    /// Write `bytes` as the file `name` of the output (atomically; the whole directory is
+    /// synced when it is committed).
+    pub fn write_file(&self, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
+        let path = self.file(name);
+        super::atomic::write_atomic_unsynced(&path, bytes).map_err(|e| OutputError::io(&path, e))
+    }
+
     /// Write the marker (listing what was written) and move the finished directory into
     /// place, replacing an empty directory or an eyeshell output (checked again).
     pub fn commit(self) -> Result<PathBuf, OutputError> {
