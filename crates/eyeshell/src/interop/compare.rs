@@ -242,9 +242,10 @@ fn load_file(path: &Path, field: Option<&FieldSpec>) -> Result<Sample, CompareEr
                     "sol.".to_string(),
                     v.struct_element(0).map(<[_]>::to_vec).ok_or_else(|| {
                         CompareError(format!(
-                            "{}: sol is {}, not bvp4c's solution struct (name the struct that holds the result with --field)",
+                            "{}: sol is {}, not bvp4c's solution struct (name the struct that holds the result with {})",
                             path.display(),
-                            describe(v)
+                            describe(v),
+                            crate::text::advice(&crate::text::Advice::Field { name: None })
                         ))
                     })?,
                 ),
@@ -279,8 +280,12 @@ fn named_struct(
     vars: &[(String, MatValue)],
     spec: &FieldSpec,
 ) -> Result<Vec<(String, MatValue)>, CompareError> {
-    let fail =
-        |why: String| CompareError(format!("{}: --field {}: {why}", path.display(), spec.name));
+    let fail = |why: String| {
+        let option = crate::text::advice(&crate::text::Advice::Field {
+            name: Some(&spec.name),
+        });
+        CompareError(format!("{}: {option}: {why}", path.display()))
+    };
     let (_, value) = vars.iter().find(|(n, _)| *n == spec.name).ok_or_else(|| {
         let names: Vec<&str> = vars.iter().map(|(n, _)| n.as_str()).collect();
         fail(format!("no such variable (it has {})", names.join(", ")))

@@ -82,9 +82,9 @@ pub enum OutputError {
     },
     #[error("{}: another eyeshell process{} is writing it; wait for it to finish or choose another output", path.display(), pid.map(|p| format!(" (pid {p})")).unwrap_or_default())]
     Busy { path: PathBuf, pid: Option<u32> },
-    #[error("{}: exists and was not written by eyeshell; refusing to overwrite it (--force replaces it)", path.display())]
+    #[error("{}: exists and was not written by eyeshell; refusing to overwrite it ({} replaces it)", path.display(), crate::text::advice(&crate::text::Advice::Force))]
     NotOurFile { path: PathBuf },
-    #[error("{}: is a file of the eyeshell output {}; refusing to overwrite it, even with --force (choose another file)", path.display(), dir.display())]
+    #[error("{}: is a file of the eyeshell output {}; refusing to overwrite it, even with {} (choose another file)", path.display(), dir.display(), crate::text::advice(&crate::text::Advice::Force))]
     PartOfOutput { path: PathBuf, dir: PathBuf },
     #[error("{}: exists and is not a regular file; refusing to overwrite it", path.display())]
     NotAFile { path: PathBuf },

@@ -85,8 +85,9 @@ impl Sweep {
             return Err(SceneError::BadSweep {
                 origin: plan.origin.clone(),
                 problem: format!(
-                    "declares {} runs, more than the {MAX_RUNS} allowed in one process: run it in shards (`eyeshell sweep SCENE --out DIR --shard K/N` or --slurm-script), each at most {MAX_RUNS} runs",
-                    plan.len()
+                    "declares {} runs, more than the {MAX_RUNS} allowed in one process: {}",
+                    plan.len(),
+                    crate::text::advice(&crate::text::Advice::Shards { max: MAX_RUNS })
                 ),
             });
         }
@@ -166,8 +167,8 @@ impl SweepPlan {
                 || grid.iter().any(|(k, _)| k == key)
             {
                 return Err(bad(format!(
-                    "sweeps {key}: remove `--set {}` (the sweep's values would be ambiguous)",
-                    one_line(text)
+                    "sweeps {key}: {} (the sweep's values would be ambiguous)",
+                    crate::text::advice(&crate::text::Advice::RemoveOverride { text })
                 )));
             }
         }
