@@ -53,8 +53,27 @@ impl Scene {
     /// # Ok::<(), eyeshell::scene::SceneError>(())
     /// ```
     pub fn set(&mut self, key: &str, value: impl std::fmt::Display) -> Result<(), SceneError> {
+        self.set_all([(key, value)])
+    }
+
+    /// Set every `(key, value)` of `assignments` as [`Scene::set`] sets one, in order, then
+    /// validate once: keys that are only valid together (`growth.t_end` and
+    /// `output.times`) are set together. On an error the scene is left as it was.
+    ///
+    /// ```
+    /// let mut scene = eyeshell::Scene::default_scene();
+    /// scene.set_all([("growth.t_end", "0.2"), ("output.times", "[0.1, 0.2]")])?;
+    /// assert_eq!(scene.growth.as_ref().unwrap().t_end, 0.2);
+    /// # Ok::<(), eyeshell::scene::SceneError>(())
+    /// ```
+    pub fn set_all<K: AsRef<str>, V: std::fmt::Display>(
+        &mut self,
+        assignments: impl IntoIterator<Item = (K, V)>,
+    ) -> Result<(), SceneError> {
         let mut changed = self.clone();
-        changed.apply_override(&format!("{key}={value}"))?;
+        for (key, value) in assignments {
+            changed.apply_override(&format!("{}={value}", key.as_ref()))?;
+        }
         changed.validate()?;
         changed.resolve_optics()?;
         *self = changed;

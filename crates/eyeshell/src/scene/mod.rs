@@ -134,7 +134,7 @@ pub enum SceneError {
     },
     #[error("{origin}: {problem}")]
     BadOverride { origin: String, problem: String },
-    #[error("{origin}: the scene declares a [sweep] of runs: run it with `eyeshell sweep {origin} --out DIR`")]
+    #[error("{origin}: the scene declares a [sweep] of runs: {}", crate::text::advice(&crate::text::Advice::RunSweep { origin }))]
     IsSweep { origin: String },
     #[error("{origin}: [sweep] {problem}")]
     BadSweep { origin: String, problem: String },
@@ -167,9 +167,9 @@ fn suggest_section(s: &Option<String>) -> String {
 
 pub(crate) use crate::text::one_line;
 
-/// The origin shown for a `--set` override.
+/// The origin shown for an override (`--set key=value` on the command line).
 fn override_origin(text: &str) -> String {
-    format!("--set {}", one_line(text))
+    crate::text::advice(&crate::text::Advice::Override { text })
 }
 
 /// Which origin set each key last; a later set wins (sequence number first).
@@ -195,6 +195,15 @@ impl Scene {
             return Err(SceneError::IsSweep { origin });
         }
         Scene::from_table(&table, &origin, &[], overrides)
+    }
+
+    /// The scene of the sweep file `path` without its `[sweep]` table (the scene every run
+    /// starts from); a scene without one reads as [`Scene::from_file`] reads it.
+    pub fn from_file_without_sweep(path: &Path) -> Result<Scene, SceneError> {
+        let (origin, text) = read_scene_file(path)?;
+        let mut table = parse_table(&text, &origin)?;
+        table.remove(sweep::SWEEP);
+        Scene::from_table(&table, &origin, &[], &[])
     }
 
     /// The scene of a parsed file `table` (no `[sweep]`), then `assignments` (key, value,
