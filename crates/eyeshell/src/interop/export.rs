@@ -249,8 +249,9 @@ pub fn check_file_target(
 ) -> Result<(), ExportError> {
     if is_file_of_run(run_dir, out) {
         return Err(bad(format!(
-            "{}: is a file of the run being exported; refusing to overwrite it, even with --force",
-            out.display()
+            "{}: is a file of the run being exported; refusing to overwrite it, even with {}",
+            out.display(),
+            crate::text::advice(&crate::text::Advice::Force)
         )));
     }
     rundir::check_file(out, force, |p| format.wrote(p)).map_err(output_error)
@@ -301,54 +302,81 @@ pub fn export(
     let run = read_run(run_dir)?;
     match run {
         Run::Elastic { table, .. } => {
-            if out.is_dir() {
-                return Err(bad(format!(
-                    "{}: is a directory; an elastic solve exports to one file (e.g. out.{})",
-                    out.display(),
-                    format.extension()
-                )));
+            if !out.is_dir() {
+                check_file_target(run_dir, out, format, force)?;
             }
-            check_file_target(run_dir, out, format, force)?;
-            let extras = ElasticExtras::of(run_dir);
-            write_one(
-                out,
-                format,
-                || elastic_mat_vars(&table, &extras),
-                || elastic_npz_arrays(&table, &extras),
-            )?;
-            Ok(Exported {
-                path: out.to_path_buf(),
-                files: vec![out.to_path_buf()],
-                nodes: table.rows.len(),
-                growth: false,
-            })
+            export_table(&table, &ElasticExtras::of(run_dir), out, format, force)
         }
-        Run::Growth(snapshots) => {
-            let dir = OutputDir::create(out, "export", &[run_dir]).map_err(output_error)?;
-            let mut files = Vec::new();
-            for s in &snapshots {
-                let stem = s
-                    .file
-                    .file_stem()
-                    .unwrap_or_default()
-                    .to_string_lossy()
-                    .into_owned();
-                let name = format!("{stem}.{}", format.extension());
-                write_one(
-                    &dir.file(&name),
-                    format,
-                    || growth_mat_vars(s),
-                    || growth_npz_arrays(s),
-                )?;
-                files.push(out.join(name));
-            }
-            let path = dir.commit().map_err(output_error)?;
-            Ok(Exported {
-                path,
-                files,
-                nodes: snapshots.first().map_or(0, |s| s.table.rows.len()),
-                growth: true,
-            })
-        }
+        Run::Growth(snapshots) => export_snapshots(&snapshots, out, format, &[run_dir]),
     }
+}
+
+/// Write an elastic solve's fields.csv `table` (with its `extras`) to the one file `out`;
+/// nothing is half-written. An existing file is replaced only if eyeshell wrote it, or
+/// with `force`.
+pub fn export_table(
+    table: &Table,
+    extras: &ElasticExtras,
+    out: &Path,
+    format: Format,
+    force: bool,
+) -> Result<Exported, ExportError> {
+    if out.is_dir() {
+        return Err(bad(format!(
+            "{}: is a directory; an elastic solve exports to one file (e.g. out.{})",
+            out.display(),
+            format.extension()
+        )));
+    }
+    rundir::check_file(out, force, |p| format.wrote(p)).map_err(output_error)?;
+    write_one(
+        out,
+        format,
+        || elastic_mat_vars(table, extras),
+        || elastic_npz_arrays(table, extras),
+    )?;
+    Ok(Exported {
+        path: out.to_path_buf(),
+        files: vec![out.to_path_buf()],
+        nodes: table.rows.len(),
+        growth: false,
+    })
+}
+
+/// Write `snapshots` (a growth run's output times, each named after its snapshot file) to
+/// the directory `out`, one file per output time in the published scripts' layout (the
+/// module's doc); nothing is half-written. `inputs` are the directories the snapshots come
+/// from, which `out` may not replace; an existing `out` is replaced only if it is an earlier
+/// eyeshell export.
+pub fn export_snapshots(
+    snapshots: &[RunSnapshot],
+    out: &Path,
+    format: Format,
+    inputs: &[&Path],
+) -> Result<Exported, ExportError> {
+    let dir = OutputDir::create(out, "export", inputs).map_err(output_error)?;
+    let mut files = Vec::new();
+    for s in snapshots {
+        let stem = s
+            .file
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let name = format!("{stem}.{}", format.extension());
+        write_one(
+            &dir.file(&name),
+            format,
+            || growth_mat_vars(s),
+            || growth_npz_arrays(s),
+        )?;
+        files.push(out.join(name));
+    }
+    let path = dir.commit().map_err(output_error)?;
+    Ok(Exported {
+        path,
+        files,
+        nodes: snapshots.first().map_or(0, |s| s.table.rows.len()),
+        growth: true,
+    })
 }

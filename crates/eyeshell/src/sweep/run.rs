@@ -141,8 +141,8 @@ fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
 }
 
 /// The retina of a loaded, ungrown shell, measured as a growth run measures it
-/// (docs/MODEL.md §6; [`EyeMeasure`]).
-fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
+/// (docs/MODEL.md §6; [`EyeMeasure`]): what a sweep's table says of an elastic run.
+pub fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
     let retina = |f: &FieldRow| stimulus::retina(f.z, f.r, f.h, f.theta);
     let pole = rows.first().map(retina).unwrap_or((f64::NAN, f64::NAN));
     let radii = rows.iter().map(|f| retina(f).1);
