@@ -15,6 +15,7 @@
 
 pub mod data;
 pub mod lm;
+pub mod report;
 
 use nalgebra::{DMatrix, DVector};
 

@@ -1,0 +1,147 @@
+//! A fit's report as the table `eyeshell fit` prints and `FitResult.text` holds: the
+//! estimates with their standard errors, the correlations, the notes on what the data do
+//! not determine, χ² and the iterations.
+
+use super::FitReport;
+use crate::scene::Scene;
+use crate::text::{advice, decimals, decimals6, one_line, Advice};
+
+/// |ρ| from which the report points a pair out.
+pub const STRONG_CORRELATION: f64 = 0.99;
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
+/// The pairs of fitted parameters correlated at |ρ| ≥ [`STRONG_CORRELATION`], with ρ: their
+/// standard errors are mostly the width of a valley along which the data barely change
+/// (BENCHMARKS.md, "Calibration": η0 and Γ on plateau data).
+pub fn strongly_correlated(r: &FitReport) -> Vec<(&str, &str, f64)> {
+    let mut pairs = vec![];
+    for (i, p) in r.parameters.iter().enumerate() {
+        for (j, q) in r.parameters.iter().enumerate().skip(i + 1) {
+            let c = r.correlation[i][j];
+            if c.abs() >= STRONG_CORRELATION {
+                pairs.push((p.key.as_str(), q.key.as_str(), c));
+            }
+        }
+    }
+    pairs
+}
+
+/// What the reader of a fit should know beyond its numbers, one line each: pairs of
+/// parameters the data determine only in combination.
+pub fn notes(r: &FitReport) -> Vec<String> {
+    let pairs = strongly_correlated(r);
+    if pairs.is_empty() {
+        return Vec::new();
+    }
+    let list: Vec<String> = pairs
+        .iter()
+        .map(|(a, b, c)| format!("{a} and {b} at {c:.4}"))
+        .collect();
+    vec![format!(
+        "strongly correlated (|ρ| ≥ {STRONG_CORRELATION}): {}; the data determine a combination \
+         of such a pair far better than either (fix one with {}, or add observations that \
+         separate them)",
+        list.join(", "),
+        advice(&Advice::SetKey)
+    )]
+}
+
+/// The correlation matrix, its labels "(i) key" in a column as wide as the longest.
+fn correlation_table(r: &FitReport) -> String {
+    let labels: Vec<String> = (r.parameters.iter().enumerate())
+        .map(|(i, p)| format!("({}) {}", i + 1, p.key))
+        .collect();
+    let width = labels
+        .iter()
+        .map(|l| l.chars().count())
+        .chain(["correlation".len()])
+        .max()
+        .unwrap_or(0);
+    let mut text = format!("  {:width$}", "correlation");
+    for j in 0..labels.len() {
+        text.push_str(&format!("  {:>10}", format!("({})", j + 1)));
+    }
+    text.push('\n');
+    for (label, row) in labels.iter().zip(&r.correlation) {
+        text.push_str(&format!("  {label:width$}"));
+        for c in row {
+            text.push_str(&format!("  {c:>10.4}"));
+        }
+        text.push('\n');
+    }
+    text
+}
+
+/// The report of the fit of `scene` as a table (no trailing line on where it was written):
+/// estimates to 6 decimals (6 significant digits in scientific notation outside [1e-4,
+/// 1e9)), correlations and χ² to 4.
+pub fn report_table(scene: &Scene, r: &FitReport) -> String {
+    let n = r.parameters.len();
+    let width = r
+        .parameters
+        .iter()
+        .map(|p| p.key.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(9);
+    let mut text = format!(
+        "eyeshell: fitted {} ({}) to {} ({} observation{}, {})\n",
+        scene.origin,
+        one_line(&scene.display_name()),
+        r.data.file,
+        r.data.observations,
+        plural(r.data.observations),
+        if r.data.sigma {
+            "σ given"
+        } else {
+            "no σ: equal weights, covariance scaled by the residual variance"
+        },
+    );
+    text.push_str(&format!(
+        "  {:width$}  {:>12}  {:>12}  {:>12}  range\n",
+        "parameter", "initial", "estimate", "std. error"
+    ));
+    for p in &r.parameters {
+        text.push_str(&format!(
+            "  {:width$}  {:>12}  {:>12}  {:>12}  {}{}\n",
+            p.key,
+            decimals6(p.initial),
+            decimals6(p.estimate),
+            decimals6(p.standard_error),
+            p.range,
+            if p.at_bound { " (at its bound)" } else { "" }
+        ));
+    }
+    if n > 1 {
+        text.push_str(&correlation_table(r));
+    }
+    for note in notes(r) {
+        text.push_str(&format!("  note             {note}\n"));
+    }
+    let d4 = |x: f64| decimals(x, 4);
+    text.push_str(&format!(
+        "  χ²               {} (from {}), {} degree{} of freedom, χ²/dof {}; rms residual {} mm\n",
+        d4(r.chi2),
+        d4(r.initial_chi2),
+        r.degrees_of_freedom,
+        plural(r.degrees_of_freedom),
+        d4(r.reduced_chi2),
+        d4(r.rms_residual)
+    ));
+    text.push_str(&format!(
+        "  iterations       {} ({} growth run{} with sensitivities); {}\n  time             {:.3} s\n",
+        r.iterations,
+        r.model_runs,
+        plural(r.model_runs),
+        r.convergence_reason,
+        r.wall_seconds,
+    ));
+    text
+}
