@@ -20,6 +20,7 @@ use eyeshell::growth::{
 use eyeshell::interop::export::{elastic_mat_vars, ElasticExtras, Table};
 use eyeshell::interop::mat::MatValue;
 use eyeshell::scene::{KeyValue, Scene, KEYS};
+use eyeshell::text::Advice;
 use eyeshell::{Error, Sweep};
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{PyArray1, PyArray2};
@@ -49,7 +50,28 @@ create_exception!(
     "A computation that failed: Newton did not converge, a growth run stopped, a file could not be written (what `eyeshell` exits 1 for)."
 );
 
-/// The library's error as its Python exception, with the command line's one-line message.
+/// The advice in the library's messages in a Python caller's terms (keyword arguments, not
+/// the command line's flags), registered when the module is imported.
+fn python_wording(a: &Advice<'_>) -> String {
+    use eyeshell::text::one_line;
+    match *a {
+        Advice::Override { text } => format!("set {}", one_line(text)),
+        Advice::RunSweep { .. } => "run it with eyeshell.sweep(), or read the scene without its sweep with eyeshell.Scene.from_file(path, sweep=False)".into(),
+        Advice::RemoveOverride { text } => format!(
+            "drop {} from the keyword overrides, or give its values in grid= or runs=",
+            one_line(text)
+        ),
+        Advice::Shards { max } => {
+            format!("split it into eyeshell.sweep() calls of at most {max} runs each")
+        }
+        Advice::Force => "force=True".into(),
+        Advice::SetKey => "a keyword override (growth__Gamma=8)".into(),
+        Advice::Field { name: None } => "field=\"NAME\"".into(),
+        Advice::Field { name: Some(name) } => format!("field={:?}", one_line(name)),
+    }
+}
+
+/// The library's error as its Python exception, with the library's one-line message.
 fn py_err(e: Error) -> PyErr {
     let line = eyeshell::text::one_line(&e.to_string().replace(['\n', '\r'], " "));
     if e.is_user_error() {
@@ -202,11 +224,19 @@ impl PyScene {
         }
     }
 
-    /// Read and validate the scene file at `path`.
+    /// Read and validate the scene file at `path`; `sweep=False` reads a sweep file's
+    /// scene without its `[sweep]` table.
     #[staticmethod]
-    fn from_file(path: std::path::PathBuf) -> PyResult<Self> {
-        let inner = Scene::from_path(&path).map_err(|e| py_err(e.into()))?;
-        Ok(PyScene { inner })
+    #[pyo3(signature = (path, sweep = true))]
+    fn from_file(path: std::path::PathBuf, sweep: bool) -> PyResult<Self> {
+        let inner = if sweep {
+            Scene::from_path(&path)
+        } else {
+            Scene::from_file_without_sweep(&path)
+        };
+        Ok(PyScene {
+            inner: inner.map_err(|e| py_err(e.into()))?,
+        })
     }
 
     /// Parse and validate a scene from TOML text; `origin` names it in messages.
@@ -221,6 +251,17 @@ impl PyScene {
     fn set(&mut self, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let v = toml_value(value)?;
         self.inner.set(key, v).map_err(|e| py_err(e.into()))
+    }
+
+    /// Set every (key, value) of `items` in order, then validate once (keys valid only
+    /// together, growth.t_end and output.times, are set together); on an error the scene is
+    /// left as it was.
+    fn set_all(&mut self, items: Vec<(String, Bound<'_, PyAny>)>) -> PyResult<()> {
+        let values = items
+            .iter()
+            .map(|(k, v)| Ok((k.as_str(), toml_value(v)?)))
+            .collect::<PyResult<Vec<_>>>()?;
+        self.inner.set_all(values).map_err(|e| py_err(e.into()))
     }
 
     /// The effective value of `key` (None for an optional key left unset).
@@ -382,6 +423,34 @@ impl Solved {
         let mut vars = elastic_mat_vars(&table_of(&self.solution), &extras);
         let (_, sol) = vars.remove(0);
         mat_to_py(py, sol)
+    }
+
+    /// The eye of the loaded, ungrown shell as a sweep's table measures it: axial_length,
+    /// equatorial_radius, retina_minus_blue, retina_minus_red, class.
+    fn eye<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let eye = eyeshell::sweep::run::unloaded_eye(&self.scene, &self.solution.rows);
+        let d = PyDict::new(py);
+        d.set_item("axial_length", eye.axial_length)?;
+        d.set_item("equatorial_radius", eye.equatorial_radius)?;
+        d.set_item("retina_minus_blue", eye.retina_minus_blue)?;
+        d.set_item("retina_minus_red", eye.retina_minus_red)?;
+        d.set_item("class", eye.class.as_str())?;
+        Ok(d)
+    }
+
+    /// Write the .mat file `eyeshell export --mat` writes of the run to `path` (over a file
+    /// eyeshell did not write only with `force`); returns the path.
+    fn write_mat(&self, py: Python<'_>, path: std::path::PathBuf, force: bool) -> PyResult<String> {
+        use eyeshell::interop::export::{export_table, Format};
+        let extras = ElasticExtras {
+            breaks: eyeshell::model::profiles::breakpoints(&self.scene.params),
+            stats: Some(self.solution.stats.clone()),
+        };
+        let table = table_of(&self.solution);
+        let format = Format::Mat { compress: false };
+        py.detach(|| export_table(&table, &extras, &path, format, force))
+            .map_err(|e| py_err(e.into()))?;
+        Ok(path.to_string_lossy().into_owned())
     }
 
     /// The text of the summary.json `eyeshell solve` writes.
@@ -557,7 +626,7 @@ fn grow<'py>(
 
 /// Fit the parameters `keys` of `scene` to observations (the CSV file `path`, or the
 /// columns `t`, `axial_length` and `sigma`), with the GIL released, as `eyeshell fit`:
-/// returns (fit.json's text, the fitted scene). Ctrl-C stops it within a step of its
+/// returns (fit.json's text, the report's table and its notes, the fitted scene). Ctrl-C stops it within a step of its
 /// current growth run, as it stops `grow`.
 #[pyfunction]
 #[pyo3(signature = (scene, keys, path = None, t = None, axial_length = None, sigma = None, max_iterations = 50))]
@@ -571,7 +640,7 @@ fn fit(
     axial_length: Option<Vec<f64>>,
     sigma: Option<Vec<f64>>,
     max_iterations: usize,
-) -> PyResult<(String, PyScene)> {
+) -> PyResult<(String, String, Vec<String>, PyScene)> {
     use eyeshell::fit::{FitOptions, Observations};
     if !(1..=1000).contains(&max_iterations) {
         return Err(input_err(format!(
@@ -607,33 +676,128 @@ fn fit(
     }
     let done = result.map_err(py_err)?;
     let json = eyeshell::fit::report_json(&done.report);
-    Ok((json, PyScene { inner: done.scene }))
+    let text = eyeshell::fit::report::report_table(&scene, &done.report);
+    let notes = eyeshell::fit::report::notes(&done.report);
+    Ok((json, text, notes, PyScene { inner: done.scene }))
 }
 
 // ---------------------------------------------------------------------------------------
 // Sweeps and comparisons
 
-/// One run of a sweep: its name, its swept (key, value as shown), its scene.
-type PlannedRun = (String, Vec<(String, String)>, PyScene);
+/// One run of a sweep: its name, its swept (key, value), its scene.
+type PlannedRun<'py> = (String, Vec<(String, Bound<'py, PyAny>)>, PyScene);
+
+/// A TOML value as Python's (a swept value that is no scene key's, such as a run's name).
+fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        toml::Value::Integer(n) => n.into_pyobject(py)?.into_any(),
+        toml::Value::Float(x) => x.into_pyobject(py)?.into_any(),
+        toml::Value::Boolean(b) => PyBool::new(py, *b).to_owned().into_any(),
+        toml::Value::Array(items) => PyList::new(
+            py,
+            items
+                .iter()
+                .map(|x| toml_to_py(py, x))
+                .collect::<PyResult<Vec<_>>>()?,
+        )?
+        .into_any(),
+        other => eyeshell::scene::sweep::show_value(other)
+            .into_pyobject(py)?
+            .into_any(),
+    })
+}
 
 /// The runs of the sweep in TOML `text` (`origin` names it), each as (name, values, scene),
-/// values being (key, value as shown) in the order of the swept keys.
+/// values being (key, value) in the order of the swept keys: a scene key's value as the
+/// run's scene holds it (fibres.D = 0 is the float 0.0, solver.nodes an int), as
+/// `Scene.get` gives it, so that a sweep's values are the numbers its runs used.
 #[pyfunction]
 #[pyo3(signature = (text, origin, overrides = Vec::new()))]
-fn expand_sweep(text: &str, origin: &str, overrides: Vec<String>) -> PyResult<Vec<PlannedRun>> {
+fn expand_sweep<'py>(
+    py: Python<'py>,
+    text: &str,
+    origin: &str,
+    overrides: Vec<String>,
+) -> PyResult<Vec<PlannedRun<'py>>> {
     let sweep = Sweep::from_toml_str(text, origin, &overrides).map_err(|e| py_err(e.into()))?;
-    Ok(sweep
+    sweep
         .runs
         .into_iter()
         .map(|r| {
             let values = r
                 .values
                 .iter()
-                .map(|(k, v)| (k.clone(), eyeshell::scene::sweep::show_value(v)))
-                .collect();
-            (r.name, values, PyScene { inner: r.scene })
+                .map(|(k, v)| {
+                    let value = match KEYS.iter().find(|spec| spec.key == k) {
+                        Some(spec) => key_value(py, spec.get(&r.scene))?,
+                        None => toml_to_py(py, v)?,
+                    };
+                    Ok((k.clone(), value))
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            Ok((r.name, values, PyScene { inner: r.scene }))
         })
-        .collect())
+        .collect()
+}
+
+/// Write a growth run's `snapshots` ((t, {column: values}), in time order, each with every
+/// column of a snapshot file) to the directory `out` as `eyeshell export --mat` writes a
+/// growth run: one .mat file per output time in the published scripts' layout. Returns
+/// the files written.
+#[pyfunction]
+#[pyo3(signature = (out, snapshots, compress = false))]
+fn export_growth(
+    py: Python<'_>,
+    out: std::path::PathBuf,
+    snapshots: Vec<(f64, std::collections::HashMap<String, Vec<f64>>)>,
+    compress: bool,
+) -> PyResult<Vec<std::path::PathBuf>> {
+    use eyeshell::interop::export::{export_snapshots, Format, RunSnapshot, Table};
+    let columns: Vec<String> = COLUMNS
+        .iter()
+        .chain(GROWTH_COLUMNS.iter())
+        .map(|c| c.to_string())
+        .collect();
+    let mut runs = Vec::with_capacity(snapshots.len());
+    for (k, (t, fields)) in snapshots.iter().enumerate() {
+        let name = eyeshell::rundir::growth::snapshot_name(k, *t);
+        let values = columns
+            .iter()
+            .map(|c| {
+                fields.get(c).ok_or_else(|| {
+                    input_err(format!(
+                        "to_mat: the snapshot at t = {} has no column {c}",
+                        eyeshell::text::number(*t)
+                    ))
+                })
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let nodes = values[0].len();
+        if let Some(c) = values.iter().position(|v| v.len() != nodes) {
+            return Err(input_err(format!(
+                "to_mat: the snapshot at t = {} has {} values of {} but {nodes} of {}",
+                eyeshell::text::number(*t),
+                values[c].len(),
+                columns[c],
+                columns[0]
+            )));
+        }
+        let rows = (0..nodes)
+            .map(|i| values.iter().map(|v| v[i]).collect())
+            .collect();
+        runs.push(RunSnapshot {
+            t: *t,
+            file: std::path::PathBuf::from(name),
+            table: Table {
+                columns: columns.clone(),
+                rows,
+            },
+        });
+    }
+    let done = py
+        .detach(|| export_snapshots(&runs, &out, Format::Mat { compress }, &[]))
+        .map_err(|e| py_err(e.into()))?;
+    Ok(done.files)
 }
 
 /// `eyeshell compare RUN REFERENCE --tol --rtol [--field]`: the reports, one dict per
@@ -752,6 +916,8 @@ fn optics<'py>(py: Python<'py>, scene: PyScene) -> PyResult<Bound<'py, PyDict>> 
 #[pymodule]
 fn _eyeshell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
+    // Only the first wording counts; a second import in this process finds it set.
+    eyeshell::text::set_wording(python_wording);
     m.add("EyeshellError", py.get_type::<EyeshellError>())?;
     m.add("InputError", py.get_type::<InputError>())?;
     m.add("SolverError", py.get_type::<SolverError>())?;
@@ -770,6 +936,7 @@ fn _eyeshell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(expand_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(export_growth, m)?)?;
     m.add_function(wrap_pyfunction!(sundials_version, m)?)?;
     Ok(())
 }

@@ -38,7 +38,7 @@ def test_a_sweep_file_matches_the_command_lines_sweep(cli, tmp_path):
         assert r.ok and list(r.values) == ["growth.Gamma", "growth.delta"]
         for key, value in r.values.items():
             assert float(value) == table[key][i]
-        assert r.result.series["axial_length"][-1] == table["axial_length"][i]
+        assert np.asarray(r.result.series["axial_length"])[-1] == table["axial_length"][i]
         series = read_csv(tmp_path / "s" / "runs" / r.name / "series.csv")
         for column, values in series.items():
             assert list(np.asarray(r.result.series[column])) == values, (r.name, column)
@@ -96,7 +96,7 @@ def test_a_run_that_aborts_fails_alone_and_the_others_are_kept(monkeypatch):
     results = eyeshell.sweep(small(), grid=FIBRES, jobs=2)
     assert [r.status for r in results] == ["ok", "failed", "ok", "ok"]
     assert results[1].error == ABORTED and results[1].result is None
-    assert results[1].values == {"fibres.D": "100"}
+    assert results[1].values == {"fibres.D": 100.0}
     monkeypatch.delenv("EYESHELL_TEST_ABORT_RUN")
     for r in [results[0], results[2], results[3]]:
         alone = eyeshell.grow(small(), frames=False, fibres__D=float(r.values["fibres.D"]))

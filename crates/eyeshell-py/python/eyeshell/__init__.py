@@ -15,7 +15,8 @@ Entry points: :class:`Scene`, :func:`keys`, :func:`solve` (a :class:`Solution`),
 :func:`grow` (a :class:`Growth`, with sensitivities on request), :func:`optics` (the
 best-focus surfaces of a schematic eye, as arrays), :func:`fit` (a
 :class:`FitResult`: calibration to measured axial lengths), :func:`sweep` and
-:func:`iter_sweep` (a list, or an iterator, of :class:`RunResult`), :func:`compare` (a
+:func:`iter_sweep` (a :class:`SweepResults` list, or an iterator, of :class:`RunResult`;
+``SweepResults.to_frame()`` tabulates a whole sweep), :func:`compare` (a
 :class:`Comparison`). Errors are
 :class:`InputError` (bad input: the command line exits 2) and :class:`SolverError` (a failed
 computation: exit 1), both :class:`EyeshellError`.
@@ -32,6 +33,7 @@ from ._api import (
     RunResult,
     Scene,
     Solution,
+    SweepResults,
     compare,
     fit,
     grow,
@@ -52,6 +54,7 @@ __all__ = [
     "Scene",
     "Solution",
     "SolverError",
+    "SweepResults",
     "compare",
     "fit",
     "grow",

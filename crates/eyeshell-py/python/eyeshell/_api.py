@@ -61,8 +61,10 @@ class Scene:
     ``Scene()`` is the default scene (the paper's shell); ``Scene(mapping)`` sets the keys of
     ``mapping`` on it, given dotted (``{"fibres.D": 200}``) or nested as in a TOML file
     (``{"fibres": {"D": 200}}``); keyword arguments set more keys, with ``__`` for the dot
-    (``Scene(fibres__D=200)``). Every value is checked as ``eyeshell check`` checks it: a
-    bad key or value raises :class:`InputError` naming it.
+    (``Scene(fibres__D=200)``). The keys are set together and checked once, as
+    ``eyeshell check`` checks a scene file, so keys that are only valid together can be set
+    in one call (``Scene(growth__t_end=0.2, output__times=[0.2])``): a bad key or value
+    raises :class:`InputError` naming it.
 
     Values: a number, a bool, a string, or a list of numbers; NumPy scalars and 0-d arrays
     count as the value they hold. An integer key (``solver.nodes``, ...) takes any
@@ -81,6 +83,8 @@ class Scene:
     eyeshell.InputError: defaults: fibres.D = -1 must be non-negative
     >>> eyeshell.Scene(solver__nodes=np.int64(301))["solver.nodes"]
     301
+    >>> eyeshell.Scene(growth__t_end=0.2, output__times=[0.1, 0.2])["output.times"]
+    [0.1, 0.2]
     """
 
     __slots__ = ("_s",)
@@ -96,15 +100,24 @@ class Scene:
         return scene
 
     @classmethod
-    def from_file(cls, path: PathLike, /, **overrides: Any) -> "Scene":
+    def from_file(cls, path: PathLike, /, *, sweep: bool = True, **overrides: Any) -> "Scene":
         """Read and validate the scene file ``path`` (TOML, as ``eyeshell solve`` reads it;
         a str, bytes or os.PathLike), then set ``overrides``.
+
+        A sweep file (a scene with a ``[sweep]`` table) is many scenes: it is refused
+        (:class:`InputError`, saying so) unless ``sweep=False``, which reads the scene its
+        runs start from, without the sweep. To run it, give the file to :func:`sweep`.
 
         >>> s = eyeshell.Scene.from_file(SCENES + "/const.toml")
         >>> s.grows, s.name
         (True, 'const')
+        >>> eyeshell.Scene.from_file(SCENES + "/grow.toml", sweep=False)["fibres.D"]
+        100.0
         """
-        return cls._wrap(_eyeshell._Scene.from_file(_path(path, "a scene file"))).update(**overrides)
+        if not isinstance(sweep, (bool, np.bool_)):
+            raise TypeError(f"sweep must be True or False, not {type(sweep).__name__}")
+        native = _eyeshell._Scene.from_file(_path(path, "a scene file"), bool(sweep))
+        return cls._wrap(native).update(**overrides)
 
     @classmethod
     def from_toml(cls, text: str, /, **overrides: Any) -> "Scene":
@@ -117,11 +130,12 @@ class Scene:
 
     def update(self, mapping: Mapping[str, Any] | None = None, /, **overrides: Any) -> "Scene":
         """Set every key of ``mapping`` (dotted or nested), then of ``overrides``
-        (``__`` for the dot), in order; returns the scene."""
-        for key, value in _flatten(mapping or {}):
-            self.set(key, value)
-        for key, value in overrides.items():
-            self.set(_key(key), value)
+        (``__`` for the dot), in order, and validate once, when all are set (keys such as
+        ``growth.t_end`` and ``output.times`` are only valid together); on an error the
+        scene is left as it was. Returns the scene."""
+        items = list(_flatten(mapping or {})) + [(_key(k), v) for k, v in overrides.items()]
+        if items:
+            self._s.set_all(items)
         return self
 
     def set(self, key: str, value: Any) -> "Scene":
@@ -229,6 +243,8 @@ class Solution:
         self._scene_toml = native.scene().to_toml()
         self.fields: dict[str, np.ndarray] = native.fields()
         self.summary: dict[str, Any] = json.loads(native.summary_text())
+        # Measured here, where the native solution is: an unpickled one would solve again.
+        self._eye: dict[str, Any] = dict(native.eye())
         self._bvp4c: dict[str, Any] | None = None
 
     @property
@@ -288,6 +304,27 @@ class Solution:
         """5×N: d/dΣ of the rows of :attr:`y` at the nodes (bvp4c's ``sol.yp``; at a
         breakpoint of the thickness, the derivative from below)."""
         return self._export()["yp"]
+
+    @property
+    def eye(self) -> dict[str, Any]:
+        """The loaded, ungrown eye as a sweep's table measures it (docs/MODEL.md §6):
+        ``axial_length``, ``equatorial_radius``, ``retina_minus_blue``,
+        ``retina_minus_red`` (mm) and ``class``.
+
+        >>> e = eyeshell.solve(solver__nodes=101).eye
+        >>> sorted(e)
+        ['axial_length', 'class', 'equatorial_radius', 'retina_minus_blue', 'retina_minus_red']
+        """
+        return dict(self._eye)
+
+    def to_mat(self, path: PathLike, /, force: bool = False) -> str:
+        """Write the solution to the .mat file ``path`` as ``eyeshell export --mat`` writes
+        an elastic run (the struct ``sol`` of :meth:`to_bvp4c`, for MATLAB's ``deval``);
+        returns the path. A file eyeshell did not write is replaced only with ``force=True``.
+        """
+        if not isinstance(force, (bool, np.bool_)):
+            raise TypeError(f"force must be True or False, not {type(force).__name__}")
+        return self._solved().write_mat(_path(path, "path"), bool(force))
 
     def to_bvp4c(self) -> dict[str, Any]:
         """A dict shaped like bvp4c's ``sol`` (``solver``, ``x``, ``y``, ``yp``, ``stats``,
@@ -382,18 +419,65 @@ class Growth:
     - ``summary``: summary.json's content.
 
     ``series``, ``history`` and ``sensitivities`` are pandas DataFrames when pandas is
-    installed (or ``frames=True``), else dicts of arrays (``frames=False``).
+    installed (or ``frames=True``), else dicts of arrays (``frames=False``); the same in
+    a sweep's results as from :func:`grow`.
     """
 
     def __init__(self, raw: dict[str, Any], scene_toml: str, frames: bool | None) -> None:
         self._scene_toml = scene_toml
-        self.series = _frame(_series_columns(raw["series"]), frames)
-        self.history = _frame(_series_columns(raw["history"]), frames)
         sens = dict(raw.get("sensitivities") or _NO_SENSITIVITIES)
         sens["parameter"] = np.array(sens["parameter"], dtype=str)
-        self.sensitivities = _frame(sens, frames)
+        self._columns = {
+            "series": _series_columns(raw["series"]),
+            "history": _series_columns(raw["history"]),
+            "sensitivities": sens,
+        }
+        self._shape(frames)
         self.snapshots: dict[float, dict[str, np.ndarray]] = dict(raw["snapshots"])
         self.summary: dict[str, Any] = json.loads(raw["summary_text"])
+
+    def _shape(self, frames: bool | None) -> "Growth":
+        """Set series, history and sensitivities as DataFrames or dicts (``frames``)."""
+        self.series = _frame(self._columns["series"], frames)
+        self.history = _frame(self._columns["history"], frames)
+        self.sensitivities = _frame(self._columns["sensitivities"], frames)
+        return self
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The columns travel, not the frames: a sweep's worker shapes nothing, and the
+        # caller's process shapes them as grow() would there.
+        return {k: v for k, v in self.__dict__.items() if k not in ("series", "history", "sensitivities")}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._shape(None)
+
+    def to_mat(self, directory: PathLike, /, compress: bool = False) -> list[str]:
+        """Write the run to ``directory`` as ``eyeshell export --mat`` writes a growth run:
+        one .mat file per output time in the published scripts' layout
+        (``snapshot_00002_t0.200000.mat``, each with the row vectors h, s, z, r, sigma,
+        rho, zeta, alpha_s, alpha_phi, alpha_n, eta, z_retina, r_retina, Sigma and the
+        scalar ``time``); ``compress``: each variable zlib-compressed (MATLAB's default).
+        The directory is written whole or not at all, and replaces only an earlier
+        eyeshell export. Returns the files written, in time order.
+
+        >>> import tempfile, scipy.io
+        >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101)
+        >>> files = g.to_mat(tempfile.mkdtemp() + "/mat")
+        >>> [f.rsplit("/", 1)[1] for f in files][:2]
+        ['snapshot_00000_t0.000000.mat', 'snapshot_00001_t0.100000.mat']
+        >>> m = scipy.io.loadmat(files[-1])
+        >>> float(m["time"][0, 0]), m["r"].shape == (1, len(g.final["r"]))
+        (1.0, True)
+        """
+        if not isinstance(compress, (bool, np.bool_)):
+            raise TypeError(f"compress must be True or False, not {type(compress).__name__}")
+        snapshots = [
+            (float(t), {k: np.asarray(v, dtype=float).tolist() for k, v in fields.items()})
+            for t, fields in sorted(self.snapshots.items())
+        ]
+        files = _eyeshell.export_growth(_path(directory, "directory"), snapshots, bool(compress))
+        return [os.fsdecode(f) for f in files]
 
     @property
     def scene(self) -> Scene:
@@ -522,11 +606,19 @@ class FitResult:
       model, residual, weighted), a DataFrame with pandas, else a dict of arrays;
     - ``scene``: the scene with the estimates (:class:`Scene`);
     - ``report``: fit.json's content (χ², iterations, cost history, convergence, data hash);
+    - ``notes``: what the numbers alone do not say, one str each (a pair of parameters
+      correlated at |ρ| ≥ 0.99: the data determine their combination, not each);
+    - ``text``: the table ``eyeshell fit`` prints (estimates and standard errors to 6
+      decimals, correlations and χ² to 4, the notes); ``str(result)`` is the same;
     - ``converged``, ``iterations``, ``chi2``.
     """
 
-    def __init__(self, report_text: str, scene: Scene, frames: bool | None) -> None:
+    def __init__(
+        self, report_text: str, text: str, notes: Sequence[str], scene: Scene, frames: bool | None
+    ) -> None:
         self.report: dict[str, Any] = json.loads(report_text)
+        self.text = text
+        self.notes: list[str] = list(notes)
         self.scene = scene
         params = self.report["parameters"]
         self.keys: list[str] = [p["key"] for p in params]
@@ -576,6 +668,9 @@ class FitResult:
         h = grow(scene, frames=False).history
         return {"t": np.asarray(h["t"]), "axial_length": np.asarray(h["axial_length"])}
 
+    def __str__(self) -> str:
+        return self.text
+
     def __repr__(self) -> str:
         est = ", ".join(
             f"{k} = {self.estimates[k]:.6g} ± {self.standard_errors[k]:.2g}" for k in self.keys
@@ -617,7 +712,7 @@ def fit(
         fit = [k for k in fit.split(",") if k.strip()]
     max_iterations = _whole(max_iterations, "max_iterations", 1, 1000)
     if isinstance(data, _PATH_TYPES):
-        text, native = _eyeshell.fit(s._s, list(fit), path=_path(data, "data"), max_iterations=max_iterations)
+        done = _eyeshell.fit(s._s, list(fit), path=_path(data, "data"), max_iterations=max_iterations)
     elif isinstance(data, Mapping) or hasattr(data, "columns"):
         def col(name: str) -> list[float] | None:
             if name not in data:
@@ -627,7 +722,7 @@ def fit(
         t, length = col("t"), col("axial_length")
         if t is None or length is None:
             raise InputError("data: the columns t and axial_length are required")
-        text, native = _eyeshell.fit(
+        done = _eyeshell.fit(
             s._s, list(fit), t=t, axial_length=length, sigma=col("sigma"),
             max_iterations=max_iterations,
         )
@@ -636,17 +731,20 @@ def fit(
             "data must be a CSV file's path (a str, bytes or os.PathLike) or a mapping of "
             f"columns t, axial_length[, sigma], not {type(data).__name__}"
         )
-    return FitResult(text, Scene._wrap(native), frames)
+    report, text, notes, native = done
+    return FitResult(report, text, notes, Scene._wrap(native), frames)
 
 
 @dataclass
 class RunResult:
     """One run of a sweep: its name and swept values, how it ended, and its result (a
-    :class:`Solution` for an elastic scene, a :class:`Growth` for a growing one; None when
-    it failed, ``error`` then saying why)."""
+    :class:`Solution` for an elastic scene, a :class:`Growth` for a growing one, shaped as
+    :func:`solve` and :func:`grow` shape theirs; None when it failed, ``error`` then saying
+    why). ``values``: each swept key's value in this run as its scene holds it (a float
+    for ``fibres.D = 0``, an int for ``solver.nodes``), as :meth:`Scene.get` gives it."""
 
     name: str
-    values: dict[str, str]
+    values: dict[str, Any]
     status: str
     result: Solution | Growth | None = None
     error: str | None = None
@@ -664,7 +762,7 @@ class RunResult:
         return None if self.result is None else self.result.summary
 
 
-def _run_here(index: int, name: str, values: dict[str, str], scene_toml: str) -> RunResult:
+def _run_here(index: int, name: str, values: dict[str, Any], scene_toml: str) -> RunResult:
     """Run one scene of a sweep in this process (a worker's): a failed run is recorded,
     not raised, as ``eyeshell sweep`` records it."""
     start = time.perf_counter()
@@ -686,7 +784,7 @@ def _internal(e: BaseException) -> str:
 
 
 def _run_in(
-    workers: _worker.Workers, index: int, name: str, values: dict[str, str], scene_toml: str
+    workers: _worker.Workers, index: int, name: str, values: dict[str, Any], scene_toml: str
 ) -> RunResult:
     """Run one scene of a sweep in a worker process of `workers`: a run whose process
     ends without a result (an abort) is recorded as failed, saying how it ended."""
@@ -707,7 +805,7 @@ def _run_in(
         return failed(_internal(e))
 
 
-def _run_one(index: int, name: str, values: dict[str, str], scene_toml: str) -> RunResult:
+def _run_one(index: int, name: str, values: dict[str, Any], scene_toml: str) -> RunResult:
     """What an executor runs for one run of a sweep: the run, in a worker process beside
     the executor's (its pool lives as long as the executor's process), so that a run that
     aborts never takes the executor's process down."""
@@ -730,15 +828,19 @@ def _sweep_text(
     scene: SceneLike, grid: Mapping[str, Sequence[Any]] | None, runs: Sequence[Mapping[str, Any]] | None
 ) -> tuple[str, str]:
     """The sweep's TOML text and origin: a sweep file as it is, or a scene with a grid
-    and/or a list of runs added as its [sweep] table."""
-    if isinstance(scene, _PATH_TYPES) and not grid and not runs:
+    and/or a list of runs added as its [sweep] table (a sweep file's own [sweep] then
+    left out: the given one replaces it)."""
+    if isinstance(scene, _PATH_TYPES):
         path = _path(scene, "a sweep file")
-        try:
-            with open(path, encoding="utf-8") as f:
-                return f.read(), path
-        except OSError as e:
-            raise InputError(f"{path}: cannot read the sweep: {e.strerror}") from None
-    base = _as_scene(scene, {})
+        if not grid and not runs:
+            try:
+                with open(path, encoding="utf-8") as f:
+                    return f.read(), path
+            except OSError as e:
+                raise InputError(f"{path}: cannot read the sweep: {e.strerror}") from None
+        base = Scene.from_file(path, sweep=False)
+    else:
+        base = _as_scene(scene, {})
     lines = [base.to_toml()]
     if grid:
         lines.append("[sweep.grid]")
@@ -757,9 +859,11 @@ def iter_sweep(
     executor: Any = None,
     grid: Mapping[str, Sequence[Any]] | None = None,
     runs: Sequence[Mapping[str, Any]] | None = None,
+    frames: bool | None = None,
     **overrides: Any,
 ) -> Iterator[RunResult]:
-    """The runs of a sweep, each yielded as it finishes (see :func:`sweep`)."""
+    """The runs of a sweep, each yielded as it finishes (see :func:`sweep`);
+    ``SweepResults(iter_sweep(...))`` collects them for :meth:`SweepResults.to_frame`."""
     text, origin = _sweep_text(scene, grid, runs)
     sets = [f"{_key(k)}={_toml_value(v)}" for k, v in overrides.items()]
     plan = _eyeshell.expand_sweep(text, origin, sets)
@@ -784,7 +888,10 @@ def iter_sweep(
                 f.add_done_callback(lambda f, args=args: finished.put(_Remote(f, args)))
                 pending.append(f)
         for _ in range(len(pending)):
-            yield _next_finished(finished).result()
+            run = _next_finished(finished).result()
+            if frames is not None and isinstance(run.result, Growth):
+                run.result._shape(frames)
+            yield run
     except BaseException:
         # Ctrl-C (or a bug): no new run starts, and our own runs stop at once (their
         # processes are killed); an executor's running tasks are its own to stop.
@@ -872,15 +979,23 @@ def sweep(
     executor: Any = None,
     grid: Mapping[str, Sequence[Any]] | None = None,
     runs: Sequence[Mapping[str, Any]] | None = None,
+    frames: bool | None = None,
     **overrides: Any,
-) -> list[RunResult]:
-    """Run every run of a sweep and return their :class:`RunResult` in the sweep's order.
+) -> "SweepResults":
+    """Run every run of a sweep and return their :class:`RunResult` in the sweep's order,
+    as a :class:`SweepResults` (a list; :meth:`SweepResults.to_frame` makes one table of
+    them).
 
     ``scene`` is a sweep file (a scene with a ``[sweep]`` table, as ``eyeshell sweep``
     reads it), or a scene (a :class:`Scene`, a path or a mapping) with ``grid`` (a mapping
-    of keys to lists of values: every combination, the last key varying fastest) and/or
-    ``runs`` (a list of mappings of keys). ``overrides`` are set on every run. The runs are
-    named as ``eyeshell sweep`` names them.
+    of keys to lists of values: every combination, in the mapping's order, the last key
+    varying fastest) and/or ``runs`` (a list of mappings of keys); a sweep file given with
+    ``grid`` or ``runs`` has its own ``[sweep]`` replaced by them
+    (``Scene.from_file(path, sweep=False)`` reads its scene alone). ``overrides`` are set
+    on every run (a key the sweep sweeps is refused: give its values in ``grid`` or
+    ``runs``). The runs are named as ``eyeshell sweep`` names them. Each run's
+    :class:`Growth` has its series as :func:`grow` gives them: DataFrames when pandas
+    imports, or as ``frames`` says.
 
     Each run goes to a worker process (``sys.executable`` importing this package, reused
     run after run), as ``eyeshell sweep`` runs its runs: a run that aborts its process (an
@@ -901,15 +1016,71 @@ def sweep(
 
     >>> rs = eyeshell.sweep(eyeshell.Scene(solver__nodes=101), grid={"fibres.D": [0, 200]}, jobs=2)
     >>> [(r.name, r.values, r.status) for r in rs]
-    [('D=0', {'fibres.D': '0'}, 'ok'), ('D=200', {'fibres.D': '200'}, 'ok')]
+    [('D=0', {'fibres.D': 0.0}, 'ok'), ('D=200', {'fibres.D': 200.0}, 'ok')]
     >>> rs[1].result.summary["parameters"]["fibres.D"]
     200.0
     """
     results = sorted(
-        iter_sweep(scene, jobs=jobs, executor=executor, grid=grid, runs=runs, **overrides),
+        iter_sweep(scene, jobs=jobs, executor=executor, grid=grid, runs=runs, frames=frames, **overrides),
         key=lambda r: r.index,
     )
-    return results
+    return SweepResults(results)
+
+
+# The columns of SweepResults.to_frame() after run, status and the swept keys: sweep.csv's
+# measures of the eye, at each output time.
+_FRAME_COLUMNS = ["t", "axial_length", "equatorial_radius", "retina_minus_blue", "retina_minus_red", "class"]
+
+
+class SweepResults(list):
+    """The runs of a sweep (a list of :class:`RunResult`, in the sweep's order), as
+    :func:`sweep` returns them; ``SweepResults(iter_sweep(...))`` collects an iterator's.
+    """
+
+    def to_frame(self, frames: bool | None = None) -> Any:
+        """One table of the whole sweep: a row per run and output time (a growth run's
+        snapshot times; t = 0 for an elastic run, measured as ``eyeshell sweep`` measures
+        it), with the columns ``run``, ``status``, each swept key (whatever keys the runs
+        set, in the sweep's order: a grid's, a list's, a sampled sweep's; NaN, or None
+        for a non-number, where a run does not set it), ``t``, ``axial_length``,
+        ``equatorial_radius``, ``retina_minus_blue``, ``retina_minus_red``, ``class`` and
+        ``error`` (a failed run: one row, its measures NaN). A pandas DataFrame when pandas
+        imports (or ``frames=True``), else a dict of lists (``frames=False``).
+
+        >>> rs = eyeshell.sweep(SCENES + "/const.toml", grid={"growth.Gamma": [4, 8]},
+        ...                     solver__nodes=101)
+        >>> df = rs.to_frame()
+        >>> list(df.columns)[:4], len(df) == 2 * len(rs[0].result.series)
+        (['run', 'status', 'growth.Gamma', 't'], True)
+        >>> sorted(set(df["growth.Gamma"]))
+        [4.0, 8.0]
+        """
+        keys: list[str] = []
+        for r in self:
+            keys += [k for k in r.values if k not in keys]
+        columns: dict[str, list[Any]] = {c: [] for c in ["run", "status", *keys, *_FRAME_COLUMNS, "error"]}
+        for r in self:
+            measures = _measures(r)
+            rows = len(measures["t"])
+            columns["run"] += [r.name] * rows
+            columns["status"] += [r.status] * rows
+            for k in keys:
+                missing = math.nan if any(isinstance(x.values.get(k), (int, float)) for x in self) else None
+                columns[k] += [r.values.get(k, missing)] * rows
+            for c in _FRAME_COLUMNS:
+                columns[c] += list(measures[c])
+            columns["error"] += [r.error or ""] * rows
+        return _frame(columns, frames)
+
+
+def _measures(r: RunResult) -> dict[str, list[Any]]:
+    """A run's measures of the eye at its output times: one row of NaN for a failed run."""
+    if isinstance(r.result, Growth):
+        series = r.result._columns["series"]
+        return {c: [x.item() if hasattr(x, "item") else x for x in series[c]] for c in _FRAME_COLUMNS}
+    if isinstance(r.result, Solution):
+        return {"t": [0.0], **{c: [v] for c, v in r.result.eye.items()}}
+    return {c: [math.nan] if c != "class" else [""] for c in _FRAME_COLUMNS}
 
 
 @dataclass
@@ -930,29 +1101,63 @@ class Comparison:
         return self.text
 
 
+Comparable = Union[PathLike, "Solution", "Growth"]
+
+
 def compare(
-    run: PathLike,
-    reference: PathLike,
+    run: Comparable,
+    reference: Comparable,
     /,
     tol: float = 1e-8,
     rtol: float = 1e-8,
     field: str | None = None,
 ) -> Comparison:
-    """``eyeshell compare RUN REFERENCE``: compare a run directory (or its .mat or .npz
-    export) against a reference, interpolating the run at the reference's points; a point
-    fails when |run − ref| > tol + rtol·|ref|. The reference is a .mat file (eyeshell's,
-    MATLAB's, Octave's or SciPy's ``savemat``), a .npz file, a directory of .mat and .npz
-    files, or another eyeshell run directory; a CSV file is not a reference (compare the
-    run directory that holds it, or its export). Paths are str, bytes or os.PathLike.
-    ``field`` names the struct of a .mat reference that holds the result (default:
-    ``sol`` if present).
+    """``eyeshell compare RUN REFERENCE``: compare a run against a reference,
+    interpolating the run at the reference's points; a point fails when
+    |run − ref| > tol + rtol·|ref|. The run is a :class:`Solution` or a :class:`Growth`
+    (compared as their .mat export: :meth:`Solution.to_mat`, :meth:`Growth.to_mat`; named
+    ``Solution`` or ``Growth`` in the report), a run directory, or its .mat or .npz export.
+    The reference is any of those, or a .mat file (MATLAB's, Octave's or SciPy's
+    ``savemat``), a .npz file or a directory of .mat and .npz files;
+    a CSV file is not a reference (compare the run directory that holds it, or its
+    export). Paths are str, bytes or os.PathLike. ``field`` names the struct of a .mat reference that holds the
+    result (default: ``sol`` if present).
 
     Unlike the command line, a comparison beyond tolerance is not an error: it returns a
     :class:`Comparison` whose ``passed`` is False. Unreadable or mismatched inputs raise
     :class:`InputError`.
     """
-    pairs, text = _eyeshell.compare(_path(run, "run"), _path(reference, "reference"), tol, rtol, field)
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="eyeshell-compare-") as tmp:
+        exported: dict[str, tuple[str, str]] = {}
+        run_path = _comparable(run, "run", tmp, exported)
+        ref_path = _comparable(reference, "reference", tmp, exported)
+        pairs, text = _eyeshell.compare(run_path, ref_path, tol, rtol, field)
+    # An exported side is named by its kind, and which side it is when both are one kind.
+    kinds = [kind for kind, _ in exported.values()]
+    for path, (kind, what) in exported.items():
+        label = kind if kinds.count(kind) == 1 else f"{kind} ({what})"
+        text = text.replace(path, label)
+        for p in pairs:
+            for k in ("reference", "run"):
+                p[k] = p[k].replace(path, label)
     return Comparison(all(p["passed"] for p in pairs), pairs, text)
+
+
+def _comparable(x: Any, what: str, tmp: str, exported: dict[str, tuple[str, str]]) -> str:
+    """A side of :func:`compare` as a path: a Solution or a Growth exported into `tmp`
+    (recorded in `exported`: path → its kind and side), a path as it is."""
+    if isinstance(x, (Solution, Growth)):
+        path = os.path.join(tmp, what + (".mat" if isinstance(x, Solution) else ""))
+        x.to_mat(path)
+        exported[path] = (type(x).__name__, what)
+        return path
+    if not isinstance(x, _PATH_TYPES):
+        raise TypeError(
+            f"{what} must be a Solution, a Growth or a path (a str, bytes or os.PathLike), not {type(x).__name__}"
+        )
+    return _path(x, what)
 
 
 __all__ = [
@@ -965,6 +1170,7 @@ __all__ = [
     "Scene",
     "Solution",
     "SolverError",
+    "SweepResults",
     "compare",
     "fit",
     "grow",
