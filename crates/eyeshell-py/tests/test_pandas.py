@@ -321,3 +321,19 @@ def test_a_fit_carries_the_reports_notes_and_table(cli, tmp_path):
     assert estimate in row and f"{r.standard_errors['growth.Gamma']:.6f}" in row
     one = eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma"], solver__nodes=101)
     assert one.notes == [] and "note" not in one.text
+
+
+def test_to_mat_refuses_a_growth_whose_snapshots_were_broken(tmp_path):
+    g = eyeshell.grow(small(), frames=False)
+    t = g.times[-1]
+    del g.snapshots[t]["eta"]
+    with pytest.raises(eyeshell.InputError, match="to_mat: the snapshot at t = 1 has no column eta"):
+        g.to_mat(tmp_path / "a")
+    g = eyeshell.grow(small(), frames=False)
+    nodes = len(g.snapshots[t]["Sigma"])
+    g.snapshots[t]["r"] = g.snapshots[t]["r"][:-1]
+    with pytest.raises(eyeshell.InputError, match=f"has {nodes - 1} values of r but {nodes} of Sigma"):
+        g.to_mat(tmp_path / "a")
+    assert not (tmp_path / "a").exists()  # nothing half-written
+    with pytest.raises(TypeError, match="directory must be a path"):
+        g.to_mat(5)

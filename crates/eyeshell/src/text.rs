@@ -121,6 +121,34 @@ mod tests {
     use super::*;
 
     #[test]
+    fn advice_is_the_command_lines_unless_a_front_end_words_it() {
+        let cases = [
+            (
+                Advice::Override {
+                    text: "fibres.D=-1",
+                },
+                "--set fibres.D=-1",
+            ),
+            (
+                Advice::RunSweep { origin: "s.toml" },
+                "run it with `eyeshell sweep s.toml --out DIR`",
+            ),
+            (
+                Advice::RemoveOverride { text: "a=1\n" },
+                "remove `--set a=1\\n`",
+            ),
+            (Advice::Force, "--force"),
+            (Advice::SetKey, "--set"),
+            (Advice::Field { name: None }, "--field"),
+            (Advice::Field { name: Some("res") }, "--field res"),
+        ];
+        for (a, text) in cases {
+            assert_eq!(command_line(&a), text);
+        }
+        assert!(command_line(&Advice::Shards { max: 7 }).ends_with("each at most 7 runs"));
+    }
+
+    #[test]
     fn excerpts_are_short_and_clean() {
         assert_eq!(excerpt("abc", 3), "abc");
         assert_eq!(excerpt("abcd", 3), "abc…");
