@@ -1067,12 +1067,12 @@ fn a_ten_million_run_grid_is_planned_in_well_under_a_second() {
     // Round-robin (every run costs the same): shard 1 holds runs 1, 1001, 2001, ...
     let runs = record["runs"].as_array().unwrap();
     assert_eq!(
-        runs[0]["name"], "D=0_C=50_dP=1_newton_tol=1e-10",
+        runs[0]["name"], "dP=1_C=50_D=0_newton_tol=1e-10",
         "{}",
         runs[0]
     );
     assert_eq!(
-        runs[1]["name"], "D=0_C=51.01010101010101_dP=1_newton_tol=1e-10",
+        runs[1]["name"], "dP=1_C=51.01010101010101_D=0_newton_tol=1e-10",
         "{}",
         runs[1]
     );

@@ -66,6 +66,7 @@ fn python_wording(a: &Advice<'_>) -> String {
         }
         Advice::Force => "force=True".into(),
         Advice::SetKey => "a keyword override (growth__Gamma=8)".into(),
+        Advice::ListKeys => "eyeshell.keys()".into(),
         Advice::Field { name: None } => "field=\"NAME\"".into(),
         Advice::Field { name: Some(name) } => format!("field={:?}", one_line(name)),
     }

@@ -182,7 +182,7 @@ def test_keyword_overrides_are_set_together_and_validated_once():
 
 # Errors in Python's terms.
 
-COMMAND_LINE = ["--set", "--out", "--force", "--field", "--shard", "eyeshell sweep"]
+COMMAND_LINE = ["--set", "--out", "--force", "--field", "--shard", "eyeshell sweep", "`eyeshell "]
 
 
 @pytest.mark.parametrize(
@@ -197,6 +197,10 @@ COMMAND_LINE = ["--set", "--out", "--force", "--field", "--shard", "eyeshell swe
         (lambda: eyeshell.Scene(fibres__E=1), "set fibres.E=1: unknown key 'fibres.E'"),
         (lambda: eyeshell.sweep(eyeshell.Scene(), grid={"fibres.D": [1]}, fibres__E=1),
          "set fibres.E=1: unknown key 'fibres.E'"),
+        (lambda: eyeshell.grow(SCENES / "const.toml", sensitivities=["growth.eta"]),
+         "\"growth.eta\" is not a scene key (supported: "),
+        (lambda: eyeshell.grow(SCENES / "const.toml", sensitivities=["growth.eta"]),
+         "eyeshell.keys() lists every key"),
     ],
 )
 def test_errors_speak_python_not_the_command_line(make, needle):

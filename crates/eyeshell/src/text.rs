@@ -76,6 +76,8 @@ pub enum Advice<'a> {
     Force,
     /// How to set a scene key from outside the scene file (to fix a fitted parameter).
     SetKey,
+    /// What lists every scene key.
+    ListKeys,
     /// The option that names the struct of a .mat reference holding the result, with
     /// the name given (`None`: no name given yet).
     Field { name: Option<&'a str> },
@@ -111,6 +113,7 @@ pub fn command_line(a: &Advice<'_>) -> String {
         ),
         Advice::Force => "--force".into(),
         Advice::SetKey => "--set".into(),
+        Advice::ListKeys => "`eyeshell keys`".into(),
         Advice::Field { name: None } => "--field".into(),
         Advice::Field { name: Some(name) } => format!("--field {}", one_line(name)),
     }
@@ -139,6 +142,7 @@ mod tests {
             ),
             (Advice::Force, "--force"),
             (Advice::SetKey, "--set"),
+            (Advice::ListKeys, "`eyeshell keys`"),
             (Advice::Field { name: None }, "--field"),
             (Advice::Field { name: Some("res") }, "--field res"),
         ];

@@ -388,7 +388,10 @@ impl SensParam {
             ),
             _ => match crate::scene::keys::find(key) {
                 Some(_) => format!("sensitivities to {key} are not available ({supported})"),
-                None => format!("{key:?} is not a scene key ({supported}; `eyeshell keys` lists every key)"),
+                None => format!(
+                    "{key:?} is not a scene key ({supported}; {} lists every key)",
+                    crate::text::advice(&crate::text::Advice::ListKeys)
+                ),
             },
         })
     }
