@@ -9,7 +9,7 @@ use eyeshell::growth::dae::{CoupledDae, DaeLinear, SensParam};
 use eyeshell::growth::system::GrowthSystem;
 use eyeshell::growth::*;
 use eyeshell::model::params::Params;
-use eyeshell_sundials::linalg::{DirectSolver, Reduced, SchurSolver};
+use eyeshell_linalg::{DirectSolver, Reduced, SchurSolver};
 use std::hint::black_box;
 use std::time::Duration;
 

@@ -38,10 +38,10 @@ use crate::bvp::equations::{
 use crate::bvp::settings::Scheme;
 use crate::model::growth_law::positive_smooth;
 use crate::model::params::Params;
-use eyeshell_sundials::linalg::{
-    Csr, DirectSolver, Fallback, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
+use eyeshell_linalg::{
+    Csr, DirectSolver, Fallback, InterleavedBand, LinalgError, Reduced, SchurSolver,
 };
-use eyeshell_sundials::MatrixSink;
+use eyeshell_sundials::{KluSolver, MatrixSink};
 
 /// W unknowns per node: the five elastic unknowns and z.
 pub const NW: usize = 6;
@@ -656,7 +656,7 @@ impl CoupledDae {
         Ok(match kind {
             DaeLinear::SchurBlock => schur(Reduced::Block)?,
             DaeLinear::Schur => schur(Reduced::Band)?,
-            DaeLinear::SchurKlu => schur(Reduced::Klu)?,
+            DaeLinear::SchurKlu => schur(KluSolver::REDUCED)?,
             DaeLinear::Band => Box::new(InterleavedBand::new(
                 &self.jac,
                 self.interleaving(),
@@ -669,7 +669,7 @@ impl CoupledDae {
     /// The Schur paths' fallback for a matrix whose growth block cannot be eliminated
     /// without pivoting (huge steps where a point's rates barely depend on its own state):
     /// KLU on the whole matrix where KLU was built in, else the pivoted interleaved band.
-    fn pivoting_solver(&self) -> eyeshell_sundials::linalg::MakeSolver {
+    fn pivoting_solver(&self) -> eyeshell_linalg::MakeSolver {
         let pattern = self.jac.clone();
         let (perm, border) = (self.interleaving(), self.d());
         Box::new(move || -> Result<Box<dyn DirectSolver>, LinalgError> {
