@@ -28,6 +28,7 @@
 
 use super::crossing::Crossing;
 use super::points::NP;
+use super::settings::DaeLinear;
 use super::system::{GrowthSystem, RhsError};
 use super::ThicknessLaw;
 use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, POLE_ROWS};
@@ -47,37 +48,6 @@ use eyeshell_sundials::{KluSolver, MatrixSink};
 pub const NW: usize = 6;
 /// Index of z among a node's W unknowns.
 pub const Z: usize = 5;
-
-/// Which linear solver factors the Newton matrix of the coupled system.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DaeLinear {
-    /// Eliminate the growth unknowns point by point; almost-block-diagonal LU (6×6 node
-    /// blocks) of what is left.
-    SchurBlock,
-    /// Eliminate the growth unknowns point by point; band LU of what is left.
-    Schur,
-    /// The same elimination; KLU of what is left.
-    SchurKlu,
-    /// Band LU of the whole system, unknowns interleaved node by node.
-    Band,
-    /// KLU on the whole sparse system.
-    Klu,
-}
-
-impl DaeLinear {
-    pub const NAMES: [&'static str; 5] = ["schur-block", "schur", "schur-klu", "band", "klu"];
-    pub const ALL: [DaeLinear; 5] = [
-        DaeLinear::SchurBlock,
-        DaeLinear::Schur,
-        DaeLinear::SchurKlu,
-        DaeLinear::Band,
-        DaeLinear::Klu,
-    ];
-
-    pub fn name(self) -> &'static str {
-        Self::NAMES[self as usize]
-    }
-}
 
 /// Where a growth point reads its local state (r, θ, z, α_s).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -374,23 +344,6 @@ impl SensParam {
             SensParam::Pressure => "pressure.dP",
             SensParam::BlueCentre => "stimulus.blue.z_B",
         }
-    }
-
-    /// The parameter of scene key `key`, or why there is none: a one-line reason naming it.
-    pub fn from_key(key: &str) -> Result<SensParam, String> {
-        if let Some(p) = Self::ALL.into_iter().find(|p| p.key() == key) {
-            return Ok(p);
-        }
-        let supported = format!("supported: {}", Self::SUPPORTED);
-        Err(match key {
-            "stimulus.red.offset" => format!(
-                "{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero ({supported})"
-            ),
-            _ => match crate::scene::keys::find(key) {
-                Some(_) => format!("sensitivities to {key} are not available ({supported})"),
-                None => format!("{key:?} is not a scene key ({supported}; `eyeshell keys` lists every key)"),
-            },
-        })
     }
 
     /// Why the parameter cannot be taken in a model of `params`, if it cannot: fibres.D in
@@ -1915,36 +1868,6 @@ mod tests {
     use crate::bvp::settings::SolverSettings;
     use crate::growth::GrowthParams;
     use crate::model::params::Params;
-
-    /// Every parameter round-trips through its scene key, `set` and `value` touch the
-    /// field the key names (as the scene's own key does), and the refusals name the key.
-    #[test]
-    fn sensitivity_parameters_and_their_keys() {
-        use crate::scene::Scene;
-        for param in SensParam::ALL {
-            assert_eq!(SensParam::from_key(param.key()), Ok(param));
-            let mut scene = Scene::default_scene();
-            scene.params.d = 200.0;
-            let mut g = GrowthParams::default();
-            param.set(&mut scene.params, &mut g, 0.75);
-            assert_eq!(param.value(&scene.params, &g), 0.75, "{}", param.key());
-            scene.growth = Some(GrowthParams::default());
-            scene.set(param.key(), 0.75).unwrap();
-            let ours = (scene.params, scene.growth.clone().unwrap());
-            assert_eq!(param.value(&ours.0, &ours.1), 0.75, "{}", param.key());
-            assert!(SensParam::SUPPORTED.contains(param.key()));
-        }
-        let why = SensParam::from_key("stimulus.red.offset").unwrap_err();
-        assert!(why.contains("only affects the classification"), "{why}");
-        let why = SensParam::FibreStiffness
-            .check(&Params::default())
-            .unwrap_err();
-        assert!(
-            why.starts_with("fibres.D = 0: the scene has no fibres"),
-            "{why}"
-        );
-        assert!(SensParam::Modulus.check(&Params::default()).is_ok());
-    }
 
     /// The const and fibre scenes (the fibre scene: non-uniform thickness, D = 200, so
     /// jump nodes and two growth points at them) under both schemes, N = 31, rounded kinks.
