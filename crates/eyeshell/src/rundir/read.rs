@@ -325,9 +325,18 @@ mod tests {
             }])
         );
         for (text, says) in [
-            ("t,parameter\n".to_string(), "the header is not t,parameter,"),
-            (format!("{header}0.5,growth.eta0,1,2,3\n"), "line 2: 5 cells, not 6"),
-            (format!("{header}0.5,growth.eta0,1,2,3,x\n"), "line 2: \"x\" is not a number"),
+            (
+                "t,parameter\n".to_string(),
+                "the header is not t,parameter,",
+            ),
+            (
+                format!("{header}0.5,growth.eta0,1,2,3\n"),
+                "line 2: 5 cells, not 6",
+            ),
+            (
+                format!("{header}0.5,growth.eta0,1,2,3,x\n"),
+                "line 2: \"x\" is not a number",
+            ),
         ] {
             fs::write(&path, text).unwrap();
             let e = read_sensitivities(dir.path()).unwrap_err().to_string();
