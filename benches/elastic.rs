@@ -12,7 +12,7 @@ use eyeshell::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
 use eyeshell::bvp::solve::{discretise, linear_spec, sphere_guess};
 use eyeshell::bvp::{self};
 use eyeshell::model::params::{Params, Thickness};
-use eyeshell_sundials::linalg::{AbdLu, BandLu};
+use eyeshell_linalg::{AbdLu, BandLu};
 use eyeshell_sundials::{Context, LinearSolver, MatrixSink, NVector};
 use std::hint::black_box;
 use std::time::Duration;

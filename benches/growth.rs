@@ -5,11 +5,12 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::growth::dae::{CoupledDae, DaeLinear, SensParam};
+use eyeshell::growth::dae::{CoupledDae, SensParam};
 use eyeshell::growth::system::GrowthSystem;
+use eyeshell::growth::DaeLinear;
 use eyeshell::growth::*;
 use eyeshell::model::params::Params;
-use eyeshell_sundials::linalg::{DirectSolver, Reduced, SchurSolver};
+use eyeshell_linalg::{DirectSolver, Reduced, SchurSolver};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -294,7 +295,10 @@ fn sensitivities_on_cpu(c: &mut Criterion) {
     for list in lists.split(';').filter(|l| !l.trim().is_empty()) {
         let params: Vec<SensParam> = list
             .split(',')
-            .map(|key| SensParam::from_key(key.trim()).unwrap_or_else(|why| panic!("{why}")))
+            .map(|key| {
+                eyeshell::scene::keys::sensitivity_param(key.trim())
+                    .unwrap_or_else(|why| panic!("{why}"))
+            })
             .collect();
         let name = format!("k{}_{}", params.len(), list.trim());
         time(

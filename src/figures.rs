@@ -317,8 +317,10 @@ const MAX_RUN_DIR: usize = 255;
 /// Every run of a sweep directory, in the order of its table.
 pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
     let path = dir.join(eyeshell::rundir::SUMMARY_FILE);
-    let text = std::fs::read_to_string(&path)
-        .map_err(|e| bad(format!("{}: not a sweep output ({e})", dir.display())))?;
+    if let Err(e) = std::fs::metadata(&path) {
+        return Err(bad(format!("{}: not a sweep output ({e})", dir.display())));
+    }
+    let text = eyeshell::rundir::read::read_text(&path, eyeshell::rundir::read::MAX_SUMMARY_BYTES)?;
     let Summary::Sweep(sweep) = Summary::parse(&path, &text)? else {
         return Err(bad(format!(
             "{}: not a sweep output (no runs in summary.json)",
@@ -894,38 +896,22 @@ type Curve = Vec<(f64, f64)>;
 /// parameter: dL/dp, d(equatorial radius)/dp, d(retina − blue)/dp and (p/L) dL/dp. None
 /// without the file.
 fn sensitivity_panels(dir: &Path) -> Result<Option<Vec<Figure>>, ExportError> {
-    let path = dir.join(eyeshell::rundir::growth::SENSITIVITIES_FILE);
-    if !path.exists() {
+    let Some(rows) = eyeshell::rundir::read::read_sensitivities(dir)? else {
         return Ok(None);
-    }
-    let what = |e: &dyn std::fmt::Display| bad(format!("{}: {e}", path.display()));
-    let mut reader = csv::Reader::from_path(&path).map_err(|e| what(&e))?;
-    let header = reader.headers().map_err(|e| what(&e))?.clone();
-    let columns = eyeshell::rundir::growth::SENSITIVITY_COLUMNS;
-    if header.iter().ne(columns.iter().copied()) {
-        return Err(what(&format!("the header is not {}", columns.join(","))));
-    }
+    };
     // Per parameter, in order of first appearance: its (t, value) for each column after the
     // parameter's.
     let mut lines: Vec<(String, [Curve; 4])> = vec![];
-    for (k, record) in reader.records().enumerate() {
-        let record = record.map_err(|e| what(&e))?;
-        let num = |c: usize| -> Result<f64, ExportError> {
-            record[c]
-                .parse::<f64>()
-                .map_err(|_| what(&format!("row {}: {:?} is not a number", k + 2, &record[c])))
-        };
-        let t = num(0)?;
-        let key = record[1].to_string();
-        let slot = match lines.iter().position(|(p, _)| *p == key) {
+    for row in rows {
+        let slot = match lines.iter().position(|(p, _)| *p == row.parameter) {
             Some(i) => i,
             None => {
-                lines.push((key, Default::default()));
+                lines.push((row.parameter, Default::default()));
                 lines.len() - 1
             }
         };
-        for c in 0..4 {
-            lines[slot].1[c].push((t, num(c + 2)?));
+        for (c, v) in row.values.into_iter().enumerate() {
+            lines[slot].1[c].push((row.t, v));
         }
     }
     let labels = [

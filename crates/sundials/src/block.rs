@@ -29,8 +29,8 @@ use sundials_sys::{
 use super::context::Context;
 use super::custom;
 use super::error::SundialsError;
-use super::linalg::{AbdLu, LinalgError};
 use super::nvector;
+use eyeshell_linalg::{AbdLu, LinalgError};
 
 /// What the token matrix's content points at. `tag` (first, `repr(C)`) lets the solver ops
 /// refuse a matrix that is not one of ours.

@@ -12,8 +12,9 @@
 //! of KINSOL so that the integrators ([`Cvode`], [`Ida`]) sit next to [`Kinsol`] and reuse
 //! them; what CVODE and IDA share beyond that (options, checks, the memory and the calls
 //! that mean the same in both, the trampolines' state) is written once in `integrator.rs`.
-//! [`linalg`] builds the structured direct solvers of the growth DAE on top, in safe
-//! Rust.
+//! The structured direct solvers are eyeshell-linalg's (safe Rust); this crate adapts them
+//! to SUNDIALS: its almost-block-diagonal LU as a SUNDIALS matrix and linear solver
+//! ([`LinearSolverSpec::Block`]), and SUNDIALS' KLU as one of its solvers ([`KluSolver`]).
 
 mod block;
 mod callback;
@@ -27,7 +28,7 @@ mod idas;
 mod integrator;
 mod kinsol;
 mod klu;
-pub mod linalg;
+mod klu_solver;
 mod linsol;
 mod matrix;
 mod nvector;
@@ -39,6 +40,7 @@ pub use error::{SundialsError, RECOVERABLE_NOTE};
 pub use ida::{DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaStats};
 pub use idas::{IdaSensStats, SensitivityOptions};
 pub use kinsol::{Kinsol, KinsolOptions, KinsolStats, NonlinearSystem, Strategy};
+pub use klu_solver::KluSolver;
 pub use linsol::{LinearSolver, LinearSolverSpec};
 pub use matrix::{
     BandMatrix, BandMut, BlockMatrix, CsrMut, DenseMatrix, DenseMut, JacobianMatrix, Matrix,

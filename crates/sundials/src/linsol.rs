@@ -12,9 +12,9 @@ use super::block::new_block_solver;
 use super::context::Context;
 use super::error::{check, FlagFamily, SundialsError};
 use super::klu::new_klu;
-use super::linalg::ABD_NODE;
 use super::matrix::{BandMatrix, BlockMatrix, DenseMatrix, Matrix, MatrixKind, SparseMatrix};
 use super::nvector::NVector;
+use eyeshell_linalg::ABD_NODE;
 
 /// Which matrix and direct solver to use for an n×n system.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -31,7 +31,7 @@ pub enum LinearSolverSpec {
         row_ptr: Vec<usize>,
         col_idx: Vec<usize>,
     },
-    /// The almost-block-diagonal LU of `linalg::AbdLu`: n = 5 · nodes unknowns, `top`
+    /// The almost-block-diagonal LU of `eyeshell_linalg::AbdLu`: n = 5 · nodes unknowns, `top`
     /// boundary rows at the start and 5 − top at the end (the elastic BVP: top = 3).
     Block {
         nodes: usize,

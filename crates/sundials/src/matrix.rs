@@ -23,24 +23,8 @@ pub use super::block::BlockMatrix;
 use super::callback::{CallbackError, CallbackResult};
 use super::context::Context;
 use super::error::SundialsError;
-use super::linalg::AbdLu;
-
-/// A matrix the Jacobian assembler writes into, entry by entry. `set` overwrites.
-pub trait MatrixSink {
-    fn nrows(&self) -> usize;
-    fn set(&mut self, i: usize, j: usize, v: f64);
-
-    /// Set the dense sub-block of `values.len() / ncols` rows from row `row0` and `ncols`
-    /// columns from column `col0` (row-major `values`). The default sets entry by entry; a
-    /// block matrix copies an interval's block whole.
-    fn set_block(&mut self, row0: usize, col0: usize, ncols: usize, values: &[f64]) {
-        for (a, row) in values.chunks_exact(ncols).enumerate() {
-            for (b, &v) in row.iter().enumerate() {
-                self.set(row0 + a, col0 + b, v);
-            }
-        }
-    }
-}
+use eyeshell_linalg::AbdLu;
+pub use eyeshell_linalg::MatrixSink;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MatrixKind {

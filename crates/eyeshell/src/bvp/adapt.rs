@@ -40,8 +40,8 @@
 //! would exceed `solver.max_nodes`, it is out of reach. Either way the solve stops with the
 //! best error and its nodes. `solver.max_seconds` bounds all the passes together.
 
-use super::solve::{cornea_layer, mesh_of, solve_on_mesh, BvpError, Solution};
-use super::{ErrorEstimate, FieldRow};
+use super::solve::{cornea_layer, mesh_of, solve_on_mesh, Solution};
+use super::{BvpError, ErrorEstimate, FieldRow};
 use crate::bvp::settings::{Scheme, SolverSettings};
 use crate::deadline::Deadline;
 use crate::mesh::{Mesh, POLE_RATIO};

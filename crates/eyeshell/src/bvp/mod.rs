@@ -158,4 +158,61 @@ pub(crate) mod interpolant;
 pub(crate) mod material;
 pub mod settings;
 pub mod solve;
-pub use solve::{solve, BvpError, Solution};
+pub use solve::Solution;
+
+use crate::deadline::OutOfTime;
+use crate::mesh::MeshError;
+use crate::model::params::Params;
+use crate::text::{decimals6, number};
+use discretisation::EvalFailure;
+use eyeshell_sundials::SundialsError;
+use settings::SolverSettings;
+
+#[derive(Debug, thiserror::Error)]
+pub enum BvpError {
+    #[error(transparent)]
+    Model(#[from] crate::model::ModelError),
+    #[error(transparent)]
+    Sundials(#[from] SundialsError),
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error("Σ = {} is outside the shell [{}, {}]", number(*sigma), number(*lo), number(*hi))]
+    OutOfRange { sigma: f64, lo: f64, hi: f64 },
+    #[error("Newton did not converge at ΔP = {} after {iterations} iterations (scaled residual {residual_norm:.3e}); worst equation: {equation} at node {node} (Σ = {}): {reason}", number(*dp), decimals6(*sigma_ref))]
+    NewtonFailed {
+        dp: f64,
+        iterations: usize,
+        residual_norm: f64,
+        node: usize,
+        sigma_ref: f64,
+        equation: &'static str,
+        reason: String,
+    },
+    #[error("the equations cannot be evaluated at node {} (Σ = {}): {}", .0.node, decimals6(.0.sigma_ref), .0.why)]
+    Evaluation(EvalFailure),
+    #[error(transparent)]
+    OutOfTime(#[from] OutOfTime),
+    #[error("{0}")]
+    Unreached(adapt::Unreached),
+}
+
+impl BvpError {
+    /// Did `solver.max_seconds` stop the solve? (Then nothing is tried again.)
+    pub fn is_out_of_time(&self) -> bool {
+        matches!(self, BvpError::OutOfTime(_))
+    }
+}
+
+/// Solve the elastic BVP, warm-started from `warm` when given. With `solver.tol` (and no
+/// warm start) the mesh is adapted to it, and with `solver.richardson` the extrapolated
+/// solution is reported ([`adapt`]).
+pub fn solve(
+    params: &Params,
+    settings: &SolverSettings,
+    warm: Option<&Solution>,
+) -> Result<Solution, BvpError> {
+    if (settings.tol.is_some() || settings.richardson) && warm.is_none() {
+        return adapt::solve_to_tolerance(params, settings);
+    }
+    solve::solve_on_mesh(params, settings, solve::mesh_of(params, settings)?, warm)
+}

@@ -1,7 +1,8 @@
 //! The KINSOL driver for the elastic BVP (docs/MODEL.md §3): Newton with a line search and the
 //! analytic Jacobian, factored by band LU (or KLU); cold starts from the inflated reference
 //! sphere, warm starts from a previous solution, and pressure continuation when a cold
-//! start does not converge.
+//! start does not converge. The solve on one mesh ([`solve_on_mesh`]) and its pieces: a
+//! leaf below the adaptive solve (`super::adapt`) and `super::solve`, which dispatches.
 
 use super::discretisation::{
     Discretisation, EvalFailure, MaterialData, LOWER, NY, POLE_ROWS, UPPER,
@@ -9,54 +10,19 @@ use super::discretisation::{
 use super::equations::{self, Shell, Vec5, KAPPA, QS, R, THETA, TS};
 use super::interpolant::{Interpolant, NQ};
 use super::material::{reference_data, reference_point};
-use super::{FieldRow, SolveStats};
+use super::{BvpError, FieldRow, SolveStats};
 use crate::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
-use crate::deadline::{Deadline, OutOfTime};
+use crate::deadline::Deadline;
 use crate::mesh::{self, Mesh, MeshError};
 use crate::model::cornea;
 use crate::model::params::Params;
 use crate::model::profiles::{self, Side};
-use crate::text::{decimals6, number};
+use crate::text::number;
 use eyeshell_sundials::{
     CallbackError, CallbackResult, JacobianMatrix, Kinsol, KinsolOptions, KinsolStats,
-    LinearSolverSpec, NonlinearSystem, Strategy, SundialsError,
+    LinearSolverSpec, NonlinearSystem, Strategy,
 };
 use std::time::Instant;
-
-#[derive(Debug, thiserror::Error)]
-pub enum BvpError {
-    #[error(transparent)]
-    Model(#[from] crate::model::ModelError),
-    #[error(transparent)]
-    Sundials(#[from] SundialsError),
-    #[error(transparent)]
-    Mesh(#[from] MeshError),
-    #[error("Σ = {} is outside the shell [{}, {}]", number(*sigma), number(*lo), number(*hi))]
-    OutOfRange { sigma: f64, lo: f64, hi: f64 },
-    #[error("Newton did not converge at ΔP = {} after {iterations} iterations (scaled residual {residual_norm:.3e}); worst equation: {equation} at node {node} (Σ = {}): {reason}", number(*dp), decimals6(*sigma_ref))]
-    NewtonFailed {
-        dp: f64,
-        iterations: usize,
-        residual_norm: f64,
-        node: usize,
-        sigma_ref: f64,
-        equation: &'static str,
-        reason: String,
-    },
-    #[error("the equations cannot be evaluated at node {} (Σ = {}): {}", .0.node, decimals6(.0.sigma_ref), .0.why)]
-    Evaluation(EvalFailure),
-    #[error(transparent)]
-    OutOfTime(#[from] OutOfTime),
-    #[error("{0}")]
-    Unreached(super::adapt::Unreached),
-}
-
-impl BvpError {
-    /// Did `solver.max_seconds` stop the solve? (Then nothing is tried again.)
-    pub fn is_out_of_time(&self) -> bool {
-        matches!(self, BvpError::OutOfTime(_))
-    }
-}
 
 /// The elastic system as KINSOL sees it.
 struct ElasticSystem {
@@ -725,20 +691,6 @@ fn polish(kin: &mut Kinsol<ElasticSystem>, u: &mut [f64], f_scale: &[f64]) {
     if kin.system_mut().disc.residual(&trial, &mut f).is_ok() && norm(&f) < before {
         u.copy_from_slice(&trial);
     }
-}
-
-/// Solve the elastic BVP, warm-started from `warm` when given. With `solver.tol` (and no
-/// warm start) the mesh is adapted to it, and with `solver.richardson` the extrapolated
-/// solution is reported ([`super::adapt`]).
-pub fn solve(
-    params: &Params,
-    settings: &SolverSettings,
-    warm: Option<&Solution>,
-) -> Result<Solution, BvpError> {
-    if (settings.tol.is_some() || settings.richardson) && warm.is_none() {
-        return super::adapt::solve_to_tolerance(params, settings);
-    }
-    solve_on_mesh(params, settings, mesh_of(params, settings)?, warm)
 }
 
 /// Solve on a given mesh (it must hold the scene's breakpoints as nodes).

@@ -127,7 +127,7 @@ impl Bounds {
 impl FitParam {
     /// The parameter of scene key `key`, with its range; a one-line refusal otherwise.
     pub fn from_key(key: &str) -> Result<FitParam, String> {
-        let param = SensParam::from_key(key)?;
+        let param = keys::sensitivity_param(key)?;
         let bounds = keys::find(param.key()).map_or(Bounds::NONE, |k| Bounds::of_rule(k.rule));
         Ok(FitParam { param, bounds })
     }

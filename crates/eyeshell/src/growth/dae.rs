@@ -28,6 +28,7 @@
 
 use super::crossing::Crossing;
 use super::points::NP;
+use super::settings::DaeLinear;
 use super::system::{GrowthSystem, RhsError};
 use super::ThicknessLaw;
 use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, POLE_ROWS};
@@ -38,46 +39,15 @@ use crate::bvp::equations::{
 use crate::bvp::settings::Scheme;
 use crate::model::growth_law::positive_smooth;
 use crate::model::params::Params;
-use eyeshell_sundials::linalg::{
-    Csr, DirectSolver, Fallback, InterleavedBand, KluSolver, LinalgError, Reduced, SchurSolver,
+use eyeshell_linalg::{
+    Csr, DirectSolver, Fallback, InterleavedBand, LinalgError, Reduced, SchurSolver,
 };
-use eyeshell_sundials::MatrixSink;
+use eyeshell_sundials::{KluSolver, MatrixSink};
 
 /// W unknowns per node: the five elastic unknowns and z.
 pub const NW: usize = 6;
 /// Index of z among a node's W unknowns.
 pub const Z: usize = 5;
-
-/// Which linear solver factors the Newton matrix of the coupled system.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DaeLinear {
-    /// Eliminate the growth unknowns point by point; almost-block-diagonal LU (6×6 node
-    /// blocks) of what is left.
-    SchurBlock,
-    /// Eliminate the growth unknowns point by point; band LU of what is left.
-    Schur,
-    /// The same elimination; KLU of what is left.
-    SchurKlu,
-    /// Band LU of the whole system, unknowns interleaved node by node.
-    Band,
-    /// KLU on the whole sparse system.
-    Klu,
-}
-
-impl DaeLinear {
-    pub const NAMES: [&'static str; 5] = ["schur-block", "schur", "schur-klu", "band", "klu"];
-    pub const ALL: [DaeLinear; 5] = [
-        DaeLinear::SchurBlock,
-        DaeLinear::Schur,
-        DaeLinear::SchurKlu,
-        DaeLinear::Band,
-        DaeLinear::Klu,
-    ];
-
-    pub fn name(self) -> &'static str {
-        Self::NAMES[self as usize]
-    }
-}
 
 /// Where a growth point reads its local state (r, θ, z, α_s).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -376,26 +346,6 @@ impl SensParam {
         }
     }
 
-    /// The parameter of scene key `key`, or why there is none: a one-line reason naming it.
-    pub fn from_key(key: &str) -> Result<SensParam, String> {
-        if let Some(p) = Self::ALL.into_iter().find(|p| p.key() == key) {
-            return Ok(p);
-        }
-        let supported = format!("supported: {}", Self::SUPPORTED);
-        Err(match key {
-            "stimulus.red.offset" => format!(
-                "{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero ({supported})"
-            ),
-            _ => match crate::scene::keys::find(key) {
-                Some(_) => format!("sensitivities to {key} are not available ({supported})"),
-                None => format!(
-                    "{key:?} is not a scene key ({supported}; {} lists every key)",
-                    crate::text::advice(&crate::text::Advice::ListKeys)
-                ),
-            },
-        })
-    }
-
     /// Why the parameter cannot be taken in a model of `params`, if it cannot: fibres.D in
     /// a scene without fibres (D = 0 leaves the fibres out of the model, docs/MODEL.md §2).
     pub fn check(self, params: &Params) -> Result<(), String> {
@@ -659,7 +609,7 @@ impl CoupledDae {
         Ok(match kind {
             DaeLinear::SchurBlock => schur(Reduced::Block)?,
             DaeLinear::Schur => schur(Reduced::Band)?,
-            DaeLinear::SchurKlu => schur(Reduced::Klu)?,
+            DaeLinear::SchurKlu => schur(KluSolver::REDUCED)?,
             DaeLinear::Band => Box::new(InterleavedBand::new(
                 &self.jac,
                 self.interleaving(),
@@ -672,7 +622,7 @@ impl CoupledDae {
     /// The Schur paths' fallback for a matrix whose growth block cannot be eliminated
     /// without pivoting (huge steps where a point's rates barely depend on its own state):
     /// KLU on the whole matrix where KLU was built in, else the pivoted interleaved band.
-    fn pivoting_solver(&self) -> eyeshell_sundials::linalg::MakeSolver {
+    fn pivoting_solver(&self) -> eyeshell_linalg::MakeSolver {
         let pattern = self.jac.clone();
         let (perm, border) = (self.interleaving(), self.d());
         Box::new(move || -> Result<Box<dyn DirectSolver>, LinalgError> {
@@ -1918,36 +1868,6 @@ mod tests {
     use crate::bvp::settings::SolverSettings;
     use crate::growth::GrowthParams;
     use crate::model::params::Params;
-
-    /// Every parameter round-trips through its scene key, `set` and `value` touch the
-    /// field the key names (as the scene's own key does), and the refusals name the key.
-    #[test]
-    fn sensitivity_parameters_and_their_keys() {
-        use crate::scene::Scene;
-        for param in SensParam::ALL {
-            assert_eq!(SensParam::from_key(param.key()), Ok(param));
-            let mut scene = Scene::default_scene();
-            scene.params.d = 200.0;
-            let mut g = GrowthParams::default();
-            param.set(&mut scene.params, &mut g, 0.75);
-            assert_eq!(param.value(&scene.params, &g), 0.75, "{}", param.key());
-            scene.growth = Some(GrowthParams::default());
-            scene.set(param.key(), 0.75).unwrap();
-            let ours = (scene.params, scene.growth.clone().unwrap());
-            assert_eq!(param.value(&ours.0, &ours.1), 0.75, "{}", param.key());
-            assert!(SensParam::SUPPORTED.contains(param.key()));
-        }
-        let why = SensParam::from_key("stimulus.red.offset").unwrap_err();
-        assert!(why.contains("only affects the classification"), "{why}");
-        let why = SensParam::FibreStiffness
-            .check(&Params::default())
-            .unwrap_err();
-        assert!(
-            why.starts_with("fibres.D = 0: the scene has no fibres"),
-            "{why}"
-        );
-        assert!(SensParam::Modulus.check(&Params::default()).is_ok());
-    }
 
     /// The const and fibre scenes (the fibre scene: non-uniform thickness, D = 200, so
     /// jump nodes and two growth points at them) under both schemes, N = 31, rounded kinks.

@@ -9,7 +9,8 @@
 //! [`STEP_GROWTH_THRESHOLD`]. A failure inside a step (an evaluation that cannot be made, a singular
 //! matrix) is recoverable: IDA cuts the step and tries again.
 
-use super::dae::{CoupledDae, DaeLinear};
+use super::dae::CoupledDae;
+use super::settings::DaeLinear;
 use super::GrowthSettings;
 use crate::text::decimals6;
 use eyeshell_sundials::{

@@ -30,7 +30,8 @@
 use crate::bvp::adapt::{self, PassEstimate};
 use crate::bvp::discretisation::{MaterialData, NY};
 use crate::bvp::settings::SolverSettings;
-use crate::bvp::solve::{BvpError, ElasticSolver, Solution};
+use crate::bvp::solve::{ElasticSolver, Solution};
+use crate::bvp::BvpError;
 use crate::bvp::ErrorEstimate;
 use crate::mesh::Mesh;
 use crate::model::params::Params;

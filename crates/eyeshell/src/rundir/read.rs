@@ -83,6 +83,65 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
     })
 }
 
+/// One row of sensitivities.csv read back: at time `t`, the derivatives of the run's
+/// measures with respect to `parameter` (a scene key), in the order of
+/// [`super::growth::SENSITIVITY_COLUMNS`] after the first two.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SensitivityRecord {
+    pub t: f64,
+    pub parameter: String,
+    pub values: [f64; 4],
+}
+
+/// sensitivities.csv of the growth run `dir` (`grow --sensitivities`), None without the
+/// file. Read with the size bound of every CSV run file; the header must be eyeshell's and
+/// every row six cells, numbers where numbers belong. Errors (bad input) name the file and
+/// the line.
+pub fn read_sensitivities(dir: &Path) -> Result<Option<Vec<SensitivityRecord>>, ReadError> {
+    use super::growth::{SENSITIVITIES_FILE, SENSITIVITY_COLUMNS};
+    let path = dir.join(SENSITIVITIES_FILE);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let records = super::table::read_records(&path)?;
+    if !records
+        .header
+        .as_ref()
+        .is_some_and(|h| h.iter().map(String::as_str).eq(SENSITIVITY_COLUMNS))
+    {
+        return Err(bad(format!(
+            "{}: the header is not {}",
+            path.display(),
+            SENSITIVITY_COLUMNS.join(",")
+        )));
+    }
+    let mut rows = Vec::new();
+    for r in records.iter() {
+        let at = |what: String| bad(format!("{}: line {}: {what}", path.display(), r.line));
+        if r.cells.len() != SENSITIVITY_COLUMNS.len() {
+            return Err(at(format!(
+                "{} cells, not {}",
+                r.cells.len(),
+                SENSITIVITY_COLUMNS.len()
+            )));
+        }
+        let num = |c: usize| {
+            r.cells[c].parse::<f64>().map_err(|_| {
+                at(format!(
+                    "{:?} is not a number",
+                    crate::text::excerpt(&r.cells[c], 40)
+                ))
+            })
+        };
+        rows.push(SensitivityRecord {
+            t: num(0)?,
+            parameter: r.cells[1].to_string(),
+            values: [num(2)?, num(3)?, num(4)?, num(5)?],
+        });
+    }
+    Ok(Some(rows))
+}
+
 /// One output time of a growth run, read back.
 #[derive(Clone, Debug)]
 pub struct RunSnapshot {
@@ -247,6 +306,43 @@ fn check_snapshot_nodes(snapshots: &[RunSnapshot]) -> Result<(), ReadError> {
 mod tests {
     use super::*;
     use crate::rundir::summary::{StudySummary, SweepSummary};
+
+    /// sensitivities.csv read back: the rows as written, None without the file, and a
+    /// header, a row's width or a cell that is not eyeshell's refused naming file and line.
+    #[test]
+    fn sensitivities_read_back_and_bad_ones_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        assert_eq!(read_sensitivities(dir.path()).unwrap(), None);
+        let path = dir.path().join("sensitivities.csv");
+        let header = "t,parameter,d_axial_length,d_equatorial_radius,d_retina_minus_blue,scaled_axial_length\n";
+        fs::write(&path, format!("{header}0.5,growth.eta0,1.5,-2,3e-3,0.25\n")).unwrap();
+        assert_eq!(
+            read_sensitivities(dir.path()).unwrap(),
+            Some(vec![SensitivityRecord {
+                t: 0.5,
+                parameter: "growth.eta0".into(),
+                values: [1.5, -2.0, 3e-3, 0.25],
+            }])
+        );
+        for (text, says) in [
+            (
+                "t,parameter\n".to_string(),
+                "the header is not t,parameter,",
+            ),
+            (
+                format!("{header}0.5,growth.eta0,1,2,3\n"),
+                "line 2: 5 cells, not 6",
+            ),
+            (
+                format!("{header}0.5,growth.eta0,1,2,3,x\n"),
+                "line 2: \"x\" is not a number",
+            ),
+        ] {
+            fs::write(&path, text).unwrap();
+            let e = read_sensitivities(dir.path()).unwrap_err().to_string();
+            assert!(e.contains("sensitivities.csv") && e.contains(says), "{e}");
+        }
+    }
 
     #[test]
     fn only_runs_read_as_runs() {

@@ -6,8 +6,9 @@
 
 use super::Scene;
 use crate::bvp::settings::{LinearSolverKind, Scheme};
-use crate::growth::dae::DaeLinear;
-use crate::growth::{GrowthParams, Integrator, ThicknessLaw};
+use crate::growth::dae::SensParam;
+use crate::growth::settings::{DaeLinear, GrowthParams, Integrator};
+use crate::growth::ThicknessLaw;
 use crate::model::optics::{Source, EYES, FOCUS_NAMES, SOURCES};
 use crate::model::params::Thickness;
 
@@ -329,6 +330,28 @@ impl KeySpec {
 /// Look a key up by its exact name.
 pub fn find(key: &str) -> Option<&'static KeySpec> {
     KEYS.iter().find(|k| k.key == key)
+}
+
+/// The sensitivity parameter of scene key `key`, or why there is none: a one-line reason
+/// naming it. Here, on the scene's side, because the reasons are about keys (the growth
+/// names its parameters' keys, it does not read the key table).
+pub fn sensitivity_param(key: &str) -> Result<SensParam, String> {
+    if let Some(p) = SensParam::ALL.into_iter().find(|p| p.key() == key) {
+        return Ok(p);
+    }
+    let supported = format!("supported: {}", SensParam::SUPPORTED);
+    Err(match key {
+        "stimulus.red.offset" => format!(
+            "{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero ({supported})"
+        ),
+        _ => match find(key) {
+            Some(_) => format!("sensitivities to {key} are not available ({supported})"),
+            None => format!(
+                "{key:?} is not a scene key ({supported}; {} lists every key)",
+                crate::text::advice(&crate::text::Advice::ListKeys)
+            ),
+        },
+    })
 }
 
 /// The most Newton iterations one solve may be allowed (each may also spend a bounded

@@ -1062,3 +1062,34 @@ fn bad_optics_keys_are_refused_naming_the_key() {
     // A polynomial scene does not check (or trace) optics keys it does not use.
     assert!(parse_set("growth.eta0 = 70", &["optics.pupil=12"]).is_ok());
 }
+
+/// Every parameter round-trips through its scene key, `set` and `value` touch the
+/// field the key names (as the scene's own key does), and the refusals name the key.
+#[test]
+fn sensitivity_parameters_and_their_keys() {
+    for param in crate::growth::dae::SensParam::ALL {
+        assert_eq!(super::keys::sensitivity_param(param.key()), Ok(param));
+        let mut scene = Scene::default_scene();
+        scene.params.d = 200.0;
+        let mut g = crate::growth::GrowthParams::default();
+        param.set(&mut scene.params, &mut g, 0.75);
+        assert_eq!(param.value(&scene.params, &g), 0.75, "{}", param.key());
+        scene.growth = Some(crate::growth::GrowthParams::default());
+        scene.set(param.key(), 0.75).unwrap();
+        let ours = (scene.params, scene.growth.clone().unwrap());
+        assert_eq!(param.value(&ours.0, &ours.1), 0.75, "{}", param.key());
+        assert!(crate::growth::dae::SensParam::SUPPORTED.contains(param.key()));
+    }
+    let why = super::keys::sensitivity_param("stimulus.red.offset").unwrap_err();
+    assert!(why.contains("only affects the classification"), "{why}");
+    let why = crate::growth::dae::SensParam::FibreStiffness
+        .check(&crate::model::params::Params::default())
+        .unwrap_err();
+    assert!(
+        why.starts_with("fibres.D = 0: the scene has no fibres"),
+        "{why}"
+    );
+    assert!(crate::growth::dae::SensParam::Modulus
+        .check(&crate::model::params::Params::default())
+        .is_ok());
+}

@@ -12,7 +12,7 @@ use eyeshell::bvp::discretisation::{DenseSink, NY, POLE_ROWS};
 use eyeshell::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
 use eyeshell::bvp::solve::{discretise, sphere_guess};
 use eyeshell::model::params::{Params, Thickness};
-use eyeshell_sundials::linalg::AbdLu;
+use eyeshell_linalg::AbdLu;
 use nalgebra::{DMatrix, DVector};
 
 fn scenes() -> Vec<(&'static str, Params)> {

@@ -2,7 +2,7 @@
 //! survives the growth extremes of TESTING.md, and every linear solver gives the same run.
 
 use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::growth::dae::DaeLinear;
+use eyeshell::growth::DaeLinear;
 use eyeshell::growth::*;
 use eyeshell::model::params::{Params, Thickness};
 

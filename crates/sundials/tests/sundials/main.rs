@@ -4,13 +4,12 @@
 
 mod sundials_support;
 
-mod abd;
-mod band_lu;
 mod cvode;
 mod ida;
 mod idas;
 mod kinsol;
 mod kinsol_block;
 mod kinsol_factorization;
+mod klu_solver;
 mod linkage;
 mod linsol;

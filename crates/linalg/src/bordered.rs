@@ -3,20 +3,16 @@
 //! v = A⁻¹c once per factorisation, the scalar Schur
 //! complement σ = s − rᵀv; then each solve is one band back-substitution:
 //!   x_A = A⁻¹ b_A,  x_s = (b_s − rᵀ x_A) / σ,  x_A ← x_A − v x_s.
-//! Why a border: in the growth DAE one unknown (the blue depth where the retina crosses
-//! φ_max) is read by every point beyond φ_max, a dense column no band can hold.
+//! Why a border: one unknown read by many equations far apart is a dense column no band
+//! can hold, and would widen the band to the whole matrix.
 //!
 //! Also here: [`InterleavedBand`], band LU of a whole CSR matrix in a given order with one
-//! unknown as the border, and [`KluSolver`], KLU on the CSR matrix as it is.
+//! unknown as the border.
 
-use std::rc::Rc;
-
-use super::{AbdLu6, BandLu, Csr, DirectSolver, LinalgError};
-use crate::{Context, LinearSolver, LinearSolverSpec, Matrix, MatrixSink, NVector};
+use super::{AbdLu6, BandLu, Csr, DirectSolver, LinalgError, MatrixSink};
 
 /// The square matrix A inside a border: factored in place, then solved with any number of
-/// times ([`BandLu`], or the almost-block-diagonal [`AbdLu6`] of the growth DAE's reduced
-/// matrix).
+/// times ([`BandLu`], or the almost-block-diagonal [`AbdLu6`]).
 pub trait Bordering {
     /// n, A's size.
     fn size(&self) -> usize;
@@ -292,62 +288,6 @@ impl DirectSolver for InterleavedBand {
                 self.perm[i]
             }];
         }
-        Ok(())
-    }
-}
-
-/// SUNDIALS' KLU on the CSR matrix in its own order (KLU orders for fill itself).
-pub struct KluSolver {
-    matrix: Matrix,
-    solver: LinearSolver,
-    b: NVector,
-    x: NVector,
-    _ctx: Rc<Context>,
-}
-
-impl KluSolver {
-    pub fn new(pattern: &Csr) -> Result<Self, LinalgError> {
-        let ctx = Context::new()?;
-        let spec = LinearSolverSpec::Klu {
-            row_ptr: pattern.row_ptr().to_vec(),
-            col_idx: pattern.col_idx().to_vec(),
-        };
-        let (matrix, solver) = LinearSolver::for_spec(&ctx, pattern.n(), &spec)?;
-        let (b, x) = (
-            NVector::new(&ctx, pattern.n())?,
-            NVector::new(&ctx, pattern.n())?,
-        );
-        Ok(KluSolver {
-            matrix,
-            solver,
-            b,
-            x,
-            _ctx: ctx,
-        })
-    }
-}
-
-impl DirectSolver for KluSolver {
-    /// KLU refactors with the pivot order of its first factorisation, and SUNDIALS reports
-    /// a zero pivot there as a failure instead of pivoting afresh (seen in growth at rtol
-    /// 1e-2, where the steps change the matrix a lot): then factor anew from scratch.
-    fn factor(&mut self, a: &Csr) -> Result<(), LinalgError> {
-        let Matrix::Sparse(m) = &mut self.matrix else {
-            unreachable!("made for KLU")
-        };
-        m.copy_values(a.values())?;
-        if self.solver.setup(&mut self.matrix).is_ok() {
-            return Ok(());
-        }
-        self.solver = LinearSolver::new(&self._ctx, &self.matrix)?;
-        self.solver.setup(&mut self.matrix)?;
-        Ok(())
-    }
-
-    fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
-        self.b.as_mut_slice().copy_from_slice(b);
-        self.solver.solve(&mut self.matrix, &mut self.x, &self.b)?;
-        x.copy_from_slice(self.x.as_slice());
         Ok(())
     }
 }

@@ -5,9 +5,9 @@
 //! from the next block, singular matrices reported as such, non-finite entries, and a
 //! proptest over sizes and structures.
 
-use crate::sundials_support::{fill_from_dense, relative_residual};
-use eyeshell_sundials::linalg::{Abd, AbdLu, AbdLu6, LinalgError, ABD_NODE};
-use eyeshell_sundials::MatrixSink;
+use crate::support::{fill_from_dense, relative_residual};
+use eyeshell_linalg::MatrixSink;
+use eyeshell_linalg::{Abd, AbdLu, AbdLu6, LinalgError, ABD_NODE};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 

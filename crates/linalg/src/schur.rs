@@ -1,40 +1,41 @@
-//! The Schur complement of the growth unknowns. The unknowns are ordered
-//! [P | W | d]: P in 2×2 blocks (a growth point's ρ and γ_s), W the band unknowns (the
-//! elastic state and z, node by node), d an optional border unknown. In the Newton matrix
+//! The Schur complement of local 2×2 blocks of unknowns. The unknowns are ordered
+//! [P | W | d]: P in 2×2 blocks, W the band unknowns (node by node), d an optional
+//! border unknown. In the matrix
 //!   [D  B  e]      D: block lower triangular (each block's rows read its own block and
-//!   [C  A  0]         earlier ones: a Hermite–Simpson midpoint reads its interval's ends),
+//!   [C  A  0]         earlier ones, e.g. a block between two nodes reads theirs),
 //!   [cᵀ aᵀ s]      A: band, B and C local (a block's rows and columns touch a few nodes),
 //! eliminating P leaves S = [A − C X, −C x_d; aᵀ − cᵀX, s − cᵀ x_d] with [X x_d] = D⁻¹[B e],
 //! which has A's band (every X row spans the W columns of one interval) bordered by d.
-//! A Newton step then costs one LU of S (at setup) and one back-substitution (per solve),
-//! the size of the elastic problem alone.
+//! A solve then costs one LU of S (at setup) and one back-substitution (per solve), the
+//! size of W alone.
 //!
-//! S's structure is the elastic Jacobian's with z added (docs/MODEL.md §3, §5–6): 6
-//! unknowns a node; 3 pole rows reading node 0 (through the pole's growth point, whose X
-//! spans node 0 only), per interval 6 rows reading its two nodes (its points' X span the
-//! same nodes, a midpoint's both), 3 cornea rows reading the last node; and the border.
-//! So besides a band (lower 8, upper 8: [`Reduced::Band`]) S is almost block diagonal with
+//! When A is the Jacobian of a one-step scheme on a mesh with 6 unknowns a node (rows at
+//! the left end reading node 0, per interval 6 rows reading its two nodes, rows at the
+//! right end reading the last node) and every block's X spans the nodes of one interval,
+//! S keeps that shape: besides a band ([`Reduced::Band`]) S is almost block diagonal with
 //! 6×6 node blocks, factored by [`super::AbdLu6`] ([`Reduced::Block`]: no zero band
 //! entries are stored or eliminated); [`SchurSolver::new`] checks that the pattern fits.
 //!
 //! The elimination order is the blocks' order, so the caller numbers blocks that others
 //! read first; [`SchurSolver::new`] checks the pattern for it.
 
-use super::{
-    AbdLu6, Bordered, BorderedAbd, BorderedBand, Csr, DirectSolver, KluSolver, LinalgError,
-};
+use super::{AbdLu6, Bordered, BorderedAbd, BorderedBand, Csr, DirectSolver, LinalgError};
+
+/// Makes a sparse direct solver for a matrix of the given pattern ([`Reduced::Sparse`]).
+pub type MakeSparse = fn(&Csr) -> Result<Box<dyn DirectSolver>, LinalgError>;
 
 /// How the reduced matrix S is factored.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug)]
 pub enum Reduced {
     /// The crate's band LU ([`super::BandLu`]), the border by block elimination.
     Band,
     /// The almost-block-diagonal LU of 6×6 node blocks ([`AbdLu6`]), the border by block
-    /// elimination: S's rows are the pole's (node 0), each interval's (its two nodes) and
-    /// the cornea's (the last node), checked on the pattern by [`SchurSolver::new`].
+    /// elimination: S's rows are the left end's (node 0), each interval's (its two nodes)
+    /// and the right end's (the last node), checked on the pattern by [`SchurSolver::new`].
     Block,
-    /// KLU on S as a sparse matrix (its band rows and the border).
-    Klu,
+    /// A sparse direct solver (made by the function for S's pattern: its band rows and the
+    /// border) on S as a CSR matrix; eyeshell-sundials' KLU is one.
+    Sparse(MakeSparse),
 }
 
 /// A pivot block D_kk is used unpivoted only while |det D_kk| ≥ this × the product of its
@@ -55,11 +56,11 @@ enum ReducedSolver {
     },
     /// S as CSR, and its rows in dense band storage while it is built (row jw holds
     /// columns jw − lower ..= jw + upper) and its border row.
-    Klu {
+    Sparse {
         s: Csr,
         s_rows: Vec<f64>,
         s_border: Vec<f64>,
-        klu: KluSolver,
+        solver: Box<dyn DirectSolver>,
     },
 }
 
@@ -128,7 +129,7 @@ pub struct SchurSolver {
     reduced: ReducedSolver,
     /// S's bandwidths.
     widths: (usize, usize),
-    /// KLU's right side (it does not solve in place).
+    /// The sparse solver's right side (it does not solve in place).
     rhs: Vec<f64>,
     /// X = 0 in the last factorisation: S = [A a; aᵀ s], the algebraic block alone.
     algebraic_only: bool,
@@ -217,7 +218,7 @@ impl SchurSolver {
                 bb: Bordered::around(block_structure(&spans)?, border),
                 row: vec![0.0; BLOCK_WIDTH * 2],
             },
-            Reduced::Klu => {
+            Reduced::Sparse(make) => {
                 let mut rows: Vec<Vec<usize>> = (0..n_w)
                     .map(|jw| {
                         (jw.saturating_sub(lower)..(jw + upper + 1).min(n_w))
@@ -229,14 +230,14 @@ impl SchurSolver {
                     rows.push((0..=n_w).collect());
                 }
                 let s = Csr::from_rows(rows);
-                let klu = KluSolver::new(&s)?;
+                let solver = make(&s)?;
                 let s_rows = vec![0.0; n_w * (lower + upper + 1)];
                 let s_border = vec![0.0; n_w];
-                ReducedSolver::Klu {
+                ReducedSolver::Sparse {
                     s,
                     s_rows,
                     s_border,
-                    klu,
+                    solver,
                 }
             }
         };
@@ -269,10 +270,10 @@ impl SchurSolver {
         match &mut self.reduced {
             ReducedSolver::Band(bb) => bb.solve_in_place(x),
             ReducedSolver::Block { bb, .. } => bb.solve_in_place(x),
-            ReducedSolver::Klu { klu, .. } => {
+            ReducedSolver::Sparse { solver, .. } => {
                 let rhs = &mut self.rhs[..x.len()];
                 rhs.copy_from_slice(x);
-                klu.solve(rhs, x)
+                solver.solve(rhs, x)
             }
         }
     }
@@ -424,7 +425,7 @@ impl SchurSolver {
                 });
                 Ok(())
             }
-            ReducedSolver::Klu {
+            ReducedSolver::Sparse {
                 s,
                 s_rows,
                 s_border,
@@ -519,7 +520,7 @@ impl SchurSolver {
         match &mut self.reduced {
             ReducedSolver::Band(bb) => bb.factor(),
             ReducedSolver::Block { bb, .. } => bb.factor(),
-            ReducedSolver::Klu { s, klu, .. } => klu.factor(s),
+            ReducedSolver::Sparse { s, solver, .. } => solver.factor(s),
         }
     }
 }
@@ -529,7 +530,7 @@ const BLOCK_WIDTH: usize = 6;
 
 /// The almost-block-diagonal matrix whose structure holds S's rows, given each row's first
 /// and last column (None: an empty row): the top rows are the leading rows within node 0
-/// (3 pole rows for the growth DAE), and every row must lie within its row's span in that
+/// (the left boundary's conditions), and every row must lie within its row's span in that
 /// structure, or S is not of this shape.
 fn block_structure(spans: &[Option<(usize, usize)>]) -> Result<AbdLu6, LinalgError> {
     let n = spans.len();
@@ -671,27 +672,23 @@ mod tests {
             .unwrap();
         let check = |x: &[f64], who: &str| assert_close(x, expect.as_slice(), 1e-12, who);
         let mut x = vec![0.0; n];
-        for how in [Reduced::Band, Reduced::Klu] {
-            if how == Reduced::Klu && !crate::klu_available() {
-                continue;
-            }
+        // A sparse solver for S: the interleaved band LU in S's own order, no border.
+        let sparse: MakeSparse = |s| {
+            let order = (0..s.n()).collect();
+            Ok(Box::new(crate::InterleavedBand::new(s, order, None)?))
+        };
+        for how in [Reduced::Band, Reduced::Sparse(sparse)] {
             let mut schur = SchurSolver::new(&a, n_p, true, how).unwrap();
             schur.factor(&a).unwrap();
             schur.solve(&b, &mut x).unwrap();
-            check(&x, "schur");
+            check(&x, &format!("schur {how:?}"));
         }
         let mut schur = SchurSolver::new(&a, n_p, true, Reduced::Band).unwrap();
         let perm: Vec<usize> = (0..n).map(|i| if i == d { 0 } else { i }).collect();
-        let mut band = super::super::InterleavedBand::new(&a, perm, Some(d)).unwrap();
+        let mut band = crate::InterleavedBand::new(&a, perm, Some(d)).unwrap();
         band.factor(&a).unwrap();
         band.solve(&b, &mut x).unwrap();
         check(&x, "band");
-        if crate::klu_available() {
-            let mut klu = super::super::KluSolver::new(&a).unwrap();
-            klu.factor(&a).unwrap();
-            klu.solve(&b, &mut x).unwrap();
-            check(&x, "klu");
-        }
         // The algebraic block alone: [A a; cᵀ s] w = −C p.
         let p: Vec<f64> = (0..n_p).map(|i| 0.1 * i as f64).collect();
         schur.factor_algebraic(&a).unwrap();
@@ -725,13 +722,13 @@ mod tests {
         let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
         let expect = dense.lu().solve(&DVector::from_vec(b.clone())).unwrap();
         let pattern = a.clone();
-        let mut solver = super::super::Fallback::new(
+        let mut solver = crate::Fallback::new(
             Box::new(SchurSolver::new(&a, n_p, true, Reduced::Band).unwrap()),
             Box::new(move || -> Result<Box<dyn DirectSolver>, LinalgError> {
                 let perm: Vec<usize> = (0..pattern.n())
                     .map(|i| if i == pattern.n() - 1 { 0 } else { i })
                     .collect();
-                Ok(Box::new(super::super::InterleavedBand::new(
+                Ok(Box::new(crate::InterleavedBand::new(
                     &pattern,
                     perm,
                     Some(pattern.n() - 1),

@@ -3,9 +3,9 @@
 //! interchanges, singular matrices reported as such, writes outside the band, and the
 //! bordered band built on it.
 
-use crate::sundials_support::{fill_from_dense, relative_residual};
-use eyeshell_sundials::linalg::{BandLu, BorderedBand, LinalgError};
-use eyeshell_sundials::MatrixSink;
+use crate::support::{fill_from_dense, relative_residual};
+use eyeshell_linalg::MatrixSink;
+use eyeshell_linalg::{BandLu, BorderedBand, LinalgError};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 

@@ -1,21 +1,19 @@
 //! LU of almost-block-diagonal (ABD) matrices with N×N node blocks, in safe Rust: the
-//! Jacobians of the shell's finite-difference BVP (docs/MODEL.md §3; N = 5, [`AbdLu`]),
-//! where each interval's five equations couple the unknowns of two neighbouring nodes and
-//! the boundary conditions sit at the two ends, and the growth DAE's reduced Newton matrix
-//! (docs/MODEL.md §5–6; N = 6, [`AbdLu6`]: the elastic unknowns and z per node, after
-//! [`super::SchurSolver`] has eliminated the growth points). The block width is a const
-//! generic, so each width gets the fixed-size code below; the text describes N = 5.
+//! Jacobians of two-point boundary-value problems discretised on a mesh (N unknowns a
+//! node; each interval's N equations couple the unknowns of its two nodes, and the
+//! boundary conditions sit at the two ends), and the reduced matrix of [`super::SchurSolver`]
+//! when it has that shape. [`AbdLu`] is N = 5, [`AbdLu6`] N = 6. The block width is a
+//! const generic, so each width gets the fixed-size code below; the text describes N = 5.
 //!
 //! Structure (M nodes, n = 5M unknowns, p rows at the start, 5 − p at the end):
 //!
 //! ```text
-//!   rows 0..p          columns 0..5                  (pole: p = 3 for the shell)
+//!   rows 0..p          columns 0..5                  (the left boundary's conditions)
 //!   rows p+5k..p+5k+5  columns 5k..5k+10, k < M − 1   (interval k: nodes k and k+1)
-//!   rows n−(5−p)..n    columns n−5..n                (cornea: 2 rows for the shell)
+//!   rows n−(5−p)..n    columns n−5..n                (the right boundary's conditions)
 //! ```
 //!
-//! Breakpoint and jump nodes add no rows or unknowns (their data only enter the values), so
-//! the trapezoid and Hermite–Simpson schemes, graded or not, all produce this one shape.
+//! Any one-step scheme on any mesh produces this one shape; what differs is only the values.
 //!
 //! # Elimination: row pivoting within block rows
 //!
@@ -60,15 +58,15 @@
 use super::LinalgError;
 use crate::MatrixSink;
 
-/// Unknowns per node of the elastic BVP's Jacobian: the size of [`AbdLu`]'s diagonal blocks.
+/// Unknowns per node of [`AbdLu`]: the size of its diagonal blocks.
 pub const NODE: usize = 5;
 /// A pivot at most this much of its column's largest original entry counts as singular.
 const PIVOT_TOLERANCE: f64 = 1e-14;
 
-/// The elastic BVP's Jacobian (KINSOL's and CVODE's elastic solves): 5×5 node blocks.
+/// An almost-block-diagonal matrix of 5×5 node blocks.
 pub type AbdLu = Abd<NODE, { 2 * NODE }>;
-/// The reduced Newton matrix S of the growth DAE ([`super::SchurSolver`]): 6×6 node
-/// blocks (the five elastic unknowns and z).
+/// An almost-block-diagonal matrix of 6×6 node blocks (the reduced matrix of
+/// [`super::SchurSolver`], [`super::Reduced::Block`]).
 pub type AbdLu6 = Abd<6, 12>;
 
 /// An almost-block-diagonal matrix with N×N node blocks (see the module docs; W = 2N, the

@@ -1,6 +1,6 @@
-//! Band LU with partial pivoting, in safe Rust, for the reduced Newton matrix of the growth
-//! DAE (n in the thousands, bandwidths under ten). It replaces SUNDIALS' scalar band LU,
-//! which ran at about 1 Gflop/s and needed copies into SUNDIALS objects.
+//! Band LU with partial pivoting, in safe Rust, for matrices with n in the thousands and
+//! bandwidths under ten. It is faster than SUNDIALS' scalar band LU (about 1 Gflop/s), and
+//! needs no copies into SUNDIALS objects.
 //!
 //! Storage: row-major band rows. Row i holds columns i − kl ..= i + ku + kl contiguously
 //! (stride w = 2 kl + ku + 1): the band itself and kl more columns on the right, where

@@ -1,0 +1,193 @@
+//! The settings of a growth run, as the scene gives them: the growth model's parameters
+//! ([`GrowthParams`]) and the time integration's ([`GrowthSettings`], [`Integrator`],
+//! [`DaeLinear`]). The scene reads and writes these types (scene/keys.rs); nothing here
+//! reads the scene.
+
+use super::dae::SensParam;
+use super::ThicknessLaw;
+use crate::model::optics::{ComputedOptics, OpticsSpec, Source};
+use crate::model::stimulus::{Focal, Surface};
+
+/// The growth model of one scene (docs/MODEL.md §4–6).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GrowthParams {
+    /// growth.eta0: η0, the largest growth rate.
+    pub eta0: f64,
+    /// growth.Gamma: Γ, where the growth capacity falls to half.
+    pub gamma: f64,
+    /// growth.delta: δ, the width of that fall.
+    pub delta: f64,
+    /// growth.t_end: the end of the run (dimensionless time).
+    pub t_end: f64,
+    /// growth.thickness_law.
+    pub thickness_law: ThicknessLaw,
+    /// The best-focus surface for blue light (growth stops where the retina reaches it).
+    pub blue: Surface,
+    /// The best-focus surface for red light (for the classification only).
+    pub red: Surface,
+    /// growth.kink_width: round the [·]⁺ kinks of the growth laws over this width (0, the
+    /// default: the model's exact kinks; an option for measuring what they cost).
+    pub kink_width: f64,
+    /// stimulus.source: the polynomial surfaces above, or surfaces computed from `optics`.
+    pub source: Source,
+    /// The optics.* keys (used with `Source::Optics`).
+    pub optics: OpticsSpec,
+    /// The surfaces `optics` gives about `blue.z_b`, traced once ([`GrowthParams::resolved`])
+    /// and shared by every copy of these parameters.
+    pub computed: Option<std::sync::Arc<ComputedOptics>>,
+}
+
+impl GrowthParams {
+    /// The blue surface the stimulus reads: the computed one with `Source::Optics` (once
+    /// [`GrowthParams::resolved`]), else the polynomial.
+    pub fn blue_focal(&self) -> Focal<'_> {
+        match (&self.source, &self.computed) {
+            (Source::Optics, Some(c)) => Focal::Computed(&c.blue),
+            _ => Focal::Polynomial(&self.blue),
+        }
+    }
+
+    /// The red surface of the classification, as [`GrowthParams::blue_focal`].
+    pub fn red_focal(&self) -> Focal<'_> {
+        match (&self.source, &self.computed) {
+            (Source::Optics, Some(c)) => Focal::Computed(&c.red),
+            _ => Focal::Polynomial(&self.red),
+        }
+    }
+
+    /// True when the stimulus can be read as it is: polynomial surfaces, or computed ones
+    /// that are those of the current optics keys and centre.
+    pub fn is_resolved(&self) -> bool {
+        self.source == Source::Polynomial
+            || self
+                .computed
+                .as_ref()
+                .is_some_and(|c| c.is_for(&self.optics, self.blue.z_b))
+    }
+
+    /// These parameters with their surfaces computed if they must be (once: a resolved copy
+    /// is returned as it is). The error names the optics key to change.
+    pub fn resolved(&self) -> Result<std::borrow::Cow<'_, GrowthParams>, String> {
+        if self.is_resolved() {
+            return Ok(std::borrow::Cow::Borrowed(self));
+        }
+        let computed = self
+            .optics
+            .compute(self.blue.z_b)
+            .map_err(|e| e.to_string())?;
+        Ok(std::borrow::Cow::Owned(GrowthParams {
+            computed: Some(std::sync::Arc::new(computed)),
+            ..self.clone()
+        }))
+    }
+}
+
+impl Default for GrowthParams {
+    fn default() -> Self {
+        GrowthParams {
+            eta0: 70.0,
+            gamma: 8.0,
+            delta: 4.0,
+            t_end: 1.0,
+            thickness_law: ThicknessLaw::None,
+            blue: Surface::blue(),
+            red: Surface::default_red(),
+            kink_width: 0.0,
+            source: Source::Polynomial,
+            optics: OpticsSpec::default(),
+            computed: None,
+        }
+    }
+}
+
+/// Which time integrator runs the growth. IDA is the default: it wins the const scene's
+/// work-precision diagram at every axial-length accuracy from 1e-2 to 1e-7 (BENCHMARKS.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// CVODE: BDF, variable order and step, error-controlled.
+    Cvode,
+    /// Explicit Euler with a fixed number of steps (docs/MODEL.md §8), for comparison.
+    Euler,
+    /// IDA: BDF on the coupled DAE of growth and elastic equilibrium (one Newton per step).
+    Ida,
+}
+
+impl Integrator {
+    /// The names `solver.integrator` takes, in the order of the variants.
+    pub const NAMES: [&'static str; 3] = ["cvode", "euler", "ida"];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
+/// Numerical settings of the time integration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GrowthSettings {
+    /// solver.integrator.
+    pub integrator: Integrator,
+    /// solver.rtol, solver.atol: CVODE's tolerances.
+    pub rtol: f64,
+    pub atol: f64,
+    /// solver.steps: Euler's number of steps to t_end.
+    pub steps: usize,
+    /// solver.dae_linear: the linear solver of IDA's Newton matrix.
+    pub dae_linear: DaeLinear,
+    /// output.times: when to write snapshots (sorted, in (0, t_end]); t = 0 is always written.
+    pub output_times: Vec<f64>,
+    /// output.history_points: record the series row (axial length, class, ...) at this many
+    /// evenly spaced times t_end·k/n as well (history.csv), without snapshots; 0: none.
+    pub history_points: usize,
+    /// Forward sensitivities of the run with respect to these parameters (IDA only;
+    /// `eyeshell grow --sensitivities`): [`super::Observer::sensitivities`] at every recorded time.
+    pub sensitivities: Vec<SensParam>,
+    /// Whether the sensitivities take part in IDAS's local error test (IDASetSensErrCon).
+    pub sensitivity_error_control: bool,
+}
+
+impl Default for GrowthSettings {
+    fn default() -> Self {
+        GrowthSettings {
+            integrator: Integrator::Ida,
+            rtol: 1e-6,
+            atol: 1e-8,
+            steps: 200,
+            dae_linear: super::ida::default_linear(),
+            output_times: vec![0.1, 0.2, 0.4, 1.0],
+            history_points: 0,
+            sensitivities: vec![],
+            sensitivity_error_control: false,
+        }
+    }
+}
+
+/// Which linear solver factors the Newton matrix of the coupled system.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DaeLinear {
+    /// Eliminate the growth unknowns point by point; almost-block-diagonal LU (6×6 node
+    /// blocks) of what is left.
+    SchurBlock,
+    /// Eliminate the growth unknowns point by point; band LU of what is left.
+    Schur,
+    /// The same elimination; KLU of what is left.
+    SchurKlu,
+    /// Band LU of the whole system, unknowns interleaved node by node.
+    Band,
+    /// KLU on the whole sparse system.
+    Klu,
+}
+
+impl DaeLinear {
+    pub const NAMES: [&'static str; 5] = ["schur-block", "schur", "schur-klu", "band", "klu"];
+    pub const ALL: [DaeLinear; 5] = [
+        DaeLinear::SchurBlock,
+        DaeLinear::Schur,
+        DaeLinear::SchurKlu,
+        DaeLinear::Band,
+        DaeLinear::Klu,
+    ];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
