@@ -197,7 +197,7 @@ impl<'a> Beam<'a> {
             e1: Vec3::new(1.0, 0.0, 0.0),
             e2: Vec3::new(0.0, th.cos(), -th.sin()),
             // Rays start on a plane normal to the beam, far enough in front of the cornea.
-            back: 30.0 / th.cos(),
+            back: (30.0 - system.origin) / th.cos(),
             stop_z,
         }
     }
@@ -668,6 +668,13 @@ pub fn coddington(
     if system.elements.iter().any(|e| e.medium.is_grin()) {
         return Err(no_grin());
     }
+    if system.elements.iter().any(|e| e.surface.phase.is_some()) {
+        return Err(OpticsError::input(
+            "Coddington's equations",
+            f64::NAN,
+            "need refracting surfaces (this system wears a thin lens)",
+        ));
+    }
     let beam = Beam::new(
         system,
         wavelength_nm,
@@ -791,7 +798,7 @@ pub fn ray_fan(
         .map(|&(u, v)| {
             let mut ray = beam.ray(u, v);
             // Start the drawn path 1 mm in front of the apex.
-            let t0 = (-1.0 - ray.position.z) / ray.direction.z;
+            let t0 = (system.origin - 1.0 - ray.position.z) / ray.direction.z;
             ray.position += ray.direction * t0;
             let mut path = Vec::new();
             let end = beam
