@@ -467,7 +467,7 @@ pub fn check_coverage(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
         9,
         system.last_vertex() + 1.0,
     )
-    .map_err(|e| spec.explain(&e))?;
+    .map_err(|e| spec.explain_worn(&e))?;
     for (i, lens) in spec.lenses.iter().enumerate() {
         // The plane where the lens's profile acts: its vertex, or the corneal apex.
         let z = if lens.kind == 1 { 0.0 } else { -lens.vertex };
