@@ -179,6 +179,9 @@ pub(crate) struct Beam<'a> {
 
 const STOP: &str = "pupil";
 
+/// A ray's launch coordinates, or why it cannot be aimed.
+type Aimed = Result<(f64, f64), OpticsError>;
+
 impl<'a> Beam<'a> {
     pub(crate) fn new(
         system: &'a OpticalSystem,
@@ -308,7 +311,7 @@ impl<'a> Beam<'a> {
         &self,
         v_chief: f64,
         targets: &[(f64, f64)],
-    ) -> Result<Vec<Result<(f64, f64), OpticsError>>, OpticsError> {
+    ) -> Result<Vec<Aimed>, OpticsError> {
         // Through a zoned thin lens the ray map jumps at the zone edges: a wider difference
         // gives the Jacobian of the map's smooth part even where the chief ray sits on an
         // edge, and Newton's method (then linear) gets more iterations.
