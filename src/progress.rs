@@ -89,6 +89,7 @@ mod tests {
             retina_minus_blue: 0.1,
             retina_minus_red: -0.5,
             class: Refraction::Emmetropic,
+            refraction_d: 0.1,
         };
         let snap = Snapshot {
             t: 0.5,

@@ -40,7 +40,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     let z_c = scene.blue().z_b;
     let start = std::time::Instant::now();
     let computed = spec.compute(z_c).map_err(|e| key_error(&scene, e))?;
-    let system = spec.system();
+    let system = eyeshell::model::eyewear::worn(&spec).map_err(|e| key_error(&scene, e))?;
     let paraxials: Vec<Paraxial> = spec
         .wavelengths
         .iter()

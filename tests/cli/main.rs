@@ -12,6 +12,7 @@ mod export_compare;
 mod export_roundtrip;
 mod export_scipy;
 mod extremes;
+mod eyewear;
 mod figures;
 mod fit;
 mod fuzz_readers;

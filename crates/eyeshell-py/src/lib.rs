@@ -204,6 +204,8 @@ fn key_value<'py>(py: Python<'py>, v: KeyValue) -> PyResult<Bound<'py, PyAny>> {
         KeyValue::Choice(s) => s.into_pyobject(py)?.into_any(),
         KeyValue::Text(s) => s.into_pyobject(py)?.into_any(),
         KeyValue::Floats(xs) => PyList::new(py, xs)?.into_any(),
+        // The lenses as their TOML text, which `set` reads back.
+        KeyValue::Lenses(_) => v.to_string().into_pyobject(py)?.into_any(),
         KeyValue::Unset => py.None().into_bound(py),
     })
 }

@@ -35,6 +35,7 @@ fn build(name: &str, elements: Vec<Element>, pupil: f64) -> OpticalSystem {
         elements,
         pupil_position: Some(pupil),
         retina: None,
+        origin: 0.0,
     }
 }
 

@@ -179,6 +179,9 @@ pub(crate) struct Beam<'a> {
 
 const STOP: &str = "pupil";
 
+/// A ray's launch coordinates, or why it cannot be aimed.
+type Aimed = Result<(f64, f64), OpticsError>;
+
 impl<'a> Beam<'a> {
     pub(crate) fn new(
         system: &'a OpticalSystem,
@@ -197,7 +200,7 @@ impl<'a> Beam<'a> {
             e1: Vec3::new(1.0, 0.0, 0.0),
             e2: Vec3::new(0.0, th.cos(), -th.sin()),
             // Rays start on a plane normal to the beam, far enough in front of the cornea.
-            back: 30.0 / th.cos(),
+            back: (30.0 - system.origin) / th.cos(),
             stop_z,
         }
     }
@@ -241,11 +244,56 @@ impl<'a> Beam<'a> {
             v1 = v2;
             f1 = self.at_stop(0.0, v1)?.1;
         }
+        if self
+            .tracer
+            .system
+            .elements
+            .iter()
+            .any(|e| e.surface.phase.is_some())
+        {
+            // A thin lens's zone edge can leave a sliver of the stop that no ray reaches: if
+            // its centre lies there, the chief ray is the ray at the sliver's edge, found by
+            // bisection on a bracket (the sliver is micrometres wide).
+            if let Some(v) = self.chief_by_bisection()? {
+                return Ok(v);
+            }
+        }
         Err(OpticsError::NoFocus {
             field_deg: self.field_deg,
             wavelength_nm: self.wavelength_nm,
             reason: "no chief ray through the centre of the pupil".into(),
         })
+    }
+
+    fn chief_by_bisection(&self) -> Result<Option<f64>, OpticsError> {
+        let f = |v: f64| self.at_stop(0.0, v).map(|p| p.1);
+        let (mut a, mut b) = (-1.0, 1.0);
+        let (mut fa, fb) = (f(a)?, f(b)?);
+        let mut grow = 0;
+        while fa * fb > 0.0 && grow < 6 {
+            a *= 3.0;
+            b *= 3.0;
+            fa = f(a)?;
+            if fa * f(b)? <= 0.0 {
+                break;
+            }
+            grow += 1;
+        }
+        if fa * f(b)? > 0.0 {
+            return Ok(None);
+        }
+        for _ in 0..80 {
+            let m = 0.5 * (a + b);
+            let fm = f(m)?;
+            if fm * fa > 0.0 {
+                a = m;
+                fa = fm;
+            } else {
+                b = m;
+            }
+        }
+        let v = if fa.abs() < f(b)?.abs() { a } else { b };
+        Ok((f(v)?.abs() < 0.02).then_some(v))
     }
 
     /// Launch coordinates of rays that cross the stop at `targets` (x, y): Newton's method with
@@ -255,7 +303,25 @@ impl<'a> Beam<'a> {
         v_chief: f64,
         targets: &[(f64, f64)],
     ) -> Result<Vec<(f64, f64)>, OpticsError> {
-        let h = 1e-4;
+        self.aim_each(v_chief, targets)?.into_iter().collect()
+    }
+
+    /// [`Beam::aim`], each target's launch or why it cannot be reached.
+    pub(crate) fn aim_each(
+        &self,
+        v_chief: f64,
+        targets: &[(f64, f64)],
+    ) -> Result<Vec<Aimed>, OpticsError> {
+        // Through a zoned thin lens the ray map jumps at the zone edges: a wider difference
+        // gives the Jacobian of the map's smooth part even where the chief ray sits on an
+        // edge, and Newton's method (then linear) gets more iterations.
+        let zoned = self
+            .tracer
+            .system
+            .elements
+            .iter()
+            .any(|e| e.surface.phase.is_some());
+        let (h, iterations) = if zoned { (0.02, 200) } else { (1e-4, 50) };
         let (xu, yu) = self.at_stop(h, v_chief)?;
         let (xu2, yu2) = self.at_stop(-h, v_chief)?;
         let (xv, yv) = self.at_stop(0.0, v_chief + h)?;
@@ -276,14 +342,14 @@ impl<'a> Beam<'a> {
             [j[1][1] / det, -j[0][1] / det],
             [-j[1][0] / det, j[0][0] / det],
         ];
-        targets
+        Ok(targets
             .iter()
             .map(|&(tx, ty)| {
                 let (mut u, mut v) = (
                     inv[0][0] * tx + inv[0][1] * ty,
                     v_chief + inv[1][0] * tx + inv[1][1] * ty,
                 );
-                for _ in 0..50 {
+                for _ in 0..iterations {
                     let (x, y) = self.at_stop(u, v)?;
                     let (ex, ey) = (tx - x, ty - y);
                     if ex.hypot(ey) < 1e-10 {
@@ -298,7 +364,7 @@ impl<'a> Beam<'a> {
                     reason: format!("the ray to the pupil point ({tx}, {ty}) mm cannot be aimed"),
                 })
             })
-            .collect()
+            .collect())
     }
 }
 
@@ -387,7 +453,34 @@ pub(crate) fn wavefront(
             .filter(|p| p.0 > 0.0)
             .collect();
     let targets: Vec<(f64, f64)> = pupil_points.iter().map(|p| (p.0, p.1)).collect();
-    let launches = beam.aim(v_chief, &targets)?;
+    // A thin lens's zone edge deflects the rays on either side of it differently, so the
+    // pupil has a sliver (micrometres wide) that no ray reaches, or that two reach: a
+    // sample point there is left out (its weight with it) rather than failing the focus.
+    let zoned = system.elements.iter().any(|e| e.surface.phase.is_some());
+    let mut kept = Vec::with_capacity(targets.len());
+    let mut launches = Vec::with_capacity(targets.len());
+    for (launch, point) in beam
+        .aim_each(v_chief, &targets)?
+        .into_iter()
+        .zip(&pupil_points)
+    {
+        match launch {
+            Ok(l) => {
+                launches.push(l);
+                kept.push(*point);
+            }
+            Err(_) if zoned => {}
+            Err(e) => return Err(e),
+        }
+    }
+    if 2 * launches.len() < targets.len() {
+        return Err(OpticsError::NoFocus {
+            field_deg,
+            wavelength_nm,
+            reason: "most rays cannot be aimed at the pupil through the lens".into(),
+        });
+    }
+    let pupil_points = kept;
     let n_image = beam.tracer.n_image();
     let dc = chief.direction;
     let es = Vec3::new(1.0, 0.0, 0.0);
@@ -668,6 +761,13 @@ pub fn coddington(
     if system.elements.iter().any(|e| e.medium.is_grin()) {
         return Err(no_grin());
     }
+    if system.elements.iter().any(|e| e.surface.phase.is_some()) {
+        return Err(OpticsError::input(
+            "Coddington's equations",
+            f64::NAN,
+            "need refracting surfaces (this system wears a thin lens)",
+        ));
+    }
     let beam = Beam::new(
         system,
         wavelength_nm,
@@ -791,7 +891,7 @@ pub fn ray_fan(
         .map(|&(u, v)| {
             let mut ray = beam.ray(u, v);
             // Start the drawn path 1 mm in front of the apex.
-            let t0 = (-1.0 - ray.position.z) / ray.direction.z;
+            let t0 = (system.origin - 1.0 - ray.position.z) / ray.direction.z;
             ray.position += ray.direction * t0;
             let mut path = Vec::new();
             let end = beam

@@ -10,9 +10,11 @@
 mod error;
 pub mod eyes;
 mod focus;
+pub mod lens;
 mod linalg;
 mod medium;
 mod paraxial;
+pub mod refraction;
 mod shell;
 mod surface;
 mod system;

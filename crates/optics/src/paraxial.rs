@@ -45,7 +45,12 @@ fn trace(
         let medium = system.medium_at(i, wavelength_nm);
         let z0 = vertices[i];
         let n_after = medium.index_at(0.0, z0);
-        nu -= y * (n_after - n_before) * e.surface.curvature();
+        let lens = e
+            .surface
+            .phase
+            .as_ref()
+            .map_or(0.0, |p| p.power(0.0) / 1000.0);
+        nu -= y * ((n_after - n_before) * e.surface.curvature() + lens);
         if i + 1 == m {
             break;
         }
@@ -95,7 +100,7 @@ pub fn paraxial(system: &OpticalSystem, wavelength_nm: f64) -> Result<Paraxial, 
     let power = -c; // mm⁻¹
     let last = system.last_vertex();
     let bfd = -a * n_image / c;
-    let front_focus = n * d / c;
+    let front_focus = system.origin + n * d / c;
     let focus = last + bfd;
     let principal = (front_focus + n / power, focus - n_image / power);
     let shift = (n_image - n) / power;

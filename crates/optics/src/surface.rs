@@ -2,6 +2,7 @@
 //! terms, their sag, slope and principal curvatures, and exact ray intersection.
 
 use crate::error::RayFailure;
+use crate::lens::PowerProfile;
 use crate::vec3::Vec3;
 
 /// A surface of revolution about the z axis. Its sag from the vertex plane is
@@ -19,6 +20,9 @@ pub struct Surface {
     pub aspheric: Vec<f64>,
     /// The surface ends this far from the axis (mm); rays beyond it are an error.
     pub semi_diameter: Option<f64>,
+    /// A thin lens on this surface (crate::lens): the optical path it adds and the deflection
+    /// that goes with it.
+    pub phase: Option<PowerProfile>,
 }
 
 impl Surface {
@@ -29,6 +33,7 @@ impl Surface {
             conic,
             aspheric: Vec::new(),
             semi_diameter: None,
+            phase: None,
         }
     }
 
@@ -204,4 +209,25 @@ pub(crate) fn refract(d: Vec3, normal: Vec3, n1: f64, n2: f64) -> Result<Vec3, R
         return Err(RayFailure::TotalInternalReflection);
     }
     Ok((d * mu + n * (k.sqrt() - mu * cos_i)).unit())
+}
+
+/// Refraction at a surface carrying a phase φ (a thin lens): the optical direction's
+/// component along the surface gains φ's gradient `grad` (n′d′ₜ = n dₜ + ∇φ), the normal
+/// component follows from |d′| = 1. No real direction (the tangential part longer than n′)
+/// is total internal reflection.
+pub(crate) fn refract_phase(
+    d: Vec3,
+    normal: Vec3,
+    n1: f64,
+    n2: f64,
+    grad: Vec3,
+) -> Result<Vec3, RayFailure> {
+    let n = if normal.dot(d) < 0.0 { -normal } else { normal };
+    let v = d * n1 + grad;
+    let t = v - n * v.dot(n);
+    let k = n2 * n2 - t.dot(t);
+    if !(k > 0.0) {
+        return Err(RayFailure::TotalInternalReflection);
+    }
+    Ok(((t + n * k.sqrt()) * (1.0 / n2)).unit())
 }

@@ -39,6 +39,9 @@ pub struct OpticalSystem {
     /// The retina (image surface) at the end of the last thickness, for figures; the optics do
     /// not need it.
     pub retina: Option<Surface>,
+    /// The z of the first surface's vertex: 0 for an eye (z from the corneal apex), negative
+    /// when eyewear sits in front of it (`lens::wear`), so that z keeps its meaning.
+    pub origin: f64,
 }
 
 /// The accepted range of refractive indices: below 1 is not a transparent dielectric, above 3
@@ -59,6 +62,7 @@ impl OpticalSystem {
             elements,
             pupil_position: None,
             retina: None,
+            origin: 0.0,
         };
         system.validate()?;
         Ok(system)
@@ -74,7 +78,7 @@ impl OpticalSystem {
         self
     }
 
-    fn validate(&self) -> Result<(), OpticsError> {
+    pub(crate) fn validate(&self) -> Result<(), OpticsError> {
         if self.elements.is_empty() {
             return Err(OpticsError::system("the system", 0.0, "it has no surfaces"));
         }
@@ -165,7 +169,7 @@ impl OpticalSystem {
 
     /// The z of each surface's vertex.
     pub fn vertices(&self) -> Vec<f64> {
-        let mut z = 0.0;
+        let mut z = self.origin;
         self.elements
             .iter()
             .map(|e| {
@@ -181,9 +185,9 @@ impl OpticalSystem {
         self.vertices().last().copied().unwrap_or(0.0)
     }
 
-    /// From the apex to the retina's vertex (the sum of the thicknesses).
+    /// From the apex to the retina's vertex.
     pub fn axial_length(&self) -> f64 {
-        self.elements.iter().map(|e| e.thickness).sum()
+        self.origin + self.elements.iter().map(|e| e.thickness).sum::<f64>()
     }
 
     /// The index of the image space (behind the last surface) at a wavelength.
@@ -234,7 +238,7 @@ impl OpticalSystem {
     /// plane in a way that makes it ambiguous.
     pub fn check_pupil_position(&self, z: f64) -> Result<(), OpticsError> {
         let last = self.last_vertex();
-        if !(z > 0.0 && z <= last) {
+        if !(z > self.origin.max(0.0) && z <= last) {
             return Err(OpticsError::input(
                 "the pupil position (mm from the corneal apex)",
                 z,

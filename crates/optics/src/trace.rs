@@ -4,7 +4,7 @@
 
 use crate::error::{RayError, RayFailure};
 use crate::medium::{GrinAt, Resolved};
-use crate::surface::{refract, Surface};
+use crate::surface::{refract, refract_phase, Surface};
 use crate::system::{OpticalSystem, INDEX_RANGE};
 use crate::vec3::Vec3;
 
@@ -150,7 +150,20 @@ impl<'a> Tracer<'a> {
                 physical(n_optical.unwrap_or_else(|| before.index_at(r2, p.z)), p).map_err(err)?;
             let n2 = physical(self.media[i].index_at(r2, p.z), p).map_err(err)?;
             let normal = surface.normal(p).ok_or(RayFailure::Miss).map_err(err)?;
-            d = refract(d, normal, n1, n2).map_err(err)?;
+            d = match &surface.phase {
+                None => refract(d, normal, n1, n2).map_err(err)?,
+                Some(profile) => {
+                    let h = r2.sqrt();
+                    let grad = if h > 0.0 {
+                        let g = profile.deflection(h) / h;
+                        Vec3::new(g * p.x, g * p.y, 0.0)
+                    } else {
+                        Vec3::new(0.0, 0.0, 0.0)
+                    };
+                    opl += profile.phase(h);
+                    refract_phase(d, normal, n1, n2, grad).map_err(err)?
+                }
+            };
         }
         Ok(Ray {
             position: p,

@@ -37,6 +37,9 @@ pub struct SeriesRow {
     /// The same for the red surface.
     pub retina_minus_red: f64,
     pub class: Refraction,
+    /// The pole's refraction (D): the spectacle power at 12 mm that brings the naked eye's
+    /// best focus onto the retina (NaN where none was computed).
+    pub refraction_d: f64,
 }
 
 impl SeriesRow {
@@ -49,6 +52,7 @@ impl SeriesRow {
             retina_minus_blue: eye.retina_minus_blue,
             retina_minus_red: eye.retina_minus_red,
             class: eye.class,
+            refraction_d: eye.refraction_d,
         }
     }
 }

@@ -6,7 +6,7 @@
 use super::dae::SensParam;
 use super::ThicknessLaw;
 use crate::model::optics::{ComputedOptics, OpticsSpec, Source};
-use crate::model::stimulus::{Focal, Surface};
+use crate::model::stimulus::{EyeMeasure, Focal, Refraction, Surface};
 
 /// The growth model of one scene (docs/MODEL.md §4–6).
 #[derive(Clone, Debug, PartialEq)]
@@ -63,6 +63,44 @@ impl GrowthParams {
                 .computed
                 .as_ref()
                 .is_some_and(|c| c.is_for(&self.optics, self.blue.z_b))
+    }
+
+    /// The optics whose refraction this scene reports: its own with `stimulus.source =
+    /// "optics"`, else the defaults (the Atchison 2006 eye, 3 mm pupil, mean sphere,
+    /// 555 nm): the eye's optics, not the published polynomial.
+    pub fn refraction_optics(&self) -> OpticsSpec {
+        crate::model::eyewear::refraction_optics(&self.optics, self.source == Source::Optics)
+    }
+
+    /// The refraction (D) of a retina at `retina_z` on the axis (NaN beyond ±25 D or when
+    /// the optics give none): computed at output times only, from a table traced once.
+    pub fn refraction(&self, retina_z: f64) -> f64 {
+        crate::model::eyewear::refraction_table(&self.refraction_optics())
+            .ok()
+            .and_then(|t| t.refraction(retina_z))
+            .unwrap_or(f64::NAN)
+    }
+
+    /// `eye` with its refraction, classified as `stimulus.classify` says.
+    pub fn measure(&self, eye: EyeMeasure) -> EyeMeasure {
+        let refraction_d = self.refraction(eye.axial_length);
+        let class = match self.optics.classify {
+            1 if refraction_d.is_finite() => {
+                if refraction_d > self.optics.hyperopia_d {
+                    Refraction::Hyperopic
+                } else if refraction_d < self.optics.myopia_d {
+                    Refraction::Myopic
+                } else {
+                    Refraction::Emmetropic
+                }
+            }
+            _ => eye.class,
+        };
+        EyeMeasure {
+            refraction_d,
+            class,
+            ..eye
+        }
     }
 
     /// These parameters with their surfaces computed if they must be (once: a resolved copy

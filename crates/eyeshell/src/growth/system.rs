@@ -461,7 +461,7 @@ impl GrowthSystem {
             self.growth.blue_focal(),
             self.growth.red_focal(),
         );
-        SeriesRow::new(t, eye)
+        SeriesRow::new(t, self.growth.measure(eye))
     }
 
     /// Take (p, u) as the current state (the coupled DAE's state at an output time): the

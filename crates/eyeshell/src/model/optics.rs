@@ -59,6 +59,15 @@ pub struct OpticsSpec {
     pub focus: usize,
     /// The largest field angle traced (degrees, in air).
     pub max_field: f64,
+    /// The eyewear worn (`[[optics.lenses]]`), from the eye outwards.
+    pub lenses: Vec<super::eyewear::LensSpec>,
+    /// The wavelength (nm) of the refraction in dioptres.
+    pub refraction_wavelength: f64,
+    /// `stimulus.classify`: index into [`super::eyewear::CLASSIFY`].
+    pub classify: usize,
+    /// `stimulus.myopia_D`, `stimulus.hyperopia_D`: the dioptre thresholds.
+    pub myopia_d: f64,
+    pub hyperopia_d: f64,
 }
 
 impl Default for OpticsSpec {
@@ -69,6 +78,11 @@ impl Default for OpticsSpec {
             wavelengths: vec![400.0, 600.0],
             focus: 0,
             max_field: 40.0,
+            lenses: Vec::new(),
+            refraction_wavelength: 555.0,
+            classify: 0,
+            myopia_d: -0.5,
+            hyperopia_d: 0.5,
         }
     }
 }
@@ -76,7 +90,8 @@ impl Default for OpticsSpec {
 /// A problem with the `optics.*` keys: the key to change and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OpticsKeyError {
-    pub key: &'static str,
+    /// The key, or an item of it (`optics.lenses[1].zones[0].radius`).
+    pub key: String,
     /// The key's value, readable.
     pub value: String,
     pub problem: String,
@@ -118,8 +133,8 @@ impl OpticsSpec {
 
     /// The checks that need no ray: counts and ranges, each naming its key.
     pub fn check(&self) -> Result<(), OpticsKeyError> {
-        let err = |key, value: String, problem: String| OpticsKeyError {
-            key,
+        let err = |key: &str, value: String, problem: String| OpticsKeyError {
+            key: key.to_string(),
             value,
             problem,
         };
@@ -165,7 +180,8 @@ impl OpticsSpec {
     pub fn compute(&self, z_c: f64) -> Result<ComputedOptics, OpticsKeyError> {
         self.check()?;
         let start = std::time::Instant::now();
-        let system = self.system();
+        super::eyewear::check_coverage(self)?;
+        let system = super::eyewear::worn(self)?;
         let settings = optics::SurfaceSettings {
             max_field_deg: self.max_field,
             // One field a degree (41 for the paper's 40°).
@@ -179,7 +195,7 @@ impl OpticsSpec {
             self.criterion(),
             &settings,
         )
-        .map_err(|e| self.explain(&e))?;
+        .map_err(|e| self.explain_worn(&e))?;
         let spline = |i: usize| {
             surfaces.surfaces[i]
                 .interpolant(z_c)
@@ -194,6 +210,33 @@ impl OpticsSpec {
             surfaces,
             wall_seconds: start.elapsed().as_secs_f64(),
         })
+    }
+
+    /// An error of the eye with its lenses on: the lenses' when the naked eye focuses on the
+    /// axis (a lens that forms no image), else as [`OpticsSpec::explain`] says.
+    pub fn explain_worn(&self, e: &OpticsError) -> OpticsKeyError {
+        if !self.lenses.is_empty() {
+            let eye = self.system();
+            let naked = optics::best_focus(
+                &eye,
+                self.wavelengths[0],
+                0.0,
+                &self.pupil_stop(&eye),
+                self.criterion(),
+            );
+            if naked.is_ok() {
+                return OpticsKeyError {
+                    key: super::eyewear::LENSES_KEY.into(),
+                    value: super::eyewear::lenses_toml(&self.lenses),
+                    problem: format!(
+                        "form no image in the {} eye: {}",
+                        self.eye_name(),
+                        crate::text::one_line(&e.to_string())
+                    ),
+                };
+            }
+        }
+        self.explain(e)
     }
 
     /// An optics error as a problem with the key that causes it: a ray failing on the axis
@@ -221,7 +264,7 @@ impl OpticsSpec {
             OpticsError::Fit(_) => ("optics.focus", format!("\"{}\"", FOCUS_NAMES[self.focus])),
         };
         OpticsKeyError {
-            key,
+            key: key.to_string(),
             value,
             problem: format!("cannot be traced in the {} eye: {text}", self.eye_name()),
         }

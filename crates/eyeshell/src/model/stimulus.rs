@@ -218,6 +218,9 @@ pub struct EyeMeasure {
     /// The same for the red surface.
     pub retina_minus_red: f64,
     pub class: Refraction,
+    /// The pole's refraction in dioptres (NaN until a growth scene measures it:
+    /// `GrowthParams::measure`).
+    pub refraction_d: f64,
 }
 
 impl EyeMeasure {
@@ -236,6 +239,7 @@ impl EyeMeasure {
             retina_minus_blue: -depth_blue,
             retina_minus_red: -depth_red,
             class: Refraction::classify(depth_blue, depth_red),
+            refraction_d: f64::NAN,
         }
     }
 }

@@ -51,13 +51,14 @@ pub const SENSITIVITY_COLUMNS: [&str; 6] = [
 /// The directory of the snapshot files.
 pub const SNAPSHOT_DIR: &str = "snapshots";
 /// The columns of series.csv.
-pub const SERIES_COLUMNS: [&str; 6] = [
+pub const SERIES_COLUMNS: [&str; 7] = [
     "t",
     "axial_length",
     "equatorial_radius",
     "retina_minus_blue",
     "retina_minus_red",
     "class",
+    "refraction_D",
 ];
 
 /// The file name of output time number `k` (0 for t = 0) at time `t`: names sort in time
@@ -103,7 +104,7 @@ pub fn series_header() -> String {
 }
 
 /// The cells of one row of series.csv.
-pub fn series_record(row: &SeriesRow) -> [String; 6] {
+pub fn series_record(row: &SeriesRow) -> [String; 7] {
     [
         format_value(row.t),
         format_value(row.axial_length),
@@ -111,6 +112,7 @@ pub fn series_record(row: &SeriesRow) -> [String; 6] {
         format_value(row.retina_minus_blue),
         format_value(row.retina_minus_red),
         row.class.as_str().to_string(),
+        format_value(row.refraction_d),
     ]
 }
 
@@ -376,6 +378,7 @@ mod tests {
                 retina_minus_blue: t - 0.5,
                 retina_minus_red: t - 1.155,
                 class,
+                refraction_d: 1.0 - t,
             },
         }
     }
@@ -397,7 +400,7 @@ mod tests {
     fn header_and_names() {
         assert_eq!(
             series_header(),
-            "t,axial_length,equatorial_radius,retina_minus_blue,retina_minus_red,class"
+            "t,axial_length,equatorial_radius,retina_minus_blue,retina_minus_red,class,refraction_D"
         );
         let h = snapshot_header();
         assert!(h.starts_with("Sigma,sigma,kappa"), "{h}");

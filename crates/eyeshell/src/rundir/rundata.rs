@@ -147,6 +147,12 @@ fn json_to_toml(v: &serde_json::Value) -> Option<toml::Value> {
         serde_json::Value::Array(items) => {
             toml::Value::Array(items.iter().filter_map(json_to_toml).collect())
         }
+        // A lens of optics.lenses.
+        serde_json::Value::Object(map) => toml::Value::Table(
+            map.iter()
+                .filter_map(|(k, v)| Some((k.clone(), json_to_toml(v)?)))
+                .collect(),
+        ),
         _ => return None,
     })
 }
@@ -165,6 +171,11 @@ pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
                 retina_minus_blue: number(3)?,
                 retina_minus_red: number(4)?,
                 class: Refraction::parse(r.cells.get(5)?)?,
+                // Runs written before the column existed have no refraction.
+                refraction_d: match r.cells.get(6) {
+                    None => f64::NAN,
+                    Some(v) => v.parse::<f64>().ok()?,
+                },
             })
         })();
         out.push(row.ok_or_else(|| {

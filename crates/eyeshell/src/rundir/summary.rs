@@ -158,6 +158,9 @@ pub struct SeriesEntry {
     #[serde(deserialize_with = "f64_or_nan")]
     pub retina_minus_red: f64,
     pub class: String,
+    /// The pole's refraction (D); null where none was computed (NaN in series.csv).
+    #[serde(rename = "refraction_D", deserialize_with = "f64_or_nan")]
+    pub refraction_d: f64,
 }
 
 /// summary.json of `eyeshell grow`: rewritten at the start (`running`), and at the end
@@ -422,6 +425,7 @@ impl GrowthSummary {
                 retina_minus_blue: r.retina_minus_blue,
                 retina_minus_red: r.retina_minus_red,
                 class: r.class.as_str().to_string(),
+                refraction_d: r.refraction_d,
             }),
             failed_at_t,
             error,

@@ -9,6 +9,7 @@ use crate::bvp::settings::{LinearSolverKind, Scheme};
 use crate::growth::dae::SensParam;
 use crate::growth::settings::{DaeLinear, GrowthParams, Integrator};
 use crate::growth::ThicknessLaw;
+use crate::model::eyewear::{lenses_toml, LensSpec, CLASSIFY};
 use crate::model::optics::{Source, EYES, FOCUS_NAMES, SOURCES};
 use crate::model::params::Thickness;
 
@@ -52,6 +53,11 @@ pub enum Access {
     Floats {
         get: fn(&Scene) -> Vec<f64>,
         set: fn(&mut Scene, Vec<f64>),
+    },
+    /// Eyewear: an array of lens tables (`[[optics.lenses]]`), each checked as it is read.
+    Lenses {
+        get: fn(&Scene) -> Vec<LensSpec>,
+        set: fn(&mut Scene, Vec<LensSpec>),
     },
 }
 
@@ -215,6 +221,7 @@ pub enum KeyValue {
     Choice(&'static str),
     Text(Option<String>),
     Floats(Vec<f64>),
+    Lenses(Vec<LensSpec>),
     /// An [`Access::OptionalFloat`] key left unset.
     Unset,
 }
@@ -234,6 +241,12 @@ impl KeyValue {
             KeyValue::Floats(xs) => {
                 serde_json::Value::Array(xs.iter().map(|x| KeyValue::Float(*x).to_json()).collect())
             }
+            // An array of objects, which summary.json's reader turns back into TOML tables.
+            KeyValue::Lenses(l) => format!("v = {}", lenses_toml(l))
+                .parse::<toml::Table>()
+                .ok()
+                .and_then(|t| serde_json::to_value(&t["v"]).ok())
+                .unwrap_or(serde_json::Value::Null),
         }
     }
 }
@@ -263,6 +276,7 @@ impl std::fmt::Display for KeyValue {
                 }
                 f.write_str("]")
             }
+            KeyValue::Lenses(l) => f.write_str(&lenses_toml(l)),
         }
     }
 }
@@ -281,6 +295,7 @@ impl KeySpec {
                 .join(" | "),
             Access::Text { .. } => "string".into(),
             Access::Floats { .. } => "list of floats".into(),
+            Access::Lenses { .. } => "array of lens tables".into(),
         }
     }
 
@@ -296,6 +311,7 @@ impl KeySpec {
             Access::Choice { names, get, .. } => KeyValue::Choice(names[get(scene)]),
             Access::Text { get, .. } => KeyValue::Text(get(scene)),
             Access::Floats { get, .. } => KeyValue::Floats(get(scene)),
+            Access::Lenses { get, .. } => KeyValue::Lenses(get(scene)),
         }
     }
 
@@ -315,6 +331,9 @@ impl KeySpec {
         // The optics keys, and the source that turns them on, apply only to a stimulus
         // computed from them: a scene of the published surfaces shows and summarises them
         // as it did before they existed.
+        if matches!(self.key, "stimulus.myopia_D" | "stimulus.hyperopia_D") {
+            return scene.growth.is_some() && scene.optics().classify == 1;
+        }
         if self.key == "stimulus.source" || self.section() == Some("optics") {
             return scene.growth.is_some() && scene.stimulus_source() == Source::Optics;
         }
@@ -813,6 +832,41 @@ pub static KEYS: &[KeySpec] = &[
         access: Access::Float { get: |s| s.optics().max_field, set: |s, v| s.set_optics(|o| o.max_field = v) },
         rule: Rule::Positive,
         doc: "largest field angle traced (degrees in air, 5 to 80, one field a degree): φ_max is where the computed surface ends (40° reaches about 0.45 rad)",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.lenses",
+        access: Access::Lenses { get: |s| s.optics().lenses.clone(), set: |s, v| s.set_optics(|o| o.lenses = v) },
+        rule: Rule::Any,
+        doc: "eyewear, [[optics.lenses]] tables (at most 4, counted from 0 in messages): kind = \"spectacle\" (vertex mm in front of the corneal apex, default 12) or \"contact\" (on the cornea), and one of power (D), zones = [{ radius, power }, ...] (rings out to each radius, mm), table = [{ radius, power }, ...] (smooth), or a real spectacle lens front_radius, back_radius, thickness, index; needs stimulus.source = \"optics\" (docs/guide/eyewear.md)",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.refraction_wavelength",
+        access: Access::Float { get: |s| s.optics().refraction_wavelength, set: |s, v| s.set_optics(|o| o.refraction_wavelength = v) },
+        rule: Rule::Positive,
+        doc: "wavelength (nm) of refraction_D, the spectacle power at 12 mm that brings the naked eye's on-axis best focus onto the retina (with stimulus.source = \"polynomial\" the refraction is the default optics' at 555 nm)",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.classify",
+        access: Access::Choice { names: &CLASSIFY, get: |s| s.optics().classify, set: |s, v| s.set_optics(|o| o.classify = v) },
+        rule: Rule::Any,
+        doc: "how the class is decided: surfaces (the paper's: hyperopic in front of blue, myopic behind red) or dioptres (refraction_D above stimulus.hyperopia_D is hyperopic, below stimulus.myopia_D myopic)",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.myopia_D",
+        access: Access::Float { get: |s| s.optics().myopia_d, set: |s, v| s.set_optics(|o| o.myopia_d = v) },
+        rule: Rule::Any,
+        doc: "with stimulus.classify = \"dioptres\": a refraction_D below this (D, in [-25, 0]) is myopic",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.hyperopia_D",
+        access: Access::Float { get: |s| s.optics().hyperopia_d, set: |s, v| s.set_optics(|o| o.hyperopia_d = v) },
+        rule: Rule::Any,
+        doc: "with stimulus.classify = \"dioptres\": a refraction_D above this (D, in [0, 25]) is hyperopic",
         growth: true,
     },
 ];

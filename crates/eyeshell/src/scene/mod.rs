@@ -233,7 +233,7 @@ impl Scene {
         scene.validate_from(&sources)?;
         if let Err(e) = scene.trace_optics() {
             return Err(SceneError::Invalid {
-                origin: scene.origin_of(&sources, &[e.key]),
+                origin: scene.origin_of(&sources, &[e.key.as_str(), "optics.lenses"]),
                 key: e.key.to_string(),
                 value: e.value,
                 problem: e.problem,
@@ -372,7 +372,7 @@ impl Scene {
     pub fn resolve_optics(&mut self) -> Result<(), SceneError> {
         self.trace_optics().map_err(|e| SceneError::Invalid {
             origin: self.origin.clone(),
-            key: e.key.to_string(),
+            key: e.key,
             value: e.value,
             problem: e.problem,
         })
@@ -385,6 +385,7 @@ impl Scene {
         if !g.is_resolved() {
             g.computed = Some(std::sync::Arc::new(g.optics.compute(g.blue.z_b)?));
         }
+        crate::model::eyewear::refraction_table(&g.refraction_optics())?;
         Ok(())
     }
 
@@ -540,6 +541,17 @@ impl Scene {
                 toml::Value::String(s) => set(self, s.clone()),
                 _ => return Err(wrong("a string")),
             },
+            Access::Lenses { set, .. } => match crate::model::eyewear::parse_lenses(value) {
+                Ok(lenses) => set(self, lenses),
+                Err(e) => {
+                    return Err(SceneError::Invalid {
+                        origin: origin.to_string(),
+                        key: e.key,
+                        value: e.value,
+                        problem: e.problem,
+                    })
+                }
+            },
             Access::Floats { set, .. } => {
                 let expected = "a list of numbers (e.g. [0.1, 0.5, 1.0])";
                 let number = |v: &toml::Value| match v {
@@ -639,7 +651,46 @@ impl Scene {
         self.validate_sizes(sources)?;
         if self.stimulus_source() == Source::Optics {
             if let Err(e) = self.optics().check() {
-                return Err(invalid(&[e.key], e.value, e.problem));
+                return Err(SceneError::Invalid {
+                    origin: self.origin_of(sources, &[e.key.as_str()]),
+                    key: e.key,
+                    value: e.value,
+                    problem: e.problem,
+                });
+            }
+        }
+        if self.growth.is_some() {
+            let o = self.optics();
+            if !o.lenses.is_empty() && self.stimulus_source() != Source::Optics {
+                return Err(invalid(
+                    &["optics.lenses"],
+                    crate::model::eyewear::lenses_toml(&o.lenses),
+                    "need stimulus.source = \"optics\": the published surfaces are of the naked eye".into(),
+                ));
+            }
+            if !(o.myopia_d >= -25.0 && o.myopia_d <= 0.0) {
+                return Err(invalid(
+                    &["stimulus.myopia_D"],
+                    number(o.myopia_d),
+                    "must lie in [-25, 0] D".into(),
+                ));
+            }
+            if !(o.hyperopia_d >= 0.0 && o.hyperopia_d <= 25.0) {
+                return Err(invalid(
+                    &["stimulus.hyperopia_D"],
+                    number(o.hyperopia_d),
+                    "must lie in [0, 25] D".into(),
+                ));
+            }
+            let (lo, hi) = crate::model::optics::WAVELENGTH_RANGE;
+            if !(o.refraction_wavelength >= lo && o.refraction_wavelength <= hi) {
+                return Err(invalid(
+                    &["optics.refraction_wavelength"],
+                    number(o.refraction_wavelength),
+                    format!(
+                        "must lie between {lo} and {hi} nm, where the eyes' dispersion laws hold"
+                    ),
+                ));
             }
         }
         if self.solver.richardson && self.growth.is_some() {

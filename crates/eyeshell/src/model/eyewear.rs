@@ -1,0 +1,592 @@
+//! The scene's eyewear (`[[optics.lenses]]`), the refraction in dioptres (`refraction_D`) and
+//! the dioptre classification (`stimulus.classify = "dioptres"`): docs/guide/eyewear.md.
+//!
+//! A lens is read from its TOML table into a [`LensSpec`] (each problem names its item,
+//! `optics.lenses[1].zones[0].radius`, counted from 0), and becomes the optics crate's
+//! [`Lens`]. The refraction is the naked eye's, as a clinician measures it (lenses off):
+//! a table of the on-axis best focus against spectacle power, traced once per optics and
+//! shared by every run that has the same optics.
+
+use std::sync::{Arc, Mutex};
+
+use eyeshell_optics as optics;
+use eyeshell_optics::lens::{Lens, LensBody, Mount, PowerProfile, ProfileError, Zone};
+use eyeshell_optics::refraction::{RefractionTable, VERTEX_MM};
+use eyeshell_optics::FocusSettings;
+
+use super::optics::{OpticsKeyError, OpticsSpec};
+use crate::text::number;
+
+/// The key of the lenses.
+pub const LENSES_KEY: &str = "optics.lenses";
+/// The names `kind` takes.
+pub const KINDS: [&str; 2] = ["spectacle", "contact"];
+/// The names `stimulus.classify` takes.
+pub const CLASSIFY: [&str; 2] = ["surfaces", "dioptres"];
+/// The most lenses a scene may wear.
+pub const MAX_LENSES: usize = 4;
+/// The most zones or table points of one lens.
+pub const MAX_POINTS: usize = 64;
+
+/// A lens as the scene gives it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LensSpec {
+    /// Index into [`KINDS`].
+    pub kind: usize,
+    /// mm from the corneal apex to the lens's back vertex (spectacles).
+    pub vertex: f64,
+    pub profile: ProfileSpec,
+}
+
+/// A lens's power, as given.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ProfileSpec {
+    Power(f64),
+    Zones(Vec<(f64, f64)>),
+    Table(Vec<(f64, f64)>),
+    Real {
+        front_radius: f64,
+        back_radius: f64,
+        thickness: f64,
+        index: f64,
+    },
+}
+
+fn key_error(key: String, value: String, problem: impl Into<String>) -> OpticsKeyError {
+    OpticsKeyError {
+        key,
+        value,
+        problem: problem.into(),
+    }
+}
+
+fn float(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+fn describe(v: &toml::Value) -> String {
+    crate::scene::describe(v)
+}
+
+/// The lenses of a TOML value: an array of tables.
+pub fn parse_lenses(value: &toml::Value) -> Result<Vec<LensSpec>, OpticsKeyError> {
+    let toml::Value::Array(items) = value else {
+        return Err(key_error(
+            LENSES_KEY.into(),
+            describe(value),
+            "must be an array of tables ([[optics.lenses]])",
+        ));
+    };
+    if items.len() > MAX_LENSES {
+        return Err(key_error(
+            LENSES_KEY.into(),
+            format!("{} lenses", items.len()),
+            format!("must list at most {MAX_LENSES} lenses"),
+        ));
+    }
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, item)| parse_lens(i, item))
+        .collect()
+}
+
+fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> {
+    let at = |name: &str| format!("{LENSES_KEY}[{i}].{name}");
+    let toml::Value::Table(t) = item else {
+        return Err(key_error(
+            format!("{LENSES_KEY}[{i}]"),
+            describe(item),
+            "must be a table (kind, vertex, power | zones | table | front_radius, back_radius, thickness, index)",
+        ));
+    };
+    const NAMES: [&str; 9] = [
+        "kind",
+        "vertex",
+        "power",
+        "zones",
+        "table",
+        "front_radius",
+        "back_radius",
+        "thickness",
+        "index",
+    ];
+    if let Some(k) = t.keys().find(|k| !NAMES.contains(&k.as_str())) {
+        return Err(key_error(
+            at(k),
+            "(given)".into(),
+            format!("is not a lens key (one of {})", NAMES.join(", ")),
+        ));
+    }
+    let number_at = |name: &str| -> Result<Option<f64>, OpticsKeyError> {
+        match t.get(name) {
+            None => Ok(None),
+            Some(v) => match float(v) {
+                Some(x) if x.is_finite() => Ok(Some(x)),
+                Some(x) => Err(key_error(at(name), number(x), "must be a finite number")),
+                None => Err(key_error(at(name), describe(v), "must be a number")),
+            },
+        }
+    };
+    let kind = match t.get("kind") {
+        None => 0,
+        Some(toml::Value::String(s)) => KINDS.iter().position(|k| k == s).ok_or_else(|| {
+            key_error(
+                at("kind"),
+                format!("\"{s}\""),
+                "must be \"spectacle\" or \"contact\"",
+            )
+        })?,
+        Some(v) => {
+            return Err(key_error(
+                at("kind"),
+                describe(v),
+                "must be \"spectacle\" or \"contact\"",
+            ))
+        }
+    };
+    let vertex = match number_at("vertex")? {
+        Some(_) if kind == 1 => {
+            return Err(key_error(
+                at("vertex"),
+                number(number_at("vertex")?.unwrap_or(0.0)),
+                "is for spectacle lenses: a contact lens sits on the cornea",
+            ))
+        }
+        Some(v) if !(v > 0.0 && v <= 50.0) => return Err(key_error(
+            at("vertex"),
+            number(v),
+            "must lie in (0, 50] mm: the spectacle lens's back vertex in front of the corneal apex",
+        )),
+        Some(v) => v,
+        None => VERTEX_MM,
+    };
+    let pairs = |name: &str, a: &str, b: &str| -> Result<Option<Vec<(f64, f64)>>, OpticsKeyError> {
+        let Some(v) = t.get(name) else {
+            return Ok(None);
+        };
+        let toml::Value::Array(rows) = v else {
+            return Err(key_error(
+                at(name),
+                describe(v),
+                format!("must be an array of {{ {a} = …, {b} = … }} tables"),
+            ));
+        };
+        if rows.is_empty() || rows.len() > MAX_POINTS {
+            return Err(key_error(
+                at(name),
+                format!("{} entries", rows.len()),
+                format!("must hold 1 to {MAX_POINTS} entries"),
+            ));
+        }
+        let mut out = Vec::new();
+        for (k, row) in rows.iter().enumerate() {
+            let item = |field: &str| format!("{}[{k}].{field}", at(name));
+            let toml::Value::Table(r) = row else {
+                return Err(key_error(
+                    format!("{}[{k}]", at(name)),
+                    describe(row),
+                    format!("must be a table {{ {a} = …, {b} = … }}"),
+                ));
+            };
+            if let Some(extra) = r.keys().find(|x| x.as_str() != a && x.as_str() != b) {
+                return Err(key_error(
+                    item(extra),
+                    "(given)".into(),
+                    format!("is not one of {a}, {b}"),
+                ));
+            }
+            let get = |field: &str| match r.get(field) {
+                None => Err(key_error(item(field), "(missing)".into(), "must be given")),
+                Some(v) => match float(v) {
+                    Some(x) if x.is_finite() => Ok(x),
+                    Some(x) => Err(key_error(item(field), number(x), "must be a finite number")),
+                    None => Err(key_error(item(field), describe(v), "must be a number")),
+                },
+            };
+            out.push((get(a)?, get(b)?));
+        }
+        Ok(Some(out))
+    };
+    let power = number_at("power")?;
+    let zones = pairs("zones", "radius", "power")?;
+    let table = pairs("table", "radius", "power")?;
+    let real = ["front_radius", "back_radius", "thickness", "index"]
+        .iter()
+        .map(|n| number_at(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let given = [
+        power.is_some(),
+        zones.is_some(),
+        table.is_some(),
+        real.iter().any(Option::is_some),
+    ];
+    if given.iter().filter(|g| **g).count() != 1 {
+        return Err(key_error(
+            format!("{LENSES_KEY}[{i}]"),
+            "(this lens)".into(),
+            "must give exactly one of power, zones, table, or front_radius/back_radius/thickness/index (a real lens)",
+        ));
+    }
+    let profile = if let Some(p) = power {
+        ProfileSpec::Power(p)
+    } else if let Some(z) = zones {
+        ProfileSpec::Zones(z)
+    } else if let Some(t) = table {
+        ProfileSpec::Table(t)
+    } else {
+        let names = ["front_radius", "back_radius", "thickness", "index"];
+        if let Some(k) = real.iter().position(Option::is_none) {
+            return Err(key_error(
+                at(names[k]),
+                "(missing)".into(),
+                "must be given for a real lens",
+            ));
+        }
+        if kind == 1 {
+            return Err(key_error(
+                at("front_radius"),
+                number(real[0].unwrap_or(0.0)),
+                "a contact lens is thin here: give its power, zones or table",
+            ));
+        }
+        let v: Vec<f64> = real.iter().map(|x| x.unwrap_or(0.0)).collect();
+        if !(v[2] > 0.0 && v[2] <= 20.0) {
+            return Err(key_error(
+                at("thickness"),
+                number(v[2]),
+                "must lie in (0, 20] mm",
+            ));
+        }
+        if !(v[3] >= 1.0 && v[3] <= 3.0) {
+            return Err(key_error(at("index"), number(v[3]), "must lie in [1, 3]"));
+        }
+        for (k, r) in v[..2].iter().enumerate() {
+            if r.abs() < 1.0 {
+                return Err(key_error(
+                    at(names[k]),
+                    number(*r),
+                    "must be at least 1 mm in size (a plane is inf)",
+                ));
+            }
+        }
+        ProfileSpec::Real {
+            front_radius: v[0],
+            back_radius: v[1],
+            thickness: v[2],
+            index: v[3],
+        }
+    };
+    let spec = LensSpec {
+        kind,
+        vertex,
+        profile,
+    };
+    spec.lens(i)?;
+    Ok(spec)
+}
+
+fn profile_error(i: usize, e: ProfileError) -> OpticsKeyError {
+    let item = if e.item.starts_with("zones") || e.item.starts_with("table") {
+        e.item.clone()
+    } else {
+        "power".to_string()
+    };
+    key_error(
+        format!("{LENSES_KEY}[{i}].{item}"),
+        number(e.value),
+        e.problem,
+    )
+}
+
+impl LensSpec {
+    /// The optics crate's lens (lens `i` of the scene, for messages).
+    pub fn lens(&self, i: usize) -> Result<Lens, OpticsKeyError> {
+        let body = match &self.profile {
+            ProfileSpec::Power(p) => {
+                LensBody::Thin(PowerProfile::uniform(*p).map_err(|e| profile_error(i, e))?)
+            }
+            ProfileSpec::Zones(z) => LensBody::Thin(
+                PowerProfile::zones(
+                    z.iter()
+                        .map(|&(radius, power)| Zone { radius, power })
+                        .collect(),
+                )
+                .map_err(|e| profile_error(i, e))?,
+            ),
+            ProfileSpec::Table(t) => LensBody::Thin(
+                PowerProfile::table(
+                    t.iter().map(|p| p.0).collect(),
+                    t.iter().map(|p| p.1).collect(),
+                )
+                .map_err(|e| profile_error(i, e))?,
+            ),
+            ProfileSpec::Real {
+                front_radius,
+                back_radius,
+                thickness,
+                index,
+            } => LensBody::Real {
+                front_radius: *front_radius,
+                back_radius: *back_radius,
+                thickness: *thickness,
+                index: *index,
+            },
+        };
+        let mount = if self.kind == 1 {
+            Mount::Contact
+        } else {
+            Mount::Spectacle {
+                vertex: self.vertex,
+            }
+        };
+        Ok(Lens { mount, body })
+    }
+
+    /// The radii where the lens's zones (or table points) begin, with their item names:
+    /// what the pupil must reach.
+    fn starts(&self) -> Vec<(String, f64)> {
+        match &self.profile {
+            ProfileSpec::Zones(z) => (1..z.len())
+                .map(|k| (format!("zones[{}].radius", k - 1), z[k - 1].0))
+                .collect(),
+            ProfileSpec::Table(t) => (0..t.len())
+                .map(|k| (format!("table[{k}].radius"), t[k].0))
+                .collect(),
+            _ => vec![],
+        }
+    }
+
+    /// The item naming the lens's edge, and the edge (mm).
+    fn edge(&self) -> Option<(String, f64)> {
+        match &self.profile {
+            ProfileSpec::Zones(z) => z
+                .last()
+                .map(|l| (format!("zones[{}].radius", z.len() - 1), l.0)),
+            ProfileSpec::Table(t) => t
+                .last()
+                .map(|l| (format!("table[{}].radius", t.len() - 1), l.0)),
+            _ => None,
+        }
+    }
+
+    /// As TOML: an inline table that reads back to this lens.
+    pub fn to_toml(&self) -> String {
+        let f = |x: f64| crate::scene::keys::KeyValue::Float(x).to_string();
+        let mut parts = vec![format!("kind = \"{}\"", KINDS[self.kind])];
+        if self.kind == 0 {
+            parts.push(format!("vertex = {}", f(self.vertex)));
+        }
+        let rows = |v: &[(f64, f64)]| {
+            v.iter()
+                .map(|(r, p)| format!("{{ radius = {}, power = {} }}", f(*r), f(*p)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        match &self.profile {
+            ProfileSpec::Power(p) => parts.push(format!("power = {}", f(*p))),
+            ProfileSpec::Zones(z) => parts.push(format!("zones = [{}]", rows(z))),
+            ProfileSpec::Table(t) => parts.push(format!("table = [{}]", rows(t))),
+            ProfileSpec::Real {
+                front_radius,
+                back_radius,
+                thickness,
+                index,
+            } => parts.push(format!(
+                "front_radius = {}, back_radius = {}, thickness = {}, index = {}",
+                f(*front_radius),
+                f(*back_radius),
+                f(*thickness),
+                f(*index)
+            )),
+        }
+        format!("{{ {} }}", parts.join(", "))
+    }
+}
+
+/// The lenses as TOML (an inline array of tables).
+pub fn lenses_toml(lenses: &[LensSpec]) -> String {
+    format!(
+        "[{}]",
+        lenses
+            .iter()
+            .map(LensSpec::to_toml)
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+/// The eye of `spec` with its lenses on.
+pub fn worn(spec: &OpticsSpec) -> Result<optics::OpticalSystem, OpticsKeyError> {
+    let eye = spec.system();
+    if spec.lenses.is_empty() {
+        return Ok(eye);
+    }
+    let lenses = spec
+        .lenses
+        .iter()
+        .enumerate()
+        .map(|(i, l)| l.lens(i))
+        .collect::<Result<Vec<_>, _>>()?;
+    optics::lens::wear(&eye, &lenses).map_err(|e| {
+        key_error(
+            LENSES_KEY.into(),
+            lenses_toml(&spec.lenses),
+            format!("cannot be worn: {}", crate::text::one_line(&e.to_string())),
+        )
+    })
+}
+
+/// Each lens must cover what the pupil sees through it out to `optics.max_field`, and each
+/// of its zones must begin where some of that light crosses: a zone beyond it would change
+/// nothing the eye sees. The heights are those of the meridional fan at the largest field
+/// (the beam's far edge), traced with the lenses' edges removed.
+pub fn check_coverage(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
+    if spec.lenses.is_empty() {
+        return Ok(());
+    }
+    let mut open = spec.clone();
+    // Zones of one power with an edge far out: the heights at the lens barely depend on the
+    // profile (only through the aiming of rays at the pupil behind it), and no ray leaves.
+    for l in &mut open.lenses {
+        if matches!(l.profile, ProfileSpec::Zones(_) | ProfileSpec::Table(_)) {
+            l.profile = ProfileSpec::Power(0.0);
+        }
+    }
+    let system = worn(&open)?;
+    let pupil = open.pupil_stop(&system);
+    let fan = optics::ray_fan(
+        &system,
+        spec.wavelengths[0],
+        spec.max_field,
+        &pupil,
+        9,
+        system.last_vertex() + 1.0,
+    )
+    .map_err(|e| spec.explain_worn(&e))?;
+    for (i, lens) in spec.lenses.iter().enumerate() {
+        // The plane where the lens's profile acts: its vertex, or the corneal apex.
+        let z = if lens.kind == 1 { 0.0 } else { -lens.vertex };
+        let reach = fan
+            .iter()
+            .filter_map(|path| height_at(path, z))
+            .fold(0.0_f64, f64::max);
+        if let Some((item, edge)) = lens.edge() {
+            if edge < reach {
+                return Err(key_error(
+                    format!("{LENSES_KEY}[{i}].{item}"),
+                    number(edge),
+                    format!(
+                        "is the lens's edge, but the pupil's rays cross the lens up to {} mm from its axis at optics.max_field = {}°: make it at least that",
+                        number((reach * 100.0).ceil() / 100.0),
+                        number(spec.max_field)
+                    ),
+                ));
+            }
+        }
+        for (item, start) in lens.starts() {
+            if start > 0.0 && start >= reach {
+                return Err(key_error(
+                    format!("{LENSES_KEY}[{i}].{item}"),
+                    number(start),
+                    format!(
+                        "puts a zone beyond what the pupil sees: its rays cross the lens at most {} mm from its axis (at optics.max_field = {}°)",
+                        number((reach * 100.0).floor() / 100.0),
+                        number(spec.max_field)
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// |y| where a polyline (z, y) crosses the plane z (interpolated), if it does.
+fn height_at(path: &[(f64, f64)], z: f64) -> Option<f64> {
+    path.windows(2).find_map(|w| {
+        let ((z0, y0), (z1, y1)) = (w[0], w[1]);
+        (z0 <= z && z <= z1 && z1 > z0).then(|| (y0 + (y1 - y0) * (z - z0) / (z1 - z0)).abs())
+    })
+}
+
+/// The optics the refraction is computed with: the scene's eye, pupil, criterion and
+/// reference wavelength (for `stimulus.source = "polynomial"`, the defaults: the
+/// Atchison 2006 eye, a 3 mm pupil, the mean sphere, 555 nm).
+#[derive(Clone, Debug, PartialEq)]
+struct RefractionKey {
+    eye: usize,
+    pupil: f64,
+    focus: usize,
+    wavelength: f64,
+}
+
+type Cache = Vec<(RefractionKey, Arc<RefractionTable>)>;
+static TABLES: Mutex<Cache> = Mutex::new(Vec::new());
+/// The tables kept: a sweep over the optics keys traces each new one once.
+const CACHED: usize = 16;
+
+/// The refraction table of `spec`'s naked eye, traced once and then shared. The error names
+/// the key to change.
+pub fn refraction_table(spec: &OpticsSpec) -> Result<Arc<RefractionTable>, OpticsKeyError> {
+    let key = RefractionKey {
+        eye: spec.eye,
+        pupil: spec.pupil,
+        focus: spec.focus,
+        wavelength: spec.refraction_wavelength,
+    };
+    if let Ok(cache) = TABLES.lock() {
+        if let Some((_, t)) = cache.iter().find(|(k, _)| *k == key) {
+            return Ok(t.clone());
+        }
+    }
+    let (lo, hi) = super::optics::WAVELENGTH_RANGE;
+    if !(spec.refraction_wavelength >= lo && spec.refraction_wavelength <= hi) {
+        return Err(key_error(
+            "optics.refraction_wavelength".into(),
+            number(spec.refraction_wavelength),
+            format!("must lie between {lo} and {hi} nm"),
+        ));
+    }
+    let eye = spec.system();
+    let table = RefractionTable::compute(
+        &eye,
+        spec.refraction_wavelength,
+        &spec.pupil_stop(&eye),
+        spec.criterion(),
+        &FocusSettings::default(),
+        VERTEX_MM,
+    )
+    .map_err(|e| {
+        key_error(
+            "optics.refraction_wavelength".into(),
+            number(spec.refraction_wavelength),
+            format!(
+                "gives no refraction in the {} eye: {}",
+                spec.eye_name(),
+                crate::text::one_line(&e.to_string())
+            ),
+        )
+    })?;
+    let table = Arc::new(table);
+    if let Ok(mut cache) = TABLES.lock() {
+        if cache.len() >= CACHED {
+            cache.remove(0);
+        }
+        cache.push((key, table.clone()));
+    }
+    Ok(table)
+}
+
+/// The optics whose refraction a growth scene reports: its own with `stimulus.source =
+/// "optics"`, else the defaults.
+pub fn refraction_optics(spec: &OpticsSpec, computed: bool) -> OpticsSpec {
+    if computed {
+        spec.clone()
+    } else {
+        OpticsSpec::default()
+    }
+}

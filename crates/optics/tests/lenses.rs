@@ -1,0 +1,265 @@
+//! Eyewear: thin and real spectacle lenses, zoned and tabulated profiles, contact lenses, and
+//! the refraction table (docs/optics.md, "Lenses" and "Refraction").
+
+mod common;
+
+use eyeshell_optics::lens::{wear, Lens, LensBody, Mount, PowerProfile, Zone};
+use eyeshell_optics::refraction::RefractionTable;
+use eyeshell_optics::{best_focus, eyes, paraxial, Criterion, FocusSettings, Pupil};
+
+/// The eye's paraxial image of an object of vergence `k` (D) at its first vertex: from the
+/// eye's own system matrix, with no lens in it.
+fn image_of_vergence(eye: &eyeshell_optics::OpticalSystem, k: f64) -> f64 {
+    let p = paraxial(eye, 555.0).unwrap();
+    let [[a, b], [c, d]] = p.matrix;
+    let k = k / 1000.0;
+    // (a + t c)/(b + t d) = k, t = (z − last)/n′.
+    let t = (a - k * b) / (k * d - c);
+    p.focus - p.back_focal_distance + t * p.n_image
+}
+
+#[test]
+fn a_thin_spectacle_lens_moves_the_focus_where_the_effective_power_says() {
+    let eye = eyes::atchison_2006();
+    let small = Pupil {
+        diameter: 0.2,
+        position: eye.pupil_position.unwrap(),
+    };
+    let base = best_focus(&eye, 555.0, 0.0, &small, Criterion::MeanSphere)
+        .unwrap()
+        .z;
+    for f in [-5.0, 5.0] {
+        for d in [12.0, 14.0] {
+            let k = f / (1.0 - d / 1000.0 * f);
+            let expected = image_of_vergence(&eye, k);
+            let worn = wear(&eye, &[Lens::spectacle(f, d)]).unwrap();
+            assert!((worn.origin + d).abs() < 1e-12, "the lens sits at −d");
+            let parax = paraxial(&worn, 555.0).unwrap().focus;
+            assert!(
+                (parax - expected).abs() < 1e-6,
+                "{f} D at {d} mm: {parax} vs {expected}"
+            );
+            // The exact trace through the lens's phase, with a pupil small enough that the
+            // eye's spherical aberration is below 1e-3 mm.
+            let exact = best_focus(&worn, 555.0, 0.0, &small, Criterion::MeanSphere)
+                .unwrap()
+                .z;
+            assert!(
+                (exact - expected).abs() < 0.01,
+                "{f} D at {d} mm: traced {exact}, effective power says {expected}"
+            );
+            // The lens moves the focus by millimetres, in the right direction.
+            assert!((exact - base) * f < -1.0, "{f} D: {exact} vs {base}");
+        }
+    }
+}
+
+#[test]
+fn a_real_lens_matches_a_thin_one_of_its_power() {
+    let eye = eyes::atchison_2006();
+    let pupil = Pupil {
+        diameter: 0.2,
+        position: eye.pupil_position.unwrap(),
+    };
+    // A 2 mm plano-concave lens in n = 1.5: back vertex power −1/(0.5/R + ...) exactly.
+    let (r, t, n) = (-100.0, 2.0, 1.5);
+    let front = (n - 1.0) / r * 1000.0;
+    let real = Lens {
+        mount: Mount::Spectacle { vertex: 12.0 },
+        body: LensBody::Real {
+            front_radius: r,
+            back_radius: f64::INFINITY,
+            thickness: t,
+            index: n,
+        },
+    };
+    // Back-vertex power of a plano-back lens: F1/(1 − t F1/n).
+    let bvp = front / (1.0 - t / 1000.0 * front / n);
+    let z_real = best_focus(
+        &wear(&eye, &[real]).unwrap(),
+        555.0,
+        0.0,
+        &pupil,
+        Criterion::MeanSphere,
+    )
+    .unwrap()
+    .z;
+    let z_thin = best_focus(
+        &wear(&eye, &[Lens::spectacle(bvp, 12.0)]).unwrap(),
+        555.0,
+        0.0,
+        &pupil,
+        Criterion::MeanSphere,
+    )
+    .unwrap()
+    .z;
+    assert!((z_real - z_thin).abs() < 0.005, "{z_real} vs {z_thin}");
+}
+
+#[test]
+fn a_plus_periphery_moves_the_peripheral_foci_not_the_axial_one() {
+    let eye = eyes::atchison_2006();
+    let pupil = Pupil {
+        diameter: 3.0,
+        position: eye.pupil_position.unwrap(),
+    };
+    let single = wear(&eye, &[Lens::spectacle(-2.0, 12.0)]).unwrap();
+    let zoned = Lens {
+        mount: Mount::Spectacle { vertex: 12.0 },
+        body: LensBody::Thin(
+            PowerProfile::zones(vec![
+                Zone {
+                    radius: 4.5,
+                    power: -2.0,
+                },
+                Zone {
+                    radius: 25.0,
+                    power: 0.5,
+                },
+            ])
+            .unwrap(),
+        ),
+    };
+    let zoned = wear(&eye, &[zoned]).unwrap();
+    let at = |s: &eyeshell_optics::OpticalSystem, field: f64| {
+        best_focus(s, 555.0, field, &pupil, Criterion::MeanSphere).unwrap()
+    };
+    let (a0, b0) = (at(&single, 0.0), at(&zoned, 0.0));
+    assert!((a0.z - b0.z).abs() < 1e-9, "on axis: {} vs {}", a0.z, b0.z);
+    // At 30° the pencil crosses the lens about 9 mm out, all of it in the plus ring: 2.5 D
+    // more plus pulls the focus forward by most of a millimetre.
+    let (a, b) = (at(&single, 30.0), at(&zoned, 30.0));
+    assert!(
+        b.distance < a.distance - 0.4,
+        "30°: {} vs {}",
+        b.distance,
+        a.distance
+    );
+}
+
+#[test]
+fn profiles_are_checked_and_their_phase_is_the_integral_of_the_deflection() {
+    let err = PowerProfile::zones(vec![
+        Zone {
+            radius: 4.5,
+            power: -2.0,
+        },
+        Zone {
+            radius: 3.0,
+            power: 0.5,
+        },
+    ])
+    .unwrap_err();
+    assert_eq!(err.item, "zones[1].radius");
+    assert!(PowerProfile::uniform(f64::NAN).is_err());
+    assert!(PowerProfile::uniform(1e6).is_err());
+    let table = PowerProfile::table(vec![0.0, 3.0, 6.0, 20.0], vec![-2.0, -2.0, 1.0, 1.0]).unwrap();
+    // Monotone between points, exact at them.
+    assert_eq!(table.power(3.0), -2.0);
+    assert!((table.power(4.5) - -0.5).abs() < 1.0);
+    for profile in [
+        table,
+        PowerProfile::zones(vec![
+            Zone {
+                radius: 4.5,
+                power: -2.0,
+            },
+            Zone {
+                radius: 25.0,
+                power: 0.5,
+            },
+        ])
+        .unwrap(),
+        PowerProfile::Uniform(-5.0),
+    ] {
+        for h in [0.5, 2.0, 4.4, 4.6, 8.0, 15.0] {
+            let dh = 1e-6;
+            let numeric = (profile.phase(h + dh) - profile.phase(h - dh)) / (2.0 * dh);
+            assert!(
+                (numeric - profile.deflection(h)).abs() < 1e-7,
+                "{profile:?} at {h}: {numeric} vs {}",
+                profile.deflection(h)
+            );
+        }
+    }
+}
+
+#[test]
+fn the_refraction_put_back_as_a_lens_focuses_on_the_retina() {
+    let eye = eyes::atchison_2006();
+    let pupil = Pupil {
+        diameter: 3.0,
+        position: eye.pupil_position.unwrap(),
+    };
+    let settings = FocusSettings::default();
+    let table =
+        RefractionTable::compute(&eye, 555.0, &pupil, Criterion::MeanSphere, &settings, 12.0)
+            .unwrap();
+    // An emmetrope's retina where its own best focus is: 0 D.
+    let own = best_focus(&eye, 555.0, 0.0, &pupil, Criterion::MeanSphere)
+        .unwrap()
+        .z;
+    assert!(table.refraction(own).unwrap().abs() < 0.01);
+    for retina in [21.0, 22.7, 24.3, 25.5] {
+        let rx = table.refraction(retina).unwrap();
+        let worn = wear(&eye, &[Lens::spectacle(rx, 12.0)]).unwrap();
+        let z = best_focus(&worn, 555.0, 0.0, &pupil, Criterion::MeanSphere)
+            .unwrap()
+            .z;
+        // 0.01 D of refraction is about 0.004 mm of focus here: check in dioptres, by the
+        // table's local slope.
+        let slope = (table.focus(rx + 0.5).unwrap() - table.focus(rx - 0.5).unwrap()) / 1.0;
+        let error_d = (z - retina) / slope;
+        assert!(
+            error_d.abs() < 0.01,
+            "retina {retina}: {rx} D leaves {error_d} D"
+        );
+        // A short eye is hyperopic (plus), a long one myopic.
+        assert_eq!(rx > 0.0, retina < own, "retina {retina}: {rx} D");
+    }
+    assert_eq!(table.refraction(10.0), None);
+}
+
+#[test]
+fn a_contact_lens_acts_on_the_cornea() {
+    let eye = eyes::atchison_2006();
+    let pupil = Pupil {
+        diameter: 0.2,
+        position: eye.pupil_position.unwrap(),
+    };
+    let contact = Lens {
+        mount: Mount::Contact,
+        body: LensBody::Thin(PowerProfile::Uniform(-3.0)),
+    };
+    let worn = wear(&eye, &[contact]).unwrap();
+    assert_eq!(worn.origin, 0.0);
+    let z = best_focus(&worn, 555.0, 0.0, &pupil, Criterion::MeanSphere)
+        .unwrap()
+        .z;
+    // A contact lens's power acts at the cornea: vergence −3 D there.
+    let expected = image_of_vergence(&eye, -3.0);
+    assert!((z - expected).abs() < 0.01, "{z} vs {expected}");
+}
+
+#[test]
+fn a_lens_that_forms_no_image_is_an_error() {
+    let eye = eyes::atchison_2006();
+    let pupil = Pupil {
+        diameter: 3.0,
+        position: eye.pupil_position.unwrap(),
+    };
+    // A strong ball-like lens focuses 12 mm in front of the eye: the eye then receives
+    // light diverging at about −170 D and cannot bring it to a focus.
+    let ball = Lens {
+        mount: Mount::Spectacle { vertex: 12.0 },
+        body: LensBody::Real {
+            front_radius: 5.0,
+            back_radius: -5.0,
+            thickness: 3.0,
+            index: 1.5,
+        },
+    };
+    let worn = wear(&eye, &[ball]).unwrap();
+    assert!(best_focus(&worn, 555.0, 0.0, &pupil, Criterion::MeanSphere).is_err());
+    assert!(wear(&eye, &[Lens::spectacle(-2.0, -3.0)]).is_err());
+}

@@ -1,0 +1,182 @@
+//! Eyewear and refraction in dioptres: refraction_D in a run's files, consistent with the
+//! optics it comes from, and bad lenses refused in one line naming the item, nothing written.
+
+use crate::support::*;
+
+/// The paper's const scene (101 nodes) starts hyperopic in dioptres too, and ends with a
+/// refraction whose sign its class agrees with (emmetropic: within ±0.5 D); the refraction at
+/// t = 0, worn as a spectacle lens, brings the default eye's best focus onto the retina
+/// (`eyeshell optics` traces it, lens on) to 0.01 D.
+#[test]
+fn the_const_scene_refraction_is_consistent() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("const");
+    ok(&[
+        "grow",
+        "scenes/const.toml",
+        "--set",
+        "solver.nodes=101",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    let (header, rows) = csv_cells(&out.join("series.csv"));
+    assert_eq!(header.last().unwrap(), "refraction_D");
+    let num = |r: &Vec<String>, i: usize| r[i].parse::<f64>().unwrap();
+    let (first, last) = (&rows[0], rows.last().unwrap());
+    let (length0, rx0) = (num(first, 1), num(first, 6));
+    assert_eq!(first[5], "hyperopic");
+    // 19.956 mm against the Atchison 2006 eye's 555 nm focus near 23.5 mm: about +10.5 D.
+    assert!(rx0 > 9.0 && rx0 < 12.0, "{rx0}");
+    let rx1 = num(last, 6);
+    assert_eq!(last[5], "emmetropic");
+    assert!(rx1.abs() <= 0.5, "{rx1}");
+    let (_, history) = csv_cells(&out.join("history.csv"));
+    assert!(history
+        .iter()
+        .all(|r| r[6].parse::<f64>().unwrap().is_finite()));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["final"]["refraction_D"].as_f64().unwrap(), rx1);
+
+    // The refraction worn: the 555 nm on-axis best focus with the lens on.
+    let eye = dir.path().join("eye");
+    ok(&[
+        "optics",
+        "scenes/const.toml",
+        "--set",
+        "stimulus.source=optics",
+        "--set",
+        "optics.wavelengths=[555, 600]",
+        "--set",
+        &format!("optics.lenses=[{{ kind = \"spectacle\", vertex = 12, power = {rx0:?} }}]"),
+        "--set",
+        "optics.max_field=5",
+        "--out",
+        s(&eye),
+        "--quiet",
+    ]);
+    let (_, foci) = csv_cells(&eye.join("surfaces.csv"));
+    let focus = num(&foci[0], 2);
+    // About 2.3 D per mm of focus at this refraction: 0.01 D is 0.0043 mm.
+    assert!(
+        (focus - length0).abs() < 0.0043,
+        "focus {focus} vs retina {length0}"
+    );
+}
+
+/// With stimulus.classify = "dioptres" the class follows refraction_D's thresholds.
+#[test]
+fn the_class_follows_dioptres_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d");
+    ok(&[
+        "grow",
+        "scenes/const.toml",
+        "--set",
+        "solver.nodes=101",
+        "--set",
+        "stimulus.classify=dioptres",
+        "--set",
+        "stimulus.hyperopia_D=2.5",
+        "--set",
+        "output.history_points=0",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    let (_, rows) = csv_cells(&out.join("series.csv"));
+    for r in &rows {
+        let rx: f64 = r[6].parse().unwrap();
+        let expect = if rx > 2.5 {
+            "hyperopic"
+        } else if rx < -0.5 {
+            "myopic"
+        } else {
+            "emmetropic"
+        };
+        assert_eq!(r[5], expect, "{r:?}");
+    }
+    // t = 0.2 is +2.1 D: emmetropic by these thresholds, hyperopic by the surfaces.
+    assert_eq!(rows[2][5], "emmetropic");
+}
+
+/// Bad eyewear: one line naming the item, exit 2, nothing written.
+#[test]
+fn bad_lenses_are_refused_and_nothing_is_written() {
+    let scene = "growth.eta0 = 70\nstimulus.source = \"optics\"\n";
+    let lens = |body: &str| format!("{scene}[[optics.lenses]]\n{body}\n");
+    // A zone that starts where no ray of the pupil crosses the lens (at most about 15 mm out
+    // at 40°, 12 mm in front of the eye).
+    fails(
+        "grow",
+        &lens("zones = [{ radius = 20, power = -2 }, { radius = 25, power = 0.5 }]"),
+        &[],
+        "optics.lenses[0].zones[0].radius = 20 puts a zone beyond what the pupil sees",
+        "scene.toml",
+    );
+    // A lens whose edge the rays pass.
+    fails(
+        "grow",
+        &lens("zones = [{ radius = 2, power = -2 }, { radius = 6, power = 0.5 }]"),
+        &[],
+        "optics.lenses[0].zones[1].radius = 6 is the lens's edge",
+        "scene.toml",
+    );
+    // Zones out of order, in the second lens.
+    fails(
+        "grow",
+        &format!(
+            "{}[[optics.lenses]]\nkind = \"contact\"\nzones = [{{ radius = 3, power = -2 }}, {{ radius = 2, power = 0 }}]\n",
+            lens("power = -1")
+        ),
+        &[],
+        "optics.lenses[1].zones[1].radius = 2 must be larger than the previous zone's radius (3 mm)",
+        "scene.toml",
+    );
+    fails(
+        "grow",
+        &lens("vertex = -3\npower = -2"),
+        &[],
+        "optics.lenses[0].vertex = -3 must lie in (0, 50] mm",
+        "scene.toml",
+    );
+    // A ball-like lens focuses the light 5 mm behind it: the eye receives it diverging at
+    // about −140 D and forms no image.
+    fails(
+        "grow",
+        &lens("front_radius = 5\nback_radius = -5\nthickness = 3\nindex = 1.5"),
+        &["optics.max_field=5"],
+        "form no image in the atchison-2006 eye",
+        "scene.toml",
+    );
+    fails(
+        "grow",
+        &lens("power = 1e9"),
+        &[],
+        "optics.lenses[0].power = 1000000000 must lie in [-100, 100] D",
+        "scene.toml",
+    );
+    fails(
+        "grow",
+        &lens("power = -2\nzones = [{ radius = 4, power = 1 }]"),
+        &[],
+        "optics.lenses[0] = (this lens) must give exactly one of power, zones, table",
+        "scene.toml",
+    );
+    // Lenses change computed surfaces only.
+    fails(
+        "grow",
+        "growth.eta0 = 70\n[[optics.lenses]]\npower = -2\n",
+        &[],
+        "need stimulus.source = \"optics\"",
+        "scene.toml",
+    );
+    fails(
+        "grow",
+        scene,
+        &["stimulus.myopia_D=3"],
+        "stimulus.myopia_D = 3 must lie in [-25, 0] D",
+        "--set stimulus.myopia_D=3",
+    );
+}
