@@ -69,6 +69,12 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
                 "  table           {}\n",
                 dir.join(TABLE_FILE).display()
             ));
+            if missing.is_empty() {
+                text.push_str(&super::sweep::population_lines(
+                    &(&merged.plan).into(),
+                    dir,
+                ));
+            }
         }
         if !failed.is_empty() {
             text.push_str(&format!("  failed          {}\n", first(&failed, "; ")));

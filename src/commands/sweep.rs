@@ -179,11 +179,34 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
                 table.display(),
                 crate::shell::word(out_dir)
             )),
-            None => text.push_str(&format!("  table           {}\n", table.display())),
+            None => {
+                text.push_str(&format!("  table           {}\n", table.display()));
+                text.push_str(&population_lines(&head, out_dir));
+            }
         }
         out(&text);
     }
     Ok(())
+}
+
+/// The lines naming a sampled sweep's population files ("" for another sweep).
+pub(crate) fn population_lines(head: &eyeshell::sweep::Head<'_>, dir: &std::path::Path) -> String {
+    use eyeshell::sweep::population::{POPULATION_FILE, POPULATION_TABLE, SOBOL_TABLE};
+    let Some(sample) = head.sample else {
+        return String::new();
+    };
+    let mut text = format!(
+        "  population      {}\n  table           {}\n",
+        dir.join(POPULATION_FILE).display(),
+        dir.join(POPULATION_TABLE).display()
+    );
+    if sample.design == eyeshell::scene::sample::Design::Saltelli {
+        text.push_str(&format!(
+            "  sobol indices   {}\n",
+            dir.join(SOBOL_TABLE).display()
+        ));
+    }
+    text
 }
 
 /// The first [`SHOWN_FAILURES`] of `failed`, then how many more: the error line stays
