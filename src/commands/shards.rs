@@ -74,10 +74,7 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
                 dir.join(TABLE_FILE).display()
             ));
             if missing.is_empty() {
-                text.push_str(&super::sweep::population_lines(
-                    &(&merged.plan).into(),
-                    dir,
-                ));
+                text.push_str(&super::sweep::population_lines(&(&merged.plan).into(), dir));
                 if let Some(png) = &figure {
                     text.push_str(&format!("  figure          {}\n", png.display()));
                 }

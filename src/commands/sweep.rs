@@ -319,8 +319,7 @@ pub(crate) fn population_figure(
         .iter()
         .filter_map(|r| {
             let text = std::fs::read_to_string(
-                dir.join(&r.dir)
-                    .join(eyeshell::rundir::growth::SERIES_FILE),
+                dir.join(&r.dir).join(eyeshell::rundir::growth::SERIES_FILE),
             )
             .ok()?;
             let mut lines = text.lines();
@@ -336,7 +335,11 @@ pub(crate) fn population_figure(
                 (a.min(x), b.max(x))
             });
         let bins = ((values.len() as f64).sqrt().ceil() as usize).clamp(5, 50);
-        let width = if hi > lo { (hi - lo) / bins as f64 } else { 1.0 };
+        let width = if hi > lo {
+            (hi - lo) / bins as f64
+        } else {
+            1.0
+        };
         let mut counts = vec![0usize; bins];
         for &x in values {
             let k = (((x - lo) / width) as usize).min(bins - 1);
@@ -349,12 +352,19 @@ pub(crate) fn population_figure(
             points.extend([(a, c as f64), (b, c as f64)]);
         }
         points.push((lo + bins as f64 * width, 0.0));
-        Figure::new(title, label, "eyes")
-            .with(Series::new(format!("{} eyes", values.len()), points, SeriesStyle::Line))
+        Figure::new(title, label, "eyes").with(Series::new(
+            format!("{} eyes", values.len()),
+            points,
+            SeriesStyle::Line,
+        ))
     };
     let mut panels = Vec::new();
     if lengths.len() >= 2 {
-        panels.push(histogram(&lengths, "Final axial length", "axial length (mm)"));
+        panels.push(histogram(
+            &lengths,
+            "Final axial length",
+            "axial length (mm)",
+        ));
     }
     if refraction.len() >= 2 {
         panels.push(histogram(&refraction, "Final refraction", "refraction (D)"));
@@ -374,11 +384,28 @@ pub(crate) fn population_figure(
         };
         panels.push(
             Figure::new("Axial length of the cohort", "t", "axial length (mm)")
-                .with(Series::new("median", band("0.5"), SeriesStyle::LineAndMarkers))
-                .with(Series::new("25 % and 75 %", band("0.25"), SeriesStyle::Line))
-                .with(Series::new("", band("0.75"), SeriesStyle::Line).no_legend())
-                .with(Series::new("5 % and 95 %", band("0.05"), SeriesStyle::DashedLine))
-                .with(Series::new("", band("0.95"), SeriesStyle::DashedLine).no_legend()),
+                .with(
+                    Series::new("median", band("0.5"), SeriesStyle::LineAndMarkers)
+                        .color(plot::PALETTE[0]),
+                )
+                .with(
+                    Series::new("25 % and 75 %", band("0.25"), SeriesStyle::Line)
+                        .color(plot::PALETTE[1]),
+                )
+                .with(
+                    Series::new("", band("0.75"), SeriesStyle::Line)
+                        .color(plot::PALETTE[1])
+                        .no_legend(),
+                )
+                .with(
+                    Series::new("5 % and 95 %", band("0.05"), SeriesStyle::DashedLine)
+                        .color(plot::PALETTE[3]),
+                )
+                .with(
+                    Series::new("", band("0.95"), SeriesStyle::DashedLine)
+                        .color(plot::PALETTE[3])
+                        .no_legend(),
+                ),
         );
     }
     if panels.is_empty() {

@@ -14,8 +14,7 @@ const SPHERE: &str = "name = \"sphere\"\n[pressure]\ndP = 2.0\n[material]\nC = 1
 const GROWING: &str = "name = \"small\"\n[fibres]\nD = 0.0\n[growth]\neta0 = 70.0\nt_end = 0.2\n[solver]\nnodes = 21\nrtol = 1e-3\n[output]\ntimes = [0.1, 0.2]\nhistory_points = 10\n[sweep.sample]\ndesign = \"latin-hypercube\"\nseed = 11\n[sweep.sample.keys]\n\"growth.eta0\" = { dist = \"normal\", mean = 70.0, sd = 5.0 }\n\"growth.Gamma\" = { dist = \"uniform\", low = 6.0, high = 10.0 }\n";
 
 fn population(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("population.json")).unwrap())
-        .unwrap()
+    serde_json::from_str(&std::fs::read_to_string(dir.join("population.json")).unwrap()).unwrap()
 }
 
 /// The exact sphere's axial length at pressure dP: the retina's z at the posterior pole,
@@ -95,7 +94,10 @@ fn a_cohorts_mean_and_sd_match_the_exact_sphere() {
     let table = std::fs::read_to_string(out.join("population.csv")).unwrap();
     assert!(table.starts_with("t,output,n,mean,sd,q0.05,"), "{table}");
     assert!(table.contains("\nfinal,axial_length,400,"), "{table}");
-    assert!(table.contains("\nfinal,class=hyperopic,400,1e0,"), "{table}");
+    assert!(
+        table.contains("\nfinal,class=hyperopic,400,1e0,"),
+        "{table}"
+    );
 }
 
 /// Which spread matters: a Saltelli design over ΔP (which sets the sphere's size) and
@@ -190,9 +192,16 @@ fn the_same_seed_gives_the_same_bytes() {
         .map(|t| t["t"].as_f64().unwrap())
         .collect();
     assert_eq!(times, [0.0, 0.1, 0.2]);
-    assert_eq!(p["times"][2]["outputs"]["axial_length"], p["final"]["axial_length"]);
+    assert_eq!(
+        p["times"][2]["outputs"]["axial_length"],
+        p["final"]["axial_length"]
+    );
     let text = std::fs::read_to_string(dir.path().join("s.toml")).unwrap();
-    std::fs::write(dir.path().join("s2.toml"), text.replace("seed = 11", "seed = 12")).unwrap();
+    std::fs::write(
+        dir.path().join("s2.toml"),
+        text.replace("seed = 11", "seed = 12"),
+    )
+    .unwrap();
     succeeded(
         &eyeshell_in(dir.path(), &["sweep", "s2.toml", "--out", "d", "--quiet"]),
         "d",
@@ -211,11 +220,17 @@ fn a_killed_cohort_resumed_and_a_sharded_one_equal_an_uninterrupted_one() {
     let eyes = 40;
     std::fs::write(
         dir.path().join("s.toml"),
-        GROWING.replace("[sweep.sample.keys]", &format!("eyes = {eyes}\n[sweep.sample.keys]")),
+        GROWING.replace(
+            "[sweep.sample.keys]",
+            &format!("eyes = {eyes}\n[sweep.sample.keys]"),
+        ),
     )
     .unwrap();
     succeeded(
-        &eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "whole", "--quiet"]),
+        &eyeshell_in(
+            dir.path(),
+            &["sweep", "s.toml", "--out", "whole", "--quiet"],
+        ),
         "whole",
     );
     let (mut child, _stderr, _) = spawn_in_own_group(
@@ -230,7 +245,10 @@ fn a_killed_cohort_resumed_and_a_sharded_one_equal_an_uninterrupted_one() {
     assert!(killed.success());
     let _ = child.wait();
     let killed = dir.path().join("killed");
-    assert!(!killed.join("population.json").exists(), "no population of a killed sweep");
+    assert!(
+        !killed.join("population.json").exists(),
+        "no population of a killed sweep"
+    );
     let run = eyeshell_in(
         dir.path(),
         &["sweep", "s.toml", "--out", "killed", "--resume"],
@@ -241,14 +259,20 @@ fn a_killed_cohort_resumed_and_a_sharded_one_equal_an_uninterrupted_one() {
         succeeded(
             &eyeshell_in(
                 dir.path(),
-                &["sweep", "s.toml", "--out", "sharded", "--shard", shard, "--quiet"],
+                &[
+                    "sweep", "s.toml", "--out", "sharded", "--shard", shard, "--quiet",
+                ],
             ),
             shard,
         );
     }
     let merged = eyeshell_in(dir.path(), &["sweep", "merge", "sharded"]);
     succeeded(&merged, "merge");
-    assert!(merged.stdout.contains("population.json"), "{}", merged.stdout);
+    assert!(
+        merged.stdout.contains("population.json"),
+        "{}",
+        merged.stdout
+    );
     let whole = dir.path().join("whole");
     for other in [killed, dir.path().join("sharded")] {
         for f in ["population.json", "population.csv"] {

@@ -274,7 +274,10 @@ fn a_slurm_job_array_of_shards_merges_to_the_plain_sweeps_table() {
     let merge = eyeshell_in(&work, &["sweep", "merge", "cohort"]);
     assert_eq!(merge.code, Some(0), "{}{}", merge.stdout, merge.stderr);
     assert!(merge.stdout.contains("8 of 8 runs ok"), "{}", merge.stdout);
-    let plain = eyeshell_in(&work, &["sweep", "cohort.toml", "--out", "cohort-plain", "-q"]);
+    let plain = eyeshell_in(
+        &work,
+        &["sweep", "cohort.toml", "--out", "cohort-plain", "-q"],
+    );
     assert_eq!(plain.code, Some(0), "{}", plain.stderr);
     for f in ["population.json", "population.csv"] {
         assert_eq!(

@@ -75,15 +75,35 @@ impl Design {
 /// A key's distribution.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Dist {
-    Normal { mean: f64, sd: f64 },
+    Normal {
+        mean: f64,
+        sd: f64,
+    },
     /// Given by the mean and sd of the value itself (not of its logarithm).
-    LogNormal { mean: f64, sd: f64 },
-    Uniform { low: f64, high: f64 },
+    LogNormal {
+        mean: f64,
+        sd: f64,
+    },
+    Uniform {
+        low: f64,
+        high: f64,
+    },
     /// The normal of `mean` and `sd` restricted to [low, high].
-    TruncatedNormal { mean: f64, sd: f64, low: f64, high: f64 },
-    Triangular { low: f64, mode: f64, high: f64 },
+    TruncatedNormal {
+        mean: f64,
+        sd: f64,
+        low: f64,
+        high: f64,
+    },
+    Triangular {
+        low: f64,
+        mode: f64,
+        high: f64,
+    },
     /// Measured values, drawn with equal probability (resampling).
-    Empirical { values: Vec<f64> },
+    Empirical {
+        values: Vec<f64>,
+    },
 }
 
 impl Dist {
@@ -260,7 +280,11 @@ impl Sample {
                 points
             }
             Design::Sobol | Design::Saltelli => {
-                let dims = if self.design == Design::Saltelli { 2 * k } else { k };
+                let dims = if self.design == Design::Saltelli {
+                    2 * k
+                } else {
+                    k
+                };
                 let seed = (self.seed ^ (self.seed >> 32)) as u32;
                 (0..n)
                     .map(|i| {
@@ -346,22 +370,26 @@ impl Resampler {
 }
 
 /// Φ⁻¹(p) for p ∈ (0, 1): Wichura's algorithm AS 241 (PPND16), about 1e-16 relative.
+// The coefficients as Wichura published them, digits beyond f64's included, to be checked
+// against the paper.
+#[allow(clippy::excessive_precision)]
 pub fn normal_quantile(p: f64) -> f64 {
     let q = p - 0.5;
     if q.abs() <= 0.425 {
         let r = 0.180625 - q * q;
-        return q * (((((((2509.0809287301226727 * r + 33430.575583588128105) * r
-            + 67265.770927008700853)
-            * r
-            + 45921.953931549871457)
-            * r
-            + 13731.693765509461125)
-            * r
-            + 1971.5909503065514427)
-            * r
-            + 133.14166789178437745)
-            * r
-            + 3.387132872796366608)
+        return q
+            * (((((((2509.0809287301226727 * r + 33430.575583588128105) * r
+                + 67265.770927008700853)
+                * r
+                + 45921.953931549871457)
+                * r
+                + 13731.693765509461125)
+                * r
+                + 1971.5909503065514427)
+                * r
+                + 133.14166789178437745)
+                * r
+                + 3.387132872796366608)
             / (((((((5226.495278852545925 * r + 28729.085735721942674) * r
                 + 39307.89580009271061)
                 * r
@@ -561,7 +589,7 @@ pub fn parse(t: &toml::Table, origin: &str) -> Result<Sample, SceneError> {
     // Without a seed the cohort would differ from one run (or shard) to the next.
     let Some(seed) = seed else {
         return Err(bad(
-            "give seed (a whole number): the same seed draws the same cohort".into()
+            "give seed (a whole number): the same seed draws the same cohort".into(),
         ));
     };
     if keys.is_empty() {
@@ -673,12 +701,7 @@ fn dist(t: &toml::Table) -> Result<Dist, String> {
     let name = match t.get("dist") {
         Some(toml::Value::String(s)) => s.clone(),
         Some(v) => return Err(format!("dist must be a string, found {}", describe(v))),
-        None => {
-            return Err(format!(
-                "give dist, one of {}",
-                Dist::NAMES.join(", ")
-            ))
-        }
+        None => return Err(format!("give dist, one of {}", Dist::NAMES.join(", "))),
     };
     let expected: &[&str] = match name.as_str() {
         "normal" | "lognormal" => &["mean", "sd"],
@@ -846,7 +869,11 @@ fn correlation_factor(c: &toml::Table, keys: &[(String, Dist)]) -> Result<Vec<Ve
                 )),
             })
             .collect::<Result<_, _>>()?,
-        _ => return Err("correlation: give keys, the list of sampled keys the matrix is over".into()),
+        _ => {
+            return Err(
+                "correlation: give keys, the list of sampled keys the matrix is over".into(),
+            )
+        }
     };
     let mut at = Vec::with_capacity(names.len());
     for n in &names {
@@ -1053,8 +1080,15 @@ mod tests {
         .unwrap();
         let draws = s.draws();
         for d in 0..2 {
-            let scale = if s.keys[d].0 == "growth.eta0" { 50.0 } else { 1.0 };
-            let mut strata: Vec<usize> = draws.iter().map(|r| (r[d] / scale * 50.0) as usize).collect();
+            let scale = if s.keys[d].0 == "growth.eta0" {
+                50.0
+            } else {
+                1.0
+            };
+            let mut strata: Vec<usize> = draws
+                .iter()
+                .map(|r| (r[d] / scale * 50.0) as usize)
+                .collect();
             strata.sort();
             assert_eq!(strata, (0..50).collect::<Vec<_>>());
         }
@@ -1115,7 +1149,12 @@ mod tests {
             e.contains(&format!("{below} of 1000 drawn values lie outside")),
             "{e}"
         );
-        assert!(e.contains(&format!("{below} of growth.eta0 (must be non-negative: eye-")), "{e}");
+        assert!(
+            e.contains(&format!(
+                "{below} of growth.eta0 (must be non-negative: eye-"
+            )),
+            "{e}"
+        );
         assert!(e.contains("not clipped"), "{e}");
     }
 

@@ -645,7 +645,7 @@ fn parse_spec(spec: &toml::Table, origin: &str) -> Result<Spec, SceneError> {
     }
     if list.is_empty() && grid.is_empty() && sample.is_none() {
         return Err(bad(
-            "is empty: give [sweep.grid] and/or [[sweep.runs]], or [sweep.sample]".into()
+            "is empty: give [sweep.grid] and/or [[sweep.runs]], or [sweep.sample]".into(),
         ));
     }
     for (key, _) in &grid {

@@ -128,9 +128,8 @@ pub fn sobol_indices(f: &[Vec<f64>], seed: u64) -> Option<Vec<Index>> {
                         .sum::<f64>()
                         / m
                         / v;
-                    let st = rows.iter().map(|r| (r[0] - r[2 + i]).powi(2)).sum::<f64>()
-                        / (2.0 * m)
-                        / v;
+                    let st =
+                        rows.iter().map(|r| (r[0] - r[2 + i]).powi(2)).sum::<f64>() / (2.0 * m) / v;
                     (s, st)
                 })
                 .collect(),
@@ -170,12 +169,19 @@ pub fn sobol_indices(f: &[Vec<f64>], seed: u64) -> Option<Vec<Index>> {
     )
 }
 
+/// One row of an eye's series.csv: t, (output, value) of its numeric columns, its class.
+type Row = (f64, Vec<(String, f64)>, String);
+/// The population at one output time: t, each output's statistics, the class shares.
+type AtTime = (f64, Vec<(String, Stats)>, Shares);
+/// Each class's share and its standard error.
+type Shares = BTreeMap<String, (f64, f64)>;
+
 /// One eye's outputs: (name, value) at the final time and, per output time, its row.
 struct Eye {
     final_values: Vec<(String, f64)>,
     final_class: String,
     /// (t, [(output, value)], class) per row of series.csv.
-    series: Vec<(f64, Vec<(String, f64)>, String)>,
+    series: Vec<Row>,
 }
 
 /// The finished eye of `record`, read from its result and its series.csv (if it grew).
@@ -340,7 +346,7 @@ pub fn write(
             .iter()
             .all(|e| e.series.iter().any(|(s, _, _)| s == t))
     });
-    let per_time: Vec<(f64, Vec<(String, Stats)>, BTreeMap<String, (f64, f64)>)> = times
+    let per_time: Vec<AtTime> = times
         .iter()
         .map(|&t| {
             let rows: Vec<(&[(String, f64)], &str)> = members
@@ -373,7 +379,11 @@ pub fn write(
     doc.insert("seed".into(), json!(sample.seed));
     doc.insert(
         "keys".into(),
-        json!(sample.keys.iter().map(|(k, _)| k.clone()).collect::<Vec<_>>()),
+        json!(sample
+            .keys
+            .iter()
+            .map(|(k, _)| k.clone())
+            .collect::<Vec<_>>()),
     );
     doc.insert("eyes".into(), json!(total));
     doc.insert("eyes_finished".into(), json!(members.len()));
@@ -426,7 +436,8 @@ pub fn write(
         path: out.join(file),
         source: e,
     };
-    write_atomic(&out.join(POPULATION_FILE), text.as_bytes()).map_err(|e| io(POPULATION_FILE, e))?;
+    write_atomic(&out.join(POPULATION_FILE), text.as_bytes())
+        .map_err(|e| io(POPULATION_FILE, e))?;
 
     // The table: t ("final" for the final time), output, then the statistics; class shares
     // as rows `class=myopic` with the share as the mean.
@@ -439,30 +450,55 @@ pub fn write(
         csv.push_str(&format!(",q{p}_se"));
     }
     csv.push('\n');
-    let rows = |csv: &mut String, t: &str, s: &[(String, Stats)], c: &BTreeMap<String, (f64, f64)>, n: usize| {
+    let rows = |csv: &mut String,
+                t: &str,
+                s: &[(String, Stats)],
+                c: &BTreeMap<String, (f64, f64)>,
+                n: usize| {
         for (k, st) in s {
-            csv.push_str(&format!("{t},{k},{},{},{}", st.n, format_value(st.mean), format_value(st.sd)));
+            csv.push_str(&format!(
+                "{t},{k},{},{},{}",
+                st.n,
+                format_value(st.mean),
+                format_value(st.sd)
+            ));
             for q in st.quantiles {
                 csv.push_str(&format!(",{}", format_value(q)));
             }
-            csv.push_str(&format!(",{},{}", format_value(st.mean_se), format_value(st.sd_se)));
+            csv.push_str(&format!(
+                ",{},{}",
+                format_value(st.mean_se),
+                format_value(st.sd_se)
+            ));
             for q in st.quantiles_se {
                 csv.push_str(&format!(",{}", format_value(q)));
             }
             csv.push('\n');
         }
         for (class, (p, se)) in c {
-            csv.push_str(&format!("{t},class={class},{n},{},,,,,,,{},,,,,,\n", format_value(*p), format_value(*se)));
+            csv.push_str(&format!(
+                "{t},class={class},{n},{},,,,,,,{},,,,,,\n",
+                format_value(*p),
+                format_value(*se)
+            ));
         }
     };
-    rows(&mut csv, "final", &final_stats, &final_shares, members.len());
+    rows(
+        &mut csv,
+        "final",
+        &final_stats,
+        &final_shares,
+        members.len(),
+    );
     for (t, s, c) in &per_time {
         rows(&mut csv, &format_value(*t), s, c, members.len());
     }
-    write_atomic(&out.join(POPULATION_TABLE), csv.as_bytes()).map_err(|e| io(POPULATION_TABLE, e))?;
+    write_atomic(&out.join(POPULATION_TABLE), csv.as_bytes())
+        .map_err(|e| io(POPULATION_TABLE, e))?;
     let mut files = vec![POPULATION_FILE, POPULATION_TABLE];
     if let Some(sobol) = &sobol {
-        let mut csv = String::from("output,key,first,first_low,first_high,total,total_low,total_high\n");
+        let mut csv =
+            String::from("output,key,first,first_low,first_high,total,total_low,total_high\n");
         for (output, indices) in sobol {
             for (key, ix) in indices {
                 csv.push_str(&format!(
@@ -569,7 +605,15 @@ mod tests {
             .map(|rows| rows.iter().map(|x| (3.0 * x[0]).sin()).collect())
             .collect();
         let ix = sobol_indices(&g, 7).unwrap();
-        assert!((ix[0].first - 1.0).abs() < 0.01 && (ix[0].total - 1.0).abs() < 0.01, "{:?}", ix[0]);
-        assert!(ix[1].first.abs() < 1e-12 && ix[1].total.abs() < 1e-12, "{:?}", ix[1]);
+        assert!(
+            (ix[0].first - 1.0).abs() < 0.01 && (ix[0].total - 1.0).abs() < 0.01,
+            "{:?}",
+            ix[0]
+        );
+        assert!(
+            ix[1].first.abs() < 1e-12 && ix[1].total.abs() < 1e-12,
+            "{:?}",
+            ix[1]
+        );
     }
 }
