@@ -54,6 +54,10 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
         .map(|r| format!("{}/{} {}", r.shard, r.shards, r.status))
         .collect();
     let complete = failed.is_empty() && missing.is_empty();
+    let figure = match write && missing.is_empty() {
+        true => super::sweep::population_figure(dir, &merged.report.records)?,
+        false => None,
+    };
     if !(args.quiet && complete) {
         let mut text = format!(
             "eyeshell: sweep {} ({}): {ok} of {total} run{} ok, {} failed, {} missing\n  shards          {}\n",
@@ -69,6 +73,12 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
                 "  table           {}\n",
                 dir.join(TABLE_FILE).display()
             ));
+            if missing.is_empty() {
+                text.push_str(&super::sweep::population_lines(&(&merged.plan).into(), dir));
+                if let Some(png) = &figure {
+                    text.push_str(&format!("  figure          {}\n", png.display()));
+                }
+            }
         }
         if !failed.is_empty() {
             text.push_str(&format!("  failed          {}\n", first(&failed, "; ")));

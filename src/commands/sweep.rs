@@ -113,6 +113,11 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         (_, _, Some(sweep)) => run_sweep(sweep, out_dir, &options, &progress)?,
         _ => unreachable!("a shard has a plan, a plain sweep its runs"),
     };
+    // A sampled sweep's figure, once population.json is there (failed eyes or not).
+    let figure = match (shard, report.interrupted) {
+        (None, false) => population_figure(out_dir, &report.records)?,
+        _ => None,
+    };
     // Where the results are: the table, or the shard's record.
     let (table, shard_text, again) = match shard {
         Some(s) => (
@@ -179,11 +184,37 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
                 table.display(),
                 crate::shell::word(out_dir)
             )),
-            None => text.push_str(&format!("  table           {}\n", table.display())),
+            None => {
+                text.push_str(&format!("  table           {}\n", table.display()));
+                text.push_str(&population_lines(&head, out_dir));
+                if let Some(png) = &figure {
+                    text.push_str(&format!("  figure          {}\n", png.display()));
+                }
+            }
         }
         out(&text);
     }
     Ok(())
+}
+
+/// The lines naming a sampled sweep's population files ("" for another sweep).
+pub(crate) fn population_lines(head: &eyeshell::sweep::Head<'_>, dir: &std::path::Path) -> String {
+    use eyeshell::sweep::population::{POPULATION_FILE, POPULATION_TABLE, SOBOL_TABLE};
+    let Some(sample) = head.sample else {
+        return String::new();
+    };
+    let mut text = format!(
+        "  population      {}\n  table           {}\n",
+        dir.join(POPULATION_FILE).display(),
+        dir.join(POPULATION_TABLE).display()
+    );
+    if sample.design == eyeshell::scene::sample::Design::Saltelli {
+        text.push_str(&format!(
+            "  sobol indices   {}\n",
+            dir.join(SOBOL_TABLE).display()
+        ));
+    }
+    text
 }
 
 /// The first [`SHOWN_FAILURES`] of `failed`, then how many more: the error line stays
@@ -251,4 +282,144 @@ pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
         ));
     }
     Ok(())
+}
+
+/// The stem of a sampled sweep's figure (`population.png`, `population.svg`).
+pub(crate) const POPULATION_FIGURE: &str = "population";
+
+/// A sampled sweep's figure, beside population.json (which must have been written): the
+/// histogram of the final axial length, that of the final refraction when series.csv has a
+/// refraction_D column, and the axial length against t as its median with the 50 % and 90 %
+/// bands (quartiles; 5 % and 95 %, dashed). Only the cohort's eyes count (for a Saltelli
+/// design the A and B rows), as in population.json.
+pub(crate) fn population_figure(
+    dir: &std::path::Path,
+    records: &[eyeshell::sweep::RunRecord],
+) -> Result<Option<std::path::PathBuf>, Error> {
+    use eyeshell::sweep::population::POPULATION_FILE;
+    use eyeshell::sweep::RunStatus;
+    use eyeshell_plot::{self as plot, Figure, Series, SeriesStyle};
+    let Ok(text) = std::fs::read_to_string(dir.join(POPULATION_FILE)) else {
+        return Ok(None);
+    };
+    let population: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Error::failed(format!("{}: {e}", dir.join(POPULATION_FILE).display())))?;
+    let eyes: Vec<&eyeshell::sweep::RunRecord> = records
+        .iter()
+        .filter(|r| matches!(r.status, RunStatus::Ok | RunStatus::Reused))
+        .filter(|r| !r.name.starts_with("AB"))
+        .collect();
+    let lengths: Vec<f64> = eyes
+        .iter()
+        .filter_map(|r| r.result.as_ref().map(|x| x.axial_length))
+        .filter(|x| x.is_finite())
+        .collect();
+    // The final refraction of each eye, from its series.csv's last row, if it has one.
+    let refraction: Vec<f64> = eyes
+        .iter()
+        .filter_map(|r| {
+            let text = std::fs::read_to_string(
+                dir.join(&r.dir).join(eyeshell::rundir::growth::SERIES_FILE),
+            )
+            .ok()?;
+            let mut lines = text.lines();
+            let at = lines.next()?.split(',').position(|h| h == "refraction_D")?;
+            lines.last()?.split(',').nth(at)?.parse::<f64>().ok()
+        })
+        .filter(|x| x.is_finite())
+        .collect();
+    let histogram = |values: &[f64], title: &str, label: &str| -> Figure {
+        let (lo, hi) = values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        let bins = ((values.len() as f64).sqrt().ceil() as usize).clamp(5, 50);
+        let width = if hi > lo {
+            (hi - lo) / bins as f64
+        } else {
+            1.0
+        };
+        let mut counts = vec![0usize; bins];
+        for &x in values {
+            let k = (((x - lo) / width) as usize).min(bins - 1);
+            counts[k] += 1;
+        }
+        // The histogram as the outline of its bars.
+        let mut points = vec![(lo, 0.0)];
+        for (k, &c) in counts.iter().enumerate() {
+            let (a, b) = (lo + k as f64 * width, lo + (k + 1) as f64 * width);
+            points.extend([(a, c as f64), (b, c as f64)]);
+        }
+        points.push((lo + bins as f64 * width, 0.0));
+        Figure::new(title, label, "eyes").with(Series::new(
+            format!("{} eyes", values.len()),
+            points,
+            SeriesStyle::Line,
+        ))
+    };
+    let mut panels = Vec::new();
+    if lengths.len() >= 2 {
+        panels.push(histogram(
+            &lengths,
+            "Final axial length",
+            "axial length (mm)",
+        ));
+    }
+    if refraction.len() >= 2 {
+        panels.push(histogram(&refraction, "Final refraction", "refraction (D)"));
+    }
+    let times = population["times"].as_array().cloned().unwrap_or_default();
+    if times.len() >= 2 {
+        let band = |q: &str| -> Vec<(f64, f64)> {
+            times
+                .iter()
+                .filter_map(|t| {
+                    Some((
+                        t["t"].as_f64()?,
+                        t["outputs"]["axial_length"]["quantiles"][q].as_f64()?,
+                    ))
+                })
+                .collect()
+        };
+        panels.push(
+            Figure::new("Axial length of the cohort", "t", "axial length (mm)")
+                .with(
+                    Series::new("median", band("0.5"), SeriesStyle::LineAndMarkers)
+                        .color(plot::PALETTE[0]),
+                )
+                .with(
+                    Series::new("25 % and 75 %", band("0.25"), SeriesStyle::Line)
+                        .color(plot::PALETTE[1]),
+                )
+                .with(
+                    Series::new("", band("0.75"), SeriesStyle::Line)
+                        .color(plot::PALETTE[1])
+                        .no_legend(),
+                )
+                .with(
+                    Series::new("5 % and 95 %", band("0.05"), SeriesStyle::DashedLine)
+                        .color(plot::PALETTE[3]),
+                )
+                .with(
+                    Series::new("", band("0.95"), SeriesStyle::DashedLine)
+                        .color(plot::PALETTE[3])
+                        .no_legend(),
+                ),
+        );
+    }
+    if panels.is_empty() {
+        return Ok(None);
+    }
+    let columns = panels.len();
+    let (png, _) = plot::write_panels(
+        &panels,
+        columns,
+        "The cohort",
+        640,
+        480,
+        &dir.join(POPULATION_FIGURE),
+    )
+    .map_err(|e| Error::failed(e.to_string()))?;
+    Ok(Some(png))
 }

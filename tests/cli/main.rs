@@ -6,6 +6,7 @@ mod support;
 
 mod absurd;
 mod bad_input;
+mod cohorts;
 mod destinations;
 mod docs;
 mod export_compare;

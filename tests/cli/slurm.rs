@@ -1,6 +1,7 @@
 //! On a real Slurm: tests/slurm/cluster.sh starts munged, slurmctld and slurmd on this
 //! machine (one node, 2 CPUs, its files under /var/tmp), the script of `eyeshell sweep
-//! --slurm-script` runs a six-run growth sweep as a three-task job array, the merge job its
+//! --slurm-script` runs a six-run growth sweep as a three-task job array (and a sampled
+//! sweep of 8 eyes as two tasks), the merge job its
 //! comment suggests (`sbatch --dependency=afterany:JOBID --wrap ...`, pasted into bash)
 //! assembles it, and sweep.csv must be a plain sweep's (timings aside). The working
 //! directory, DIR and the binary's folder hold line breaks, quotes, `$(...)` and
@@ -247,10 +248,48 @@ fn a_slurm_job_array_of_shards_merges_to_the_plain_sweeps_table() {
         table_without_timings(&work.join(&out)),
         table_without_timings(&work.join("plain"))
     );
+    // A sampled sweep (a cohort of 8 eyes) as a job array of 2 tasks, merged: its
+    // population files are those of the plain sweep, byte for byte.
+    let cohort = "[sweep.sample]\neyes = 8\ndesign = \"latin-hypercube\"\nseed = 11\n[sweep.sample.keys]\n\"growth.eta0\" = { dist = \"normal\", mean = 70.0, sd = 5.0 }\n\"growth.Gamma\" = { dist = \"uniform\", low = 6.0, high = 10.0 }\n";
+    std::fs::write(work.join("cohort.toml"), format!("{scene}{cohort}")).unwrap();
+    let script = Run::from(
+        Command::new(&exe)
+            .args(["sweep", "cohort.toml", "--out", "cohort", "--slurm-script"])
+            .args(["--shards", "2", "--time", "5:00"])
+            .current_dir(&work)
+            .output()
+            .unwrap(),
+    );
+    assert_eq!(script.code, Some(0), "{}", script.stderr);
+    std::fs::write(work.join("cohort.sh"), &script.stdout).unwrap();
+    let job = sbatch(&["--wait", "cohort.sh"]);
+    assert_eq!(
+        job.code,
+        Some(0),
+        "sbatch --wait cohort.sh: {}{}\n{}",
+        job.stdout,
+        job.stderr,
+        logs(&work, &cluster)
+    );
+    let merge = eyeshell_in(&work, &["sweep", "merge", "cohort"]);
+    assert_eq!(merge.code, Some(0), "{}{}", merge.stdout, merge.stderr);
+    assert!(merge.stdout.contains("8 of 8 runs ok"), "{}", merge.stdout);
+    let plain = eyeshell_in(
+        &work,
+        &["sweep", "cohort.toml", "--out", "cohort-plain", "-q"],
+    );
+    assert_eq!(plain.code, Some(0), "{}", plain.stderr);
+    for f in ["population.json", "population.csv"] {
+        assert_eq!(
+            std::fs::read(work.join("cohort").join(f)).unwrap(),
+            std::fs::read(work.join("cohort-plain").join(f)).unwrap(),
+            "{f}"
+        );
+    }
     assert_eq!(canaries(base.path()), Vec::<String>::new());
     drop(cluster);
     eprintln!(
-        "the real Slurm test ran: 3 array tasks and the merge job, hostile paths, in {:.1} s",
+        "the real Slurm test ran: 3 array tasks and the merge job, hostile paths, and a cohort of 8 eyes as 2 tasks, in {:.1} s",
         start.elapsed().as_secs_f64()
     );
 }

@@ -16,6 +16,7 @@
 //! output.times, stimulus.*) are kept but not used, shown or summarised.
 
 pub mod keys;
+pub mod sample;
 pub mod sweep;
 
 use std::collections::BTreeMap;

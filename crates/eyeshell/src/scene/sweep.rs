@@ -18,6 +18,7 @@
 //! would be ambiguous which wins). Every run's scene is validated before anything runs, and
 //! an error names the run.
 
+use super::sample::Sample;
 use super::{
     closest, describe, keys, one_line, parse_table, show, unknown_key, KeyValue, Scene, SceneError,
 };
@@ -60,6 +61,8 @@ pub struct Sweep {
     /// The scene file, as given, when the sweep was read from one: `origin` is only its
     /// name as messages show it (control characters escaped), which may name no file.
     pub path: Option<std::path::PathBuf>,
+    /// The sampled cohort, when the sweep is a `[sweep.sample]` ([`super::sample`]).
+    pub sample: Option<std::sync::Arc<Sample>>,
 }
 
 impl Sweep {
@@ -113,6 +116,8 @@ pub struct SweepPlan {
     pub name: String,
     /// The scene file, as given, when the plan was read from one ([`Sweep::path`]).
     pub path: Option<std::path::PathBuf>,
+    /// The sampled cohort, when the sweep is a `[sweep.sample]`: its draws are the list.
+    pub sample: Option<std::sync::Arc<Sample>>,
     table: toml::Table,
     overrides: Vec<String>,
     list: Vec<ListEntry>,
@@ -154,11 +159,30 @@ impl SweepPlan {
             origin: origin.clone(),
             problem,
         };
-        let (list, grid) = match &spec {
-            None => (Vec::new(), Vec::new()),
+        let (mut list, grid, sample) = match &spec {
+            None => (Vec::new(), Vec::new(), None),
             Some(toml::Value::Table(t)) => parse_spec(t, &origin)?,
             Some(v) => return Err(bad(format!("must be a table, found {}", describe(v)))),
         };
+        // A cohort is a list of runs, one per eye (or per Saltelli row), each named and
+        // setting the sampled keys to its draws: everything a listed sweep does, it does.
+        if let Some(sample) = &sample {
+            let draws = sample.draws();
+            super::sample::check_draws(sample, &draws, &origin)?;
+            list = draws
+                .into_iter()
+                .enumerate()
+                .map(|(i, row)| ListEntry {
+                    name: Some(sample.run_name(i)),
+                    values: sample
+                        .keys
+                        .iter()
+                        .zip(row)
+                        .map(|((k, _), x)| (k.clone(), toml::Value::Float(x)))
+                        .collect(),
+                })
+                .collect();
+        }
         for text in overrides {
             let key = text
                 .split_once('=')
@@ -206,6 +230,7 @@ impl SweepPlan {
             keys,
             name,
             path: None,
+            sample: sample.map(std::sync::Arc::new),
             table,
             overrides: overrides.to_vec(),
             list,
@@ -466,6 +491,7 @@ impl SweepPlan {
                 .collect::<Result<_, _>>()?,
             name: self.name.clone(),
             path: self.path.clone(),
+            sample: self.sample.clone(),
         })
     }
 
@@ -539,16 +565,27 @@ struct ListEntry {
     values: Vec<Assignment>,
 }
 
-/// The list entries and the grid axes (key, values) of a `[sweep]` table.
-fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<Axis>), SceneError> {
+/// The list entries, the grid axes (key, values) and the sample of a `[sweep]` table.
+type Spec = (Vec<ListEntry>, Vec<Axis>, Option<Sample>);
+
+/// The list entries, the grid axes (key, values) and the sample of a `[sweep]` table.
+fn parse_spec(spec: &toml::Table, origin: &str) -> Result<Spec, SceneError> {
     let bad = |problem: String| SceneError::BadSweep {
         origin: origin.to_string(),
         problem,
     };
     let mut list = Vec::new();
     let mut grid = Vec::new();
+    let mut sample = None;
     for (name, value) in spec {
         match (name.as_str(), value) {
+            ("sample", toml::Value::Table(t)) => sample = Some(super::sample::parse(t, origin)?),
+            ("sample", v) => {
+                return Err(bad(format!(
+                    "sample must be a table ([sweep.sample]), found {}",
+                    describe(v)
+                )))
+            }
             ("runs", toml::Value::Array(entries)) => {
                 for (i, e) in entries.iter().enumerate() {
                     let toml::Value::Table(t) = e else {
@@ -590,19 +627,26 @@ fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<A
                 )));
             }
             (other, _) => {
-                let hint = closest(other, ["grid", "runs"].into_iter())
+                let hint = closest(other, ["grid", "runs", "sample"].into_iter())
                     .map(|s| format!(" (did you mean '{s}'?)"))
                     .unwrap_or_default();
                 return Err(bad(format!(
-                    "unknown entry '{}'{hint}: a sweep has a grid and/or runs",
+                    "unknown entry '{}'{hint}: a sweep has a grid and/or runs, or a sample",
                     one_line(other)
                 )));
             }
         }
     }
-    if list.is_empty() && grid.is_empty() {
+    if sample.is_some() && !(list.is_empty() && grid.is_empty()) {
+        // The population's statistics are over the cohort: a grid or list beside it would
+        // mix cohorts (run one sampled sweep per setting instead).
         return Err(bad(
-            "is empty: give [sweep.grid] and/or [[sweep.runs]]".into()
+            "a sampled sweep ([sweep.sample]) has no [sweep.grid] or [[sweep.runs]]: give one sweep per setting".into(),
+        ));
+    }
+    if list.is_empty() && grid.is_empty() && sample.is_none() {
+        return Err(bad(
+            "is empty: give [sweep.grid] and/or [[sweep.runs]], or [sweep.sample]".into(),
         ));
     }
     for (key, _) in &grid {
@@ -610,7 +654,7 @@ fn parse_spec(spec: &toml::Table, origin: &str) -> Result<(Vec<ListEntry>, Vec<A
             return Err(bad(format!("{key} is both in the grid and in the runs")));
         }
     }
-    Ok((list, grid))
+    Ok((list, grid, sample))
 }
 
 /// A `[[sweep.runs]]` entry: `name` names the run, every other leaf is a scene key.

@@ -9,6 +9,8 @@
 //!   at most every [`TABLE_INTERVAL`]);
 //! - `summary.json`: the same as JSON with the sweep's status (`running`, `ok`, `partial`
 //!   when some runs failed, `interrupted`);
+//! - `population.json`, `population.csv` (and `sobol.csv`): for a sampled sweep
+//!   (`[sweep.sample]`), the cohort's statistics once every run has ended ([`population`]);
 //! - `shards/K.json`: with `--shard K/N` ([`run_shard`]), the record of shard K, which
 //!   writes neither sweep.csv nor summary.json; [`merge`] writes them from the runs.
 //!
@@ -29,6 +31,7 @@
 //!   it, or mix a sweep with something else.
 
 pub mod files;
+pub mod population;
 pub mod resume;
 pub mod run;
 pub mod shard;
@@ -204,14 +207,36 @@ pub fn run_sweep(
         sweep.runs.iter().map(|r| r.name.as_str()).collect();
     let _owned = target::prepare(&|n| names.contains(n), out, options.resume, options.inputs)?;
     let all: Vec<usize> = (0..sweep.runs.len()).collect();
-    run_some(
+    let report = run_some(
         sweep,
         &all,
         out,
         options,
         &|r| write_tables(sweep.into(), r),
         done,
-    )
+    )?;
+    write_population(sweep.into(), &report)?;
+    Ok(report)
+}
+
+/// A sampled sweep's population results ([`population`]), once every run has ended (an
+/// interrupted sweep writes none: its cohort is not the one described); None otherwise.
+pub fn write_population(
+    head: Head<'_>,
+    report: &SweepReport,
+) -> Result<Option<population::Written>, OutputError> {
+    let Some(sample) = head.sample else {
+        return Ok(None);
+    };
+    if report.interrupted
+        || report
+            .records
+            .iter()
+            .any(|r| r.status == RunStatus::Pending)
+    {
+        return Ok(None);
+    }
+    population::write(&report.dir, head.name, sample, &report.records).map(Some)
 }
 
 /// Run the runs of `shard` ([`shard::runs_of`]) into `out`, as [`run_sweep`] runs them,
@@ -368,6 +393,8 @@ pub struct Head<'a> {
     pub name: &'a str,
     pub origin: &'a str,
     pub keys: &'a [String],
+    /// The cohort of a sampled sweep.
+    pub sample: Option<&'a crate::scene::sample::Sample>,
 }
 
 impl<'a> From<&'a Sweep> for Head<'a> {
@@ -376,6 +403,7 @@ impl<'a> From<&'a Sweep> for Head<'a> {
             name: &s.name,
             origin: &s.origin,
             keys: &s.keys,
+            sample: s.sample.as_deref(),
         }
     }
 }
@@ -386,6 +414,7 @@ impl<'a> From<&'a SweepPlan> for Head<'a> {
             name: &s.name,
             origin: &s.origin,
             keys: &s.keys,
+            sample: s.sample.as_deref(),
         }
     }
 }

@@ -524,6 +524,7 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
     };
     if write {
         super::write_tables((&plan).into(), &report)?;
+        super::write_population((&plan).into(), &report)?;
     }
     Ok(Merged {
         plan,

@@ -1,0 +1,333 @@
+//! Sampled sweeps (`[sweep.sample]`, virtual cohorts): population statistics against the
+//! exact inflated sphere, Sobol indices of a key that matters and one that does not, the
+//! same seed giving the same bytes, a killed sweep resumed to the same result, shards
+//! merged to the same result, and draws outside a key's range refused.
+
+use std::path::Path;
+
+use crate::support::*;
+
+/// The exact sphere of docs/MODEL.md §7 on 21 nodes (4e-6 mm from the exact axial length).
+const SPHERE: &str = "name = \"sphere\"\n[pressure]\ndP = 2.0\n[material]\nC = 100.0\nbending = 18.0\nthickness = \"uniform\"\nH0 = 0.65\n[fibres]\nD = 0.0\n[cornea]\nC = 100.0\nH = 0.65\nR0 = 10.0\n[geometry]\nR0 = 10.0\nfraction = 0.8\n[solver]\nnodes = 21\n";
+
+/// A small growth scene (N = 21, CVODE rtol 1e-3, two output times) and a cohort of it.
+const GROWING: &str = "name = \"small\"\n[fibres]\nD = 0.0\n[growth]\neta0 = 70.0\nt_end = 0.2\n[solver]\nnodes = 21\nrtol = 1e-3\n[output]\ntimes = [0.1, 0.2]\nhistory_points = 10\n[sweep.sample]\ndesign = \"latin-hypercube\"\nseed = 11\n[sweep.sample.keys]\n\"growth.eta0\" = { dist = \"normal\", mean = 70.0, sd = 5.0 }\n\"growth.Gamma\" = { dist = \"uniform\", low = 6.0, high = 10.0 }\n";
+
+fn population(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("population.json")).unwrap()).unwrap()
+}
+
+/// The exact sphere's axial length at pressure dP: the retina's z at the posterior pole,
+/// 2αR0 − h/2 with the inflated thickness h = H0/α² (MODEL.md §6, §7), α the cornea's
+/// stretch (its closed form, solved to double precision by the library).
+fn exact_axial_length(dp: f64) -> f64 {
+    let cornea = eyeshell::model::params::CorneaParams {
+        c: 100.0,
+        h: 0.65,
+        r0: 10.0,
+    };
+    let a = eyeshell::model::cornea::stretch(&cornea, dp).unwrap();
+    2.0 * a * 10.0 - 0.65 / (2.0 * a * a)
+}
+
+/// Right statistics: ΔP ~ N(2, 0.2²) over 400 eyes of the exact sphere. The population's
+/// mean and sd of the axial length are those of the closed form over the normal density
+/// (by quadrature, 1e-12), within 3 of their reported Monte Carlo standard errors; the
+/// table's values are the runs' own; and each run's drawn ΔP is its sweep.csv column.
+#[test]
+fn a_cohorts_mean_and_sd_match_the_exact_sphere() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("s.toml"),
+        format!("{SPHERE}[sweep.sample]\neyes = 400\nseed = 3\n[sweep.sample.keys]\n\"pressure.dP\" = {{ dist = \"normal\", mean = 2.0, sd = 0.2 }}\n"),
+    )
+    .unwrap();
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "--quiet"]);
+    succeeded(&run, "sampled sweep");
+    let out = dir.path().join("out");
+    // Quadrature of the closed form against the normal density on ±8 sd.
+    let (mut m0, mut m1, mut m2) = (0.0, 0.0, 0.0);
+    let steps = 4000;
+    for i in 0..=steps {
+        let z = -8.0 + 16.0 * i as f64 / steps as f64;
+        let w = if i == 0 || i == steps { 0.5 } else { 1.0 } * (-0.5 * z * z).exp();
+        let l = exact_axial_length(2.0 + 0.2 * z);
+        m0 += w;
+        m1 += w * l;
+        m2 += w * l * l;
+    }
+    let mean = m1 / m0;
+    let sd = (m2 / m0 - mean * mean).sqrt();
+    let p = population(&out);
+    let a = &p["final"]["axial_length"];
+    let got = |k: &str| a[k].as_f64().unwrap();
+    assert_eq!(a["n"], 400);
+    assert!(
+        (got("mean") - mean).abs() < 3.0 * got("mean_se"),
+        "mean {} vs exact {mean} (se {})",
+        got("mean"),
+        got("mean_se")
+    );
+    assert!(
+        (got("sd") - sd).abs() < 3.0 * got("sd_se"),
+        "sd {} vs exact {sd} (se {})",
+        got("sd"),
+        got("sd_se")
+    );
+    // The standard error is the sd over √n, and sd is about 0.02 mm (dL/dΔP ≈ 0.1 mm/kPa).
+    assert!((got("mean_se") - got("sd") / 20.0).abs() < 1e-15);
+    assert!(sd > 0.01 && sd < 0.03, "{sd}");
+    // Each run: its drawn ΔP in the table, and its axial length the closed form's.
+    let (header, rows) = csv_cells(&out.join("sweep.csv"));
+    assert_eq!(&header[..3], ["run", "status", "pressure.dP"]);
+    let col = header.iter().position(|h| h == "axial_length").unwrap();
+    let lengths: Vec<f64> = rows.iter().map(|r| r[col].parse().unwrap()).collect();
+    for r in &rows {
+        let dp: f64 = r[2].parse().unwrap();
+        let l: f64 = r[col].parse().unwrap();
+        assert!((l - exact_axial_length(dp)).abs() < 1e-5, "{r:?}");
+    }
+    assert_eq!(rows[0][0], "eye-001");
+    let n = lengths.len() as f64;
+    let sample_mean = lengths.iter().sum::<f64>() / n;
+    assert!((got("mean") - sample_mean).abs() < 1e-12);
+    let table = std::fs::read_to_string(out.join("population.csv")).unwrap();
+    assert!(table.starts_with("t,output,n,mean,sd,q0.05,"), "{table}");
+    assert!(table.contains("\nfinal,axial_length,400,"), "{table}");
+    assert!(
+        table.contains("\nfinal,class=hyperopic,400,1e0,"),
+        "{table}"
+    );
+}
+
+/// Which spread matters: a Saltelli design over ΔP (which sets the sphere's size) and
+/// solver.newton_tol (which does not change the converged shell beyond round-off): ΔP's
+/// first-order and total indices are 1 and newton_tol's 0, each inside its bootstrap
+/// interval.
+#[test]
+fn sobol_indices_name_the_key_that_matters() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("s.toml"),
+        format!("{SPHERE}[sweep.sample]\neyes = 64\ndesign = \"saltelli\"\nseed = 5\n[sweep.sample.keys]\n\"pressure.dP\" = {{ dist = \"uniform\", low = 1.5, high = 2.5 }}\n\"solver.newton_tol\" = {{ dist = \"lognormal\", mean = 1e-9, sd = 5e-10 }}\n"),
+    )
+    .unwrap();
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out"]);
+    succeeded(&run, "saltelli sweep");
+    assert!(run.stdout.contains("sobol indices"), "{}", run.stdout);
+    let out = dir.path().join("out");
+    let (_, rows) = csv_cells(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 64 * 4);
+    assert_eq!(
+        [&rows[0][0], &rows[1][0], &rows[2][0], &rows[3][0]],
+        ["A-001", "B-001", "AB1-001", "AB2-001"]
+    );
+    let p = population(&out);
+    assert_eq!(p["eyes"], 128, "A and B rows are the cohort");
+    let s = &p["sobol"]["axial_length"];
+    let f = |key: &str, what: &str| s[key][what].as_f64().unwrap();
+    let ci = |key: &str, what: &str| {
+        let c = &s[key][format!("{what}_ci")];
+        (c[0].as_f64().unwrap(), c[1].as_f64().unwrap())
+    };
+    assert!((f("pressure.dP", "first") - 1.0).abs() < 0.05, "{s}");
+    assert!((f("pressure.dP", "total") - 1.0).abs() < 0.05, "{s}");
+    assert!(f("solver.newton_tol", "first").abs() < 1e-3, "{s}");
+    assert!(f("solver.newton_tol", "total").abs() < 1e-3, "{s}");
+    let (lo, hi) = ci("pressure.dP", "total");
+    assert!(lo < 1.0 + 1e-9 && hi > 0.9, "{s}");
+    let table = std::fs::read_to_string(out.join("sobol.csv")).unwrap();
+    assert!(table.starts_with("output,key,first,first_low,first_high,total,total_low,total_high\n"));
+    assert!(table.contains("\naxial_length,pressure.dP,"), "{table}");
+}
+
+/// The columns of sweep.csv that do not measure time or say whether a run was reused:
+/// the names, the draws and the results.
+fn table_without_timings(path: &Path) -> Vec<Vec<String>> {
+    let (header, rows) = csv_cells(path);
+    let wall = header.iter().position(|h| h == "wall_seconds").unwrap();
+    rows.into_iter()
+        .map(|mut r| {
+            r.remove(wall);
+            r.remove(1);
+            r
+        })
+        .collect()
+}
+
+/// Reproducible: the same seed draws the same cohort and writes the same population files,
+/// byte for byte; another seed draws another cohort.
+#[test]
+fn the_same_seed_gives_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("s.toml"),
+        GROWING.replace("[sweep.sample.keys]", "eyes = 6\n[sweep.sample.keys]"),
+    )
+    .unwrap();
+    for out in ["a", "b"] {
+        succeeded(
+            &eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", out, "--quiet"]),
+            out,
+        );
+    }
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    assert_eq!(
+        table_without_timings(&a.join("sweep.csv")),
+        table_without_timings(&b.join("sweep.csv"))
+    );
+    for f in ["population.json", "population.csv"] {
+        assert_eq!(
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    // Per output time: t = 0 and both output times, each with every output.
+    let p = population(&a);
+    let times: Vec<f64> = p["times"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["t"].as_f64().unwrap())
+        .collect();
+    assert_eq!(times, [0.0, 0.1, 0.2]);
+    assert_eq!(
+        p["times"][2]["outputs"]["axial_length"],
+        p["final"]["axial_length"]
+    );
+    let text = std::fs::read_to_string(dir.path().join("s.toml")).unwrap();
+    std::fs::write(
+        dir.path().join("s2.toml"),
+        text.replace("seed = 11", "seed = 12"),
+    )
+    .unwrap();
+    succeeded(
+        &eyeshell_in(dir.path(), &["sweep", "s2.toml", "--out", "d", "--quiet"]),
+        "d",
+    );
+    let (_, ra) = csv_cells(&a.join("sweep.csv"));
+    let (_, rd) = csv_cells(&dir.path().join("d/sweep.csv"));
+    assert_ne!(ra[0][2], rd[0][2], "another seed, other draws");
+}
+
+/// A sampled sweep killed (SIGKILL, as a lost node) and resumed writes the population
+/// files an uninterrupted sweep writes, byte for byte; the killed one wrote none. Run as
+/// two shards and merged, the same again.
+#[test]
+fn a_killed_cohort_resumed_and_a_sharded_one_equal_an_uninterrupted_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let eyes = 40;
+    std::fs::write(
+        dir.path().join("s.toml"),
+        GROWING.replace(
+            "[sweep.sample.keys]",
+            &format!("eyes = {eyes}\n[sweep.sample.keys]"),
+        ),
+    )
+    .unwrap();
+    succeeded(
+        &eyeshell_in(
+            dir.path(),
+            &["sweep", "s.toml", "--out", "whole", "--quiet"],
+        ),
+        "whole",
+    );
+    let (mut child, _stderr, _) = spawn_in_own_group(
+        dir.path(),
+        &["sweep", "s.toml", "--out", "killed", "--jobs", "1"],
+        "eyeshell: [1/40] eye-",
+    );
+    let killed = std::process::Command::new("kill")
+        .args(["-KILL", "--", &format!("-{}", child.id())])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let _ = child.wait();
+    let killed = dir.path().join("killed");
+    assert!(
+        !killed.join("population.json").exists(),
+        "no population of a killed sweep"
+    );
+    let run = eyeshell_in(
+        dir.path(),
+        &["sweep", "s.toml", "--out", "killed", "--resume"],
+    );
+    succeeded(&run, "resume");
+    assert!(run.stdout.contains("reused"), "{}", run.stdout);
+    for shard in ["1/2", "2/2"] {
+        succeeded(
+            &eyeshell_in(
+                dir.path(),
+                &[
+                    "sweep", "s.toml", "--out", "sharded", "--shard", shard, "--quiet",
+                ],
+            ),
+            shard,
+        );
+    }
+    let merged = eyeshell_in(dir.path(), &["sweep", "merge", "sharded"]);
+    succeeded(&merged, "merge");
+    assert!(
+        merged.stdout.contains("population.json"),
+        "{}",
+        merged.stdout
+    );
+    let whole = dir.path().join("whole");
+    for other in [killed, dir.path().join("sharded")] {
+        for f in ["population.json", "population.csv"] {
+            assert_eq!(
+                std::fs::read(whole.join(f)).unwrap(),
+                std::fs::read(other.join(f)).unwrap(),
+                "{f} of {}",
+                other.display()
+            );
+        }
+        assert_eq!(
+            table_without_timings(&whole.join("sweep.csv")),
+            table_without_timings(&other.join("sweep.csv"))
+        );
+    }
+}
+
+/// Bad samples: one line, exit 2, nothing written. A draw outside its key's range is named
+/// and counted, not clipped.
+#[test]
+fn bad_samples_are_refused_before_anything_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "[sweep.sample]\neyes = 200\nseed = 1\n[sweep.sample.keys]\n\"material.C\" = { dist = \"normal\", mean = 20.0, sd = 10.0 }\n",
+            "of 200 drawn values lie outside their key's range and are not clipped",
+        ),
+        (
+            "[sweep.sample]\neyes = 20\nseed = 1\ndesign = \"sobal\"\n[sweep.sample.keys]\n\"material.C\" = { dist = \"uniform\", low = 90.0, high = 110.0 }\n",
+            "did you mean 'sobol'",
+        ),
+        (
+            "[sweep.sample]\neyes = 20\nseed = 1\n[sweep.sample.keys]\n\"material.C\" = { dist = \"uniform\", low = 90.0, high = 110.0 }\n[sweep.grid]\n\"fibres.D\" = [0, 1]\n",
+            "has no [sweep.grid] or [[sweep.runs]]",
+        ),
+        (
+            "[sweep.sample]\neyes = 20\n[sweep.sample.keys]\n\"material.C\" = { dist = \"uniform\", low = 90.0, high = 110.0 }\n",
+            "give seed",
+        ),
+    ];
+    for (sample, needle) in cases {
+        std::fs::write(dir.path().join("s.toml"), format!("{SPHERE}{sample}")).unwrap();
+        let run = bounded(dir.path(), &["sweep", "s.toml", "--out", "out"]);
+        refused(&run, needle, sample);
+        assert!(!dir.path().join("out").exists(), "{sample}");
+    }
+    // A sampled key set with --set would be ambiguous.
+    std::fs::write(
+        dir.path().join("s.toml"),
+        format!("{SPHERE}[sweep.sample]\neyes = 20\nseed = 1\n[sweep.sample.keys]\n\"material.C\" = {{ dist = \"uniform\", low = 90.0, high = 110.0 }}\n"),
+    )
+    .unwrap();
+    let run = bounded(
+        dir.path(),
+        &["sweep", "s.toml", "--out", "out", "--set", "material.C=5"],
+    );
+    refused(&run, "sweeps material.C", "--set on a sampled key");
+}
