@@ -14,6 +14,7 @@ pub(crate) mod euler;
 pub(crate) mod ida;
 pub mod mesh_choice;
 pub(crate) mod points;
+pub mod schedule;
 #[doc(hidden)]
 pub mod system;
 
@@ -48,6 +49,10 @@ pub struct GrowthParams {
     /// The surfaces `optics` gives about `blue.z_b`, traced once ([`GrowthParams::resolved`])
     /// and shared by every copy of these parameters.
     pub computed: Option<std::sync::Arc<ComputedOptics>>,
+    /// growth.schedule*: the factor on η0 over time ([`schedule`]).
+    pub schedule: schedule::Schedule,
+    /// time.*: the ages the growth window stands for.
+    pub clock: schedule::Clock,
 }
 
 impl GrowthParams {
@@ -109,6 +114,8 @@ impl Default for GrowthParams {
             source: Source::Polynomial,
             optics: OpticsSpec::default(),
             computed: None,
+            schedule: schedule::Schedule::default(),
+            clock: schedule::Clock::default(),
         }
     }
 }
@@ -534,7 +541,7 @@ fn snapshot_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
 
 /// Every time after t = 0 at which [`run`] calls its output: the snapshot times and the
 /// history times t_end·k/n, merged in order (times closer than 1e-12·t_end are one).
-fn recorded_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
+pub(crate) fn recorded_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
     let n = settings.history_points;
     let mut times = snapshot_times(settings, t_end);
     times.extend((1..n).map(|k| t_end * k as f64 / n as f64));
@@ -578,6 +585,23 @@ pub type SensitivityFn<'a> = dyn FnMut(&[SensitivityRow]) -> Result<(), Observer
 
 /// [`run`] with the forward sensitivities of `settings.sensitivities` handed to `sens`.
 pub fn run_with(
+    params: &crate::model::params::Params,
+    solver: &crate::bvp::settings::SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    sens: &mut SensitivityFn<'_>,
+    output: &mut OutputFn<'_>,
+    progress: &mut ProgressFn<'_>,
+) -> Result<GrowthStats, GrowthError> {
+    let outside = settings.sensitivities.iter().any(|p| !p.in_dae());
+    if growth.schedule.is_constant() && !outside {
+        return run_plain(params, solver, growth, settings, sens, output, progress);
+    }
+    schedule::run(params, solver, growth, settings, sens, output, progress)
+}
+
+/// [`run_with`] on the model's own clock, every sensitivity from the DAE.
+pub(crate) fn run_plain(
     params: &crate::model::params::Params,
     solver: &crate::bvp::settings::SolverSettings,
     growth: &GrowthParams,
