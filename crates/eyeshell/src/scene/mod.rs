@@ -641,6 +641,15 @@ impl Scene {
             ));
         }
         if let Some(g) = &self.growth {
+            // The clock and the schedule: each problem names its key and shows its value.
+            for (key, problem) in [g.clock.check().err(), g.schedule.check().err()]
+                .into_iter()
+                .flatten()
+            {
+                let value = crate::scene::keys::find(key)
+                    .map_or_else(String::new, |k| show(&k.get(self)));
+                return Err(invalid(&[key], value, problem));
+            }
             let times = &self.growth_settings.output_times;
             if let Some(&last) = times.last().filter(|&&t| t > g.t_end) {
                 return Err(invalid(
