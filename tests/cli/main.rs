@@ -33,3 +33,4 @@ mod solve;
 mod status;
 mod study;
 mod sweep;
+mod years;

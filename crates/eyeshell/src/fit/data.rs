@@ -118,7 +118,11 @@ impl Observations {
             }
             let mut values = [0.0; 3];
             for (j, cell) in record.iter().enumerate() {
-                let name = if j == 0 && ages { "age" } else { DATA_COLUMNS[j] };
+                let name = if j == 0 && ages {
+                    "age"
+                } else {
+                    DATA_COLUMNS[j]
+                };
                 let column = format!("column {} ({name})", j + 1);
                 let x: f64 = cell.parse().map_err(|_| {
                     fail(

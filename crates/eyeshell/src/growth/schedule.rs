@@ -143,7 +143,12 @@ pub enum Form {
 
 impl Form {
     pub const NAMES: [&'static str; 4] = ["constant", "exponential", "logistic", "table"];
-    pub const ALL: [Form; 4] = [Form::Constant, Form::Exponential, Form::Logistic, Form::Table];
+    pub const ALL: [Form; 4] = [
+        Form::Constant,
+        Form::Exponential,
+        Form::Logistic,
+        Form::Table,
+    ];
 }
 
 /// The factor on η0 over time. The parameters are in the scene's time (ages with time.unit,
@@ -306,7 +311,10 @@ impl Warp {
             Form::Constant => x,
             Form::Exponential => -self.tau * (-x / self.tau).exp_m1(),
             Form::Logistic => {
-                let (u, v) = ((a - self.centre) / self.width, (self.a0 - self.centre) / self.width);
+                let (u, v) = (
+                    (a - self.centre) / self.width,
+                    (self.a0 - self.centre) / self.width,
+                );
                 // ∫ 1/(1 + e^{(a−c)/w}) da = a − w softplus((a − c)/w).
                 x - self.width * (softplus(u) - softplus(v))
             }
@@ -328,11 +336,17 @@ impl Warp {
                 -(-x / self.tau).exp_m1() - (x / self.tau) * e
             }
             (Form::Logistic, ScheduleParam::Centre) => {
-                let (u, v) = ((a - self.centre) / self.width, (self.a0 - self.centre) / self.width);
+                let (u, v) = (
+                    (a - self.centre) / self.width,
+                    (self.a0 - self.centre) / self.width,
+                );
                 logistic(u) - logistic(v)
             }
             (Form::Logistic, ScheduleParam::Width) => {
-                let (u, v) = ((a - self.centre) / self.width, (self.a0 - self.centre) / self.width);
+                let (u, v) = (
+                    (a - self.centre) / self.width,
+                    (self.a0 - self.centre) / self.width,
+                );
                 -(softplus(u) - u * logistic(u)) + (softplus(v) - v * logistic(v))
             }
             _ => 0.0,
@@ -516,12 +530,11 @@ pub(crate) fn run(
     // Every recorded time after 0 in t, with its τ.
     let times = super::recorded_times(settings, t_end);
     let mut pairs: Vec<(f64, f64)> = vec![(0.0, 0.0)];
-    pairs.extend(times.iter().map(|&t| {
-        (
-            if t == t_end { tau_end } else { warp.clock(t) },
-            t,
-        )
-    }));
+    pairs.extend(
+        times
+            .iter()
+            .map(|&t| (if t == t_end { tau_end } else { warp.clock(t) }, t)),
+    );
     let mut warped = settings.clone();
     warped.history_points = 0;
     warped.output_times = pairs[1..]
@@ -623,7 +636,8 @@ pub(crate) fn run(
                     row.t = t;
                     if let Some(sp) = p.schedule_param() {
                         // ∂x(t)/∂θ = x̃'(τ) ∂S/∂θ, x̃'(τ) = (η0/τ) ∂x̃/∂η0.
-                        let e = eta_row.expect("η0's sensitivity is integrated with the schedule's");
+                        let e =
+                            eta_row.expect("η0's sensitivity is integrated with the schedule's");
                         let rate = if tau > 0.0 { eta0 / tau } else { 0.0 };
                         let ds = warp.clock_partial(t, sp);
                         row.d_axial_length = rate * e.d_axial_length * ds;
@@ -737,7 +751,11 @@ mod tests {
             let w = Warp::new(&s, &ages(), 1.0);
             for t in [0.01, 0.2, 0.5, 1.0] {
                 let (exact, q) = (w.clock(t), quad(&w, t));
-                assert!((exact - q).abs() < 1e-10, "{:?} t = {t}: {exact} vs {q}", s.form);
+                assert!(
+                    (exact - q).abs() < 1e-10,
+                    "{:?} t = {t}: {exact} vs {q}",
+                    s.form
+                );
             }
         }
     }
@@ -796,7 +814,10 @@ mod tests {
             let e = 1e-7;
             let left = (h.value(xi) - h.value(xi - e)) / e;
             let right = (h.value(xi + e) - h.value(xi)) / e;
-            assert!((left - right).abs() < 1e-5, "kink at {xi}: {left} vs {right}");
+            assert!(
+                (left - right).abs() < 1e-5,
+                "kink at {xi}: {left} vs {right}"
+            );
         }
     }
 

@@ -143,7 +143,10 @@ impl Rule {
     pub fn check_floats(self, xs: &[f64]) -> Result<(), String> {
         if let Rule::List(max) = self {
             if xs.len() > max {
-                return Err(format!("lists {} values, more than the {max} allowed", xs.len()));
+                return Err(format!(
+                    "lists {} values, more than the {max} allowed",
+                    xs.len()
+                ));
             }
         }
         if let Rule::PositiveIncreasing(max) = self {

@@ -646,8 +646,8 @@ impl Scene {
                 .into_iter()
                 .flatten()
             {
-                let value = crate::scene::keys::find(key)
-                    .map_or_else(String::new, |k| show(&k.get(self)));
+                let value =
+                    crate::scene::keys::find(key).map_or_else(String::new, |k| show(&k.get(self)));
                 return Err(invalid(&[key], value, problem));
             }
             let times = &self.growth_settings.output_times;
