@@ -389,6 +389,26 @@ impl Scene {
         self.keys().map(|k| (k.key, k.get(self))).collect()
     }
 
+    /// Whether key `key` is read by nothing in this scene: the schedule's parameters of
+    /// another form, the schedule itself when constant, the time unit when there is none.
+    /// Written files leave such keys out, so that the files of scenes that do not use
+    /// schedules or ages stay byte for byte as they were.
+    pub fn idle(&self, key: &str) -> bool {
+        use crate::growth::schedule::{Form, TimeUnit};
+        let Some(g) = &self.growth else {
+            return false;
+        };
+        let form = g.schedule.form;
+        match key {
+            "growth.schedule" => form == Form::Constant,
+            "growth.schedule_tau" => form != Form::Exponential,
+            "growth.schedule_centre" | "growth.schedule_width" => form != Form::Logistic,
+            "growth.schedule_times" | "growth.schedule_factors" => form != Form::Table,
+            "time.unit" => g.clock.unit == TimeUnit::None,
+            _ => false,
+        }
+    }
+
     /// The effective parameters (every key in use but the metadata and the unset keys) as a
     /// JSON object: the growth keys only when the scene grows.
     pub fn parameters_json(&self) -> serde_json::Value {
@@ -396,7 +416,7 @@ impl Scene {
         // use it stay as they were).
         let map = self
             .keys()
-            .filter(|k| k.is_parameter())
+            .filter(|k| k.is_parameter() && !self.idle(k.key))
             .map(|k| (k.key, k.get(self)))
             .filter(|(_, v)| *v != KeyValue::Unset)
             .map(|(k, v)| (k.to_string(), v.to_json()))
@@ -408,7 +428,7 @@ impl Scene {
     /// growth keys only when the scene grows).
     pub fn to_toml(&self) -> String {
         let mut out = String::new();
-        for k in self.keys() {
+        for k in self.keys().filter(|k| !self.idle(k.key)) {
             // A red surface that follows the blue one is derived, not given: written as a
             // key it would be given (and stop following) when the text is read back, so it
             // is shown as a comment.
