@@ -561,10 +561,7 @@ pub(crate) fn run(
         let h = RADIUS_STEP * params.r0;
         let mut sides = vec![];
         for r0 in [params.r0 + h, params.r0 - h] {
-            let shifted = crate::model::params::Params {
-                r0,
-                ..params.clone()
-            };
+            let shifted = crate::model::params::Params { r0, ..*params };
             let plain = super::GrowthSettings {
                 sensitivities: vec![],
                 ..warped.clone()

@@ -662,10 +662,7 @@ impl Scene {
         }
         if let Some(g) = &self.growth {
             // The clock and the schedule: each problem names its key and shows its value.
-            for (key, problem) in [g.clock.check().err(), g.schedule.check().err()]
-                .into_iter()
-                .flatten()
-            {
+            if let Some((key, problem)) = g.clock.check().err().or(g.schedule.check().err()) {
                 let value =
                     crate::scene::keys::find(key).map_or_else(String::new, |k| show(&k.get(self)));
                 return Err(invalid(&[key], value, problem));
