@@ -238,7 +238,7 @@ pub(crate) struct GrowArgs {
     /// Output directory, written as results come (only an earlier growth run or an empty directory is replaced; on failure the results so far stay)
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
-    /// Forward sensitivities of the run (IDAS) with respect to these scene keys, into sensitivities.csv: growth.eta0, growth.Gamma, growth.delta, fibres.D (scenes with fibres), material.C, material.bending, pressure.dP, stimulus.blue.z_B (stimulus.red.offset only moves the classification: refused)
+    /// Forward sensitivities of the run (IDAS) with respect to these scene keys, into sensitivities.csv: growth.eta0, growth.Gamma, growth.delta, fibres.D (scenes with fibres), material.C, material.bending, pressure.dP, stimulus.blue.z_B, growth.schedule_tau, growth.schedule_centre, growth.schedule_width (the scene's named schedule), geometry.R0 (a directional difference of two more runs) (stimulus.red.offset only moves the classification: refused)
     #[arg(long, value_name = "KEY,KEY,...", value_delimiter = ',')]
     pub(crate) sensitivities: Vec<String>,
     /// Include the sensitivities in the local error test (IDASetSensErrCon): 4–75× slower, and the sensitivities converge with solver.rtol (see BENCHMARKS.md)
@@ -269,7 +269,7 @@ pub(crate) struct FitArgs {
     /// The observations: a CSV file with the header t,axial_length[,sigma] (t in [0, growth.t_end], lengths and σ in mm)
     #[arg(long, value_name = "DATA.csv")]
     pub(crate) data: PathBuf,
-    /// The parameters to fit, starting from the scene's values (any key --sensitivities takes: growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B)
+    /// The parameters to fit, starting from the scene's values (any key --sensitivities takes: growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B, growth.schedule_tau, growth.schedule_centre, growth.schedule_width, geometry.R0)
     #[arg(
         long,
         value_name = "KEY,KEY,...",

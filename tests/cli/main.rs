@@ -35,3 +35,4 @@ mod solve;
 mod status;
 mod study;
 mod sweep;
+mod years;

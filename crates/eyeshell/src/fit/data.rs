@@ -12,7 +12,7 @@
 use std::path::Path;
 
 use crate::rundir::read::read_text;
-use crate::text::excerpt;
+use crate::text::{excerpt, number};
 use crate::Error;
 
 /// The most bytes a data file may have (16 MiB: about half a million rows).
@@ -30,6 +30,9 @@ pub struct Observation {
     pub axial_length: f64,
     /// σ (mm); None when the file has no sigma column (every observation weighs the same).
     pub sigma: Option<f64>,
+    /// The age the file gives (an `age` column in place of `t`, in the scene's time.unit);
+    /// t is then the model time of that age ([`Observations::on_clock`]).
+    pub age: Option<f64>,
 }
 
 /// The observations of a fit, in the order of the file.
@@ -61,6 +64,7 @@ impl Observations {
             .from_reader(text.as_bytes());
         let mut record = csv::StringRecord::new();
         let mut columns: Option<usize> = None;
+        let mut ages = false;
         let mut rows = Vec::new();
         loop {
             match reader.read_record(&mut record) {
@@ -77,15 +81,22 @@ impl Observations {
             let line = record.position().map_or(0, |p| p.line());
             let Some(n) = columns else {
                 let header: Vec<&str> = record.iter().collect();
-                if header != DATA_COLUMNS[..2] && header != DATA_COLUMNS {
+                // An `age` column stands in place of t (ages in the scene's time.unit).
+                let is_age = header.first() == Some(&"age");
+                let mut named = header.clone();
+                if is_age {
+                    named[0] = "t";
+                }
+                if named != DATA_COLUMNS[..2] && named != DATA_COLUMNS {
                     return Err(fail(
                         line,
                         format!(
-                            "the header must be \"t,axial_length\" or \"t,axial_length,sigma\", not {:?}",
+                            "the header must be \"t,axial_length\" or \"t,axial_length,sigma\" (or age in place of t), not {:?}",
                             excerpt(&header.join(","), 80)
                         ),
                     ));
                 }
+                ages = is_age;
                 columns = Some(header.len());
                 continue;
             };
@@ -107,7 +118,12 @@ impl Observations {
             }
             let mut values = [0.0; 3];
             for (j, cell) in record.iter().enumerate() {
-                let column = format!("column {} ({})", j + 1, DATA_COLUMNS[j]);
+                let name = if j == 0 && ages {
+                    "age"
+                } else {
+                    DATA_COLUMNS[j]
+                };
+                let column = format!("column {} ({name})", j + 1);
                 let x: f64 = cell.parse().map_err(|_| {
                     fail(
                         line,
@@ -116,7 +132,7 @@ impl Observations {
                 })?;
                 let why = if !x.is_finite() {
                     Some("must be a finite number")
-                } else if j == 0 && x < 0.0 {
+                } else if j == 0 && x < 0.0 && !ages {
                     Some("must be ≥ 0 (the run starts at t = 0)")
                 } else if j > 0 && x <= 0.0 {
                     Some(if j == 1 {
@@ -136,6 +152,7 @@ impl Observations {
                 t: values[0],
                 axial_length: values[1],
                 sigma: (n == 3).then_some(values[2]),
+                age: ages.then_some(values[0]),
             });
         }
         if columns.is_none() {
@@ -195,6 +212,39 @@ impl Observations {
         self.rows.first().is_some_and(|r| r.sigma.is_some())
     }
 
+    /// The observations on the model's clock: ages (an `age` column) mapped to t through
+    /// the scene's time.* keys; each age must lie in [time.start, time.end]. Observations
+    /// in t are returned as they are.
+    pub fn on_clock(&self, g: &crate::growth::GrowthParams) -> Result<Observations, Error> {
+        if !self.rows.iter().any(|r| r.age.is_some()) {
+            return Ok(self.clone());
+        }
+        let clock = &g.clock;
+        let (true, Some(a0), Some(a1)) = (clock.has_ages(), clock.start, clock.end) else {
+            return Err(Error::input(format!(
+                "{}: the data give ages (an age column), but the scene counts no ages: set time.unit (\"years\" or \"days\"), time.start and time.end, or give the model's t",
+                self.origin
+            )));
+        };
+        let unit = clock.unit.name();
+        let mut out = self.clone();
+        for (i, r) in out.rows.iter_mut().enumerate() {
+            let a = r.age.unwrap_or(r.t);
+            if a < a0 || a > a1 {
+                return Err(Error::input(format!(
+                    "{}: observation {} (age {} {unit}) lies outside the scene's ages [time.start, time.end] = [{}, {}] {unit}; widen them to cover the data",
+                    self.origin,
+                    i + 1,
+                    number(a),
+                    number(a0),
+                    number(a1)
+                )));
+            }
+            r.t = clock.t_of(a, g.t_end).clamp(0.0, g.t_end);
+        }
+        Ok(out)
+    }
+
     /// Refuse times outside the run [0, `t_end`] (the model has no value there).
     pub fn check_times(&self, t_end: f64) -> Result<(), Error> {
         if let Some((i, r)) = self.rows.iter().enumerate().find(|(_, r)| r.t > t_end) {
@@ -237,7 +287,8 @@ mod tests {
             Observation {
                 t: 0.0,
                 axial_length: 20.0,
-                sigma: None
+                sigma: None,
+                age: None
             }
         );
         assert!(!o.has_sigma());
@@ -325,7 +376,8 @@ mod tests {
             Observation {
                 t: 0.2,
                 axial_length: 22.0,
-                sigma: Some(0.1)
+                sigma: Some(0.1),
+                age: None
             }
         );
         let e = Observations::from_columns(&[0.1], &[f64::NAN], None, "arrays").unwrap_err();

@@ -585,6 +585,7 @@ pub fn fit_watched(
     }
     check_params(scene, params, "fit")?;
     let params: &[FitParam] = &params.iter().map(|p| p.in_scene(scene)).collect::<Vec<_>>();
+    let data = &data.on_clock(g)?;
     data.check_times(g.t_end)?;
     let (n, k) = (data.rows.len(), params.len());
     let has_sigma = data.has_sigma();

@@ -315,6 +315,16 @@ pub enum SensParam {
     /// stimulus.blue.z_B: the blue best-focus surface's polar centre, which moves the
     /// surface along the axis.
     BlueCentre,
+    /// growth.schedule_tau, growth.schedule_centre, growth.schedule_width: the named
+    /// schedules' parameters. They never reach the DAE: the schedule is a change of the
+    /// run's clock, and their sensitivities follow from η0's ([`super::schedule`]).
+    ScheduleTau,
+    ScheduleCentre,
+    ScheduleWidth,
+    /// geometry.R0: the eye's radius at the start. It moves the material mesh itself (the
+    /// shell's length is π·fraction·R0), so its sensitivity is a directional difference of
+    /// two runs, not an IDAS sensitivity (docs/MODEL.md §11).
+    Radius,
 }
 
 impl SensParam {
@@ -329,8 +339,32 @@ impl SensParam {
         SensParam::BlueCentre,
     ];
 
+    /// The parameters the run handles outside the DAE: the schedule's and R0.
+    pub const OUTSIDE: [SensParam; 4] = [
+        SensParam::ScheduleTau,
+        SensParam::ScheduleCentre,
+        SensParam::ScheduleWidth,
+        SensParam::Radius,
+    ];
+
     /// The scene keys sensitivities can be taken to, for messages and help.
-    pub const SUPPORTED: &'static str = "growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B";
+    pub const SUPPORTED: &'static str = "growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B, growth.schedule_tau, growth.schedule_centre, growth.schedule_width, geometry.R0";
+
+    /// The schedule's parameter this is, if it is one.
+    pub fn schedule_param(self) -> Option<super::schedule::ScheduleParam> {
+        use super::schedule::ScheduleParam;
+        match self {
+            SensParam::ScheduleTau => Some(ScheduleParam::Tau),
+            SensParam::ScheduleCentre => Some(ScheduleParam::Centre),
+            SensParam::ScheduleWidth => Some(ScheduleParam::Width),
+            _ => None,
+        }
+    }
+
+    /// True for the parameters IDAS integrates sensitivities to (the DAE's).
+    pub fn in_dae(self) -> bool {
+        !Self::OUTSIDE.contains(&self)
+    }
 
     /// The scene key.
     pub fn key(self) -> &'static str {
@@ -343,6 +377,10 @@ impl SensParam {
             SensParam::Bending => "material.bending",
             SensParam::Pressure => "pressure.dP",
             SensParam::BlueCentre => "stimulus.blue.z_B",
+            SensParam::ScheduleTau => "growth.schedule_tau",
+            SensParam::ScheduleCentre => "growth.schedule_centre",
+            SensParam::ScheduleWidth => "growth.schedule_width",
+            SensParam::Radius => "geometry.R0",
         }
     }
 
@@ -385,6 +423,10 @@ impl SensParam {
             SensParam::Bending => params.e_b,
             SensParam::Pressure => params.dp,
             SensParam::BlueCentre => g.blue.z_b,
+            SensParam::ScheduleTau => g.schedule.tau,
+            SensParam::ScheduleCentre => g.schedule.centre,
+            SensParam::ScheduleWidth => g.schedule.width,
+            SensParam::Radius => params.r0,
         }
     }
 
@@ -414,6 +456,10 @@ impl SensParam {
             SensParam::Bending => params.e_b = v,
             SensParam::Pressure => params.dp = v,
             SensParam::BlueCentre => g.blue.z_b = v,
+            SensParam::ScheduleTau => g.schedule.tau = v,
+            SensParam::ScheduleCentre => g.schedule.centre = v,
+            SensParam::ScheduleWidth => g.schedule.width = v,
+            SensParam::Radius => params.r0 = v,
         }
     }
 

@@ -14,6 +14,7 @@ pub(crate) mod euler;
 pub(crate) mod ida;
 pub mod mesh_choice;
 pub(crate) mod points;
+pub mod schedule;
 #[doc(hidden)]
 pub mod system;
 
@@ -388,7 +389,7 @@ fn snapshot_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
 
 /// Every time after t = 0 at which [`run`] calls its output: the snapshot times and the
 /// history times t_end·k/n, merged in order (times closer than 1e-12·t_end are one).
-fn recorded_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
+pub(crate) fn recorded_times(settings: &GrowthSettings, t_end: f64) -> Vec<f64> {
     let n = settings.history_points;
     let mut times = snapshot_times(settings, t_end);
     times.extend((1..n).map(|k| t_end * k as f64 / n as f64));
@@ -432,6 +433,23 @@ pub type SensitivityFn<'a> = dyn FnMut(&[SensitivityRow]) -> Result<(), Observer
 
 /// [`run`] with the forward sensitivities of `settings.sensitivities` handed to `sens`.
 pub fn run_with(
+    params: &crate::model::params::Params,
+    solver: &crate::bvp::settings::SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    sens: &mut SensitivityFn<'_>,
+    output: &mut OutputFn<'_>,
+    progress: &mut ProgressFn<'_>,
+) -> Result<GrowthStats, GrowthError> {
+    let outside = settings.sensitivities.iter().any(|p| !p.in_dae());
+    if growth.schedule.is_constant() && !outside {
+        return run_plain(params, solver, growth, settings, sens, output, progress);
+    }
+    schedule::run(params, solver, growth, settings, sens, output, progress)
+}
+
+/// [`run_with`] on the model's own clock, every sensitivity from the DAE.
+pub(crate) fn run_plain(
     params: &crate::model::params::Params,
     solver: &crate::bvp::settings::SolverSettings,
     growth: &GrowthParams,

@@ -35,6 +35,10 @@ pub struct GrowthParams {
     /// The surfaces `optics` gives about `blue.z_b`, traced once ([`GrowthParams::resolved`])
     /// and shared by every copy of these parameters.
     pub computed: Option<std::sync::Arc<ComputedOptics>>,
+    /// growth.schedule*: the factor on η0 over time ([`super::schedule`]).
+    pub schedule: super::schedule::Schedule,
+    /// time.*: the ages the growth window stands for.
+    pub clock: super::schedule::Clock,
 }
 
 impl GrowthParams {
@@ -134,6 +138,8 @@ impl Default for GrowthParams {
             source: Source::Polynomial,
             optics: OpticsSpec::default(),
             computed: None,
+            schedule: super::schedule::Schedule::default(),
+            clock: super::schedule::Clock::default(),
         }
     }
 }

@@ -10,6 +10,7 @@ use crate::growth::dae::SensParam;
 use crate::growth::settings::{DaeLinear, GrowthParams, Integrator};
 use crate::growth::ThicknessLaw;
 use crate::model::eyewear::{lenses_toml, LensSpec, CLASSIFY};
+use crate::growth::schedule::{Form, TimeUnit};
 use crate::model::optics::{Source, EYES, FOCUS_NAMES, SOURCES};
 use crate::model::params::Thickness;
 
@@ -85,6 +86,8 @@ pub enum Rule {
     PositiveIncreasing(usize),
     /// A span of time at least [`MIN_T_END`].
     Duration,
+    /// A list of at most n finite numbers.
+    List(usize),
 }
 
 /// The shortest growth run (growth.t_end). SUNDIALS compares times by multiplying a
@@ -109,6 +112,7 @@ impl Rule {
                 format!("1 to {n} values, each > 0, strictly increasing")
             }
             Rule::Duration => format!(">= {}", crate::text::number(MIN_T_END)),
+            Rule::List(n) => format!("at most {n} values"),
         }
     }
 
@@ -144,6 +148,14 @@ impl Rule {
     /// The reason the list `xs` breaks this rule. Lists are never sorted for the user: an
     /// unsorted list is an error, since it is more likely a typo than a wish.
     pub fn check_floats(self, xs: &[f64]) -> Result<(), String> {
+        if let Rule::List(max) = self {
+            if xs.len() > max {
+                return Err(format!(
+                    "lists {} values, more than the {max} allowed",
+                    xs.len()
+                ));
+            }
+        }
         if let Rule::PositiveIncreasing(max) = self {
             if xs.is_empty() {
                 return Err("must list at least one time".into());
@@ -355,7 +367,11 @@ pub fn find(key: &str) -> Option<&'static KeySpec> {
 /// naming it. Here, on the scene's side, because the reasons are about keys (the growth
 /// names its parameters' keys, it does not read the key table).
 pub fn sensitivity_param(key: &str) -> Result<SensParam, String> {
-    if let Some(p) = SensParam::ALL.into_iter().find(|p| p.key() == key) {
+    if let Some(p) = SensParam::ALL
+        .into_iter()
+        .chain(SensParam::OUTSIDE)
+        .find(|p| p.key() == key)
+    {
         return Ok(p);
     }
     let supported = format!("supported: {}", SensParam::SUPPORTED);
@@ -387,6 +403,9 @@ pub const MAX_OUTPUT_TIMES: usize = 1_000;
 const THICKNESS: &[&str] = &["uniform", "nonuniform"];
 const SCHEMES: &[&str] = &["trapezoid", "hermite-simpson"];
 const LINEAR: &[&str] = &["band", "klu", "block"];
+/// The most points of a schedule table.
+pub const MAX_SCHEDULE_POINTS: usize = 1000;
+
 const THICKNESS_LAWS: &[&str] = &["none", "mass"];
 const INTEGRATORS: &[&str] = &Integrator::NAMES;
 const SOURCE_NAMES: &[&str] = &SOURCES;
@@ -656,6 +675,77 @@ pub static KEYS: &[KeySpec] = &[
         },
         rule: Rule::Any,
         doc: "unloaded thickness under growth: none (ζ = H, the paper's) or mass (ζ = H/(γ_s γ_φ)) (docs/MODEL.md §5)",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.schedule",
+        access: Access::Choice {
+            names: &Form::NAMES,
+            get: |s| growth(s).schedule.form as usize,
+            set: |s, i| s.growth_mut().schedule.form = Form::ALL[i],
+        },
+        rule: Rule::Any,
+        doc: "a factor s ≥ 0 on η0 over time (docs/MODEL.md §11): constant (s = 1, the paper's), exponential (s = exp(−(age − time.start)/growth.schedule_tau)), logistic (s = 1/(1 + exp((age − growth.schedule_centre)/growth.schedule_width))) or table (growth.schedule_times, growth.schedule_factors, interpolated monotonically and C¹)",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.schedule_tau",
+        access: Access::Float { get: |s| growth(s).schedule.tau, set: |s, v| s.growth_mut().schedule.tau = v },
+        rule: Rule::Positive,
+        doc: "the time constant of growth.schedule = \"exponential\", in time.unit (t without one)",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.schedule_centre",
+        access: Access::Float { get: |s| growth(s).schedule.centre, set: |s, v| s.growth_mut().schedule.centre = v },
+        rule: Rule::Any,
+        doc: "the age at which growth.schedule = \"logistic\" has fallen to half, in time.unit (t without one)",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.schedule_width",
+        access: Access::Float { get: |s| growth(s).schedule.width, set: |s, v| s.growth_mut().schedule.width = v },
+        rule: Rule::Positive,
+        doc: "the width of the fall of growth.schedule = \"logistic\", in time.unit (t without one)",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.schedule_times",
+        access: Access::Floats { get: |s| growth(s).schedule.times.clone(), set: |s, v| s.growth_mut().schedule.times = v },
+        rule: Rule::List(MAX_SCHEDULE_POINTS),
+        doc: "the ages (in time.unit; t without one) of growth.schedule = \"table\", strictly increasing; the factor is held beyond them",
+        growth: true,
+    },
+    KeySpec {
+        key: "growth.schedule_factors",
+        access: Access::Floats { get: |s| growth(s).schedule.factors.clone(), set: |s, v| s.growth_mut().schedule.factors = v },
+        rule: Rule::List(MAX_SCHEDULE_POINTS),
+        doc: "the factors on η0 at growth.schedule_times, each finite, ≥ 0 and at most 1e6",
+        growth: true,
+    },
+    KeySpec {
+        key: "time.unit",
+        access: Access::Choice {
+            names: &TimeUnit::NAMES,
+            get: |s| growth(s).clock.unit as usize,
+            set: |s, i| s.growth_mut().clock.unit = TimeUnit::ALL[i],
+        },
+        rule: Rule::Any,
+        doc: "what ages are counted in: none (the model's dimensionless t), years or days; with a unit, time.start and time.end are the ages of t = 0 and growth.t_end, and the outputs and fit data carry ages",
+        growth: true,
+    },
+    KeySpec {
+        key: "time.start",
+        access: Access::OptionalFloat { get: |s| growth(s).clock.start, set: |s, v| s.growth_mut().clock.start = Some(v) },
+        rule: Rule::Any,
+        doc: "the age (in time.unit) at t = 0",
+        growth: true,
+    },
+    KeySpec {
+        key: "time.end",
+        access: Access::OptionalFloat { get: |s| growth(s).clock.end, set: |s, v| s.growth_mut().clock.end = Some(v) },
+        rule: Rule::Any,
+        doc: "the age (in time.unit) at t = growth.t_end, after time.start",
         growth: true,
     },
     KeySpec {

@@ -400,6 +400,26 @@ impl Scene {
         self.keys().map(|k| (k.key, k.get(self))).collect()
     }
 
+    /// Whether key `key` is read by nothing in this scene: the schedule's parameters of
+    /// another form, the schedule itself when constant, the time unit when there is none.
+    /// Written files leave such keys out, so that the files of scenes that do not use
+    /// schedules or ages stay byte for byte as they were.
+    pub fn idle(&self, key: &str) -> bool {
+        use crate::growth::schedule::{Form, TimeUnit};
+        let Some(g) = &self.growth else {
+            return false;
+        };
+        let form = g.schedule.form;
+        match key {
+            "growth.schedule" => form == Form::Constant,
+            "growth.schedule_tau" => form != Form::Exponential,
+            "growth.schedule_centre" | "growth.schedule_width" => form != Form::Logistic,
+            "growth.schedule_times" | "growth.schedule_factors" => form != Form::Table,
+            "time.unit" => g.clock.unit == TimeUnit::None,
+            _ => false,
+        }
+    }
+
     /// The effective parameters (every key in use but the metadata and the unset keys) as a
     /// JSON object: the growth keys only when the scene grows.
     pub fn parameters_json(&self) -> serde_json::Value {
@@ -407,7 +427,7 @@ impl Scene {
         // use it stay as they were).
         let map = self
             .keys()
-            .filter(|k| k.is_parameter())
+            .filter(|k| k.is_parameter() && !self.idle(k.key))
             .map(|k| (k.key, k.get(self)))
             .filter(|(_, v)| *v != KeyValue::Unset)
             .map(|(k, v)| (k.to_string(), v.to_json()))
@@ -419,7 +439,7 @@ impl Scene {
     /// growth keys only when the scene grows).
     pub fn to_toml(&self) -> String {
         let mut out = String::new();
-        for k in self.keys() {
+        for k in self.keys().filter(|k| !self.idle(k.key)) {
             // A red surface that follows the blue one is derived, not given: written as a
             // key it would be given (and stop following) when the text is read back, so it
             // is shown as a comment.
@@ -702,6 +722,12 @@ impl Scene {
             ));
         }
         if let Some(g) = &self.growth {
+            // The clock and the schedule: each problem names its key and shows its value.
+            if let Some((key, problem)) = g.clock.check().err().or(g.schedule.check().err()) {
+                let value =
+                    crate::scene::keys::find(key).map_or_else(String::new, |k| show(&k.get(self)));
+                return Err(invalid(&[key], value, problem));
+            }
             let times = &self.growth_settings.output_times;
             if let Some(&last) = times.last().filter(|&&t| t > g.t_end) {
                 return Err(invalid(

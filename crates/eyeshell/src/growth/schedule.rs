@@ -1,0 +1,848 @@
+//! Growth in the user's time, and growth rates that vary with it (docs/MODEL.md §11).
+//!
+//! The clock (`time.unit`, `time.start`, `time.end`) maps ages affinely onto the growth
+//! window: age a = a₀ + k t with a₀ = time.start and k = (time.end − time.start)/t_end;
+//! without a unit, a = t.
+//!
+//! The schedule (`growth.schedule`) multiplies η0 by a factor s(a) ≥ 0. Every growth rate of
+//! the model is η0 times a function of the state (docs/MODEL.md §5: η = g_c g_v, g_c ∝ η0),
+//! and nothing else in the model depends on time, so the scheduled growth
+//! p' = s(a(t)) η0 f(p) is the constant-rate growth on the clock τ = S(t) = ∫₀ᵗ s(a(t')) dt':
+//! p(t) = p̃(S(t)). The run integrates p̃ to S(t_end) and records it at S(tᵢ); the integrator
+//! never sees s, so a table's points cost it nothing, and a factor of 1 leaves the run as it
+//! was, bit for bit (the schedule is not applied at all).
+//!
+//! The sensitivity of anything measured at t to a parameter θ of the schedule follows from
+//! the same identity: ∂L(t)/∂θ = L̃'(S(t)) ∂S(t)/∂θ, with L̃'(τ) = (η0/τ) ∂L̃/∂η0 (the
+//! constant-rate growth depends on η0 and τ only through η0 τ), so it needs only the η0
+//! sensitivity the run integrates anyway, and ∂S/∂θ in closed form.
+
+use crate::text::number;
+
+/// time.unit: what the ages of the scene, its data and its outputs are in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TimeUnit {
+    /// The model's dimensionless t (the paper's).
+    #[default]
+    None,
+    Years,
+    Days,
+}
+
+impl TimeUnit {
+    /// The names `time.unit` takes, in the order of the variants.
+    pub const NAMES: [&'static str; 3] = ["none", "years", "days"];
+    pub const ALL: [TimeUnit; 3] = [TimeUnit::None, TimeUnit::Years, TimeUnit::Days];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
+/// The scene's clock: time.unit, time.start, time.end.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Clock {
+    pub unit: TimeUnit,
+    pub start: Option<f64>,
+    pub end: Option<f64>,
+}
+
+impl Clock {
+    /// True when the scene counts in ages (a unit, with its start and end).
+    pub fn has_ages(&self) -> bool {
+        self.unit != TimeUnit::None
+    }
+
+    /// (a₀, k) of a = a₀ + k t for a growth window of length `t_end`.
+    pub fn affine(&self, t_end: f64) -> (f64, f64) {
+        match (self.unit, self.start, self.end) {
+            (TimeUnit::None, _, _) | (_, None, _) | (_, _, None) => (0.0, 1.0),
+            (_, Some(a0), Some(a1)) => (a0, (a1 - a0) / t_end),
+        }
+    }
+
+    /// The age of model time `t`.
+    pub fn age(&self, t: f64, t_end: f64) -> f64 {
+        let (a0, k) = self.affine(t_end);
+        if self.has_ages() {
+            a0 + k * t
+        } else {
+            t
+        }
+    }
+
+    /// The model time of age `a`.
+    pub fn t_of(&self, a: f64, t_end: f64) -> f64 {
+        let (a0, k) = self.affine(t_end);
+        if self.has_ages() {
+            (a - a0) / k
+        } else {
+            a
+        }
+    }
+
+    /// Why the clock cannot be used, as (key, problem): a unit without its start or end, an
+    /// end not after the start, ages so far apart or so large that their differences are
+    /// not resolved.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        match (self.unit, self.start, self.end) {
+            (TimeUnit::None, None, None) => Ok(()),
+            (TimeUnit::None, _, _) => Err((
+                "time.unit",
+                "is \"none\" (dimensionless t), but time.start or time.end is given: set time.unit = \"years\" or \"days\" to count in ages".into(),
+            )),
+            (u, None, _) | (u, _, None) => Err((
+                "time.unit",
+                format!(
+                    "is \"{}\", but time.start and time.end must both be given: the ages mapped onto the growth window [0, growth.t_end]",
+                    u.name()
+                ),
+            )),
+            (_, Some(a0), Some(a1)) => {
+                if a1 <= a0 {
+                    return Err((
+                        "time.end",
+                        format!(
+                            "must come after time.start = {} (the ages are out of order)",
+                            number(a0)
+                        ),
+                    ));
+                }
+                if !(a1 - a0).is_finite() || a1 - a0 <= 1e-9 * a0.abs().max(a1.abs()) {
+                    return Err((
+                        "time.end",
+                        format!(
+                            "is too close to time.start = {} or too far from it: their difference must be finite and resolved in double precision",
+                            number(a0)
+                        ),
+                    ));
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// growth.schedule: the form of the factor s on η0.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Form {
+    /// s = 1: the paper's constant rate.
+    #[default]
+    Constant,
+    /// s = exp(−(a − a_start)/τ): a rate that declines with the time constant τ
+    /// (growth.schedule_tau).
+    Exponential,
+    /// s = 1/(1 + exp((a − c)/w)): growth that ends around the centre c over the width w
+    /// (growth.schedule_centre, growth.schedule_width).
+    Logistic,
+    /// A table of factors at ages (growth.schedule_times, growth.schedule_factors),
+    /// interpolated monotonically and C¹ (Fritsch–Butland tangents; zero slopes at its ends,
+    /// held constant beyond them).
+    Table,
+}
+
+impl Form {
+    pub const NAMES: [&'static str; 4] = ["constant", "exponential", "logistic", "table"];
+    pub const ALL: [Form; 4] = [
+        Form::Constant,
+        Form::Exponential,
+        Form::Logistic,
+        Form::Table,
+    ];
+}
+
+/// The factor on η0 over time. The parameters are in the scene's time (ages with time.unit,
+/// else t); each is read only by its form.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Schedule {
+    pub form: Form,
+    pub tau: f64,
+    pub centre: f64,
+    pub width: f64,
+    pub times: Vec<f64>,
+    pub factors: Vec<f64>,
+}
+
+impl Default for Schedule {
+    fn default() -> Self {
+        Schedule {
+            form: Form::Constant,
+            tau: 1.0,
+            centre: 0.5,
+            width: 0.1,
+            times: vec![],
+            factors: vec![],
+        }
+    }
+}
+
+/// A parameter of a named schedule (forward sensitivities, `fit`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScheduleParam {
+    Tau,
+    Centre,
+    Width,
+}
+
+impl ScheduleParam {
+    pub fn key(self) -> &'static str {
+        match self {
+            ScheduleParam::Tau => "growth.schedule_tau",
+            ScheduleParam::Centre => "growth.schedule_centre",
+            ScheduleParam::Width => "growth.schedule_width",
+        }
+    }
+
+    /// The form that holds it.
+    pub fn form(self) -> Form {
+        match self {
+            ScheduleParam::Tau => Form::Exponential,
+            _ => Form::Logistic,
+        }
+    }
+}
+
+impl Schedule {
+    /// True when the schedule is 1 everywhere (the run is the paper's, untouched).
+    pub fn is_constant(&self) -> bool {
+        self.form == Form::Constant
+    }
+
+    /// Why the schedule cannot be used, as (key, problem): a table whose times are out of
+    /// order or whose factors are negative or not finite, lists of different lengths.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        if self.form != Form::Table {
+            return Ok(());
+        }
+        let (xs, fs) = (&self.times, &self.factors);
+        if xs.is_empty() || xs.len() != fs.len() {
+            return Err((
+                "growth.schedule_factors",
+                format!(
+                    "holds {} factors for {} times in growth.schedule_times: growth.schedule = \"table\" needs one factor at each time (at least one)",
+                    fs.len(),
+                    xs.len()
+                ),
+            ));
+        }
+        for (i, w) in xs.windows(2).enumerate() {
+            if w[1] <= w[0] {
+                return Err((
+                    "growth.schedule_times",
+                    format!(
+                        "must be strictly increasing (the ages are out of order): {} (item {}) follows {}",
+                        number(w[1]),
+                        i + 2,
+                        number(w[0])
+                    ),
+                ));
+            }
+        }
+        if let Some((i, f)) = fs
+            .iter()
+            .enumerate()
+            .find(|(_, f)| !f.is_finite() || **f < 0.0 || **f > MAX_FACTOR)
+        {
+            return Err((
+                "growth.schedule_factors",
+                format!(
+                    "item {} is {}: a factor on growth.eta0 must be finite, at least 0 and at most {} (the schedule multiplies the growth rate, which never goes negative)",
+                    i + 1,
+                    number(*f),
+                    number(MAX_FACTOR)
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The largest factor a table may hold: larger factors are a rate η0 larger by that much,
+/// better given as growth.eta0 itself (whose limits the run checks).
+pub const MAX_FACTOR: f64 = 1e6;
+
+/// The schedule of one run on its clock: S(t) and ∂S/∂θ.
+#[derive(Clone, Debug)]
+pub struct Warp {
+    form: Form,
+    tau: f64,
+    centre: f64,
+    width: f64,
+    a0: f64,
+    k: f64,
+    table: Option<Hermite>,
+}
+
+impl Warp {
+    /// The warp of `schedule` on `clock` over a window of length `t_end`.
+    pub fn new(schedule: &Schedule, clock: &Clock, t_end: f64) -> Warp {
+        let (a0, k) = clock.affine(t_end);
+        Warp {
+            form: schedule.form,
+            tau: schedule.tau,
+            centre: schedule.centre,
+            width: schedule.width,
+            a0,
+            k,
+            table: (schedule.form == Form::Table)
+                .then(|| Hermite::new(&schedule.times, &schedule.factors)),
+        }
+    }
+
+    /// The factor s at model time t.
+    pub fn factor(&self, t: f64) -> f64 {
+        let a = self.a0 + self.k * t;
+        match self.form {
+            Form::Constant => 1.0,
+            Form::Exponential => (-(a - self.a0) / self.tau).exp(),
+            Form::Logistic => logistic(-(a - self.centre) / self.width),
+            Form::Table => self.table.as_ref().map_or(1.0, |h| h.value(a)),
+        }
+    }
+
+    /// τ = S(t) = ∫₀ᵗ s dt' = A(a(t))/k with A(a) = ∫_{a₀}^a s da'.
+    pub fn clock(&self, t: f64) -> f64 {
+        if self.form == Form::Constant {
+            return t;
+        }
+        let a = self.a0 + self.k * t;
+        let x = a - self.a0;
+        let area = match self.form {
+            Form::Constant => x,
+            Form::Exponential => -self.tau * (-x / self.tau).exp_m1(),
+            Form::Logistic => {
+                let (u, v) = (
+                    (a - self.centre) / self.width,
+                    (self.a0 - self.centre) / self.width,
+                );
+                // ∫ 1/(1 + e^{(a−c)/w}) da = a − w softplus((a − c)/w).
+                x - self.width * (softplus(u) - softplus(v))
+            }
+            Form::Table => {
+                let h = self.table.as_ref().expect("a table form has its table");
+                h.integral(a) - h.integral(self.a0)
+            }
+        };
+        area / self.k
+    }
+
+    /// ∂S(t)/∂θ for a parameter of the named forms (in the scene's time units of θ).
+    pub fn clock_partial(&self, t: f64, p: ScheduleParam) -> f64 {
+        let a = self.a0 + self.k * t;
+        let x = a - self.a0;
+        let d_area = match (self.form, p) {
+            (Form::Exponential, ScheduleParam::Tau) => {
+                let e = (-x / self.tau).exp();
+                -(-x / self.tau).exp_m1() - (x / self.tau) * e
+            }
+            (Form::Logistic, ScheduleParam::Centre) => {
+                let (u, v) = (
+                    (a - self.centre) / self.width,
+                    (self.a0 - self.centre) / self.width,
+                );
+                logistic(u) - logistic(v)
+            }
+            (Form::Logistic, ScheduleParam::Width) => {
+                let (u, v) = (
+                    (a - self.centre) / self.width,
+                    (self.a0 - self.centre) / self.width,
+                );
+                -(softplus(u) - u * logistic(u)) + (softplus(v) - v * logistic(v))
+            }
+            _ => 0.0,
+        };
+        d_area / self.k
+    }
+
+    /// The model time t at which the clock reads τ (the first, where s vanishes over an
+    /// interval), by bisection on the monotone S; for progress reports only.
+    pub fn time_at(&self, tau: f64, t_end: f64) -> f64 {
+        if self.form == Form::Constant {
+            return tau;
+        }
+        let (mut lo, mut hi) = (0.0, t_end);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if self.clock(mid) < tau {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi
+    }
+}
+
+/// 1/(1 + e^{−x}).
+fn logistic(x: f64) -> f64 {
+    if x >= 0.0 {
+        1.0 / (1.0 + (-x).exp())
+    } else {
+        let e = x.exp();
+        e / (1.0 + e)
+    }
+}
+
+/// ln(1 + eˣ), without overflow.
+fn softplus(x: f64) -> f64 {
+    if x > 0.0 {
+        x + (-x).exp().ln_1p()
+    } else {
+        x.exp().ln_1p()
+    }
+}
+
+/// A monotone C¹ cubic Hermite interpolant (Fritsch–Butland tangents: the weighted
+/// harmonic mean of the neighbouring secants, 0 where they differ in sign), with zero
+/// slopes at its ends and held constant beyond them, so that it is C¹ everywhere and keeps
+/// to the range of its data on every interval (never below the smallest factor, so never
+/// negative).
+#[derive(Clone, Debug)]
+struct Hermite {
+    x: Vec<f64>,
+    f: Vec<f64>,
+    m: Vec<f64>,
+    /// ∫_{x₀}^{x_i} of the interpolant.
+    cum: Vec<f64>,
+}
+
+impl Hermite {
+    fn new(x: &[f64], f: &[f64]) -> Hermite {
+        let n = x.len();
+        let mut m = vec![0.0; n];
+        for i in 1..n.saturating_sub(1) {
+            let (h0, h1) = (x[i] - x[i - 1], x[i + 1] - x[i]);
+            let (d0, d1) = ((f[i] - f[i - 1]) / h0, (f[i + 1] - f[i]) / h1);
+            if d0 * d1 > 0.0 {
+                let (w1, w2) = (2.0 * h1 + h0, h1 + 2.0 * h0);
+                m[i] = (w1 + w2) / (w1 / d0 + w2 / d1);
+            }
+        }
+        let mut h = Hermite {
+            x: x.to_vec(),
+            f: f.to_vec(),
+            m,
+            cum: vec![0.0; n],
+        };
+        for i in 1..n {
+            h.cum[i] = h.cum[i - 1] + h.piece_integral(i - 1, x[i]);
+        }
+        h
+    }
+
+    /// The interval of `a` (clamped to the table).
+    fn interval(&self, a: f64) -> usize {
+        let n = self.x.len();
+        self.x.partition_point(|&xi| xi <= a).clamp(1, n - 1) - 1
+    }
+
+    fn piece(&self, i: usize, a: f64) -> f64 {
+        let h = self.x[i + 1] - self.x[i];
+        let s = (a - self.x[i]) / h;
+        let (s2, s3) = (s * s, s * s * s);
+        (2.0 * s3 - 3.0 * s2 + 1.0) * self.f[i]
+            + (s3 - 2.0 * s2 + s) * h * self.m[i]
+            + (-2.0 * s3 + 3.0 * s2) * self.f[i + 1]
+            + (s3 - s2) * h * self.m[i + 1]
+    }
+
+    /// ∫_{x_i}^{a} of piece i, a in its interval: two-point Gauss–Legendre, exact for cubics.
+    fn piece_integral(&self, i: usize, a: f64) -> f64 {
+        let (lo, half) = (self.x[i], 0.5 * (a - self.x[i]));
+        let g = half / 3f64.sqrt();
+        half * (self.piece(i, lo + half - g) + self.piece(i, lo + half + g))
+    }
+
+    fn value(&self, a: f64) -> f64 {
+        let n = self.x.len();
+        if n == 1 || a <= self.x[0] {
+            return self.f[0];
+        }
+        if a >= self.x[n - 1] {
+            return self.f[n - 1];
+        }
+        self.piece(self.interval(a), a)
+    }
+
+    /// ∫_{x₀}^{a} (negative below x₀).
+    fn integral(&self, a: f64) -> f64 {
+        let n = self.x.len();
+        if n == 1 || a <= self.x[0] {
+            return self.f[0] * (a - self.x[0]);
+        }
+        if a >= self.x[n - 1] {
+            return self.cum[n - 1] + self.f[n - 1] * (a - self.x[n - 1]);
+        }
+        let i = self.interval(a);
+        self.cum[i] + self.piece_integral(i, a)
+    }
+}
+
+/// The relative step of geometry.R0's directional difference: small enough that its
+/// truncation error (∝ step²) is far below the runs' own error, large enough that their
+/// error (≈ solver.rtol·L) divided by the step stays near 1e-3 of ∂L/∂R0 at rtol 1e-6.
+pub const RADIUS_STEP: f64 = 1e-3;
+
+/// [`super::run_with`] with a schedule or with sensitivities the DAE does not integrate
+/// (the schedule's parameters, geometry.R0): the constant-rate run on the clock τ = S(t),
+/// its records relabelled with t, the schedule's sensitivities from η0's and R0's from two
+/// more runs at R0(1 ± [`RADIUS_STEP`]).
+pub(crate) fn run(
+    params: &crate::model::params::Params,
+    solver: &crate::bvp::settings::SolverSettings,
+    growth: &super::GrowthParams,
+    settings: &super::GrowthSettings,
+    sens: &mut super::SensitivityFn<'_>,
+    output: &mut super::OutputFn<'_>,
+    progress: &mut super::ProgressFn<'_>,
+) -> Result<super::GrowthStats, super::GrowthError> {
+    use super::dae::SensParam;
+    use super::{GrowthError, GrowthStats};
+    let fail = |reason: String| GrowthError {
+        t: 0.0,
+        reason,
+        stats: Box::default(),
+    };
+    let t_end = growth.t_end;
+    for p in &settings.sensitivities {
+        if let Some(sp) = p.schedule_param() {
+            if growth.schedule.form != sp.form() {
+                let want = Form::NAMES[sp.form() as usize];
+                return Err(fail(format!(
+                    "the sensitivity to {} needs growth.schedule = \"{want}\" (the scene has \"{}\")",
+                    sp.key(),
+                    Form::NAMES[growth.schedule.form as usize]
+                )));
+            }
+        }
+    }
+    let warp = Warp::new(&growth.schedule, &growth.clock, t_end);
+    let tau_end = warp.clock(t_end);
+    let min = crate::scene::keys::MIN_T_END;
+    if !(tau_end.is_finite() && tau_end >= min) {
+        return Err(fail(format!(
+            "the schedule grows nothing that can be integrated: ∫ s dt over the growth window is {} (growth.schedule = \"{}\"); it must be finite and at least {}",
+            number(tau_end),
+            Form::NAMES[growth.schedule.form as usize],
+            number(min)
+        )));
+    }
+    // Every recorded time after 0 in t, with its τ.
+    let times = super::recorded_times(settings, t_end);
+    let mut pairs: Vec<(f64, f64)> = vec![(0.0, 0.0)];
+    pairs.extend(
+        times
+            .iter()
+            .map(|&t| (if t == t_end { tau_end } else { warp.clock(t) }, t)),
+    );
+    let mut warped = settings.clone();
+    warped.history_points = 0;
+    warped.output_times = pairs[1..]
+        .iter()
+        .map(|p| p.0)
+        .filter(|&tau| tau > 0.0 && tau < tau_end)
+        .collect();
+    warped.output_times.dedup();
+    let wanted = settings.sensitivities.clone();
+    warped.sensitivities = wanted.iter().copied().filter(|p| p.in_dae()).collect();
+    let outside = wanted.iter().any(|p| !p.in_dae());
+    if outside && !warped.sensitivities.contains(&SensParam::Eta0) {
+        warped.sensitivities.push(SensParam::Eta0);
+    }
+    let clocked = super::GrowthParams {
+        t_end: tau_end,
+        ..growth.clone()
+    };
+    // The records at τ: those of every time t whose τ lies within the run's merging of
+    // close times (1e-12 of its end), each once.
+    let near = |a: f64, b: f64| (a - b).abs() <= 1e-12 * tau_end;
+    // geometry.R0: the eye measured at every τ in runs at R0(1 ± step).
+    let radius = if wanted.contains(&SensParam::Radius) {
+        let h = RADIUS_STEP * params.r0;
+        let mut sides = vec![];
+        for r0 in [params.r0 + h, params.r0 - h] {
+            let shifted = crate::model::params::Params { r0, ..*params };
+            let plain = super::GrowthSettings {
+                sensitivities: vec![],
+                ..warped.clone()
+            };
+            let mut rows: Vec<(f64, [f64; 3])> = vec![];
+            super::run_plain(
+                &shifted,
+                solver,
+                &clocked,
+                &plain,
+                &mut |_| Ok(()),
+                &mut |sys, tau, p| {
+                    let r = sys.series(tau, p)?;
+                    rows.push((
+                        tau,
+                        [r.axial_length, r.equatorial_radius, r.retina_minus_blue],
+                    ));
+                    Ok(())
+                },
+                &mut |_| Ok(()),
+            )
+            .map_err(|e| GrowthError {
+                t: warp.time_at(e.t, t_end),
+                reason: format!(
+                    "the run at geometry.R0 = {} for the sensitivity to geometry.R0: {}",
+                    number(r0),
+                    e.reason
+                ),
+                stats: e.stats,
+            })?;
+            sides.push(rows);
+        }
+        Some((h, sides))
+    } else {
+        None
+    };
+    let mut sens_done = vec![false; pairs.len()];
+    let mut out_done = vec![false; pairs.len()];
+    let eta0 = growth.eta0;
+    let result = super::run_plain(
+        params,
+        solver,
+        &clocked,
+        &warped,
+        &mut |rows| {
+            let Some(first) = rows.first() else {
+                return Ok(());
+            };
+            let tau = first.t;
+            let eta_row = rows.iter().find(|r| r.parameter == SensParam::Eta0.key());
+            for (i, &(tau_i, t)) in pairs.iter().enumerate() {
+                if sens_done[i] || !near(tau_i, tau) {
+                    continue;
+                }
+                sens_done[i] = true;
+                let mut out = Vec::with_capacity(wanted.len());
+                for &p in &wanted {
+                    let mut row = match rows.iter().find(|r| r.parameter == p.key()) {
+                        Some(r) => *r,
+                        None => super::SensitivityRow {
+                            parameter: p.key(),
+                            value: p.value(params, growth),
+                            d_axial_length: 0.0,
+                            d_equatorial_radius: 0.0,
+                            d_retina_minus_blue: 0.0,
+                            ..*first
+                        },
+                    };
+                    row.t = t;
+                    if let Some(sp) = p.schedule_param() {
+                        // ∂x(t)/∂θ = x̃'(τ) ∂S/∂θ, x̃'(τ) = (η0/τ) ∂x̃/∂η0.
+                        let e =
+                            eta_row.expect("η0's sensitivity is integrated with the schedule's");
+                        let rate = if tau > 0.0 { eta0 / tau } else { 0.0 };
+                        let ds = warp.clock_partial(t, sp);
+                        row.d_axial_length = rate * e.d_axial_length * ds;
+                        row.d_equatorial_radius = rate * e.d_equatorial_radius * ds;
+                        row.d_retina_minus_blue = rate * e.d_retina_minus_blue * ds;
+                    }
+                    if let (SensParam::Radius, Some((h, sides))) = (p, &radius) {
+                        let at = |side: &Vec<(f64, [f64; 3])>| {
+                            side.iter().find(|(x, _)| near(*x, tau)).map(|(_, v)| *v)
+                        };
+                        let (Some(up), Some(down)) = (at(&sides[0]), at(&sides[1])) else {
+                            return Err(format!(
+                                "the runs at geometry.R0 ± {} recorded nothing at t = {}",
+                                number(*h),
+                                number(t)
+                            )
+                            .into());
+                        };
+                        row.d_axial_length = (up[0] - down[0]) / (2.0 * h);
+                        row.d_equatorial_radius = (up[1] - down[1]) / (2.0 * h);
+                        row.d_retina_minus_blue = (up[2] - down[2]) / (2.0 * h);
+                    }
+                    out.push(row);
+                }
+                sens(&out)?;
+            }
+            Ok(())
+        },
+        &mut |sys, tau, p| {
+            for (i, &(tau_i, t)) in pairs.iter().enumerate() {
+                if !out_done[i] && near(tau_i, tau) {
+                    out_done[i] = true;
+                    output(sys, t, p)?;
+                }
+            }
+            Ok(())
+        },
+        &mut |tau| progress(warp.time_at(tau, t_end)),
+    );
+    let relabel = |stats: &mut GrowthStats| {
+        stats.t_reached = warp.time_at(stats.t_reached, t_end);
+    };
+    match result {
+        Ok(mut stats) => {
+            relabel(&mut stats);
+            Ok(stats)
+        }
+        Err(mut e) => {
+            e.t = warp.time_at(e.t, t_end);
+            relabel(&mut e.stats);
+            Err(e)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad(w: &Warp, t: f64) -> f64 {
+        // Composite Simpson of s over [0, t].
+        let n = 20_000;
+        let h = t / n as f64;
+        (0..=n)
+            .map(|i| {
+                let c = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                c * w.factor(i as f64 * h)
+            })
+            .sum::<f64>()
+            * h
+            / 3.0
+    }
+
+    fn ages() -> Clock {
+        Clock {
+            unit: TimeUnit::Years,
+            start: Some(0.25),
+            end: Some(20.0),
+        }
+    }
+
+    /// S(t) is the integral of the factor, for every form, on an age clock.
+    #[test]
+    fn clock_is_the_integral_of_the_factor() {
+        let table = Schedule {
+            form: Form::Table,
+            times: vec![0.0, 1.0, 3.0, 8.0, 15.0],
+            factors: vec![3.0, 2.0, 0.5, 0.5, 0.0],
+            ..Schedule::default()
+        };
+        for s in [
+            Schedule {
+                form: Form::Exponential,
+                tau: 2.5,
+                ..Schedule::default()
+            },
+            Schedule {
+                form: Form::Logistic,
+                centre: 6.0,
+                width: 1.5,
+                ..Schedule::default()
+            },
+            table,
+        ] {
+            let w = Warp::new(&s, &ages(), 1.0);
+            for t in [0.01, 0.2, 0.5, 1.0] {
+                let (exact, q) = (w.clock(t), quad(&w, t));
+                assert!(
+                    (exact - q).abs() < 1e-10,
+                    "{:?} t = {t}: {exact} vs {q}",
+                    s.form
+                );
+            }
+        }
+    }
+
+    /// ∂S/∂θ in closed form against central differences.
+    #[test]
+    fn clock_partials_match_differences() {
+        let cases = [
+            (Form::Exponential, ScheduleParam::Tau),
+            (Form::Logistic, ScheduleParam::Centre),
+            (Form::Logistic, ScheduleParam::Width),
+        ];
+        for (form, p) in cases {
+            let base = Schedule {
+                form,
+                tau: 2.5,
+                centre: 6.0,
+                width: 1.5,
+                ..Schedule::default()
+            };
+            let at = |d: f64| {
+                let mut s = base.clone();
+                match p {
+                    ScheduleParam::Tau => s.tau += d,
+                    ScheduleParam::Centre => s.centre += d,
+                    ScheduleParam::Width => s.width += d,
+                }
+                Warp::new(&s, &ages(), 1.0)
+            };
+            for t in [0.1, 0.4, 1.0] {
+                let h = 1e-5;
+                let fd = (at(h).clock(t) - at(-h).clock(t)) / (2.0 * h);
+                let exact = at(0.0).clock_partial(t, p);
+                assert!((fd - exact).abs() < 1e-8, "{p:?} t = {t}: {exact} vs {fd}");
+                assert!(exact.abs() > 1e-4, "{p:?} t = {t}: {exact}");
+            }
+        }
+    }
+
+    /// The table's interpolant passes its points, stays in the range of its neighbours
+    /// (monotone, so never negative), and is C¹ at the points.
+    #[test]
+    fn table_is_monotone_and_c1() {
+        let (x, f) = (vec![0.0, 1.0, 3.0, 8.0], vec![3.0, 2.0, 0.0, 0.0]);
+        let h = Hermite::new(&x, &f);
+        for (xi, fi) in x.iter().zip(&f) {
+            assert_eq!(h.value(*xi), *fi);
+        }
+        let mut prev = h.value(-1.0);
+        for i in 0..=900 {
+            let v = h.value(-1.0 + i as f64 * 0.01);
+            assert!(v <= prev + 1e-15 && v >= 0.0, "at {}: {v} after {prev}", i);
+            prev = v;
+        }
+        for &xi in &x {
+            let e = 1e-7;
+            let left = (h.value(xi) - h.value(xi - e)) / e;
+            let right = (h.value(xi + e) - h.value(xi)) / e;
+            assert!(
+                (left - right).abs() < 1e-5,
+                "kink at {xi}: {left} vs {right}"
+            );
+        }
+    }
+
+    #[test]
+    fn bad_clocks_and_tables_are_refused() {
+        let c = Clock {
+            unit: TimeUnit::Years,
+            start: Some(0.0),
+            end: None,
+        };
+        assert_eq!(c.check().unwrap_err().0, "time.unit");
+        let c = Clock {
+            start: Some(0.0),
+            end: Some(0.0),
+            ..ages()
+        };
+        assert!(c.check().unwrap_err().1.contains("out of order"));
+        let mut s = Schedule {
+            form: Form::Table,
+            times: vec![0.0, 2.0, 1.0],
+            factors: vec![1.0, 1.0, 1.0],
+            ..Schedule::default()
+        };
+        assert!(s.check().unwrap_err().1.contains("out of order"));
+        s.times = vec![0.0, 1.0, 2.0];
+        s.factors = vec![1.0, -0.5, 1.0];
+        assert!(s.check().unwrap_err().1.contains("item 2 is -0.5"));
+        s.factors = vec![1.0, f64::NAN, 1.0];
+        assert!(s.check().unwrap_err().1.contains("finite"));
+    }
+}

@@ -1,0 +1,135 @@
+//! Growth in years (time.*, growth.schedule*): bad clocks, schedules and ages are refused in
+//! one line before any run; a schedule is the constant-rate run on another clock.
+
+use crate::support::*;
+
+fn grow_fails(scene: &str, needle: &str) {
+    fails("grow", scene, &[], needle, "scene.toml: ");
+}
+
+const YEARS: &str = "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 0\nend = 20\n";
+
+#[test]
+fn bad_clocks_and_schedules_are_refused_in_one_line() {
+    grow_fails(
+        "[growth]\neta0 = 70\n[time]\nunit = \"years\"\n",
+        "time.start and time.end must both be given",
+    );
+    grow_fails(
+        "[growth]\neta0 = 70\n[time]\nunit = \"days\"\nstart = 3\n",
+        "time.unit",
+    );
+    grow_fails(
+        "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 5\nend = 1\n",
+        "time.end = 1 must come after time.start = 5 (the ages are out of order)",
+    );
+    let table = |times: &str, factors: &str| {
+        format!("[growth]\neta0 = 70\nschedule = \"table\"\nschedule_times = {times}\nschedule_factors = {factors}\n[time]\nunit = \"years\"\nstart = 0\nend = 20\n")
+    };
+    grow_fails(
+        &table("[0, 4, 2]", "[1, 1, 1]"),
+        "growth.schedule_times = [0, 4, 2] must be strictly increasing (the ages are out of order): 2 (item 3) follows 4",
+    );
+    grow_fails(
+        &table("[0, 2, 4]", "[1, -0.5, 1]"),
+        "item 2 is -0.5: a factor on growth.eta0 must be finite, at least 0",
+    );
+    grow_fails(
+        &table("[0, 2, 4]", "[1, nan, 1]"),
+        "growth.schedule_factors",
+    );
+    grow_fails(&table("[0, 2, 4]", "[1, 1e300, 1]"), "at most 1000000");
+    grow_fails(&table("[0, 2]", "[1, 1, 1]"), "holds 3 factors for 2 times");
+    grow_fails(
+        "[growth]\nschedule = \"exponential\"\nschedule_tau = -1\n",
+        "growth.schedule_tau = -1 must be positive",
+    );
+    grow_fails(
+        "[growth]\nschedule = \"logistic\"\nschedule_width = 0\n",
+        "growth.schedule_width = 0 must be positive",
+    );
+}
+
+/// Ages in a fit's data: outside [time.start, time.end], or without a clock in the scene.
+#[test]
+fn ages_outside_the_clock_or_without_one_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("years.toml"),
+        format!("{YEARS}[solver]\nnodes = 21\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("t.toml"),
+        "[growth]\neta0 = 70\n[solver]\nnodes = 21\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("late.csv"), "age,axial_length\n1,20\n2,21\n25,23\n").unwrap();
+    std::fs::write(d.join("ages.csv"), "age,axial_length\n1,20\n2,21\n5,23\n").unwrap();
+    let fit = |scene: &str, data: &str| {
+        eyeshell_in(
+            d,
+            &[
+                "fit",
+                scene,
+                "--data",
+                data,
+                "--fit",
+                "growth.eta0",
+                "--out",
+                "out",
+            ],
+        )
+    };
+    let r = fit("years.toml", "late.csv");
+    refused(
+        &r,
+        "late.csv: observation 3 (age 25 years) lies outside the scene's ages [time.start, time.end] = [0, 20] years",
+        "age after time.end",
+    );
+    let r = fit("t.toml", "ages.csv");
+    refused(
+        &r,
+        "the data give ages (an age column), but the scene counts no ages",
+        "ages without time.unit",
+    );
+    assert!(!d.join("out").exists());
+}
+
+/// A table schedule of 2 everywhere is η0 doubled: the same run on a clock twice as fast.
+#[test]
+fn a_factor_of_two_is_eta0_doubled() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("double.toml"),
+        "[growth]\neta0 = 70\nschedule = \"table\"\nschedule_times = [0, 1]\nschedule_factors = [2, 2]\n[solver]\nnodes = 21\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("fast.toml"),
+        "[growth]\neta0 = 140\n[solver]\nnodes = 21\n",
+    )
+    .unwrap();
+    for name in ["double", "fast"] {
+        succeeded(
+            &eyeshell_in(
+                d,
+                &["grow", &format!("{name}.toml"), "--out", name, "--quiet"],
+            ),
+            name,
+        );
+    }
+    let lengths = |name: &str| -> Vec<f64> {
+        let (h, rows) = csv_cells(&d.join(name).join("series.csv"));
+        let j = h.iter().position(|c| c == "axial_length").unwrap();
+        rows.iter().map(|r| r[j].parse().unwrap()).collect()
+    };
+    let (a, b) = (lengths("double"), lengths("fast"));
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-9 * y, "{x} against {y}");
+    }
+    assert!(a[a.len() - 1] - a[0] > 1.0, "{a:?}");
+}
