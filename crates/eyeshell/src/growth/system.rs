@@ -126,7 +126,7 @@ impl GrowthSystem {
     }
 
     /// The growth system on a given material mesh (it must hold the scene's breakpoints), as
-    /// `solver.tol` chooses it ([`super::mesh_choice`]).
+    /// `solver.tol` chooses it ([`super::tolerance`]).
     pub fn on_mesh(
         params: &Params,
         solver: &SolverSettings,
