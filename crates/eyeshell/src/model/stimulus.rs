@@ -357,7 +357,7 @@ mod tests {
     }
 
     /// On a circle of radius 11 sampled every h in angle, the largest sample is off by
-    /// O(h²) and the vertex by O(h⁴) (the samples are symmetric about none of them).
+    /// O(h²) and the vertex by O(h⁴) (the samples are placed off-symmetric).
     #[test]
     fn the_largest_radius_is_the_vertex_through_the_samples() {
         let circle = |h: f64| -> Vec<(f64, f64)> {
@@ -372,9 +372,11 @@ mod tests {
         for h in [0.1, 0.05, 0.025] {
             let pts = circle(h);
             let (top, vertex) = (sample(&pts), largest_radius(&pts));
-            assert!(11.0 - top > 0.5 * h * h, "h {h}: sample {top}");
+            // The sample is off by up to 11·(h/2)²/2; the vertex by O(h⁴) (the top of
+            // r(z) is symmetric, so the cubic term of the parabola's error vanishes there).
+            assert!(11.0 - top <= 1.4 * h * h, "h {h}: sample {top}");
             assert!(
-                (vertex - 11.0).abs() < 0.05 * (11.0 - top) * h,
+                (vertex - 11.0).abs() <= 20.0 * h.powi(4),
                 "h {h}: vertex {vertex}"
             );
         }
