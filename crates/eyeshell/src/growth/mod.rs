@@ -12,11 +12,11 @@ pub mod crossing;
 pub mod dae;
 pub(crate) mod euler;
 pub(crate) mod ida;
-pub mod mesh_choice;
 pub(crate) mod points;
 pub mod schedule;
 #[doc(hidden)]
 pub mod system;
+pub mod tolerance;
 
 pub mod settings;
 
@@ -122,9 +122,12 @@ pub struct GrowthStats {
     pub t_reached: f64,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
-    /// With `solver.tol`: how the material mesh was chosen (absent otherwise).
+    /// With `solver.tol`: what was chosen ([`tolerance`]; absent otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub mesh_choice: Option<mesh_choice::MeshChoice>,
+    pub accuracy: Option<tolerance::Accuracy>,
+    /// With `solver.tol`: the estimated error of the outputs (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_estimate: Option<tolerance::ErrorEstimate>,
 }
 
 /// The forward sensitivities' share of a growth run's work (summary.json), IDAS's counters.
@@ -407,8 +410,8 @@ pub type OutputFn<'a> =
 
 /// The growth run behind [`grow`], for callers that want the system itself at each output
 /// time (t = 0, the output times, t_end): `output(sys, t, p)` with p the growth state.
-/// With `solver.tol` the material mesh is chosen first ([`mesh_choice`]), and the run
-/// records how in its stats.
+/// With `solver.tol` the mesh and the integrator's tolerances are chosen for it, and the
+/// outputs are those of the delivered run, with their estimated error ([`tolerance`]).
 pub fn run(
     params: &crate::model::params::Params,
     solver: &crate::bvp::settings::SolverSettings,
@@ -470,43 +473,16 @@ pub(crate) fn run_plain(
             params, solver, growth, settings, None, sens, output, progress,
         );
     };
-    let start = std::time::Instant::now();
-    // solver.max_seconds bounds the choice and the run together: one clock for all stages.
-    let solver = &solver.clock_started();
-    let (mesh, choice) =
-        mesh_choice::choose(params, solver, growth, settings).map_err(|reason| GrowthError {
-            t: 0.0,
-            reason,
-            stats: Box::default(),
-        })?;
-    // The run's elastic solves are as tight as the choice's.
-    let solver = crate::bvp::settings::SolverSettings {
-        newton_tol: crate::bvp::adapt::newton_tol_for(solver),
-        ..*solver
-    };
-    let with_choice = |stats: &mut GrowthStats| {
-        stats.mesh_choice = Some(choice.clone());
-        stats.wall_seconds = start.elapsed().as_secs_f64();
-    };
-    match run_on(
+    // solver.max_seconds bounds every run of the choice together: one clock for all.
+    tolerance::run(
         params,
-        &solver,
+        &solver.clock_started(),
         growth,
         settings,
-        Some(mesh),
         sens,
         output,
         progress,
-    ) {
-        Ok(mut stats) => {
-            with_choice(&mut stats);
-            Ok(stats)
-        }
-        Err(mut e) => {
-            with_choice(&mut e.stats);
-            Err(e)
-        }
-    }
+    )
 }
 
 /// The growth run on `mesh` (None: the mesh of `solver.nodes`).

@@ -127,7 +127,7 @@ impl GrowthSystem {
     }
 
     /// The growth system on a given material mesh (it must hold the scene's breakpoints), as
-    /// `solver.tol` chooses it ([`super::mesh_choice`]).
+    /// `solver.tol` chooses it ([`super::tolerance`]).
     pub fn on_mesh(
         params: &Params,
         solver: &SolverSettings,
@@ -450,14 +450,17 @@ impl GrowthSystem {
     }
 
     /// The series row from the stimulus at every point: at the posterior pole, and the
-    /// largest retina radius over the nodes.
+    /// largest retina radius through the nodes ([`crate::model::stimulus::largest_radius`]).
     fn series_row(&self, t: f64, stim: &[PointStimulus]) -> SeriesRow {
         let pts = &self.points;
         let pole = &stim[pts.node_point(0)];
-        let radii = (0..pts.above.len()).map(|i| stim[pts.node_point(i)].r_retina);
+        let retina = (0..pts.above.len()).map(|i| {
+            let s = &stim[pts.node_point(i)];
+            (s.z_retina, s.r_retina)
+        });
         let eye = EyeMeasure::new(
             (pole.z_retina, pole.r_retina),
-            radii,
+            retina,
             self.growth.blue_focal(),
             self.growth.red_focal(),
         );

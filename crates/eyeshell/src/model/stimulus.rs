@@ -224,23 +224,54 @@ pub struct EyeMeasure {
 }
 
 impl EyeMeasure {
-    /// From the retina at the posterior pole `(z, r)` and its radius at every node.
+    /// From the retina at the posterior pole `(z, r)` and the retina `(z, r)` at every node
+    /// in order along the meridian.
     pub fn new(
         pole: (f64, f64),
-        radii: impl IntoIterator<Item = f64>,
+        retina: impl IntoIterator<Item = (f64, f64)>,
         blue: Focal<'_>,
         red: Focal<'_>,
     ) -> EyeMeasure {
         let depth_blue = blue.depth(pole.0, pole.1);
         let depth_red = red.depth(pole.0, pole.1);
+        let retina: Vec<(f64, f64)> = retina.into_iter().collect();
         EyeMeasure {
             axial_length: pole.0,
-            equatorial_radius: radii.into_iter().fold(f64::MIN, f64::max),
+            equatorial_radius: largest_radius(&retina),
             retina_minus_blue: -depth_blue,
             retina_minus_red: -depth_red,
             class: Refraction::classify(depth_blue, depth_red),
             refraction_d: f64::NAN,
         }
+    }
+}
+
+/// The largest radius of the curve through `points` (z, r), in order along it: the vertex
+/// of the parabola r(z) through the largest sample and its two neighbours. The largest
+/// sample alone is off by O(h²) and jumps from node to node as the equator moves through
+/// the mesh; the vertex is off by O(h³) and moves smoothly, so a growth run's equatorial
+/// radius converges as its axial length does (docs/MODEL.md §6). At an end of the curve,
+/// or where the three samples do not bound a concave vertex, the largest sample.
+pub fn largest_radius(points: &[(f64, f64)]) -> f64 {
+    let Some(k) = (0..points.len()).max_by(|&a, &b| points[a].1.total_cmp(&points[b].1)) else {
+        return f64::NAN;
+    };
+    let top = points[k].1;
+    if k == 0 || k + 1 == points.len() {
+        return top;
+    }
+    let ((z0, r0), (z1, r1), (z2, r2)) = (points[k - 1], points[k], points[k + 1]);
+    // Newton's form of the parabola: p(z) = r0 + d01 (z − z0) + c (z − z0)(z − z1).
+    let d01 = (r1 - r0) / (z1 - z0);
+    let d12 = (r2 - r1) / (z2 - z1);
+    let curvature = (d12 - d01) / (z2 - z0);
+    let z = 0.5 * (z0 + z1) - d01 / (2.0 * curvature);
+    let vertex = r0 + d01 * (z - z0) + curvature * (z - z0) * (z - z1);
+    let inside = (z - z0) * (z - z2) <= 0.0;
+    if curvature < 0.0 && inside && vertex.is_finite() && vertex >= top {
+        vertex
+    } else {
+        top
     }
 }
 
@@ -304,12 +335,15 @@ mod tests {
         for z in [20.0, 22.5, 23.2, 25.0] {
             let eye = EyeMeasure::new(
                 (z, 0.0),
-                [3.0, 11.5, 9.0],
+                [(24.0, 3.0), (12.0, 11.5), (1.0, 9.0)],
                 Focal::Polynomial(&blue),
                 Focal::Polynomial(&red),
             );
             assert_eq!(eye.axial_length, z);
-            assert_eq!(eye.equatorial_radius, 11.5);
+            // The parabola through (24, 3), (12, 11.5), (1, 9) peaks above its middle sample.
+            let vertex = largest_radius(&[(24.0, 3.0), (12.0, 11.5), (1.0, 9.0)]);
+            assert!(vertex > 11.5 && vertex < 12.5, "{vertex}");
+            assert_eq!(eye.equatorial_radius, vertex);
             assert_eq!(eye.retina_minus_blue, -blue.depth(z, 0.0));
             assert_eq!(eye.retina_minus_red, -red.depth(z, 0.0));
             let expect = Refraction::classify(blue.depth(z, 0.0), red.depth(z, 0.0));
@@ -319,11 +353,41 @@ mod tests {
         let between = 0.5 * (blue.point(0.0).0 + red.point(0.0).0);
         let eye = EyeMeasure::new(
             (between, 0.0),
-            [10.0],
+            [(12.0, 10.0)],
             Focal::Polynomial(&blue),
             Focal::Polynomial(&red),
         );
         assert_eq!(eye.class, Refraction::Emmetropic);
+    }
+
+    /// On a circle of radius 11 sampled every h in angle, the largest sample is off by
+    /// O(h²) and the vertex by O(h⁴) (the samples are placed off-symmetric).
+    #[test]
+    fn the_largest_radius_is_the_vertex_through_the_samples() {
+        let circle = |h: f64| -> Vec<(f64, f64)> {
+            (0..=(3.0 / h) as usize)
+                .map(|k| {
+                    let a = 0.1 + 0.37 * h + k as f64 * h;
+                    (11.0 * a.cos(), 11.0 * a.sin())
+                })
+                .collect()
+        };
+        let sample = |pts: &[(f64, f64)]| pts.iter().map(|p| p.1).fold(f64::MIN, f64::max);
+        for h in [0.1, 0.05, 0.025] {
+            let pts = circle(h);
+            let (top, vertex) = (sample(&pts), largest_radius(&pts));
+            // The sample is off by up to 11·(h/2)²/2; the vertex by O(h⁴) (the top of
+            // r(z) is symmetric, so the cubic term of the parabola's error vanishes there).
+            assert!(11.0 - top <= 1.4 * h * h, "h {h}: sample {top}");
+            assert!(
+                (vertex - 11.0).abs() <= 20.0 * h.powi(4),
+                "h {h}: vertex {vertex}"
+            );
+        }
+        // An end of the curve, and a flat top, are the largest sample.
+        assert_eq!(largest_radius(&[(1.0, 1.0), (2.0, 3.0)]), 3.0);
+        assert_eq!(largest_radius(&[(1.0, 2.0), (2.0, 2.0), (3.0, 2.0)]), 2.0);
+        assert!(largest_radius(&[]).is_nan());
     }
 
     #[test]

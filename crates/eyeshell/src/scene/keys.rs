@@ -609,7 +609,7 @@ pub static KEYS: &[KeySpec] = &[
         key: "solver.tol",
         access: Access::OptionalFloat { get: |s| s.solver.tol, set: |s, v| s.solver.tol = Some(v) },
         rule: Rule::OpenUnit,
-        doc: "the global error asked for: the mesh is adapted until the estimated error of each of κ, α_s, r, θ, Q (absolute, in fields.csv's units) is at most tol (Richardson on the halved mesh); in a growth scene it picks the material mesh once, from t = 0 and a test run to t_end (docs/guide/accuracy.md); unset: solver.nodes lays the mesh",
+        doc: "the global error asked for: the mesh is adapted until the estimated error of each of κ, α_s, r, θ, Q (absolute, in fields.csv's units) is at most tol (Richardson on the halved mesh); in a growth scene (mm) it bounds the global error of the lengths of series.csv and the snapshots' r and z at every output time, choosing the mesh and solver.rtol/atol together (solver.nodes, solver.rtol and solver.atol are then ignored; docs/guide/accuracy.md); unset: solver.nodes lays the mesh",
         growth: false,
     },
     KeySpec {
@@ -774,14 +774,14 @@ pub static KEYS: &[KeySpec] = &[
         key: "solver.rtol",
         access: Access::Float { get: |s| s.growth_settings.rtol, set: |s, v| s.growth_settings.rtol = v },
         rule: Rule::OpenUnit,
-        doc: "CVODE's relative tolerance",
+        doc: "the integrators' (IDA's, CVODE's) relative tolerance (ignored with solver.tol, which chooses it)",
         growth: true,
     },
     KeySpec {
         key: "solver.atol",
         access: Access::Float { get: |s| s.growth_settings.atol, set: |s, v| s.growth_settings.atol = v },
         rule: Rule::Positive,
-        doc: "CVODE's absolute tolerance",
+        doc: "the integrators' (IDA's, CVODE's) absolute tolerance (ignored with solver.tol, which chooses it)",
         growth: true,
     },
     KeySpec {

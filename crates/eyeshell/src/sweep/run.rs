@@ -145,7 +145,7 @@ fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
 pub fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
     let retina = |f: &FieldRow| stimulus::retina(f.z, f.r, f.h, f.theta);
     let pole = rows.first().map(retina).unwrap_or((f64::NAN, f64::NAN));
-    let radii = rows.iter().map(|f| retina(f).1);
+    let radii = rows.iter().map(retina);
     let (blue, red) = (scene.blue(), scene.red());
     match &scene.growth {
         // A growing scene's surfaces, computed ones included (traced when it was read).

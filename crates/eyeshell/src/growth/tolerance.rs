@@ -1,0 +1,556 @@
+//! `solver.tol` in a growth run (docs/MODEL.md §5, "Growth to a tolerance"): the global error
+//! of the run's outputs — the lengths of series.csv and history.csv and the snapshots' r and
+//! z, at every output time — is estimated, space and time apart, and the material mesh and
+//! the integrator's tolerances are chosen together so that their sum is at most tol.
+//!
+//! A round runs the scene three times: on a mesh M (`solver.nodes`' uniform + graded mesh
+//! of n nodes) at rtol, on M halved (M/2, every interval split in two) at rtol — the run
+//! that is delivered — and on M again at 10·rtol. Then, at every output time and for every
+//! length,
+//!
+//! - the space error of M/2 is |u(M/2) − u(M)| / (2^p − 1), p = [`SPACE_ORDER`]: the grown
+//!   shell converges only at order 2–3 in the nodes (points stop growing at their own
+//!   times, and the kinks this leaves in its data no fixed mesh resolves), so p = 2 errs on
+//!   the safe side;
+//! - the time error is |u(M, 10·rtol) − u(M, rtol)| / (10^q − 1), q = [`TIME_ORDER`]: the
+//!   global error of IDA and CVODE falls as rtol^q, q ≈ 0.75 measured on the const scene
+//!   over rtol 1e-5…1e-8. It is measured on M at the looser rtol, where it costs about a
+//!   quarter of the delivered run, and it depends on the mesh only through the shell it
+//!   integrates.
+//!
+//! If the largest sum over the lengths and times is at most tol, M/2's run is delivered with
+//! those estimates. If not, the next round's (n, rtol) is the cheapest that the measured
+//! estimates, scaled as n^−[`MODEL_SPACE_ORDER`] and rtol^q, predict to meet [`AIM`]·tol
+//! (the estimate takes the safe order 2, the prediction the observed 2.5): the cost of a run grows
+//! as n·rtol^−β ([`COST_RTOL_EXPONENT`]), and the split of the error between space and
+//! time is searched over with n and rtol held inside their bounds. The first round reads
+//! the same model with the const scene's measured constants ([`PRIOR`]), so that on the
+//! scenes like it one round is enough.
+//!
+//! The time estimate by a rerun at 10·rtol was chosen over two others: IDAS's quadrature
+//! of the local errors does not bound the global error of a stiff DAE (the local errors are
+//! damped, not summed), and an adjoint needs a backward run per output length and time
+//! (each dearer than the rerun). Richardson in rtol with the rerun is what BDF's
+//! tolerance proportionality allows; how far it holds is measured in BENCHMARKS.md.
+
+use crate::bvp::settings::SolverSettings;
+use crate::mesh::Mesh;
+use crate::model::params::Params;
+
+use super::system::GrowthSystem;
+use super::{
+    GrowthError, GrowthParams, GrowthSettings, GrowthStats, Integrator, OutputFn, ProgressFn,
+    SensitivityFn, SensitivityRow,
+};
+
+/// The order in the nodes that the space estimate assumes (module docs).
+pub const SPACE_ORDER: f64 = 2.0;
+/// The order in the nodes that the next round's mesh is predicted with: the const scene's
+/// axial length converges at 2.3 to 3.1 between N = 51 and 801 (module docs).
+pub const MODEL_SPACE_ORDER: f64 = 2.5;
+/// The power of rtol that the time error follows (module docs).
+pub const TIME_ORDER: f64 = 0.75;
+/// A run's cost grows as rtol^−β at a given mesh (IDA's steps on the const scene).
+pub const COST_RTOL_EXPONENT: f64 = 0.25;
+/// The fraction of tol a new round aims at, so that the estimate of the next is within tol.
+pub const AIM: f64 = 0.5;
+/// The most rounds before giving up.
+pub const MAX_ROUNDS: usize = 4;
+/// The bounds of the chosen rtol: looser (its companion at 10·rtol looser still), the
+/// integrator's error stops following rtol;
+/// tighter, IDA's error test fails at the start (const scene, rtol 1.2e-11).
+pub const RTOL_RANGE: (f64, f64) = (1e-10, 1e-4);
+/// The fewest nodes of M.
+pub const MIN_NODES: usize = 11;
+/// solver.atol as a fraction of the chosen rtol (the growth state is O(1) to O(10) mm).
+pub const ATOL_PER_RTOL: f64 = 1e-2;
+/// The first round's model: M of `nodes` nodes at `rtol` has the space error `space` and
+/// the time error `time` (mm): the const scene's, measured against IDA at N = 3201, rtol 1e-10.
+pub const PRIOR: Round = Round {
+    nodes: 26,
+    rtol: 1e-5,
+    atol: 1e-7,
+    space: 2e-4,
+    time: 1.6e-4,
+    seconds: 0.0,
+};
+
+/// One length's estimated error (mm): space and time, and their sum.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Split {
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub total: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub space: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub time: f64,
+}
+
+impl Split {
+    fn new(space: f64, time: f64) -> Split {
+        Split {
+            total: space + time,
+            space,
+            time,
+        }
+    }
+
+    fn max(self, o: Split) -> Split {
+        Split {
+            total: self.total.max(o.total),
+            space: self.space.max(o.space),
+            time: self.time.max(o.time),
+        }
+    }
+}
+
+/// The estimated error of each output length (mm).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Lengths {
+    pub axial_length: Split,
+    pub equatorial_radius: Split,
+    pub retina_minus_blue: Split,
+    pub retina_minus_red: Split,
+    /// The snapshots' r and z, the largest over the nodes (the snapshot times only).
+    pub shell: Split,
+}
+
+impl Lengths {
+    fn all(&self) -> [Split; 5] {
+        [
+            self.axial_length,
+            self.equatorial_radius,
+            self.retina_minus_blue,
+            self.retina_minus_red,
+            self.shell,
+        ]
+    }
+
+    /// The largest total over the lengths, and the space and time parts of each (largest).
+    fn worst(&self) -> Split {
+        self.all().into_iter().fold(Split::default(), Split::max)
+    }
+
+    fn max(self, o: Lengths) -> Lengths {
+        Lengths {
+            axial_length: self.axial_length.max(o.axial_length),
+            equatorial_radius: self.equatorial_radius.max(o.equatorial_radius),
+            retina_minus_blue: self.retina_minus_blue.max(o.retina_minus_blue),
+            retina_minus_red: self.retina_minus_red.max(o.retina_minus_red),
+            shell: self.shell.max(o.shell),
+        }
+    }
+}
+
+/// The estimate at one output time.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct TimedLengths {
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub t: f64,
+    #[serde(flatten)]
+    pub lengths: Lengths,
+}
+
+/// summary.json's `error_estimate` of a growth run under `solver.tol`: each length's largest
+/// over the output times, and each output time's.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct ErrorEstimate {
+    #[serde(flatten)]
+    pub largest: Lengths,
+    pub per_time: Vec<TimedLengths>,
+}
+
+impl ErrorEstimate {
+    /// The largest estimated total error over every length and time (mm).
+    pub fn overall(&self) -> f64 {
+        self.largest.worst().total
+    }
+}
+
+/// One round of the choice: M's nodes, the tolerances, and the estimated error of its
+/// M/2 run (the largest over the lengths and times, mm), and the seconds of its three runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Round {
+    pub nodes: usize,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub rtol: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub atol: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub space: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub time: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub seconds: f64,
+}
+
+/// summary.json's `accuracy`: what `solver.tol` chose for a growth run.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Accuracy {
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub tol: f64,
+    /// Nodes of the delivered run's mesh (M/2 of the last round).
+    pub nodes: usize,
+    /// The delivered run's integrator tolerances.
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub rtol: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub atol: f64,
+    pub rounds: Vec<Round>,
+    /// Every run of every round, and the delivery.
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub wall_seconds: f64,
+}
+
+/// The outputs of one run, recorded at every output time.
+struct Recorded {
+    t: Vec<f64>,
+    /// The growth state and the elastic unknowns, to hand the caller's output afterwards.
+    p: Vec<Vec<f64>>,
+    u: Vec<Vec<f64>>,
+    /// Axial length, equatorial radius, retina − blue, retina − red.
+    series: Vec<[f64; 4]>,
+    /// (r, z) at every node, at the snapshot times.
+    shell: Vec<Option<Vec<(f64, f64)>>>,
+    sens: Vec<Vec<SensitivityRow>>,
+    stats: GrowthStats,
+}
+
+/// Run the scene on `mesh` at `settings`, recording its outputs.
+fn record(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    mesh: Mesh,
+    progress: &mut ProgressFn<'_>,
+) -> Result<Recorded, GrowthError> {
+    let snapshots = super::snapshot_times(settings, growth.t_end);
+    let mut rec = Recorded {
+        t: vec![],
+        p: vec![],
+        u: vec![],
+        series: vec![],
+        shell: vec![],
+        sens: vec![],
+        stats: GrowthStats::default(),
+    };
+    let mut sens_rows = vec![];
+    let mut output = |sys: &mut GrowthSystem, t: f64, p: &[f64]| {
+        let (row, shell) = if t == 0.0 || snapshots.contains(&t) {
+            let snap = sys.snapshot(t, p)?;
+            let shell = snap.fields.iter().map(|f| (f.r, f.z)).collect();
+            (snap.series, Some(shell))
+        } else {
+            (sys.series(t, p)?, None)
+        };
+        rec.t.push(t);
+        rec.p.push(p.to_vec());
+        rec.u.push(sys.elastic.u.clone());
+        rec.series.push([
+            row.axial_length,
+            row.equatorial_radius,
+            row.retina_minus_blue,
+            row.retina_minus_red,
+        ]);
+        rec.shell.push(shell);
+        Ok(())
+    };
+    let stats = super::run_on(
+        params,
+        solver,
+        growth,
+        settings,
+        Some(mesh),
+        &mut |rows| {
+            sens_rows.push(rows.to_vec());
+            Ok(())
+        },
+        &mut output,
+        progress,
+    )?;
+    rec.stats = stats;
+    rec.sens = sens_rows;
+    Ok(rec)
+}
+
+/// |a − b| of each length at each output time; `stride` reads a's nodes every `stride`
+/// nodes of b's (2: a on M/2, b on M).
+fn differences(a: &Recorded, b: &Recorded, stride: usize) -> Vec<[f64; 5]> {
+    a.series
+        .iter()
+        .zip(&b.series)
+        .zip(a.shell.iter().zip(&b.shell))
+        .map(|((x, y), (sa, sb))| {
+            let shell = match (sa, sb) {
+                (Some(sa), Some(sb)) => sb
+                    .iter()
+                    .enumerate()
+                    .map(|(i, q)| {
+                        let p = sa[stride * i];
+                        (p.0 - q.0).abs().max((p.1 - q.1).abs())
+                    })
+                    .fold(0.0, f64::max),
+                _ => 0.0,
+            };
+            [
+                (x[0] - y[0]).abs(),
+                (x[1] - y[1]).abs(),
+                (x[2] - y[2]).abs(),
+                (x[3] - y[3]).abs(),
+                shell,
+            ]
+        })
+        .collect()
+}
+
+/// The error estimate of `fine` (M/2 at rtol) from `coarse` (M at rtol) and `loose`
+/// (M at 10·rtol): module docs.
+fn estimate(fine: &Recorded, coarse: &Recorded, loose: &Recorded) -> ErrorEstimate {
+    let space = differences(fine, coarse, 2);
+    let time = differences(coarse, loose, 1);
+    let ks = 1.0 / (2f64.powf(SPACE_ORDER) - 1.0);
+    let kt = 1.0 / (10f64.powf(TIME_ORDER) - 1.0);
+    let per_time: Vec<TimedLengths> = fine
+        .t
+        .iter()
+        .zip(space.iter().zip(&time))
+        .map(|(&t, (s, d))| {
+            let split = |k: usize| Split::new(ks * s[k], kt * d[k]);
+            TimedLengths {
+                t,
+                lengths: Lengths {
+                    axial_length: split(0),
+                    equatorial_radius: split(1),
+                    retina_minus_blue: split(2),
+                    retina_minus_red: split(3),
+                    shell: split(4),
+                },
+            }
+        })
+        .collect();
+    let largest = per_time
+        .iter()
+        .fold(Lengths::default(), |m, t| m.max(t.lengths));
+    ErrorEstimate { largest, per_time }
+}
+
+/// The cheapest (nodes of M, rtol) that `last`'s errors, scaled as n^−2.5 and rtol^q, predict
+/// to meet `target`, the split between space and time searched over in steps of 1/40.
+fn next(last: &Round, target: f64, max_nodes: usize) -> (usize, f64) {
+    let space = last.space.max(1e-300);
+    let time = last.time.max(1e-300);
+    let mut best: Option<(f64, usize, f64)> = None;
+    for k in 1..40 {
+        let f = k as f64 / 40.0;
+        let n = (last.nodes as f64 * (space / (f * target)).powf(1.0 / MODEL_SPACE_ORDER)).ceil();
+        let n = (n as usize).max(MIN_NODES);
+        let rtol = (last.rtol * ((1.0 - f) * target / time).powf(1.0 / TIME_ORDER))
+            .clamp(RTOL_RANGE.0, RTOL_RANGE.1);
+        // Held at a bound, the model's error may exceed the target: such a split is out.
+        let predicted = space * (last.nodes as f64 / n as f64).powf(MODEL_SPACE_ORDER)
+            + time * (rtol / last.rtol).powf(TIME_ORDER);
+        if predicted > target * (1.0 + 1e-9) || n > max_nodes {
+            continue;
+        }
+        let cost = n as f64 * rtol.powf(-COST_RTOL_EXPONENT);
+        if best.is_none_or(|b| cost < b.0) {
+            best = Some((cost, n, rtol));
+        }
+    }
+    match best {
+        Some((_, n, rtol)) => (n, rtol),
+        // Nothing meets it inside the bounds: the finest the bounds allow.
+        None => (max_nodes.max(MIN_NODES), RTOL_RANGE.0),
+    }
+}
+
+/// The growth run under `solver.tol` (module docs): rounds until the estimate is within tol,
+/// then the delivered run's outputs and sensitivities are handed to the callbacks, in the
+/// order of the run. `solver` has its clock started: every run shares `solver.max_seconds`.
+pub(super) fn run(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    sens: &mut SensitivityFn<'_>,
+    output: &mut OutputFn<'_>,
+    progress: &mut ProgressFn<'_>,
+) -> Result<GrowthStats, GrowthError> {
+    let start = std::time::Instant::now();
+    let tol = solver.tol.expect("growth to a tolerance is for solver.tol");
+    let refuse = |reason: String| GrowthError {
+        t: 0.0,
+        reason,
+        stats: Box::default(),
+    };
+    if settings.integrator == Integrator::Euler {
+        return Err(refuse(
+            "solver.tol in a growth scene needs solver.integrator = \"ida\" or \"cvode\" (Euler's fixed steps have no tolerance to choose)".into(),
+        ));
+    }
+    // Each run's elastic solves as tight as the adaptive elastic solve's.
+    let base = SolverSettings {
+        tol: None,
+        richardson: false,
+        newton_tol: crate::bvp::adapt::newton_tol_for(solver),
+        ..*solver
+    };
+    let mut accuracy = Accuracy {
+        tol,
+        ..Accuracy::default()
+    };
+    // M's nodes from the model, at most half of solver.max_nodes (M/2 has 2n − 1).
+    let max_nodes = solver.max_nodes.div_ceil(2);
+    let (mut nodes, mut rtol) = next(&PRIOR, AIM * tol, max_nodes);
+    loop {
+        let round_start = std::time::Instant::now();
+        let atol = ATOL_PER_RTOL * rtol;
+        let at = |rtol: f64, sensitivities: bool| GrowthSettings {
+            rtol,
+            atol: ATOL_PER_RTOL * rtol,
+            sensitivities: if sensitivities {
+                settings.sensitivities.clone()
+            } else {
+                Vec::new()
+            },
+            ..settings.clone()
+        };
+        let with_rounds = |mut e: GrowthError, accuracy: &Accuracy| {
+            e.stats.accuracy = Some(Accuracy {
+                wall_seconds: start.elapsed().as_secs_f64(),
+                ..accuracy.clone()
+            });
+            e
+        };
+        let s = SolverSettings { nodes, ..base };
+        let mesh = crate::bvp::solve::mesh_of(params, &s).map_err(|e| refuse(e.to_string()))?;
+        let coarse = record(
+            params,
+            &s,
+            growth,
+            &at(rtol, false),
+            mesh.clone(),
+            &mut |_| Ok(()),
+        )
+        .map_err(|e| with_rounds(e, &accuracy))?;
+        let loose = record(
+            params,
+            &s,
+            growth,
+            &at(10.0 * rtol, false),
+            mesh.clone(),
+            &mut |_| Ok(()),
+        )
+        .map_err(|e| with_rounds(e, &accuracy))?;
+        let fine_mesh = mesh.halved();
+        let fine = record(
+            params,
+            &s,
+            growth,
+            &at(rtol, true),
+            fine_mesh.clone(),
+            progress,
+        )
+        .map_err(|e| with_rounds(e, &accuracy))?;
+        let est = estimate(&fine, &coarse, &loose);
+        let worst = est.largest.worst();
+        let round = Round {
+            nodes,
+            rtol,
+            atol,
+            space: worst.space,
+            time: worst.time,
+            seconds: round_start.elapsed().as_secs_f64(),
+        };
+        accuracy.rounds.push(round);
+        if worst.total <= tol {
+            accuracy.nodes = fine_mesh.len();
+            accuracy.rtol = rtol;
+            accuracy.atol = atol;
+            let mut stats = fine.stats.clone();
+            stats.error_estimate = Some(est);
+            stats.accuracy = Some(accuracy);
+            replay(
+                params, &s, growth, fine_mesh, &fine, &mut stats, sens, output,
+            )?;
+            stats.wall_seconds = start.elapsed().as_secs_f64();
+            if let Some(a) = stats.accuracy.as_mut() {
+                a.wall_seconds = stats.wall_seconds;
+            }
+            return Ok(stats);
+        }
+        let (n, r) = next(&round, AIM * tol, max_nodes);
+        if accuracy.rounds.len() >= MAX_ROUNDS || (n == nodes && r == rtol) {
+            let mut e = refuse(format!(
+                "solver.tol = {} cannot be reached in growth: the estimated error was {} mm (space {}, time {}) on {} nodes at solver.rtol = {}{}",
+                crate::text::number(tol),
+                crate::text::number(worst.total),
+                crate::text::number(worst.space),
+                crate::text::number(worst.time),
+                fine_mesh.len(),
+                crate::text::number(rtol),
+                if accuracy.rounds.len() >= MAX_ROUNDS {
+                    format!(" after {MAX_ROUNDS} rounds")
+                } else {
+                    format!(
+                        " and neither more nodes (solver.max_nodes = {}) nor a tighter rtol (down to {}) is predicted to reach it",
+                        solver.max_nodes,
+                        crate::text::number(RTOL_RANGE.0)
+                    )
+                }
+            ));
+            e.stats = Box::new(fine.stats);
+            return Err(with_rounds(e, &accuracy));
+        }
+        (nodes, rtol) = (n, r);
+    }
+}
+
+/// Hand the delivered run's outputs and sensitivity rows to the caller, in the order of the
+/// run: at each output time the growth system on its mesh takes the recorded state (the
+/// snapshots re-polish the elastic state, as in the run).
+#[allow(clippy::too_many_arguments)]
+fn replay(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: &GrowthParams,
+    mesh: Mesh,
+    fine: &Recorded,
+    stats: &mut GrowthStats,
+    sens: &mut SensitivityFn<'_>,
+    output: &mut OutputFn<'_>,
+) -> Result<(), GrowthError> {
+    let fail = |t: f64, reason: String, stats: &GrowthStats| GrowthError {
+        t,
+        reason,
+        stats: Box::new(stats.clone()),
+    };
+    let mut sys = GrowthSystem::on_mesh(params, solver, growth, mesh)
+        .map_err(|e| fail(0.0, e.to_string(), stats))?;
+    // The sensitivity rows of a recorded time come after t = 0's output and before each
+    // later one's ([`super::Observer::sensitivities`]).
+    let mut rows = fine.sens.iter();
+    for ((&t, p), u) in fine.t.iter().zip(&fine.p).zip(&fine.u) {
+        if t > 0.0 {
+            if let Some(r) = rows.next() {
+                sens(r).map_err(|e| fail(t, e.to_string(), stats))?;
+            }
+        }
+        sys.adopt(p, u);
+        output(&mut sys, t, p).map_err(|e| fail(t, e.to_string(), stats))?;
+        if t == 0.0 {
+            if let Some(r) = rows.next() {
+                sens(r).map_err(|e| fail(t, e.to_string(), stats))?;
+            }
+        }
+    }
+    stats.bvp_solves += sys.work.bvp_solves;
+    Ok(())
+}
