@@ -35,9 +35,22 @@ fn optics_writes_surfaces_json_and_a_figure() {
             "optics.json",
             "optics.png",
             "optics.svg",
+            "published.csv",
+            "published.png",
+            "published.svg",
             "surfaces.csv"
         ]
     );
+    // Against the published blue surface (docs/optics.md's table): the sagittal surface of a
+    // 1 mm pupil 0.090 mm in front of it on the axis, 0.070 mm at the 40° field (φ ≈ 0.45).
+    let (header, published) = csv_cells(&out.join("published.csv"));
+    assert_eq!(header[3], "criterion_minus_polynomial");
+    assert_eq!(published.len(), 41);
+    let at = |row: usize, col: usize| published[row][col].parse::<f64>().unwrap();
+    assert!((at(0, 2) - 23.635).abs() < 1e-3 && at(0, 1) == 0.0);
+    assert!((at(0, 3) + 0.090).abs() < 2e-3, "{:?}", published[0]);
+    assert!((at(40, 4) + 0.070).abs() < 0.01, "{:?}", published[40]);
+    assert!(at(40, 5) < -1.0, "{:?}", published[40]);
     let (header, rows) = csv_cells(&out.join("surfaces.csv"));
     assert_eq!(
         header,

@@ -5,6 +5,7 @@
 pub mod components;
 pub mod constitutive;
 pub mod cornea;
+pub mod eye;
 pub mod growth_law;
 pub mod optics;
 pub mod params;
