@@ -114,8 +114,8 @@ pub fn spline_weights(ts: &[f64], t: f64) -> Vec<f64> {
         w[i + 1] += b + dt * (1.0 / hi);
         let c0 = dt * hi / 6.0 * (-(3.0 * a * a - 1.0));
         let c1 = dt * hi / 6.0 * (3.0 * b * b - 1.0);
-        for k in 0..n {
-            w[k] += c0 * s[i][k] + c1 * s[i + 1][k];
+        for (k, wk) in w.iter_mut().enumerate() {
+            *wk += c0 * s[i][k] + c1 * s[i + 1][k];
         }
         return w;
     }
@@ -123,8 +123,8 @@ pub fn spline_weights(ts: &[f64], t: f64) -> Vec<f64> {
     w[i] += a;
     w[i + 1] += b;
     let (c0, c1) = (hi * hi / 6.0 * (a * a * a - a), hi * hi / 6.0 * (b * b * b - b));
-    for k in 0..n {
-        w[k] += c0 * s[i][k] + c1 * s[i + 1][k];
+    for (k, wk) in w.iter_mut().enumerate() {
+        *wk += c0 * s[i][k] + c1 * s[i + 1][k];
     }
     w
 }
@@ -158,8 +158,8 @@ fn natural_second_derivatives(ts: &[f64], h: &[f64]) -> Vec<Vec<f64>> {
         for j in (0..m - 1).rev() {
             x[j] = (d[j] - h[j + 1] * x[j + 1]) / b[j];
         }
-        for j in 0..m {
-            s[j + 1][k] = x[j];
+        for (row, xj) in s[1..=m].iter_mut().zip(&x) {
+            row[k] = *xj;
         }
     }
     s

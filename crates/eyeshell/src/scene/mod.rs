@@ -641,7 +641,7 @@ impl Scene {
                 text.split_once('=')
                     .is_some_and(|(k, _)| family(k.trim()) == family(key))
             })
-            .map(|text| override_origin(text))
+            .map(|text| override_origin(text.as_str()))
             .unwrap_or_else(|| self.origin.clone())
     }
 
