@@ -260,6 +260,8 @@ fn float(v: &toml::Value) -> Option<f64> {
     match v {
         toml::Value::Float(x) => Some(*x),
         toml::Value::Integer(i) => Some(*i as f64),
+        // As summary.json writes the numbers JSON lacks (a plane's radius).
+        toml::Value::String(s) if ["inf", "-inf", "nan"].contains(&s.as_str()) => s.parse().ok(),
         _ => None,
     }
 }

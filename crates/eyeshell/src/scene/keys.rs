@@ -277,9 +277,11 @@ impl std::fmt::Display for KeyValue {
     }
 }
 
-/// A TOML value as JSON (non-finite floats, which JSON lacks, as null).
+/// A TOML value as JSON; non-finite floats, which JSON lacks, as the strings "inf", "-inf"
+/// and "nan", which a surface's keys read back (a plane's radius is inf).
 fn toml_to_json(v: &toml::Value) -> serde_json::Value {
     match v {
+        toml::Value::Float(x) if !x.is_finite() => serde_json::Value::from(KeyValue::Float(*x).to_string()),
         toml::Value::Float(x) => KeyValue::Float(*x).to_json(),
         toml::Value::Integer(i) => serde_json::Value::from(*i),
         toml::Value::String(s) => serde_json::Value::from(s.as_str()),
@@ -322,9 +324,11 @@ impl KeySpec {
             Access::Choice { names, get, .. } => KeyValue::Choice(names[get(scene)]),
             Access::Text { get, .. } => KeyValue::Text(get(scene)),
             Access::Floats { get, .. } => KeyValue::Floats(get(scene)),
-            Access::Surfaces { get, .. } => {
-                KeyValue::Tables(get(scene).iter().map(SurfaceSpec::to_toml).collect())
-            }
+            // No surface tables is no value: the built-in eye as its source gives it.
+            Access::Surfaces { get, .. } => match get(scene) {
+                s if s.is_empty() => KeyValue::Unset,
+                s => KeyValue::Tables(s.iter().map(SurfaceSpec::to_toml).collect()),
+            },
         }
     }
 

@@ -1084,6 +1084,17 @@ fn the_eyes_surfaces_are_read_written_and_overridden() {
     assert_eq!(s.parameters_json()["optics.surfaces"][1]["cauchy"][1], 0.0043);
     let back = parse(&s.to_toml()).unwrap();
     assert_eq!(back, s);
+    // A plane's radius in summary.json (JSON has no inf) reads back as a plane.
+    let planar = parse_set(CUSTOM_EYE, &["optics.surfaces[1].radius=inf"]).unwrap();
+    let json = planar.parameters_json();
+    assert_eq!(json["optics.surfaces"][1]["radius"], "inf");
+    let text = format!("{CUSTOM_EYE}\n");
+    let again = parse_set(&text, &["optics.surfaces[1].radius=\"inf\""]).unwrap();
+    assert_eq!(again.optics().surfaces, planar.optics().surfaces);
+    // No surface tables: no value, shown or summarised.
+    let builtin = parse("growth.eta0 = 70\nstimulus.source = \"optics\"").unwrap();
+    assert!(builtin.parameters_json().get("optics.surfaces").is_none());
+    assert!(!builtin.to_toml().contains("optics.surfaces"));
     let s = parse_set(CUSTOM_EYE, &["optics.surfaces[2].radius=11"]).unwrap();
     assert_eq!(s.optics().system().unwrap().elements[2].surface.radius, 11.0);
     // Overrides of the Atchison eye: a flatter cornea and a deeper anterior chamber.
