@@ -1075,10 +1075,14 @@ pub fn published_figure(
         fig = fig.with(Series::new(name, column(k), SeriesStyle::Line).color(colour));
     }
     fig = fig.with(
-        Series::new("", vec![(0.0, 0.0), (rows.last().map_or(0.5, |r| r[1]), 0.0)], SeriesStyle::Line)
-            .color(BLACK)
-            .width(1)
-            .no_legend(),
+        Series::new(
+            "",
+            vec![(0.0, 0.0), (rows.last().map_or(0.5, |r| r[1]), 0.0)],
+            SeriesStyle::Line,
+        )
+        .color(BLACK)
+        .width(1)
+        .no_legend(),
     );
     fig.width = PANEL.0;
     fig.height = PANEL.1;

@@ -207,7 +207,10 @@ fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAn
         toml::Value::Integer(i) => i.into_pyobject(py)?.into_any(),
         toml::Value::Boolean(b) => PyBool::new(py, *b).to_owned().into_any(),
         toml::Value::Array(a) => {
-            let items = a.iter().map(|x| toml_to_py(py, x)).collect::<PyResult<Vec<_>>>()?;
+            let items = a
+                .iter()
+                .map(|x| toml_to_py(py, x))
+                .collect::<PyResult<Vec<_>>>()?;
             PyList::new(py, items)?.into_any()
         }
         toml::Value::Table(t) => {

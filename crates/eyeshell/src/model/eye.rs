@@ -37,7 +37,10 @@ pub const MAX_THICKNESS: f64 = 100.0;
 pub enum EyeValue {
     Fixed(f64),
     /// Values at increasing times (at least two), a natural cubic spline between.
-    Table { t: Vec<f64>, value: Vec<f64> },
+    Table {
+        t: Vec<f64>,
+        value: Vec<f64>,
+    },
 }
 
 impl EyeValue {
@@ -122,7 +125,10 @@ pub fn spline_weights(ts: &[f64], t: f64) -> Vec<f64> {
     let (a, b) = ((x1 - t) / hi, (t - x0) / hi);
     w[i] += a;
     w[i + 1] += b;
-    let (c0, c1) = (hi * hi / 6.0 * (a * a * a - a), hi * hi / 6.0 * (b * b * b - b));
+    let (c0, c1) = (
+        hi * hi / 6.0 * (a * a * a - a),
+        hi * hi / 6.0 * (b * b * b - b),
+    );
     for (k, wk) in w.iter_mut().enumerate() {
         *wk += c0 * s[i][k] + c1 * s[i + 1][k];
     }
@@ -298,13 +304,18 @@ impl SurfaceSpec {
                 return Err(err(shape.into()));
             }
             if let Some(k) = table.keys().find(|k| *k != "t" && *k != "value") {
-                return Err(err(format!("has the unknown key '{}': {shape}", crate::text::excerpt(k, 40))));
+                return Err(err(format!(
+                    "has the unknown key '{}': {shape}",
+                    crate::text::one_line(&crate::text::excerpt(k, 40))
+                )));
             }
             let (Some(t), Some(value)) = (
                 table.get("t").and_then(floats),
                 table.get("value").and_then(floats),
             ) else {
-                return Err(err(format!("{shape}: t and value must both be lists of numbers")));
+                return Err(err(format!(
+                    "{shape}: t and value must both be lists of numbers"
+                )));
             };
             Ok(EyeValue::Table { t, value })
         };
@@ -341,7 +352,7 @@ impl SurfaceSpec {
             }
             _ => {
                 return Err(SurfaceKeyError {
-                    key: surface_key(i, &crate::text::excerpt(name, 40)),
+                    key: surface_key(i, &crate::text::one_line(&crate::text::excerpt(name, 40))),
                     value: show_toml(v),
                     problem: format!(
                         "is not a key of a surface: a surface takes {}",
@@ -383,7 +394,8 @@ impl SurfaceSpec {
         let mut put = |k: &str, v: toml::Value| {
             t.insert(k.to_string(), v);
         };
-        let list = |xs: &[f64]| toml::Value::Array(xs.iter().map(|x| toml::Value::Float(*x)).collect());
+        let list =
+            |xs: &[f64]| toml::Value::Array(xs.iter().map(|x| toml::Value::Float(*x)).collect());
         if let Some(v) = &self.radius {
             put("radius", v.to_toml());
         }
@@ -413,7 +425,10 @@ impl SurfaceSpec {
     /// Every time any of this surface's tables names.
     pub fn times(&self) -> Vec<f64> {
         let mut out = Vec::new();
-        for v in [&self.radius, &self.conic, &self.thickness].into_iter().flatten() {
+        for v in [&self.radius, &self.conic, &self.thickness]
+            .into_iter()
+            .flatten()
+        {
             out.extend_from_slice(v.times());
         }
         if let Some(MediumSpec::Index(v)) = &self.medium {
@@ -436,11 +451,9 @@ impl SurfaceSpec {
          -> Result<(), SurfaceKeyError> {
             let shown = match v {
                 EyeValue::Fixed(x) => number(*x),
-                EyeValue::Table { t, value } => format!(
-                    "{{ t = {}, value = {} }}",
-                    list_text(t),
-                    list_text(value)
-                ),
+                EyeValue::Table { t, value } => {
+                    format!("{{ t = {}, value = {} }}", list_text(t), list_text(value))
+                }
             };
             if let EyeValue::Table { t, value } = v {
                 if t.len() < 2 || t.len() > MAX_TABLE_TIMES {
@@ -498,10 +511,15 @@ impl SurfaceSpec {
                 "radius",
                 v,
                 &|x| x.is_infinite() || (x.abs() >= rlo && x.abs() <= rhi),
-                &format!("between {rlo} and {} mm in magnitude, or inf for a plane", number(rhi)),
+                &format!(
+                    "between {rlo} and {} mm in magnitude, or inf for a plane",
+                    number(rhi)
+                ),
             )?;
             if let EyeValue::Table { value, .. } = v {
-                if value.iter().any(|x| x.is_infinite()) || value.windows(2).any(|w| w[0] * w[1] < 0.0) {
+                if value.iter().any(|x| x.is_infinite())
+                    || value.windows(2).any(|w| w[0] * w[1] < 0.0)
+                {
                     return Err(bad(
                         "radius",
                         format!("{{ …, value = {} }}", list_text(value)),
@@ -568,7 +586,9 @@ impl SurfaceSpec {
                         m.key(),
                         shown,
                         match m {
-                            MediumSpec::Cauchy(_) => "must list one to four finite numbers: a, b, c, d (λ in µm)".into(),
+                            MediumSpec::Cauchy(_) => {
+                                "must list one to four finite numbers: a, b, c, d (λ in µm)".into()
+                            }
                             _ => "must give as many b as c, one to six of each, all finite".into(),
                         },
                     ));
@@ -672,15 +692,24 @@ pub fn assemble(
                 });
             }
             for (i, s) in surfaces.iter().enumerate() {
-                let radius = s.radius.as_ref().ok_or_else(|| missing(i, "radius", "mm, inf for a plane"))?;
-                let thickness = s
-                    .thickness
+                let radius = s
+                    .radius
                     .as_ref()
-                    .ok_or_else(|| missing(i, "thickness", "mm to the next surface, or the last one's to the retina"))?;
-                let medium = s
-                    .medium
-                    .as_ref()
-                    .ok_or_else(|| missing(i, "index", "the medium behind it: index, cauchy or sellmeier"))?;
+                    .ok_or_else(|| missing(i, "radius", "mm, inf for a plane"))?;
+                let thickness = s.thickness.as_ref().ok_or_else(|| {
+                    missing(
+                        i,
+                        "thickness",
+                        "mm to the next surface, or the last one's to the retina",
+                    )
+                })?;
+                let medium = s.medium.as_ref().ok_or_else(|| {
+                    missing(
+                        i,
+                        "index",
+                        "the medium behind it: index, cauchy or sellmeier",
+                    )
+                })?;
                 let name = format!("surface {i}");
                 let surface = Surface::new(
                     name.clone(),

@@ -145,17 +145,23 @@ impl OpticsSpec {
                 })
             }
         };
-        let checked = OpticalSystem::new(system.name.clone(), system.object.clone(), system.elements.clone())
-            .map_err(|e| self.explain(&e))?;
+        let checked = OpticalSystem::new(
+            system.name.clone(),
+            system.object.clone(),
+            system.elements.clone(),
+        )
+        .map_err(|e| self.explain(&e))?;
         system = checked;
-        system.check_pupil_position(position).map_err(|e| OpticsKeyError {
-            key: "optics.pupil_position".into(),
-            value: number(position),
-            problem: match e {
-                OpticsError::InvalidInput { reason, .. } => reason,
-                e => crate::text::one_line(&e.to_string()),
-            },
-        })?;
+        system
+            .check_pupil_position(position)
+            .map_err(|e| OpticsKeyError {
+                key: "optics.pupil_position".into(),
+                value: number(position),
+                problem: match e {
+                    OpticsError::InvalidInput { reason, .. } => reason,
+                    e => crate::text::one_line(&e.to_string()),
+                },
+            })?;
         Ok(system.with_pupil_position(position))
     }
 
@@ -248,7 +254,11 @@ impl OpticsSpec {
         }
         // The eye at every time it is traced: each a valid system at every wavelength.
         let times = self.times();
-        for &t in if times.is_empty() { &[0.0][..] } else { &times[..] } {
+        for &t in if times.is_empty() {
+            &[0.0][..]
+        } else {
+            &times[..]
+        } {
             let at_time = |mut e: OpticsKeyError| {
                 if !times.is_empty() {
                     e.problem = format!("{} (the eye at growth time t = {})", e.problem, number(t));
@@ -434,9 +444,7 @@ impl TimedSurfaces {
                 .map(|&p| {
                     w.iter()
                         .zip(splines)
-                        .map(|(w, s)| {
-                            w * super::stimulus::Focal::Computed(s).radius_and_slope(p).0
-                        })
+                        .map(|(w, s)| w * super::stimulus::Focal::Computed(s).radius_and_slope(p).0)
                         .sum()
                 })
                 .collect();
@@ -511,7 +519,10 @@ mod tests {
             let (blue, red) = timed.at(t).unwrap();
             for phi in [0.0, 0.1, 0.2] {
                 let traced = timed.blue[k].radius(phi).unwrap();
-                assert!((blue.radius(phi).unwrap() - traced).abs() < 1e-5, "t {t}, φ {phi}");
+                assert!(
+                    (blue.radius(phi).unwrap() - traced).abs() < 1e-5,
+                    "t {t}, φ {phi}"
+                );
             }
             assert!((red.phi_max() - timed.red[k].phi_max()).abs() < 1e-12);
         }
@@ -519,7 +530,10 @@ mod tests {
         let r = |t: f64| timed.at(t).unwrap().0.radius(0.15).unwrap();
         let h = 1e-5;
         let (left, right) = ((r(0.4) - r(0.4 - h)) / h, (r(0.4 + h) - r(0.4)) / h);
-        assert!(left < 0.0 && (left - right).abs() < 1e-3 * left.abs(), "{left} {right}");
+        assert!(
+            left < 0.0 && (left - right).abs() < 1e-3 * left.abs(),
+            "{left} {right}"
+        );
     }
 
     /// A table's error names the key and the growth time of the eye that fails.

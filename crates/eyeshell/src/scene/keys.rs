@@ -281,7 +281,9 @@ impl std::fmt::Display for KeyValue {
 /// and "nan", which a surface's keys read back (a plane's radius is inf).
 fn toml_to_json(v: &toml::Value) -> serde_json::Value {
     match v {
-        toml::Value::Float(x) if !x.is_finite() => serde_json::Value::from(KeyValue::Float(*x).to_string()),
+        toml::Value::Float(x) if !x.is_finite() => {
+            serde_json::Value::from(KeyValue::Float(*x).to_string())
+        }
         toml::Value::Float(x) => KeyValue::Float(*x).to_json(),
         toml::Value::Integer(i) => serde_json::Value::from(*i),
         toml::Value::String(s) => serde_json::Value::from(s.as_str()),
@@ -289,7 +291,9 @@ fn toml_to_json(v: &toml::Value) -> serde_json::Value {
         toml::Value::Datetime(d) => serde_json::Value::from(d.to_string()),
         toml::Value::Array(a) => serde_json::Value::Array(a.iter().map(toml_to_json).collect()),
         toml::Value::Table(t) => serde_json::Value::Object(
-            t.iter().map(|(k, v)| (k.clone(), toml_to_json(v))).collect(),
+            t.iter()
+                .map(|(k, v)| (k.clone(), toml_to_json(v)))
+                .collect(),
         ),
     }
 }

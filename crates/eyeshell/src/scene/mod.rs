@@ -469,7 +469,10 @@ impl Scene {
         origin: &str,
         sources: &mut Sources,
     ) -> Result<(), SceneError> {
-        if let Some(rest) = key.strip_prefix(SURFACES_KEY).and_then(|r| r.strip_prefix('[')) {
+        if let Some(rest) = key
+            .strip_prefix(SURFACES_KEY)
+            .and_then(|r| r.strip_prefix('['))
+        {
             self.set_one_surface_key(key, rest, value, origin)?;
             let seq = sources.values().map(|(n, _)| *n).max().unwrap_or(0) + 1;
             sources.insert(SURFACES_KEY, (seq, origin.to_string()));

@@ -1081,7 +1081,10 @@ fn the_eyes_surfaces_are_read_written_and_overridden() {
     let system = s.optics().system().unwrap();
     assert_eq!(system.elements.len(), 4);
     assert_eq!(system.elements[2].surface.conic, -3.0);
-    assert_eq!(s.parameters_json()["optics.surfaces"][1]["cauchy"][1], 0.0043);
+    assert_eq!(
+        s.parameters_json()["optics.surfaces"][1]["cauchy"][1],
+        0.0043
+    );
     let back = parse(&s.to_toml()).unwrap();
     assert_eq!(back, s);
     // A plane's radius in summary.json (JSON has no inf) reads back as a plane.
@@ -1096,7 +1099,10 @@ fn the_eyes_surfaces_are_read_written_and_overridden() {
     assert!(builtin.parameters_json().get("optics.surfaces").is_none());
     assert!(!builtin.to_toml().contains("optics.surfaces"));
     let s = parse_set(CUSTOM_EYE, &["optics.surfaces[2].radius=11"]).unwrap();
-    assert_eq!(s.optics().system().unwrap().elements[2].surface.radius, 11.0);
+    assert_eq!(
+        s.optics().system().unwrap().elements[2].surface.radius,
+        11.0
+    );
     // Overrides of the Atchison eye: a flatter cornea and a deeper anterior chamber.
     let s = parse_set(
         "growth.eta0 = 70\nstimulus.source = \"optics\"",
@@ -1109,7 +1115,10 @@ fn the_eyes_surfaces_are_read_written_and_overridden() {
     let eye = s.optics().system().unwrap();
     let source = eyeshell_optics::eyes::atchison_2006();
     assert_eq!(eye.elements[0].surface.radius, 7.9);
-    assert_eq!(eye.elements[0].surface.conic, source.elements[0].surface.conic);
+    assert_eq!(
+        eye.elements[0].surface.conic,
+        source.elements[0].surface.conic
+    );
     assert_eq!(eye.elements[1].thickness, 3.35);
     assert_eq!(eye.elements[4], source.elements[4]);
     assert!((eye.pupil_position.unwrap() - 3.90).abs() < 1e-12);
@@ -1120,28 +1129,116 @@ fn the_eyes_surfaces_are_read_written_and_overridden() {
 #[test]
 fn bad_surface_keys_are_refused_naming_the_surface() {
     for (set, key, problem) in [
-        ("optics.surfaces[2].radius=0.01", "optics.surfaces[2].radius", "between 0.5 and 10000 mm"),
-        ("optics.surfaces[2].radius=nan", "optics.surfaces[2].radius", "(not nan)"),
-        ("optics.surfaces[1].index=0.5", "optics.surfaces[1].index", "between 1 and 3"),
-        ("optics.surfaces[3].thickness=-1", "optics.surfaces[3].thickness", "positive"),
-        ("optics.surfaces[3].thickness=1e300", "optics.surfaces[3].thickness", "at most 100 mm"),
-        ("optics.surfaces[2].conic=1e6", "optics.surfaces[2].conic", "between −100 and 100"),
-        ("optics.surfaces[1].colour=3", "optics.surfaces[1].colour", "is not a key of a surface"),
-        ("optics.surfaces[x].radius=3", "optics.surfaces[x].radius", "i from 0 to 15"),
-        ("optics.surfaces[99].radius=3", "optics.surfaces[99].radius", "i from 0 to 15"),
-        ("optics.surfaces[5].radius=7", "optics.surfaces[4].radius", "must be given for a custom eye"),
-        ("optics.surfaces[1].cauchy=[1.4, 0.5]", "optics.surfaces[1].cauchy", "at 400 nm, not a physical one"),
-        ("optics.surfaces[1].cauchy=[]", "optics.surfaces[1].cauchy", "one to four"),
-        ("optics.surfaces[0].aspheric=[1, nan]", "optics.surfaces[0].aspheric", "finite"),
-        ("optics.surfaces[0].sellmeier={ b = [1] }", "optics.surfaces[0].sellmeier", "must be a table"),
-        ("optics.pupil_position=30", "optics.pupil_position", "not behind the last one (at 7.6 mm)"),
-        ("optics.pupil_position=-1", "optics.pupil_position", "positive"),
-        ("optics.surfaces[0].radius={ t = [0, 1], value = [7.8] }", "optics.surfaces[0].radius", "as many values as times"),
-        ("optics.surfaces[0].radius={ t = [1, 0], value = [7.8, 7.7] }", "optics.surfaces[0].radius", "strictly increasing"),
-        ("optics.surfaces[0].radius={ t = [-1, 1], value = [7.8, 7.7] }", "optics.surfaces[0].radius", "from 0 on"),
-        ("optics.surfaces[0].radius={ t = [0, 1], value = [7.8, -7.7] }", "optics.surfaces[0].radius", "keep one sign"),
-        ("optics.surfaces[0].radius={ t = [0, 1], v = [7.8, 7.7] }", "optics.surfaces[0].radius", "unknown key 'v'"),
-        ("optics.surfaces[0].aspheric={ t = [0, 1], value = [0, 1] }", "optics.surfaces[0].aspheric", "list of numbers"),
+        (
+            "optics.surfaces[2].radius=0.01",
+            "optics.surfaces[2].radius",
+            "between 0.5 and 10000 mm",
+        ),
+        (
+            "optics.surfaces[2].radius=nan",
+            "optics.surfaces[2].radius",
+            "(not nan)",
+        ),
+        (
+            "optics.surfaces[1].index=0.5",
+            "optics.surfaces[1].index",
+            "between 1 and 3",
+        ),
+        (
+            "optics.surfaces[3].thickness=-1",
+            "optics.surfaces[3].thickness",
+            "positive",
+        ),
+        (
+            "optics.surfaces[3].thickness=1e300",
+            "optics.surfaces[3].thickness",
+            "at most 100 mm",
+        ),
+        (
+            "optics.surfaces[2].conic=1e6",
+            "optics.surfaces[2].conic",
+            "between −100 and 100",
+        ),
+        (
+            "optics.surfaces[1].colour=3",
+            "optics.surfaces[1].colour",
+            "is not a key of a surface",
+        ),
+        (
+            "optics.surfaces[x].radius=3",
+            "optics.surfaces[x].radius",
+            "i from 0 to 15",
+        ),
+        (
+            "optics.surfaces[99].radius=3",
+            "optics.surfaces[99].radius",
+            "i from 0 to 15",
+        ),
+        (
+            "optics.surfaces[5].radius=7",
+            "optics.surfaces[4].radius",
+            "must be given for a custom eye",
+        ),
+        (
+            "optics.surfaces[1].cauchy=[1.4, 0.5]",
+            "optics.surfaces[1].cauchy",
+            "at 400 nm, not a physical one",
+        ),
+        (
+            "optics.surfaces[1].cauchy=[]",
+            "optics.surfaces[1].cauchy",
+            "one to four",
+        ),
+        (
+            "optics.surfaces[0].aspheric=[1, nan]",
+            "optics.surfaces[0].aspheric",
+            "finite",
+        ),
+        (
+            "optics.surfaces[0].sellmeier={ b = [1] }",
+            "optics.surfaces[0].sellmeier",
+            "must be a table",
+        ),
+        (
+            "optics.pupil_position=30",
+            "optics.pupil_position",
+            "not behind the last one (at 7.6 mm)",
+        ),
+        (
+            "optics.pupil_position=-1",
+            "optics.pupil_position",
+            "positive",
+        ),
+        (
+            "optics.surfaces[0].radius={ t = [0, 1], value = [7.8] }",
+            "optics.surfaces[0].radius",
+            "as many values as times",
+        ),
+        (
+            "optics.surfaces[0].radius={ t = [1, 0], value = [7.8, 7.7] }",
+            "optics.surfaces[0].radius",
+            "strictly increasing",
+        ),
+        (
+            "optics.surfaces[0].radius={ t = [-1, 1], value = [7.8, 7.7] }",
+            "optics.surfaces[0].radius",
+            "from 0 on",
+        ),
+        (
+            "optics.surfaces[0].radius={ t = [0, 1], value = [7.8, -7.7] }",
+            "optics.surfaces[0].radius",
+            "keep one sign",
+        ),
+        (
+            "optics.surfaces[0].radius={ t = [0, 1], v = [7.8, 7.7] }",
+            "optics.surfaces[0].radius",
+            "unknown key 'v'",
+        ),
+        (
+            "optics.surfaces[0].aspheric={ t = [0, 1], value = [0, 1] }",
+            "optics.surfaces[0].aspheric",
+            "list of numbers",
+        ),
     ] {
         let e = err(parse_set(CUSTOM_EYE, &[set]), &format!("--set {set}"), key);
         assert!(e.contains(problem), "{set}: {e}");
@@ -1156,7 +1253,10 @@ fn bad_surface_keys_are_refused_naming_the_surface() {
     // A custom eye needs its stop, two surfaces or more, and each surface's numbers.
     let text = CUSTOM_EYE.replace("pupil_position = 3.6\n", "");
     let e = err(parse(&text), "x.toml", "optics.pupil_position");
-    assert!(e.contains("must be given for optics.eye = \"custom\""), "{e}");
+    assert!(
+        e.contains("must be given for optics.eye = \"custom\""),
+        "{e}"
+    );
     let text = CUSTOM_EYE.replace("thickness = 3.05\n", "");
     let e = err(parse(&text), "x.toml", "optics.surfaces[1].thickness");
     assert!(e.contains("must be given"), "{e}");
@@ -1167,7 +1267,10 @@ fn bad_surface_keys_are_refused_naming_the_surface() {
         "--set optics.surfaces[5].radius=7",
         "optics.surfaces[5]",
     );
-    assert!(e.contains("beyond the atchison-2006 eye's 5 surfaces"), "{e}");
+    assert!(
+        e.contains("beyond the atchison-2006 eye's 5 surfaces"),
+        "{e}"
+    );
     let e = err(
         parse_set(base, &["optics.surfaces[2].index=1.4"]),
         "--set optics.surfaces[2].index=1.4",
@@ -1188,8 +1291,15 @@ fn a_traced_error_names_the_origin_of_its_key() {
     );
     assert!(e.contains("fails at 'posterior lens'"), "{e}");
     // The same error after the scene was read (as `eyeshell optics` meets it).
-    let mut s = parse_set("growth.eta0 = 70", &["optics.pupil=8", "optics.max_field=80"]).unwrap();
+    let mut s = parse_set(
+        "growth.eta0 = 70",
+        &["optics.pupil=8", "optics.max_field=80"],
+    )
+    .unwrap();
     s.set_stimulus_source(Source::Optics);
     let e = s.resolve_optics().unwrap_err().to_string();
-    assert!(e.starts_with("--set optics.max_field=80: optics.max_field = 80"), "{e}");
+    assert!(
+        e.starts_with("--set optics.max_field=80: optics.max_field = 80"),
+        "{e}"
+    );
 }

@@ -70,7 +70,11 @@ fn a_custom_eye_from_a_scene_focuses_where_ynu_and_differential_rays_say() {
     }
     let (power, bfd) = ynu_reference(&reference, &N);
     let p = paraxial(&system, 589.0).unwrap();
-    assert!((p.power - power).abs() < 0.01, "power {} vs {power}", p.power);
+    assert!(
+        (p.power - power).abs() < 0.01,
+        "power {} vs {power}",
+        p.power
+    );
     // The surfaces the growth would read, traced as the scene was read.
     let computed = scene.growth.as_ref().unwrap().computed.clone().unwrap();
     let blue = &computed.surfaces.surfaces[0];
@@ -87,10 +91,22 @@ fn a_custom_eye_from_a_scene_focuses_where_ynu_and_differential_rays_say() {
         let f = &blue.points[field];
         assert_eq!(f.field_deg, field as f64);
         let (s, t) = differential_foci(&reference, 589.0, field as f64, 3.6);
-        assert!((f.sagittal - s).abs() < 0.02, "{field}°: sagittal {} vs {s}", f.sagittal);
-        assert!((f.tangential - t).abs() < 0.02, "{field}°: tangential {} vs {t}", f.tangential);
+        assert!(
+            (f.sagittal - s).abs() < 0.02,
+            "{field}°: sagittal {} vs {s}",
+            f.sagittal
+        );
+        assert!(
+            (f.tangential - t).abs() < 0.02,
+            "{field}°: tangential {} vs {t}",
+            f.tangential
+        );
         let mean = 2.0 / (1.0 / s + 1.0 / t);
-        assert!((f.distance - mean).abs() < 0.02, "{field}°: {} vs {mean}", f.distance);
+        assert!(
+            (f.distance - mean).abs() < 0.02,
+            "{field}°: {} vs {mean}",
+            f.distance
+        );
         // Astigmatic enough that the agreement is not trivial.
         assert!((t - s).abs() > 0.05, "{field}°: {s} {t}");
     }
