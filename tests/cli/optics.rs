@@ -97,7 +97,7 @@ fn bad_optics_keys_are_refused_and_nothing_is_written() {
         scene,
         &["optics.pupil=12"],
         "optics.pupil = 12 must lie in (0, 10] mm",
-        "scene.toml",
+        "--set optics.pupil=12",
     );
     fails(
         "optics",
@@ -111,13 +111,35 @@ fn bad_optics_keys_are_refused_and_nothing_is_written() {
         scene,
         &["optics.wavelengths=[400, 1500]"],
         "(1500 does not)",
-        "scene.toml",
+        "--set optics.wavelengths=[400, 1500]",
     );
+    // A key given by --set is named with its --set, also when the error is found by tracing.
     fails(
         "optics",
         scene,
         &["optics.pupil=8", "optics.max_field=80"],
         "optics.max_field = 80 cannot be traced in the atchison-2006 eye: the ray at 80° and 400 nm fails at 'posterior lens'",
+        "--set optics.max_field=80",
+    );
+    fails(
+        "optics",
+        "optics.max_field = 80\noptics.pupil = 8\n",
+        &[],
+        "optics.max_field = 80 cannot be traced",
+        "scene.toml",
+    );
+    fails(
+        "optics",
+        scene,
+        &["optics.surfaces[0].radius=0.1"],
+        "optics.surfaces[0].radius = 0.1 must be between 0.5 and 10000 mm",
+        "--set optics.surfaces[0].radius=0.1",
+    );
+    fails(
+        "optics",
+        scene,
+        &["optics.eye=custom"],
+        "optics.surfaces = (0 surface tables) must describe 2 to 16 surfaces",
         "scene.toml",
     );
     // The same keys refuse a growth run that would use them.
