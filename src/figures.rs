@@ -1034,6 +1034,47 @@ fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     Ok(files)
 }
 
+/// The first wavelength's best-focus surface of `eyeshell optics`, and its sagittal and
+/// tangential focal surfaces, minus the scene's polynomial blue surface, against the polar
+/// angle φ about z_B (`rows` as published.csv holds them: field, φ, R_B, then the three
+/// differences).
+pub fn published_figure(
+    rows: &[[f64; 6]],
+    criterion: &str,
+    wavelength_nm: f64,
+    stem: &Path,
+) -> Result<(PathBuf, PathBuf), FigureError> {
+    let mut fig = Figure::new(
+        format!(
+            "{} nm surfaces minus the polynomial blue surface",
+            trim(wavelength_nm)
+        ),
+        "φ (rad about z_B)",
+        "R − R_B (mm)",
+    );
+    let column = |k: usize| rows.iter().map(|r| (r[1], r[k])).collect::<Vec<_>>();
+    for (k, name, colour) in [
+        (4, "sagittal focus".to_string(), RGBColor(90, 160, 90)),
+        (5, "tangential focus".to_string(), RGBColor(200, 140, 40)),
+        (3, format!("best focus ({criterion})"), BLUE),
+    ] {
+        fig = fig.with(Series::new(name, column(k), SeriesStyle::Line).color(colour));
+    }
+    fig = fig.with(
+        Series::new(
+            "",
+            vec![(0.0, 0.0), (rows.last().map_or(0.5, |r| r[1]), 0.0)],
+            SeriesStyle::Line,
+        )
+        .color(BLACK)
+        .width(1)
+        .no_legend(),
+    );
+    fig.width = PANEL.0;
+    fig.height = PANEL.1;
+    Ok(plot::write(&fig, stem)?)
+}
+
 /// A ray fan of the optics figure: its field angle (degrees) and each ray's (z, y) path.
 pub type RayFan = (f64, Vec<Vec<(f64, f64)>>);
 

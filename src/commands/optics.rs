@@ -20,13 +20,18 @@ pub const SURFACES_FILE: &str = "surfaces.csv";
 pub const OPTICS_FILE: &str = "optics.json";
 /// The figure's stem (optics.png, optics.svg).
 const FIGURE: &str = "optics";
+/// The first wavelength's surfaces against the scene's polynomial blue surface.
+pub const PUBLISHED_FILE: &str = "published.csv";
+/// Its figure's stem (published.png, published.svg).
+const PUBLISHED_FIGURE: &str = "published";
 /// The field angles of the figure's ray fans (degrees), those within `optics.max_field`.
 const FAN_FIELDS: [f64; 3] = [0.0, 20.0, 40.0];
 
-/// A problem with an optics key, as the scene's error (the user's: exit 2).
+/// A problem with an optics key, as the scene's error (the user's: exit 2), from where the
+/// key was given (the file, or the `--set` that gave it).
 fn key_error(scene: &Scene, e: OpticsKeyError) -> Error {
     Error::from(SceneError::Invalid {
-        origin: scene.origin.clone(),
+        origin: scene.origin_of_key(&e.key),
         key: e.key.to_string(),
         value: e.value,
         problem: e.problem,
@@ -102,11 +107,34 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         &spec,
         &computed,
         &paraxials,
+        &system,
         z_c,
         start.elapsed().as_secs_f64(),
     );
     write(OPTICS_FILE, json.as_bytes())?;
     crate::figures::optics_figure(&system, &computed, &fans, &dir.file(FIGURE))?;
+    let rows = against_polynomial(&computed, &scene.blue());
+    let v = rundir::format_value;
+    let table = rundir::table::csv_bytes(
+        [
+            "field_deg",
+            "phi",
+            "R_polynomial",
+            "criterion_minus_polynomial",
+            "sagittal_minus_polynomial",
+            "tangential_minus_polynomial",
+        ],
+        rows.iter().map(|r| r.map(v)),
+        rundir::table::QuoteStyle::Necessary,
+    )
+    .map_err(|e| io(PUBLISHED_FILE, e))?;
+    write(PUBLISHED_FILE, &table)?;
+    crate::figures::published_figure(
+        &rows,
+        spec.criterion().name(),
+        spec.wavelengths[0],
+        &dir.file(PUBLISHED_FIGURE),
+    )?;
     let target = dir.commit()?;
     if !a.quiet {
         let blue = &computed.surfaces.surfaces[0];
@@ -124,12 +152,46 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// The first wavelength's best focus, and its sagittal and tangential foci, against the
+/// scene's polynomial blue surface (`stimulus.blue.*`, the published one by default), in its
+/// polar frame about z_B: for each field, the field, the best focus's φ, R_B(φ) and each
+/// focus's R − R_B(φ) at its own φ (mm; negative: in front of the polynomial surface).
+fn against_polynomial(
+    c: &eyeshell::model::optics::ComputedOptics,
+    blue: &eyeshell::model::stimulus::Surface,
+) -> Vec<[f64; 6]> {
+    let diff = |z: f64, r: f64| blue.depth(z, r);
+    c.surfaces.surfaces[0]
+        .points
+        .iter()
+        .map(|p| {
+            let on_chief = |s: f64| {
+                let (z, y) = (
+                    p.chief_exit.0 + s * p.chief_direction.0,
+                    p.chief_exit.1 + s * p.chief_direction.1,
+                );
+                -diff(z, y.abs())
+            };
+            let phi = blue.angle(p.z, p.r);
+            [
+                p.field_deg,
+                phi,
+                blue.radius(phi),
+                -diff(p.z, p.r),
+                on_chief(p.sagittal),
+                on_chief(p.tangential),
+            ]
+        })
+        .collect()
+}
+
 /// optics.json: the request, the paraxial figures at each wavelength, the longitudinal
 /// chromatic aberration between the first two, each surface's polar fit about z_B.
 fn optics_json(
     spec: &OpticsSpec,
     c: &eyeshell::model::optics::ComputedOptics,
     paraxials: &[Paraxial],
+    system: &eyeshell_optics::OpticalSystem,
     z_b: f64,
     wall_seconds: f64,
 ) -> String {
@@ -168,7 +230,7 @@ fn optics_json(
     let doc = json!({
         "eye": spec.eye_name(),
         "pupil_mm": spec.pupil,
-        "pupil_position_mm": spec.pupil_stop(&spec.system()).position,
+        "pupil_position_mm": spec.pupil_stop(system).position,
         "focus": spec.criterion().name(),
         "max_field_deg": spec.max_field,
         "wavelengths_nm": spec.wavelengths,

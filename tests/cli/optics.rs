@@ -35,9 +35,22 @@ fn optics_writes_surfaces_json_and_a_figure() {
             "optics.json",
             "optics.png",
             "optics.svg",
+            "published.csv",
+            "published.png",
+            "published.svg",
             "surfaces.csv"
         ]
     );
+    // Against the published blue surface (docs/optics.md's table): the sagittal surface of a
+    // 1 mm pupil 0.090 mm in front of it on the axis, 0.070 mm at the 40° field (φ ≈ 0.45).
+    let (header, published) = csv_cells(&out.join("published.csv"));
+    assert_eq!(header[3], "criterion_minus_polynomial");
+    assert_eq!(published.len(), 41);
+    let at = |row: usize, col: usize| published[row][col].parse::<f64>().unwrap();
+    assert!((at(0, 2) - 23.635).abs() < 1e-3 && at(0, 1) == 0.0);
+    assert!((at(0, 3) + 0.090).abs() < 2e-3, "{:?}", published[0]);
+    assert!((at(40, 4) + 0.065).abs() < 0.02, "{:?}", published[40]);
+    assert!(at(40, 5) < -1.0, "{:?}", published[40]);
     let (header, rows) = csv_cells(&out.join("surfaces.csv"));
     assert_eq!(
         header,
@@ -84,7 +97,7 @@ fn bad_optics_keys_are_refused_and_nothing_is_written() {
         scene,
         &["optics.pupil=12"],
         "optics.pupil = 12 must lie in (0, 10] mm",
-        "scene.toml",
+        "--set optics.pupil=12",
     );
     fails(
         "optics",
@@ -98,13 +111,35 @@ fn bad_optics_keys_are_refused_and_nothing_is_written() {
         scene,
         &["optics.wavelengths=[400, 1500]"],
         "(1500 does not)",
-        "scene.toml",
+        "--set optics.wavelengths=[400, 1500]",
     );
+    // A key given by --set is named with its --set, also when the error is found by tracing.
     fails(
         "optics",
         scene,
         &["optics.pupil=8", "optics.max_field=80"],
         "optics.max_field = 80 cannot be traced in the atchison-2006 eye: the ray at 80° and 400 nm fails at 'posterior lens'",
+        "--set optics.max_field=80",
+    );
+    fails(
+        "optics",
+        "optics.max_field = 80\noptics.pupil = 8\n",
+        &[],
+        "optics.max_field = 80 cannot be traced",
+        "scene.toml",
+    );
+    fails(
+        "optics",
+        scene,
+        &["optics.surfaces[0].radius=0.1"],
+        "optics.surfaces[0].radius = 0.1 must be between 0.5 and 10000 mm",
+        "--set optics.surfaces[0].radius=0.1",
+    );
+    fails(
+        "optics",
+        scene,
+        &["optics.eye=custom"],
+        "optics.surfaces = (0 surface tables) must describe 2 to 16 surfaces",
         "scene.toml",
     );
     // The same keys refuse a growth run that would use them.

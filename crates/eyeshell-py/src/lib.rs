@@ -144,6 +144,14 @@ fn toml_value(v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
     if is_numpy_scalar(v)? {
         return toml_value(&v.call_method0("item")?);
     }
+    // A dict is a table (a surface of optics.surfaces), not the list of its keys.
+    if let Ok(d) = v.cast::<pyo3::types::PyDict>() {
+        let mut table = toml::Table::new();
+        for (k, x) in d.iter() {
+            table.insert(k.extract::<String>()?, toml_value(&x)?);
+        }
+        return Ok(toml::Value::Table(table));
+    }
     // Before __index__ and __float__, which NumPy's arrays have too (and refuse unless 0-d).
     if let Ok(items) = v.try_iter() {
         let values = items
@@ -206,7 +214,38 @@ fn key_value<'py>(py: Python<'py>, v: KeyValue) -> PyResult<Bound<'py, PyAny>> {
         KeyValue::Floats(xs) => PyList::new(py, xs)?.into_any(),
         // The lenses as their TOML text, which `set` reads back.
         KeyValue::Lenses(_) => v.to_string().into_pyobject(py)?.into_any(),
+        KeyValue::Tables(ts) => {
+            let items = ts
+                .iter()
+                .map(|t| toml_to_py(py, t))
+                .collect::<PyResult<Vec<_>>>()?;
+            PyList::new(py, items)?.into_any()
+        }
         KeyValue::Unset => py.None().into_bound(py),
+    })
+}
+
+/// A TOML value (a surface table of `optics.surfaces`) as Python lists, dicts and numbers.
+fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        toml::Value::Float(x) => x.into_pyobject(py)?.into_any(),
+        toml::Value::Integer(i) => i.into_pyobject(py)?.into_any(),
+        toml::Value::Boolean(b) => PyBool::new(py, *b).to_owned().into_any(),
+        toml::Value::Array(a) => {
+            let items = a
+                .iter()
+                .map(|x| toml_to_py(py, x))
+                .collect::<PyResult<Vec<_>>>()?;
+            PyList::new(py, items)?.into_any()
+        }
+        toml::Value::Table(t) => {
+            let d = pyo3::types::PyDict::new(py);
+            for (k, x) in t {
+                d.set_item(k, toml_to_py(py, x)?)?;
+            }
+            d.into_any()
+        }
+        other => other.to_string().into_pyobject(py)?.into_any(),
     })
 }
 

@@ -271,6 +271,17 @@ pub struct PolarSpline {
 }
 
 impl PolarSpline {
+    /// The spline through the points (φᵢ, Rᵢ) about `z_c`, φ increasing from the axis (φ₀ = 0
+    /// makes the slope zero there): how a surface resampled or blended from others is held.
+    pub fn from_points(z_c: f64, phi: Vec<f64>, radius: Vec<f64>) -> Result<Self, OpticsError> {
+        if phi.len() != radius.len() || phi.windows(2).any(|w| !(w[1] > w[0])) {
+            return Err(OpticsError::Fit(
+                "a spline's angles must increase and match its radii".into(),
+            ));
+        }
+        Self::new(z_c, phi, radius)
+    }
+
     fn new(z_c: f64, phi: Vec<f64>, radius: Vec<f64>) -> Result<Self, OpticsError> {
         let n = phi.len();
         if n < 3 || phi.iter().chain(&radius).any(|v| !v.is_finite()) {

@@ -20,6 +20,7 @@ impl OdeSystem for GrowthOde<'_> {
     fn rhs(&mut self, t: f64, y: &[f64], ydot: &mut [f64]) -> CallbackResult {
         self.sys
             .check_deadline(|| format!("in CVODE's right-hand side at t = {}", decimals6(t)))
+            .and_then(|_| self.sys.set_time(t))
             .and_then(|_| self.sys.rhs(y, ydot))
             .map_err(|e| e.to_callback())
     }

@@ -28,6 +28,7 @@ pub fn integrate(
             (n + 1) as f64 * dt
         };
         sys.check_deadline(|| format!("in Euler step {} of {steps}", n + 1))
+            .and_then(|_| sys.set_time(t))
             .and_then(|_| sys.rhs(&p, &mut rate))
             .map_err(|e| (t, EulerError::Rhs(e)))?;
         while let Some(&&tout) = next.peek() {

@@ -77,18 +77,20 @@ impl DaeSystem for GrowthDae<'_> {
         self.dae
             .sys
             .check_deadline(|| format!("in IDA's residual at t = {}", decimals6(t)))
+            .and_then(|_| self.dae.sys.set_time(t))
             .and_then(|_| self.dae.residual(y, yp, r))
             .map_err(|e| e.to_callback())
     }
 
     fn linear_setup(
         &mut self,
-        _t: f64,
+        t: f64,
         cj: f64,
         y: &[f64],
         _yp: &[f64],
         _r: &[f64],
     ) -> CallbackResult {
+        self.dae.sys.set_time(t).map_err(|e| e.to_callback())?;
         self.dae.setup(cj, y).map_err(recoverable)
     }
 
@@ -98,7 +100,7 @@ impl DaeSystem for GrowthDae<'_> {
 
     fn sensitivity_residual(
         &mut self,
-        _t: f64,
+        t: f64,
         y: &[f64],
         _yp: &[f64],
         _r: &[f64],
@@ -106,6 +108,7 @@ impl DaeSystem for GrowthDae<'_> {
         yps: &[&[f64]],
         rs: &mut [&mut [f64]],
     ) -> CallbackResult {
+        self.dae.sys.set_time(t).map_err(|e| e.to_callback())?;
         self.dae
             .sensitivity_residual(y, ys, yps, rs)
             .map_err(recoverable)

@@ -76,18 +76,19 @@ impl GrowthParams {
         crate::model::eyewear::refraction_optics(&self.optics, self.source == Source::Optics)
     }
 
-    /// The refraction (D) of a retina at `retina_z` on the axis (NaN beyond ±25 D or when
-    /// the optics give none): computed at output times only, from a table traced once.
-    pub fn refraction(&self, retina_z: f64) -> f64 {
-        crate::model::eyewear::refraction_table(&self.refraction_optics())
+    /// The refraction (D) at growth time `t` of a retina at `retina_z` on the axis (NaN
+    /// beyond ±25 D or when the optics give none): computed at output times only, from a
+    /// table traced once (once per time for optics that change with age).
+    pub fn refraction(&self, t: f64, retina_z: f64) -> f64 {
+        crate::model::eyewear::refraction_table_at(&self.refraction_optics(), t)
             .ok()
             .and_then(|t| t.refraction(retina_z))
             .unwrap_or(f64::NAN)
     }
 
-    /// `eye` with its refraction, classified as `stimulus.classify` says.
-    pub fn measure(&self, eye: EyeMeasure) -> EyeMeasure {
-        let refraction_d = self.refraction(eye.axial_length);
+    /// `eye` at growth time `t` with its refraction, classified as `stimulus.classify` says.
+    pub fn measure(&self, t: f64, eye: EyeMeasure) -> EyeMeasure {
+        let refraction_d = self.refraction(t, eye.axial_length);
         let class = match self.optics.classify {
             1 if refraction_d.is_finite() => {
                 if refraction_d > self.optics.hyperopia_d {

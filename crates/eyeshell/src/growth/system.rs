@@ -21,6 +21,7 @@ use crate::deadline::OutOfTime;
 use crate::model::growth_law;
 use crate::model::params::Params;
 use crate::model::stimulus::{self, EyeMeasure, Focal};
+use eyeshell_optics::PolarSpline;
 use eyeshell_sundials::{CallbackError, Context, LinearSolver, Matrix, NVector, SundialsError};
 use std::rc::Rc;
 
@@ -115,6 +116,24 @@ pub struct GrowthSystem {
     /// What stopped the run when `solver.max_seconds` did: the integrator's own error says
     /// only that a callback failed.
     out_of_time: Option<OutOfTime>,
+    /// The blue and red surfaces at the time of the last [`GrowthSystem::set_time`], when the
+    /// eye's optics change with time (`None`: the surfaces of t = 0, or fixed optics).
+    now: Option<(f64, PolarSpline, PolarSpline)>,
+}
+
+/// The blue (or red) surface the stimulus reads: at the current time when the optics
+/// change with it, else the growth model's own.
+fn focal<'a>(
+    growth: &'a GrowthParams,
+    now: &'a Option<(f64, PolarSpline, PolarSpline)>,
+    blue: bool,
+) -> Focal<'a> {
+    match (now, blue) {
+        (Some((_, b, _)), true) => Focal::Computed(b),
+        (Some((_, _, r)), false) => Focal::Computed(r),
+        (None, true) => growth.blue_focal(),
+        (None, false) => growth.red_focal(),
+    }
 }
 
 impl GrowthSystem {
@@ -167,7 +186,23 @@ impl GrowthSystem {
             factored: None,
             work: Work::default(),
             out_of_time: None,
+            now: None,
         })
+    }
+
+    /// The growth time the next right sides are evaluated at: the stimulus's surfaces are
+    /// blended for it when the eye's optics change with time (once per time; nothing to do
+    /// for fixed optics, whose right side does not depend on t).
+    pub fn set_time(&mut self, t: f64) -> Result<(), RhsError> {
+        let Some(timed) = self.growth.computed.as_ref().and_then(|c| c.timed.as_ref()) else {
+            return Ok(());
+        };
+        if self.now.as_ref().is_some_and(|(at, _, _)| *at == t) {
+            return Ok(());
+        }
+        let (blue, red) = timed.at(t).map_err(RhsError::Optics)?;
+        self.now = Some((t, blue, red));
+        Ok(())
     }
 
     /// The number of growth unknowns.
@@ -280,7 +315,7 @@ impl GrowthSystem {
             }
         }
         // The retina (inner face) and the depth of the blue surface behind it.
-        let blue = self.growth.blue_focal();
+        let blue = focal(&self.growth, &self.now, true);
         let mut stim: Vec<PointStimulus> = (0..n_pts)
             .map(|k| {
                 let (r, th, z, a) = local[k];
@@ -401,6 +436,7 @@ impl GrowthSystem {
 
     /// Every field of the shell in state `p` at time `t`, for output.
     pub fn snapshot(&mut self, t: f64, p: &[f64]) -> Result<super::Snapshot, RhsError> {
+        self.set_time(t)?;
         self.solve_elastic(p)?;
         let sol: Solution = self.elastic.solution()?;
         let stim = self.stimulus(p)?;
@@ -432,6 +468,7 @@ impl GrowthSystem {
     /// time `t`: what a history point needs, without the fields of a snapshot. An adopted
     /// state is used as it is (its error is the integrator's).
     pub fn series(&mut self, t: f64, p: &[f64]) -> Result<SeriesRow, RhsError> {
+        self.set_time(t)?;
         if self.solved_at.as_slice() != p {
             self.solve_elastic(p)?;
         }
@@ -461,10 +498,10 @@ impl GrowthSystem {
         let eye = EyeMeasure::new(
             (pole.z_retina, pole.r_retina),
             retina,
-            self.growth.blue_focal(),
-            self.growth.red_focal(),
+            focal(&self.growth, &self.now, true),
+            focal(&self.growth, &self.now, false),
         );
-        SeriesRow::new(t, self.growth.measure(eye))
+        SeriesRow::new(t, self.growth.measure(t, eye))
     }
 
     /// Take (p, u) as the current state (the coupled DAE's state at an output time): the
@@ -494,7 +531,7 @@ impl GrowthSystem {
 
     /// The blue best-focus surface the stimulus reads.
     pub fn blue(&self) -> Focal<'_> {
-        self.growth.blue_focal()
+        focal(&self.growth, &self.now, true)
     }
 
     /// Move the blue surface's polar centre to `z_b` (forward sensitivities measure the eye

@@ -422,7 +422,12 @@ pub fn lenses_toml(lenses: &[LensSpec]) -> String {
 
 /// The eye of `spec` with its lenses on.
 pub fn worn(spec: &OpticsSpec) -> Result<optics::OpticalSystem, OpticsKeyError> {
-    let eye = spec.system();
+    worn_at(spec, 0.0)
+}
+
+/// The eye at growth time `t` (its surface tables read at t) with the lenses on.
+pub fn worn_at(spec: &OpticsSpec, t: f64) -> Result<optics::OpticalSystem, OpticsKeyError> {
+    let eye = spec.system_at(t)?;
     if spec.lenses.is_empty() {
         return Ok(eye);
     }
@@ -519,9 +524,13 @@ fn height_at(path: &[(f64, f64)], z: f64) -> Option<f64> {
 #[derive(Clone, Debug, PartialEq)]
 struct RefractionKey {
     eye: usize,
+    surfaces: Vec<super::eye::SurfaceSpec>,
+    pupil_position: Option<f64>,
     pupil: f64,
     focus: usize,
     wavelength: f64,
+    /// The growth time the surface tables were read at (0 for an eye without tables).
+    t: f64,
 }
 
 type Cache = Vec<(RefractionKey, Arc<RefractionTable>)>;
@@ -532,11 +541,24 @@ const CACHED: usize = 16;
 /// The refraction table of `spec`'s naked eye, traced once and then shared. The error names
 /// the key to change.
 pub fn refraction_table(spec: &OpticsSpec) -> Result<Arc<RefractionTable>, OpticsKeyError> {
+    refraction_table_at(spec, 0.0)
+}
+
+/// [`refraction_table`] of the naked eye at growth time `t` (one table a time only for an
+/// eye whose surfaces change with age).
+pub fn refraction_table_at(
+    spec: &OpticsSpec,
+    t: f64,
+) -> Result<Arc<RefractionTable>, OpticsKeyError> {
+    let t = if spec.times().is_empty() { 0.0 } else { t };
     let key = RefractionKey {
         eye: spec.eye,
+        surfaces: spec.surfaces.clone(),
+        pupil_position: spec.pupil_position,
         pupil: spec.pupil,
         focus: spec.focus,
         wavelength: spec.refraction_wavelength,
+        t,
     };
     if let Ok(cache) = TABLES.lock() {
         if let Some((_, t)) = cache.iter().find(|(k, _)| *k == key) {
@@ -551,7 +573,7 @@ pub fn refraction_table(spec: &OpticsSpec) -> Result<Arc<RefractionTable>, Optic
             format!("must lie between {lo} and {hi} nm"),
         ));
     }
-    let eye = spec.system();
+    let eye = spec.system_at(t)?;
     let table = RefractionTable::compute(
         &eye,
         spec.refraction_wavelength,

@@ -6,6 +6,7 @@ pub mod components;
 pub mod constitutive;
 pub mod cornea;
 pub mod eyewear;
+pub mod eye;
 pub mod growth_law;
 pub mod optics;
 pub mod params;

@@ -12,13 +12,22 @@ use std::sync::Arc;
 use eyeshell_optics as optics;
 use eyeshell_optics::{Criterion, OpticalSystem, OpticsError, PolarSpline, Pupil, Surfaces};
 
+use super::eye::{self, SurfaceKeyError, SurfaceSpec};
 use crate::text::number;
 
 /// The names `stimulus.source` takes, in the order of [`Source`]'s variants.
 pub const SOURCES: [&str; 2] = ["polynomial", "optics"];
 
-/// The names `optics.eye` takes: the optics crate's built-in eyes.
-pub const EYES: [&str; 3] = optics::eyes::BUILTIN;
+/// The names `optics.eye` takes: the optics crate's built-in eyes, then `custom` (the eye of
+/// `[[optics.surfaces]]`).
+pub const EYES: [&str; 4] = [
+    optics::eyes::BUILTIN[0],
+    optics::eyes::BUILTIN[1],
+    optics::eyes::BUILTIN[2],
+    CUSTOM,
+];
+/// The name of the eye a scene describes itself.
+pub const CUSTOM: &str = "custom";
 
 /// The names `optics.focus` takes, in the order of [`FOCI`].
 pub const FOCUS_NAMES: [&str; 4] = ["mean-sphere", "strehl", "sagittal", "tangential"];
@@ -68,6 +77,11 @@ pub struct OpticsSpec {
     /// `stimulus.myopia_D`, `stimulus.hyperopia_D`: the dioptre thresholds.
     pub myopia_d: f64,
     pub hyperopia_d: f64,
+    /// `[[optics.surfaces]]`: a custom eye's surfaces, or overrides of a built-in eye's.
+    pub surfaces: Vec<SurfaceSpec>,
+    /// optics.pupil_position: the stop's distance from the corneal apex (mm); unset, a
+    /// built-in eye's source's (on the lens's front vertex, which it follows).
+    pub pupil_position: Option<f64>,
 }
 
 impl Default for OpticsSpec {
@@ -83,6 +97,8 @@ impl Default for OpticsSpec {
             classify: 0,
             myopia_d: -0.5,
             hyperopia_d: 0.5,
+            surfaces: Vec::new(),
+            pupil_position: None,
         }
     }
 }
@@ -90,7 +106,8 @@ impl Default for OpticsSpec {
 /// A problem with the `optics.*` keys: the key to change and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OpticsKeyError {
-    /// The key, or an item of it (`optics.lenses[1].zones[0].radius`).
+    /// The key, or an item of it (`optics.pupil`, `optics.surfaces[2].radius`,
+    /// `optics.lenses[1].zones[0].radius`).
     pub key: String,
     /// The key's value, readable.
     pub value: String,
@@ -112,13 +129,71 @@ impl OpticsSpec {
         FOCI[self.focus]
     }
 
-    /// The built-in eye.
-    pub fn system(&self) -> OpticalSystem {
-        // EYES is the crate's own list of the names `builtin` accepts.
-        optics::eyes::builtin(self.eye_name()).unwrap_or_else(optics::eyes::atchison_2006)
+    /// The built-in eye these keys start from (`None` for a custom eye).
+    fn base(&self) -> Option<OpticalSystem> {
+        optics::eyes::builtin(self.eye_name())
     }
 
-    /// The pupil: `optics.pupil` wide, where the eye's source puts it.
+    /// The eye at growth time 0 (see [`OpticsSpec::system_at`]).
+    pub fn system(&self) -> Result<OpticalSystem, OpticsKeyError> {
+        self.system_at(0.0)
+    }
+
+    /// The optical system at growth time `t`: the eye of `optics.eye` with the surface tables
+    /// applied (every table read at t), its stop at `optics.pupil_position` or where the
+    /// eye's source puts it. Checked: the error names the key to change.
+    pub fn system_at(&self, t: f64) -> Result<OpticalSystem, OpticsKeyError> {
+        let base = self.base();
+        let mut system = eye::assemble(base.as_ref(), &self.surfaces, t).map_err(surface_error)?;
+        let position = match (self.pupil_position, &base) {
+            (Some(z), _) => z,
+            // On the same surface's vertex as in the source, wherever the tables move it.
+            (None, Some(b)) => match eye::pupil_vertex(b) {
+                Some(i) => system.vertices()[i],
+                None => b.pupil_position.unwrap_or(3.6),
+            },
+            (None, None) => {
+                return Err(OpticsKeyError {
+                    key: "optics.pupil_position".into(),
+                    value: "(none)".into(),
+                    problem: "must be given for optics.eye = \"custom\" (mm from the corneal apex to the pupil's centre)".into(),
+                })
+            }
+        };
+        let checked = OpticalSystem::new(
+            system.name.clone(),
+            system.object.clone(),
+            system.elements.clone(),
+        )
+        .map_err(|e| self.explain(&e))?;
+        system = checked;
+        system
+            .check_pupil_position(position)
+            .map_err(|e| OpticsKeyError {
+                key: "optics.pupil_position".into(),
+                value: number(position),
+                problem: match e {
+                    OpticsError::InvalidInput { reason, .. } => reason,
+                    e => crate::text::one_line(&e.to_string()),
+                },
+            })?;
+        Ok(system.with_pupil_position(position))
+    }
+
+    /// The growth times at which the eye's surfaces are traced: 0 and every time a table
+    /// names, in order (empty when no key is a table: the eye does not change).
+    pub fn times(&self) -> Vec<f64> {
+        let mut ts: Vec<f64> = self.surfaces.iter().flat_map(|s| s.times()).collect();
+        if ts.is_empty() {
+            return ts;
+        }
+        ts.push(0.0);
+        ts.sort_by(f64::total_cmp);
+        ts.dedup();
+        ts
+    }
+
+    /// The pupil: `optics.pupil` wide, at the system's stop.
     pub fn pupil_stop(&self, system: &OpticalSystem) -> Pupil {
         Pupil {
             diameter: self.pupil,
@@ -173,15 +248,102 @@ impl OpticsSpec {
                 ),
             ));
         }
+        if self.surfaces.len() > eye::MAX_SURFACES {
+            return Err(err(
+                "optics.surfaces",
+                format!("({} surface tables)", self.surfaces.len()),
+                format!("must describe at most {} surfaces", eye::MAX_SURFACES),
+            ));
+        }
+        for (i, s) in self.surfaces.iter().enumerate() {
+            s.check(i, &self.wavelengths).map_err(surface_error)?;
+        }
+        if let Some(z) = self.pupil_position {
+            if !(z.is_finite() && z > 0.0) {
+                return Err(err(
+                    "optics.pupil_position",
+                    number(z),
+                    "must be a positive distance (mm from the corneal apex)".into(),
+                ));
+            }
+        }
+        // The eye at every time it is traced: each a valid system at every wavelength.
+        let times = self.times();
+        for &t in if times.is_empty() {
+            &[0.0][..]
+        } else {
+            &times[..]
+        } {
+            let at_time = |mut e: OpticsKeyError| {
+                if !times.is_empty() {
+                    e.problem = format!("{} (the eye at growth time t = {})", e.problem, number(t));
+                }
+                e
+            };
+            let system = self.system_at(t).map_err(at_time)?;
+            for &w in &self.wavelengths {
+                system
+                    .check_wavelength(w)
+                    .map_err(|e| at_time(self.explain(&e)))?;
+            }
+        }
         Ok(())
     }
 
-    /// Trace the surfaces and make the stimulus's splines about `z_c`.
+    /// Trace the surfaces and make the stimulus's splines about `z_c`: once for an eye that
+    /// does not change, else at each of [`OpticsSpec::times`] (the surfaces at time 0 are
+    /// those of `surfaces`, `blue` and `red`).
     pub fn compute(&self, z_c: f64) -> Result<ComputedOptics, OpticsKeyError> {
         self.check()?;
         let start = std::time::Instant::now();
         super::eyewear::check_coverage(self)?;
-        let system = super::eyewear::worn(self)?;
+        let times = self.times();
+        let mut first = self.compute_at(0.0, z_c)?;
+        if times.len() > 1 {
+            let mut blue = vec![first.1.clone()];
+            let mut red = vec![first.2.clone()];
+            for &t in &times[1..] {
+                let (surfaces, b, r) = self.compute_at(t, z_c)?;
+                first.0.rays_traced += surfaces.rays_traced;
+                blue.push(b);
+                red.push(r);
+            }
+            let (surfaces, b, r) = first;
+            return Ok(ComputedOptics {
+                spec: self.clone(),
+                z_c,
+                blue: b,
+                red: r,
+                surfaces,
+                timed: Some(TimedSurfaces { times, blue, red }),
+                wall_seconds: start.elapsed().as_secs_f64(),
+            });
+        }
+        let (surfaces, blue, red) = first;
+        Ok(ComputedOptics {
+            spec: self.clone(),
+            z_c,
+            blue,
+            red,
+            surfaces,
+            timed: None,
+            wall_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The surfaces of the eye at growth time `t` and their blue and red splines about `z_c`.
+    fn compute_at(
+        &self,
+        t: f64,
+        z_c: f64,
+    ) -> Result<(Surfaces, PolarSpline, PolarSpline), OpticsKeyError> {
+        let at_time = |mut e: OpticsKeyError| {
+            if !self.times().is_empty() {
+                e.problem = format!("{} (the eye at growth time t = {})", e.problem, number(t));
+            }
+            e
+        };
+        let system = super::eyewear::worn_at(self, t).map_err(at_time)?;
         let settings = optics::SurfaceSettings {
             max_field_deg: self.max_field,
             // One field a degree (41 for the paper's 40°).
@@ -195,28 +357,20 @@ impl OpticsSpec {
             self.criterion(),
             &settings,
         )
-        .map_err(|e| self.explain_worn(&e))?;
+        .map_err(|e| at_time(self.explain_worn(&e)))?;
         let spline = |i: usize| {
             surfaces.surfaces[i]
                 .interpolant(z_c)
-                .map_err(|e| self.explain(&e))
+                .map_err(|e| at_time(self.explain(&e)))
         };
         let (blue, red) = (spline(0)?, spline(1)?);
-        Ok(ComputedOptics {
-            spec: self.clone(),
-            z_c,
-            blue,
-            red,
-            surfaces,
-            wall_seconds: start.elapsed().as_secs_f64(),
-        })
+        Ok((surfaces, blue, red))
     }
 
     /// An error of the eye with its lenses on: the lenses' when the naked eye focuses on the
     /// axis (a lens that forms no image), else as [`OpticsSpec::explain`] says.
     pub fn explain_worn(&self, e: &OpticsError) -> OpticsKeyError {
-        if !self.lenses.is_empty() {
-            let eye = self.system();
+        if let (false, Ok(eye)) = (self.lenses.is_empty(), self.system()) {
             let naked = optics::best_focus(
                 &eye,
                 self.wavelengths[0],
@@ -256,6 +410,12 @@ impl OpticsSpec {
             OpticsError::InvalidInput { what, .. } if what.contains("wavelength") => {
                 ("optics.wavelengths", self.wavelengths_text())
             }
+            // A surface's own number (the tables' ranges are checked first, so this is a
+            // combination of them: an ellipsoid that ends before the next surface, ...).
+            OpticsError::InvalidSystem { what, .. } if what.starts_with("surface '") => (
+                "optics.surfaces",
+                format!("({} surface tables)", self.surfaces.len()),
+            ),
             OpticsError::InvalidSystem { .. } => ("optics.wavelengths", self.wavelengths_text()),
             OpticsError::InvalidInput { what, .. } if what.contains("field") => {
                 ("optics.max_field", number(self.max_field))
@@ -281,7 +441,64 @@ pub struct ComputedOptics {
     pub blue: PolarSpline,
     pub red: PolarSpline,
     pub surfaces: Surfaces,
+    /// With tables over time: the splines at every traced time, blended between them.
+    pub timed: Option<TimedSurfaces>,
     pub wall_seconds: f64,
+}
+
+/// A surface's key error as the optics keys' error.
+fn surface_error(e: SurfaceKeyError) -> OpticsKeyError {
+    OpticsKeyError {
+        key: e.key,
+        value: e.value,
+        problem: e.problem,
+    }
+}
+
+/// The blue and red splines of an eye that changes with growth time, traced at `times`.
+#[derive(Clone, Debug)]
+pub struct TimedSurfaces {
+    pub times: Vec<f64>,
+    pub blue: Vec<PolarSpline>,
+    pub red: Vec<PolarSpline>,
+}
+
+/// The points a blended spline is resampled at (one per degree of the default 40°).
+const BLEND_POINTS: usize = 41;
+
+impl TimedSurfaces {
+    /// The blue and red surfaces at growth time `t`: at each angle the natural cubic spline
+    /// in t through the traced surfaces' radii (the weights of [`eye::spline_weights`]),
+    /// φ_max likewise, resampled on [`BLEND_POINTS`] angles to φ_max(t). Each traced
+    /// surface continues beyond its own φ_max along its end slope, as the stimulus reads it.
+    /// The result is C² in t (the weights are, and so are the angles), so an integrator
+    /// meets no kink at a table's time.
+    pub fn at(&self, t: f64) -> Result<(PolarSpline, PolarSpline), String> {
+        let w = eye::spline_weights(&self.times, t);
+        let blend = |splines: &[PolarSpline]| -> Result<PolarSpline, String> {
+            let top: f64 = w.iter().zip(splines).map(|(w, s)| w * s.phi_max()).sum();
+            let z_c = splines[0].z_c;
+            let phi: Vec<f64> = (0..BLEND_POINTS)
+                .map(|j| top * j as f64 / (BLEND_POINTS - 1) as f64)
+                .collect();
+            let radius: Vec<f64> = phi
+                .iter()
+                .map(|&p| {
+                    w.iter()
+                        .zip(splines)
+                        .map(|(w, s)| w * super::stimulus::Focal::Computed(s).radius_and_slope(p).0)
+                        .sum()
+                })
+                .collect();
+            PolarSpline::from_points(z_c, phi, radius).map_err(|e| {
+                format!(
+                    "the best-focus surface at t = {} cannot be blended from the traced ones: {e}",
+                    number(t)
+                )
+            })
+        };
+        Ok((blend(&self.blue)?, blend(&self.red)?))
+    }
 }
 
 /// Two computations of the same spec about the same centre are the same surfaces (the
@@ -301,3 +518,76 @@ impl ComputedOptics {
 
 /// The computed surfaces shared by the copies of a scene's growth parameters.
 pub type Shared = Arc<ComputedOptics>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::eye::EyeValue;
+
+    /// The Atchison eye whose cornea flattens over t (three table times), a small quick trace.
+    fn flattening() -> OpticsSpec {
+        let mut spec = OpticsSpec {
+            max_field: 10.0,
+            pupil: 1.0,
+            ..OpticsSpec::default()
+        };
+        spec.surfaces = vec![crate::model::eye::SurfaceSpec {
+            radius: Some(EyeValue::Table {
+                t: vec![0.0, 0.4, 1.0],
+                value: vec![7.47, 7.70, 7.77],
+            }),
+            ..Default::default()
+        }];
+        spec
+    }
+
+    /// The system at time t reads every table at t; the surfaces are traced at each table
+    /// time and the blend between them passes through each (to the resampling's accuracy) and
+    /// is C¹ in t at a table time: no kink for the integrator.
+    #[test]
+    fn optics_with_age_are_traced_at_the_tables_times_and_blended_smoothly() {
+        let spec = flattening();
+        assert_eq!(spec.times(), vec![0.0, 0.4, 1.0]);
+        let at = |t: f64| spec.system_at(t).unwrap().elements[0].surface.radius;
+        assert_eq!((at(0.0), at(0.4), at(1.0)), (7.47, 7.70, 7.77));
+        assert!(at(0.7) > 7.70 && at(0.7) < 7.77, "{}", at(0.7));
+        let c = spec.compute(-0.5).unwrap();
+        let timed = c.timed.as_ref().expect("a table over time");
+        assert_eq!(timed.times, vec![0.0, 0.4, 1.0]);
+        // A flatter cornea has less power: the blue focus moves back as t grows.
+        let axial = |s: &PolarSpline| s.radius(0.0).unwrap();
+        assert!(axial(&timed.blue[0]) + 0.3 < axial(&timed.blue[2]));
+        for (k, &t) in timed.times.iter().enumerate() {
+            let (blue, red) = timed.at(t).unwrap();
+            for phi in [0.0, 0.05, 0.09] {
+                let traced = timed.blue[k].radius(phi).unwrap();
+                assert!(
+                    (blue.radius(phi).unwrap() - traced).abs() < 1e-5,
+                    "t {t}, φ {phi}"
+                );
+            }
+            assert!((red.phi_max() - timed.red[k].phi_max()).abs() < 1e-12);
+        }
+        // One-sided slopes in t at the inner table time agree (the surface moving back).
+        let r = |t: f64| timed.at(t).unwrap().0.radius(0.08).unwrap();
+        let h = 1e-5;
+        let (left, right) = ((r(0.4) - r(0.4 - h)) / h, (r(0.4 + h) - r(0.4)) / h);
+        assert!(
+            left > 0.0 && (left - right).abs() < 1e-3 * left.abs(),
+            "{left} {right}"
+        );
+    }
+
+    /// A table's error names the key and the growth time of the eye that fails.
+    #[test]
+    fn an_eye_that_fails_at_a_later_time_names_the_time() {
+        let mut spec = flattening();
+        spec.surfaces[0].radius = Some(EyeValue::Table {
+            t: vec![0.0, 1.0],
+            value: vec![7.77, 0.6],
+        });
+        spec.pupil = 8.0;
+        let e = spec.compute(-0.5).unwrap_err();
+        assert!(e.problem.contains("(the eye at growth time t = 1)"), "{e}");
+    }
+}

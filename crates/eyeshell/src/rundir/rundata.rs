@@ -147,13 +147,13 @@ fn json_to_toml(v: &serde_json::Value) -> Option<toml::Value> {
         serde_json::Value::Array(items) => {
             toml::Value::Array(items.iter().filter_map(json_to_toml).collect())
         }
-        // A lens of optics.lenses.
+        // A lens of optics.lenses or a surface of optics.surfaces.
         serde_json::Value::Object(map) => toml::Value::Table(
             map.iter()
                 .filter_map(|(k, v)| Some((k.clone(), json_to_toml(v)?)))
                 .collect(),
         ),
-        _ => return None,
+        serde_json::Value::Null => return None,
     })
 }
 

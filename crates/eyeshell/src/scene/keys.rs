@@ -11,6 +11,7 @@ use crate::growth::settings::{DaeLinear, GrowthParams, Integrator};
 use crate::growth::ThicknessLaw;
 use crate::model::eyewear::{lenses_toml, LensSpec, CLASSIFY};
 use crate::growth::schedule::{Form, TimeUnit};
+use crate::model::eye::SurfaceSpec;
 use crate::model::optics::{Source, EYES, FOCUS_NAMES, SOURCES};
 use crate::model::params::Thickness;
 
@@ -59,6 +60,11 @@ pub enum Access {
     Lenses {
         get: fn(&Scene) -> Vec<LensSpec>,
         set: fn(&mut Scene, Vec<LensSpec>),
+    /// The eye's surfaces: an array of tables (`[[optics.surfaces]]`), each a surface's keys
+    /// (model/eye.rs); one of them is set alone as `optics.surfaces[i].key`.
+    Surfaces {
+        get: fn(&Scene) -> Vec<SurfaceSpec>,
+        set: fn(&mut Scene, Vec<SurfaceSpec>),
     },
 }
 
@@ -234,6 +240,8 @@ pub enum KeyValue {
     Text(Option<String>),
     Floats(Vec<f64>),
     Lenses(Vec<LensSpec>),
+    /// An [`Access::Surfaces`] key: one TOML table a surface.
+    Tables(Vec<toml::Value>),
     /// An [`Access::OptionalFloat`] key left unset.
     Unset,
 }
@@ -259,6 +267,7 @@ impl KeyValue {
                 .ok()
                 .and_then(|t| serde_json::to_value(&t["v"]).ok())
                 .unwrap_or(serde_json::Value::Null),
+            KeyValue::Tables(ts) => serde_json::Value::Array(ts.iter().map(toml_to_json).collect()),
         }
     }
 }
@@ -289,7 +298,29 @@ impl std::fmt::Display for KeyValue {
                 f.write_str("]")
             }
             KeyValue::Lenses(l) => f.write_str(&lenses_toml(l)),
+            KeyValue::Tables(ts) => write!(f, "{}", toml::Value::Array(ts.clone())),
         }
+    }
+}
+
+/// A TOML value as JSON; non-finite floats, which JSON lacks, as the strings "inf", "-inf"
+/// and "nan", which a surface's keys read back (a plane's radius is inf).
+fn toml_to_json(v: &toml::Value) -> serde_json::Value {
+    match v {
+        toml::Value::Float(x) if !x.is_finite() => {
+            serde_json::Value::from(KeyValue::Float(*x).to_string())
+        }
+        toml::Value::Float(x) => KeyValue::Float(*x).to_json(),
+        toml::Value::Integer(i) => serde_json::Value::from(*i),
+        toml::Value::String(s) => serde_json::Value::from(s.as_str()),
+        toml::Value::Boolean(b) => serde_json::Value::Bool(*b),
+        toml::Value::Datetime(d) => serde_json::Value::from(d.to_string()),
+        toml::Value::Array(a) => serde_json::Value::Array(a.iter().map(toml_to_json).collect()),
+        toml::Value::Table(t) => serde_json::Value::Object(
+            t.iter()
+                .map(|(k, v)| (k.clone(), toml_to_json(v)))
+                .collect(),
+        ),
     }
 }
 
@@ -308,6 +339,7 @@ impl KeySpec {
             Access::Text { .. } => "string".into(),
             Access::Floats { .. } => "list of floats".into(),
             Access::Lenses { .. } => "array of lens tables".into(),
+            Access::Surfaces { .. } => "array of surface tables".into(),
         }
     }
 
@@ -324,6 +356,11 @@ impl KeySpec {
             Access::Text { get, .. } => KeyValue::Text(get(scene)),
             Access::Floats { get, .. } => KeyValue::Floats(get(scene)),
             Access::Lenses { get, .. } => KeyValue::Lenses(get(scene)),
+            // No surface tables is no value: the built-in eye as its source gives it.
+            Access::Surfaces { get, .. } => match get(scene) {
+                s if s.is_empty() => KeyValue::Unset,
+                s => KeyValue::Tables(s.iter().map(SurfaceSpec::to_toml).collect()),
+            },
         }
     }
 
@@ -893,7 +930,7 @@ pub static KEYS: &[KeySpec] = &[
         key: "optics.eye",
         access: Access::Choice { names: EYE_NAMES, get: |s| s.optics().eye, set: |s, v| s.set_optics(|o| o.eye = v) },
         rule: Rule::Any,
-        doc: "schematic eye of stimulus.source = \"optics\" and `eyeshell optics` (docs/optics.md cites each)",
+        doc: "schematic eye of stimulus.source = \"optics\" and `eyeshell optics` (docs/optics.md cites each), or custom: the eye of [[optics.surfaces]]",
         growth: true,
     },
     KeySpec {
@@ -915,6 +952,20 @@ pub static KEYS: &[KeySpec] = &[
         access: Access::Choice { names: FOCI, get: |s| s.optics().focus, set: |s, v| s.set_optics(|o| o.focus = v) },
         rule: Rule::Any,
         doc: "best-focus criterion: mean-sphere (the mean of the sagittal and tangential vergences, what peripheral refraction measures), strehl (the paper's stated criterion: the largest Strehl ratio, which jumps between the focal lines for pupils above about 1 mm), sagittal (the sagittal focal line: the one the paper's published blue surface follows) or tangential",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.pupil_position",
+        access: Access::OptionalFloat { get: |s| s.optics().pupil_position, set: |s, v| s.set_optics(|o| o.pupil_position = Some(v)) },
+        rule: Rule::Positive,
+        doc: "the pupil's (aperture stop's) distance from the corneal apex (mm), in a homogeneous medium inside the eye; unset: a built-in eye's source's (on the lens's front vertex, which it follows when the surfaces change); a custom eye must give it",
+        growth: true,
+    },
+    KeySpec {
+        key: "optics.surfaces",
+        access: Access::Surfaces { get: |s| s.optics().surfaces.clone(), set: |s, v| s.set_optics(|o| o.surfaces = v) },
+        rule: Rule::Any,
+        doc: "[[optics.surfaces]], one table a surface from the cornea back: radius (mm, inf for a plane), conic, aspheric (r⁴, r⁶, ... terms), thickness (mm to the next surface; the last one's to the retina) and the medium behind it: index, cauchy = [a, b, c, d] (λ in µm) or sellmeier = { b = [..], c = [..] }. The surfaces of optics.eye = \"custom\", or overrides of a built-in eye's (in its surface order; a key left out keeps the source's). radius, conic, thickness and index may be tables over the growth's time, { t = [0, 0.5, 1], value = [7.4, 7.7, 7.8] }. One key alone: optics.surfaces[i].key (i from 0) (docs/guide/optics.md)",
         growth: true,
     },
     KeySpec {

@@ -24,6 +24,7 @@ use std::path::Path;
 
 use crate::bvp::settings::SolverSettings;
 use crate::growth::{GrowthParams, GrowthSettings};
+use crate::model::eye::{SurfaceSpec, MAX_SURFACES};
 use crate::model::optics::{OpticsSpec, Source};
 use crate::model::params::Params;
 use crate::model::stimulus::{Surface, RED_OFFSET};
@@ -234,7 +235,7 @@ impl Scene {
         scene.validate_from(&sources)?;
         if let Err(e) = scene.trace_optics() {
             return Err(SceneError::Invalid {
-                origin: scene.origin_of(&sources, &[e.key.as_str(), "optics.lenses"]),
+                origin: scene.origin_of(&sources, &[source_key(&e.key), "optics.lenses"]),
                 key: e.key.to_string(),
                 value: e.value,
                 problem: e.problem,
@@ -372,8 +373,8 @@ impl Scene {
     /// The error names the optics key to change.
     pub fn resolve_optics(&mut self) -> Result<(), SceneError> {
         self.trace_optics().map_err(|e| SceneError::Invalid {
-            origin: self.origin.clone(),
-            key: e.key,
+            origin: self.origin_of_key(&e.key),
+            key: e.key.to_string(),
             value: e.value,
             problem: e.problem,
         })
@@ -499,6 +500,15 @@ impl Scene {
         origin: &str,
         sources: &mut Sources,
     ) -> Result<(), SceneError> {
+        if let Some(rest) = key
+            .strip_prefix(SURFACES_KEY)
+            .and_then(|r| r.strip_prefix('['))
+        {
+            self.set_one_surface_key(key, rest, value, origin)?;
+            let seq = sources.values().map(|(n, _)| *n).max().unwrap_or(0) + 1;
+            sources.insert(SURFACES_KEY, (seq, origin.to_string()));
+            return Ok(());
+        }
         let Some(spec) = find_key(key) else {
             return Err(unknown_key(origin, key));
         };
@@ -573,6 +583,18 @@ impl Scene {
                     })
                 }
             },
+            Access::Surfaces { set, .. } => {
+                let toml::Value::Array(items) = value else {
+                    return Err(wrong("an array of surface tables ([[optics.surfaces]])"));
+                };
+                let mut surfaces = Vec::with_capacity(items.len().min(MAX_SURFACES + 1));
+                for (i, item) in items.iter().enumerate().take(MAX_SURFACES + 1) {
+                    surfaces.push(
+                        SurfaceSpec::from_toml(i, item).map_err(|e| surface_error(origin, e))?,
+                    );
+                }
+                set(self, surfaces)
+            }
             Access::Floats { set, .. } => {
                 let expected = "a list of numbers (e.g. [0.1, 0.5, 1.0])";
                 let number = |v: &toml::Value| match v {
@@ -608,6 +630,66 @@ impl Scene {
         let seq = sources.values().map(|(n, _)| *n).max().unwrap_or(0) + 1;
         sources.insert(spec.key, (seq, origin.to_string()));
         Ok(())
+    }
+
+    /// `optics.surfaces[i].name = value`: one key of one surface (`rest` is `i].name`); the
+    /// surfaces before it are added empty if there are fewer (a built-in eye's keep the
+    /// source's numbers; a custom eye's must be given).
+    fn set_one_surface_key(
+        &mut self,
+        key: &str,
+        rest: &str,
+        value: &toml::Value,
+        origin: &str,
+    ) -> Result<(), SceneError> {
+        let parsed = rest
+            .split_once("].")
+            .and_then(|(i, name)| Some((i.trim().parse::<usize>().ok()?, name.trim())));
+        let Some((i, name)) = parsed.filter(|(i, _)| *i < MAX_SURFACES) else {
+            return Err(SceneError::Invalid {
+                origin: origin.to_string(),
+                key: crate::text::excerpt(&one_line(key), 80),
+                value: describe(value),
+                problem: format!(
+                    "is not a surface's key: write optics.surfaces[i].key with i from 0 to {} and key one of {}",
+                    MAX_SURFACES - 1,
+                    crate::model::eye::SURFACE_KEYS.join(", ")
+                ),
+            });
+        };
+        let mut surfaces = self.optics().surfaces.clone();
+        if surfaces.len() <= i {
+            surfaces.resize(i + 1, SurfaceSpec::default());
+        }
+        surfaces[i]
+            .set(i, name, value)
+            .map_err(|e| surface_error(origin, e))?;
+        self.set_optics(|o| o.surfaces = surfaces);
+        Ok(())
+    }
+
+    /// Where the value of `key` came from: the last `--set` of it (or, for a surface's key,
+    /// of any surface), else the scene's origin. For errors found after the scene was read
+    /// (an optics key that cannot be traced).
+    pub fn origin_of_key(&self, key: &str) -> String {
+        let family = |k: &str| {
+            if k.starts_with(SURFACES_KEY) {
+                SURFACES_KEY.to_string()
+            } else if k.starts_with(LENSES_KEY) {
+                LENSES_KEY.to_string()
+            } else {
+                k.to_string()
+            }
+        };
+        self.overrides
+            .iter()
+            .rev()
+            .find(|text| {
+                text.split_once('=')
+                    .is_some_and(|(k, _)| family(k.trim()) == family(key))
+            })
+            .map(|text| override_origin(text.as_str()))
+            .unwrap_or_else(|| self.origin.clone())
     }
 
     /// The origin of the most recent of `keys` to be set, else the scene's origin.
@@ -673,7 +755,7 @@ impl Scene {
         if self.stimulus_source() == Source::Optics {
             if let Err(e) = self.optics().check() {
                 return Err(SceneError::Invalid {
-                    origin: self.origin_of(sources, &[e.key.as_str()]),
+                    origin: self.origin_of(sources, &[source_key(&e.key)]),
                     key: e.key,
                     value: e.value,
                     problem: e.problem,
@@ -854,6 +936,32 @@ impl Scene {
             value,
             problem,
         })
+    }
+}
+
+/// The key of the eye's surfaces.
+const SURFACES_KEY: &str = "optics.surfaces";
+/// The key of the lenses in front of the eye.
+const LENSES_KEY: &str = "optics.lenses";
+
+/// The table key under which the origin of `key` is recorded: a surface's own key
+/// (`optics.surfaces[2].radius`) is recorded as the surfaces'.
+fn source_key(key: &str) -> &'static str {
+    if key.starts_with(LENSES_KEY) {
+        return LENSES_KEY;
+    }
+    KEYS.iter()
+        .find(|k| k.key == key)
+        .map_or(SURFACES_KEY, |k| k.key)
+}
+
+/// A surface key's error as the scene's.
+fn surface_error(origin: &str, e: crate::model::eye::SurfaceKeyError) -> SceneError {
+    SceneError::Invalid {
+        origin: origin.to_string(),
+        key: e.key,
+        value: e.value,
+        problem: e.problem,
     }
 }
 

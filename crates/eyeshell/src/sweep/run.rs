@@ -150,7 +150,7 @@ pub fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
     match &scene.growth {
         // A growing scene's surfaces, computed ones included (traced when it was read).
         Some(g) if g.is_resolved() => {
-            g.measure(EyeMeasure::new(pole, radii, g.blue_focal(), g.red_focal()))
+            g.measure(0.0, EyeMeasure::new(pole, radii, g.blue_focal(), g.red_focal()))
         }
         _ => EyeMeasure::new(
             pole,

@@ -8,6 +8,7 @@ mod adapt;
 mod api_never_panics;
 mod block_solver;
 mod convergence;
+mod custom_eye;
 mod dae_jacobian;
 mod exact_solution;
 mod growth;

@@ -1,0 +1,781 @@
+//! The scene's schematic eye: a built-in eye with some of its numbers changed, or a custom
+//! eye (`optics.eye = "custom"`), surface by surface (`[[optics.surfaces]]`), and numbers
+//! that change over the growth's time (docs/guide/optics.md, "An eye of your own" and
+//! "Optics with age").
+//!
+//! Each `[[optics.surfaces]]` table describes one refracting surface and what follows it:
+//! `radius`, `conic`, `aspheric` (the r⁴, r⁶, ... terms), `thickness` to the next surface (the
+//! last one's to the retina) and the medium behind it: `index`, or `cauchy = [a, b, c, d]`
+//! (n = a + b/λ² + c/λ⁴ + d/λ⁶, λ in µm), or `sellmeier = { b = [..], c = [..] }`. For a
+//! built-in eye the tables are overrides, in the eye's surface order: a key given replaces the
+//! source's number, a key left out keeps it. `radius`, `conic`, `thickness` and `index` may be
+//! tables over the growth's time, `{ t = [..], value = [..] }`, read through a natural cubic
+//! spline in t (C² everywhere: beyond the table's ends it continues along its end slopes).
+
+use eyeshell_optics as optics;
+use eyeshell_optics::{Dispersion, Medium, MediumKind, OpticalSystem, Surface};
+
+use crate::text::number;
+
+/// The most surfaces a custom eye may have (a schematic eye has four to six).
+pub const MAX_SURFACES: usize = 16;
+/// The most aspheric terms of a surface (r⁴ to r¹⁸).
+pub const MAX_ASPHERIC: usize = 8;
+/// The most times of a table over time.
+pub const MAX_TABLE_TIMES: usize = 100;
+/// Radii (mm) a surface of an eye or an ophthalmic lens may have, in magnitude; a plane is
+/// `radius = inf`. Smaller radii are a typo for an eye (a 0.01 mm cornea), larger ones a plane.
+pub const RADIUS_RANGE: (f64, f64) = (0.5, 1.0e4);
+/// Conic constants: beyond ±100 the conicoid is a cone or a flat disc within a few µm of
+/// its vertex.
+pub const CONIC_LIMIT: f64 = 100.0;
+/// The longest thickness (mm): an eye is at most about 35 mm long.
+pub const MAX_THICKNESS: f64 = 100.0;
+
+/// A number of the eye: fixed, or a table over the growth's time.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EyeValue {
+    Fixed(f64),
+    /// Values at increasing times (at least two), a natural cubic spline between.
+    Table {
+        t: Vec<f64>,
+        value: Vec<f64>,
+    },
+}
+
+impl EyeValue {
+    /// The value at growth time `t`.
+    pub fn at(&self, t: f64) -> f64 {
+        match self {
+            EyeValue::Fixed(x) => *x,
+            EyeValue::Table { t: ts, value } => {
+                let w = spline_weights(ts, t);
+                w.iter().zip(value).map(|(w, v)| w * v).sum()
+            }
+        }
+    }
+
+    /// The table's times (none for a fixed value).
+    pub fn times(&self) -> &[f64] {
+        match self {
+            EyeValue::Fixed(_) => &[],
+            EyeValue::Table { t, .. } => t,
+        }
+    }
+
+    fn values(&self) -> Vec<f64> {
+        match self {
+            EyeValue::Fixed(x) => vec![*x],
+            EyeValue::Table { value, .. } => value.clone(),
+        }
+    }
+
+    fn to_toml(&self) -> toml::Value {
+        match self {
+            EyeValue::Fixed(x) => toml::Value::Float(*x),
+            EyeValue::Table { t, value } => {
+                let list = |xs: &[f64]| {
+                    toml::Value::Array(xs.iter().map(|x| toml::Value::Float(*x)).collect())
+                };
+                let mut table = toml::Table::new();
+                table.insert("t".into(), list(t));
+                table.insert("value".into(), list(value));
+                toml::Value::Table(table)
+            }
+        }
+    }
+}
+
+/// The weights w_k(t) of the natural cubic spline through values at the times `ts`: the
+/// spline's value at t is Σ w_k v_k (the spline is linear in its values). Beyond the ends it
+/// continues along its end slopes, which the natural ends (zero second derivative) make C².
+pub fn spline_weights(ts: &[f64], t: f64) -> Vec<f64> {
+    let n = ts.len();
+    let mut w = vec![0.0; n];
+    if n == 1 {
+        w[0] = 1.0;
+        return w;
+    }
+    // The second derivatives M = S v of the natural spline, S (n×n) from the tridiagonal
+    // system; only the two rows of the interval holding t are needed, but n is small.
+    let h: Vec<f64> = ts.windows(2).map(|p| p[1] - p[0]).collect();
+    let s = natural_second_derivatives(ts, &h);
+    let i = if t <= ts[0] {
+        0
+    } else {
+        ts.partition_point(|&x| x <= t).saturating_sub(1).min(n - 2)
+    };
+    let (x0, x1, hi) = (ts[i], ts[i + 1], h[i]);
+    if t < ts[0] || t > ts[n - 1] {
+        // Linear beyond the end, with the end's slope (the end's M is zero).
+        let (end, e) = if t < ts[0] { (0, x0) } else { (n - 1, x1) };
+        // Slope at the end: (v1 − v0)/h + h/6 (−(3a² − 1) M0 + (3b² − 1) M1) with a, b the
+        // end's barycentric coordinates (a = 1 at x0, b = 1 at x1).
+        let (a, b) = if end == 0 { (1.0, 0.0) } else { (0.0, 1.0) };
+        let dt = t - e;
+        w[i] += a + dt * (-1.0 / hi);
+        w[i + 1] += b + dt * (1.0 / hi);
+        let c0 = dt * hi / 6.0 * (-(3.0 * a * a - 1.0));
+        let c1 = dt * hi / 6.0 * (3.0 * b * b - 1.0);
+        for (k, wk) in w.iter_mut().enumerate() {
+            *wk += c0 * s[i][k] + c1 * s[i + 1][k];
+        }
+        return w;
+    }
+    let (a, b) = ((x1 - t) / hi, (t - x0) / hi);
+    w[i] += a;
+    w[i + 1] += b;
+    let (c0, c1) = (
+        hi * hi / 6.0 * (a * a * a - a),
+        hi * hi / 6.0 * (b * b * b - b),
+    );
+    for (k, wk) in w.iter_mut().enumerate() {
+        *wk += c0 * s[i][k] + c1 * s[i + 1][k];
+    }
+    w
+}
+
+/// The matrix S with M = S v for the natural cubic spline through (ts, v): row i holds the
+/// second derivative at ts[i] as a combination of the values.
+fn natural_second_derivatives(ts: &[f64], h: &[f64]) -> Vec<Vec<f64>> {
+    let n = ts.len();
+    let mut s = vec![vec![0.0; n]; n];
+    if n < 3 {
+        return s;
+    }
+    // Interior equations h_{i-1} M_{i-1} + 2(h_{i-1}+h_i) M_i + h_i M_{i+1} = 6 (Δ_i − Δ_{i-1})
+    // with M_0 = M_{n-1} = 0, solved for each unit value vector (Thomas algorithm).
+    let m = n - 2;
+    for k in 0..n {
+        let mut d = vec![0.0; m];
+        for (j, dj) in d.iter_mut().enumerate() {
+            let i = j + 1;
+            let v = |q: usize| if q == k { 1.0 } else { 0.0 };
+            *dj = 6.0 * ((v(i + 1) - v(i)) / h[i] - (v(i) - v(i - 1)) / h[i - 1]);
+        }
+        let mut b: Vec<f64> = (0..m).map(|j| 2.0 * (h[j] + h[j + 1])).collect();
+        for j in 1..m {
+            let f = h[j] / b[j - 1];
+            b[j] -= f * h[j];
+            d[j] -= f * d[j - 1];
+        }
+        let mut x = vec![0.0; m];
+        x[m - 1] = d[m - 1] / b[m - 1];
+        for j in (0..m - 1).rev() {
+            x[j] = (d[j] - h[j + 1] * x[j + 1]) / b[j];
+        }
+        for (row, xj) in s[1..=m].iter_mut().zip(&x) {
+            row[k] = *xj;
+        }
+    }
+    s
+}
+
+/// The medium behind a surface, as a scene gives it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MediumSpec {
+    /// One index at every wavelength (may change over time).
+    Index(EyeValue),
+    /// Cauchy's a, b, c, d (λ in µm), missing terms zero.
+    Cauchy(Vec<f64>),
+    /// Sellmeier's b and c (λ in µm).
+    Sellmeier { b: Vec<f64>, c: Vec<f64> },
+}
+
+impl MediumSpec {
+    fn dispersion(&self, t: f64) -> Dispersion {
+        match self {
+            MediumSpec::Index(v) => Dispersion::Constant(v.at(t)),
+            MediumSpec::Cauchy(c) => {
+                let k = |i: usize| c.get(i).copied().unwrap_or(0.0);
+                Dispersion::Cauchy {
+                    a: k(0),
+                    b: k(1),
+                    c: k(2),
+                    d: k(3),
+                }
+            }
+            MediumSpec::Sellmeier { b, c } => Dispersion::Sellmeier {
+                b: b.clone(),
+                c: c.clone(),
+            },
+        }
+    }
+
+    /// The key that gives this medium.
+    fn key(&self) -> &'static str {
+        match self {
+            MediumSpec::Index(_) => "index",
+            MediumSpec::Cauchy(_) => "cauchy",
+            MediumSpec::Sellmeier { .. } => "sellmeier",
+        }
+    }
+}
+
+/// One `[[optics.surfaces]]` table: every key optional (a built-in eye's surface keeps what
+/// is left out; a custom eye's surface needs `radius`, `thickness` and a medium).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfaceSpec {
+    pub radius: Option<EyeValue>,
+    pub conic: Option<EyeValue>,
+    pub aspheric: Option<Vec<f64>>,
+    pub thickness: Option<EyeValue>,
+    pub medium: Option<MediumSpec>,
+}
+
+/// The keys a surface table takes, in the order they are written.
+pub const SURFACE_KEYS: [&str; 7] = [
+    "radius",
+    "conic",
+    "aspheric",
+    "thickness",
+    "index",
+    "cauchy",
+    "sellmeier",
+];
+
+/// A problem with one key of a surface table: the key (`optics.surfaces[2].radius`), its value
+/// as the user wrote it and what is wrong.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceKeyError {
+    pub key: String,
+    pub value: String,
+    pub problem: String,
+}
+
+impl std::fmt::Display for SurfaceKeyError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} = {} {}", self.key, self.value, self.problem)
+    }
+}
+
+/// `optics.surfaces[i].name`.
+pub fn surface_key(i: usize, name: &str) -> String {
+    format!("optics.surfaces[{i}].{name}")
+}
+
+fn show_toml(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(x) => number(*x),
+        toml::Value::Integer(i) => i.to_string(),
+        v => crate::text::excerpt(&crate::text::one_line(&v.to_string()), 120),
+    }
+}
+
+fn float(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        // As summary.json writes the numbers JSON lacks (a plane's radius).
+        toml::Value::String(s) if ["inf", "-inf", "nan"].contains(&s.as_str()) => s.parse().ok(),
+        _ => None,
+    }
+}
+
+fn floats(v: &toml::Value) -> Option<Vec<f64>> {
+    match v {
+        toml::Value::Array(items) => items.iter().map(float).collect(),
+        v => float(v).map(|x| vec![x]),
+    }
+}
+
+impl SurfaceSpec {
+    /// Set the key `name` of surface `i` from its TOML value (types and table shapes checked;
+    /// ranges by [`SurfaceSpec::check`]).
+    pub fn set(&mut self, i: usize, name: &str, v: &toml::Value) -> Result<(), SurfaceKeyError> {
+        let err = |problem: String| SurfaceKeyError {
+            key: surface_key(i, name),
+            value: show_toml(v),
+            problem,
+        };
+        let value = |timed: bool| -> Result<EyeValue, SurfaceKeyError> {
+            if let Some(x) = float(v) {
+                return Ok(EyeValue::Fixed(x));
+            }
+            let shape = if timed {
+                "must be a number or a table over the growth's time, { t = [0, 0.5, 1], value = [7.4, 7.7, 7.8] }"
+            } else {
+                "must be a number"
+            };
+            let toml::Value::Table(table) = v else {
+                return Err(err(shape.into()));
+            };
+            if !timed {
+                return Err(err(shape.into()));
+            }
+            if let Some(k) = table.keys().find(|k| *k != "t" && *k != "value") {
+                return Err(err(format!(
+                    "has the unknown key '{}': {shape}",
+                    crate::text::one_line(&crate::text::excerpt(k, 40))
+                )));
+            }
+            let (Some(t), Some(value)) = (
+                table.get("t").and_then(floats),
+                table.get("value").and_then(floats),
+            ) else {
+                return Err(err(format!(
+                    "{shape}: t and value must both be lists of numbers"
+                )));
+            };
+            Ok(EyeValue::Table { t, value })
+        };
+        match name {
+            "radius" => self.radius = Some(value(true)?),
+            "conic" => self.conic = Some(value(true)?),
+            "thickness" => self.thickness = Some(value(true)?),
+            "index" => self.medium = Some(MediumSpec::Index(value(true)?)),
+            "aspheric" => {
+                self.aspheric = Some(floats(v).ok_or_else(|| {
+                    err("must be a list of numbers: the coefficients of r⁴, r⁶, ... (mm⁻³, mm⁻⁵, ...)".into())
+                })?)
+            }
+            "cauchy" => {
+                self.medium = Some(MediumSpec::Cauchy(floats(v).ok_or_else(|| {
+                    err("must be a list of one to four numbers: a, b, c, d of n = a + b/λ² + c/λ⁴ + d/λ⁶ (λ in µm)".into())
+                })?))
+            }
+            "sellmeier" => {
+                let shape = "must be a table { b = [..], c = [..] } of Sellmeier's n² = 1 + Σ bᵢλ²/(λ² − cᵢ) (λ in µm)";
+                let toml::Value::Table(table) = v else {
+                    return Err(err(shape.into()));
+                };
+                let (Some(b), Some(c)) = (
+                    table.get("b").and_then(floats),
+                    table.get("c").and_then(floats),
+                ) else {
+                    return Err(err(shape.into()));
+                };
+                if table.len() != 2 {
+                    return Err(err(shape.into()));
+                }
+                self.medium = Some(MediumSpec::Sellmeier { b, c });
+            }
+            _ => {
+                return Err(SurfaceKeyError {
+                    key: surface_key(i, &crate::text::one_line(&crate::text::excerpt(name, 40))),
+                    value: show_toml(v),
+                    problem: format!(
+                        "is not a key of a surface: a surface takes {}",
+                        SURFACE_KEYS.join(", ")
+                    ),
+                })
+            }
+        }
+        Ok(())
+    }
+
+    /// The surface from a TOML table.
+    pub fn from_toml(i: usize, v: &toml::Value) -> Result<SurfaceSpec, SurfaceKeyError> {
+        let toml::Value::Table(table) = v else {
+            return Err(SurfaceKeyError {
+                key: format!("optics.surfaces[{i}]"),
+                value: show_toml(v),
+                problem: "must be a table of a surface's keys ([[optics.surfaces]])".into(),
+            });
+        };
+        let mut s = SurfaceSpec::default();
+        let media = ["index", "cauchy", "sellmeier"];
+        if table.keys().filter(|k| media.contains(&k.as_str())).count() > 1 {
+            return Err(SurfaceKeyError {
+                key: format!("optics.surfaces[{i}]"),
+                value: show_toml(v),
+                problem: "gives its medium twice: give one of index, cauchy or sellmeier".into(),
+            });
+        }
+        for (name, value) in table {
+            s.set(i, name, value)?;
+        }
+        Ok(s)
+    }
+
+    /// The surface as a TOML table (its keys in the table's own, alphabetical, order).
+    pub fn to_toml(&self) -> toml::Value {
+        let mut t = toml::Table::new();
+        let mut put = |k: &str, v: toml::Value| {
+            t.insert(k.to_string(), v);
+        };
+        let list =
+            |xs: &[f64]| toml::Value::Array(xs.iter().map(|x| toml::Value::Float(*x)).collect());
+        if let Some(v) = &self.radius {
+            put("radius", v.to_toml());
+        }
+        if let Some(v) = &self.conic {
+            put("conic", v.to_toml());
+        }
+        if let Some(a) = &self.aspheric {
+            put("aspheric", list(a));
+        }
+        if let Some(v) = &self.thickness {
+            put("thickness", v.to_toml());
+        }
+        match &self.medium {
+            Some(MediumSpec::Index(v)) => put("index", v.to_toml()),
+            Some(MediumSpec::Cauchy(c)) => put("cauchy", list(c)),
+            Some(MediumSpec::Sellmeier { b, c }) => {
+                let mut s = toml::Table::new();
+                s.insert("b".into(), list(b));
+                s.insert("c".into(), list(c));
+                put("sellmeier", toml::Value::Table(s));
+            }
+            None => {}
+        }
+        toml::Value::Table(t)
+    }
+
+    /// Every time any of this surface's tables names.
+    pub fn times(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        for v in [&self.radius, &self.conic, &self.thickness]
+            .into_iter()
+            .flatten()
+        {
+            out.extend_from_slice(v.times());
+        }
+        if let Some(MediumSpec::Index(v)) = &self.medium {
+            out.extend_from_slice(v.times());
+        }
+        out
+    }
+
+    /// Each key's own range (tables: times and values), naming the key.
+    pub fn check(&self, i: usize, wavelengths: &[f64]) -> Result<(), SurfaceKeyError> {
+        let bad = |name: &str, value: String, problem: String| SurfaceKeyError {
+            key: surface_key(i, name),
+            value,
+            problem,
+        };
+        let check_value = |name: &str,
+                           v: &EyeValue,
+                           ok: &dyn Fn(f64) -> bool,
+                           range: &str|
+         -> Result<(), SurfaceKeyError> {
+            let shown = match v {
+                EyeValue::Fixed(x) => number(*x),
+                EyeValue::Table { t, value } => {
+                    format!("{{ t = {}, value = {} }}", list_text(t), list_text(value))
+                }
+            };
+            if let EyeValue::Table { t, value } = v {
+                if t.len() < 2 || t.len() > MAX_TABLE_TIMES {
+                    return Err(bad(
+                        name,
+                        shown,
+                        format!("must list 2 to {MAX_TABLE_TIMES} times"),
+                    ));
+                }
+                if t.len() != value.len() {
+                    return Err(bad(
+                        name,
+                        shown,
+                        format!(
+                            "must list as many values as times ({} times, {} values)",
+                            t.len(),
+                            value.len()
+                        ),
+                    ));
+                }
+                if let Some(x) = t.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+                    return Err(bad(
+                        name,
+                        shown,
+                        format!(
+                            "must list finite times from 0 on (the growth's time), not {}",
+                            number(*x)
+                        ),
+                    ));
+                }
+                if let Some(w) = t.windows(2).find(|w| w[1] <= w[0]) {
+                    return Err(bad(
+                        name,
+                        shown,
+                        format!(
+                            "must list strictly increasing times (they are not sorted for you): {} follows {}",
+                            number(w[1]),
+                            number(w[0])
+                        ),
+                    ));
+                }
+            }
+            if let Some(x) = v.values().into_iter().find(|x| !ok(*x)) {
+                return Err(bad(
+                    name,
+                    shown,
+                    format!("must be {range} (not {})", number(x)),
+                ));
+            }
+            Ok(())
+        };
+        let (rlo, rhi) = RADIUS_RANGE;
+        if let Some(v) = &self.radius {
+            check_value(
+                "radius",
+                v,
+                &|x| x.is_infinite() || (x.abs() >= rlo && x.abs() <= rhi),
+                &format!(
+                    "between {rlo} and {} mm in magnitude, or inf for a plane",
+                    number(rhi)
+                ),
+            )?;
+            if let EyeValue::Table { value, .. } = v {
+                if value.iter().any(|x| x.is_infinite())
+                    || value.windows(2).any(|w| w[0] * w[1] < 0.0)
+                {
+                    return Err(bad(
+                        "radius",
+                        format!("{{ …, value = {} }}", list_text(value)),
+                        "must keep one sign and stay finite over time (a surface cannot turn through a plane)".into(),
+                    ));
+                }
+            }
+        }
+        if let Some(v) = &self.conic {
+            check_value(
+                "conic",
+                v,
+                &|x| x.is_finite() && x.abs() <= CONIC_LIMIT,
+                &format!("a finite number between −{CONIC_LIMIT} and {CONIC_LIMIT}"),
+            )?;
+        }
+        if let Some(v) = &self.thickness {
+            check_value(
+                "thickness",
+                v,
+                &|x| x > 0.0 && x <= MAX_THICKNESS,
+                &format!("positive and at most {MAX_THICKNESS} mm"),
+            )?;
+        }
+        if let Some(a) = &self.aspheric {
+            if a.is_empty() || a.len() > MAX_ASPHERIC || a.iter().any(|x| !x.is_finite()) {
+                return Err(bad(
+                    "aspheric",
+                    list_text(a),
+                    format!("must list 1 to {MAX_ASPHERIC} finite coefficients (of r⁴, r⁶, ...)"),
+                ));
+            }
+        }
+        let (nlo, nhi) = optics::INDEX_RANGE;
+        match &self.medium {
+            Some(MediumSpec::Index(v)) => check_value(
+                "index",
+                v,
+                &|x| x >= nlo && x <= nhi,
+                &format!("a refractive index between {nlo} and {nhi}"),
+            )?,
+            Some(m) => {
+                let shown = match m {
+                    MediumSpec::Cauchy(c) => list_text(c),
+                    MediumSpec::Sellmeier { b, c } => {
+                        format!("{{ b = {}, c = {} }}", list_text(b), list_text(c))
+                    }
+                    MediumSpec::Index(_) => String::new(),
+                };
+                let shape_ok = match m {
+                    MediumSpec::Cauchy(c) => {
+                        !c.is_empty() && c.len() <= 4 && c.iter().all(|x| x.is_finite())
+                    }
+                    MediumSpec::Sellmeier { b, c } => {
+                        !b.is_empty()
+                            && b.len() == c.len()
+                            && b.len() <= 6
+                            && b.iter().chain(c).all(|x| x.is_finite())
+                    }
+                    MediumSpec::Index(_) => true,
+                };
+                if !shape_ok {
+                    return Err(bad(
+                        m.key(),
+                        shown,
+                        match m {
+                            MediumSpec::Cauchy(_) => {
+                                "must list one to four finite numbers: a, b, c, d (λ in µm)".into()
+                            }
+                            _ => "must give as many b as c, one to six of each, all finite".into(),
+                        },
+                    ));
+                }
+                let d = m.dispersion(0.0);
+                // The scene's wavelengths and 555 nm, where every system is checked.
+                for &w in wavelengths.iter().chain(&[555.0]) {
+                    let n = d.index(w);
+                    if !(n >= nlo && n <= nhi) {
+                        return Err(bad(
+                            m.key(),
+                            shown,
+                            format!(
+                                "gives the index {} at {} nm, not a physical one (between {nlo} and {nhi})",
+                                number(n),
+                                number(w)
+                            ),
+                        ));
+                    }
+                }
+            }
+            None => {}
+        }
+        Ok(())
+    }
+}
+
+fn list_text(xs: &[f64]) -> String {
+    let items: Vec<String> = xs.iter().take(8).map(|x| number(*x)).collect();
+    let more = if xs.len() > 8 { ", …" } else { "" };
+    format!("[{}{more}]", items.join(", "))
+}
+
+/// The eye at growth time `t`: the base (a built-in eye, or none for a custom one) with the
+/// surface tables applied. `pupil` is the built-in eye's stop as the surface whose vertex it
+/// lies on, so that a changed anterior chamber carries the pupil with the lens.
+pub fn assemble(
+    base: Option<&OpticalSystem>,
+    surfaces: &[SurfaceSpec],
+    t: f64,
+) -> Result<OpticalSystem, SurfaceKeyError> {
+    let missing = |i: usize, name: &str, what: &str| SurfaceKeyError {
+        key: surface_key(i, name),
+        value: "(none)".into(),
+        problem: format!("must be given for a custom eye's surface ({what})"),
+    };
+    let mut elements = Vec::new();
+    match base {
+        Some(eye) => {
+            if surfaces.len() > eye.elements.len() {
+                return Err(SurfaceKeyError {
+                    key: format!("optics.surfaces[{}]", eye.elements.len()),
+                    value: format!("({} surface tables)", surfaces.len()),
+                    problem: format!(
+                        "is beyond the {} eye's {} surfaces (surfaces are counted from 0; give \"custom\" as optics.eye to describe an eye of your own)",
+                        eye.name,
+                        eye.elements.len()
+                    ),
+                });
+            }
+            for (i, e) in eye.elements.iter().enumerate() {
+                let mut e = e.clone();
+                if let Some(s) = surfaces.get(i) {
+                    if let Some(v) = &s.radius {
+                        e.surface.radius = v.at(t);
+                    }
+                    if let Some(v) = &s.conic {
+                        e.surface.conic = v.at(t);
+                    }
+                    if let Some(a) = &s.aspheric {
+                        e.surface.aspheric = a.clone();
+                    }
+                    if let Some(v) = &s.thickness {
+                        e.thickness = v.at(t);
+                    }
+                    if let Some(m) = &s.medium {
+                        if let MediumKind::Grin(_) = e.medium.kind {
+                            return Err(SurfaceKeyError {
+                                key: surface_key(i, m.key()),
+                                value: "(given)".into(),
+                                problem: format!(
+                                    "cannot replace the gradient-index medium '{}' of the {} eye (its profile is the source's)",
+                                    e.medium.name, eye.name
+                                ),
+                            });
+                        }
+                        e.medium = Medium::homogeneous(e.medium.name.clone(), m.dispersion(t));
+                    }
+                }
+                elements.push(e);
+            }
+        }
+        None => {
+            if surfaces.len() < 2 {
+                return Err(SurfaceKeyError {
+                    key: "optics.surfaces".into(),
+                    value: format!("({} surface tables)", surfaces.len()),
+                    problem: format!(
+                        "must describe 2 to {MAX_SURFACES} surfaces for optics.eye = \"custom\" (one [[optics.surfaces]] table each)"
+                    ),
+                });
+            }
+            for (i, s) in surfaces.iter().enumerate() {
+                let radius = s
+                    .radius
+                    .as_ref()
+                    .ok_or_else(|| missing(i, "radius", "mm, inf for a plane"))?;
+                let thickness = s.thickness.as_ref().ok_or_else(|| {
+                    missing(
+                        i,
+                        "thickness",
+                        "mm to the next surface, or the last one's to the retina",
+                    )
+                })?;
+                let medium = s.medium.as_ref().ok_or_else(|| {
+                    missing(
+                        i,
+                        "index",
+                        "the medium behind it: index, cauchy or sellmeier",
+                    )
+                })?;
+                let name = format!("surface {i}");
+                let surface = Surface::new(
+                    name.clone(),
+                    radius.at(t),
+                    s.conic.as_ref().map_or(0.0, |v| v.at(t)),
+                )
+                .with_aspheric(s.aspheric.clone().unwrap_or_default());
+                elements.push(optics::Element::new(
+                    surface,
+                    thickness.at(t),
+                    Medium::homogeneous(format!("medium after surface {i}"), medium.dispersion(t)),
+                ));
+            }
+        }
+    }
+    Ok(OpticalSystem {
+        name: base.map_or("custom".into(), |b| b.name.clone()),
+        object: Medium::constant("air", 1.0),
+        elements,
+        pupil_position: None,
+        retina: None,
+    })
+}
+
+/// The surface (index into the elements) whose vertex a built-in eye's stop lies on, if it
+/// lies on one.
+pub fn pupil_vertex(eye: &OpticalSystem) -> Option<usize> {
+    let z = eye.pupil_position?;
+    eye.vertices().iter().position(|v| (v - z).abs() < 1e-9)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The weights reproduce the natural cubic spline: exact for a straight line (inside and
+    /// beyond the ends), interpolating at the knots, C¹ at an interior knot.
+    #[test]
+    fn spline_weights_are_a_natural_cubic_spline() {
+        let ts = [0.0, 0.3, 0.5, 1.0];
+        let line = |t: f64| 2.0 - 3.0 * t;
+        let v: Vec<f64> = ts.iter().map(|&t| line(t)).collect();
+        let at = |t: f64| -> f64 {
+            spline_weights(&ts, t)
+                .iter()
+                .zip(&v)
+                .map(|(w, v)| w * v)
+                .sum()
+        };
+        for t in [-0.5, 0.0, 0.1, 0.3, 0.77, 1.0, 1.4] {
+            assert!((at(t) - line(t)).abs() < 1e-12, "{t}: {}", at(t));
+        }
+        let value = EyeValue::Table {
+            t: ts.to_vec(),
+            value: vec![7.4, 7.6, 7.7, 7.8],
+        };
+        for (t, x) in ts.iter().zip([7.4, 7.6, 7.7, 7.8]) {
+            assert!((value.at(*t) - x).abs() < 1e-12);
+        }
+        // One-sided slopes at the knot 0.3 and at the end 1.0 agree (C¹, and C¹ into the
+        // linear continuation).
+        let h = 1e-6;
+        for k in [0.3, 0.5, 1.0, 0.0] {
+            let left = (value.at(k) - value.at(k - h)) / h;
+            let right = (value.at(k + h) - value.at(k)) / h;
+            assert!((left - right).abs() < 1e-4, "{k}: {left} vs {right}");
+        }
+    }
+}
