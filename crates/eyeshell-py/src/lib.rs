@@ -225,7 +225,8 @@ fn key_value<'py>(py: Python<'py>, v: KeyValue) -> PyResult<Bound<'py, PyAny>> {
     })
 }
 
-/// A TOML value (a surface table of `optics.surfaces`) as Python lists, dicts and numbers.
+/// A TOML value as Python lists, dicts and numbers: a surface table of `optics.surfaces`,
+/// or a swept value that is no scene key's (such as a run's name).
 fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
     Ok(match v {
         toml::Value::Float(x) => x.into_pyobject(py)?.into_any(),
@@ -245,7 +246,9 @@ fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAn
             }
             d.into_any()
         }
-        other => other.to_string().into_pyobject(py)?.into_any(),
+        other => eyeshell::scene::sweep::show_value(other)
+            .into_pyobject(py)?
+            .into_any(),
     })
 }
 
@@ -728,26 +731,6 @@ fn fit(
 
 /// One run of a sweep: its name, its swept (key, value), its scene.
 type PlannedRun<'py> = (String, Vec<(String, Bound<'py, PyAny>)>, PyScene);
-
-/// A TOML value as Python's (a swept value that is no scene key's, such as a run's name).
-fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
-    Ok(match v {
-        toml::Value::Integer(n) => n.into_pyobject(py)?.into_any(),
-        toml::Value::Float(x) => x.into_pyobject(py)?.into_any(),
-        toml::Value::Boolean(b) => PyBool::new(py, *b).to_owned().into_any(),
-        toml::Value::Array(items) => PyList::new(
-            py,
-            items
-                .iter()
-                .map(|x| toml_to_py(py, x))
-                .collect::<PyResult<Vec<_>>>()?,
-        )?
-        .into_any(),
-        other => eyeshell::scene::sweep::show_value(other)
-            .into_pyobject(py)?
-            .into_any(),
-    })
-}
 
 /// The runs of the sweep in TOML `text` (`origin` names it), each as (name, values, scene),
 /// values being (key, value) in the order of the swept keys: a scene key's value as the

@@ -731,6 +731,7 @@ pub fn assemble(
         elements,
         pupil_position: None,
         retina: None,
+        origin: 0.0,
     })
 }
 

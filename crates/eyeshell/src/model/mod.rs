@@ -5,8 +5,8 @@
 pub mod components;
 pub mod constitutive;
 pub mod cornea;
-pub mod eyewear;
 pub mod eye;
+pub mod eyewear;
 pub mod growth_law;
 pub mod optics;
 pub mod params;

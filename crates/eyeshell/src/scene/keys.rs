@@ -7,11 +7,11 @@
 use super::Scene;
 use crate::bvp::settings::{LinearSolverKind, Scheme};
 use crate::growth::dae::SensParam;
+use crate::growth::schedule::{Form, TimeUnit};
 use crate::growth::settings::{DaeLinear, GrowthParams, Integrator};
 use crate::growth::ThicknessLaw;
-use crate::model::eyewear::{lenses_toml, LensSpec, CLASSIFY};
-use crate::growth::schedule::{Form, TimeUnit};
 use crate::model::eye::SurfaceSpec;
+use crate::model::eyewear::{lenses_toml, LensSpec, CLASSIFY};
 use crate::model::optics::{Source, EYES, FOCUS_NAMES, SOURCES};
 use crate::model::params::Thickness;
 
@@ -60,6 +60,7 @@ pub enum Access {
     Lenses {
         get: fn(&Scene) -> Vec<LensSpec>,
         set: fn(&mut Scene, Vec<LensSpec>),
+    },
     /// The eye's surfaces: an array of tables (`[[optics.surfaces]]`), each a surface's keys
     /// (model/eye.rs); one of them is set alone as `optics.surfaces[i].key`.
     Surfaces {

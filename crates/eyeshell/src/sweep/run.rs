@@ -149,9 +149,10 @@ pub fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
     let (blue, red) = (scene.blue(), scene.red());
     match &scene.growth {
         // A growing scene's surfaces, computed ones included (traced when it was read).
-        Some(g) if g.is_resolved() => {
-            g.measure(0.0, EyeMeasure::new(pole, radii, g.blue_focal(), g.red_focal()))
-        }
+        Some(g) if g.is_resolved() => g.measure(
+            0.0,
+            EyeMeasure::new(pole, radii, g.blue_focal(), g.red_focal()),
+        ),
         _ => EyeMeasure::new(
             pole,
             radii,
