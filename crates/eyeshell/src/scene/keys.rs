@@ -379,13 +379,18 @@ impl KeySpec {
     /// when the scene grows.
     pub fn applies_to(&self, scene: &Scene) -> bool {
         // The optics keys, and the source that turns them on, apply only to a stimulus
-        // computed from them: a scene of the published surfaces shows and summarises them
-        // as it did before they existed.
+        // computed from them or to an eye the scene sets: a scene of the published surfaces
+        // shows and summarises them as it did before they existed.
         if matches!(self.key, "stimulus.myopia_D" | "stimulus.hyperopia_D") {
             return scene.growth.is_some() && scene.optics().classify == 1;
         }
-        if self.key == "stimulus.source" || self.section() == Some("optics") {
+        if self.key == "stimulus.source" {
             return scene.growth.is_some() && scene.stimulus_source() == Source::Optics;
+        }
+        // An eye of the scene's own (for `eyeshell optics`) applies whether or not it grows.
+        if self.section() == Some("optics") {
+            return (scene.growth.is_some() && scene.stimulus_source() == Source::Optics)
+                || *scene.optics() != crate::model::optics::OpticsSpec::default();
         }
         !self.growth || scene.growth.is_some()
     }
