@@ -204,7 +204,7 @@ fn with_tol_the_runs_of_the_choice_share_one_bound() {
 }
 
 /// A job's clock started earlier (`clock_start`) counts: a growth run with `solver.tol`
-/// whose bound passed before it began stops in the first solve of the adaptation, with the
+/// whose bound passed before it began stops in its first elastic solve, with the
 /// bound as given, and hands nothing on.
 #[test]
 fn a_bound_counted_from_an_earlier_start_stops_the_first_stage() {
