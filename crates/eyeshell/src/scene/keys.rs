@@ -387,10 +387,13 @@ impl KeySpec {
         if self.key == "stimulus.source" {
             return scene.growth.is_some() && scene.stimulus_source() == Source::Optics;
         }
-        // An eye of the scene's own (for `eyeshell optics`) applies whether or not it grows.
+        // In a growing scene the optics apply to a computed stimulus only; a scene that does
+        // not grow keeps an eye of its own for `eyeshell optics`.
         if self.section() == Some("optics") {
-            return (scene.growth.is_some() && scene.stimulus_source() == Source::Optics)
-                || *scene.optics() != crate::model::optics::OpticsSpec::default();
+            return match scene.growth {
+                Some(_) => scene.stimulus_source() == Source::Optics,
+                None => *scene.optics() != crate::model::optics::OpticsSpec::default(),
+            };
         }
         !self.growth || scene.growth.is_some()
     }
