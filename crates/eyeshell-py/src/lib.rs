@@ -563,7 +563,8 @@ const SERIES_NAMES: [&str; 5] = [
     "retina_minus_red",
 ];
 
-/// Series rows as a dict of arrays (series.csv's columns; `class` as a list of str).
+/// Series rows as a dict of arrays (series.csv's columns, in its order; `class` as a list
+/// of str).
 fn series_dict<'py>(py: Python<'py>, rows: &[SeriesRow]) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let getters: [fn(&SeriesRow) -> f64; 5] = [
@@ -578,6 +579,7 @@ fn series_dict<'py>(py: Python<'py>, rows: &[SeriesRow]) -> PyResult<Bound<'py, 
     }
     let classes: Vec<&str> = rows.iter().map(|r| r.class.as_str()).collect();
     d.set_item("class", PyList::new(py, classes)?)?;
+    d.set_item("refraction_D", column(py, rows, |r| r.refraction_d))?;
     Ok(d)
 }
 
