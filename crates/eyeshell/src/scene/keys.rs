@@ -777,7 +777,7 @@ pub static KEYS: &[KeySpec] = &[
             set: |s, i| s.growth_mut().clock.unit = TimeUnit::ALL[i],
         },
         rule: Rule::Any,
-        doc: "what ages are counted in: none (the model's dimensionless t), years or days; with a unit, time.start and time.end are the ages of t = 0 and growth.t_end, and the outputs and fit data carry ages",
+        doc: "what ages are counted in: none (the model's dimensionless t), years or days; with a unit, time.start and time.end are the ages of t = 0 and growth.t_end, and fit data may be given by age (the outputs stay in t)",
         growth: true,
     },
     KeySpec {
