@@ -68,3 +68,41 @@ def test_series_are_data_frames_with_pandas():
     assert g.series["class"].iloc[-1] == g.summary["final"]["class"]
     plain = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=101)
     assert np.array_equal(g.series["axial_length"].to_numpy(), plain.series["axial_length"])
+
+
+def test_grow_tol_delivers_and_estimates_the_error_it_reports():
+    # tol = 1e-3 on the const scene: N and rtol chosen, the estimate within tol, and the
+    # true error (against N = 201 at rtol 1e-7, itself within 5e-6 mm of IDA at N = 3201,
+    # rtol 1e-10: BENCHMARKS.md) within tol and within [1/3, 30] of the estimate.
+    g = eyeshell.grow(SCENES / "const.toml", frames=False, tol=1e-3)
+    assert g.summary["accuracy"]["tol"] == 1e-3
+    assert g.summary["accuracy"]["nodes"] != 501  # chosen, not the scene's solver.nodes
+    est = g.error_estimate
+    assert set(est["axial_length"]) == {"total", "space", "time"}
+    assert 0 < est["axial_length"]["total"] <= 1e-3
+    assert [row["t"] for row in est["per_time"]] == list(g.series["t"])
+    ref = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=201,
+                        solver__rtol=1e-7, solver__atol=1e-9)
+    for name in ["axial_length", "equatorial_radius"]:
+        error = np.max(np.abs(np.asarray(g.series[name]) - np.asarray(ref.series[name])))
+        assert error <= 1e-3, name
+        assert error / 3 <= est[name]["total"] <= 30 * error, (name, error, est[name])
+    assert ref.error_estimate is None
+
+
+def test_grow_tol_is_solver_tol():
+    a = eyeshell.grow(SCENES / "const.toml", frames=False, tol=1e-3)
+    b = eyeshell.grow(SCENES / "const.toml", frames=False, solver__tol=1e-3)
+    assert list(a.series["axial_length"]) == list(b.series["axial_length"])
+    assert a.error_estimate == b.error_estimate
+
+
+@pytest.mark.parametrize("tol", [0.0, -1e-4, float("nan"), float("inf")])
+def test_grow_tol_refuses_what_is_not_a_tolerance(tol):
+    with pytest.raises(eyeshell.InputError, match="solver.tol"):
+        eyeshell.grow(SCENES / "const.toml", tol=tol)
+
+
+def test_grow_tol_and_solver_tol_together_is_refused():
+    with pytest.raises(TypeError, match="both tol and solver__tol"):
+        eyeshell.grow(SCENES / "const.toml", tol=1e-3, solver__tol=1e-4)

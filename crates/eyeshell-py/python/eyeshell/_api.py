@@ -416,7 +416,10 @@ class Growth:
     - ``sensitivities``: with ``grow(..., sensitivities=[...])``, sensitivities.csv's
       columns (t, parameter, d_axial_length, d_equatorial_radius, d_retina_minus_blue,
       scaled_axial_length), one row per recorded time and parameter; else empty;
-    - ``summary``: summary.json's content.
+    - ``summary``: summary.json's content;
+    - ``error_estimate``: with ``grow(tol=...)`` (``solver.tol``), summary.json's
+      ``error_estimate``: each length's estimated error (mm) as {total, space, time}, the
+      largest over the output times, and ``per_time`` the same at each; else None.
 
     ``series``, ``history`` and ``sensitivities`` are pandas DataFrames when pandas is
     installed (or ``frames=True``), else dicts of arrays (``frames=False``); the same in
@@ -435,6 +438,13 @@ class Growth:
         self._shape(frames)
         self.snapshots: dict[float, dict[str, np.ndarray]] = dict(raw["snapshots"])
         self.summary: dict[str, Any] = json.loads(raw["summary_text"])
+
+    @property
+    def error_estimate(self) -> dict[str, Any] | None:
+        """The run's estimated error under ``solver.tol`` (summary.json's
+        ``error_estimate``), else None."""
+        estimate: dict[str, Any] | None = self.summary.get("error_estimate")
+        return estimate
 
     def _shape(self, frames: bool | None) -> "Growth":
         """Set series, history and sensitivities as DataFrames or dicts (``frames``)."""
@@ -552,6 +562,7 @@ def grow(
     frames: bool | None = None,
     sensitivities: Sequence[str] = (),
     sensitivity_error_control: bool = False,
+    tol: float | None = None,
     **overrides: Any,
 ) -> Growth:
     """Grow the eye of ``scene`` (as :func:`solve` takes it; the scene must grow: set a
@@ -570,6 +581,17 @@ def grow(
     would do nothing, so it is refused (:class:`InputError`), as the command line refuses
     ``--sensitivity-error-control`` without ``--sensitivities``.
 
+    ``tol=1e-4`` sets ``solver.tol`` (mm): eyeshell chooses the material mesh and the
+    integrator's rtol and atol so that the outputs' lengths (axial length, equatorial
+    radius, the retina's distances to the surfaces, the snapshots' r and z) are within tol
+    at every output time, and reports its estimate in :attr:`Growth.error_estimate` and
+    what it chose in ``summary["accuracy"]``; ``solver.nodes``, ``solver.rtol`` and
+    ``solver.atol`` are then ignored, as with ``solver.tol`` in a scene file.
+
+    >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, tol=1e-3)
+    >>> bool(g.error_estimate["axial_length"]["total"] <= 1e-3), g.summary["accuracy"]["tol"]
+    (True, 0.001)
+
     >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101,
     ...                   sensitivities=["growth.eta0", "growth.Gamma"])
     >>> g.sensitivities["parameter"][-2:].tolist(), float(g.sensitivities["t"][-1])
@@ -581,6 +603,10 @@ def grow(
     >>> bool(g.series["axial_length"][-1] > g.series["axial_length"][0])
     True
     """
+    if tol is not None:
+        if "solver__tol" in overrides:
+            raise TypeError("grow() got both tol and solver__tol: give one")
+        overrides = {**overrides, "solver__tol": tol}
     s = _as_scene(scene, overrides)
     if isinstance(sensitivities, str):
         sensitivities = [k for k in sensitivities.split(",") if k.strip()]
