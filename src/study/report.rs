@@ -216,6 +216,26 @@ pub fn wpd(scene: &Scene, dir: &Path) -> Result<String, StudyError> {
             &mut text,
             "growth (axial length)",
         );
+        let tol = wpd::growth_tolerance(
+            p,
+            s,
+            g,
+            &scene.growth_settings,
+            &wpd::GROWTH_TOLERANCES,
+            &wpd::GROWTH_LADDER,
+            wpd::GROWTH_REFERENCE,
+        )?;
+        let (n, rtol) = wpd::GROWTH_REFERENCE;
+        write_curves(
+            &tol,
+            dir,
+            "wpd_growth_tol",
+            &format!(
+                "growth to t_end, solver.tol beside fixed (N, rtol): axial-length error against IDA N = {n}, rtol {rtol:e}"
+            ),
+            true,
+        )?;
+        write_tolerance_growth(&tol, dir, &mut text)?;
     }
     Ok(text)
 }
@@ -296,6 +316,69 @@ fn write_tolerance(curves: &[wpd::Curve], dir: &Path, text: &mut String) -> Resu
             "  {:.0e}  {:.2e}  {:.2e}  {}  {:.4} s",
             p.value, p.error, p.estimate, p.nodes, p.seconds
         );
+    }
+    Ok(())
+}
+
+/// The growth runs under solver.tol: delivered and estimated axial-length error against
+/// the tolerance asked for, with the line error = tol, and the fixed ladder's rungs in the
+/// report beside them.
+fn write_tolerance_growth(
+    curves: &[wpd::Curve],
+    dir: &Path,
+    text: &mut String,
+) -> Result<(), StudyError> {
+    let Some(c) = curves.iter().find(|c| c.knob == "tol") else {
+        return Ok(());
+    };
+    let pick = |f: &dyn Fn(&wpd::WorkPoint) -> f64| -> Vec<(f64, f64)> {
+        c.points.iter().map(|p| (p.value, f(p))).collect()
+    };
+    let fig = Figure::new(
+        "growth under solver.tol: delivered and estimated axial-length error",
+        "requested tol (mm)",
+        "axial-length error (mm)",
+    )
+    .scales(Scale::Log10, Scale::Log10)
+    .with(Series::new(
+        "delivered error".to_string(),
+        pick(&|p| p.axial_error),
+        SeriesStyle::LineAndMarkers,
+    ))
+    .with(Series::new(
+        "estimate".to_string(),
+        pick(&|p| p.estimate),
+        SeriesStyle::LineAndMarkers,
+    ))
+    .with(Series::new(
+        "error = tol".to_string(),
+        pick(&|p| p.value),
+        SeriesStyle::DashedLine,
+    ));
+    plot::write(&fig, &dir.join("wpd_growth_tolerance")).map_err(plot_error)?;
+    let _ = writeln!(
+        text,
+        "growth solver.tol: requested, delivered axial-length error, estimate, nodes, seconds"
+    );
+    for p in &c.points {
+        let _ = writeln!(
+            text,
+            "  {:.0e}  {:.2e}  {:.2e}  {}  {:.4} s",
+            p.value, p.axial_error, p.estimate, p.nodes, p.seconds
+        );
+    }
+    if let Some(f) = curves.iter().find(|c| c.knob == "nodes") {
+        let _ = writeln!(
+            text,
+            "growth fixed (N, rtol): N, rtol, axial-length error, seconds"
+        );
+        for (p, (_, rtol)) in f.points.iter().zip(wpd::GROWTH_LADDER) {
+            let _ = writeln!(
+                text,
+                "  {}  {rtol:.0e}  {:.2e}  {:.4} s",
+                p.value, p.axial_error, p.seconds
+            );
+        }
     }
     Ok(())
 }

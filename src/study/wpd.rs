@@ -7,7 +7,8 @@
 //! - Growth: explicit Euler over its step count, CVODE and IDA over rtol, errors in the axial
 //!   length (the largest over the scene's output times and t_end: an integrator's error is
 //!   not monotone in t, and one instant can flatter it) and the largest field error at t_end
-//!   (same mesh as the reference).
+//!   (same mesh as the reference); and IDA under `solver.tol` (mesh and rtol chosen) beside
+//!   a fixed (N, rtol) ladder, axial-length errors against a reference on a finer mesh.
 
 use super::{max_diff, run, sample, worst, StudyError};
 use eyeshell::bvp::settings::{Scheme, SolverSettings};
@@ -314,6 +315,102 @@ pub fn growth(
     Ok(curves)
 }
 
+/// The requested tolerances (mm) of the growth diagram's `solver.tol` series.
+pub const GROWTH_TOLERANCES: [f64; 3] = [1e-3, 1e-4, 1e-5];
+/// The fixed (N, rtol) ladder beside it: on the const scene each rung is the cheapest point
+/// of BENCHMARKS.md's hand-picked grid for about a decade of tol (atol = rtol/100).
+pub const GROWTH_LADDER: [(usize, f64); 4] = [(51, 1e-5), (101, 1e-6), (201, 1e-7), (401, 1e-8)];
+/// The reference of both, space and time together: IDA on this many nodes at this rtol
+/// (BENCHMARKS.md, "Growth to a tolerance": CVODE on 1601 nodes at rtol 1e-10 lies within
+/// 2.8e-8 mm of it on the const scene).
+pub const GROWTH_REFERENCE: (usize, f64) = (3201, 1e-10);
+
+/// The growth diagram's accuracy series: IDA under `solver.tol` for each of `tols` (its mesh
+/// and rtol chosen; the point's `estimate` is the axial length's estimated total error
+/// from summary.json's `error_estimate`, `nodes` the delivered mesh's, `seconds` the whole
+/// choice), and IDA on the fixed (N, rtol) `ladder` (value and nodes N); the axial-length
+/// error of each, the largest over the output times and t_end, against IDA on the mesh of
+/// `reference.0` nodes at rtol `reference.1`. Field errors are NaN: the meshes differ.
+pub fn growth_tolerance(
+    params: &Params,
+    solver: &SolverSettings,
+    g: &GrowthParams,
+    settings: &GrowthSettings,
+    tols: &[f64],
+    ladder: &[(usize, f64)],
+    reference: (usize, f64),
+) -> Result<Vec<Curve>, StudyError> {
+    let ida = |rtol: f64| GrowthSettings {
+        integrator: Integrator::Ida,
+        rtol,
+        atol: rtol * 1e-2,
+        ..settings.clone()
+    };
+    let on = |nodes: usize| SolverSettings {
+        nodes,
+        tol: None,
+        ..*solver
+    };
+    let ref_axial = run(
+        params,
+        &on(reference.0),
+        Some((g, &ida(reference.1))),
+        "reference",
+    )?
+    .axial_series;
+    let point = |r: super::Run, value: f64, nodes: f64| {
+        let estimate = r
+            .growth
+            .as_ref()
+            .and_then(|s| s.error_estimate.as_ref())
+            .map_or(f64::NAN, |e| e.largest.axial_length.total);
+        let nodes = r
+            .growth
+            .as_ref()
+            .and_then(|s| s.accuracy.as_ref())
+            .map_or(nodes, |a| a.nodes as f64);
+        WorkPoint {
+            value,
+            error: f64::NAN,
+            axial_error: largest_axial_difference(&r.axial_series, &ref_axial),
+            seconds: r.seconds,
+            estimate,
+            nodes,
+        }
+    };
+    let mut tol_curve = Curve {
+        method: "ida solver.tol".into(),
+        knob: "tol",
+        points: vec![],
+    };
+    for &tol in tols {
+        let s = SolverSettings {
+            tol: Some(tol),
+            ..*solver
+        };
+        let what = format!("IDA solver.tol = {tol:e}");
+        tol_curve.points.push(point(
+            run(params, &s, Some((g, &ida(settings.rtol))), &what)?,
+            tol,
+            f64::NAN,
+        ));
+    }
+    let mut fixed = Curve {
+        method: "ida fixed (N, rtol)".into(),
+        knob: "nodes",
+        points: vec![],
+    };
+    for &(n, rtol) in ladder {
+        let what = format!("IDA N = {n}, rtol {rtol:e}");
+        fixed.points.push(point(
+            run(params, &on(n), Some((g, &ida(rtol))), &what)?,
+            n as f64,
+            n as f64,
+        ));
+    }
+    Ok(vec![tol_curve, fixed])
+}
+
 /// For each target accuracy, the cheapest method that reaches it (by interpolating each
 /// curve's cost in log-log between its points): (target, method, seconds).
 pub fn winners(curves: &[Curve], targets: &[f64], axial: bool) -> Vec<(f64, String, f64)> {
@@ -524,5 +621,50 @@ mod tests {
                 assert!(r.adapted_error <= r.tol, "{name}: {r:?}");
             }
         }
+    }
+
+    /// The growth diagram's solver.tol series on the const scene: a point per tol, each
+    /// delivered within tol with an estimate within [1/3, 30] of its true error, and the
+    /// ladder's rungs beside it (a cheap reference here: IDA on N = 201 at rtol 1e-7, within
+    /// 5e-6 mm of N = 3201 at 1e-10 by BENCHMARKS.md; the command uses the latter).
+    #[test]
+    fn growth_tol_series_delivers_within_tol() {
+        let scene = eyeshell::scene::Scene::from_file(
+            std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/const.toml")),
+            &[],
+        )
+        .unwrap();
+        let g = scene.growth.as_ref().unwrap();
+        let curves = growth_tolerance(
+            &scene.params,
+            &scene.solver,
+            g,
+            &scene.growth_settings,
+            &[1e-3, 1e-4],
+            &[(51, 1e-5)],
+            (201, 1e-7),
+        )
+        .unwrap();
+        let tol = curves.iter().find(|c| c.knob == "tol").unwrap();
+        assert_eq!(
+            tol.points.iter().map(|p| p.value).collect::<Vec<_>>(),
+            [1e-3, 1e-4]
+        );
+        for p in &tol.points {
+            assert!(p.axial_error > 0.0 && p.axial_error <= p.value, "{p:?}");
+            assert!(
+                p.estimate >= p.axial_error / 3.0 && p.estimate <= 30.0 * p.axial_error,
+                "{p:?}"
+            );
+            assert!(
+                p.nodes > 11.0 && p.nodes < 501.0 && p.seconds > 0.0,
+                "{p:?}"
+            );
+        }
+        let fixed = curves.iter().find(|c| c.knob == "nodes").unwrap();
+        assert_eq!(fixed.points.len(), 1);
+        // N = 51 at rtol 1e-5: 2.3e-4 mm on the const scene (BENCHMARKS.md).
+        let e = fixed.points[0].axial_error;
+        assert!(e > 5e-5 && e < 1e-3, "{e}");
     }
 }
