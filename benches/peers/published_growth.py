@@ -26,8 +26,9 @@ time (perf_counter around the 200 steps);
 then eyeshell `grow scenes/const.toml --set solver.tol=TOL` (TOL = the peer's error / 100
 unless --tol is given), its delivered error and its time twice: the subprocess's wall
 time (process start, the tolerance rounds, writing the run directory) and summary.json's
-`wall_seconds` (the solve with the tolerance rounds, without start-up), each the least of
---repeat runs; and the ratios.
+`wall_seconds` (the solve with the tolerance rounds, without start-up), and the CPU
+seconds of both (the peer's process_time, eyeshell's process's user + system time: on a
+shared machine the fairer measure), each the least of --repeat runs; and the ratios.
 
     cargo build --release
     python3 benches/peers/published_growth.py [--eyeshell target/release/eyeshell]
@@ -38,6 +39,7 @@ import argparse
 import csv
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -152,7 +154,7 @@ def stimulus(sigma, kappa, r, theta, a, rho):
 
 def published():
     """The 200 Euler steps; ({t: (axial length, equatorial radius)} at the output times,
-    seconds, collocation iterations, largest mesh)."""
+    wall and CPU seconds, collocation iterations, largest mesh)."""
     big_sigma = np.linspace(EPS, L, POINTS)
     g_c = 0.5 * ETA0 * (1 + np.tanh((GAMMA - big_sigma) / DELTA))
     sigma = big_sigma.copy()
@@ -163,7 +165,7 @@ def published():
                          sigma / R0, np.zeros_like(sigma), np.full_like(sigma, ALPHA)])
     dt = T_END / STEPS
     iterations, largest, outputs = 0, 0, {}
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     for step in range(STEPS + 1):
         shell = Shell(sigma, rho)
         s_eps = sigma[0]
@@ -187,23 +189,26 @@ def published():
         # The next solve starts from this one, carried to the new σ by material point.
         guess_x, guess_y = sigma_new, np.vstack([kappa, r, theta, q, a])
         sigma, rho = sigma_new, rho_new
-    seconds = time.perf_counter() - start
-    return outputs, seconds, iterations, largest
+    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+    return outputs, seconds, cpu, iterations, largest
 
 
 def eyeshell_grow(binary, sets, out):
     cmd = [binary, "grow", SCENE, "--out", out, "--quiet", "--set", "output.history_points=0"]
     for s in sets:
         cmd += ["--set", s]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
     wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     with open(os.path.join(out, "series.csv")) as f:
         rows = {float(r["t"]): (float(r["axial_length"]), float(r["equatorial_radius"]))
                 for r in csv.DictReader(f)}
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
-    return rows, wall, summary
+    return rows, wall, summary, cpu
 
 
 def error(rows, ref):
@@ -224,29 +229,33 @@ def main():
     a = ap.parse_args()
 
     with tempfile.TemporaryDirectory() as tmp:
-        ref, _, _ = eyeshell_grow(
+        ref, _, _, _ = eyeshell_grow(
             a.eyeshell, ["solver.nodes=3201", "solver.rtol=1e-10", "solver.atol=1e-12"],
             os.path.join(tmp, "ref"))
-        peer, peer_s, iterations, largest = published()
+        peer, peer_s, peer_cpu, iterations, largest = published()
         peer_err, peer_t = error(peer, ref)
         tol = a.tol if a.tol is not None else float(f"{peer_err / 100:.1e}")
         runs = [eyeshell_grow(a.eyeshell, [f"solver.tol={tol}"], os.path.join(tmp, f"r{i}"))
                 for i in range(a.repeat)]
-        rows, _, summary = runs[0]
+        rows, _, summary, _ = runs[0]
         es_err, es_t = error(rows, ref)
         wall = min(r[1] for r in runs)
         inside = min(r[2]["wall_seconds"] for r in runs)
+        es_cpu = min(r[3] for r in runs)
+        load = os.getloadavg()
         accuracy = summary.get("accuracy", {})
     report = {
         "reference": {str(t): v for t, v in ref.items()},
-        "published": {"seconds": peer_s, "error": peer_err, "at_t": peer_t,
+        "load_average": load,
+        "published": {"seconds": peer_s, "cpu_seconds": peer_cpu, "error": peer_err, "at_t": peer_t,
                       "at": {str(t): v for t, v in peer.items()},
                       "bvp_iterations": iterations, "largest_mesh": largest},
         "eyeshell": {"tol": tol, "error": es_err, "at_t": es_t, "process_seconds": wall,
-                     "wall_seconds": inside, "nodes": accuracy.get("nodes"),
+                     "process_cpu_seconds": es_cpu, "wall_seconds": inside, "nodes": accuracy.get("nodes"),
                      "rtol": accuracy.get("rtol"), "rounds": len(accuracy.get("rounds", []))},
         "speedup_process": peer_s / wall,
         "speedup_wall_seconds": peer_s / inside,
+        "speedup_cpu": peer_cpu / es_cpu,
         "accuracy_ratio": peer_err / es_err if es_err > 0 else float("inf"),
     }
     if a.json:
@@ -256,15 +265,18 @@ def main():
     print(f"reference: eyeshell IDA N = 3201, rtol 1e-10, atol 1e-12; at t = 1 axial length "
           f"{ref[1.0][0]:.9f}, equatorial radius {ref[1.0][1]:.9f} mm")
     print(f"published method (solve_bvp tol 1e-6 + 200 Euler steps, 501 points): error "
-          f"{peer_err:.2e} mm (largest at t = {peer_t:g}); {peer_s:.2f} s, {iterations} "
+          f"{peer_err:.2e} mm (largest at t = {peer_t:g}); {peer_s:.2f} s ({peer_cpu:.2f} s CPU), "
+          f"{iterations} "
           f"collocation iterations, largest mesh {largest}")
     print(f"eyeshell grow solver.tol = {tol:.1e} (chose N = {e['nodes']}, rtol "
           f"{e['rtol'] or float('nan'):.2g}, {e['rounds']} round(s)): error {es_err:.2e} mm "
-          f"(largest at t = {es_t:g}); process {wall:.4f} s, summary wall_seconds "
-          f"{inside:.4f} s (least of {a.repeat})")
+          f"(largest at t = {es_t:g}); process {wall:.4f} s ({es_cpu:.4f} s CPU), summary "
+          f"wall_seconds {inside:.4f} s (each the least of {a.repeat})")
     print(f"speed-up: {report['speedup_process']:.0f}x (process), "
-          f"{report['speedup_wall_seconds']:.0f}x (wall_seconds); eyeshell "
-          f"{report['accuracy_ratio']:.0f}x more accurate")
+          f"{report['speedup_wall_seconds']:.0f}x (wall_seconds), {report['speedup_cpu']:.0f}x "
+          f"(CPU, process against process); eyeshell "
+          f"{report['accuracy_ratio']:.0f}x more accurate; load average {load[0]:.1f} "
+          f"{load[1]:.1f} {load[2]:.1f}")
 
 
 if __name__ == "__main__":

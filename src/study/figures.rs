@@ -99,38 +99,34 @@ pub fn make(
                 ..FiguresSummary::default()
             },
         )?;
-        for (name, file, text) in SCENES {
-            let sweep = Sweep::from_toml_str(text, file, &[])
-                .map_err(|e| failed(format!("built-in scene {e}")))?;
-            let options = SweepOptions {
-                jobs,
-                resume: false,
-                cancel,
-                runner: &eyeshell::sweep::InProcess,
-                inputs: &[],
-            };
-            let report = run_sweep(&sweep, &data.join(name), &options, &|r, n, total| {
-                progress(&format!(
-                    "{name} [{n}/{total}] {} {}",
-                    r.name,
-                    r.status_text()
-                ));
-            })
-            .map_err(|e| failed(e.to_string()))?;
-            if let Some(r) = report.failed().next() {
-                let why = r.status.message_line().unwrap_or_default();
-                return Err(failed(format!(
-                    "{file}: run {} failed: {why} (its output is in {})",
-                    r.name,
-                    data.join(name).join(&r.dir).display()
-                )));
+        let one = |(name, file, text): (&str, &str, &str), jobs: usize| {
+            run_scene(name, file, text, &data, jobs, cancel, progress)
+        };
+        // The const and thick scenes are one run each: on one core each, side by side, so
+        // that neither leaves the other core idle (with --jobs 1, one after the other).
+        let (single, sweeps) = SCENES.split_at(2);
+        if jobs >= 2 {
+            let done: Vec<Result<(), FiguresError>> = std::thread::scope(|s| {
+                let running: Vec<_> = single
+                    .iter()
+                    .map(|&scene| s.spawn(move || one(scene, 1)))
+                    .collect();
+                running
+                    .into_iter()
+                    .map(|h| {
+                        h.join()
+                            .unwrap_or_else(|_| Err(failed("a figure's run stopped with a panic")))
+                    })
+                    .collect()
+            });
+            done.into_iter().collect::<Result<(), _>>()?;
+        } else {
+            for &scene in single {
+                one(scene, jobs)?;
             }
-            if report.interrupted {
-                return Err(failed(format!(
-                    "interrupted during {file}: the runs so far are in {}",
-                    data.display()
-                )));
-            }
+        }
+        for &scene in sweeps {
+            one(scene, jobs)?;
         }
     }
     if owned.is_none() {
@@ -169,6 +165,50 @@ pub fn make(
     )?;
     drop(owned);
     Ok(figures)
+}
+
+/// Run one of [`SCENES`] (a sweep) into `data/name` with `jobs` runs at a time.
+fn run_scene(
+    name: &str,
+    file: &str,
+    text: &str,
+    data: &Path,
+    jobs: usize,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<(), FiguresError> {
+    let sweep =
+        Sweep::from_toml_str(text, file, &[]).map_err(|e| failed(format!("built-in scene {e}")))?;
+    let options = SweepOptions {
+        jobs,
+        resume: false,
+        cancel,
+        runner: &eyeshell::sweep::InProcess,
+        inputs: &[],
+    };
+    let report = run_sweep(&sweep, &data.join(name), &options, &|r, n, total| {
+        progress(&format!(
+            "{name} [{n}/{total}] {} {}",
+            r.name,
+            r.status_text()
+        ));
+    })
+    .map_err(|e| failed(e.to_string()))?;
+    if let Some(r) = report.failed().next() {
+        let why = r.status.message_line().unwrap_or_default();
+        return Err(failed(format!(
+            "{file}: run {} failed: {why} (its output is in {})",
+            r.name,
+            data.join(name).join(&r.dir).display()
+        )));
+    }
+    if report.interrupted {
+        return Err(failed(format!(
+            "interrupted during {file}: the runs so far are in {}",
+            data.display()
+        )));
+    }
+    Ok(())
 }
 
 type Opener<'a> = &'a dyn Fn(&Path, &str, &[&str]) -> Result<rundir::OwnedDir, rundir::OutputError>;
