@@ -1035,20 +1035,24 @@ pub fn fit_figure(
             )
         })
         .collect();
-    let mut fig = Figure::new("axial length: data and fit", axis.title(), "axial length (mm)")
-        .with(Series::new("initial", on_axis(initial), SeriesStyle::DashedLine).color(GREY))
-        .with(Series::new("fitted", on_axis(fitted), SeriesStyle::Line).color(BLUE))
-        .with(
-            Series::new(
-                "data",
-                r.residuals
-                    .iter()
-                    .map(|x| (axis.x(x.t), x.axial_length))
-                    .collect(),
-                SeriesStyle::Markers,
-            )
-            .color(RED),
-        );
+    let mut fig = Figure::new(
+        "axial length: data and fit",
+        axis.title(),
+        "axial length (mm)",
+    )
+    .with(Series::new("initial", on_axis(initial), SeriesStyle::DashedLine).color(GREY))
+    .with(Series::new("fitted", on_axis(fitted), SeriesStyle::Line).color(BLUE))
+    .with(
+        Series::new(
+            "data",
+            r.residuals
+                .iter()
+                .map(|x| (axis.x(x.t), x.axial_length))
+                .collect(),
+            SeriesStyle::Markers,
+        )
+        .color(RED),
+    );
     for e in estimates {
         fig = fig.note(e);
     }

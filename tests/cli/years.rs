@@ -177,7 +177,10 @@ fn a_scene_in_years_has_ages_in_every_output() {
         let (t, age) = (numbers(&path, "t"), numbers(&path, "age"));
         assert!(t.len() >= 5, "{file}: {t:?}");
         for (t, a) in t.iter().zip(&age) {
-            assert!((a - (2.0 + 10.0 * t)).abs() <= 1e-12, "{file}: t {t}, age {a}");
+            assert!(
+                (a - (2.0 + 10.0 * t)).abs() <= 1e-12,
+                "{file}: t {t}, age {a}"
+            );
         }
     }
     let names: Vec<String> = snapshots(&run)
@@ -204,7 +207,10 @@ fn a_scene_in_years_has_ages_in_every_output() {
     );
     for f in ["timeline", "sensitivities", "profiles"] {
         let svg = std::fs::read_to_string(d.join(format!("figs/{f}.svg"))).unwrap();
-        assert!(svg.contains("age (years)") || svg.contains("years"), "{f}.svg has no age");
+        assert!(
+            svg.contains("age (years)") || svg.contains("years"),
+            "{f}.svg has no age"
+        );
     }
     let svg = std::fs::read_to_string(d.join("figs/timeline.svg")).unwrap();
     assert!(svg.contains("age (years)"), "timeline.svg: no age axis");
@@ -246,7 +252,10 @@ fn a_scene_in_years_has_ages_in_every_output() {
     assert_eq!(column(&residuals, "age"), ages[1..].to_vec());
     let curve = d.join("fit/curve.csv");
     for (t, a) in column(&curve, "t").iter().zip(column(&curve, "age")) {
-        assert!((a - (2.0 + 10.0 * t)).abs() <= 1e-12, "curve.csv: t {t}, age {a}");
+        assert!(
+            (a - (2.0 + 10.0 * t)).abs() <= 1e-12,
+            "curve.csv: t {t}, age {a}"
+        );
     }
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("fit/fit.json")).unwrap()).unwrap();

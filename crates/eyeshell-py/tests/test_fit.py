@@ -87,7 +87,7 @@ def test_fit_refusals_are_input_errors():
                      fit=["growth.Gamma"])
     with pytest.raises(eyeshell.InputError, match="is listed twice"):
         eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma", "growth.Gamma"])
-    with pytest.raises(eyeshell.InputError, match="the columns t and axial_length are required"):
+    with pytest.raises(eyeshell.InputError, match="the columns t \\(or age, not both\\) and axial_length are required"):
         eyeshell.fit(SCENES / "const.toml", {"t": [0.5]}, fit=["growth.Gamma"])
     for bad in [0, 1001, True, 2.0]:
         with pytest.raises(eyeshell.InputError, match=f"max_iterations = {bad!r}: must be a whole number from 1 to 1,000"):

@@ -200,7 +200,10 @@ impl GrowthWriter {
         if with_sensitivities {
             entries.push(SENSITIVITIES_FILE);
         }
-        let ages = scene.growth.as_ref().is_some_and(|g| g.age_unit().is_some());
+        let ages = scene
+            .growth
+            .as_ref()
+            .is_some_and(|g| g.age_unit().is_some());
         let owned = OwnedDir::fresh(target, "grow", &entries, inputs)?;
         let target = owned.path().to_path_buf();
         let snapshots = target.join(SNAPSHOT_DIR);
