@@ -135,6 +135,69 @@ fn t_label(t: f64) -> String {
     format!("t = {}", trim(t))
 }
 
+/// The time axis of a run's figures: the scene's ages when it counts in them (time.unit),
+/// else the model's t, so that a scene in years is drawn in years and one without a unit
+/// exactly as before.
+#[derive(Clone, Copy, Debug)]
+pub struct TimeAxis {
+    /// The clock and growth.t_end of a scene with ages; None: t.
+    clock: Option<(eyeshell::growth::schedule::Clock, f64, &'static str)>,
+}
+
+impl TimeAxis {
+    /// The axis of `scene`.
+    pub fn of(scene: &Scene) -> TimeAxis {
+        TimeAxis {
+            clock: scene
+                .growth
+                .as_ref()
+                .and_then(|g| Some((g.clock, g.t_end, g.age_unit()?))),
+        }
+    }
+
+    /// The axis of several runs drawn together: ages when every run counts in the same
+    /// unit, else t (ages in years and t on one axis would mislead).
+    fn of_runs<'a>(scenes: impl IntoIterator<Item = &'a Scene>) -> TimeAxis {
+        let mut axes = scenes.into_iter().map(TimeAxis::of);
+        let Some(first) = axes.next() else {
+            return TimeAxis { clock: None };
+        };
+        let unit = first.clock.map(|c| c.2);
+        if axes.all(|a| a.clock.map(|c| c.2) == unit) {
+            first
+        } else {
+            TimeAxis { clock: None }
+        }
+    }
+
+    /// Where time `t` of a run with this axis lies on it.
+    pub fn x(&self, t: f64) -> f64 {
+        match self.clock {
+            Some((clock, t_end, _)) => clock.age(t, t_end),
+            None => t,
+        }
+    }
+
+    /// The axis' title: "age (years)", or "t".
+    pub fn title(&self) -> String {
+        match self.clock {
+            Some((_, _, unit)) => format!("age ({unit})"),
+            None => "t".to_string(),
+        }
+    }
+
+    /// A legend's name for time `t`: "age 3.5 years", or "t = 0.2".
+    fn label(&self, t: f64) -> String {
+        match self.clock {
+            Some((_, _, unit)) => format!("age {} {unit}", trim(self.x(t))),
+            None => t_label(t),
+        }
+    }
+}
+
+/// The paper's figures are in t.
+const T: TimeAxis = TimeAxis { clock: None };
+
 /// A number as short as it reads: 0.1, 1, 23.58.
 fn trim(x: f64) -> String {
     let s = format!("{x:.4}");
@@ -184,6 +247,7 @@ fn profile_panel(
     field: &str,
     label: &str,
     snaps: &[&RunSnapshot],
+    axis: TimeAxis,
 ) -> Result<Figure, ExportError> {
     let mut fig = Figure::new(title, "σ (mm)", label);
     // Evenly spread along the colour map by order (the times themselves cluster near 0).
@@ -194,19 +258,26 @@ fn profile_panel(
             .zip(column(s, field)?)
             .collect();
         let c = colormap(0.85 * k as f64 / last);
-        fig = fig.with(Series::new(t_label(s.t), pts, SeriesStyle::Line).color(c));
+        fig = fig.with(Series::new(axis.label(s.t), pts, SeriesStyle::Line).color(c));
     }
     Ok(fig)
 }
 
-/// Axial length against t for several runs.
+/// Axial length against time for several runs: against age when they all count in the
+/// same unit ([`TimeAxis::of_runs`]), else against t.
 fn axial_panel(title: &str, runs: &[(String, &RunData)]) -> Figure {
-    let mut fig = Figure::new(title, "t", "axial length (mm)");
+    let ages = TimeAxis::of_runs(runs.iter().map(|(_, r)| &r.scene));
+    let mut fig = Figure::new(title, ages.title(), "axial length (mm)");
     for (k, (name, run)) in runs.iter().enumerate() {
+        let axis = if ages.clock.is_some() {
+            TimeAxis::of(&run.scene)
+        } else {
+            ages
+        };
         let pts = run
             .timeline()
             .iter()
-            .map(|p| (p.t, p.axial_length))
+            .map(|p| (axis.x(p.t), p.axial_length))
             .collect();
         fig = fig
             .with(Series::new(name.clone(), pts, SeriesStyle::Line).color(plot::PALETTE[k % 10]));
@@ -454,8 +525,8 @@ fn figure_b(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
     let run = &runs.constant;
     let snaps = snapshots_at(run, &[0.0, 0.1, 0.2, 0.4, 1.0]);
     let panels = vec![
-        profile_panel("(f) stretch α_s", "alpha_s", "α_s", &snaps)?,
-        profile_panel("(g) stretch α_φ", "alpha_phi", "α_φ", &snaps)?,
+        profile_panel("(f) stretch α_s", "alpha_s", "α_s", &snaps, T)?,
+        profile_panel("(g) stretch α_φ", "alpha_phi", "α_φ", &snaps, T)?,
     ];
     let title = "Stretches of the uniform sclera as it grows";
     let files = plot::write_panels(
@@ -812,11 +883,12 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
             )?);
         }
         RunKind::Growth { .. } => {
+            let axis = TimeAxis::of(&run.scene);
             let snaps: Vec<&RunSnapshot> = run.snapshots().iter().collect();
             let top = eta_max(&snaps);
             let shells = snaps
                 .iter()
-                .map(|s| shell_panel(t_label(s.t), &run.scene, s, top))
+                .map(|s| shell_panel(axis.label(s.t), &run.scene, s, top))
                 .collect::<Result<Vec<_>, _>>()?;
             let columns = shells.len().clamp(1, 3);
             push(plot::write_panels(
@@ -828,10 +900,10 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 &stem("shells"),
             )?);
             let profiles = vec![
-                profile_panel("α_s", "alpha_s", "α_s", &snaps)?,
-                profile_panel("α_φ", "alpha_phi", "α_φ", &snaps)?,
-                profile_panel("η", "eta", "η (1/mm)", &snaps)?,
-                profile_panel("t_s", "t_s", "t_s (kPa·mm)", &snaps)?,
+                profile_panel("α_s", "alpha_s", "α_s", &snaps, axis)?,
+                profile_panel("α_φ", "alpha_phi", "α_φ", &snaps, axis)?,
+                profile_panel("η", "eta", "η (1/mm)", &snaps, axis)?,
+                profile_panel("t_s", "t_s", "t_s (kPa·mm)", &snaps, axis)?,
             ];
             push(plot::write_panels(
                 &profiles,
@@ -845,13 +917,15 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
             let axial = axial_panel("axial length", &[(run.name.clone(), &run)]).no_legend();
             let refraction = Figure::new(
                 "retina behind the best-focus surfaces",
-                "t",
+                axis.title(),
                 "distance behind (mm)",
             )
             .with(
                 Series::new(
                     "behind blue",
-                    tl.iter().map(|p| (p.t, p.retina_minus_blue)).collect(),
+                    tl.iter()
+                        .map(|p| (axis.x(p.t), p.retina_minus_blue))
+                        .collect(),
                     SeriesStyle::Line,
                 )
                 .color(BLUE),
@@ -859,7 +933,9 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
             .with(
                 Series::new(
                     "behind red",
-                    tl.iter().map(|p| (p.t, p.retina_minus_red)).collect(),
+                    tl.iter()
+                        .map(|p| (axis.x(p.t), p.retina_minus_red))
+                        .collect(),
                     SeriesStyle::Line,
                 )
                 .color(RED),
@@ -872,7 +948,7 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 PANEL.1,
                 &stem("timeline"),
             )?);
-            if let Some(panels) = sensitivity_panels(dir)? {
+            if let Some(panels) = sensitivity_panels(dir, axis)? {
                 push(plot::write_panels(
                     &panels,
                     2,
@@ -890,10 +966,10 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
 /// A line of a figure: (t, value) points.
 type Curve = Vec<(f64, f64)>;
 
-/// sensitivities.csv of a growth run (`grow --sensitivities`) against t, one line per
-/// parameter: dL/dp, d(equatorial radius)/dp, d(retina − blue)/dp and (p/L) dL/dp. None
-/// without the file.
-fn sensitivity_panels(dir: &Path) -> Result<Option<Vec<Figure>>, ExportError> {
+/// sensitivities.csv of a growth run (`grow --sensitivities`) against time (`axis`), one
+/// line per parameter: dL/dp, d(equatorial radius)/dp, d(retina − blue)/dp and (p/L)
+/// dL/dp. None without the file.
+fn sensitivity_panels(dir: &Path, axis: TimeAxis) -> Result<Option<Vec<Figure>>, ExportError> {
     let Some(rows) = eyeshell::rundir::read::read_sensitivities(dir)? else {
         return Ok(None);
     };
@@ -909,7 +985,7 @@ fn sensitivity_panels(dir: &Path) -> Result<Option<Vec<Figure>>, ExportError> {
             }
         };
         for (c, v) in row.values.into_iter().enumerate() {
-            lines[slot].1[c].push((row.t, v));
+            lines[slot].1[c].push((axis.x(row.t), v));
         }
     }
     let labels = [
@@ -923,7 +999,7 @@ fn sensitivity_panels(dir: &Path) -> Result<Option<Vec<Figure>>, ExportError> {
         .enumerate()
         .map(|(c, label)| {
             lines.iter().fold(
-                Figure::new(label.to_string(), "t", label.to_string()),
+                Figure::new(label.to_string(), axis.title(), label.to_string()),
                 |f, (key, cols)| {
                     f.with(Series::new(key.clone(), cols[c].clone(), SeriesStyle::Line))
                 },
@@ -939,8 +1015,12 @@ pub fn fit_figure(
     r: &eyeshell::fit::FitReport,
     fitted: &[(f64, f64)],
     initial: &[(f64, f64)],
+    axis: TimeAxis,
     stem: &Path,
 ) -> Result<(PathBuf, PathBuf), FigureError> {
+    let on_axis = |curve: &[(f64, f64)]| -> Vec<(f64, f64)> {
+        curve.iter().map(|&(t, l)| (axis.x(t), l)).collect()
+    };
     let estimates: Vec<String> = r
         .parameters
         .iter()
@@ -953,17 +1033,24 @@ pub fn fit_figure(
             )
         })
         .collect();
-    let mut fig = Figure::new("axial length: data and fit", "t", "axial length (mm)")
-        .with(Series::new("initial", initial.to_vec(), SeriesStyle::DashedLine).color(GREY))
-        .with(Series::new("fitted", fitted.to_vec(), SeriesStyle::Line).color(BLUE))
-        .with(
-            Series::new(
-                "data",
-                r.residuals.iter().map(|x| (x.t, x.axial_length)).collect(),
-                SeriesStyle::Markers,
-            )
-            .color(RED),
-        );
+    let mut fig = Figure::new(
+        "axial length: data and fit",
+        axis.title(),
+        "axial length (mm)",
+    )
+    .with(Series::new("initial", on_axis(initial), SeriesStyle::DashedLine).color(GREY))
+    .with(Series::new("fitted", on_axis(fitted), SeriesStyle::Line).color(BLUE))
+    .with(
+        Series::new(
+            "data",
+            r.residuals
+                .iter()
+                .map(|x| (axis.x(x.t), x.axial_length))
+                .collect(),
+            SeriesStyle::Markers,
+        )
+        .color(RED),
+    );
     for e in estimates {
         fig = fig.note(e);
     }
@@ -974,7 +1061,10 @@ pub fn fit_figure(
                 fig = fig.with(
                     Series::new(
                         "±σ",
-                        vec![(x.t, x.axial_length - s), (x.t, x.axial_length + s)],
+                        vec![
+                            (axis.x(x.t), x.axial_length - s),
+                            (axis.x(x.t), x.axial_length + s),
+                        ],
                         SeriesStyle::Line,
                     )
                     .color(RED)

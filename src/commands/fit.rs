@@ -60,6 +60,10 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
         .as_bytes(),
     )?;
     let v = rundir::format_value;
+    // A scene in ages: residuals.csv and curve.csv end in the age column, as series.csv.
+    let g = scene.growth.as_ref();
+    let ages = g.is_some_and(|g| g.age_unit().is_some());
+    let age_cell = |t: f64| g.and_then(|g| g.age_of(t)).map(v);
     let rows = r.residuals.iter().map(|x| {
         [
             v(x.t),
@@ -69,32 +73,44 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
             v(x.residual),
             v(x.weighted),
         ]
+        .into_iter()
+        .chain(x.age.map(v))
+        .collect::<Vec<_>>()
     });
     let table = rundir::table::csv_bytes(
-        [
-            "t",
-            "axial_length",
-            "sigma",
-            "model",
-            "residual",
-            "weighted_residual",
-        ],
+        rundir::growth::with_age_column(
+            &[
+                "t",
+                "axial_length",
+                "sigma",
+                "model",
+                "residual",
+                "weighted_residual",
+            ],
+            ages,
+        ),
         rows,
         rundir::table::QuoteStyle::Necessary,
     )
     .map_err(|e| io(RESIDUALS_FILE, e))?;
     write(RESIDUALS_FILE, &table)?;
     let curve = rundir::table::csv_bytes(
-        ["t", "fitted_axial_length", "initial_axial_length"],
-        fitted
-            .iter()
-            .zip(&initial)
-            .map(|(f, i)| [v(f.0), v(f.1), v(i.1)]),
+        rundir::growth::with_age_column(
+            &["t", "fitted_axial_length", "initial_axial_length"],
+            ages,
+        ),
+        fitted.iter().zip(&initial).map(|(f, i)| {
+            [v(f.0), v(f.1), v(i.1)]
+                .into_iter()
+                .chain(age_cell(f.0))
+                .collect::<Vec<_>>()
+        }),
         rundir::table::QuoteStyle::Necessary,
     )
     .map_err(|e| io(CURVE_FILE, e))?;
     write(CURVE_FILE, &curve)?;
-    crate::figures::fit_figure(r, &fitted, &initial, &dir.file("fit"))?;
+    let axis = crate::figures::TimeAxis::of(&scene);
+    crate::figures::fit_figure(r, &fitted, &initial, axis, &dir.file("fit"))?;
     let target = dir.commit()?;
     if !a.quiet {
         out(&report_text(&scene, r, &target));

@@ -338,7 +338,12 @@ fn output_matches(shown: &str, printed: &str, numbers_any: bool) -> bool {
 /// A fresh directory to run a file's commands in, with the inputs the docs name.
 fn workdir() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("temp dir");
-    for sub in ["scenes", "scenes/eyewear", "examples/fit"] {
+    for sub in [
+        "scenes",
+        "scenes/eyewear",
+        "examples/fit",
+        "examples/cohort",
+    ] {
         let to = dir.path().join(sub);
         std::fs::create_dir_all(&to).expect("mkdir");
         for entry in std::fs::read_dir(repo().join(sub)).expect("read inputs") {

@@ -133,3 +133,135 @@ fn a_factor_of_two_is_eta0_doubled() {
     }
     assert!(a[a.len() - 1] - a[0] > 1.0, "{a:?}");
 }
+
+/// Column `name` of a CSV file whose other columns may be text (series.csv's class).
+fn numbers(path: &std::path::Path, name: &str) -> Vec<f64> {
+    let (h, rows) = csv_cells(path);
+    let j = h.iter().position(|c| c == name).unwrap();
+    rows.iter().map(|r| r[j].parse().unwrap()).collect()
+}
+
+/// A scene in years carries the age beside t everywhere: series.csv, history.csv and
+/// sensitivities.csv end in an `age` column, the snapshot files are named by age, `plot`
+/// draws against age, and `fit` (data by age) reports, tabulates and draws by age.
+#[test]
+fn a_scene_in_years_has_ages_in_every_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Ages 2 to 12 years over t in [0, 1]: age = 2 + 10 t.
+    std::fs::write(
+        d.join("years.toml"),
+        "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\nhistory_points = 4\n[solver]\nnodes = 21\n",
+    )
+    .unwrap();
+    succeeded(
+        &eyeshell_in(
+            d,
+            &[
+                "grow",
+                "years.toml",
+                "--out",
+                "run",
+                "--sensitivities",
+                "growth.eta0",
+                "--quiet",
+            ],
+        ),
+        "grow in years",
+    );
+    let run = d.join("run");
+    for file in ["series.csv", "history.csv", "sensitivities.csv"] {
+        let path = run.join(file);
+        let (h, _) = csv_cells(&path);
+        assert_eq!(h.last().map(String::as_str), Some("age"), "{file}: {h:?}");
+        let (t, age) = (numbers(&path, "t"), numbers(&path, "age"));
+        assert!(t.len() >= 5, "{file}: {t:?}");
+        for (t, a) in t.iter().zip(&age) {
+            assert!(
+                (a - (2.0 + 10.0 * t)).abs() <= 1e-12,
+                "{file}: t {t}, age {a}"
+            );
+        }
+    }
+    let names: Vec<String> = snapshots(&run)
+        .iter()
+        .map(|(p, _)| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "snapshot_00000_age2.000000.csv",
+            "snapshot_00001_age3.000000.csv",
+            "snapshot_00002_age4.000000.csv",
+            "snapshot_00003_age6.000000.csv",
+            "snapshot_00004_age12.000000.csv"
+        ]
+    );
+    for (p, _) in snapshots(&run) {
+        assert!(p.is_file(), "{}", p.display());
+    }
+    // plot: the timeline and the sensitivities against age.
+    succeeded(
+        &eyeshell_in(d, &["plot", "run", "--out", "figs", "-q"]),
+        "plot",
+    );
+    for f in ["timeline", "sensitivities", "profiles"] {
+        let svg = std::fs::read_to_string(d.join(format!("figs/{f}.svg"))).unwrap();
+        assert!(
+            svg.contains("age (years)") || svg.contains("years"),
+            "{f}.svg has no age"
+        );
+    }
+    let svg = std::fs::read_to_string(d.join("figs/timeline.svg")).unwrap();
+    assert!(svg.contains("age (years)"), "timeline.svg: no age axis");
+    // fit by age: the series' own lengths at its ages, η0 started 10 % off.
+    let (ages, lengths) = (
+        numbers(&run.join("series.csv"), "age"),
+        numbers(&run.join("series.csv"), "axial_length"),
+    );
+    let mut data = String::from("age,axial_length,sigma\n");
+    for (a, l) in ages.iter().zip(&lengths).skip(1) {
+        data.push_str(&format!("{a},{l},0.05\n"));
+    }
+    std::fs::write(d.join("ages.csv"), data).unwrap();
+    let r = eyeshell_in(
+        d,
+        &[
+            "fit",
+            "years.toml",
+            "--data",
+            "ages.csv",
+            "--fit",
+            "growth.eta0",
+            "--set",
+            "growth.eta0=63",
+            "--out",
+            "fit",
+        ],
+    );
+    succeeded(&r, "fit by age");
+    assert!(
+        r.stdout.contains("residuals        age (years)"),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("      12.0000"), "{}", r.stdout);
+    let residuals = d.join("fit/residuals.csv");
+    let (h, _) = csv_cells(&residuals);
+    assert_eq!(h.last().map(String::as_str), Some("age"), "{h:?}");
+    assert_eq!(column(&residuals, "age"), ages[1..].to_vec());
+    let curve = d.join("fit/curve.csv");
+    for (t, a) in column(&curve, "t").iter().zip(column(&curve, "age")) {
+        assert!(
+            (a - (2.0 + 10.0 * t)).abs() <= 1e-12,
+            "curve.csv: t {t}, age {a}"
+        );
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("fit/fit.json")).unwrap()).unwrap();
+    assert_eq!(json["residuals"][0]["age"].as_f64(), Some(ages[1]));
+    let estimate = json["parameters"][0]["estimate"].as_f64().unwrap();
+    assert!((estimate - 70.0).abs() < 0.05, "η0 = {estimate}");
+    let svg = std::fs::read_to_string(d.join("fit/fit.svg")).unwrap();
+    assert!(svg.contains("age (years)"), "fit.svg: no age axis");
+}

@@ -15,7 +15,7 @@
 
 use eyeshell::bvp::{FieldRow, Solution, COLUMNS};
 use eyeshell::growth::{
-    Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot, GROWTH_COLUMNS,
+    GrowthParams, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot, GROWTH_COLUMNS,
 };
 use eyeshell::interop::export::{elastic_mat_vars, ElasticExtras, Table};
 use eyeshell::interop::mat::MatValue;
@@ -564,8 +564,12 @@ const SERIES_NAMES: [&str; 5] = [
 ];
 
 /// Series rows as a dict of arrays (series.csv's columns, in its order; `class` as a list
-/// of str).
-fn series_dict<'py>(py: Python<'py>, rows: &[SeriesRow]) -> PyResult<Bound<'py, PyDict>> {
+/// of str; `age` last when the scene counts in ages, `g`'s time.unit, as series.csv).
+fn series_dict<'py>(
+    py: Python<'py>,
+    rows: &[SeriesRow],
+    g: Option<&GrowthParams>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let getters: [fn(&SeriesRow) -> f64; 5] = [
         |r| r.t,
@@ -580,7 +584,23 @@ fn series_dict<'py>(py: Python<'py>, rows: &[SeriesRow]) -> PyResult<Bound<'py, 
     let classes: Vec<&str> = rows.iter().map(|r| r.class.as_str()).collect();
     d.set_item("class", PyList::new(py, classes)?)?;
     d.set_item("refraction_D", column(py, rows, |r| r.refraction_d))?;
+    add_age(py, &d, rows.iter().map(|r| r.t), g)?;
     Ok(d)
+}
+
+/// The `age` column of the times `t` in a scene that counts in ages (`g`'s time.unit), as
+/// the command line's files end in it; nothing without a unit.
+fn add_age(
+    py: Python<'_>,
+    d: &Bound<'_, PyDict>,
+    t: impl Iterator<Item = f64>,
+    g: Option<&GrowthParams>,
+) -> PyResult<()> {
+    let Some(g) = g.filter(|g| g.age_unit().is_some()) else {
+        return Ok(());
+    };
+    let ages: Vec<f64> = t.map(|t| g.age_of(t).unwrap_or(f64::NAN)).collect();
+    d.set_item("age", PyArray1::from_vec(py, ages))
 }
 
 /// One snapshot's fields (fields.csv's columns, then the growth columns) as arrays.
@@ -597,6 +617,7 @@ fn snapshot_dict<'py>(py: Python<'py>, s: &Snapshot) -> PyResult<Bound<'py, PyDi
 fn sensitivities_dict<'py>(
     py: Python<'py>,
     rows: &[SensitivityRow],
+    g: Option<&GrowthParams>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("t", column(py, rows, |r| r.t))?;
@@ -615,6 +636,7 @@ fn sensitivities_dict<'py>(
         "scaled_axial_length",
         column(py, rows, SensitivityRow::scaled_axial_length),
     )?;
+    add_age(py, &d, rows.iter().map(|r| r.t), g)?;
     Ok(d)
 }
 
@@ -647,8 +669,9 @@ fn grow<'py>(
     }
     let growth = result.map_err(py_err)?;
     let d = PyDict::new(py);
-    d.set_item("series", series_dict(py, &growth.series)?)?;
-    d.set_item("history", series_dict(py, &growth.history)?)?;
+    let g = scene.growth.as_ref();
+    d.set_item("series", series_dict(py, &growth.series, g)?)?;
+    d.set_item("history", series_dict(py, &growth.history, g)?)?;
     let snapshots = PyList::empty(py);
     for s in &growth.snapshots {
         snapshots.append(PyTuple::new(
@@ -662,7 +685,7 @@ fn grow<'py>(
     d.set_item("snapshots", snapshots)?;
     d.set_item(
         "sensitivities",
-        sensitivities_dict(py, &growth.sensitivities)?,
+        sensitivities_dict(py, &growth.sensitivities, g)?,
     )?;
     d.set_item("summary_text", scene.grow_summary(&growth))?;
     Ok(d)
@@ -672,11 +695,12 @@ fn grow<'py>(
 // Calibration
 
 /// Fit the parameters `keys` of `scene` to observations (the CSV file `path`, or the
-/// columns `t`, `axial_length` and `sigma`), with the GIL released, as `eyeshell fit`:
+/// columns `t` (or `age`, in the scene's time.unit), `axial_length` and `sigma`), with the
+/// GIL released, as `eyeshell fit`:
 /// returns (fit.json's text, the report's table and its notes, the fitted scene). Ctrl-C stops it within a step of its
 /// current growth run, as it stops `grow`.
 #[pyfunction]
-#[pyo3(signature = (scene, keys, path = None, t = None, axial_length = None, sigma = None, max_iterations = 50))]
+#[pyo3(signature = (scene, keys, path = None, t = None, axial_length = None, sigma = None, max_iterations = 50, age = None))]
 #[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
@@ -687,6 +711,7 @@ fn fit(
     axial_length: Option<Vec<f64>>,
     sigma: Option<Vec<f64>>,
     max_iterations: usize,
+    age: Option<Vec<f64>>,
 ) -> PyResult<(String, String, Vec<String>, PyScene)> {
     use eyeshell::fit::{FitOptions, Observations};
     if !(1..=1000).contains(&max_iterations) {
@@ -695,14 +720,17 @@ fn fit(
         )));
     }
     let scene = scene.inner;
-    let data = match (path, t, axial_length) {
-        (Some(p), None, None) => Observations::read(&p).map_err(py_err)?,
-        (None, Some(t), Some(l)) => {
+    let data = match (path, t, age, axial_length) {
+        (Some(p), None, None, None) => Observations::read(&p).map_err(py_err)?,
+        (None, Some(t), None, Some(l)) => {
             Observations::from_columns(&t, &l, sigma.as_deref(), "data").map_err(py_err)?
+        }
+        (None, None, Some(a), Some(l)) => {
+            Observations::from_age_columns(&a, &l, sigma.as_deref(), "data").map_err(py_err)?
         }
         _ => {
             return Err(input_err(
-                "data: give a CSV file's path, or the columns t and axial_length (and sigma)",
+                "data: give a CSV file's path, or the columns t (or age) and axial_length (and sigma), not both t and age",
             ))
         }
     };

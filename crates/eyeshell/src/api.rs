@@ -20,7 +20,7 @@ use crate::bvp::{self, Solution, COLUMNS};
 use crate::growth::{
     self, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
 };
-use crate::rundir::growth::{snapshot_name, SNAPSHOT_DIR};
+use crate::rundir::growth::{snapshot_name_at, SNAPSHOT_DIR};
 use crate::rundir::summary::{ElasticSummary, GrowthSummary, RunStatus, SnapshotEntry, Summary};
 use crate::scene::sweep::Sweep;
 use crate::scene::{Scene, SceneError};
@@ -223,7 +223,10 @@ impl Scene {
             .enumerate()
             .map(|(k, s)| SnapshotEntry {
                 t: s.t,
-                file: format!("{SNAPSHOT_DIR}/{}", snapshot_name(k, s.t)),
+                file: format!(
+                    "{SNAPSHOT_DIR}/{}",
+                    snapshot_name_at(k, s.t, self.growth.as_ref().and_then(|g| g.age_of(s.t)))
+                ),
             })
             .collect();
         let status = RunStatus::Ok(&growth.stats);

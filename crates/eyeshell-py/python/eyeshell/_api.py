@@ -409,13 +409,15 @@ class Growth:
     """A growth run from t = 0 to ``growth.t_end``.
 
     - ``series``: series.csv's columns (t, axial_length, equatorial_radius,
-      retina_minus_blue, retina_minus_red, class) at each snapshot;
+      retina_minus_blue, retina_minus_red, class, refraction_D, and ``age`` in a scene
+      with ``time.unit``: the age of each t in that unit) at each snapshot;
     - ``history``: the same at every recorded time when ``output.history_points`` > 0
       (history.csv), else empty;
     - ``snapshots``: {t: every field at every node (the snapshot files' columns)};
     - ``sensitivities``: with ``grow(..., sensitivities=[...])``, sensitivities.csv's
       columns (t, parameter, d_axial_length, d_equatorial_radius, d_retina_minus_blue,
-      scaled_axial_length), one row per recorded time and parameter; else empty;
+      scaled_axial_length, and ``age`` with ``time.unit``), one row per recorded time and
+      parameter; else empty;
     - ``summary``: summary.json's content;
     - ``error_estimate``: with ``grow(tol=...)`` (``solver.tol``), summary.json's
       ``error_estimate``: each length's estimated error (mm) as {total, space, time}, the
@@ -629,7 +631,8 @@ class FitResult:
     - ``estimates``, ``standard_errors``, ``initial``: {key: value} in the order fitted;
     - ``correlation``, ``covariance``: k×k arrays in that order;
     - ``residuals``: each observation against the fitted model (t, axial_length, sigma,
-      model, residual, weighted), a DataFrame with pandas, else a dict of arrays;
+      model, residual, weighted, and ``age`` in a scene with ``time.unit``), a DataFrame
+      with pandas, else a dict of arrays;
     - ``scene``: the scene with the estimates (:class:`Scene`);
     - ``report``: fit.json's content (χ², iterations, cost history, convergence, data hash);
     - ``notes``: what the numbers alone do not say, one str each (a pair of parameters
@@ -654,9 +657,13 @@ class FitResult:
         self.correlation = np.array(self.report["correlation"], dtype=float)
         self.covariance = np.array(self.report["covariance"], dtype=float)
         rows = self.report["residuals"]
+        names = ["t", "axial_length", "sigma", "model", "residual", "weighted"]
+        # fit.json gives each residual its age when the scene counts in ages.
+        if rows and "age" in rows[0]:
+            names.append("age")
         columns = {
             k: np.array([math.nan if r[k] is None else r[k] for r in rows], dtype=float)
-            for k in ["t", "axial_length", "sigma", "model", "residual", "weighted"]
+            for k in names
         }
         self.residuals = _frame(columns, frames)
 
@@ -678,8 +685,8 @@ class FitResult:
     def curve(self, points: int = 201) -> dict[str, np.ndarray]:
         """The fitted model's axial length at ``points`` evenly spaced times over
         [0, t_end], both ends included (t = t_end·k/(points − 1)): {"t": ...,
-        "axial_length": ...}, from one growth run of :attr:`scene` (the curve ``eyeshell
-        fit`` plots). ``points``: a whole number from 2 (the two ends) to 1,000,001;
+        "axial_length": ...} (and "age" in a scene with ``time.unit``), from one growth run
+        of :attr:`scene` (the curve ``eyeshell fit`` plots). ``points``: a whole number from 2 (the two ends) to 1,000,001;
         Ctrl-C stops the run as it stops :func:`grow`.
 
         >>> r = eyeshell.fit(SCENES + "/const.toml", SCENES + "/../examples/fit/const_synthetic.csv",
@@ -692,7 +699,7 @@ class FitResult:
         # No snapshot between the ends (t_end is always one), so no time but the history's.
         scene = self.scene.copy(output__times=[self.scene["growth.t_end"]], output__history_points=n - 1)
         h = grow(scene, frames=False).history
-        return {"t": np.asarray(h["t"]), "axial_length": np.asarray(h["axial_length"])}
+        return {k: np.asarray(h[k]) for k in ("t", "axial_length", "age") if k in h}
 
     def __str__(self) -> str:
         return self.text
@@ -716,9 +723,11 @@ def fit(
     """``eyeshell fit``: fit the scene keys ``fit`` (start values: the scene's) to measured
     axial lengths by Levenberg–Marquardt, the Jacobian being the growth run's forward
     sensitivities (IDAS), each step kept in the key's validity range. ``data`` is a CSV
-    file's path (a str, bytes or os.PathLike; header ``t,axial_length[,sigma]``, as the
-    command line reads it) or a mapping with the columns ``t``, ``axial_length`` and
-    optionally ``sigma`` (a dict of sequences or a pandas DataFrame). ``overrides`` are
+    file's path (a str, bytes or os.PathLike; header ``t,axial_length[,sigma]`` or
+    ``age,axial_length[,sigma]``, as the command line reads it) or a mapping with the
+    columns ``t`` (or ``age``: ages in the scene's ``time.unit``, each within
+    [``time.start``, ``time.end``]), ``axial_length`` and optionally ``sigma`` (a dict of
+    sequences or a pandas DataFrame). ``overrides`` are
     set on a copy of ``scene``. The GIL is released while it fits; Ctrl-C stops it within
     a step of its current growth run and raises KeyboardInterrupt, as in :func:`grow`.
 
@@ -745,17 +754,17 @@ def fit(
                 return None
             return [float(x) for x in np.asarray(data[name], dtype=float).ravel()]
 
-        t, length = col("t"), col("axial_length")
-        if t is None or length is None:
-            raise InputError("data: the columns t and axial_length are required")
+        t, age, length = col("t"), col("age"), col("axial_length")
+        if (t is None) == (age is None) or length is None:
+            raise InputError("data: the columns t (or age, not both) and axial_length are required")
         done = _eyeshell.fit(
             s._s, list(fit), t=t, axial_length=length, sigma=col("sigma"),
-            max_iterations=max_iterations,
+            max_iterations=max_iterations, age=age,
         )
     else:
         raise TypeError(
             "data must be a CSV file's path (a str, bytes or os.PathLike) or a mapping of "
-            f"columns t, axial_length[, sigma], not {type(data).__name__}"
+            f"columns t (or age), axial_length[, sigma], not {type(data).__name__}"
         )
     report, text, notes, native = done
     return FitResult(report, text, notes, Scene._wrap(native), frames)

@@ -59,6 +59,7 @@ def fit(
     axial_length: list[float] | None = None,
     sigma: list[float] | None = None,
     max_iterations: int = 50,
+    age: list[float] | None = None,
 ) -> tuple[str, str, list[str], _Scene]: ...
 def expand_sweep(
     text: str, origin: str, overrides: list[str] = ...

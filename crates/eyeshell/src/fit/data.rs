@@ -180,19 +180,41 @@ impl Observations {
         sigma: Option<&[f64]>,
         origin: &str,
     ) -> Result<Observations, Error> {
+        Observations::from_named_columns("t", t, axial_length, sigma, origin)
+    }
+
+    /// [`Observations::from_columns`] with ages (in the scene's time.unit) in place of t,
+    /// as a file with an `age` column: checked against the scene's ages by the fit.
+    pub fn from_age_columns(
+        age: &[f64],
+        axial_length: &[f64],
+        sigma: Option<&[f64]>,
+        origin: &str,
+    ) -> Result<Observations, Error> {
+        Observations::from_named_columns("age", age, axial_length, sigma, origin)
+    }
+
+    /// The observations of the columns (`first`: "t" or "age"), as the file with those
+    /// columns would give them.
+    fn from_named_columns(
+        first: &str,
+        t: &[f64],
+        axial_length: &[f64],
+        sigma: Option<&[f64]>,
+        origin: &str,
+    ) -> Result<Observations, Error> {
         let n = t.len();
         if axial_length.len() != n || sigma.is_some_and(|s| s.len() != n) {
             return Err(Error::input(format!(
-                "{origin}: t, axial_length and sigma must have the same length ({n}, {}, {})",
+                "{origin}: {first}, axial_length and sigma must have the same length ({n}, {}, {})",
                 axial_length.len(),
                 sigma.map_or("none".to_string(), |s| s.len().to_string())
             )));
         }
-        let mut text = String::from(if sigma.is_some() {
-            "t,axial_length,sigma\n"
-        } else {
-            "t,axial_length\n"
-        });
+        let mut text = format!(
+            "{first},axial_length{}\n",
+            if sigma.is_some() { ",sigma" } else { "" }
+        );
         for i in 0..n {
             let mut cells = vec![
                 crate::rundir::format_value(t[i]),

@@ -445,6 +445,10 @@ pub fn identifiability(j: &DMatrix<f64>, params: &[FitParam], values: &[f64]) ->
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct ResidualRow {
     pub t: f64,
+    /// The observation's age in the scene's time.unit (as the data gave it, or of its t);
+    /// absent without a unit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub age: Option<f64>,
     pub axial_length: f64,
     /// σ as given (None: no sigma column).
     pub sigma: Option<f64>,
@@ -682,6 +686,7 @@ pub fn fit_watched(
         .zip(outcome.residuals.iter())
         .map(|((o, &m), &w)| ResidualRow {
             t: o.t,
+            age: g.age_of(o.t).map(|a| o.age.unwrap_or(a)),
             axial_length: o.axial_length,
             sigma: o.sigma,
             model: m,

@@ -42,6 +42,18 @@ pub struct GrowthParams {
 }
 
 impl GrowthParams {
+    /// The age of growth time `t` in time.unit, None without a unit: every output that
+    /// carries an `age` beside t asks here, so a scene without ages writes what it always
+    /// wrote.
+    pub fn age_of(&self, t: f64) -> Option<f64> {
+        self.clock.has_ages().then(|| self.clock.age(t, self.t_end))
+    }
+
+    /// time.unit's name when the scene counts in ages ("years", "days"), else None.
+    pub fn age_unit(&self) -> Option<&'static str> {
+        self.clock.has_ages().then(|| self.clock.unit.name())
+    }
+
     /// The blue surface the stimulus reads: the computed one with `Source::Optics` (once
     /// [`GrowthParams::resolved`]), else the polynomial.
     pub fn blue_focal(&self) -> Focal<'_> {

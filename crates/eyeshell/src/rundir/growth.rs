@@ -1,13 +1,17 @@
 //! Writing the results of a growth run as they come, so that nothing is lost if it fails:
 //!
 //! - `series.csv`: one row per output time (t = 0 first), appended and flushed at once;
-//! - `snapshots/snapshot_<k>_t<t>.csv`: every elastic and growth field on every node at
-//!   output time number k (names sort in time order), each written to a temporary file and
-//!   renamed, so a snapshot is never half-written;
+//! - `snapshots/snapshot_<k>_t<t>.csv` (`snapshot_<k>_age<age>.csv` when the scene counts
+//!   in ages): every elastic and growth field on every node at output time number k (names
+//!   sort in time order), each written to a temporary file and renamed, so a snapshot is
+//!   never half-written;
 //! - `history.csv` (with `output.history_points` > 0): the same columns at every recorded
 //!   time, the history times and the snapshot times, appended and flushed at once;
 //! - `sensitivities.csv` (with `GrowthSettings::sensitivities`): one row per recorded time
 //!   and parameter, [`SENSITIVITY_COLUMNS`], appended and flushed at once;
+//! - with `time.unit` set, series.csv, history.csv and sensitivities.csv end in an `age`
+//!   column (in that unit) after their columns without it, so a reader that takes the
+//!   columns by position reads either; without a unit every file is as it always was;
 //! - `summary.json`: `"status": "running"` from the start, then `"ok"`
 //!   with every [`GrowthStats`] field, or `"failed"` with `failed_at_t`, `error` and the
 //!   statistics so far.
@@ -48,6 +52,9 @@ pub const SENSITIVITY_COLUMNS: [&str; 6] = [
     "d_retina_minus_blue",
     "scaled_axial_length",
 ];
+/// The column series.csv, history.csv and sensitivities.csv end in when the scene counts in
+/// ages (time.unit): the age of the row's t, in that unit.
+pub const AGE_COLUMN: &str = "age";
 /// The directory of the snapshot files.
 pub const SNAPSHOT_DIR: &str = "snapshots";
 /// The columns of series.csv.
@@ -68,6 +75,17 @@ pub fn snapshot_name(k: usize, t: f64) -> String {
     format!("snapshot_{k:05}_t{}.csv", crate::text::decimals6(t))
 }
 
+/// The file name of output time number `k` at time `t` whose age is `age` (None: a scene
+/// without time.unit, [`snapshot_name`]): with an age the name carries it in place of t
+/// (`snapshot_00002_age3.500000.csv`), the age being what the user asked for; k keeps the
+/// names in time order, and summary.json lists each file with its t.
+pub fn snapshot_name_at(k: usize, t: f64, age: Option<f64>) -> String {
+    match age {
+        Some(a) => format!("snapshot_{k:05}_age{}.csv", crate::text::decimals6(a)),
+        None => snapshot_name(k, t),
+    }
+}
+
 /// The most bytes one number takes in a run's CSV files ([`format_value`]: a sign, 17
 /// digits, the point, `e-308`) with its separator.
 pub const CELL_BYTES: u64 = 26;
@@ -83,9 +101,10 @@ pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
     let snapshot = (nodes as u64 + 1) * row(COLUMNS.len() + GROWTH_COLUMNS.len());
     let series_rows = times as u64 + 2;
     let history_rows = (history_points + times) as u64 + 2;
+    // With room for the age column of a scene with time.unit.
     (times as u64 + 1)
         .saturating_mul(snapshot)
-        .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len()))
+        .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len() + 1))
 }
 
 /// The header of a snapshot file: the elastic [`COLUMNS`], then the [`GROWTH_COLUMNS`].
@@ -101,6 +120,15 @@ pub fn snapshot_header() -> String {
 /// The header of series.csv.
 pub fn series_header() -> String {
     SERIES_COLUMNS.join(",")
+}
+
+/// `columns`, then [`AGE_COLUMN`] when `ages` (a scene with time.unit).
+pub fn with_age_column<'a>(columns: &[&'a str], ages: bool) -> Vec<&'a str> {
+    let mut out = columns.to_vec();
+    if ages {
+        out.push(AGE_COLUMN);
+    }
+    out
 }
 
 /// The cells of one row of series.csv.
@@ -147,6 +175,13 @@ pub struct GrowthWriter {
 }
 
 impl GrowthWriter {
+    /// The age of time `t` when the scene counts in ages (time.unit), else None.
+    fn age(&self, t: f64) -> Option<f64> {
+        self.scene.growth.as_ref().and_then(|g| g.age_of(t))
+    }
+}
+
+impl GrowthWriter {
     /// Check `target` (a directory that exists and is not an earlier growth run, or where
     /// one of `inputs`, the files the run is made from, is, is refused), remove a previous
     /// run there, and create the directory with `snapshots/`, the header of series.csv and
@@ -165,20 +200,27 @@ impl GrowthWriter {
         if with_sensitivities {
             entries.push(SENSITIVITIES_FILE);
         }
+        let ages = scene
+            .growth
+            .as_ref()
+            .is_some_and(|g| g.age_unit().is_some());
         let owned = OwnedDir::fresh(target, "grow", &entries, inputs)?;
         let target = owned.path().to_path_buf();
         let snapshots = target.join(SNAPSHOT_DIR);
         fs::create_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
         let series_path = target.join(SERIES_FILE);
-        let series = create_with_header(&series_path)?;
+        let series = create_with_header(&series_path, ages)?;
         let history = if history_points > 0 {
-            Some(create_with_header(&target.join(HISTORY_FILE))?)
+            Some(create_with_header(&target.join(HISTORY_FILE), ages)?)
         } else {
             None
         };
         let sensitivities = if with_sensitivities {
             let path = target.join(SENSITIVITIES_FILE);
-            Some(create_with_columns(&path, &SENSITIVITY_COLUMNS)?)
+            Some(create_with_columns(
+                &path,
+                &with_age_column(&SENSITIVITY_COLUMNS, ages),
+            )?)
         } else {
             None
         };
@@ -214,7 +256,7 @@ impl GrowthWriter {
     /// Write the snapshot file of `s`, then append its row to series.csv and flush.
     pub fn write_snapshot(&mut self, s: &Snapshot) -> Result<(), OutputError> {
         let k = self.snapshots.len();
-        let name = snapshot_name(k, s.t);
+        let name = snapshot_name_at(k, s.t, self.age(s.t));
         let path = self.dir.join(SNAPSHOT_DIR).join(&name);
         if s.fields.len() != s.growth.len() {
             return Err(OutputError::io(
@@ -231,7 +273,8 @@ impl GrowthWriter {
             .and_then(|text| write_atomic_unsynced(&path, &text))
             .map_err(|e| OutputError::io(&path, e))?;
         let series_path = self.dir.join(SERIES_FILE);
-        append(&mut self.series, &s.series).map_err(|e| OutputError::io(&series_path, e))?;
+        let age = self.age(s.t);
+        append(&mut self.series, &s.series, age).map_err(|e| OutputError::io(&series_path, e))?;
         self.snapshots.push(WrittenSnapshot {
             t: s.t,
             file: format!("{SNAPSHOT_DIR}/{name}"),
@@ -270,9 +313,9 @@ impl GrowthWriter {
     }
 }
 
-/// Create `path` with the series header as its first line.
-fn create_with_header(path: &Path) -> Result<csv::Writer<fs::File>, OutputError> {
-    create_with_columns(path, &SERIES_COLUMNS)
+/// Create `path` with the series header (and the age column with `ages`) as its first line.
+fn create_with_header(path: &Path, ages: bool) -> Result<csv::Writer<fs::File>, OutputError> {
+    create_with_columns(path, &with_age_column(&SERIES_COLUMNS, ages))
 }
 
 /// Create `path` with `columns` as its first line.
@@ -289,17 +332,18 @@ fn create_with_columns(
     Ok(w)
 }
 
-/// Append the series row `row` and flush it to the file at once.
-fn append(w: &mut csv::Writer<fs::File>, row: &SeriesRow) -> std::io::Result<()> {
-    w.write_record(series_record(row))?;
+/// Append the series row `row` (and its age, in a scene with ages) and flush it at once.
+fn append(w: &mut csv::Writer<fs::File>, row: &SeriesRow, age: Option<f64>) -> std::io::Result<()> {
+    w.write_record(series_record(row).into_iter().chain(age.map(format_value)))?;
     w.flush()
 }
 
 impl Observer for GrowthWriter {
     fn history(&mut self, row: &SeriesRow) -> Result<(), ObserverError> {
         let path = self.dir.join(HISTORY_FILE);
+        let age = self.age(row.t);
         match &mut self.history {
-            Some(w) => append(w, row).map_err(|e| OutputError::io(&path, e).into()),
+            Some(w) => append(w, row, age).map_err(|e| OutputError::io(&path, e).into()),
             None => Ok(()),
         }
     }
@@ -310,19 +354,21 @@ impl Observer for GrowthWriter {
 
     fn sensitivities(&mut self, rows: &[SensitivityRow]) -> Result<(), ObserverError> {
         let path = self.dir.join(SENSITIVITIES_FILE);
+        let ages: Vec<Option<f64>> = rows.iter().map(|r| self.age(r.t)).collect();
         let Some(w) = &mut self.sensitivities else {
             return Ok(());
         };
         let write = |w: &mut csv::Writer<fs::File>| -> std::io::Result<()> {
-            for r in rows {
-                w.write_record([
+            for (r, age) in rows.iter().zip(&ages) {
+                let cells = [
                     format_value(r.t),
                     r.parameter.to_string(),
                     format_value(r.d_axial_length),
                     format_value(r.d_equatorial_radius),
                     format_value(r.d_retina_minus_blue),
                     format_value(r.scaled_axial_length()),
-                ])?;
+                ];
+                w.write_record(cells.into_iter().chain(age.map(format_value)))?;
             }
             w.flush()
         };
@@ -420,6 +466,12 @@ mod tests {
         assert_eq!(names, sorted);
         assert_eq!(snapshot_name(2, 0.2), "snapshot_00002_t0.200000.csv");
         assert_eq!(snapshot_name(2, 1e300), "snapshot_00002_t1.000000e300.csv");
+        // A scene with ages names them by age; without, as ever.
+        assert_eq!(
+            snapshot_name_at(2, 0.2, Some(3.5)),
+            "snapshot_00002_age3.500000.csv"
+        );
+        assert_eq!(snapshot_name_at(2, 0.2, None), snapshot_name(2, 0.2));
     }
 
     #[test]

@@ -95,34 +95,38 @@ pub struct SensitivityRecord {
 
 /// sensitivities.csv of the growth run `dir` (`grow --sensitivities`), None without the
 /// file. Read with the size bound of every CSV run file; the header must be eyeshell's and
-/// every row six cells, numbers where numbers belong. Errors (bad input) name the file and
+/// every row as many cells, numbers where numbers belong. Errors (bad input) name the file and
 /// the line.
 pub fn read_sensitivities(dir: &Path) -> Result<Option<Vec<SensitivityRecord>>, ReadError> {
-    use super::growth::{SENSITIVITIES_FILE, SENSITIVITY_COLUMNS};
+    use super::growth::{with_age_column, SENSITIVITIES_FILE, SENSITIVITY_COLUMNS};
     let path = dir.join(SENSITIVITIES_FILE);
     if !path.exists() {
         return Ok(None);
     }
     let records = super::table::read_records(&path)?;
-    if !records
-        .header
-        .as_ref()
-        .is_some_and(|h| h.iter().map(String::as_str).eq(SENSITIVITY_COLUMNS))
-    {
+    // A scene with ages ends the file in an age column: read it too (the age follows from t
+    // and the scene, so it is not kept).
+    let columns = records.header.as_ref().and_then(|h| {
+        [false, true]
+            .into_iter()
+            .map(|ages| with_age_column(&SENSITIVITY_COLUMNS, ages))
+            .find(|c| h.iter().map(String::as_str).eq(c.iter().copied()))
+    });
+    let Some(columns) = columns else {
         return Err(bad(format!(
-            "{}: the header is not {}",
+            "{}: the header is not {} (with a final age column in a scene with time.unit)",
             path.display(),
             SENSITIVITY_COLUMNS.join(",")
         )));
-    }
+    };
     let mut rows = Vec::new();
     for r in records.iter() {
         let at = |what: String| bad(format!("{}: line {}: {what}", path.display(), r.line));
-        if r.cells.len() != SENSITIVITY_COLUMNS.len() {
+        if r.cells.len() != columns.len() {
             return Err(at(format!(
                 "{} cells, not {}",
                 r.cells.len(),
-                SENSITIVITY_COLUMNS.len()
+                columns.len()
             )));
         }
         let num = |c: usize| {

@@ -213,7 +213,8 @@ fn eye(out: &Path, record: &RunRecord) -> Option<Eye> {
             let values: Vec<(String, f64)> = header
                 .iter()
                 .zip(&cells)
-                .filter(|(h, _)| **h != "t" && **h != "class")
+                // The age is the time's, not a measure of the eye.
+                .filter(|(h, _)| !matches!(**h, "t" | "class" | crate::rundir::growth::AGE_COLUMN))
                 .filter_map(|(h, c)| Some((h.to_string(), c.parse::<f64>().ok()?)))
                 .collect();
             let class = class_at
