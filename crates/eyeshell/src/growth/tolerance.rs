@@ -514,8 +514,8 @@ pub(super) fn run(
         let atol = ATOL_PER_RTOL * rtol;
         // Every run carries the sensitivities (their error is estimated from the three, as
         // the lengths'), in the local error test: outside it their time error does not
-        // follow rtol (∂L/∂Γ, const scene with fibres, tol 1e-4: 7× its estimate, where
-        // with the test it came within 0.5×).
+        // follow rtol (∂L/∂Γ, const scene with fibres, tol 1e-4: the error was 5.8× its
+        // estimate; with the test, 0.53×).
         let at = |rtol: f64| GrowthSettings {
             rtol,
             atol: ATOL_PER_RTOL * rtol,
