@@ -2,26 +2,33 @@
 """Growth to a tolerance (BENCHMARKS.md, "Growth to a tolerance"): for each scene and each
 solver.tol, the delivered error of the axial length and the equatorial radius (the largest
 over the output times) against a reference, the estimate summary.json reports, the run's
-seconds (its choice included), and the cheapest (N, rtol) of a hand-picked grid that meets
-the same tol, with its seconds.
+cost (its choice included), and the cheapest (N, rtol) of a hand-picked grid that meets
+the same tol, with its cost.
 
     cargo build --release && python3 benches/growth_tol.py [--scenes const,thick,fibre]
-        [--tols 1e-3,1e-4,1e-5,1e-6,1e-7] [--out DIR]
+        [--tols 1e-3,1e-4,1e-5,1e-6,1e-7] [--out DIR] [--grid-only] [--bin EYESHELL]
 
-The reference of each scene is IDA on N = 3201 nodes at rtol 1e-10 (atol 1e-12); for the
-const scene CVODE on N = 1601 at rtol 1e-10 is run beside it and their distance printed.
-Times are each run's summary `wall_seconds`, the least of --repeat runs.
+The reference of each scene is IDA on N = 3201 nodes at rtol 1e-10 (atol 1e-12); CVODE on
+N = 1601 at rtol 1e-10 is run beside it and their distance printed. A run's cost is its
+CPU seconds (user + system, from the operating system), which a shared machine's load
+disturbs far less than the wall clock; summary.json's wall_seconds is printed beside it.
+
+The reference and grid runs do not depend on solver.tol's code: each is kept in DIR and
+read back on the next call (delete DIR to rerun them). For each N the grid walks rtol from
+1e-4 down and stops once tightening no longer cuts the error by 1.5x (the mesh's floor:
+a tighter rtol there only costs more) or a run took over --grid-cap CPU seconds.
 """
 
 import argparse
 import csv
 import json
 import os
+import resource
 import subprocess
 import sys
+import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-EYESHELL = os.path.join(ROOT, "target", "release", "eyeshell")
 SCENES = {
     "const": ("scenes/const.toml", []),
     "thick": ("scenes/thick.toml", []),
@@ -29,75 +36,116 @@ SCENES = {
 }
 GRID_N = [26, 51, 101, 201, 401, 801, 1601]
 GRID_RTOL = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
+EYESHELL = os.path.join(ROOT, "target", "release", "eyeshell")
 
 
-def grow(scene, sets, out):
-    path, base = SCENES[scene]
-    cmd = [EYESHELL, "grow", os.path.join(ROOT, path), "--out", out,
-           "--set", "output.history_points=0"]
-    for s in base + sets:
-        cmd += ["--set", s]
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+def cpu_of_children():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def grow(scene, sets, out, cached=False):
+    """(rows, summary, cpu seconds) of one run; `cached` reads a finished run back."""
+    done = out + ".cpu.json"
+    if cached and os.path.exists(done):
+        with open(done) as f:
+            cpu = json.load(f)["cpu_seconds"]
+    else:
+        path, base = SCENES[scene]
+        cmd = [EYESHELL, "grow", os.path.join(ROOT, path), "--out", out,
+               "--set", "output.history_points=0"]
+        for s in base + sets:
+            cmd += ["--set", s]
+        before = cpu_of_children()
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        cpu = cpu_of_children() - before
+        with open(done, "w") as f:
+            json.dump({"cpu_seconds": cpu}, f)
     with open(os.path.join(out, "series.csv")) as f:
         rows = [(float(r["axial_length"]), float(r["equatorial_radius"]))
                 for r in csv.DictReader(f)]
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
-    return rows, summary
+    return rows, summary, cpu
 
 
 def error(rows, ref):
     return max(max(abs(a[0] - b[0]), abs(a[1] - b[1])) for a, b in zip(rows, ref))
 
 
-def timed(scene, sets, out, repeat):
-    best = None
-    for _ in range(repeat):
-        rows, summary = grow(scene, sets, out)
-        if best is None or summary["wall_seconds"] < best[1]["wall_seconds"]:
-            best = (rows, summary)
-    return best
+def grid_of(scene, d, ref, cap):
+    grid = []
+    for n in GRID_N:
+        last = None
+        for r in GRID_RTOL:
+            rows, s, cpu = grow(scene, [f"solver.nodes={n}", f"solver.rtol={r}",
+                                        f"solver.atol={r * 1e-2}"], d(f"n{n}-r{r}"), cached=True)
+            e = error(rows, ref)
+            grid.append((n, r, e, cpu, s["wall_seconds"]))
+            print(f"  grid {scene} N={n} rtol={r:g}: error {e:.2e}, {cpu:.3f} s cpu", file=sys.stderr, flush=True)
+            if (last is not None and e > last / 1.5) or cpu > cap:
+                break
+            last = e
+    return grid
 
 
 def main():
+    global EYESHELL
     ap = argparse.ArgumentParser()
     ap.add_argument("--scenes", default="const,thick,fibre")
     ap.add_argument("--tols", default="1e-3,1e-4,1e-5,1e-6,1e-7")
     ap.add_argument("--out", default="out/growth_tol")
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--grid-only", action="store_true")
+    ap.add_argument("--grid-cap", type=float, default=120.0)
+    ap.add_argument("--bin", default=EYESHELL)
+    ap.add_argument("--tol-max-seconds", type=float, default=600.0,
+                    help="solver.max_seconds of each solver.tol run (a row that reaches it fails)")
     a = ap.parse_args()
+    EYESHELL = a.bin
     os.makedirs(a.out, exist_ok=True)
     tols = [float(t) for t in a.tols.split(",")]
-    print("| scene | tol | nodes, rtol chosen | rounds | delivered error | estimate | estimate / error | seconds | cheapest grid (N, rtol) | its error | its seconds | seconds / grid's |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    table = []
     for scene in a.scenes.split(","):
         d = lambda name: os.path.join(a.out, f"{scene}-{name}")
-        ref, _ = grow(scene, ["solver.nodes=3201", "solver.rtol=1e-10", "solver.atol=1e-12"], d("ref"))
-        if scene == "const":
-            cv, _ = grow(scene, ["solver.nodes=1601", "solver.rtol=1e-10", "solver.atol=1e-12",
-                                 "solver.integrator=cvode"], d("ref-cvode"))
-            print(f"<!-- {scene}: IDA N=3201 against CVODE N=1601, both rtol 1e-10: {error(cv, ref):.2e} mm -->", file=sys.stderr)
-        grid = []
-        for n in GRID_N:
-            for r in GRID_RTOL:
-                rows, s = timed(scene, [f"solver.nodes={n}", f"solver.rtol={r}", f"solver.atol={r * 1e-2}"],
-                                d(f"n{n}-r{r}"), a.repeat)
-                grid.append((n, r, error(rows, ref), s["wall_seconds"]))
+        ref, _, cpu = grow(scene, ["solver.nodes=3201", "solver.rtol=1e-10", "solver.atol=1e-12"],
+                           d("ref"), cached=True)
+        cv, _, cpu_cv = grow(scene, ["solver.nodes=1601", "solver.rtol=1e-10", "solver.atol=1e-12",
+                                     "solver.integrator=cvode"], d("ref-cvode"), cached=True)
+        print(f"{scene}: reference IDA N=3201 ({cpu:.0f} s cpu) against CVODE N=1601 ({cpu_cv:.0f} s), "
+              f"both rtol 1e-10: {error(cv, ref):.2e} mm", file=sys.stderr, flush=True)
+        grid = grid_of(scene, d, ref, a.grid_cap)
+        if a.grid_only:
+            continue
         for tol in tols:
+            best = None
             try:
-                rows, s = timed(scene, [f"solver.tol={tol}"], d(f"tol{tol}"), a.repeat)
+                for _ in range(a.repeat):
+                    started = time.time()
+                    rows, s, cpu = grow(scene, [f"solver.tol={tol}", f"solver.max_seconds={a.tol_max_seconds}"],
+                                        d(f"tol{tol}"))
+                    if best is None or cpu < best[2]:
+                        best = (rows, s, cpu)
             except subprocess.CalledProcessError:
-                print(f"| {scene} | {tol:g} | failed | | | | | | | | | |")
+                table.append(f"| {scene} | {tol:g} | failed | | | | | | | | | |")
+                print(table[-1], flush=True)
                 continue
+            rows, s, cpu = best
             e = error(rows, ref)
             est = s["error_estimate"]
             estimate = max(est["axial_length"]["total"], est["equatorial_radius"]["total"])
             acc = s["accuracy"]
             ok = [g for g in grid if g[2] <= tol]
             cheapest = min(ok, key=lambda g: g[3]) if ok else None
-            ch = (f"{cheapest[0]}, {cheapest[1]:g} | {cheapest[2]:.2e} | {cheapest[3]:.3f} | {s['wall_seconds'] / cheapest[3]:.1f}"
+            ch = (f"{cheapest[0]}, {cheapest[1]:g} | {cheapest[2]:.2e} | {cheapest[3]:.3f} | {cpu / cheapest[3]:.2f}"
                   if cheapest else "none on the grid | | |")
-            print(f"| {scene} | {tol:g} | {acc['nodes']}, {acc['rtol']:.1e} | {len(acc['rounds'])} | {e:.2e} | {estimate:.2e} | {estimate / e:.2f} | {s['wall_seconds']:.3f} | {ch} |", flush=True)
+            table.append(f"| {scene} | {tol:g} | {acc['nodes']}, {acc['rtol']:.1e} | {len(acc['rounds'])} | "
+                         f"{e:.2e} | {estimate:.2e} | {estimate / e:.2f} | {cpu:.3f} ({s['wall_seconds']:.3f}) | {ch} |")
+            print(table[-1], flush=True)
+    if table:
+        print("| scene | tol | nodes, rtol delivered | rounds | delivered error | estimate | estimate / error | cpu s (wall) | cheapest grid (N, rtol) | its error | its cpu s | cost / grid's |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+        print("\n".join(table))
 
 
 if __name__ == "__main__":

@@ -27,6 +27,10 @@
 //! the same model with the const scene's measured constants ([`PRIOR`]), so that on the
 //! scenes like it one round is enough.
 //!
+//! With forward sensitivities, the three runs carry them under IDAS's error test and each
+//! one's error is estimated the same way ([`SensitivityEstimate`]), the space part at
+//! [`SENSITIVITY_SPACE_ORDER`]; tol bounds each parameter p's |p|·(error of ∂y/∂p) too.
+//!
 //! The time estimate by a rerun at 10·rtol was chosen over two others: IDAS's quadrature
 //! of the local errors does not bound the global error of a stiff DAE (the local errors are
 //! damped, not summed), and an adjoint needs a backward run per output length and time
@@ -48,6 +52,14 @@ pub const SPACE_ORDER: f64 = 2.0;
 /// The order in the nodes that the next round's mesh is predicted with: the const scene's
 /// axial length converges at 2.3 to 3.1 between N = 51 and 801 (module docs).
 pub const MODEL_SPACE_ORDER: f64 = 2.5;
+/// The order in the nodes that the sensitivities' space estimate assumes: ∂L/∂Γ on the
+/// const scene with fibres (D = 100) converges at order 1.1, 1.6 and 2.1 between 26–50,
+/// 50–100 and 100–150 nodes of M (the kinks of growth stopping point by point move with the
+/// parameters, and their sensitivities resolve slower than the lengths); at order 2 the
+/// estimate fell 1.8× short of the true error at tol 1e-3.
+pub const SENSITIVITY_SPACE_ORDER: f64 = 1.0;
+/// The order the next round's mesh is predicted with when the sensitivities bound it.
+pub const SENSITIVITY_MODEL_ORDER: f64 = 1.5;
 /// The power of rtol that the time error follows (module docs).
 pub const TIME_ORDER: f64 = 0.75;
 /// A run's cost grows as rtol^−β at a given mesh (IDA's steps on the const scene).
@@ -162,12 +174,62 @@ pub struct ErrorEstimate {
     #[serde(flatten)]
     pub largest: Lengths,
     pub per_time: Vec<TimedLengths>,
+    /// With sensitivities: each one's estimate, the largest over the recorded times.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub sensitivities: Vec<SensitivityEstimate>,
 }
 
 impl ErrorEstimate {
     /// The largest estimated total error over every length and time (mm).
     pub fn overall(&self) -> f64 {
         self.largest.worst().total
+    }
+
+    /// What `solver.tol` bounds: the largest of [`Self::overall`] and every sensitivity's
+    /// [`SensitivityEstimate::scaled`] (mm), with the largest space and time parts.
+    pub fn bounded(&self) -> Split {
+        self.sensitivities
+            .iter()
+            .map(SensitivityEstimate::scaled)
+            .fold(self.largest.worst(), Split::max)
+    }
+}
+
+/// The estimated error of one parameter's sensitivities (per unit of the parameter, as in
+/// sensitivities.csv), the largest over the recorded times. `solver.tol` bounds them scaled
+/// by the parameter's magnitude ([`Self::scaled`]).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct SensitivityEstimate {
+    /// The scene key.
+    pub parameter: String,
+    /// Its value in the run.
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub value: f64,
+    pub d_axial_length: Split,
+    pub d_equatorial_radius: Split,
+    pub d_retina_minus_blue: Split,
+}
+
+impl SensitivityEstimate {
+    /// The error of p·∂y/∂p (mm: the change of each length for a change of p by its own
+    /// size, the scale a sensitivity is read at), the largest over the three lengths; a
+    /// parameter at 0 is read per unit instead. Space and time are each the largest part.
+    pub fn scaled(&self) -> Split {
+        let scale = if self.value == 0.0 {
+            1.0
+        } else {
+            self.value.abs()
+        };
+        let s = self
+            .d_axial_length
+            .max(self.d_equatorial_radius)
+            .max(self.d_retina_minus_blue);
+        Split {
+            total: scale * s.total,
+            space: scale * s.space,
+            time: scale * s.time,
+        }
     }
 }
 
@@ -338,23 +400,61 @@ fn estimate(fine: &Recorded, coarse: &Recorded, loose: &Recorded) -> ErrorEstima
     let largest = per_time
         .iter()
         .fold(Lengths::default(), |m, t| m.max(t.lengths));
-    ErrorEstimate { largest, per_time }
+    // The sensitivity rows of the three runs come at the same recorded times, one per
+    // parameter in the same order.
+    let mut sensitivities: Vec<SensitivityEstimate> = fine
+        .sens
+        .first()
+        .map(|rows| {
+            rows.iter()
+                .map(|r| SensitivityEstimate {
+                    parameter: r.parameter.to_string(),
+                    value: r.value,
+                    ..SensitivityEstimate::default()
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let ks = 1.0 / (2f64.powf(SENSITIVITY_SPACE_ORDER) - 1.0);
+    for ((f, c), l) in fine.sens.iter().zip(&coarse.sens).zip(&loose.sens) {
+        for (((e, f), c), l) in sensitivities.iter_mut().zip(f).zip(c).zip(l) {
+            let split = |f: f64, c: f64, l: f64| Split::new(ks * (f - c).abs(), kt * (c - l).abs());
+            e.d_axial_length =
+                e.d_axial_length
+                    .max(split(f.d_axial_length, c.d_axial_length, l.d_axial_length));
+            e.d_equatorial_radius = e.d_equatorial_radius.max(split(
+                f.d_equatorial_radius,
+                c.d_equatorial_radius,
+                l.d_equatorial_radius,
+            ));
+            e.d_retina_minus_blue = e.d_retina_minus_blue.max(split(
+                f.d_retina_minus_blue,
+                c.d_retina_minus_blue,
+                l.d_retina_minus_blue,
+            ));
+        }
+    }
+    ErrorEstimate {
+        largest,
+        per_time,
+        sensitivities,
+    }
 }
 
-/// The cheapest (nodes of M, rtol) that `last`'s errors, scaled as n^−2.5 and rtol^q, predict
-/// to meet `target`, the split between space and time searched over in steps of 1/40.
-fn next(last: &Round, target: f64, max_nodes: usize) -> (usize, f64) {
+/// The cheapest (nodes of M, rtol) that `last`'s errors, scaled as n^−`order` and rtol^q,
+/// predict to meet `target`, the split between space and time searched over in steps of 1/40.
+fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> (usize, f64) {
     let space = last.space.max(1e-300);
     let time = last.time.max(1e-300);
     let mut best: Option<(f64, usize, f64)> = None;
     for k in 1..40 {
         let f = k as f64 / 40.0;
-        let n = (last.nodes as f64 * (space / (f * target)).powf(1.0 / MODEL_SPACE_ORDER)).ceil();
+        let n = (last.nodes as f64 * (space / (f * target)).powf(1.0 / order)).ceil();
         let n = (n as usize).max(MIN_NODES);
         let rtol = (last.rtol * ((1.0 - f) * target / time).powf(1.0 / TIME_ORDER))
             .clamp(RTOL_RANGE.0, RTOL_RANGE.1);
         // Held at a bound, the model's error may exceed the target: such a split is out.
-        let predicted = space * (last.nodes as f64 / n as f64).powf(MODEL_SPACE_ORDER)
+        let predicted = space * (last.nodes as f64 / n as f64).powf(order)
             + time * (rtol / last.rtol).powf(TIME_ORDER);
         if predicted > target * (1.0 + 1e-9) || n > max_nodes {
             continue;
@@ -408,18 +508,18 @@ pub(super) fn run(
     };
     // M's nodes from the model, at most half of solver.max_nodes (M/2 has 2n − 1).
     let max_nodes = solver.max_nodes.div_ceil(2);
-    let (mut nodes, mut rtol) = next(&PRIOR, AIM * tol, max_nodes);
+    let (mut nodes, mut rtol) = next(&PRIOR, AIM * tol, max_nodes, MODEL_SPACE_ORDER);
     loop {
         let round_start = std::time::Instant::now();
         let atol = ATOL_PER_RTOL * rtol;
-        let at = |rtol: f64, sensitivities: bool| GrowthSettings {
+        // Every run carries the sensitivities (their error is estimated from the three, as
+        // the lengths'), in the local error test: outside it their time error does not
+        // follow rtol (∂L/∂Γ, const scene with fibres, tol 1e-4: the error was 5.8× its
+        // estimate; with the test, 0.53×).
+        let at = |rtol: f64| GrowthSettings {
             rtol,
             atol: ATOL_PER_RTOL * rtol,
-            sensitivities: if sensitivities {
-                settings.sensitivities.clone()
-            } else {
-                Vec::new()
-            },
+            sensitivity_error_control: !settings.sensitivities.is_empty(),
             ..settings.clone()
         };
         let with_rounds = |mut e: GrowthError, accuracy: &Accuracy| {
@@ -431,36 +531,22 @@ pub(super) fn run(
         };
         let s = SolverSettings { nodes, ..base };
         let mesh = crate::bvp::solve::mesh_of(params, &s).map_err(|e| refuse(e.to_string()))?;
-        let coarse = record(
-            params,
-            &s,
-            growth,
-            &at(rtol, false),
-            mesh.clone(),
-            &mut |_| Ok(()),
-        )
-        .map_err(|e| with_rounds(e, &accuracy))?;
+        let coarse = record(params, &s, growth, &at(rtol), mesh.clone(), &mut |_| Ok(()))
+            .map_err(|e| with_rounds(e, &accuracy))?;
         let loose = record(
             params,
             &s,
             growth,
-            &at(10.0 * rtol, false),
+            &at(10.0 * rtol),
             mesh.clone(),
             &mut |_| Ok(()),
         )
         .map_err(|e| with_rounds(e, &accuracy))?;
         let fine_mesh = mesh.halved();
-        let fine = record(
-            params,
-            &s,
-            growth,
-            &at(rtol, true),
-            fine_mesh.clone(),
-            progress,
-        )
-        .map_err(|e| with_rounds(e, &accuracy))?;
+        let fine = record(params, &s, growth, &at(rtol), fine_mesh.clone(), progress)
+            .map_err(|e| with_rounds(e, &accuracy))?;
         let est = estimate(&fine, &coarse, &loose);
-        let worst = est.largest.worst();
+        let worst = est.bounded();
         let round = Round {
             nodes,
             rtol,
@@ -486,12 +572,24 @@ pub(super) fn run(
             }
             return Ok(stats);
         }
-        let (n, r) = next(&round, AIM * tol, max_nodes);
+        // The sensitivities converge slower in the nodes: where they bound the error, the
+        // mesh is predicted at their order.
+        let order = if est.largest.worst().total < worst.total {
+            SENSITIVITY_MODEL_ORDER
+        } else {
+            MODEL_SPACE_ORDER
+        };
+        let (n, r) = next(&round, AIM * tol, max_nodes, order);
         if accuracy.rounds.len() >= MAX_ROUNDS || (n == nodes && r == rtol) {
             let mut e = refuse(format!(
-                "solver.tol = {} cannot be reached in growth: the estimated error was {} mm (space {}, time {}) on {} nodes at solver.rtol = {}{}",
+                "solver.tol = {} cannot be reached in growth: the estimated error was {} mm{} (space {}, time {}) on {} nodes at solver.rtol = {}{}",
                 crate::text::number(tol),
                 crate::text::number(worst.total),
+                if order == SENSITIVITY_MODEL_ORDER {
+                    " in the sensitivities (p·∂y/∂p)"
+                } else {
+                    ""
+                },
                 crate::text::number(worst.space),
                 crate::text::number(worst.time),
                 fine_mesh.len(),
