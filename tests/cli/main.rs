@@ -23,6 +23,7 @@ mod golden;
 mod grow;
 mod hostile;
 mod keys_check;
+mod layers;
 mod max_seconds;
 mod optics;
 mod ownership;

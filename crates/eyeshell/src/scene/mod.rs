@@ -16,6 +16,7 @@
 //! output.times, stimulus.*) are kept but not used, shown or summarised.
 
 pub mod keys;
+pub mod optics_toml;
 pub mod sample;
 pub mod sweep;
 
@@ -25,6 +26,7 @@ use std::path::Path;
 use crate::bvp::settings::SolverSettings;
 use crate::growth::{GrowthParams, GrowthSettings};
 use crate::model::eye::{SurfaceSpec, MAX_SURFACES};
+use optics_toml::SurfaceToml;
 use crate::model::optics::{OpticsSpec, Source};
 use crate::model::params::Params;
 use crate::model::stimulus::{Surface, RED_OFFSET};
@@ -572,7 +574,7 @@ impl Scene {
                 toml::Value::String(s) => set(self, s.clone()),
                 _ => return Err(wrong("a string")),
             },
-            Access::Lenses { set, .. } => match crate::model::eyewear::parse_lenses(value) {
+            Access::Lenses { set, .. } => match optics_toml::parse_lenses(value) {
                 Ok(lenses) => set(self, lenses),
                 Err(e) => {
                     return Err(SceneError::Invalid {
