@@ -17,6 +17,7 @@
 mod args;
 mod commands;
 pub mod figures;
+pub mod image;
 pub mod progress;
 mod shell;
 pub mod study;

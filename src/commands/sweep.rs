@@ -412,7 +412,7 @@ pub(crate) fn population_figure(
         return Ok(None);
     }
     let columns = panels.len();
-    let (png, _) = plot::write_panels(
+    let (png, _) = crate::image::write_panels(
         &panels,
         columns,
         "The cohort",

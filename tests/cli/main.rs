@@ -22,6 +22,7 @@ mod fuzz_scene;
 mod golden;
 mod grow;
 mod hostile;
+mod image;
 mod keys_check;
 mod layers;
 mod max_seconds;
