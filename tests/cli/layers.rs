@@ -16,7 +16,16 @@ fn dependencies(package: &str) -> Vec<String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
         .current_dir(repo())
-        .args(["tree", "--offline", "-e", "normal", "--prefix", "none", "-p", package])
+        .args([
+            "tree",
+            "--offline",
+            "-e",
+            "normal",
+            "--prefix",
+            "none",
+            "-p",
+            package,
+        ])
         .output()
         .expect("cargo runs");
     let text = String::from_utf8_lossy(&out.stdout);
@@ -46,13 +55,26 @@ fn io_crates_in(names: &[String]) -> Vec<&'static str> {
 fn the_numerics_crate_depends_on_no_io_crate() {
     let core = dependencies("eyeshell-core");
     // Not vacuous: the tree was read, and holds what the numerics do use.
-    for used in ["eyeshell-core", "eyeshell-sundials", "eyeshell-linalg", "nalgebra"] {
+    for used in [
+        "eyeshell-core",
+        "eyeshell-sundials",
+        "eyeshell-linalg",
+        "nalgebra",
+    ] {
         assert!(core.iter().any(|n| n == used), "{used} not in {core:?}");
     }
-    assert_eq!(io_crates_in(&core), [] as [&str; 0], "eyeshell-core's dependencies: {core:?}");
+    assert_eq!(
+        io_crates_in(&core),
+        [] as [&str; 0],
+        "eyeshell-core's dependencies: {core:?}"
+    );
     // The same check sees them where they belong: the files crate above it.
     let files = dependencies("eyeshell");
-    assert_eq!(io_crates_in(&files), IO_CRATES, "eyeshell's dependencies: {files:?}");
+    assert_eq!(
+        io_crates_in(&files),
+        IO_CRATES,
+        "eyeshell's dependencies: {files:?}"
+    );
 }
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -88,7 +110,11 @@ fn file_api_uses(dir: &Path) -> Vec<String> {
 #[test]
 fn the_numerics_crate_names_no_file_api() {
     let hits = file_api_uses(&repo().join("crates/core/src"));
-    assert!(hits.is_empty(), "file I/O in eyeshell-core:\n{}", hits.join("\n"));
+    assert!(
+        hits.is_empty(),
+        "file I/O in eyeshell-core:\n{}",
+        hits.join("\n")
+    );
     // The same search finds them in the files crate, which writes run directories.
     assert!(!file_api_uses(&repo().join("crates/eyeshell/src/rundir")).is_empty());
 }

@@ -115,17 +115,17 @@ pub(crate) fn check_size(what: &str, w: u64, h: u64) -> Result<(), PlotError> {
         }
     };
     Err(invalid(format!(
-            "{what} size {}x{} is outside 100..=20000 pixels",
-            show(w),
-            show(h)
-        ),
-    ))
+        "{what} size {}x{} is outside 100..=20000 pixels",
+        show(w),
+        show(h)
+    )))
 }
 
 pub(crate) fn check_figure(fig: &Figure, prefix: &str) -> Result<(), PlotError> {
     if fig.aspect_equal && (fig.x_scale != Scale::Linear || fig.y_scale != Scale::Linear) {
-        return Err(invalid(format!("{prefix}an equal aspect ratio needs both axes linear"),
-        ));
+        return Err(invalid(format!(
+            "{prefix}an equal aspect ratio needs both axes linear"
+        )));
     }
     Ok(())
 }

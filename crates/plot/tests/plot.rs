@@ -540,9 +540,7 @@ fn odd_input_still_draws() {
         assert_eq!((w, h), (fig.width, fig.height));
         keep_sample(fig, &format!("odd{k}"));
     }
-    let (png, _) =
-        write_panels(&figs, 2, "odd", 200, 150, &dir.path().join("odd-panels"))
-            .unwrap();
+    let (png, _) = write_panels(&figs, 2, "odd", 200, 150, &dir.path().join("odd-panels")).unwrap();
     assert_eq!(decode_png(&png).0, 400);
 }
 

@@ -11,10 +11,10 @@ use crate::growth::schedule::{Form, TimeUnit};
 use crate::growth::settings::{DaeLinear, GrowthParams, Integrator};
 use crate::growth::ThicknessLaw;
 use crate::model::eye::SurfaceSpec;
-use crate::scene::optics_toml::SurfaceToml;
 use crate::model::eyewear::{lenses_toml, LensSpec, CLASSIFY};
 use crate::model::optics::{Source, EYES, FOCUS_NAMES, SOURCES};
 use crate::model::params::Thickness;
+use crate::scene::optics_toml::SurfaceToml;
 
 /// How a key is read from and written to a [`Scene`]; the variant is the key's type.
 #[derive(Clone, Copy)]

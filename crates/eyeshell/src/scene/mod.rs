@@ -26,12 +26,12 @@ use std::path::Path;
 use crate::bvp::settings::SolverSettings;
 use crate::growth::{GrowthParams, GrowthSettings};
 use crate::model::eye::{SurfaceSpec, MAX_SURFACES};
-use optics_toml::SurfaceToml;
 use crate::model::optics::{OpticsSpec, Source};
 use crate::model::params::Params;
 use crate::model::stimulus::{Surface, RED_OFFSET};
 use crate::text::{decimals6, number};
 pub use keys::{Access, KeySpec, KeyValue, Rule, KEYS};
+use optics_toml::SurfaceToml;
 
 /// Everything a scene sets: the physical parameters and the numerical settings.
 #[derive(Clone, Debug, PartialEq)]
