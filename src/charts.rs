@@ -1,5 +1,8 @@
-//! The paper's result figures (its section 3; docs/MODEL.md §8) and the pictures of any run,
-//! drawn from run directories read back from disk ([`eyeshell::rundir::rundata`]), as PNG and SVG.
+//! The charts eyeshell draws from its results: the panels of the paper's result figures (its
+//! section 3; docs/MODEL.md §8), `eyeshell plot`'s pictures of any run, the fit's and the
+//! optics' charts; drawn from run directories read back from disk
+//! ([`eyeshell::rundir::rundata`]), as PNG and SVG. "Figures" names only the paper's
+//! figures (`eyeshell figures`, `study/figures.rs`, which runs their scenes).
 //!
 //! Panels are built by small functions (a shell cross-section, stretch profiles, axial
 //! length against time, retinas); [`paper_figures`] composes them into figures (a)–(f) and
@@ -7,14 +10,13 @@
 
 use std::path::{Path, PathBuf};
 
-
+use crate::image::{self, ImageError};
 use eyeshell::interop::export::{bad, ExportError, RunSnapshot};
 use eyeshell::model::stimulus::Surface;
 use eyeshell::rundir::rundata::{self, column, RunData, RunKind, SeriesPoint};
 use eyeshell::rundir::Summary;
 use eyeshell::scene::Scene;
 use eyeshell::text::excerpt;
-use crate::image::{self, ImageError};
 use eyeshell_plot::{self as plot, colormap, Figure, Rgb, Series, SeriesStyle};
 
 /// Size of one panel, in pixels.

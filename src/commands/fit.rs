@@ -94,7 +94,7 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
     )
     .map_err(|e| io(CURVE_FILE, e))?;
     write(CURVE_FILE, &curve)?;
-    crate::figures::fit_figure(r, &fitted, &initial, &dir.file("fit"))?;
+    crate::charts::fit_figure(r, &fitted, &initial, &dir.file("fit"))?;
     let target = dir.commit()?;
     if !a.quiet {
         out(&report_text(&scene, r, &target));

@@ -1,5 +1,6 @@
-//! Figures as PNG and SVG, drawn with `plotters` (no Python), knowing nothing of eyes:
+//! Charts as PNG and SVG bytes, drawn with `plotters` (no Python), knowing nothing of eyes:
 //! eyeshell draws its convergence studies, work-precision diagrams and the paper's figures with it.
+//! (Its [`Figure`] is one chart: the paper's figures are eyeshell's, made of several.)
 //!
 //! A [`Figure`] holds [`Series`] of points; [`render()`] draws it as an [`Image`], its PNG
 //! and SVG bytes, and [`render_panels`] draws several figures as the panels of one image.
@@ -320,7 +321,11 @@ mod tests {
         let s = Series::new("a", vec![], SeriesStyle::Line);
         assert!(s.legend && s.color.is_none() && s.width.is_none() && s.values.is_none());
         assert!(Series::default().legend);
-        let s = s.color(Rgb(255, 0, 0)).width(5).shaded(vec![1.0]).no_legend();
+        let s = s
+            .color(Rgb(255, 0, 0))
+            .width(5)
+            .shaded(vec![1.0])
+            .no_legend();
         assert_eq!(
             (s.color, s.width, s.values, s.legend),
             (Some(Rgb(255, 0, 0)), Some(5), Some(vec![1.0]), false)
