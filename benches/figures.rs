@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 use criterion::{criterion_group, criterion_main, Criterion};
 use eyeshell::scene::sweep::Sweep;
 use eyeshell::sweep::{run_sweep, SweepOptions};
-use eyeshell_cli::figures::{paper_figures, PaperRuns};
+use eyeshell_cli::charts::{paper_figures, PaperRuns};
 use eyeshell_cli::study::figures::SCENES;
 
 /// The binary's allocator (src/main.rs), so that the figures are what `eyeshell` gets.

@@ -109,8 +109,8 @@ pub(crate) fn cmd_fit(a: &FitArgs) -> Result<(), Error> {
     )
     .map_err(|e| io(CURVE_FILE, e))?;
     write(CURVE_FILE, &curve)?;
-    let axis = crate::figures::TimeAxis::of(&scene);
-    crate::figures::fit_figure(r, &fitted, &initial, axis, &dir.file("fit"))?;
+    let axis = crate::charts::TimeAxis::of(&scene);
+    crate::charts::fit_figure(r, &fitted, &initial, axis, &dir.file("fit"))?;
     let target = dir.commit()?;
     if !a.quiet {
         out(&report_text(&scene, r, &target));

@@ -112,7 +112,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         start.elapsed().as_secs_f64(),
     );
     write(OPTICS_FILE, json.as_bytes())?;
-    crate::figures::optics_figure(&system, &computed, &fans, &dir.file(FIGURE))?;
+    crate::charts::optics_figure(&system, &computed, &fans, &dir.file(FIGURE))?;
     let rows = against_polynomial(&computed, &scene.blue());
     let v = rundir::format_value;
     let table = rundir::table::csv_bytes(
@@ -129,7 +129,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     )
     .map_err(|e| io(PUBLISHED_FILE, e))?;
     write(PUBLISHED_FILE, &table)?;
-    crate::figures::published_figure(
+    crate::charts::published_figure(
         &rows,
         spec.criterion().name(),
         spec.wavelengths[0],

@@ -265,7 +265,7 @@ pub(crate) fn cmd_figures(a: &FiguresArgs) -> Result<(), Error> {
 }
 
 pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
-    use crate::figures::plot_run;
+    use crate::charts::plot_run;
     let target = a.out.clone().unwrap_or_else(|| a.dir.join("plots"));
     // Drawn into a temporary directory and moved into place whole, with its marker: only an
     // empty directory or an earlier plot is replaced, never the run or sweep it is drawn
@@ -412,7 +412,7 @@ pub(crate) fn population_figure(
         return Ok(None);
     }
     let columns = panels.len();
-    let (png, _) = plot::write_panels(
+    let (png, _) = crate::image::write_panels(
         &panels,
         columns,
         "The cohort",

@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-use crate::figures::{index_html, paper_figures, PaperRuns, Written};
+use crate::charts::{index_html, paper_figures, PaperRuns, Written};
 use eyeshell::rundir::summary::{FigureEntry, FiguresSummary};
 use eyeshell::rundir::{self, write_atomic, Summary};
 use eyeshell::scene::sweep::Sweep;
@@ -216,7 +216,7 @@ type Opener<'a> = &'a dyn Fn(&Path, &str, &[&str]) -> Result<rundir::OwnedDir, r
 /// Own `out` (fresh, or resumed for a replot): its marker lists every file the figures
 /// write, before they are written.
 fn own(out: &Path, open: Opener<'_>) -> Result<rundir::OwnedDir, FiguresError> {
-    let pictures: Vec<String> = crate::figures::PAPER_STEMS
+    let pictures: Vec<String> = crate::charts::PAPER_STEMS
         .iter()
         .flat_map(|s| [format!("{s}.png"), format!("{s}.svg")])
         .collect();

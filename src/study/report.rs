@@ -5,11 +5,11 @@ use super::converge::{self, Knob, Ladder};
 use super::{refinement, worst, wpd, write_csv, StudyError, FIELDS};
 use eyeshell::growth::{GrowthSettings, Integrator};
 use eyeshell::scene::Scene;
-use eyeshell_plot::{self as plot, Figure, Scale, Series, SeriesStyle};
+use eyeshell_plot::{Figure, Scale, Series, SeriesStyle};
 use std::fmt::Write as _;
 use std::path::Path;
 
-fn plot_error(e: plot::PlotError) -> StudyError {
+fn plot_error(e: crate::image::ImageError) -> StudyError {
     StudyError::Invalid(e.to_string())
 }
 
@@ -46,7 +46,7 @@ fn write_ladder(l: &Ladder, dir: &Path, stem: &str) -> Result<(), StudyError> {
             .collect();
         fig = fig.with(Series::new(*name, pts, SeriesStyle::LineAndMarkers));
     }
-    plot::write(&fig, &dir.join(stem)).map_err(plot_error)?;
+    crate::image::write(&fig, &dir.join(stem)).map_err(plot_error)?;
     Ok(())
 }
 
@@ -271,7 +271,7 @@ fn write_curves(
             SeriesStyle::LineAndMarkers,
         ));
     }
-    plot::write(&fig, &dir.join(stem)).map_err(plot_error)?;
+    crate::image::write(&fig, &dir.join(stem)).map_err(plot_error)?;
     Ok(())
 }
 
@@ -305,7 +305,7 @@ fn write_tolerance(curves: &[wpd::Curve], dir: &Path, text: &mut String) -> Resu
         pick(&|p| p.value),
         SeriesStyle::DashedLine,
     ));
-    plot::write(&fig, &dir.join("wpd_tolerance")).map_err(plot_error)?;
+    crate::image::write(&fig, &dir.join("wpd_tolerance")).map_err(plot_error)?;
     let _ = writeln!(
         text,
         "solver.tol: requested, true error, estimate, nodes, seconds"
@@ -355,7 +355,7 @@ fn write_tolerance_growth(
         pick(&|p| p.value),
         SeriesStyle::DashedLine,
     ));
-    plot::write(&fig, &dir.join("wpd_growth_tolerance")).map_err(plot_error)?;
+    crate::image::write(&fig, &dir.join("wpd_growth_tolerance")).map_err(plot_error)?;
     let _ = writeln!(
         text,
         "growth solver.tol: requested, delivered axial-length error, estimate, nodes, seconds"

@@ -7,9 +7,9 @@ use std::sync::OnceLock;
 
 use crate::support::*;
 use eyeshell::rundir::rundata::{self, RunData};
-use eyeshell_cli::figures::sweep_runs;
+use eyeshell_cli::charts::sweep_runs;
 
-use eyeshell_cli::figures::PAPER_STEMS as FIGURES;
+use eyeshell_cli::charts::PAPER_STEMS as FIGURES;
 
 /// `eyeshell figures` once for the whole file (it runs twelve growth runs).
 fn figures() -> &'static Path {

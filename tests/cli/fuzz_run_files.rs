@@ -587,7 +587,7 @@ fn read_back(bench: &Workbench, broken: &Path) -> Result<(), TestCaseError> {
     let mut errors = Vec::new();
     if bench.sweep {
         errors.push(check("sweep_runs", names, TIME_BOUND, || {
-            eyeshell_cli::figures::sweep_runs(run)
+            eyeshell_cli::charts::sweep_runs(run)
                 .map(|_| ())
                 .map_err(|e| e.to_string())
         })?);
@@ -752,7 +752,7 @@ fn found_a_control_character_in_a_sweeps_run_directory() {
     let nul = summary.replacen("\"runs/D=0\"", "\"a\\u0000b/D=0\"", 1);
     assert_ne!(nul, summary);
     let e = error_with(&r.sweep, "summary.json", nul.as_bytes(), |d| {
-        eyeshell_cli::figures::sweep_runs(d)
+        eyeshell_cli::charts::sweep_runs(d)
             .map(|_| ())
             .map_err(|e| e.to_string())
     });
@@ -773,7 +773,7 @@ fn found_a_sweeps_run_directory_of_a_kilobyte() {
         1,
     );
     let e = error_with(&r.sweep, "summary.json", long.as_bytes(), |d| {
-        eyeshell_cli::figures::sweep_runs(d)
+        eyeshell_cli::charts::sweep_runs(d)
             .map(|_| ())
             .map_err(|e| e.to_string())
     });

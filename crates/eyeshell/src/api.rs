@@ -16,7 +16,7 @@
 
 use std::path::Path;
 
-use crate::bvp::{self, Solution, COLUMNS};
+use crate::bvp::{self, Solution};
 use crate::growth::{
     self, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
 };
@@ -292,22 +292,6 @@ impl Observer for Record<'_> {
         self.inner.sensitivities(rows)?;
         self.sensitivities.extend_from_slice(rows);
         Ok(())
-    }
-}
-
-/// No observer: `scene.grow(&mut ())`.
-impl Observer for () {
-    fn snapshot(&mut self, _s: &Snapshot) -> Result<(), ObserverError> {
-        Ok(())
-    }
-}
-
-impl Solution {
-    /// The values of the field `name` (a column of fields.csv: `Sigma`, `kappa`, `r`, `z`,
-    /// `theta`, `Q`, …; see [`COLUMNS`]) at every node, or None for an unknown name.
-    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
-        let j = COLUMNS.iter().position(|&c| c == name)?;
-        Some(self.rows.iter().map(|r| r.values()[j]).collect())
     }
 }
 

@@ -305,7 +305,7 @@ where
 pub(crate) const SHADE_LEVELS: f64 = 127.0;
 
 /// The colour of a segment from the mean of its end values, on [`SHADE_LEVELS`] steps.
-pub(crate) fn segment_color(a: f64, b: f64, shade: (f64, f64)) -> RGBColor {
+pub(crate) fn segment_color(a: f64, b: f64, shade: (f64, f64)) -> Rgb {
     // Halves first, so that the mean of two large values does not overflow.
     let t = normalise(a / 2.0 + b / 2.0, shade);
     if t.is_nan() {
@@ -502,8 +502,8 @@ where
                 10
             },
         )
-        .bold_line_style(RGBColor(210, 210, 210))
-        .light_line_style(RGBColor(238, 238, 238))
+        .bold_line_style(Rgb(210, 210, 210))
+        .light_line_style(Rgb(238, 238, 238))
         .axis_style(BLACK)
         .draw()
         .map_err(e)?;
@@ -535,7 +535,7 @@ where
             .legend_area_size(LEGEND_AREA as u32)
             .label_font(text(LEGEND_SIZE))
             .background_style(WHITE.mix(0.9))
-            .border_style(RGBColor(160, 160, 160))
+            .border_style(Rgb(160, 160, 160))
             .draw()
             .map_err(e)?;
     }

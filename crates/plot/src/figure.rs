@@ -8,18 +8,33 @@ pub const DEFAULT_WIDTH: u32 = 900;
 /// Size of a figure unless told otherwise, in pixels.
 pub const DEFAULT_HEIGHT: u32 = 650;
 
+/// A colour by its red, green and blue components (sRGB, 0 to 255): the crate's own type,
+/// so that its users need no plotters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Rgb(pub u8, pub u8, pub u8);
+
+// Drawing takes it wherever plotters takes a colour.
+impl Color for Rgb {
+    fn to_backend_color(&self) -> plotters_backend::BackendColor {
+        plotters_backend::BackendColor {
+            alpha: 1.0,
+            rgb: (self.0, self.1, self.2),
+        }
+    }
+}
+
 /// The series colours, by index (matplotlib's "tab10": distinct, and readable in print).
-pub const PALETTE: [RGBColor; 10] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
+pub const PALETTE: [Rgb; 10] = [
+    Rgb(31, 119, 180),
+    Rgb(255, 127, 14),
+    Rgb(44, 160, 44),
+    Rgb(214, 39, 40),
+    Rgb(148, 103, 189),
+    Rgb(140, 86, 75),
+    Rgb(227, 119, 194),
+    Rgb(127, 127, 127),
+    Rgb(188, 189, 34),
+    Rgb(23, 190, 207),
 ];
 
 /// How a series is drawn.
@@ -46,33 +61,33 @@ pub enum Scale {
 }
 
 /// Colour of a shaded segment whose value is not finite.
-pub const NO_VALUE_COLOR: RGBColor = RGBColor(170, 170, 170);
+pub const NO_VALUE_COLOR: Rgb = Rgb(170, 170, 170);
 
 /// Anchors of matplotlib's "viridis" at 0, 1/9, ..., 1 (perceptually uniform, lightness
 /// increasing, readable in grey and by colour-blind readers).
-pub(crate) const VIRIDIS: [RGBColor; 10] = [
-    RGBColor(0x44, 0x01, 0x54),
-    RGBColor(0x48, 0x28, 0x78),
-    RGBColor(0x3e, 0x4a, 0x89),
-    RGBColor(0x31, 0x68, 0x8e),
-    RGBColor(0x26, 0x82, 0x8e),
-    RGBColor(0x1f, 0x9e, 0x89),
-    RGBColor(0x35, 0xb7, 0x79),
-    RGBColor(0x6d, 0xcd, 0x59),
-    RGBColor(0xb4, 0xde, 0x2c),
-    RGBColor(0xfd, 0xe7, 0x25),
+pub(crate) const VIRIDIS: [Rgb; 10] = [
+    Rgb(0x44, 0x01, 0x54),
+    Rgb(0x48, 0x28, 0x78),
+    Rgb(0x3e, 0x4a, 0x89),
+    Rgb(0x31, 0x68, 0x8e),
+    Rgb(0x26, 0x82, 0x8e),
+    Rgb(0x1f, 0x9e, 0x89),
+    Rgb(0x35, 0xb7, 0x79),
+    Rgb(0x6d, 0xcd, 0x59),
+    Rgb(0xb4, 0xde, 0x2c),
+    Rgb(0xfd, 0xe7, 0x25),
 ];
 
 /// The colour of `x` on the viridis colormap: dark purple at 0, yellow at 1. `x` is clamped
 /// to [0, 1]; NaN gives the low end.
-pub fn colormap(x: f64) -> RGBColor {
+pub fn colormap(x: f64) -> Rgb {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
     let s = x * (VIRIDIS.len() - 1) as f64;
     let i = (s.floor() as usize).min(VIRIDIS.len() - 2);
     let f = s - i as f64;
     let (a, b) = (VIRIDIS[i], VIRIDIS[i + 1]);
     let mix = |p: u8, q: u8| (p as f64 + f * (q as f64 - p as f64)).round() as u8;
-    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+    Rgb(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
 /// One curve: a name for the legend, its points and how to draw them.
@@ -85,7 +100,7 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     pub style: SeriesStyle,
     /// Overrides the palette colour (lines, markers and legend icon).
-    pub color: Option<RGBColor>,
+    pub color: Option<Rgb>,
     /// Stroke width of the line in pixels (default 2; clamped to 1..=[`MAX_STROKE`]).
     pub width: Option<u32>,
     /// One value per point: the line is coloured segment by segment through [`colormap`],
@@ -122,7 +137,7 @@ impl Series {
     }
 
     /// Builder: draw in this colour instead of the palette's.
-    pub fn color(mut self, color: RGBColor) -> Self {
+    pub fn color(mut self, color: Rgb) -> Self {
         self.color = Some(color);
         self
     }

@@ -33,7 +33,9 @@ pub fn ensure_font() -> Result<PathBuf, (Vec<PathBuf>, Option<PathBuf>)> {
     }
     candidates.extend(FONT_PATHS.iter().map(PathBuf::from));
     for path in &candidates {
-        let Ok(bytes) = fs::read(path) else { continue };
+        let Ok(bytes) = std::fs::read(path) else {
+            continue;
+        };
         // plotters keeps the font for the life of the process: leak it once.
         let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
         if plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_err() {

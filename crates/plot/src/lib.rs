@@ -1,8 +1,11 @@
-//! Figures as PNG and SVG, drawn with `plotters` (no Python), knowing nothing of eyes:
+//! Charts as PNG and SVG bytes, drawn with `plotters` (no Python), knowing nothing of eyes:
 //! eyeshell draws its convergence studies, work-precision diagrams and the paper's figures with it.
+//! (Its [`Figure`] is one chart: the paper's figures are eyeshell's, made of several.)
 //!
-//! A [`Figure`] holds [`Series`] of points; [`write()`] draws it to `<stem>.png` and
-//! `<stem>.svg`, and [`write_panels`] draws several figures as the panels of one image.
+//! A [`Figure`] holds [`Series`] of points; [`render()`] draws it as an [`Image`], its PNG
+//! and SVG bytes, and [`render_panels`] draws several figures as the panels of one image.
+//! The crate writes no file: its callers write the bytes (eyeshell through its one atomic
+//! writer), and its public types are its own ([`Rgb`], not plotters').
 //! Colours come from a fixed palette ([`PALETTE`]) and marker shapes from a fixed cycle,
 //! both by the series' index, so a figure looks the same on every run. A series may instead
 //! be shaded point by point through [`colormap`] (viridis), against the figure's
@@ -20,11 +23,8 @@ mod font;
 mod output;
 mod prepare;
 
-use std::ffi::OsString;
-use std::fs;
 use std::ops::Range;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::path::PathBuf;
 use std::sync::Mutex;
 
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
@@ -44,39 +44,21 @@ pub use figure::*;
 pub use font::{ensure_font, FONT_ENV, FONT_PATHS};
 #[allow(unused_imports)]
 use output::*;
-pub use output::{write, write_panels, PANELS_TITLE_BAND};
+pub use output::{render, render_panels, Image, PANELS_TITLE_BAND};
 #[allow(unused_imports)]
 use prepare::*;
 
-/// Failure to write a figure. Display is one line naming the path.
+/// Failure to draw a figure. Display is one line; the caller names the file it was for.
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
-    #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("{}: no font for the figure's text (looked for {}); install one with `apt-get install fonts-dejavu-core` or name a TTF file in {FONT_ENV}", path.display(), tried.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "))]
-    NoFont { path: PathBuf, tried: Vec<PathBuf> },
-    #[error("{}: the font {} could not be read as TrueType", path.display(), font.display())]
-    BadFont { path: PathBuf, font: PathBuf },
-    #[error("{}: drawing failed: {message}", path.display())]
-    Draw { path: PathBuf, message: String },
-    #[error("{}: {reason}", path.display())]
-    Invalid { path: PathBuf, reason: String },
-}
-
-impl PlotError {
-    /// The file (or stem) the error is about.
-    pub fn path(&self) -> &Path {
-        match self {
-            PlotError::Io { path, .. }
-            | PlotError::NoFont { path, .. }
-            | PlotError::BadFont { path, .. }
-            | PlotError::Draw { path, .. }
-            | PlotError::Invalid { path, .. } => path,
-        }
-    }
+    #[error("no font for the figure's text (looked for {}); install one with `apt-get install fonts-dejavu-core` or name a TTF file in {FONT_ENV}", tried.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "))]
+    NoFont { tried: Vec<PathBuf> },
+    #[error("the font {} could not be read as TrueType", font.display())]
+    BadFont { font: PathBuf },
+    #[error("drawing failed: {message}")]
+    Draw { message: String },
+    #[error("{reason}")]
+    Invalid { reason: String },
 }
 
 #[cfg(test)]
@@ -191,7 +173,7 @@ mod tests {
         assert_eq!(linear_label(125000.0, 1e5), "1.25e5");
     }
     /// Relative luminance of an sRGB colour.
-    fn luminance(c: RGBColor) -> f64 {
+    fn luminance(c: Rgb) -> f64 {
         let lin = |v: u8| {
             let v = v as f64 / 255.0;
             if v <= 0.04045 {
@@ -205,14 +187,14 @@ mod tests {
 
     #[test]
     fn colormap_is_viridis_with_increasing_luminance() {
-        assert_eq!(colormap(0.0), RGBColor(0x44, 0x01, 0x54));
-        assert_eq!(colormap(1.0), RGBColor(0xfd, 0xe7, 0x25));
+        assert_eq!(colormap(0.0), Rgb(0x44, 0x01, 0x54));
+        assert_eq!(colormap(1.0), Rgb(0xfd, 0xe7, 0x25));
         assert_eq!(colormap(-3.0), colormap(0.0));
         assert_eq!(colormap(7.0), colormap(1.0));
         assert_eq!(colormap(f64::NAN), colormap(0.0));
         assert_eq!(colormap(f64::INFINITY), colormap(1.0));
         // The anchors are hit exactly.
-        assert_eq!(colormap(5.0 / 9.0), RGBColor(0x1f, 0x9e, 0x89));
+        assert_eq!(colormap(5.0 / 9.0), Rgb(0x1f, 0x9e, 0x89));
         let lum: Vec<f64> = (0..=200)
             .map(|i| luminance(colormap(i as f64 / 200.0)))
             .collect();
@@ -339,10 +321,14 @@ mod tests {
         let s = Series::new("a", vec![], SeriesStyle::Line);
         assert!(s.legend && s.color.is_none() && s.width.is_none() && s.values.is_none());
         assert!(Series::default().legend);
-        let s = s.color(RED).width(5).shaded(vec![1.0]).no_legend();
+        let s = s
+            .color(Rgb(255, 0, 0))
+            .width(5)
+            .shaded(vec![1.0])
+            .no_legend();
         assert_eq!(
             (s.color, s.width, s.values, s.legend),
-            (Some(RED), Some(5), Some(vec![1.0]), false)
+            (Some(Rgb(255, 0, 0)), Some(5), Some(vec![1.0]), false)
         );
         let f = Figure::default();
         assert!(f.legend && f.color_scale.is_none() && f.notes.is_empty());

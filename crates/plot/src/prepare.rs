@@ -186,7 +186,7 @@ pub(crate) fn normalise(v: f64, (lo, hi): (f64, f64)) -> f64 {
 }
 
 /// The colour of a value against the figure's shade range.
-pub(crate) fn shade_color(v: f64, range: (f64, f64)) -> RGBColor {
+pub(crate) fn shade_color(v: f64, range: (f64, f64)) -> Rgb {
     let t = normalise(v, range);
     if t.is_nan() {
         NO_VALUE_COLOR

@@ -6,10 +6,35 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use eyeshell_plot::{
-    self, colormap, Figure, PlotError, Scale, Series, SeriesStyle, COLORBAR_AREA, NO_VALUE_COLOR,
-    PALETTE, PANELS_TITLE_BAND,
+    self, colormap, Figure, PlotError, Rgb, Scale, Series, SeriesStyle, COLORBAR_AREA,
+    NO_VALUE_COLOR, PALETTE, PANELS_TITLE_BAND,
 };
-use plotters::style::RGBColor;
+
+/// `<stem>.png` and `<stem>.svg` as the figure renders (the crate draws to bytes; the tests
+/// look at files, as eyeshell writes them).
+fn save(image: eyeshell_plot::Image, stem: &Path) -> (PathBuf, PathBuf) {
+    let name = stem.file_name().unwrap().to_string_lossy();
+    let png = stem.with_file_name(format!("{name}.png"));
+    let svg = stem.with_file_name(format!("{name}.svg"));
+    fs::write(&png, &image.png).unwrap();
+    fs::write(&svg, image.svg.as_bytes()).unwrap();
+    (png, svg)
+}
+
+fn write(fig: &Figure, stem: &Path) -> Result<(PathBuf, PathBuf), PlotError> {
+    eyeshell_plot::render(fig).map(|image| save(image, stem))
+}
+
+fn write_panels(
+    panels: &[Figure],
+    columns: usize,
+    title: &str,
+    w: u32,
+    h: u32,
+    stem: &Path,
+) -> Result<(PathBuf, PathBuf), PlotError> {
+    eyeshell_plot::render_panels(panels, columns, title, w, h).map(|image| save(image, stem))
+}
 
 /// The decoded PNG: width, height and RGB bytes.
 fn decode_png(path: &Path) -> (u32, u32, Vec<u8>) {
@@ -44,14 +69,14 @@ fn svg_texts(svg: &str) -> Vec<String> {
         .collect()
 }
 
-fn count_color(rgb: &[u8], c: plotters::style::RGBColor) -> usize {
+fn count_color(rgb: &[u8], c: Rgb) -> usize {
     pixels(rgb).filter(|p| *p == [c.0, c.1, c.2]).count()
 }
 
 /// Keep a copy of the figure when EYESHELL_PLOT_SAMPLES names a directory.
 fn keep_sample(fig: &Figure, name: &str) {
     if let Some(dir) = std::env::var_os("EYESHELL_PLOT_SAMPLES") {
-        eyeshell_plot::write(fig, &PathBuf::from(dir).join(name)).unwrap();
+        write(fig, &PathBuf::from(dir).join(name)).unwrap();
     }
 }
 
@@ -94,7 +119,7 @@ fn log_log_figure_is_written_as_png_and_svg() {
     let dir = tempfile::tempdir().unwrap();
     let fig = convergence_figure();
     assert_eq!((fig.width, fig.height), (900, 650));
-    let (png_path, svg_path) = eyeshell_plot::write(&fig, &dir.path().join("conv")).unwrap();
+    let (png_path, svg_path) = write(&fig, &dir.path().join("conv")).unwrap();
     assert_eq!(png_path, dir.path().join("conv.png"));
     assert_eq!(svg_path, dir.path().join("conv.svg"));
     only(dir.path(), &["conv.png", "conv.svg"]);
@@ -139,7 +164,7 @@ fn log_log_figure_is_written_as_png_and_svg() {
     keep_sample(&fig, "convergence");
 
     // Writing again replaces the files.
-    eyeshell_plot::write(&fig, &dir.path().join("conv")).unwrap();
+    write(&fig, &dir.path().join("conv")).unwrap();
     only(dir.path(), &["conv.png", "conv.svg"]);
 }
 
@@ -154,7 +179,7 @@ fn a_series_with_no_drawable_point_is_listed_as_no_data() {
     ));
     fig.series
         .push(Series::new("empty", vec![], SeriesStyle::LineAndMarkers));
-    let (_, svg) = eyeshell_plot::write(&fig, &dir.path().join("f")).unwrap();
+    let (_, svg) = write(&fig, &dir.path().join("f")).unwrap();
     let svg = fs::read_to_string(svg).unwrap();
     let texts = svg_texts(&svg);
     assert!(texts.iter().any(|t| t == "diverged (no data)"), "{texts:?}");
@@ -165,13 +190,13 @@ fn a_series_with_no_drawable_point_is_listed_as_no_data() {
         series: vec![Series::new("none", vec![(0.0, 0.0)], SeriesStyle::Markers)],
         ..Figure::new("empty", "x", "y")
     };
-    let (png, _) = eyeshell_plot::write(&nothing, &dir.path().join("nothing")).unwrap();
+    let (png, _) = write(&nothing, &dir.path().join("nothing")).unwrap();
     assert_eq!(decode_png(&png).0, 900);
 }
 
 /// The horizontal and vertical diameters, in pixels, of a closed curve drawn in colour `c`:
 /// through its centre (the median of its pixels, which a legend icon does not move far).
-fn diameters(w: u32, rgb: &[u8], c: plotters::style::RGBColor) -> (u32, u32) {
+fn diameters(w: u32, rgb: &[u8], c: Rgb) -> (u32, u32) {
     let hits: Vec<(u32, u32)> = pixels(rgb)
         .enumerate()
         .filter(|(_, p)| *p == [c.0, c.1, c.2])
@@ -209,7 +234,7 @@ fn equal_aspect_draws_a_circle_round() {
         height: 400,
         ..Figure::default()
     };
-    let (png, svg) = eyeshell_plot::write(&fig, &dir.path().join("shape")).unwrap();
+    let (png, svg) = write(&fig, &dir.path().join("shape")).unwrap();
     let (w, h, rgb) = decode_png(&png);
     assert_eq!((w, h), (700, 400));
     let (dx, dy) = diameters(w, &rgb, PALETTE[0]);
@@ -224,7 +249,7 @@ fn equal_aspect_draws_a_circle_round() {
         aspect_equal: false,
         ..fig.clone()
     };
-    let (png, _) = eyeshell_plot::write(&stretched, &dir.path().join("stretched")).unwrap();
+    let (png, _) = write(&stretched, &dir.path().join("stretched")).unwrap();
     let (w, _, rgb) = decode_png(&png);
     let (dx, dy) = diameters(w, &rgb, PALETTE[0]);
     assert!(
@@ -234,26 +259,20 @@ fn equal_aspect_draws_a_circle_round() {
 }
 
 #[test]
-fn errors_are_typed_and_name_the_path() {
+fn errors_are_typed() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("a-file");
     fs::write(&file, "x").unwrap();
-    let stem = file.join("fig");
-    let err = eyeshell_plot::write(&convergence_figure(), &stem).unwrap_err();
-    assert!(matches!(err, PlotError::Io { .. }), "{err:?}");
-    assert!(err.to_string().contains("a-file"), "{err}");
-    assert_eq!(fs::read_to_string(&file).unwrap(), "x");
-    only(dir.path(), &["a-file"]);
 
     // Equal aspect on a log axis is refused.
     let fig = Figure {
         aspect_equal: true,
         ..convergence_figure()
     };
-    let err = eyeshell_plot::write(&fig, &dir.path().join("log")).unwrap_err();
+    let err = write(&fig, &dir.path().join("log")).unwrap_err();
     assert!(matches!(err, PlotError::Invalid { .. }), "{err:?}");
     assert!(err.to_string().contains("linear"), "{err}");
-    let err = eyeshell_plot::write(
+    let err = write(
         &Figure {
             width: 0,
             ..Figure::default()
@@ -266,7 +285,7 @@ fn errors_are_typed_and_name_the_path() {
 }
 
 /// Pixels within `tol` (per channel) of colour `c`.
-fn count_near(rgb: &[u8], c: RGBColor, tol: u8) -> usize {
+fn count_near(rgb: &[u8], c: Rgb, tol: u8) -> usize {
     pixels(rgb)
         .filter(|p| {
             p.iter()
@@ -309,7 +328,7 @@ fn a_shaded_series_uses_both_ends_of_the_colormap() {
     let dir = tempfile::tempdir().unwrap();
     // No colour scale: the curve alone spans its values, and no bar is drawn.
     let fig = shaded_shell(false);
-    let (png, svg) = eyeshell_plot::write(&fig, &dir.path().join("shell")).unwrap();
+    let (png, svg) = write(&fig, &dir.path().join("shell")).unwrap();
     let (w, h, rgb) = decode_png(&png);
     assert_eq!((w, h), (700, 600));
     let low = count_near(&rgb, colormap(0.0), 6);
@@ -328,7 +347,7 @@ fn a_shaded_series_uses_both_ends_of_the_colormap() {
 fn the_colour_bar_is_drawn_at_the_right_with_its_label() {
     let dir = tempfile::tempdir().unwrap();
     let fig = shaded_shell(true);
-    let (png, svg) = eyeshell_plot::write(&fig, &dir.path().join("bar")).unwrap();
+    let (png, svg) = write(&fig, &dir.path().join("bar")).unwrap();
     let (w, h, rgb) = decode_png(&png);
     assert_eq!((w, h), (700, 600));
     // Both ends of the scale are in the bar's strip.
@@ -366,7 +385,7 @@ fn non_finite_values_are_grey_and_the_scale_clamps() {
         )
         .color_scale("", 0.0, 1.0)
         .no_legend();
-    let (png, _) = eyeshell_plot::write(&fig, &dir.path().join("grey")).unwrap();
+    let (png, _) = write(&fig, &dir.path().join("grey")).unwrap();
     let (_, _, rgb) = decode_png(&png);
     assert!(count_color(&rgb, NO_VALUE_COLOR) > 20);
     assert!(count_near(&rgb, colormap(0.0), 0) > 100);
@@ -376,14 +395,14 @@ fn non_finite_values_are_grey_and_the_scale_clamps() {
 #[test]
 fn colour_and_width_override_the_palette_also_when_dashed() {
     let dir = tempfile::tempdir().unwrap();
-    let c = RGBColor(200, 30, 120);
+    let c = Rgb(200, 30, 120);
     let line = |w: u32| {
         let fig = Figure::new("", "x", "y").with(
             Series::new("ref", vec![(0.0, 0.0), (1.0, 1.0)], SeriesStyle::DashedLine)
                 .color(c)
                 .width(w),
         );
-        let (png, _) = eyeshell_plot::write(&fig, &dir.path().join(format!("w{w}"))).unwrap();
+        let (png, _) = write(&fig, &dir.path().join(format!("w{w}"))).unwrap();
         let (_, _, rgb) = decode_png(&png);
         assert_eq!(count_color(&rgb, PALETTE[0]), 0);
         count_color(&rgb, c)
@@ -415,9 +434,9 @@ fn explicit_ranges_clip_the_lines() {
         .x_range(0.0, 1.0)
         .y_range(0.0, 1.0)
         .no_legend();
-    let (png, svg) = eyeshell_plot::write(&fig, &dir.path().join("clip")).unwrap();
+    let (png, svg) = write(&fig, &dir.path().join("clip")).unwrap();
     let (w, _, rgb) = decode_png(&png);
-    let xs = |c: RGBColor| -> Vec<u32> {
+    let xs = |c: Rgb| -> Vec<u32> {
         pixels(&rgb)
             .enumerate()
             .filter(|(_, p)| *p == [c.0, c.1, c.2])
@@ -460,11 +479,11 @@ fn legends_can_be_left_out() {
         }
     };
     let fig = (0..4).fold(Figure::new("family", "x", "y"), |f, k| f.with(fam(k)));
-    let (_, svg) = eyeshell_plot::write(&fig, &dir.path().join("some")).unwrap();
+    let (_, svg) = write(&fig, &dir.path().join("some")).unwrap();
     let texts = svg_texts(&fs::read_to_string(svg).unwrap());
     assert!(texts.iter().any(|t| t == "curve 0"), "{texts:?}");
     assert!(!texts.iter().any(|t| t == "curve 1"), "{texts:?}");
-    let (_, svg) = eyeshell_plot::write(&fig.no_legend(), &dir.path().join("none")).unwrap();
+    let (_, svg) = write(&fig.no_legend(), &dir.path().join("none")).unwrap();
     let texts = svg_texts(&fs::read_to_string(svg).unwrap());
     assert!(!texts.iter().any(|t| t.starts_with("curve")), "{texts:?}");
 }
@@ -516,14 +535,12 @@ fn odd_input_still_draws() {
             .y_range(-1.0, 1.0),
     ];
     for (k, fig) in figs.iter().enumerate() {
-        let (png, _) = eyeshell_plot::write(fig, &dir.path().join(format!("odd{k}"))).unwrap();
+        let (png, _) = write(fig, &dir.path().join(format!("odd{k}"))).unwrap();
         let (w, h, _) = decode_png(&png);
         assert_eq!((w, h), (fig.width, fig.height));
         keep_sample(fig, &format!("odd{k}"));
     }
-    let (png, _) =
-        eyeshell_plot::write_panels(&figs, 2, "odd", 200, 150, &dir.path().join("odd-panels"))
-            .unwrap();
+    let (png, _) = write_panels(&figs, 2, "odd", 200, 150, &dir.path().join("odd-panels")).unwrap();
     assert_eq!(decode_png(&png).0, 400);
 }
 
@@ -540,7 +557,7 @@ fn panel(k: usize) -> Figure {
     .with(
         Series::new("heavy", points, SeriesStyle::Line)
             .width(4)
-            .color(RGBColor(0, 0, 0)),
+            .color(Rgb(0, 0, 0)),
     );
     if k == 1 {
         fig.color_scale("rate", 0.0, 1.0)
@@ -554,9 +571,9 @@ fn panels_are_laid_out_in_a_grid() {
     let dir = tempfile::tempdir().unwrap();
     let panels: Vec<Figure> = (0..5).map(panel).collect();
     let stem = dir.path().join("grid");
-    let (png, svg) = eyeshell_plot::write_panels(&panels, 3, "Figure 4", 400, 300, &stem).unwrap();
+    let (png, svg) = write_panels(&panels, 3, "Figure 4", 400, 300, &stem).unwrap();
     if let Some(d) = std::env::var_os("EYESHELL_PLOT_SAMPLES") {
-        eyeshell_plot::write_panels(
+        write_panels(
             &panels,
             3,
             "Figure 4",
@@ -600,7 +617,7 @@ fn panels_are_laid_out_in_a_grid() {
         height: 300,
         ..panel(0)
     };
-    let (one, _) = eyeshell_plot::write(&alone, &dir.path().join("one")).unwrap();
+    let (one, _) = write(&alone, &dir.path().join("one")).unwrap();
     let (_, _, single) = decode_png(&one);
     let cell: Vec<u8> = rgb
         .chunks_exact(w as usize * 3)
@@ -614,7 +631,7 @@ fn panels_are_laid_out_in_a_grid() {
     );
 
     // No title: no band.
-    let (png, _) = eyeshell_plot::write_panels(&panels[..4], 2, "", 400, 300, &stem).unwrap();
+    let (png, _) = write_panels(&panels[..4], 2, "", 400, 300, &stem).unwrap();
     let (w, h, _) = decode_png(&png);
     assert_eq!((w, h), (2 * 400, 2 * 300));
     only(dir.path(), &["grid.png", "grid.svg", "one.png", "one.svg"]);
@@ -645,10 +662,9 @@ fn bad_panels_are_refused_and_write_nothing() {
         ),
     ];
     for (panels, columns, pw, ph, why) in cases {
-        let err = eyeshell_plot::write_panels(panels, columns, "t", pw, ph, &stem).unwrap_err();
+        let err = write_panels(panels, columns, "t", pw, ph, &stem).unwrap_err();
         assert!(matches!(err, PlotError::Invalid { .. }), "{err:?}");
         assert!(err.to_string().contains(why), "{err} (wanted {why})");
-        assert_eq!(err.path(), stem);
     }
     only(dir.path(), &[]);
 }

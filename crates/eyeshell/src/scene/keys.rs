@@ -14,6 +14,7 @@ use crate::model::eye::SurfaceSpec;
 use crate::model::eyewear::{lenses_toml, LensSpec, CLASSIFY};
 use crate::model::optics::{Source, EYES, FOCUS_NAMES, SOURCES};
 use crate::model::params::Thickness;
+use crate::scene::optics_toml::SurfaceToml;
 
 /// How a key is read from and written to a [`Scene`]; the variant is the key's type.
 #[derive(Clone, Copy)]
@@ -97,11 +98,8 @@ pub enum Rule {
     List(usize),
 }
 
-/// The shortest growth run (growth.t_end). SUNDIALS compares times by multiplying a
-/// distance in time by a step, and below about 1e-160 that product underflows: IDA and CVODE
-/// then refuse to step at all ("tstop is behind t") however small the step. 1e-100 leaves
-/// steps 1e60 times shorter than the run room; a run that short does not grow anyway.
-pub const MIN_T_END: f64 = 1e-100;
+// The shortest growth run: growth owns it (its schedules check against it too).
+pub use crate::growth::settings::MIN_T_END;
 
 impl Rule {
     /// A short description for `eyeshell keys`.

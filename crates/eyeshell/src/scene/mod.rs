@@ -16,6 +16,7 @@
 //! output.times, stimulus.*) are kept but not used, shown or summarised.
 
 pub mod keys;
+pub mod optics_toml;
 pub mod sample;
 pub mod sweep;
 
@@ -30,6 +31,7 @@ use crate::model::params::Params;
 use crate::model::stimulus::{Surface, RED_OFFSET};
 use crate::text::{decimals6, number};
 pub use keys::{Access, KeySpec, KeyValue, Rule, KEYS};
+use optics_toml::SurfaceToml;
 
 /// Everything a scene sets: the physical parameters and the numerical settings.
 #[derive(Clone, Debug, PartialEq)]
@@ -572,7 +574,7 @@ impl Scene {
                 toml::Value::String(s) => set(self, s.clone()),
                 _ => return Err(wrong("a string")),
             },
-            Access::Lenses { set, .. } => match crate::model::eyewear::parse_lenses(value) {
+            Access::Lenses { set, .. } => match optics_toml::parse_lenses(value) {
                 Ok(lenses) => set(self, lenses),
                 Err(e) => {
                     return Err(SceneError::Invalid {

@@ -518,7 +518,7 @@ pub(crate) fn run(
     }
     let warp = Warp::new(&growth.schedule, &growth.clock, t_end);
     let tau_end = warp.clock(t_end);
-    let min = crate::scene::keys::MIN_T_END;
+    let min = super::settings::MIN_T_END;
     if !(tau_end.is_finite() && tau_end >= min) {
         return Err(fail(format!(
             "the schedule grows nothing that can be integrated: ∫ s dt over the growth window is {} (growth.schedule = \"{}\"); it must be finite and at least {}",

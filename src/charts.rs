@@ -1,5 +1,8 @@
-//! The paper's result figures (its section 3; docs/MODEL.md §8) and the pictures of any run,
-//! drawn from run directories read back from disk ([`eyeshell::rundir::rundata`]), as PNG and SVG.
+//! The charts eyeshell draws from its results: the panels of the paper's result figures (its
+//! section 3; docs/MODEL.md §8), `eyeshell plot`'s pictures of any run, the fit's and the
+//! optics' charts; drawn from run directories read back from disk
+//! ([`eyeshell::rundir::rundata`]), as PNG and SVG. "Figures" names only the paper's
+//! figures (`eyeshell figures`, `study/figures.rs`, which runs their scenes).
 //!
 //! Panels are built by small functions (a shell cross-section, stretch profiles, axial
 //! length against time, retinas); [`paper_figures`] composes them into figures (a)–(f) and
@@ -7,23 +10,22 @@
 
 use std::path::{Path, PathBuf};
 
-use plotters::style::RGBColor;
-
+use crate::image::{self, ImageError};
 use eyeshell::interop::export::{bad, ExportError, RunSnapshot};
 use eyeshell::model::stimulus::Surface;
 use eyeshell::rundir::rundata::{self, column, RunData, RunKind, SeriesPoint};
 use eyeshell::rundir::Summary;
 use eyeshell::scene::Scene;
 use eyeshell::text::excerpt;
-use eyeshell_plot::{self as plot, colormap, Figure, PlotError, Series, SeriesStyle};
+use eyeshell_plot::{self as plot, colormap, Figure, Rgb, Series, SeriesStyle};
 
 /// Size of one panel, in pixels.
 pub const PANEL: (u32, u32) = (820, 620);
 
-const BLUE: RGBColor = RGBColor(31, 90, 220);
-const RED: RGBColor = RGBColor(210, 40, 40);
-const GREY: RGBColor = RGBColor(150, 150, 150);
-const BLACK: RGBColor = RGBColor(0, 0, 0);
+const BLUE: Rgb = Rgb(31, 90, 220);
+const RED: Rgb = Rgb(210, 40, 40);
+const GREY: Rgb = Rgb(150, 150, 150);
+const BLACK: Rgb = Rgb(0, 0, 0);
 
 /// A figure that was written: its files and its caption (for the index).
 #[derive(Clone, Debug)]
@@ -43,7 +45,7 @@ pub enum FigureError {
     Read(#[from] ExportError),
     /// Drawing or writing a picture failed (a missing font, a full disk): not the user's.
     #[error(transparent)]
-    Plot(#[from] PlotError),
+    Plot(#[from] ImageError),
 }
 
 impl FigureError {
@@ -489,7 +491,7 @@ fn figure_a(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         .map(|(s, l)| shell_panel(format!("{l} {}", t_label(s.t)), &run.scene, s, top))
         .collect::<Result<Vec<_>, _>>()?;
     let title = "Growth of a uniform, fibre-free sclera";
-    let files = plot::write_panels(
+    let files = image::write_panels(
         &panels,
         2,
         title,
@@ -529,7 +531,7 @@ fn figure_b(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         profile_panel("(g) stretch α_φ", "alpha_phi", "α_φ", &snaps, T)?,
     ];
     let title = "Stretches of the uniform sclera as it grows";
-    let files = plot::write_panels(
+    let files = image::write_panels(
         &panels,
         2,
         title,
@@ -596,7 +598,7 @@ fn figure_c(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         }
     }
     let title = "Non-uniform against uniform reference thickness";
-    let files = plot::write_panels(
+    let files = image::write_panels(
         &[shells, alpha_s, alpha_phi],
         3,
         title,
@@ -662,7 +664,7 @@ fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
     }
     let axial = axial_panel("(b) axial length", &axial_runs);
     let title = "Effects of fibre reinforcement on scleral growth";
-    let files = plot::write_panels(
+    let files = image::write_panels(
         &[shells, close, axial, alpha_s, alpha_phi],
         3,
         title,
@@ -733,7 +735,7 @@ fn figure_e(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         .len()
         .max(1);
     let title = "Effect of the growth zone on the retina";
-    let files = plot::write_panels(
+    let files = image::write_panels(
         &panels,
         columns,
         title,
@@ -776,7 +778,7 @@ fn figure_f(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         panels.push(axial_panel(&format!("δ = {}", trim(*delta)), &named));
     }
     let title = "Axial length for the growth zones";
-    let files = plot::write_panels(
+    let files = image::write_panels(
         &panels,
         panels.len().max(1),
         title,
@@ -873,7 +875,7 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 vs("t_s", "t_s (kPa·mm)")?,
                 vs("Q", "Q")?,
             ];
-            push(plot::write_panels(
+            push(image::write_panels(
                 &panels,
                 3,
                 &run.name,
@@ -891,7 +893,7 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 .map(|s| shell_panel(axis.label(s.t), &run.scene, s, top))
                 .collect::<Result<Vec<_>, _>>()?;
             let columns = shells.len().clamp(1, 3);
-            push(plot::write_panels(
+            push(image::write_panels(
                 &shells,
                 columns,
                 &format!("{}: shells", run.name),
@@ -905,7 +907,7 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 profile_panel("η", "eta", "η (1/mm)", &snaps, axis)?,
                 profile_panel("t_s", "t_s", "t_s (kPa·mm)", &snaps, axis)?,
             ];
-            push(plot::write_panels(
+            push(image::write_panels(
                 &profiles,
                 2,
                 &format!("{}: profiles against σ", run.name),
@@ -940,7 +942,7 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 )
                 .color(RED),
             );
-            push(plot::write_panels(
+            push(image::write_panels(
                 &[axial, refraction],
                 2,
                 &format!("{}: the eye in time", run.name),
@@ -949,7 +951,7 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 &stem("timeline"),
             )?);
             if let Some(panels) = sensitivity_panels(dir, axis)? {
-                push(plot::write_panels(
+                push(image::write_panels(
                     &panels,
                     2,
                     &format!("{}: sensitivities", run.name),
@@ -1076,7 +1078,7 @@ pub fn fit_figure(
     }
     fig.width = PANEL.0;
     fig.height = PANEL.1;
-    Ok(plot::write(&fig, stem)?)
+    Ok(image::write(&fig, stem)?)
 }
 
 /// Does `dir` hold a sweep's output (summary.json with a list of runs)?
@@ -1116,7 +1118,7 @@ fn plot_sweep(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
         .collect();
     if !growing.is_empty() {
         let fig = axial_panel("axial length of every run", &growing);
-        let (png, svg) = plot::write(&fig, &out.join("axial_length"))?;
+        let (png, svg) = image::write(&fig, &out.join("axial_length"))?;
         files.extend([png, svg]);
     }
     Ok(files)
@@ -1142,8 +1144,8 @@ pub fn published_figure(
     );
     let column = |k: usize| rows.iter().map(|r| (r[1], r[k])).collect::<Vec<_>>();
     for (k, name, colour) in [
-        (4, "sagittal focus".to_string(), RGBColor(90, 160, 90)),
-        (5, "tangential focus".to_string(), RGBColor(200, 140, 40)),
+        (4, "sagittal focus".to_string(), Rgb(90, 160, 90)),
+        (5, "tangential focus".to_string(), Rgb(200, 140, 40)),
         (3, format!("best focus ({criterion})"), BLUE),
     ] {
         fig = fig.with(Series::new(name, column(k), SeriesStyle::Line).color(colour));
@@ -1160,7 +1162,7 @@ pub fn published_figure(
     );
     fig.width = PANEL.0;
     fig.height = PANEL.1;
-    Ok(plot::write(&fig, stem)?)
+    Ok(image::write(&fig, stem)?)
 }
 
 /// A ray fan of the optics figure: its field angle (degrees) and each ray's (z, y) path.
@@ -1196,7 +1198,7 @@ pub fn optics_figure(
             );
         }
     }
-    let fan_colours = [GREY, RGBColor(90, 160, 90), RGBColor(200, 140, 40)];
+    let fan_colours = [GREY, Rgb(90, 160, 90), Rgb(200, 140, 40)];
     for (i, (field, rays)) in fans.iter().enumerate() {
         for (k, ray) in rays.iter().enumerate() {
             let series = Series::new(
@@ -1223,5 +1225,5 @@ pub fn optics_figure(
     }
     fig.width = PANEL.0;
     fig.height = PANEL.1;
-    Ok(plot::write(&fig, stem)?)
+    Ok(image::write(&fig, stem)?)
 }

@@ -203,6 +203,13 @@ pub trait Observer {
     }
 }
 
+/// No observer: `scene.grow(&mut ())`.
+impl Observer for () {
+    fn snapshot(&mut self, _s: &Snapshot) -> Result<(), ObserverError> {
+        Ok(())
+    }
+}
+
 /// The largest growth rate at t = 0 the integrators can follow, weighted as their error
 /// test weighs it: |∂p/∂t| / (solver.rtol·|p| + solver.atol), per unit time. Their error
 /// norms and step selection square it and multiply it by steps: measured on the const

@@ -113,6 +113,15 @@ pub struct Solution {
 }
 
 impl Solution {
+    /// The values of the field `name` (a column of fields.csv: `Sigma`, `kappa`, `r`, `z`,
+    /// `theta`, `Q`, …; see [`super::COLUMNS`]) at every node, or None for an unknown name.
+    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
+        let j = super::COLUMNS.iter().position(|&c| c == name)?;
+        Some(self.rows.iter().map(|r| r.values()[j]).collect())
+    }
+}
+
+impl Solution {
     /// y = (κ, r, θ, q_s, t_s) at node i.
     pub fn y(&self, i: usize) -> Vec5 {
         Vec5::from_column_slice(&self.u[NY * i..NY * i + NY])

@@ -8,6 +8,12 @@ use super::ThicknessLaw;
 use crate::model::optics::{ComputedOptics, OpticsSpec, Source};
 use crate::model::stimulus::{EyeMeasure, Focal, Refraction, Surface};
 
+/// The shortest growth run (growth.t_end). SUNDIALS compares times by multiplying a
+/// distance in time by a step, and below about 1e-160 that product underflows: IDA and CVODE
+/// then refuse to step at all ("tstop is behind t") however small the step. 1e-100 leaves
+/// steps 1e60 times shorter than the run room; a run that short does not grow anyway.
+pub const MIN_T_END: f64 = 1e-100;
+
 /// The growth model of one scene (docs/MODEL.md §4–6).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GrowthParams {

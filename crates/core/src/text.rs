@@ -13,6 +13,18 @@ pub fn number(x: f64) -> String {
     }
 }
 
+/// `x` as TOML writes a float: the shortest form that reads back to the same f64, with
+/// `nan`, `inf` and `-inf` for the values JSON lacks (`2.5`, `1e-300`, `inf`).
+pub fn toml_float(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.is_infinite() {
+        (if x > 0.0 { "inf" } else { "-inf" }).into()
+    } else {
+        format!("{x:?}")
+    }
+}
+
 /// `x` with 6 decimals where that shows it (|x| in [1e-4, 1e9), or 0), else 6 significant
 /// digits in scientific notation: `5.932091`, `1.234568e-7`. At most about 17 characters.
 pub fn decimals6(x: f64) -> String {

@@ -1,0 +1,448 @@
+//! The TOML of the optics keys: an eye's `[[optics.surfaces]]` tables and the
+//! `[[optics.lenses]]`, read into and written from the model's types
+//! (`model::eye::SurfaceSpec`, `model::eyewear::LensSpec`). The model holds what they mean
+//! and checks their ranges; reading a scene file's values is the scene's, so that the
+//! numerics crate needs no TOML.
+
+use eyeshell_optics::refraction::VERTEX_MM;
+
+use crate::model::eye::{
+    surface_key, EyeValue, MediumSpec, SurfaceKeyError, SurfaceSpec, SURFACE_KEYS,
+};
+use crate::model::eyewear::{LensSpec, ProfileSpec, KINDS, LENSES_KEY, MAX_LENSES, MAX_POINTS};
+use crate::model::optics::OpticsKeyError;
+use crate::text::number;
+
+/// A surface of the eye read from and written as TOML (the trait brings these to
+/// `SurfaceSpec`, which the numerics crate defines).
+pub trait SurfaceToml: Sized {
+    /// Set the key `name` of surface `i` from its TOML value (types and table shapes checked;
+    /// ranges by `SurfaceSpec::check`).
+    fn set(&mut self, i: usize, name: &str, v: &toml::Value) -> Result<(), SurfaceKeyError>;
+    /// The surface from a TOML table.
+    fn from_toml(i: usize, v: &toml::Value) -> Result<Self, SurfaceKeyError>;
+    /// The surface as a TOML table (its keys in the table's own, alphabetical, order).
+    fn to_toml(&self) -> toml::Value;
+}
+
+fn key_error(key: String, value: String, problem: impl Into<String>) -> OpticsKeyError {
+    OpticsKeyError {
+        key,
+        value,
+        problem: problem.into(),
+    }
+}
+
+fn eye_value_toml(value: &EyeValue) -> toml::Value {
+    match value {
+        EyeValue::Fixed(x) => toml::Value::Float(*x),
+        EyeValue::Table { t, value } => {
+            let list = |xs: &[f64]| {
+                toml::Value::Array(xs.iter().map(|x| toml::Value::Float(*x)).collect())
+            };
+            let mut table = toml::Table::new();
+            table.insert("t".into(), list(t));
+            table.insert("value".into(), list(value));
+            toml::Value::Table(table)
+        }
+    }
+}
+
+fn show_toml(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(x) => number(*x),
+        toml::Value::Integer(i) => i.to_string(),
+        v => crate::text::excerpt(&crate::text::one_line(&v.to_string()), 120),
+    }
+}
+
+fn float(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        // As summary.json writes the numbers JSON lacks (a plane's radius).
+        toml::Value::String(s) if ["inf", "-inf", "nan"].contains(&s.as_str()) => s.parse().ok(),
+        _ => None,
+    }
+}
+
+fn floats(v: &toml::Value) -> Option<Vec<f64>> {
+    match v {
+        toml::Value::Array(items) => items.iter().map(float).collect(),
+        v => float(v).map(|x| vec![x]),
+    }
+}
+
+impl SurfaceToml for SurfaceSpec {
+    /// Set the key `name` of surface `i` from its TOML value (types and table shapes checked;
+    /// ranges by [`SurfaceSpec::check`]).
+    fn set(&mut self, i: usize, name: &str, v: &toml::Value) -> Result<(), SurfaceKeyError> {
+        let err = |problem: String| SurfaceKeyError {
+            key: surface_key(i, name),
+            value: show_toml(v),
+            problem,
+        };
+        let value = |timed: bool| -> Result<EyeValue, SurfaceKeyError> {
+            if let Some(x) = float(v) {
+                return Ok(EyeValue::Fixed(x));
+            }
+            let shape = if timed {
+                "must be a number or a table over the growth's time, { t = [0, 0.5, 1], value = [7.4, 7.7, 7.8] }"
+            } else {
+                "must be a number"
+            };
+            let toml::Value::Table(table) = v else {
+                return Err(err(shape.into()));
+            };
+            if !timed {
+                return Err(err(shape.into()));
+            }
+            if let Some(k) = table.keys().find(|k| *k != "t" && *k != "value") {
+                return Err(err(format!(
+                    "has the unknown key '{}': {shape}",
+                    crate::text::one_line(&crate::text::excerpt(k, 40))
+                )));
+            }
+            let (Some(t), Some(value)) = (
+                table.get("t").and_then(floats),
+                table.get("value").and_then(floats),
+            ) else {
+                return Err(err(format!(
+                    "{shape}: t and value must both be lists of numbers"
+                )));
+            };
+            Ok(EyeValue::Table { t, value })
+        };
+        match name {
+            "radius" => self.radius = Some(value(true)?),
+            "conic" => self.conic = Some(value(true)?),
+            "thickness" => self.thickness = Some(value(true)?),
+            "index" => self.medium = Some(MediumSpec::Index(value(true)?)),
+            "aspheric" => {
+                self.aspheric = Some(floats(v).ok_or_else(|| {
+                    err("must be a list of numbers: the coefficients of r⁴, r⁶, ... (mm⁻³, mm⁻⁵, ...)".into())
+                })?)
+            }
+            "cauchy" => {
+                self.medium = Some(MediumSpec::Cauchy(floats(v).ok_or_else(|| {
+                    err("must be a list of one to four numbers: a, b, c, d of n = a + b/λ² + c/λ⁴ + d/λ⁶ (λ in µm)".into())
+                })?))
+            }
+            "sellmeier" => {
+                let shape = "must be a table { b = [..], c = [..] } of Sellmeier's n² = 1 + Σ bᵢλ²/(λ² − cᵢ) (λ in µm)";
+                let toml::Value::Table(table) = v else {
+                    return Err(err(shape.into()));
+                };
+                let (Some(b), Some(c)) = (
+                    table.get("b").and_then(floats),
+                    table.get("c").and_then(floats),
+                ) else {
+                    return Err(err(shape.into()));
+                };
+                if table.len() != 2 {
+                    return Err(err(shape.into()));
+                }
+                self.medium = Some(MediumSpec::Sellmeier { b, c });
+            }
+            _ => {
+                return Err(SurfaceKeyError {
+                    key: surface_key(i, &crate::text::one_line(&crate::text::excerpt(name, 40))),
+                    value: show_toml(v),
+                    problem: format!(
+                        "is not a key of a surface: a surface takes {}",
+                        SURFACE_KEYS.join(", ")
+                    ),
+                })
+            }
+        }
+        Ok(())
+    }
+
+    /// The surface from a TOML table.
+    fn from_toml(i: usize, v: &toml::Value) -> Result<SurfaceSpec, SurfaceKeyError> {
+        let toml::Value::Table(table) = v else {
+            return Err(SurfaceKeyError {
+                key: format!("optics.surfaces[{i}]"),
+                value: show_toml(v),
+                problem: "must be a table of a surface's keys ([[optics.surfaces]])".into(),
+            });
+        };
+        let mut s = SurfaceSpec::default();
+        let media = ["index", "cauchy", "sellmeier"];
+        if table.keys().filter(|k| media.contains(&k.as_str())).count() > 1 {
+            return Err(SurfaceKeyError {
+                key: format!("optics.surfaces[{i}]"),
+                value: show_toml(v),
+                problem: "gives its medium twice: give one of index, cauchy or sellmeier".into(),
+            });
+        }
+        for (name, value) in table {
+            s.set(i, name, value)?;
+        }
+        Ok(s)
+    }
+
+    /// The surface as a TOML table (its keys in the table's own, alphabetical, order).
+    fn to_toml(&self) -> toml::Value {
+        let mut t = toml::Table::new();
+        let mut put = |k: &str, v: toml::Value| {
+            t.insert(k.to_string(), v);
+        };
+        let list =
+            |xs: &[f64]| toml::Value::Array(xs.iter().map(|x| toml::Value::Float(*x)).collect());
+        if let Some(v) = &self.radius {
+            put("radius", eye_value_toml(v));
+        }
+        if let Some(v) = &self.conic {
+            put("conic", eye_value_toml(v));
+        }
+        if let Some(a) = &self.aspheric {
+            put("aspheric", list(a));
+        }
+        if let Some(v) = &self.thickness {
+            put("thickness", eye_value_toml(v));
+        }
+        match &self.medium {
+            Some(MediumSpec::Index(v)) => put("index", eye_value_toml(v)),
+            Some(MediumSpec::Cauchy(c)) => put("cauchy", list(c)),
+            Some(MediumSpec::Sellmeier { b, c }) => {
+                let mut s = toml::Table::new();
+                s.insert("b".into(), list(b));
+                s.insert("c".into(), list(c));
+                put("sellmeier", toml::Value::Table(s));
+            }
+            None => {}
+        }
+        toml::Value::Table(t)
+    }
+}
+
+fn lens_float(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+/// The lenses of a TOML value: an array of tables.
+pub fn parse_lenses(value: &toml::Value) -> Result<Vec<LensSpec>, OpticsKeyError> {
+    let toml::Value::Array(items) = value else {
+        return Err(key_error(
+            LENSES_KEY.into(),
+            super::describe(value),
+            "must be an array of tables ([[optics.lenses]])",
+        ));
+    };
+    if items.len() > MAX_LENSES {
+        return Err(key_error(
+            LENSES_KEY.into(),
+            format!("{} lenses", items.len()),
+            format!("must list at most {MAX_LENSES} lenses"),
+        ));
+    }
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, item)| parse_lens(i, item))
+        .collect()
+}
+
+fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> {
+    let at = |name: &str| format!("{LENSES_KEY}[{i}].{name}");
+    let toml::Value::Table(t) = item else {
+        return Err(key_error(
+            format!("{LENSES_KEY}[{i}]"),
+            super::describe(item),
+            "must be a table (kind, vertex, power | zones | table | front_radius, back_radius, thickness, index)",
+        ));
+    };
+    const NAMES: [&str; 9] = [
+        "kind",
+        "vertex",
+        "power",
+        "zones",
+        "table",
+        "front_radius",
+        "back_radius",
+        "thickness",
+        "index",
+    ];
+    if let Some(k) = t.keys().find(|k| !NAMES.contains(&k.as_str())) {
+        return Err(key_error(
+            at(k),
+            "(given)".into(),
+            format!("is not a lens key (one of {})", NAMES.join(", ")),
+        ));
+    }
+    let number_at = |name: &str| -> Result<Option<f64>, OpticsKeyError> {
+        match t.get(name) {
+            None => Ok(None),
+            Some(v) => match lens_float(v) {
+                Some(x) if x.is_finite() => Ok(Some(x)),
+                Some(x) => Err(key_error(at(name), number(x), "must be a finite number")),
+                None => Err(key_error(at(name), super::describe(v), "must be a number")),
+            },
+        }
+    };
+    let kind = match t.get("kind") {
+        None => 0,
+        Some(toml::Value::String(s)) => KINDS.iter().position(|k| k == s).ok_or_else(|| {
+            key_error(
+                at("kind"),
+                format!("\"{s}\""),
+                "must be \"spectacle\" or \"contact\"",
+            )
+        })?,
+        Some(v) => {
+            return Err(key_error(
+                at("kind"),
+                super::describe(v),
+                "must be \"spectacle\" or \"contact\"",
+            ))
+        }
+    };
+    let vertex = match number_at("vertex")? {
+        Some(_) if kind == 1 => {
+            return Err(key_error(
+                at("vertex"),
+                number(number_at("vertex")?.unwrap_or(0.0)),
+                "is for spectacle lenses: a contact lens sits on the cornea",
+            ))
+        }
+        Some(v) if !(v > 0.0 && v <= 50.0) => return Err(key_error(
+            at("vertex"),
+            number(v),
+            "must lie in (0, 50] mm: the spectacle lens's back vertex in front of the corneal apex",
+        )),
+        Some(v) => v,
+        None => VERTEX_MM,
+    };
+    let pairs = |name: &str, a: &str, b: &str| -> Result<Option<Vec<(f64, f64)>>, OpticsKeyError> {
+        let Some(v) = t.get(name) else {
+            return Ok(None);
+        };
+        let toml::Value::Array(rows) = v else {
+            return Err(key_error(
+                at(name),
+                super::describe(v),
+                format!("must be an array of {{ {a} = …, {b} = … }} tables"),
+            ));
+        };
+        if rows.is_empty() || rows.len() > MAX_POINTS {
+            return Err(key_error(
+                at(name),
+                format!("{} entries", rows.len()),
+                format!("must hold 1 to {MAX_POINTS} entries"),
+            ));
+        }
+        let mut out = Vec::new();
+        for (k, row) in rows.iter().enumerate() {
+            let item = |field: &str| format!("{}[{k}].{field}", at(name));
+            let toml::Value::Table(r) = row else {
+                return Err(key_error(
+                    format!("{}[{k}]", at(name)),
+                    super::describe(row),
+                    format!("must be a table {{ {a} = …, {b} = … }}"),
+                ));
+            };
+            if let Some(extra) = r.keys().find(|x| x.as_str() != a && x.as_str() != b) {
+                return Err(key_error(
+                    item(extra),
+                    "(given)".into(),
+                    format!("is not one of {a}, {b}"),
+                ));
+            }
+            let get = |field: &str| match r.get(field) {
+                None => Err(key_error(item(field), "(missing)".into(), "must be given")),
+                Some(v) => match lens_float(v) {
+                    Some(x) if x.is_finite() => Ok(x),
+                    Some(x) => Err(key_error(item(field), number(x), "must be a finite number")),
+                    None => Err(key_error(
+                        item(field),
+                        super::describe(v),
+                        "must be a number",
+                    )),
+                },
+            };
+            out.push((get(a)?, get(b)?));
+        }
+        Ok(Some(out))
+    };
+    let power = number_at("power")?;
+    let zones = pairs("zones", "radius", "power")?;
+    let table = pairs("table", "radius", "power")?;
+    let real = ["front_radius", "back_radius", "thickness", "index"]
+        .iter()
+        .map(|n| number_at(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let given = [
+        power.is_some(),
+        zones.is_some(),
+        table.is_some(),
+        real.iter().any(Option::is_some),
+    ];
+    if given.iter().filter(|g| **g).count() != 1 {
+        return Err(key_error(
+            format!("{LENSES_KEY}[{i}]"),
+            "(this lens)".into(),
+            "must give exactly one of power, zones, table, or front_radius/back_radius/thickness/index (a real lens)",
+        ));
+    }
+    let profile = if let Some(p) = power {
+        ProfileSpec::Power(p)
+    } else if let Some(z) = zones {
+        ProfileSpec::Zones(z)
+    } else if let Some(t) = table {
+        ProfileSpec::Table(t)
+    } else {
+        let names = ["front_radius", "back_radius", "thickness", "index"];
+        if let Some(k) = real.iter().position(Option::is_none) {
+            return Err(key_error(
+                at(names[k]),
+                "(missing)".into(),
+                "must be given for a real lens",
+            ));
+        }
+        if kind == 1 {
+            return Err(key_error(
+                at("front_radius"),
+                number(real[0].unwrap_or(0.0)),
+                "a contact lens is thin here: give its power, zones or table",
+            ));
+        }
+        let v: Vec<f64> = real.iter().map(|x| x.unwrap_or(0.0)).collect();
+        if !(v[2] > 0.0 && v[2] <= 20.0) {
+            return Err(key_error(
+                at("thickness"),
+                number(v[2]),
+                "must lie in (0, 20] mm",
+            ));
+        }
+        if !(v[3] >= 1.0 && v[3] <= 3.0) {
+            return Err(key_error(at("index"), number(v[3]), "must lie in [1, 3]"));
+        }
+        for (k, r) in v[..2].iter().enumerate() {
+            if r.abs() < 1.0 {
+                return Err(key_error(
+                    at(names[k]),
+                    number(*r),
+                    "must be at least 1 mm in size (a plane is inf)",
+                ));
+            }
+        }
+        ProfileSpec::Real {
+            front_radius: v[0],
+            back_radius: v[1],
+            thickness: v[2],
+            index: v[3],
+        }
+    };
+    let spec = LensSpec {
+        kind,
+        vertex,
+        profile,
+    };
+    spec.lens(i)?;
+    Ok(spec)
+}
