@@ -797,16 +797,27 @@ fn expand_sweep<'py>(
 
 /// Write a growth run's `snapshots` ((t, {column: values}), in time order, each with every
 /// column of a snapshot file) to the directory `out` as `eyeshell export --mat` writes a
-/// growth run: one .mat file per output time in the published scripts' layout. Returns
+/// growth run: one .mat file per output time in the published scripts' layout, named by
+/// `ages` (one per snapshot) in a scene with `time.unit` as its snapshot files are. Returns
 /// the files written.
 #[pyfunction]
-#[pyo3(signature = (out, snapshots, compress = false))]
+#[pyo3(signature = (out, snapshots, compress = false, ages = None))]
 fn export_growth(
     py: Python<'_>,
     out: std::path::PathBuf,
     snapshots: Vec<(f64, std::collections::HashMap<String, Vec<f64>>)>,
     compress: bool,
+    ages: Option<Vec<f64>>,
 ) -> PyResult<Vec<std::path::PathBuf>> {
+    if let Some(ages) = &ages {
+        if ages.len() != snapshots.len() {
+            return Err(input_err(format!(
+                "to_mat: {} ages for {} snapshots",
+                ages.len(),
+                snapshots.len()
+            )));
+        }
+    }
     use eyeshell::interop::export::{export_snapshots, Format, RunSnapshot, Table};
     let columns: Vec<String> = COLUMNS
         .iter()
@@ -815,7 +826,8 @@ fn export_growth(
         .collect();
     let mut runs = Vec::with_capacity(snapshots.len());
     for (k, (t, fields)) in snapshots.iter().enumerate() {
-        let name = eyeshell::rundir::growth::snapshot_name(k, *t);
+        let age = ages.as_ref().map(|a| a[k]);
+        let name = eyeshell::rundir::growth::snapshot_name_at(k, *t, age);
         let values = columns
             .iter()
             .map(|c| {

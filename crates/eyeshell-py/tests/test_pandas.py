@@ -291,6 +291,20 @@ def test_growth_to_mat_writes_what_the_command_lines_export_writes(cli, tmp_path
     assert (tmp_path / "mine" / "notes.txt").read_text() == "keep"
 
 
+def test_growth_to_mat_names_a_scene_in_years_by_age_as_the_command_line_does(cli, tmp_path):
+    optional("scipy.io")
+    sets = ["solver.nodes=51", "time.unit=years", "time.start=2", "time.end=12"]
+    cli("grow", SCENES / "const.toml", *[a for kv in sets for a in ("--set", kv)],
+        "--out", tmp_path / "run", "--quiet")
+    cli("export", tmp_path / "run", "--mat", tmp_path / "cli")
+    g = eyeshell.grow(SCENES / "const.toml", solver__nodes=51, time__unit="years",
+                      time__start=2.0, time__end=12.0)
+    files = [f.rsplit("/", 1)[1] for f in g.to_mat(tmp_path / "py")]
+    names = sorted(p.name for p in (tmp_path / "cli").iterdir() if not p.name.startswith("."))
+    assert files == names and len(names) == 5
+    assert "age" in files[-1] and "12" in files[-1], files
+
+
 def test_solution_to_mat_is_the_command_lines_export(cli, tmp_path):
     scipy_io = optional("scipy.io")
     cli("solve", SCENES / "default.toml", "--set", "solver.nodes=101", "--out", tmp_path / "run", "--quiet")

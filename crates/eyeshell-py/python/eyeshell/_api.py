@@ -488,7 +488,18 @@ class Growth:
             (float(t), {k: np.asarray(v, dtype=float).tolist() for k, v in fields.items()})
             for t, fields in sorted(self.snapshots.items())
         ]
-        files = _eyeshell.export_growth(_path(directory, "directory"), snapshots, bool(compress))
+        # A scene in ages names its files by age, as the snapshot files (and so `eyeshell
+        # export --mat`) do.
+        ages = None
+        if "age" in self.series:
+            age_of = dict(zip(np.asarray(self.series["t"], dtype=float).tolist(),
+                              np.asarray(self.series["age"], dtype=float).tolist()))
+            ages = [age_of.get(t) for t, _ in snapshots]
+            if any(a is None for a in ages):
+                ages = None
+        files = _eyeshell.export_growth(
+            _path(directory, "directory"), snapshots, bool(compress), ages
+        )
         return [os.fsdecode(f) for f in files]
 
     @property

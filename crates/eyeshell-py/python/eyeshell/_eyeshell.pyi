@@ -68,6 +68,9 @@ def compare(
     run: str, reference: str, tol: float, rtol: float, field: str | None = None
 ) -> tuple[list[dict[str, Any]], str]: ...
 def export_growth(
-    out: str, snapshots: list[tuple[float, dict[str, list[float]]]], compress: bool = False
+    out: str,
+    snapshots: list[tuple[float, dict[str, list[float]]]],
+    compress: bool = False,
+    ages: list[float] | None = None,
 ) -> list[Any]: ...
 def sundials_version() -> str | None: ...
