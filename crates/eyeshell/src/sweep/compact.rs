@@ -118,7 +118,11 @@ fn compute_eye(scene: &Scene) -> (RunStatus, Option<RunResult>, Vec<SeriesRow>) 
                 Some(super::run::elastic_result(scene, &solution)),
                 Vec::new(),
             ),
-            Err(e) => (RunStatus::Failed(Error::from(e).to_string()), None, Vec::new()),
+            Err(e) => (
+                RunStatus::Failed(Error::from(e).to_string()),
+                None,
+                Vec::new(),
+            ),
         };
     };
     let mut rows = Rows(Vec::new());
@@ -213,9 +217,7 @@ impl Checkpoint {
     /// Append the pending lines and sync them, when a batch is full or the interval has
     /// passed (`force`: now).
     fn flush(&mut self, force: bool) -> std::io::Result<()> {
-        let due = force
-            || self.eyes >= self.batch
-            || self.last.elapsed() >= super::TABLE_INTERVAL;
+        let due = force || self.eyes >= self.batch || self.last.elapsed() >= super::TABLE_INTERVAL;
         if !due || self.pending.is_empty() {
             return Ok(());
         }
@@ -386,7 +388,10 @@ mod tests {
             result: None,
             series: vec!["0e0,1.5e0,2e0,3e0,4e0,emmetropic,NaN".into()],
         };
-        let mut text: Vec<u8> = ["eye-1", "eye-2"].iter().flat_map(|r| line(&entry(r))).collect();
+        let mut text: Vec<u8> = ["eye-1", "eye-2"]
+            .iter()
+            .flat_map(|r| line(&entry(r)))
+            .collect();
         let third = line(&entry("eye-3"));
         text.extend(&third[..third.len() / 2]);
         std::fs::write(&path, &text).unwrap();
@@ -394,7 +399,9 @@ mod tests {
         let runs: Vec<&str> = read.iter().map(|e| e.run.as_str()).collect();
         assert_eq!(runs, ["eye-1", "eye-2"]);
         assert_eq!(read[1].series, entry("eye-2").series);
-        assert!(read_checkpoint(&tmp.path().join("none")).unwrap().is_empty());
+        assert!(read_checkpoint(&tmp.path().join("none"))
+            .unwrap()
+            .is_empty());
         assert_eq!(batch_size(10_000), 100);
         assert_eq!(batch_size(40), 1);
         assert_eq!(batch_size(1), 1);
