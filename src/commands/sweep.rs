@@ -315,9 +315,32 @@ pub(crate) fn population_figure(
         .filter(|x| x.is_finite())
         .collect();
     // The final refraction of each eye, from its series.csv's last row, if it has one.
+    // A cohort kept as a table (no run directories): each eye's last row of the sweep's
+    // series.csv, whose first column is the run.
+    let table: std::collections::HashMap<String, f64> = match eyes.iter().any(|r| r.dir.is_empty())
+    {
+        false => Default::default(),
+        true => {
+            let text = std::fs::read_to_string(dir.join(eyeshell::sweep::compact::SERIES_TABLE))
+                .unwrap_or_default();
+            let mut lines = text.lines();
+            let at = lines
+                .next()
+                .and_then(|h| h.split(',').position(|h| h == "refraction_D"));
+            lines
+                .filter_map(|l| {
+                    let cells: Vec<&str> = l.split(',').collect();
+                    Some((cells.first()?.to_string(), cells.get(at?)?.parse().ok()?))
+                })
+                .collect()
+        }
+    };
     let refraction: Vec<f64> = eyes
         .iter()
         .filter_map(|r| {
+            if r.dir.is_empty() {
+                return table.get(&r.name).copied();
+            }
             let text = std::fs::read_to_string(
                 dir.join(&r.dir).join(eyeshell::rundir::growth::SERIES_FILE),
             )

@@ -120,6 +120,11 @@ mod tests {
             let Ok(sweep) = Sweep::from_file(&path, &overrides) else {
                 continue;
             };
+            // A cohort kept as a table runs in the sweep's own process, never in a worker.
+            let table = eyeshell::scene::sample::PerRun::Table;
+            if sweep.sample.as_ref().is_some_and(|s| s.per_run == table) {
+                continue;
+            }
             for run in &sweep.runs {
                 let request = Request::of(run, format!("runs/{}", run.name))
                     .unwrap_or_else(|e| panic!("{}: {}: {e}", path.display(), run.name));

@@ -331,3 +331,137 @@ fn bad_samples_are_refused_before_anything_runs() {
     );
     refused(&run, "sweeps material.C", "--set on a sampled key");
 }
+
+/// `per_run = "table"`: a cohort without a directory per eye. Its population files are the
+/// per-eye output's, byte for byte; its series.csv holds each eye's series.csv rows (a run
+/// column first) and its sweep.csv the same rows. Killed (SIGKILL) and resumed, with the
+/// checkpoint's last line cut short as a kill mid-write leaves it, it writes the same
+/// population, series and table as an uninterrupted one. Shards refuse it (they need run
+/// directories); a misspelt per_run is refused.
+#[test]
+fn a_cohort_kept_as_a_table_equals_the_per_eye_output_and_resumes_to_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let eyes = 40;
+    let per_eye = GROWING.replace(
+        "[sweep.sample.keys]",
+        &format!("eyes = {eyes}\n[sweep.sample.keys]"),
+    );
+    let table = per_eye.replace(
+        "[sweep.sample.keys]",
+        "per_run = \"table\"\n[sweep.sample.keys]",
+    );
+    std::fs::write(dir.path().join("d.toml"), &per_eye).unwrap();
+    std::fs::write(dir.path().join("t.toml"), &table).unwrap();
+    for (scene, out) in [("d.toml", "dirs"), ("t.toml", "table")] {
+        succeeded(
+            &eyeshell_in(dir.path(), &["sweep", scene, "--out", out, "--quiet"]),
+            out,
+        );
+    }
+    let (dirs, whole) = (dir.path().join("dirs"), dir.path().join("table"));
+    assert!(!whole.join("runs").exists(), "no run directories");
+    for f in ["population.json", "population.csv"] {
+        assert_eq!(
+            std::fs::read(dirs.join(f)).unwrap(),
+            std::fs::read(whole.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    assert_eq!(
+        table_without_timings(&dirs.join("sweep.csv")),
+        table_without_timings(&whole.join("sweep.csv"))
+    );
+    let series = std::fs::read_to_string(whole.join("series.csv")).unwrap();
+    let mut lines = series.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<&str> = lines.collect();
+    for k in 1..=eyes {
+        let name = format!("eye-{k:03}");
+        let own =
+            std::fs::read_to_string(dirs.join("runs").join(&name).join("series.csv")).unwrap();
+        let mut own = own.lines();
+        assert_eq!(header, format!("run,{}", own.next().unwrap()));
+        let prefix = format!("{name},");
+        let mine: Vec<&str> = rows
+            .iter()
+            .filter_map(|r| r.strip_prefix(prefix.as_str()))
+            .collect();
+        assert_eq!(mine, own.collect::<Vec<_>>(), "{name}");
+        assert_eq!(mine.len(), 3, "t = 0, 0.1, 0.2");
+    }
+
+    let (mut child, _stderr, _) = spawn_in_own_group(
+        dir.path(),
+        &["sweep", "t.toml", "--out", "killed", "--jobs", "1"],
+        "eyeshell: [1/40] eye-",
+    );
+    let status = std::process::Command::new("kill")
+        .args(["-KILL", "--", &format!("-{}", child.id())])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let _ = child.wait();
+    let killed = dir.path().join("killed");
+    assert!(!killed.join("population.json").exists());
+    let checkpoint = killed.join("eyes.jsonl");
+    let kept = std::fs::read_to_string(&checkpoint)
+        .unwrap()
+        .matches('\n')
+        .count();
+    assert!((1..eyes).contains(&kept), "{kept} eyes checkpointed");
+    let mut torn = std::fs::read(&checkpoint).unwrap();
+    torn.extend_from_slice(b"{\"run\":\"eye-040\",\"scene\":\"01");
+    std::fs::write(&checkpoint, torn).unwrap();
+    let run = eyeshell_in(
+        dir.path(),
+        &["sweep", "t.toml", "--out", "killed", "--resume"],
+    );
+    succeeded(&run, "resume");
+    assert!(
+        run.stdout
+            .contains(&format!("({kept} reused from the earlier sweep)")),
+        "{}",
+        run.stdout
+    );
+    for f in ["population.json", "population.csv", "series.csv"] {
+        assert_eq!(
+            std::fs::read(whole.join(f)).unwrap(),
+            std::fs::read(killed.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    assert_eq!(
+        table_without_timings(&whole.join("sweep.csv")),
+        table_without_timings(&killed.join("sweep.csv"))
+    );
+    assert_eq!(
+        std::fs::read_to_string(&checkpoint)
+            .unwrap()
+            .lines()
+            .count(),
+        eyes,
+        "the torn line dropped, every eye checkpointed once"
+    );
+
+    let run = bounded(
+        dir.path(),
+        &["sweep", "t.toml", "--out", "sh", "--shard", "1/2"],
+    );
+    refused(
+        &run,
+        "per_run = \"table\" in [sweep.sample] runs the cohort in one process",
+        "shard",
+    );
+    assert!(!dir.path().join("sh").exists());
+    std::fs::write(
+        dir.path().join("bad.toml"),
+        table.replace("per_run = \"table\"", "per_run = \"tables\""),
+    )
+    .unwrap();
+    let run = bounded(dir.path(), &["sweep", "bad.toml", "--out", "bad"]);
+    refused(
+        &run,
+        "per_run must be \"directory\" (a run directory per eye) or \"table\"",
+        "per_run",
+    );
+}

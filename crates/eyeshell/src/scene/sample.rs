@@ -170,6 +170,25 @@ pub struct Sample {
     pub keys: Vec<(String, Dist)>,
     /// The Cholesky factor of the correlation of normal scores, over `keys`' order.
     pub cholesky: Option<Vec<Vec<f64>>>,
+    /// What each eye leaves: a run directory, or a row of the sweep's tables.
+    pub per_run: PerRun,
+}
+
+/// What a sampled sweep keeps of each eye (`per_run` in `[sweep.sample]`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PerRun {
+    /// `runs/<eye>/`, an ordinary run directory per eye (the default).
+    #[default]
+    Directory,
+    /// No directory: a row per eye in sweep.csv, its series in the sweep's one series.csv,
+    /// checkpointed in batches ([`crate::sweep::compact`]). A cohort of 10,000 eyes is
+    /// otherwise 10,000 directories of files, each synced: the files, not the numerics,
+    /// take most of the time.
+    Table,
+}
+
+impl PerRun {
+    pub const NAMES: [&'static str; 2] = ["directory", "table"];
 }
 
 /// The role of a run in a Saltelli design: base matrix A, B, or AB_i (0-based i).
@@ -508,6 +527,7 @@ pub fn parse(t: &toml::Table, origin: &str) -> Result<Sample, SceneError> {
     let mut seed = None;
     let mut keys = Vec::new();
     let mut correlation = None;
+    let mut per_run = PerRun::Directory;
     for (name, value) in t {
         match name.as_str() {
             "eyes" => match value {
@@ -571,13 +591,25 @@ pub fn parse(t: &toml::Table, origin: &str) -> Result<Sample, SceneError> {
                     )))
                 }
             },
+            "per_run" => {
+                per_run = match value {
+                    toml::Value::String(s) if s == "directory" => PerRun::Directory,
+                    toml::Value::String(s) if s == "table" => PerRun::Table,
+                    v => {
+                        return Err(bad(format!(
+                            "per_run must be \"directory\" (a run directory per eye) or \"table\" (a row per eye, no directories), found {}",
+                            describe(v)
+                        )))
+                    }
+                }
+            }
             other => {
-                let known = ["eyes", "design", "seed", "keys", "correlation"];
+                let known = ["eyes", "design", "seed", "keys", "correlation", "per_run"];
                 let hint = closest(other, known.into_iter())
                     .map(|s| format!(" (did you mean '{s}'?)"))
                     .unwrap_or_default();
                 return Err(bad(format!(
-                    "unknown entry '{}'{hint}: a sample has eyes, design, seed, keys and correlation",
+                    "unknown entry '{}'{hint}: a sample has eyes, design, seed, keys, correlation and per_run",
                     one_line(other)
                 )));
             }
@@ -631,6 +663,7 @@ pub fn parse(t: &toml::Table, origin: &str) -> Result<Sample, SceneError> {
         seed,
         keys,
         cholesky,
+        per_run,
     };
     if sample.runs() > super::sweep::MAX_PLANNED_RUNS {
         return Err(bad(format!(

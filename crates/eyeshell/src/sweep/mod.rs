@@ -30,6 +30,7 @@
 //! - [`target`]: the output directory, refused when resuming would read or write outside
 //!   it, or mix a sweep with something else.
 
+pub mod compact;
 pub mod files;
 pub mod population;
 pub mod resume;
@@ -46,6 +47,7 @@ use rayon::prelude::*;
 use crate::rundir::summary::{SweepRunEntry, SweepSummary};
 use crate::rundir::table::{csv_bytes, QuoteStyle};
 use crate::rundir::{self, format_value, write_atomic, OutputError, Summary};
+use crate::scene::sample::PerRun;
 use crate::scene::sweep::{Sweep, SweepPlan};
 use crate::Error;
 
@@ -205,7 +207,13 @@ pub fn run_sweep(
     // The sweep's directory, owned and locked until the sweep ends.
     let names: std::collections::HashSet<&str> =
         sweep.runs.iter().map(|r| r.name.as_str()).collect();
-    let _owned = target::prepare(&|n| names.contains(n), out, options.resume, options.inputs)?;
+    let mut owned = target::prepare(&|n| names.contains(n), out, options.resume, options.inputs)?;
+    if sweep.sample.as_ref().map(|s| s.per_run) == Some(PerRun::Table) {
+        let (report, series) = compact::run(sweep, out, &mut owned, options, done)?;
+        let text = |r: &RunRecord| series.get(&r.name).map(|rows| compact::series_text(rows));
+        write_population_with(sweep.into(), &report, &text)?;
+        return Ok(report);
+    }
     let all: Vec<usize> = (0..sweep.runs.len()).collect();
     let report = run_some(
         sweep,
@@ -225,6 +233,24 @@ pub fn write_population(
     head: Head<'_>,
     report: &SweepReport,
 ) -> Result<Option<population::Written>, OutputError> {
+    let text = |r: &RunRecord| {
+        std::fs::read_to_string(
+            report
+                .dir
+                .join(&r.dir)
+                .join(crate::rundir::growth::SERIES_FILE),
+        )
+        .ok()
+    };
+    write_population_with(head, report, &text)
+}
+
+/// [`write_population`] with each eye's series.csv text from `series` (None: it has none).
+fn write_population_with(
+    head: Head<'_>,
+    report: &SweepReport,
+    series: &dyn Fn(&RunRecord) -> Option<String>,
+) -> Result<Option<population::Written>, OutputError> {
     let Some(sample) = head.sample else {
         return Ok(None);
     };
@@ -236,7 +262,7 @@ pub fn write_population(
     {
         return Ok(None);
     }
-    population::write(&report.dir, head.name, sample, &report.records).map(Some)
+    population::write(&report.dir, head.name, sample, &report.records, series).map(Some)
 }
 
 /// Run the runs of `shard` ([`shard::runs_of`]) into `out`, as [`run_sweep`] runs them,

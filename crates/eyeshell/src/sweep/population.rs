@@ -184,8 +184,9 @@ struct Eye {
     series: Vec<Row>,
 }
 
-/// The finished eye of `record`, read from its result and its series.csv (if it grew).
-fn eye(out: &Path, record: &RunRecord) -> Option<Eye> {
+/// The finished eye of `record`, read from its result and the text of its series.csv
+/// (`series`: None if it did not grow).
+fn eye(record: &RunRecord, series: &dyn Fn(&RunRecord) -> Option<String>) -> Option<Eye> {
     if !matches!(record.status, RunStatus::Ok | RunStatus::Reused) {
         return None;
     }
@@ -196,11 +197,9 @@ fn eye(out: &Path, record: &RunRecord) -> Option<Eye> {
         ("retina_minus_blue".to_string(), r.retina_minus_blue),
         ("retina_minus_red".to_string(), r.retina_minus_red),
     ];
+    let text = series(record);
     let mut series = Vec::new();
-    let path = out
-        .join(&record.dir)
-        .join(crate::rundir::growth::SERIES_FILE);
-    if let Ok(text) = std::fs::read_to_string(&path) {
+    if let Some(text) = text {
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
         let t_at = header.iter().position(|h| *h == "t");
@@ -317,14 +316,16 @@ pub struct Written {
 }
 
 /// Write population.json, population.csv and (Saltelli) sobol.csv into `out` from the
-/// finished runs of `records` (in the sweep's run order, as the sample names them).
+/// finished runs of `records` (in the sweep's run order, as the sample names them), each
+/// eye's series.csv text given by `series` (from its run directory, or the sweep's table).
 pub fn write(
     out: &Path,
     name: &str,
     sample: &Sample,
     records: &[RunRecord],
+    series: &dyn Fn(&RunRecord) -> Option<String>,
 ) -> Result<Written, OutputError> {
-    let eyes: Vec<Option<Eye>> = records.iter().map(|r| eye(out, r)).collect();
+    let eyes: Vec<Option<Eye>> = records.iter().map(|r| eye(r, series)).collect();
     // The population: every eye (for Saltelli, the A and B rows: draws of the cohort).
     let members: Vec<&Eye> = eyes
         .iter()

@@ -101,7 +101,7 @@ fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     }
 }
 
-fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
+pub(super) fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
     RunResult {
         kind: "grow".into(),
         t: row.t,
@@ -121,9 +121,14 @@ fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
 
 fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
     let run = rundir::run::solve_into(scene, dir, &[], &[]).map_err(|e| (e.to_string(), None))?;
-    let s = &run.solution.stats;
-    let eye = unloaded_eye(scene, &run.solution.rows);
-    Ok(RunResult {
+    Ok(elastic_result(scene, &run.solution))
+}
+
+/// What a sweep's table says of the elastic solve of `scene`.
+pub(super) fn elastic_result(scene: &Scene, solution: &crate::bvp::Solution) -> RunResult {
+    let s = &solution.stats;
+    let eye = unloaded_eye(scene, &solution.rows);
+    RunResult {
         kind: "solve".into(),
         t: 0.0,
         axial_length: eye.axial_length,
@@ -137,7 +142,7 @@ fn execute_elastic(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
         rhs_evaluations: 0,
         wall_seconds: s.wall_seconds,
         files: Vec::new(),
-    })
+    }
 }
 
 /// The retina of a loaded, ungrown shell, measured as a growth run measures it

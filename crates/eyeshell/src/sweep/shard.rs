@@ -222,6 +222,14 @@ impl Costs {
 /// nodes, whether the scene grows, growth.t_end), its runs cost the same and nothing is
 /// done per run: a plan of 10⁷ runs is partitioned in milliseconds.
 pub fn costs_of(plan: &SweepPlan) -> Result<Costs, Error> {
+    // A shard's runs are directories that `merge` reads; a cohort kept as a table is
+    // computed and checkpointed by one process (super::compact).
+    if plan.sample.as_ref().map(|s| s.per_run) == Some(crate::scene::sample::PerRun::Table) {
+        return Err(Error::input(format!(
+            "{}: per_run = \"table\" in [sweep.sample] runs the cohort in one process, which shards cannot share: set per_run = \"directory\" to run it in shards",
+            plan.origin
+        )));
+    }
     let runs = plan.len();
     if runs > MAX_RUNS {
         for i in plan.representatives() {
