@@ -49,10 +49,21 @@ fn the_const_scene_refraction_is_consistent() {
         let fields: Vec<f64> = at.iter().map(|p| num(p, 1)).collect();
         assert_eq!(fields, [0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0]);
         assert!(at.iter().all(|p| p[0] == row[0]));
-        assert!((num(&at[0], 2) - num(row, 6)).abs() < 1e-3, "{at:?} {row:?}");
+        assert!(
+            (num(&at[0], 2) - num(row, 6)).abs() < 1e-3,
+            "{at:?} {row:?}"
+        );
         assert_eq!(num(&at[0], 3), 0.0);
-        for p in at {
-            assert!((num(p, 3) - (num(p, 2) - num(&at[0], 2))).abs() < 1e-12);
+        // To 30° every time has a refraction; at 35° and 40° the +10 D eye of t = 0 has none
+        // (the foci there fail for the strongest plus lenses, which the cubic around that
+        // refraction needs): NaN in both columns.
+        for (k, p) in at.iter().enumerate() {
+            assert!(k > 6 || num(p, 2).is_finite(), "{p:?}");
+            let relative = num(p, 2) - num(&at[0], 2);
+            assert!(
+                (num(p, 3) - relative).abs() < 1e-12 || (relative.is_nan() && num(p, 3).is_nan()),
+                "{p:?}"
+            );
         }
     }
 
