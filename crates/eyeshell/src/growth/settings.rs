@@ -99,14 +99,16 @@ impl GrowthParams {
     pub fn peripheral(&self, t: f64, retina: &[(f64, f64)]) -> Vec<super::PeripheralRow> {
         let spec = self.refraction_optics();
         let fields = crate::model::eyewear::peripheral_fields(spec.max_field);
-        let values = blend_over_ages(&spec, t, |at| {
-            match crate::model::eyewear::peripheral_table_at(&spec, at) {
+        let values = blend_over_ages(
+            &spec,
+            t,
+            |at| match crate::model::eyewear::peripheral_table_at(&spec, at) {
                 Ok(table) => {
                     crate::model::eyewear::peripheral_refraction(&table, self.blue.z_b, retina)
                 }
                 Err(_) => vec![f64::NAN; fields.len()],
-            }
-        });
+            },
+        );
         let pole = values.first().copied().unwrap_or(f64::NAN);
         fields
             .iter()

@@ -689,7 +689,11 @@ pub fn peripheral_refraction(table: &PeripheralTable, z_c: f64, retina: &[(f64, 
             .windows(2)
             .find(|w| (w[0].0 <= phi && phi <= w[1].0) || (w[1].0 <= phi && phi <= w[0].0))?;
         let ((p0, r0), (p1, r1)) = (w[0], w[1]);
-        let s = if p1 == p0 { 0.0 } else { (phi - p0) / (p1 - p0) };
+        let s = if p1 == p0 {
+            0.0
+        } else {
+            (phi - p0) / (p1 - p0)
+        };
         Some(r.hypot(z - z_c) - (r0 + s * (r1 - r0)))
     };
     (0..table.fields.len())
@@ -774,7 +778,12 @@ mod tests {
             }),
             ..Default::default()
         }];
-        let traced_at = |t: f64| refraction_table_at(&spec, t).unwrap().refraction(23.0).unwrap();
+        let traced_at = |t: f64| {
+            refraction_table_at(&spec, t)
+                .unwrap()
+                .refraction(23.0)
+                .unwrap()
+        };
         let blend = |t: f64| blend_over_ages(&spec, t, |at| vec![traced_at(at)])[0];
         assert_eq!(blend(0.4), traced_at(0.4));
         for t in [0.2, 0.7] {
@@ -782,7 +791,12 @@ mod tests {
             assert!((b - exact).abs() < 0.02, "t {t}: {b} against {exact}");
         }
         // The flattening cornea loses power: the same retina grows more hyperopic.
-        assert!(blend(1.0) > blend(0.0) + 0.5, "{} {}", blend(0.0), blend(1.0));
+        assert!(
+            blend(1.0) > blend(0.0) + 0.5,
+            "{} {}",
+            blend(0.0),
+            blend(1.0)
+        );
     }
 
     #[test]
