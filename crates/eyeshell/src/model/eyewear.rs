@@ -770,14 +770,16 @@ mod tests {
     fn refraction_with_age_is_blended_from_the_table_times() {
         use crate::growth::settings::blend_over_ages;
         use crate::model::eye::{EyeValue, SurfaceSpec};
-        let mut spec = OpticsSpec::default();
-        spec.surfaces = vec![SurfaceSpec {
-            radius: Some(EyeValue::Table {
-                t: vec![0.0, 0.4, 1.0],
-                value: vec![7.47, 7.70, 7.77],
-            }),
-            ..Default::default()
-        }];
+        let spec = OpticsSpec {
+            surfaces: vec![SurfaceSpec {
+                radius: Some(EyeValue::Table {
+                    t: vec![0.0, 0.4, 1.0],
+                    value: vec![7.47, 7.70, 7.77],
+                }),
+                ..Default::default()
+            }],
+            ..OpticsSpec::default()
+        };
         let traced_at = |t: f64| {
             refraction_table_at(&spec, t)
                 .unwrap()
