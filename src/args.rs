@@ -81,9 +81,9 @@ pub(crate) struct FiguresArgs {
 
 #[derive(Args, Debug)]
 pub(crate) struct PlotArgs {
-    /// A run directory (of solve or grow) or a sweep directory
-    #[arg(value_name = "DIR")]
-    pub(crate) dir: PathBuf,
+    /// A run directory (of solve or grow) or a sweep directory; several growth runs are drawn together into OUT/compare.png (axial length, refraction_D and the peripheral refraction; needs --out)
+    #[arg(value_name = "DIR", required = true, num_args = 1..)]
+    pub(crate) dirs: Vec<PathBuf>,
     /// Where to write the pictures (default: DIR/plots); drawn whole into a new directory, replacing only an earlier plot or an empty directory (never the run or sweep drawn, nor a directory holding it)
     #[arg(long, value_name = "OUT")]
     pub(crate) out: Option<PathBuf>,

@@ -826,7 +826,7 @@ fn escape(s: &str) -> String {
 // ---------------------------------------------------------------- any run
 
 /// Draw the run (or sweep) in `dir` into `out`: for a growth run its shells, stretches,
-/// tensions and axial length; for an elastic run its shape and fields against Σ; for a
+/// tensions, axial length, growth stimulus and peripheral refraction; for an elastic run its shape and fields against Σ; for a
 /// sweep, each run into `out/<run>/` and the axial lengths of all runs together.
 pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
     if is_sweep(dir) {
@@ -950,6 +950,14 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
                 PANEL.1,
                 &stem("timeline"),
             )?);
+            push(image::write_panels(
+                &stimulus_panels(dir, &snaps, axis)?,
+                2,
+                &format!("{}: growth stimulus and peripheral refraction", run.name),
+                PANEL.0,
+                PANEL.1,
+                &stem("stimulus"),
+            )?);
             if let Some(panels) = sensitivity_panels(dir, axis)? {
                 push(image::write_panels(
                     &panels,
@@ -967,6 +975,125 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
 
 /// A line of a figure: (t, value) points.
 type Curve = Vec<(f64, f64)>;
+
+/// A growth run's peripheral.csv as curves of relative_D against the field angle, one per
+/// output time (in time order); None for a run without the file.
+fn peripheral_curves(dir: &Path) -> Result<Option<Vec<(f64, Curve)>>, ExportError> {
+    use eyeshell::rundir::growth::PERIPHERAL_FILE;
+    let path = dir.join(PERIPHERAL_FILE);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let table = eyeshell::interop::export::read_csv(&path)?;
+    let col = |n: &str| {
+        table
+            .column(n)
+            .ok_or_else(|| bad(format!("{}: no column {n:?}", path.display())))
+    };
+    let (t, field, relative) = (col("t")?, col("field_deg")?, col("relative_D")?);
+    let mut curves: Vec<(f64, Curve)> = vec![];
+    for ((t, f), d) in t.into_iter().zip(field).zip(relative) {
+        match curves.last_mut() {
+            Some((at, c)) if *at == t => c.push((f, d)),
+            _ => curves.push((t, vec![(f, d)])),
+        }
+    }
+    Ok(Some(curves))
+}
+
+/// The growth-rate map of a growth run: the stimulus g_v (the rate of growth at each point,
+/// docs/MODEL.md §6) against σ at each output time, and the relative peripheral refraction
+/// against the field angle at each output time (when the run wrote peripheral.csv).
+fn stimulus_panels(
+    dir: &Path,
+    snaps: &[&RunSnapshot],
+    axis: TimeAxis,
+) -> Result<Vec<Figure>, ExportError> {
+    let mut panels = vec![profile_panel(
+        "growth stimulus g_v (0: no growth)",
+        "g_v",
+        "g_v",
+        snaps,
+        axis,
+    )?];
+    if let Some(curves) = peripheral_curves(dir)? {
+        let last = curves.len().saturating_sub(1).max(1) as f64;
+        let fig = curves.into_iter().enumerate().fold(
+            Figure::new(
+                "peripheral refraction, naked eye",
+                "field angle (°)",
+                "relative to the pole (D)",
+            ),
+            |f, (k, (t, c))| {
+                f.with(
+                    Series::new(axis.label(t), c, SeriesStyle::Line)
+                        .color(colormap(0.85 * k as f64 / last)),
+                )
+            },
+        );
+        panels.push(fig);
+    }
+    Ok(panels)
+}
+
+/// Several growth runs drawn together into `out` (`compare.png`, `.svg`): their axial length
+/// and their refraction_D against t, and the relative peripheral refraction against the field
+/// angle at each run's last output time (runs without peripheral.csv are left out of it).
+/// Each run is named by its directory.
+pub fn plot_compare(dirs: &[PathBuf], out: &Path) -> Result<Vec<PathBuf>, FigureError> {
+    let mut runs = Vec::with_capacity(dirs.len());
+    for dir in dirs {
+        let run = rundata::read(dir)?;
+        if run.timeline().is_empty() {
+            return Err(FigureError::Read(bad(format!(
+                "{}: is not a growth run: only growth runs are drawn together",
+                dir.display()
+            ))));
+        }
+        let name = dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| dir.display().to_string());
+        runs.push((name, run));
+    }
+    let named: Vec<(String, &RunData)> = runs.iter().map(|(n, r)| (n.clone(), r)).collect();
+    let axial = axial_panel("axial length", &named);
+    let ages = TimeAxis::of_runs(runs.iter().map(|(_, r)| &r.scene));
+    let mut refraction = Figure::new("refraction at the pole", ages.title(), "refraction_D (D)");
+    let mut peripheral = Figure::new(
+        "peripheral refraction at the end, naked eye",
+        "field angle (°)",
+        "relative to the pole (D)",
+    );
+    for (k, ((name, run), dir)) in runs.iter().zip(dirs).enumerate() {
+        let colour = plot::PALETTE[k % 10];
+        let axis = if ages.clock.is_some() {
+            TimeAxis::of(&run.scene)
+        } else {
+            ages
+        };
+        let pts = run
+            .timeline()
+            .iter()
+            .map(|p| (axis.x(p.t), p.refraction_d))
+            .collect();
+        refraction =
+            refraction.with(Series::new(name.clone(), pts, SeriesStyle::Line).color(colour));
+        if let Some((_, last)) = peripheral_curves(dir)?.and_then(|mut c| c.pop()) {
+            peripheral =
+                peripheral.with(Series::new(name.clone(), last, SeriesStyle::Line).color(colour));
+        }
+    }
+    let (png, svg) = image::write_panels(
+        &[axial, refraction, peripheral],
+        3,
+        "growth runs compared",
+        PANEL.0,
+        PANEL.1,
+        &out.join("compare"),
+    )?;
+    Ok(vec![png, svg])
+}
 
 /// sensitivities.csv of a growth run (`grow --sensitivities`) against time (`axis`), one
 /// line per parameter: dL/dp, d(equatorial radius)/dp, d(retina − blue)/dp and (p/L)

@@ -96,6 +96,7 @@ mod tests {
             fields: vec![],
             growth: vec![],
             series: row,
+            peripheral: vec![],
         };
         let mut bar = GrowthProgress::new(false, Some("choosing the mesh"));
         assert_eq!(bar.bar.message(), "choosing the mesh");

@@ -265,19 +265,35 @@ pub(crate) fn cmd_figures(a: &FiguresArgs) -> Result<(), Error> {
 }
 
 pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
-    use crate::charts::plot_run;
-    let target = a.out.clone().unwrap_or_else(|| a.dir.join("plots"));
+    use crate::charts::{plot_compare, plot_run};
+    let target = match (&a.out, a.dirs.as_slice()) {
+        (Some(out), _) => out.clone(),
+        (None, [dir]) => dir.join("plots"),
+        (None, _) => {
+            return Err(Error::input(format!(
+                "plot: {} runs are drawn together into one directory: give it with --out OUT",
+                a.dirs.len()
+            )))
+        }
+    };
     // Drawn into a temporary directory and moved into place whole, with its marker: only an
-    // empty directory or an earlier plot is replaced, never the run or sweep it is drawn
-    // from, nor a directory that holds it.
-    let dir = rundir::OutputDir::create(&target, "plot", &[a.dir.as_path()])?;
-    let files = plot_run(&a.dir, &dir.file(""))?;
+    // empty directory or an earlier plot is replaced, never a run or sweep it is drawn
+    // from, nor a directory that holds one.
+    let inputs: Vec<&std::path::Path> = a.dirs.iter().map(|d| d.as_path()).collect();
+    let dir = rundir::OutputDir::create(&target, "plot", &inputs)?;
+    let files = match a.dirs.as_slice() {
+        [one] => plot_run(one, &dir.file(""))?,
+        several => plot_compare(several, &dir.file(""))?,
+    };
     let target = dir.commit()?;
     if !a.quiet {
+        let from = match a.dirs.as_slice() {
+            [one] => one.display().to_string(),
+            several => format!("{} runs", several.len()),
+        };
         out(&format!(
-            "eyeshell: {} files drawn from {} into {}\n",
+            "eyeshell: {} files drawn from {from} into {}\n",
             files.len(),
-            a.dir.display(),
             target.display()
         ));
     }

@@ -39,6 +39,34 @@ fn the_const_scene_refraction_is_consistent() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["final"]["refraction_D"].as_f64().unwrap(), rx1);
 
+    // peripheral.csv: every output time at every 5° to optics.max_field (40°); field 0 is
+    // the pole, whose refraction (from a 2.5 D table) is series.csv's (from a 1 D table).
+    let (header, peripheral) = csv_cells(&out.join("peripheral.csv"));
+    assert_eq!(header, ["t", "field_deg", "refraction_D", "relative_D"]);
+    assert_eq!(peripheral.len(), rows.len() * 9);
+    for (k, row) in rows.iter().enumerate() {
+        let at = &peripheral[9 * k..9 * (k + 1)];
+        let fields: Vec<f64> = at.iter().map(|p| num(p, 1)).collect();
+        assert_eq!(fields, [0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0]);
+        assert!(at.iter().all(|p| p[0] == row[0]));
+        assert!(
+            (num(&at[0], 2) - num(row, 6)).abs() < 1e-3,
+            "{at:?} {row:?}"
+        );
+        assert_eq!(num(&at[0], 3), 0.0);
+        // To 30° every time has a refraction; at 35° and 40° the +10 D eye of t = 0 has none
+        // (the foci there fail for the strongest plus lenses, which the cubic around that
+        // refraction needs): NaN in both columns.
+        for (k, p) in at.iter().enumerate() {
+            assert!(k > 6 || num(p, 2).is_finite(), "{p:?}");
+            let relative = num(p, 2) - num(&at[0], 2);
+            assert!(
+                (num(p, 3) - relative).abs() < 1e-12 || (relative.is_nan() && num(p, 3).is_nan()),
+                "{p:?}"
+            );
+        }
+    }
+
     // The refraction worn: the 555 nm on-axis best focus with the lens on.
     let eye = dir.path().join("eye");
     ok(&[

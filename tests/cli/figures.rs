@@ -359,7 +359,7 @@ fn plot_draws_an_elastic_and_a_growth_run() {
     let (w, h, colours) = png_stats(&solve.join("plots/fields.png"));
     assert!(w > 1000 && h > 600 && colours > 20);
     ok(&["plot", s(&grow), "--out", s(&dir.path().join("g")), "-q"]);
-    for f in ["shells", "profiles", "timeline"] {
+    for f in ["shells", "profiles", "timeline", "stimulus"] {
         assert!(
             png_stats(&dir.path().join(format!("g/{f}.png"))).2 > 20,
             "{f}"
@@ -379,4 +379,57 @@ fn plot_draws_an_elastic_and_a_growth_run() {
         "not an eyeshell run directory",
         "plot none",
     );
+}
+
+/// Several growth runs are drawn together (axial length, refraction_D, peripheral refraction),
+/// each named by its directory; without --out, or with a run that does not grow, it is bad
+/// input and nothing is written.
+#[test]
+fn plot_draws_several_growth_runs_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let (solve, grow) = small_runs(dir.path());
+    let wider = dir.path().join("wider-gamma");
+    ok(&[
+        "grow",
+        "scenes/const.toml",
+        "--set",
+        "solver.nodes=21",
+        "--set",
+        "solver.rtol=1e-3",
+        "--set",
+        "growth.Gamma=12",
+        "--out",
+        s(&wider),
+        "--quiet",
+    ]);
+    let out = dir.path().join("compare");
+    let r = ok(&["plot", s(&grow), s(&wider), "--out", s(&out)]);
+    assert!(
+        r.stdout.contains("2 files drawn from 2 runs"),
+        "{}",
+        r.stdout
+    );
+    let (w, h, colours) = png_stats(&out.join("compare.png"));
+    assert!(w > 2000 && h > 500 && colours > 20, "{w} {h} {colours}");
+    let svg = std::fs::read_to_string(out.join("compare.svg")).unwrap();
+    for needle in [
+        "\ngrow\n",
+        "\nwider-gamma\n",
+        "refraction_D (D)",
+        "relative to the pole (D)",
+    ] {
+        assert!(svg.contains(needle), "{needle} not in compare.svg");
+    }
+    let nothing = dir.path().join("nothing");
+    assert_bad(
+        &eyeshell(&["plot", s(&grow), s(&wider)]),
+        "give it with --out OUT",
+        "plot two runs without --out",
+    );
+    assert_bad(
+        &eyeshell(&["plot", s(&grow), s(&solve), "--out", s(&nothing)]),
+        "is not a growth run",
+        "plot a growth and an elastic run together",
+    );
+    assert!(!nothing.exists());
 }

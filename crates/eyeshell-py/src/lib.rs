@@ -603,6 +603,20 @@ fn add_age(
     d.set_item("age", PyArray1::from_vec(py, ages))
 }
 
+/// The peripheral refraction of every snapshot (peripheral.csv's columns) as arrays.
+fn peripheral_dict<'py>(py: Python<'py>, snapshots: &[Snapshot]) -> PyResult<Bound<'py, PyDict>> {
+    let rows: Vec<(f64, &eyeshell::growth::PeripheralRow)> = snapshots
+        .iter()
+        .flat_map(|s| s.peripheral.iter().map(move |p| (s.t, p)))
+        .collect();
+    let d = PyDict::new(py);
+    d.set_item("t", column(py, &rows, |r| r.0))?;
+    d.set_item("field_deg", column(py, &rows, |r| r.1.field_deg))?;
+    d.set_item("refraction_D", column(py, &rows, |r| r.1.refraction_d))?;
+    d.set_item("relative_D", column(py, &rows, |r| r.1.relative_d))?;
+    Ok(d)
+}
+
 /// One snapshot's fields (fields.csv's columns, then the growth columns) as arrays.
 fn snapshot_dict<'py>(py: Python<'py>, s: &Snapshot) -> PyResult<Bound<'py, PyDict>> {
     let d = fields_dict(py, &s.fields)?;
@@ -683,6 +697,7 @@ fn grow<'py>(
         )?)?;
     }
     d.set_item("snapshots", snapshots)?;
+    d.set_item("peripheral", peripheral_dict(py, &growth.snapshots)?)?;
     d.set_item(
         "sensitivities",
         sensitivities_dict(py, &growth.sensitivities, g)?,

@@ -59,6 +59,22 @@ def test_progress_true_draws_a_bar_on_stderr(capfd):
     assert "t = 1.0000 / 1" in err and err.endswith("\n")
 
 
+def test_peripheral_refraction_per_field_at_each_snapshot():
+    g = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=101)
+    p = g.peripheral
+    assert list(p) == ["t", "field_deg", "refraction_D", "relative_D"]
+    fields = [0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0]
+    assert len(p["t"]) == len(g.series["t"]) * len(fields)
+    assert list(p["field_deg"][:9]) == fields and list(p["t"][:9]) == [0.0] * 9
+    # Field 0 is the pole: its refraction is the series' refraction_D (a coarser table).
+    pole = p["refraction_D"][p["field_deg"] == 0.0]
+    assert np.allclose(pole, g.series["refraction_D"], atol=1e-3)
+    assert np.all(p["relative_D"][p["field_deg"] == 0.0] == 0.0)
+    # NaN where a wide field of the +10 D eye at t = 0 has no refraction, in both columns.
+    assert np.allclose(p["relative_D"], p["refraction_D"] - np.repeat(pole, 9), equal_nan=True)
+    assert np.all(np.isfinite(p["refraction_D"][p["field_deg"] <= 30.0]))
+
+
 def test_series_are_data_frames_with_pandas():
     pandas = optional("pandas")
     g = eyeshell.grow(SCENES / "const.toml", solver__nodes=101)

@@ -62,14 +62,14 @@ def test_to_frame_has_a_row_per_run_and_output_time_with_the_swept_keys():
     assert isinstance(df, pandas.DataFrame)
     assert list(df.columns) == ["run", "status", "growth.delta", "growth.Gamma", "t", "axial_length",
                                 "equatorial_radius", "retina_minus_blue", "retina_minus_red", "class",
-                                "error"]
+                                "refraction_D", "error"]
     times = len(runs[0].result.series)
     assert times == 5 and len(df) == 4 * times
     for r in runs:
         rows = df[df["run"] == r.name]
         assert list(rows["growth.delta"]) == [r.values["growth.delta"]] * times
         assert list(rows["growth.Gamma"]) == [r.values["growth.Gamma"]] * times
-        for column in ["t", "axial_length", "equatorial_radius", "class"]:
+        for column in ["t", "axial_length", "equatorial_radius", "class", "refraction_D"]:
             assert list(rows[column]) == list(r.result.series[column]), column
     # The final rows are sweep.csv's final measures: a pivot is one line of pandas.
     final = df[df["t"] == 1.0].pivot(index="growth.delta", columns="growth.Gamma", values="axial_length")
@@ -99,6 +99,7 @@ def test_to_frame_is_generic_over_the_runs_keys_and_keeps_failed_runs(monkeypatc
     eye = eyeshell.solve(eyeshell.Scene(solver__nodes=101), fibres__D=200).eye
     assert df["axial_length"].iloc[1] == eye["axial_length"] and 19 < eye["axial_length"] < 21
     assert df["class"].iloc[1] == eye["class"]
+    assert math.isnan(df["refraction_D"].iloc[1])  # an elastic run has no refraction
     # An iterator's runs, collected.
     assert len(eyeshell.SweepResults(eyeshell.iter_sweep(small(), grid=GAMMA)).to_frame()) == 10
 

@@ -85,6 +85,22 @@ impl GrowthRow {
     }
 }
 
+/// The peripheral refraction at one field angle (a row of peripheral.csv).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PeripheralRow {
+    /// The field angle (degrees, in air).
+    pub field_deg: f64,
+    /// The spectacle power (D) at 12 mm that brings the naked eye's best focus of this field
+    /// onto the retina: the pole's refraction_D's conversion, off the axis.
+    pub refraction_d: f64,
+    /// `refraction_d` minus the same at field 0 (the pole's): the relative peripheral
+    /// refraction, positive where the periphery is more hyperopic than the pole.
+    pub relative_d: f64,
+}
+
+/// The columns of peripheral.csv.
+pub const PERIPHERAL_COLUMNS: [&str; 4] = ["t", "field_deg", "refraction_D", "relative_D"];
+
 /// The state of the eye at one output time.
 #[derive(Clone, Debug)]
 pub struct Snapshot {
@@ -92,6 +108,8 @@ pub struct Snapshot {
     pub fields: Vec<crate::bvp::FieldRow>,
     pub growth: Vec<GrowthRow>,
     pub series: SeriesRow,
+    /// The peripheral refraction at each field angle (field 0 first).
+    pub peripheral: Vec<PeripheralRow>,
 }
 
 /// Work done by a growth run (summary.json).

@@ -96,12 +96,47 @@ impl GrowthParams {
 
     /// The refraction (D) at growth time `t` of a retina at `retina_z` on the axis (NaN
     /// beyond ±25 D or when the optics give none): computed at output times only, from a
-    /// table traced once (once per time for optics that change with age).
+    /// table traced once; for optics that change with age, once per table time, and the
+    /// refractions there blended in t as the surfaces are ([`blend_over_ages`]).
     pub fn refraction(&self, t: f64, retina_z: f64) -> f64 {
-        crate::model::eyewear::refraction_table_at(&self.refraction_optics(), t)
-            .ok()
-            .and_then(|t| t.refraction(retina_z))
-            .unwrap_or(f64::NAN)
+        let spec = self.refraction_optics();
+        blend_over_ages(&spec, t, |at| {
+            crate::model::eyewear::refraction_table_at(&spec, at)
+                .ok()
+                .and_then(|table| table.refraction(retina_z))
+                .map_or(vec![f64::NAN], |d| vec![d])
+        })[0]
+    }
+
+    /// The peripheral refraction at growth time `t` of the retina through `retina` (its
+    /// points (z, r) from the pole outwards): one row per field angle of
+    /// [`crate::model::eyewear::peripheral_fields`], with the same optics and conversion as
+    /// [`GrowthParams::refraction`] (NaN where the optics give none). Computed at output
+    /// times only, from a table traced once (once per table time for optics that change
+    /// with age, blended as [`blend_over_ages`] says).
+    pub fn peripheral(&self, t: f64, retina: &[(f64, f64)]) -> Vec<super::PeripheralRow> {
+        let spec = self.refraction_optics();
+        let fields = crate::model::eyewear::peripheral_fields(spec.max_field);
+        let values = blend_over_ages(
+            &spec,
+            t,
+            |at| match crate::model::eyewear::peripheral_table_at(&spec, at) {
+                Ok(table) => {
+                    crate::model::eyewear::peripheral_refraction(&table, self.blue.z_b, retina)
+                }
+                Err(_) => vec![f64::NAN; fields.len()],
+            },
+        );
+        let pole = values.first().copied().unwrap_or(f64::NAN);
+        fields
+            .iter()
+            .zip(&values)
+            .map(|(&field_deg, &d)| super::PeripheralRow {
+                field_deg,
+                refraction_d: d,
+                relative_d: d - pole,
+            })
+            .collect()
     }
 
     /// `eye` at growth time `t` with its refraction, classified as `stimulus.classify` says.
@@ -253,4 +288,28 @@ impl DaeLinear {
     pub fn name(self) -> &'static str {
         Self::NAMES[self as usize]
     }
+}
+
+/// `values(t_k)` at growth time `t`: for an eye that does not change, at 0; for one whose
+/// optics are tables over t, at each table time t_k of `spec` and blended with the weights
+/// the best-focus surfaces are blended with (the natural cubic spline through them,
+/// [`crate::model::eye::spline_weights`]), so that the optics are traced at the table times
+/// only, not at every output and history time. NaN in any is NaN in the blend.
+pub fn blend_over_ages(spec: &OpticsSpec, t: f64, values: impl Fn(f64) -> Vec<f64>) -> Vec<f64> {
+    let times = spec.times();
+    if times.is_empty() {
+        return values(0.0);
+    }
+    let weights = crate::model::eye::spline_weights(&times, t);
+    let mut sum: Vec<f64> = vec![];
+    for (&at, w) in times.iter().zip(weights) {
+        let v = values(at);
+        if sum.is_empty() {
+            sum = vec![0.0; v.len()];
+        }
+        for (s, x) in sum.iter_mut().zip(v) {
+            *s += w * x;
+        }
+    }
+    sum
 }

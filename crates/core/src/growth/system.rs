@@ -456,11 +456,14 @@ impl GrowthSystem {
             })
             .collect();
         let series = self.series_row(t, &stim);
+        let retina: Vec<(f64, f64)> = growth.iter().map(|g| (g.z_retina, g.r_retina)).collect();
+        let peripheral = self.growth.peripheral(t, &retina);
         Ok(super::Snapshot {
             t,
             fields: sol.rows,
             growth,
             series,
+            peripheral,
         })
     }
 

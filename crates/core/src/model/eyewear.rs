@@ -11,7 +11,7 @@ use std::sync::{Arc, Mutex};
 
 use eyeshell_optics as optics;
 use eyeshell_optics::lens::{Lens, LensBody, Mount, PowerProfile, ProfileError, Zone};
-use eyeshell_optics::refraction::{RefractionTable, VERTEX_MM};
+use eyeshell_optics::refraction::{PeripheralTable, RefractionTable, VERTEX_MM};
 use eyeshell_optics::FocusSettings;
 
 use super::optics::{OpticsKeyError, OpticsSpec};
@@ -373,6 +373,104 @@ pub fn refraction_table_at(
     Ok(table)
 }
 
+/// The field angles (degrees) of the peripheral refraction: every 5° from the axis to
+/// `optics.max_field` (and `max_field` itself when it is not a multiple of 5).
+pub fn peripheral_fields(max_field: f64) -> Vec<f64> {
+    let mut fields: Vec<f64> = (0..)
+        .map(|k| 5.0 * k as f64)
+        .take_while(|f| *f <= max_field)
+        .collect();
+    if fields.last().is_some_and(|f| *f < max_field) {
+        fields.push(max_field);
+    }
+    fields
+}
+
+static PERIPHERAL: Mutex<Vec<(RefractionKey, f64, Arc<PeripheralTable>)>> = Mutex::new(Vec::new());
+
+/// The peripheral refraction table of `spec`'s naked eye at growth time `t` (at
+/// [`peripheral_fields`] of `optics.max_field`), traced once and then shared, as
+/// [`refraction_table_at`]'s.
+pub fn peripheral_table_at(
+    spec: &OpticsSpec,
+    t: f64,
+) -> Result<Arc<PeripheralTable>, OpticsKeyError> {
+    let t = if spec.times().is_empty() { 0.0 } else { t };
+    let key = RefractionKey {
+        eye: spec.eye,
+        surfaces: spec.surfaces.clone(),
+        pupil_position: spec.pupil_position,
+        pupil: spec.pupil,
+        focus: spec.focus,
+        wavelength: spec.refraction_wavelength,
+        t,
+    };
+    if let Ok(cache) = PERIPHERAL.lock() {
+        if let Some((_, _, t)) = cache
+            .iter()
+            .find(|(k, m, _)| *k == key && *m == spec.max_field)
+        {
+            return Ok(t.clone());
+        }
+    }
+    // The pole's table checks the wavelength and the eye, and names the key that fails.
+    refraction_table_at(spec, t)?;
+    let eye = spec.system_at(t)?;
+    let table = PeripheralTable::compute(
+        &eye,
+        spec.refraction_wavelength,
+        &spec.pupil_stop(&eye),
+        spec.criterion(),
+        &FocusSettings::default(),
+        VERTEX_MM,
+        &peripheral_fields(spec.max_field),
+    )
+    .map_err(|e| spec.explain(&e))?;
+    let table = Arc::new(table);
+    if let Ok(mut cache) = PERIPHERAL.lock() {
+        if cache.len() >= CACHED {
+            cache.remove(0);
+        }
+        cache.push((key, spec.max_field, table.clone()));
+    }
+    Ok(table)
+}
+
+/// The peripheral refraction of a retina given by its points (z, r) from the posterior pole
+/// outwards: for each field angle of `table`, the spectacle power (D) that brings that
+/// field's best focus onto the retina (NaN where none of ±25 D does). "Onto" is measured
+/// along rays from the axis point `z_c` (the stimulus's polar centre), as the stimulus
+/// measures the retina against its surfaces.
+pub fn peripheral_refraction(table: &PeripheralTable, z_c: f64, retina: &[(f64, f64)]) -> Vec<f64> {
+    let polar: Vec<(f64, f64)> = retina
+        .iter()
+        .map(|&(z, r)| (r.abs().atan2(z - z_c), r.hypot(z - z_c)))
+        .collect();
+    let behind = |z: f64, r: f64| -> Option<f64> {
+        let phi = r.abs().atan2(z - z_c);
+        // Between the axis and the first node (a shell's nodes begin just off the pole) the
+        // retina's radius is the first node's: it is even in φ, flat to first order.
+        if let Some(&(p0, r0)) = polar.first() {
+            if phi < p0 {
+                return Some(r.hypot(z - z_c) - r0);
+            }
+        }
+        let w = polar
+            .windows(2)
+            .find(|w| (w[0].0 <= phi && phi <= w[1].0) || (w[1].0 <= phi && phi <= w[0].0))?;
+        let ((p0, r0), (p1, r1)) = (w[0], w[1]);
+        let s = if p1 == p0 {
+            0.0
+        } else {
+            (phi - p0) / (p1 - p0)
+        };
+        Some(r.hypot(z - z_c) - (r0 + s * (r1 - r0)))
+    };
+    (0..table.fields.len())
+        .map(|i| table.refraction(i, behind).unwrap_or(f64::NAN))
+        .collect()
+}
+
 /// The optics whose refraction a growth scene reports: its own with `stimulus.source =
 /// "optics"`, else the defaults.
 pub fn refraction_optics(spec: &OpticsSpec, computed: bool) -> OpticsSpec {
@@ -380,5 +478,102 @@ pub fn refraction_optics(spec: &OpticsSpec, computed: bool) -> OpticsSpec {
         spec.clone()
     } else {
         OpticsSpec::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use eyeshell_optics::best_focus_with;
+
+    /// A spherical retina of radius 11 mm about z = 12 (23 mm long), from just off its pole
+    /// outwards (as a shell's nodes are).
+    fn sphere() -> Vec<(f64, f64)> {
+        (0..=240)
+            .map(|k| {
+                let phi = (0.01 + k as f64 * 0.5).to_radians();
+                (12.0 + 11.0 * phi.cos(), 11.0 * phi.sin())
+            })
+            .collect()
+    }
+
+    /// The peripheral refraction at field 0 is the pole's refraction_D (read from the 1 D
+    /// table), and off the axis it is what it says: a thin spectacle lens of that power,
+    /// traced directly (not from the table), puts that field's best focus on the retina.
+    #[test]
+    fn peripheral_refraction_puts_each_fields_focus_on_the_retina() {
+        let spec = OpticsSpec::default();
+        let table = peripheral_table_at(&spec, 0.0).unwrap();
+        assert_eq!(table.fields, peripheral_fields(40.0));
+        assert_eq!(table.fields.len(), 9);
+        let d = peripheral_refraction(&table, 12.0, &sphere());
+        eprintln!("peripheral refraction of the sphere: {d:?}");
+        let pole = refraction_table(&spec).unwrap().refraction(23.0).unwrap();
+        assert!((d[0] - pole).abs() < 1e-3, "{} against {pole}", d[0]);
+        let eye = spec.system().unwrap();
+        let pupil = spec.pupil_stop(&eye);
+        for (i, &field) in table.fields.iter().enumerate() {
+            let worn = optics::lens::wear(&eye, &[Lens::spectacle(d[i], VERTEX_MM)]).unwrap();
+            let f = best_focus_with(
+                &worn,
+                spec.refraction_wavelength,
+                field,
+                &pupil,
+                spec.criterion(),
+                &FocusSettings::default(),
+            )
+            .unwrap();
+            let behind = f.r.hypot(f.z - 12.0) - 11.0;
+            // 0.004 mm is about 0.01 D in this eye.
+            assert!(behind.abs() < 0.004, "field {field}°: {behind} mm off");
+        }
+        // This sphere is steeper than the eye's image shell: its periphery is hyperopic
+        // against the pole (+0.26 D at 40°), and more so at every larger field.
+        assert!(d[8] > d[0] + 0.2, "{d:?}");
+        assert!(d[4..].windows(2).all(|w| w[1] > w[0]), "{d:?}");
+    }
+
+    /// An eye whose cornea flattens over t is traced at its table times only; between them
+    /// its refraction is the blend of theirs, within 0.02 D of a table traced at that time
+    /// (at a table time, exactly the traced one).
+    #[test]
+    fn refraction_with_age_is_blended_from_the_table_times() {
+        use crate::growth::settings::blend_over_ages;
+        use crate::model::eye::{EyeValue, SurfaceSpec};
+        let spec = OpticsSpec {
+            surfaces: vec![SurfaceSpec {
+                radius: Some(EyeValue::Table {
+                    t: vec![0.0, 0.4, 1.0],
+                    value: vec![7.47, 7.70, 7.77],
+                }),
+                ..Default::default()
+            }],
+            ..OpticsSpec::default()
+        };
+        let traced_at = |t: f64| {
+            refraction_table_at(&spec, t)
+                .unwrap()
+                .refraction(23.0)
+                .unwrap()
+        };
+        let blend = |t: f64| blend_over_ages(&spec, t, |at| vec![traced_at(at)])[0];
+        assert_eq!(blend(0.4), traced_at(0.4));
+        for t in [0.2, 0.7] {
+            let (b, exact) = (blend(t), traced_at(t));
+            assert!((b - exact).abs() < 0.02, "t {t}: {b} against {exact}");
+        }
+        // The flattening cornea loses power: the same retina grows more hyperopic.
+        assert!(
+            blend(1.0) > blend(0.0) + 0.5,
+            "{} {}",
+            blend(0.0),
+            blend(1.0)
+        );
+    }
+
+    #[test]
+    fn the_fields_run_every_5_degrees_to_the_largest() {
+        assert_eq!(peripheral_fields(12.0), vec![0.0, 5.0, 10.0, 12.0]);
+        assert_eq!(peripheral_fields(10.0), vec![0.0, 5.0, 10.0]);
     }
 }

@@ -411,6 +411,8 @@ class Growth:
     - ``series``: series.csv's columns (t, axial_length, equatorial_radius,
       retina_minus_blue, retina_minus_red, class, refraction_D, and ``age`` in a scene
       with ``time.unit``: the age of each t in that unit) at each snapshot;
+    - ``peripheral``: peripheral.csv's columns (t, field_deg, refraction_D, relative_D),
+      the peripheral refraction at each snapshot and field angle;
     - ``history``: the same at every recorded time when ``output.history_points`` > 0
       (history.csv), else empty;
     - ``snapshots``: {t: every field at every node (the snapshot files' columns)};
@@ -423,7 +425,7 @@ class Growth:
       ``error_estimate``: each length's estimated error (mm) as {total, space, time}, the
       largest over the output times, and ``per_time`` the same at each; else None.
 
-    ``series``, ``history`` and ``sensitivities`` are pandas DataFrames when pandas is
+    ``series``, ``history``, ``peripheral`` and ``sensitivities`` are pandas DataFrames when pandas is
     installed (or ``frames=True``), else dicts of arrays (``frames=False``); the same in
     a sweep's results as from :func:`grow`.
     """
@@ -436,6 +438,7 @@ class Growth:
             "series": _series_columns(raw["series"]),
             "history": _series_columns(raw["history"]),
             "sensitivities": sens,
+            "peripheral": {k: np.asarray(v) for k, v in raw["peripheral"].items()},
         }
         self._shape(frames)
         self.snapshots: dict[float, dict[str, np.ndarray]] = dict(raw["snapshots"])
@@ -449,16 +452,17 @@ class Growth:
         return estimate
 
     def _shape(self, frames: bool | None) -> "Growth":
-        """Set series, history and sensitivities as DataFrames or dicts (``frames``)."""
+        """Set series, history, sensitivities and peripheral as DataFrames or dicts (``frames``)."""
         self.series = _frame(self._columns["series"], frames)
         self.history = _frame(self._columns["history"], frames)
         self.sensitivities = _frame(self._columns["sensitivities"], frames)
+        self.peripheral = _frame(self._columns["peripheral"], frames)
         return self
 
     def __getstate__(self) -> dict[str, Any]:
         # The columns travel, not the frames: a sweep's worker shapes nothing, and the
         # caller's process shapes them as grow() would there.
-        return {k: v for k, v in self.__dict__.items() if k not in ("series", "history", "sensitivities")}
+        return {k: v for k, v in self.__dict__.items() if k not in ("series", "history", "sensitivities", "peripheral")}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
@@ -1075,7 +1079,8 @@ def sweep(
 
 # The columns of SweepResults.to_frame() after run, status and the swept keys: sweep.csv's
 # measures of the eye, at each output time.
-_FRAME_COLUMNS = ["t", "axial_length", "equatorial_radius", "retina_minus_blue", "retina_minus_red", "class"]
+_FRAME_COLUMNS = ["t", "axial_length", "equatorial_radius", "retina_minus_blue", "retina_minus_red", "class",
+                  "refraction_D"]
 
 
 class SweepResults(list):
@@ -1089,8 +1094,8 @@ class SweepResults(list):
         it), with the columns ``run``, ``status``, each swept key (whatever keys the runs
         set, in the sweep's order: a grid's, a list's, a sampled sweep's; NaN, or None
         for a non-number, where a run does not set it), ``t``, ``axial_length``,
-        ``equatorial_radius``, ``retina_minus_blue``, ``retina_minus_red``, ``class`` and
-        ``error`` (a failed run: one row, its measures NaN). A pandas DataFrame when pandas
+        ``equatorial_radius``, ``retina_minus_blue``, ``retina_minus_red``, ``class``,
+        ``refraction_D`` (NaN for an elastic run) and ``error`` (a failed run: one row, its measures NaN). A pandas DataFrame when pandas
         imports (or ``frames=True``), else a dict of lists (``frames=False``).
 
         >>> rs = eyeshell.sweep(SCENES + "/const.toml", grid={"growth.Gamma": [4, 8]},
@@ -1125,7 +1130,8 @@ def _measures(r: RunResult) -> dict[str, list[Any]]:
         series = r.result._columns["series"]
         return {c: [x.item() if hasattr(x, "item") else x for x in series[c]] for c in _FRAME_COLUMNS}
     if isinstance(r.result, Solution):
-        return {"t": [0.0], **{c: [v] for c, v in r.result.eye.items()}}
+        # An elastic run does not grow and has no refraction.
+        return {"t": [0.0], "refraction_D": [math.nan], **{c: [v] for c, v in r.result.eye.items()}}
     return {c: [math.nan] if c != "class" else [""] for c in _FRAME_COLUMNS}
 
 

@@ -32,7 +32,7 @@ use super::{format_value, write_atomic_unsynced, OutputError, OwnedDir, SUMMARY_
 use crate::bvp::COLUMNS;
 use crate::growth::{
     GrowthError, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
-    GROWTH_COLUMNS,
+    GROWTH_COLUMNS, PERIPHERAL_COLUMNS,
 };
 use crate::scene::Scene;
 
@@ -55,6 +55,9 @@ pub const SENSITIVITY_COLUMNS: [&str; 6] = [
 /// The column series.csv, history.csv and sensitivities.csv end in when the scene counts in
 /// ages (time.unit): the age of the row's t, in that unit.
 pub const AGE_COLUMN: &str = "age";
+/// The peripheral refraction at each output time and field angle
+/// ([`crate::growth::PERIPHERAL_COLUMNS`]).
+pub const PERIPHERAL_FILE: &str = "peripheral.csv";
 /// The directory of the snapshot files.
 pub const SNAPSHOT_DIR: &str = "snapshots";
 /// The columns of series.csv.
@@ -94,17 +97,20 @@ pub const CELL_BYTES: u64 = 26;
 pub const MAX_RUN_BYTES: u64 = 8 << 30;
 
 /// The most bytes a growth run writes: a snapshot of every node at t = 0 and at each of
-/// `times` output times, and the series and history rows (summary.json and the marker
+/// `times` output times, the series, history and peripheral rows (summary.json and the marker
 /// are small beside them).
 pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
     let row = |cells: usize| cells as u64 * CELL_BYTES;
     let snapshot = (nodes as u64 + 1) * row(COLUMNS.len() + GROWTH_COLUMNS.len());
     let series_rows = times as u64 + 2;
     let history_rows = (history_points + times) as u64 + 2;
-    // With room for the age column of a scene with time.unit.
+    // With room for the age column of a scene with time.unit; peripheral.csv: a row per
+    // field angle, every 5° to at most 90°, per output time.
+    let peripheral_rows = series_rows * 20;
     (times as u64 + 1)
         .saturating_mul(snapshot)
         .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len() + 1))
+        .saturating_add(peripheral_rows * row(PERIPHERAL_COLUMNS.len()))
 }
 
 /// The header of a snapshot file: the elastic [`COLUMNS`], then the [`GROWTH_COLUMNS`].
@@ -168,6 +174,7 @@ pub struct GrowthWriter {
     _owned: OwnedDir,
     scene: Scene,
     series: csv::Writer<fs::File>,
+    peripheral: csv::Writer<fs::File>,
     history: Option<csv::Writer<fs::File>>,
     sensitivities: Option<csv::Writer<fs::File>>,
     snapshots: Vec<WrittenSnapshot>,
@@ -192,7 +199,7 @@ impl GrowthWriter {
         inputs: &[&Path],
     ) -> Result<GrowthWriter, OutputError> {
         let history_points = scene.growth_settings.history_points;
-        let mut entries = vec![SERIES_FILE, SNAPSHOT_DIR, SUMMARY_FILE];
+        let mut entries = vec![SERIES_FILE, PERIPHERAL_FILE, SNAPSHOT_DIR, SUMMARY_FILE];
         if history_points > 0 {
             entries.push(HISTORY_FILE);
         }
@@ -210,6 +217,7 @@ impl GrowthWriter {
         fs::create_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
         let series_path = target.join(SERIES_FILE);
         let series = create_with_header(&series_path, ages)?;
+        let peripheral = create_with_columns(&target.join(PERIPHERAL_FILE), &PERIPHERAL_COLUMNS)?;
         let history = if history_points > 0 {
             Some(create_with_header(&target.join(HISTORY_FILE), ages)?)
         } else {
@@ -229,6 +237,7 @@ impl GrowthWriter {
             _owned: owned,
             scene: scene.clone(),
             series,
+            peripheral,
             history,
             sensitivities,
             snapshots: Vec::new(),
@@ -275,6 +284,9 @@ impl GrowthWriter {
         let series_path = self.dir.join(SERIES_FILE);
         let age = self.age(s.t);
         append(&mut self.series, &s.series, age).map_err(|e| OutputError::io(&series_path, e))?;
+        let peripheral_path = self.dir.join(PERIPHERAL_FILE);
+        append_peripheral(&mut self.peripheral, s)
+            .map_err(|e| OutputError::io(&peripheral_path, e))?;
         self.snapshots.push(WrittenSnapshot {
             t: s.t,
             file: format!("{SNAPSHOT_DIR}/{name}"),
@@ -335,6 +347,19 @@ fn create_with_columns(
 /// Append the series row `row` (and its age, in a scene with ages) and flush it at once.
 fn append(w: &mut csv::Writer<fs::File>, row: &SeriesRow, age: Option<f64>) -> std::io::Result<()> {
     w.write_record(series_record(row).into_iter().chain(age.map(format_value)))?;
+    w.flush()
+}
+
+/// Append the peripheral refraction rows of snapshot `s` and flush them at once.
+fn append_peripheral(w: &mut csv::Writer<fs::File>, s: &Snapshot) -> std::io::Result<()> {
+    for p in &s.peripheral {
+        w.write_record([
+            format_value(s.t),
+            format_value(p.field_deg),
+            format_value(p.refraction_d),
+            format_value(p.relative_d),
+        ])?;
+    }
     w.flush()
 }
 
@@ -426,6 +451,7 @@ mod tests {
                 class,
                 refraction_d: 1.0 - t,
             },
+            peripheral: vec![],
         }
     }
 
