@@ -22,6 +22,13 @@ pub const POWERS: (f64, f64, usize) = (-25.0, 25.0, 51);
 /// The default vertex distance (mm) of a refraction.
 pub const VERTEX_MM: f64 = 12.0;
 
+/// The spectacle powers (D) of a table's grid `(lowest, highest, count)`, evenly spaced.
+pub fn power_grid((lo, hi, n): (f64, f64, usize)) -> Vec<f64> {
+    (0..n)
+        .map(|k| lo + (hi - lo) * k as f64 / (n - 1) as f64)
+        .collect()
+}
+
 /// An eye's on-axis best focus against the power of a thin spectacle lens in front of it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RefractionTable {
@@ -43,10 +50,7 @@ impl RefractionTable {
         settings: &FocusSettings,
         vertex: f64,
     ) -> Result<Self, OpticsError> {
-        let (lo, hi, n) = POWERS;
-        let powers: Vec<f64> = (0..n)
-            .map(|k| lo + (hi - lo) * k as f64 / (n - 1) as f64)
-            .collect();
+        let powers = power_grid(POWERS);
         let foci = powers
             .par_iter()
             .map(|&f| {
@@ -170,10 +174,8 @@ impl PeripheralTable {
         vertex: f64,
         fields: &[f64],
     ) -> Result<Self, OpticsError> {
-        let (lo, hi, n) = PERIPHERAL_POWERS;
-        let powers: Vec<f64> = (0..n)
-            .map(|k| lo + (hi - lo) * k as f64 / (n - 1) as f64)
-            .collect();
+        let powers = power_grid(PERIPHERAL_POWERS);
+        let n = powers.len();
         let systems = powers
             .iter()
             .map(|&f| wear(eye, &[Lens::spectacle(f, vertex)]))

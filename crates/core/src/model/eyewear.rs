@@ -7,11 +7,13 @@
 //! a table of the on-axis best focus against spectacle power, traced once per optics and
 //! shared by every run that has the same optics.
 
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use eyeshell_optics as optics;
 use eyeshell_optics::lens::{Lens, LensBody, Mount, PowerProfile, ProfileError, Zone};
-use eyeshell_optics::refraction::{PeripheralTable, RefractionTable, VERTEX_MM};
+use eyeshell_optics::refraction::{
+    power_grid, PeripheralTable, RefractionTable, PERIPHERAL_POWERS, POWERS, VERTEX_MM,
+};
 use eyeshell_optics::FocusSettings;
 
 use super::optics::{OpticsKeyError, OpticsSpec};
@@ -303,6 +305,21 @@ struct RefractionKey {
     t: f64,
 }
 
+impl RefractionKey {
+    /// The key of `spec`'s naked eye at growth time `t` (0 for an eye without tables).
+    fn of(spec: &OpticsSpec, t: f64) -> RefractionKey {
+        RefractionKey {
+            eye: spec.eye,
+            surfaces: spec.surfaces.clone(),
+            pupil_position: spec.pupil_position,
+            pupil: spec.pupil,
+            focus: spec.focus,
+            wavelength: spec.refraction_wavelength,
+            t: if spec.times().is_empty() { 0.0 } else { t },
+        }
+    }
+}
+
 type Cache = Vec<(RefractionKey, Arc<RefractionTable>)>;
 static TABLES: Mutex<Cache> = Mutex::new(Vec::new());
 /// The tables kept: a sweep over the optics keys traces each new one once.
@@ -315,26 +332,37 @@ pub fn refraction_table(spec: &OpticsSpec) -> Result<Arc<RefractionTable>, Optic
 }
 
 /// [`refraction_table`] of the naked eye at growth time `t` (one table a time only for an
-/// eye whose surfaces change with age).
+/// eye whose surfaces change with age). The default optics' table is kept, not traced
+/// ([`default_tables`]).
 pub fn refraction_table_at(
     spec: &OpticsSpec,
     t: f64,
 ) -> Result<Arc<RefractionTable>, OpticsKeyError> {
-    let t = if spec.times().is_empty() { 0.0 } else { t };
-    let key = RefractionKey {
-        eye: spec.eye,
-        surfaces: spec.surfaces.clone(),
-        pupil_position: spec.pupil_position,
-        pupil: spec.pupil,
-        focus: spec.focus,
-        wavelength: spec.refraction_wavelength,
-        t,
-    };
+    let key = RefractionKey::of(spec, t);
+    if key == RefractionKey::of(&OpticsSpec::default(), 0.0) {
+        return Ok(default_tables().0);
+    }
     if let Ok(cache) = TABLES.lock() {
         if let Some((_, t)) = cache.iter().find(|(k, _)| *k == key) {
             return Ok(t.clone());
         }
     }
+    let table = Arc::new(trace_refraction_table(spec, key.t)?);
+    if let Ok(mut cache) = TABLES.lock() {
+        if cache.len() >= CACHED {
+            cache.remove(0);
+        }
+        cache.push((key, table.clone()));
+    }
+    Ok(table)
+}
+
+/// Trace the refraction table of `spec`'s naked eye at growth time `t` (no cache, no kept
+/// table). The error names the key to change.
+pub fn trace_refraction_table(
+    spec: &OpticsSpec,
+    t: f64,
+) -> Result<RefractionTable, OpticsKeyError> {
     let (lo, hi) = super::optics::WAVELENGTH_RANGE;
     if !(spec.refraction_wavelength >= lo && spec.refraction_wavelength <= hi) {
         return Err(key_error(
@@ -344,7 +372,7 @@ pub fn refraction_table_at(
         ));
     }
     let eye = spec.system_at(t)?;
-    let table = RefractionTable::compute(
+    RefractionTable::compute(
         &eye,
         spec.refraction_wavelength,
         &spec.pupil_stop(&eye),
@@ -362,15 +390,34 @@ pub fn refraction_table_at(
                 crate::text::one_line(&e.to_string())
             ),
         )
-    })?;
-    let table = Arc::new(table);
-    if let Ok(mut cache) = TABLES.lock() {
-        if cache.len() >= CACHED {
-            cache.remove(0);
-        }
-        cache.push((key, table.clone()));
-    }
-    Ok(table)
+    })
+}
+
+/// The tables of the default optics (the Atchison 2006 eye, a 3 mm pupil, the mean sphere,
+/// 555 nm, fields every 5° to 40°), kept in default_tables.rs rather than traced: every
+/// scene without optics of its own reports its refraction with them, and tracing them
+/// (about 0.2 s of CPU) cost a 10 ms growth run twenty times over. The numerics test
+/// `default_refraction_tables_are_a_fresh_trace` checks them against a new trace.
+pub fn default_tables() -> (Arc<RefractionTable>, Arc<PeripheralTable>) {
+    static KEPT: OnceLock<(Arc<RefractionTable>, Arc<PeripheralTable>)> = OnceLock::new();
+    KEPT.get_or_init(|| {
+        use super::default_tables as kept;
+        let pole = RefractionTable {
+            wavelength_nm: kept::WAVELENGTH_NM,
+            vertex: VERTEX_MM,
+            powers: power_grid(POWERS),
+            foci: kept::POLE_FOCI.to_vec(),
+        };
+        let peripheral = PeripheralTable {
+            wavelength_nm: kept::WAVELENGTH_NM,
+            vertex: VERTEX_MM,
+            fields: kept::FIELDS.to_vec(),
+            powers: power_grid(PERIPHERAL_POWERS),
+            foci: kept::PERIPHERAL_FOCI.iter().map(|f| f.to_vec()).collect(),
+        };
+        (Arc::new(pole), Arc::new(peripheral))
+    })
+    .clone()
 }
 
 /// The field angles (degrees) of the peripheral refraction: every 5° from the axis to
@@ -395,16 +442,11 @@ pub fn peripheral_table_at(
     spec: &OpticsSpec,
     t: f64,
 ) -> Result<Arc<PeripheralTable>, OpticsKeyError> {
-    let t = if spec.times().is_empty() { 0.0 } else { t };
-    let key = RefractionKey {
-        eye: spec.eye,
-        surfaces: spec.surfaces.clone(),
-        pupil_position: spec.pupil_position,
-        pupil: spec.pupil,
-        focus: spec.focus,
-        wavelength: spec.refraction_wavelength,
-        t,
-    };
+    let key = RefractionKey::of(spec, t);
+    let default = OpticsSpec::default();
+    if key == RefractionKey::of(&default, 0.0) && spec.max_field == default.max_field {
+        return Ok(default_tables().1);
+    }
     if let Ok(cache) = PERIPHERAL.lock() {
         if let Some((_, _, t)) = cache
             .iter()
@@ -414,9 +456,25 @@ pub fn peripheral_table_at(
         }
     }
     // The pole's table checks the wavelength and the eye, and names the key that fails.
-    refraction_table_at(spec, t)?;
+    refraction_table_at(spec, key.t)?;
+    let table = Arc::new(trace_peripheral_table(spec, key.t)?);
+    if let Ok(mut cache) = PERIPHERAL.lock() {
+        if cache.len() >= CACHED {
+            cache.remove(0);
+        }
+        cache.push((key, spec.max_field, table.clone()));
+    }
+    Ok(table)
+}
+
+/// Trace the peripheral refraction table of `spec`'s naked eye at growth time `t` (no
+/// cache, no kept table).
+pub fn trace_peripheral_table(
+    spec: &OpticsSpec,
+    t: f64,
+) -> Result<PeripheralTable, OpticsKeyError> {
     let eye = spec.system_at(t)?;
-    let table = PeripheralTable::compute(
+    PeripheralTable::compute(
         &eye,
         spec.refraction_wavelength,
         &spec.pupil_stop(&eye),
@@ -425,15 +483,7 @@ pub fn peripheral_table_at(
         VERTEX_MM,
         &peripheral_fields(spec.max_field),
     )
-    .map_err(|e| spec.explain(&e))?;
-    let table = Arc::new(table);
-    if let Ok(mut cache) = PERIPHERAL.lock() {
-        if cache.len() >= CACHED {
-            cache.remove(0);
-        }
-        cache.push((key, spec.max_field, table.clone()));
-    }
-    Ok(table)
+    .map_err(|e| spec.explain(&e))
 }
 
 /// The peripheral refraction of a retina given by its points (z, r) from the posterior pole

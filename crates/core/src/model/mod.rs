@@ -5,6 +5,7 @@
 pub mod components;
 pub mod constitutive;
 pub mod cornea;
+mod default_tables;
 pub mod eye;
 pub mod eyewear;
 pub mod growth_law;

@@ -10,6 +10,7 @@ mod block_solver;
 mod convergence;
 mod custom_eye;
 mod dae_jacobian;
+mod default_tables;
 mod exact_solution;
 mod growth;
 mod growth_ida;
