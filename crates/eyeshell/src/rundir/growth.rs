@@ -600,6 +600,7 @@ mod tests {
             top,
             vec![
                 super::super::MARKER_FILE,
+                PERIPHERAL_FILE,
                 SERIES_FILE,
                 SNAPSHOT_DIR,
                 SUMMARY_FILE
