@@ -275,49 +275,76 @@ fn write_curves(
     Ok(())
 }
 
+/// What a tolerance plot says: its title, axes, error series, file stem and report header.
+struct ToleranceLabels {
+    title: &'static str,
+    x: &'static str,
+    y: &'static str,
+    error: &'static str,
+    stem: &'static str,
+    header: &'static str,
+}
+
+/// A curve of `solver.tol` points: `error` and the estimate against the tolerance asked
+/// for, with the line error = tol, drawn and listed in the report.
+fn write_tolerance_curve(
+    c: &wpd::Curve,
+    error: fn(&wpd::WorkPoint) -> f64,
+    labels: ToleranceLabels,
+    dir: &Path,
+    text: &mut String,
+) -> Result<(), StudyError> {
+    let pick = |f: &dyn Fn(&wpd::WorkPoint) -> f64| -> Vec<(f64, f64)> {
+        c.points.iter().map(|p| (p.value, f(p))).collect()
+    };
+    let fig = Figure::new(labels.title, labels.x, labels.y)
+        .scales(Scale::Log10, Scale::Log10)
+        .with(Series::new(
+            labels.error.to_string(),
+            pick(&error),
+            SeriesStyle::LineAndMarkers,
+        ))
+        .with(Series::new(
+            "estimate".to_string(),
+            pick(&|p| p.estimate),
+            SeriesStyle::LineAndMarkers,
+        ))
+        .with(Series::new(
+            "error = tol".to_string(),
+            pick(&|p| p.value),
+            SeriesStyle::DashedLine,
+        ));
+    crate::image::write(&fig, &dir.join(labels.stem)).map_err(plot_error)?;
+    let _ = writeln!(text, "{}", labels.header);
+    for p in &c.points {
+        let _ = writeln!(
+            text,
+            "  {:.0e}  {:.2e}  {:.2e}  {}  {:.4} s",
+            p.value,
+            error(p),
+            p.estimate,
+            p.nodes,
+            p.seconds
+        );
+    }
+    Ok(())
+}
+
 /// The tolerance-driven solves: true error and estimate against the tolerance asked for,
 /// with the line error = tol.
 fn write_tolerance(curves: &[wpd::Curve], dir: &Path, text: &mut String) -> Result<(), StudyError> {
     let Some(c) = curves.iter().find(|c| c.knob == "tol") else {
         return Ok(());
     };
-    let pick = |f: &dyn Fn(&wpd::WorkPoint) -> f64| -> Vec<(f64, f64)> {
-        c.points.iter().map(|p| (p.value, f(p))).collect()
+    let labels = ToleranceLabels {
+        title: "solver.tol: true error and estimate against the tolerance asked for",
+        x: "requested tol",
+        y: "largest field error",
+        error: "true error",
+        stem: "wpd_tolerance",
+        header: "solver.tol: requested, true error, estimate, nodes, seconds",
     };
-    let fig = Figure::new(
-        "solver.tol: true error and estimate against the tolerance asked for",
-        "requested tol",
-        "largest field error",
-    )
-    .scales(Scale::Log10, Scale::Log10)
-    .with(Series::new(
-        "true error".to_string(),
-        pick(&|p| p.error),
-        SeriesStyle::LineAndMarkers,
-    ))
-    .with(Series::new(
-        "estimate".to_string(),
-        pick(&|p| p.estimate),
-        SeriesStyle::LineAndMarkers,
-    ))
-    .with(Series::new(
-        "error = tol".to_string(),
-        pick(&|p| p.value),
-        SeriesStyle::DashedLine,
-    ));
-    crate::image::write(&fig, &dir.join("wpd_tolerance")).map_err(plot_error)?;
-    let _ = writeln!(
-        text,
-        "solver.tol: requested, true error, estimate, nodes, seconds"
-    );
-    for p in &c.points {
-        let _ = writeln!(
-            text,
-            "  {:.0e}  {:.2e}  {:.2e}  {}  {:.4} s",
-            p.value, p.error, p.estimate, p.nodes, p.seconds
-        );
-    }
-    Ok(())
+    write_tolerance_curve(c, |p| p.error, labels, dir, text)
 }
 
 /// The growth runs under solver.tol: delivered and estimated axial-length error against
@@ -331,42 +358,16 @@ fn write_tolerance_growth(
     let Some(c) = curves.iter().find(|c| c.knob == "tol") else {
         return Ok(());
     };
-    let pick = |f: &dyn Fn(&wpd::WorkPoint) -> f64| -> Vec<(f64, f64)> {
-        c.points.iter().map(|p| (p.value, f(p))).collect()
+    let labels = ToleranceLabels {
+        title: "growth under solver.tol: delivered and estimated axial-length error",
+        x: "requested tol (mm)",
+        y: "axial-length error (mm)",
+        error: "delivered error",
+        stem: "wpd_growth_tolerance",
+        header:
+            "growth solver.tol: requested, delivered axial-length error, estimate, nodes, seconds",
     };
-    let fig = Figure::new(
-        "growth under solver.tol: delivered and estimated axial-length error",
-        "requested tol (mm)",
-        "axial-length error (mm)",
-    )
-    .scales(Scale::Log10, Scale::Log10)
-    .with(Series::new(
-        "delivered error".to_string(),
-        pick(&|p| p.axial_error),
-        SeriesStyle::LineAndMarkers,
-    ))
-    .with(Series::new(
-        "estimate".to_string(),
-        pick(&|p| p.estimate),
-        SeriesStyle::LineAndMarkers,
-    ))
-    .with(Series::new(
-        "error = tol".to_string(),
-        pick(&|p| p.value),
-        SeriesStyle::DashedLine,
-    ));
-    crate::image::write(&fig, &dir.join("wpd_growth_tolerance")).map_err(plot_error)?;
-    let _ = writeln!(
-        text,
-        "growth solver.tol: requested, delivered axial-length error, estimate, nodes, seconds"
-    );
-    for p in &c.points {
-        let _ = writeln!(
-            text,
-            "  {:.0e}  {:.2e}  {:.2e}  {}  {:.4} s",
-            p.value, p.axial_error, p.estimate, p.nodes, p.seconds
-        );
-    }
+    write_tolerance_curve(c, |p| p.axial_error, labels, dir, text)?;
     if let Some(f) = curves.iter().find(|c| c.knob == "nodes") {
         let _ = writeln!(
             text,
