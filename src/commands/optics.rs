@@ -3,7 +3,8 @@
 //! The scene and its `optics.*` keys are checked first (one line naming the key, exit 2),
 //! then the surfaces are traced: a ray that fails is the user's keys' (exit 2, the line
 //! naming the surface, the field angle and the wavelength). The directory is written whole
-//! or not at all: surfaces.csv, optics.json, optics.png and optics.svg.
+//! or not at all: surfaces.csv, optics.json, optics.png and optics.svg. An eye whose keys
+//! are tables over t is drawn as it is at `--at T` (default 0).
 
 use eyeshell::model::optics::{OpticsKeyError, OpticsSpec};
 use eyeshell::rundir::{self, OutputDir, OutputError};
@@ -43,9 +44,12 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     let spec: OpticsSpec = scene.optics().clone();
     spec.check().map_err(|e| key_error(&scene, e))?;
     let z_c = scene.blue().z_b;
+    let t = growth_time(&scene, a.at)?;
     let start = std::time::Instant::now();
-    let computed = spec.compute(z_c).map_err(|e| key_error(&scene, e))?;
-    let system = eyeshell::model::eyewear::worn(&spec).map_err(|e| key_error(&scene, e))?;
+    let computed = spec
+        .compute_eye_at(t, z_c)
+        .map_err(|e| key_error(&scene, e))?;
+    let system = eyeshell::model::eyewear::worn_at(&spec, t).map_err(|e| key_error(&scene, e))?;
     let paraxials: Vec<Paraxial> = spec
         .wavelengths
         .iter()
@@ -109,6 +113,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         &paraxials,
         &system,
         z_c,
+        t,
         start.elapsed().as_secs_f64(),
     );
     write(OPTICS_FILE, json.as_bytes())?;
@@ -138,8 +143,13 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     let target = dir.commit()?;
     if !a.quiet {
         let blue = &computed.surfaces.surfaces[0];
+        let when = if spec.times().is_empty() {
+            String::new()
+        } else {
+            format!(" at t = {}", eyeshell::text::number(t))
+        };
         out(&format!(
-            "{} eye, {} mm pupil, {}: {} surfaces of {} fields, {} rays traced\n  written to {}\n",
+            "{} eye{when}, {} mm pupil, {}: {} surfaces of {} fields, {} rays traced\n  written to {}\n",
             spec.eye_name(),
             eyeshell::text::number(spec.pupil),
             spec.criterion().name(),
@@ -150,6 +160,23 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         ));
     }
     Ok(())
+}
+
+/// The growth time of `--at`: 0 by default; else a finite time within [0, growth.t_end]
+/// (within [0, 1] for a scene that does not grow), as the user's error otherwise.
+fn growth_time(scene: &Scene, at: Option<f64>) -> Result<f64, Error> {
+    let Some(t) = at else {
+        return Ok(0.0);
+    };
+    let end = scene.growth.as_ref().map_or(1.0, |g| g.t_end);
+    if !(t >= 0.0 && t <= end) {
+        return Err(Error::input(format!(
+            "--at {}: the eye's growth time must lie in [0, {}] (growth.t_end)",
+            eyeshell::text::number(t),
+            eyeshell::text::number(end)
+        )));
+    }
+    Ok(t)
 }
 
 /// The first wavelength's best focus, and its sagittal and tangential foci, against the
@@ -193,6 +220,7 @@ fn optics_json(
     paraxials: &[Paraxial],
     system: &eyeshell_optics::OpticalSystem,
     z_b: f64,
+    t: f64,
     wall_seconds: f64,
 ) -> String {
     use serde_json::json;
@@ -227,7 +255,7 @@ fn optics_json(
             })
         })
         .collect();
-    let doc = json!({
+    let mut doc = json!({
         "eye": spec.eye_name(),
         "pupil_mm": spec.pupil,
         "pupil_position_mm": spec.pupil_stop(system).position,
@@ -244,6 +272,10 @@ fn optics_json(
         "rays_traced": c.surfaces.rays_traced,
         "wall_seconds": wall_seconds,
     });
+    // An eye that changes with age says which time it was traced at.
+    if !spec.times().is_empty() {
+        doc["t"] = json!(t);
+    }
     let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
     text.push('\n');
     text

@@ -151,3 +151,64 @@ fn bad_optics_keys_are_refused_and_nothing_is_written() {
         "--set optics.max_field=80",
     );
 }
+
+/// An eye whose keys are tables over t is drawn as it is at `--at T`: at t = 1 the surfaces
+/// of scenes/optics-age.toml are those of the same eye with its t = 1 values fixed, at 0
+/// (the default) those of its t = 0 values; a time outside [0, growth.t_end] is refused in
+/// one line and nothing is written.
+#[test]
+fn optics_at_a_growth_time_draws_the_eye_of_that_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let quick = [
+        "--set",
+        "optics.max_field=10",
+        "--set",
+        "optics.wavelengths=[450, 600]",
+    ];
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec!["optics", "scenes/optics-age.toml"];
+        args.extend_from_slice(&quick);
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", s(&out), "--quiet"]);
+        ok(&args);
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("optics.json")).unwrap())
+                .unwrap();
+        (std::fs::read(out.join("surfaces.csv")).unwrap(), json)
+    };
+    let fixed_at = |radius: &str, thickness: &str| {
+        [
+            "--set".to_string(),
+            format!("optics.surfaces=[{{ radius = {radius} }}, {{ thickness = {thickness} }}]"),
+        ]
+    };
+    let (default, json0) = run("default", &[]);
+    let (at0, _) = run("at0", &["--at", "0"]);
+    let (at1, json1) = run("at1", &["--at", "1"]);
+    let f0 = fixed_at("7.472", "2.512");
+    let f1 = fixed_at("7.77", "3.15");
+    let (fixed0, _) = run("fixed0", &[&f0[0], &f0[1]]);
+    let (fixed1, _) = run("fixed1", &[&f1[0], &f1[1]]);
+    assert_eq!(default, at0);
+    assert_eq!(at0, fixed0);
+    assert_eq!(at1, fixed1);
+    assert_ne!(at0, at1);
+    assert_eq!(json0["t"], 0.0);
+    assert_eq!(json1["t"], 1.0);
+    // The flatter cornea and deeper chamber of t = 1 move the axial focus back.
+    let axial = |j: &serde_json::Value| j["surfaces"][0]["axial_focus_mm"].as_f64().unwrap();
+    assert!(
+        axial(&json1) > axial(&json0) + 0.1,
+        "{} {}",
+        axial(&json0),
+        axial(&json1)
+    );
+    for bad in ["1.5", "-0.1", "nan"] {
+        let out = dir.path().join(format!("bad{bad}"));
+        let at = format!("--at={bad}");
+        let r = eyeshell(&["optics", "scenes/optics-age.toml", &at, "--out", s(&out)]);
+        assert_fails(&r, 2, "--at");
+        assert!(!out.exists());
+    }
+}

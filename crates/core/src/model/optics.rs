@@ -331,6 +331,24 @@ impl OpticsSpec {
         })
     }
 
+    /// The surfaces of the eye as it is at growth time `t` alone (its tables read at t; no
+    /// blending over the other times): what `eyeshell optics --at T` draws.
+    pub fn compute_eye_at(&self, t: f64, z_c: f64) -> Result<ComputedOptics, OpticsKeyError> {
+        self.check()?;
+        let start = std::time::Instant::now();
+        super::eyewear::check_coverage(self)?;
+        let (surfaces, blue, red) = self.compute_at(t, z_c)?;
+        Ok(ComputedOptics {
+            spec: self.clone(),
+            z_c,
+            blue,
+            red,
+            surfaces,
+            timed: None,
+            wall_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
     /// The surfaces of the eye at growth time `t` and their blue and red splines about `z_c`.
     fn compute_at(
         &self,
