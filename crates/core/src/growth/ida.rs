@@ -305,13 +305,9 @@ mod tests {
     /// A signature of the kinks at y that changes exactly when one of `which` switches.
     fn signature(dae: &mut CoupledDae, y: &[f64], which: Events) -> Vec<usize> {
         let (cross, on) = dae.kink_state(y).expect("the kinks' state");
-        let mut sig = vec![cross.map_or(usize::MAX, |k| k)];
+        let mut sig = vec![cross.unwrap_or(usize::MAX)];
         if which == Events::All {
-            sig.extend(
-                on.iter()
-                    .flat_map(|f| f.iter().map(|&b| usize::from(b)))
-                    .collect::<Vec<_>>(),
-            );
+            sig.extend(on.iter().flat_map(|f| f.iter().map(|&b| usize::from(b))));
         }
         sig
     }
@@ -367,7 +363,11 @@ mod tests {
         )
         .unwrap();
         let (mut y, mut yp, mut yo) = (y0.clone(), yp0.clone(), vec![0.0; n]);
-        let mut stops = stops.iter().copied().filter(|&t| t > 0.0 && t < 1.0).peekable();
+        let mut stops = stops
+            .iter()
+            .copied()
+            .filter(|&t| t > 0.0 && t < 1.0)
+            .peekable();
         let mut next_out = OUTPUT.iter().copied().peekable();
         let mut lengths = vec![];
         let mut events = vec![];
