@@ -342,6 +342,91 @@ fn record(
     Ok(rec)
 }
 
+/// A round's three runs: `fine_mesh` at `at[0]` (the delivered one, which reports
+/// `progress`), and `mesh` at `at[0]` and at `at[1]`, in that order. They are independent,
+/// so with a second core the two on M run on a thread of their own beside the delivered
+/// run, which costs about as much as those two together (M/2 has twice M's nodes, and the
+/// looser run is cheaper): the round then takes about the wall time of the delivered run
+/// alone. Each run makes and drops its own SUNDIALS context on its own thread. Once one run
+/// fails the others stop at their next step (a flag their progress reads), and the error
+/// is that of the run that failed first: a failure or an interruption costs no more than
+/// it would one run after another.
+fn three_runs(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: &GrowthParams,
+    at: [GrowthSettings; 2],
+    mesh: Mesh,
+    fine_mesh: Mesh,
+    progress: &mut ProgressFn<'_>,
+) -> Result<[Recorded; 3], GrowthError> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let [tight, loose] = at;
+    if !std::thread::available_parallelism().is_ok_and(|n| n.get() > 1) {
+        let fine = record(params, solver, growth, &tight, fine_mesh, progress)?;
+        let coarse = record(
+            params,
+            solver,
+            growth,
+            &tight,
+            mesh.clone(),
+            &mut |_| Ok(()),
+        )?;
+        let loose = record(params, solver, growth, &loose, mesh, &mut |_| Ok(()))?;
+        return Ok([fine, coarse, loose]);
+    }
+    // 0 while every run goes on, else 1 + the index of the run that failed first.
+    let failed = AtomicUsize::new(0);
+    let fail = |k: usize| {
+        let _ = failed.compare_exchange(0, k + 1, Ordering::Relaxed, Ordering::Relaxed);
+    };
+    let halt = || -> Result<(), super::ObserverError> {
+        match failed.load(Ordering::Relaxed) {
+            0 => Ok(()),
+            _ => Err("stopped: another run of the round failed".into()),
+        }
+    };
+    let (fine, coarse, loose) = std::thread::scope(|scope| {
+        let helper = scope.spawn(|| {
+            let coarse = record(params, solver, growth, &tight, mesh.clone(), &mut |_| {
+                halt()
+            });
+            if coarse.is_err() {
+                fail(1);
+                let skipped = GrowthError {
+                    t: 0.0,
+                    reason: "not run: another run of the round failed".into(),
+                    stats: Box::default(),
+                };
+                return (coarse, Err(skipped));
+            }
+            let loose = record(params, solver, growth, &loose, mesh, &mut |_| halt());
+            if loose.is_err() {
+                fail(2);
+            }
+            (coarse, loose)
+        });
+        let fine = record(params, solver, growth, &tight, fine_mesh, &mut |t| {
+            halt()?;
+            progress(t)
+        });
+        if fine.is_err() {
+            fail(0);
+        }
+        let (coarse, loose) = helper
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (fine, coarse, loose)
+    });
+    let first = failed.into_inner();
+    match (fine, coarse, loose) {
+        (Ok(f), Ok(c), Ok(l)) => Ok([f, c, l]),
+        (_, Err(e), _) if first == 2 => Err(e),
+        (_, _, Err(e)) if first == 3 => Err(e),
+        (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => Err(e),
+    }
+}
+
 /// |a − b| of each length at each output time; `stride` reads a's nodes every `stride`
 /// nodes of b's (2: a on M/2, b on M).
 fn differences(a: &Recorded, b: &Recorded, stride: usize) -> Vec<[f64; 5]> {
@@ -531,20 +616,17 @@ pub(super) fn run(
         };
         let s = SolverSettings { nodes, ..base };
         let mesh = crate::bvp::solve::mesh_of(params, &s).map_err(|e| refuse(e.to_string()))?;
-        let coarse = record(params, &s, growth, &at(rtol), mesh.clone(), &mut |_| Ok(()))
-            .map_err(|e| with_rounds(e, &accuracy))?;
-        let loose = record(
+        let fine_mesh = mesh.halved();
+        let [fine, coarse, loose] = three_runs(
             params,
             &s,
             growth,
-            &at(10.0 * rtol),
-            mesh.clone(),
-            &mut |_| Ok(()),
+            [at(rtol), at(10.0 * rtol)],
+            mesh,
+            fine_mesh.clone(),
+            progress,
         )
         .map_err(|e| with_rounds(e, &accuracy))?;
-        let fine_mesh = mesh.halved();
-        let fine = record(params, &s, growth, &at(rtol), fine_mesh.clone(), progress)
-            .map_err(|e| with_rounds(e, &accuracy))?;
         let est = estimate(&fine, &coarse, &loose);
         let worst = est.bounded();
         let round = Round {
