@@ -223,3 +223,44 @@ fn a_bound_counted_from_an_earlier_start_stops_the_first_stage() {
     assert_eq!(e.t, 0.0);
     assert!(kept.is_empty());
 }
+
+/// Refuses the first progress report.
+struct RefuseProgress;
+
+impl Observer for RefuseProgress {
+    fn snapshot(&mut self, _: &Snapshot) -> Result<(), ObserverError> {
+        Ok(())
+    }
+
+    fn progress(&mut self, _t: f64, _t_end: f64) -> Result<(), ObserverError> {
+        Err("enough (the observer's own error)".into())
+    }
+}
+
+/// With `solver.tol` a round's runs go side by side: the observer's error at the delivered
+/// run's first step is the run's error, and it stops the round's other runs too (at tol
+/// 1e-6 those two take seconds; stopped, the whole run ends within the first steps).
+#[test]
+fn with_tol_an_observer_error_stops_every_run_of_the_round() {
+    let solver = SolverSettings {
+        tol: Some(1e-6),
+        ..SolverSettings::default()
+    };
+    let start = std::time::Instant::now();
+    let r = grow(
+        &Params::default(),
+        &solver,
+        &GrowthParams::default(),
+        &GrowthSettings::default(),
+        &mut RefuseProgress,
+    );
+    let seconds = start.elapsed().as_secs_f64();
+    let e = r.expect_err("the observer refused");
+    assert!(
+        e.reason.contains("enough (the observer's own error)"),
+        "{e}"
+    );
+    assert!(seconds < 1.0, "the round took {seconds:.3} s after the refusal");
+    let accuracy = e.stats.accuracy.expect("the choice is recorded");
+    assert!(accuracy.rounds.is_empty(), "{accuracy:?}");
+}
