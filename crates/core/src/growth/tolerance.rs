@@ -85,6 +85,8 @@ pub const PRIOR: Round = Round {
     space: 2e-4,
     time: 1.6e-4,
     seconds: 0.0,
+    delivered_cpu_seconds: 0.0,
+    companions_cpu_seconds: 0.0,
 };
 
 /// One length's estimated error (mm): space and time, and their sum.
@@ -249,6 +251,32 @@ pub struct Round {
     pub time: f64,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub seconds: f64,
+    /// The CPU seconds of the delivered run (M/2), and of the two runs on M, each on its own
+    /// thread (NaN where the system does not tell a thread's CPU time): on two idle cores
+    /// the round takes about the larger, under load the wall clock says little.
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub delivered_cpu_seconds: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub companions_cpu_seconds: f64,
+}
+
+/// The CPU time of the calling thread (s), from Linux's /proc/thread-self/schedstat (its
+/// first field, in ns); None elsewhere.
+fn thread_cpu_seconds() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
+}
+
+/// The CPU seconds the calling thread spends in `f`, NaN if unknown.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let before = thread_cpu_seconds();
+    let value = f();
+    let seconds = match (before, thread_cpu_seconds()) {
+        (Some(a), Some(b)) => b - a,
+        _ => f64::NAN,
+    };
+    (value, seconds)
 }
 
 /// summary.json's `accuracy`: what `solver.tol` chose for a growth run.
@@ -359,21 +387,26 @@ fn three_runs(
     mesh: Mesh,
     fine_mesh: Mesh,
     progress: &mut ProgressFn<'_>,
-) -> Result<[Recorded; 3], GrowthError> {
+) -> Result<([Recorded; 3], [f64; 2]), GrowthError> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     let [tight, loose] = at;
     if !std::thread::available_parallelism().is_ok_and(|n| n.get() > 1) {
-        let fine = record(params, solver, growth, &tight, fine_mesh, progress)?;
-        let coarse = record(
-            params,
-            solver,
-            growth,
-            &tight,
-            mesh.clone(),
-            &mut |_| Ok(()),
-        )?;
-        let loose = record(params, solver, growth, &loose, mesh, &mut |_| Ok(()))?;
-        return Ok([fine, coarse, loose]);
+        let (fine, f) = timed(|| record(params, solver, growth, &tight, fine_mesh, progress));
+        let fine = fine?;
+        let (others, o) = timed(|| {
+            let coarse = record(
+                params,
+                solver,
+                growth,
+                &tight,
+                mesh.clone(),
+                &mut |_| Ok(()),
+            )?;
+            let loose = record(params, solver, growth, &loose, mesh, &mut |_| Ok(()))?;
+            Ok::<_, GrowthError>((coarse, loose))
+        });
+        let (coarse, loose) = others?;
+        return Ok(([fine, coarse, loose], [f, o]));
     }
     // 0 while every run goes on, else 1 + the index of the run that failed first.
     let failed = AtomicUsize::new(0);
@@ -386,41 +419,45 @@ fn three_runs(
             _ => Err("stopped: another run of the round failed".into()),
         }
     };
-    let (fine, coarse, loose) = std::thread::scope(|scope| {
+    let (fine, coarse, loose, cpu) = std::thread::scope(|scope| {
         let helper = scope.spawn(|| {
-            let coarse = record(params, solver, growth, &tight, mesh.clone(), &mut |_| {
-                halt()
-            });
-            if coarse.is_err() {
-                fail(1);
-                let skipped = GrowthError {
-                    t: 0.0,
-                    reason: "not run: another run of the round failed".into(),
-                    stats: Box::default(),
-                };
-                return (coarse, Err(skipped));
-            }
-            let loose = record(params, solver, growth, &loose, mesh, &mut |_| halt());
-            if loose.is_err() {
-                fail(2);
-            }
-            (coarse, loose)
+            timed(|| {
+                let coarse = record(params, solver, growth, &tight, mesh.clone(), &mut |_| {
+                    halt()
+                });
+                if coarse.is_err() {
+                    fail(1);
+                    let skipped = GrowthError {
+                        t: 0.0,
+                        reason: "not run: another run of the round failed".into(),
+                        stats: Box::default(),
+                    };
+                    return (coarse, Err(skipped));
+                }
+                let loose = record(params, solver, growth, &loose, mesh, &mut |_| halt());
+                if loose.is_err() {
+                    fail(2);
+                }
+                (coarse, loose)
+            })
         });
-        let fine = record(params, solver, growth, &tight, fine_mesh, &mut |t| {
-            halt()?;
-            progress(t)
+        let (fine, f) = timed(|| {
+            record(params, solver, growth, &tight, fine_mesh, &mut |t| {
+                halt()?;
+                progress(t)
+            })
         });
         if fine.is_err() {
             fail(0);
         }
-        let (coarse, loose) = helper
+        let ((coarse, loose), o) = helper
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        (fine, coarse, loose)
+        (fine, coarse, loose, [f, o])
     });
     let first = failed.into_inner();
     match (fine, coarse, loose) {
-        (Ok(f), Ok(c), Ok(l)) => Ok([f, c, l]),
+        (Ok(f), Ok(c), Ok(l)) => Ok(([f, c, l], cpu)),
         (_, Err(e), _) if first == 2 => Err(e),
         (_, _, Err(e)) if first == 3 => Err(e),
         (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => Err(e),
@@ -617,7 +654,7 @@ pub(super) fn run(
         let s = SolverSettings { nodes, ..base };
         let mesh = crate::bvp::solve::mesh_of(params, &s).map_err(|e| refuse(e.to_string()))?;
         let fine_mesh = mesh.halved();
-        let [fine, coarse, loose] = three_runs(
+        let ([fine, coarse, loose], cpu) = three_runs(
             params,
             &s,
             growth,
@@ -636,6 +673,8 @@ pub(super) fn run(
             space: worst.space,
             time: worst.time,
             seconds: round_start.elapsed().as_secs_f64(),
+            delivered_cpu_seconds: cpu[0],
+            companions_cpu_seconds: cpu[1],
         };
         accuracy.rounds.push(round);
         if worst.total <= tol {

@@ -260,7 +260,10 @@ fn with_tol_an_observer_error_stops_every_run_of_the_round() {
         e.reason.contains("enough (the observer's own error)"),
         "{e}"
     );
-    assert!(seconds < 1.0, "the round took {seconds:.3} s after the refusal");
+    assert!(
+        seconds < 1.0,
+        "the round took {seconds:.3} s after the refusal"
+    );
     let accuracy = e.stats.accuracy.expect("the choice is recorded");
     assert!(accuracy.rounds.is_empty(), "{accuracy:?}");
 }
