@@ -18,6 +18,10 @@
 //!   quarter of the delivered run, and it depends on the mesh only through the shell it
 //!   integrates.
 //!
+//! The three runs are independent: with a second core the two on M go on a thread of their
+//! own beside M/2's ([`three_runs`]), so that on two idle cores a round takes about the wall
+//! time of its dearer side, and each round records both sides' CPU seconds.
+//!
 //! If the largest sum over the lengths and times is at most tol, M/2's run is delivered with
 //! those estimates. If not, the next round's (n, rtol) is the cheapest that the measured
 //! estimates, scaled as n^−[`MODEL_SPACE_ORDER`] and rtol^q, predict to meet [`AIM`]·tol
@@ -564,8 +568,9 @@ fn estimate(fine: &Recorded, coarse: &Recorded, loose: &Recorded) -> ErrorEstima
 }
 
 /// The cheapest (nodes of M, rtol) that `last`'s errors, scaled as n^−`order` and rtol^q,
-/// predict to meet `target`, the split between space and time searched over in steps of 1/40.
-fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> (usize, f64) {
+/// predict to meet `target`, the split between space and time searched over in steps of 1/40;
+/// None if nothing inside the bounds of n and rtol is predicted to.
+fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> Option<(usize, f64)> {
     let space = last.space.max(1e-300);
     let time = last.time.max(1e-300);
     let mut best: Option<(f64, usize, f64)> = None;
@@ -586,11 +591,7 @@ fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> (usize, f64)
             best = Some((cost, n, rtol));
         }
     }
-    match best {
-        Some((_, n, rtol)) => (n, rtol),
-        // Nothing meets it inside the bounds: the finest the bounds allow.
-        None => (max_nodes.max(MIN_NODES), RTOL_RANGE.0),
-    }
+    best.map(|(_, n, rtol)| (n, rtol))
 }
 
 /// The growth run under `solver.tol` (module docs): rounds until the estimate is within tol,
@@ -630,7 +631,10 @@ pub(super) fn run(
     };
     // M's nodes from the model, at most half of solver.max_nodes (M/2 has 2n − 1).
     let max_nodes = solver.max_nodes.div_ceil(2);
-    let (mut nodes, mut rtol) = next(&PRIOR, AIM * tol, max_nodes, MODEL_SPACE_ORDER);
+    // The prior is another scene's: where it sees no way to tol, the finest the bounds allow
+    // is tried, and the measured estimate decides.
+    let (mut nodes, mut rtol) = next(&PRIOR, AIM * tol, max_nodes, MODEL_SPACE_ORDER)
+        .unwrap_or((max_nodes.max(MIN_NODES), RTOL_RANGE.0));
     loop {
         let round_start = std::time::Instant::now();
         let atol = ATOL_PER_RTOL * rtol;
@@ -700,8 +704,12 @@ pub(super) fn run(
         } else {
             MODEL_SPACE_ORDER
         };
-        let (n, r) = next(&round, AIM * tol, max_nodes, order);
-        if accuracy.rounds.len() >= MAX_ROUNDS || (n == nodes && r == rtol) {
+        // Without the margin if the measured errors leave no room for it; if they say tol
+        // itself is out of reach (the time error at the tightest rtol, or the nodes past
+        // solver.max_nodes), the run stops here rather than run the finest mesh to learn it.
+        let choice = next(&round, AIM * tol, max_nodes, order)
+            .or_else(|| next(&round, tol, max_nodes, order));
+        if accuracy.rounds.len() >= MAX_ROUNDS || choice.is_none_or(|c| c == (nodes, rtol)) {
             let mut e = refuse(format!(
                 "solver.tol = {} cannot be reached in growth: the estimated error was {} mm{} (space {}, time {}) on {} nodes at solver.rtol = {}{}",
                 crate::text::number(tol),
@@ -728,7 +736,9 @@ pub(super) fn run(
             e.stats = Box::new(fine.stats);
             return Err(with_rounds(e, &accuracy));
         }
-        (nodes, rtol) = (n, r);
+        if let Some(c) = choice {
+            (nodes, rtol) = c;
+        }
     }
 }
 
