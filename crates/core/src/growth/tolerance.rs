@@ -27,7 +27,9 @@
 //! estimates, scaled as n^−[`MODEL_SPACE_ORDER`] and rtol^q, predict to meet [`AIM`]·tol
 //! (the estimate takes the safe order 2, the prediction the observed 2.5): the cost of a run grows
 //! as n·rtol^−β ([`COST_RTOL_EXPONENT`]), and the split of the error between space and
-//! time is searched over with n and rtol held inside their bounds. The first round reads
+//! time is searched over with n and rtol held inside their bounds. Where nothing inside
+//! them is predicted to meet AIM·tol, the next round aims at tol itself, and where nothing
+//! meets tol either the run stops with the estimate it has. The first round reads
 //! the same model with the const scene's measured constants ([`PRIOR`]), so that on the
 //! scenes like it one round is enough.
 //!
