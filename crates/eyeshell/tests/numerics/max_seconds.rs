@@ -167,10 +167,11 @@ impl Observer for SleepUntil {
 }
 
 /// With `solver.tol`, the runs of the choice share one bound: progress is reported by the
-/// third run of a round only (the delivered one), and the observer, at its first report,
-/// sleeps until the bound counted from the start of `grow` has passed; the run then stops
-/// at IDA's next residual. Counted from each run's own start, the bound would still leave
-/// the third run the time of the first two, and it would end normally.
+/// delivered run of a round only, and the observer, at its first report, sleeps until the
+/// bound counted from the start of `grow` has passed; the run then stops at IDA's next
+/// residual. On one core the delivered run goes first and on two it starts with the
+/// others, so this shows the bound reaching the delivered run, not on its own that the
+/// clock is the job's (`a_bound_counted_from_an_earlier_start_stops_the_first_stage` does).
 #[test]
 fn with_tol_the_runs_of_the_choice_share_one_bound() {
     // At tol 1e-4 the first two runs take a few hundredths of a second.
