@@ -12,8 +12,6 @@ pub mod bvp;
 pub mod deadline;
 pub mod fit;
 pub mod growth;
-#[doc(hidden)]
-pub mod json;
 pub mod mesh;
 pub mod model;
 pub mod text;

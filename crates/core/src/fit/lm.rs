@@ -49,7 +49,7 @@ use super::Bounds;
 const LAMBDA0: f64 = 1e-5;
 
 /// The stopping tolerances of [`minimise`].
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FitOptions {
     pub max_iterations: usize,
     /// Relative step of every parameter.
@@ -76,13 +76,11 @@ impl Default for FitOptions {
 }
 
 /// Why the iteration stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Convergence {
     Step,
     Cost,
     Gradient,
-    #[serde(rename = "standard-error")]
     StandardError,
     Stalled,
     /// λ beyond 1e16 after rejected steps of which at least one could not be evaluated.
@@ -115,7 +113,7 @@ impl Convergence {
 }
 
 /// One iteration: the step tried and what came of it.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct IterationRecord {
     pub iteration: usize,
     /// The parameters after it (the accepted trial, or unchanged).
@@ -126,7 +124,6 @@ pub struct IterationRecord {
     pub lambda: f64,
     pub accepted: bool,
     /// Why a trial was rejected: a higher cost, or the scene's or the run's refusal.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub rejected: Option<String>,
 }
 

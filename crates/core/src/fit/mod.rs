@@ -36,7 +36,7 @@ pub const IDENTIFIABILITY_THRESHOLD: f64 = 1e-8;
 
 /// The range a parameter may take: a lower bound, open (> lo) or closed (≥ lo), or none;
 /// and an upper bound likewise. Open bounds are approached, never reached ([`lm`]).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds {
     pub lower: Option<f64>,
     pub lower_open: bool,

@@ -88,14 +88,10 @@ pub const PRIOR: Round = Round {
 };
 
 /// One length's estimated error (mm): space and time, and their sum.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Split {
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub total: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub space: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub time: f64,
 }
 
@@ -118,8 +114,7 @@ impl Split {
 }
 
 /// The estimated error of each output length (mm).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Lengths {
     pub axial_length: Split,
     pub equatorial_radius: Split,
@@ -157,25 +152,19 @@ impl Lengths {
 }
 
 /// The estimate at one output time.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TimedLengths {
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub t: f64,
-    #[serde(flatten)]
     pub lengths: Lengths,
 }
 
 /// summary.json's `error_estimate` of a growth run under `solver.tol`: each length's largest
 /// over the output times, and each output time's.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ErrorEstimate {
-    #[serde(flatten)]
     pub largest: Lengths,
     pub per_time: Vec<TimedLengths>,
     /// With sensitivities: each one's estimate, the largest over the recorded times.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub sensitivities: Vec<SensitivityEstimate>,
 }
 
@@ -198,13 +187,11 @@ impl ErrorEstimate {
 /// The estimated error of one parameter's sensitivities (per unit of the parameter, as in
 /// sensitivities.csv), the largest over the recorded times. `solver.tol` bounds them scaled
 /// by the parameter's magnitude ([`Self::scaled`]).
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SensitivityEstimate {
     /// The scene key.
     pub parameter: String,
     /// Its value in the run.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub value: f64,
     pub d_axial_length: Split,
     pub d_equatorial_radius: Split,
@@ -235,38 +222,27 @@ impl SensitivityEstimate {
 
 /// One round of the choice: M's nodes, the tolerances, and the estimated error of its
 /// M/2 run (the largest over the lengths and times, mm), and the seconds of its three runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Round {
     pub nodes: usize,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub rtol: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub atol: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub space: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub time: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub seconds: f64,
 }
 
 /// summary.json's `accuracy`: what `solver.tol` chose for a growth run.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Accuracy {
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub tol: f64,
     /// Nodes of the delivered run's mesh (M/2 of the last round).
     pub nodes: usize,
     /// The delivered run's integrator tolerances.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub rtol: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub atol: f64,
     pub rounds: Vec<Round>,
     /// Every run of every round, and the delivery.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
 }
 

@@ -333,9 +333,11 @@ pub struct FitReport {
     pub iterations: usize,
     /// Growth runs (each with its sensitivities): one per iteration and per rejected step.
     pub model_runs: usize,
+    #[serde(serialize_with = "crate::rundir::record::convergence")]
     pub convergence: Convergence,
     /// Why the iteration stopped, in words.
     pub convergence_reason: String,
+    #[serde(serialize_with = "crate::rundir::record::iteration_records")]
     pub history: Vec<IterationRecord>,
     pub residuals: Vec<ResidualRow>,
     pub wall_seconds: f64,
