@@ -285,3 +285,61 @@ pub fn identifiability(j: &DMatrix<f64>, names: &[&str], values: &[f64]) -> Opti
         if named.len() == 1 { named[0].to_string() } else { format!("one of {}", named.join(", ")) },
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::growth::Integrator;
+
+    /// One growth run gives L and ∂L/∂η0 at each observation, in the data's order (a time
+    /// given twice reads the same value), and a time the run does not reach is refused.
+    #[test]
+    fn the_model_is_read_at_each_observation_time() {
+        let params = Params::default();
+        let solver = SolverSettings {
+            nodes: 41,
+            ..SolverSettings::default()
+        };
+        let growth = GrowthParams::default();
+        let settings = GrowthSettings {
+            integrator: Integrator::Ida,
+            ..GrowthSettings::default()
+        };
+        let times = [0.5 * growth.t_end, 0.25 * growth.t_end, 0.5 * growth.t_end];
+        let model = GrowthModel {
+            params: &params,
+            solver: &solver,
+            growth: &growth,
+            settings: &settings,
+            fitted: &[SensParam::Eta0],
+            times: &times,
+        };
+        let m = model.evaluate(&mut |_| Ok(())).unwrap();
+        assert_eq!(m.axial_length.len(), 3);
+        assert_eq!(m.jacobian.shape(), (3, 1));
+        assert_eq!(m.axial_length[0], m.axial_length[2]);
+        // The eye grows: longer at t_end/2 than at t_end/4, and faster with a larger η0.
+        assert!(
+            m.axial_length[0] > m.axial_length[1],
+            "{:?}",
+            m.axial_length
+        );
+        assert!(
+            m.jacobian.iter().all(|&d| d.is_finite() && d > 0.0),
+            "{}",
+            m.jacobian
+        );
+        let beyond = [2.0 * growth.t_end];
+        let err = GrowthModel {
+            times: &beyond,
+            ..model
+        }
+        .evaluate(&mut |_| Ok(()))
+        .unwrap_err();
+        assert!(matches!(err, FitError::NotRecorded { .. }), "{err}");
+        assert!(err
+            .to_string()
+            .starts_with("the growth run recorded no finite axial length"));
+        assert_eq!(distinct_times(&[0.5, 0.25, 0.5 + 1e-12], 1.0), [0.25, 0.5]);
+    }
+}

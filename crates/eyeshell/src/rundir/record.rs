@@ -543,4 +543,51 @@ mod tests {
             }
         );
     }
+
+    /// fit.json's `convergence` is the reason's name, and its `history` one record per
+    /// iteration, `rejected` only on a rejected step.
+    #[test]
+    fn the_fit_records_its_convergence_and_history_by_name() {
+        #[derive(Serialize)]
+        struct Fit {
+            #[serde(serialize_with = "convergence")]
+            convergence: Convergence,
+            #[serde(serialize_with = "iteration_records")]
+            history: Vec<IterationRecord>,
+        }
+        let step = |iteration, accepted, rejected: Option<&str>| IterationRecord {
+            iteration,
+            values: vec![0.5, 2.0],
+            chi2: 1.5,
+            lambda: 1e-5,
+            accepted,
+            rejected: rejected.map(str::to_string),
+        };
+        let fit = Fit {
+            convergence: Convergence::StandardError,
+            history: vec![step(1, true, None), step(2, false, Some("χ² 2 ≥ 1.5"))],
+        };
+        assert_eq!(
+            serde_json::to_value(fit).unwrap(),
+            serde_json::json!({
+                "convergence": "standard-error",
+                "history": [
+                    { "iteration": 1, "values": [0.5, 2.0], "chi2": 1.5, "lambda": 1e-5, "accepted": true },
+                    { "iteration": 2, "values": [0.5, 2.0], "chi2": 1.5, "lambda": 1e-5, "accepted": false, "rejected": "χ² 2 ≥ 1.5" },
+                ],
+            })
+        );
+        for (c, name) in [
+            (Convergence::Step, "step"),
+            (Convergence::Cost, "cost"),
+            (Convergence::Gradient, "gradient"),
+            (Convergence::Stalled, "stalled"),
+            (Convergence::Refused, "refused"),
+            (Convergence::Iterations, "iterations"),
+        ] {
+            #[derive(Serialize)]
+            struct C(#[serde(serialize_with = "convergence")] Convergence);
+            assert_eq!(serde_json::to_value(C(c)).unwrap(), name);
+        }
+    }
 }
