@@ -104,8 +104,13 @@ pub fn make(
         };
         // The const and thick scenes are one run each: on one core each, side by side, so
         // that neither leaves the other core idle (with --jobs 1, one after the other).
+        // --jobs not given (0) means every core, as a sweep reads it.
+        let cores = match jobs {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            j => j,
+        };
         let (single, sweeps) = SCENES.split_at(2);
-        if jobs >= 2 {
+        if cores >= 2 {
             let done: Vec<Result<(), FiguresError>> = std::thread::scope(|s| {
                 let running: Vec<_> = single
                     .iter()

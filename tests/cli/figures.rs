@@ -162,9 +162,9 @@ fn the_figures_show_what_the_runs_wrote() {
 type Cut = fn(&str) -> (String, String);
 
 /// `figures --replot` names the snapshot that was cut short, and the line, whether the cut
-/// falls inside a line or at a line end, in a single run or in a sweep's run (it used to
-/// read the const and thick sweeps again as plain runs when they failed, and so blamed
-/// the sweep's own directory).
+/// falls inside a line or at a line end, in a single run or in a sweep's run (a sweep
+/// that fails to read is not read again as a plain run, which would blame the sweep's own
+/// directory).
 #[test]
 fn replot_names_the_snapshot_cut_short() {
     let src = figures();

@@ -362,3 +362,41 @@ fn a_failed_run_keeps_its_results() {
     );
     assert!(v.get("steps").is_some() && v.get("rhs_evaluations").is_some());
 }
+
+/// solver.tol out of reach in growth: with solver.max_nodes = 30 no mesh of at most 15 nodes
+/// (M) can bring the space error of the const scene to 1e-4, so after the first round's
+/// estimate the run stops, exit 1 (a failure, not bad input), one line giving the estimate,
+/// its split and why; summary.json records that one round, and no snapshot is written.
+#[test]
+fn solver_tol_out_of_reach_in_growth_stops_after_the_round_that_shows_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("far");
+    let run = eyeshell_in(
+        repo(),
+        &[
+            "grow",
+            "scenes/const.toml",
+            "--set",
+            "solver.tol=1e-4",
+            "--set",
+            "solver.max_nodes=30",
+            "--out",
+            s(&out),
+        ],
+    );
+    assert_fails(&run, 1, "solver.tol = 0.0001 cannot be reached in growth");
+    assert!(
+        run.stderr.contains(
+            "and neither more nodes (solver.max_nodes = 30) nor a tighter rtol (down to 1e-10) is predicted to reach it"
+        ),
+        "{}",
+        run.stderr
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let rounds = v["accuracy"]["rounds"].as_array().unwrap();
+    assert_eq!(rounds.len(), 1, "{rounds:?}");
+    assert_eq!(rounds[0]["nodes"], 15);
+    assert!(rounds[0]["space"].as_f64().unwrap() > 1e-4, "{rounds:?}");
+    assert!(snapshots(&out).is_empty());
+}

@@ -56,3 +56,58 @@ fn solve_bvp_and_eyeshell_agree_on_the_fibre_shell() {
         );
     }
 }
+
+/// The switch that keeps CI honest: the peer test, run again in a child process whose
+/// `python3` cannot import SciPy, says SKIPPED and passes by default, and fails with
+/// `EYESHELL_REQUIRE_SCIPY=1`. Without this, a machine that lost SciPy would pass every
+/// comparison against it without making one.
+#[test]
+fn a_missing_scipy_fails_the_peer_test_when_scipy_is_required() {
+    let bin = tempfile::tempdir().unwrap();
+    let python = bin.path().join("python3");
+    std::fs::write(
+        &python,
+        "#!/bin/sh\necho 'No module named scipy' >&2\nexit 1\n",
+    )
+    .unwrap();
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&python, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    let peer = |require: Option<&str>| {
+        let mut child = Command::new(std::env::current_exe().unwrap());
+        child
+            .args([
+                "peer::solve_bvp_and_eyeshell_agree_on_the_fibre_shell",
+                "--exact",
+                "--nocapture",
+                "--test-threads=1",
+            ])
+            .env("PATH", bin.path())
+            .env_remove("EYESHELL_REQUIRE_SCIPY");
+        if let Some(v) = require {
+            child.env("EYESHELL_REQUIRE_SCIPY", v);
+        }
+        let out = child.output().expect("the test binary runs again");
+        let text = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        (out.status.success(), text)
+    };
+    let (passed, text) = peer(None);
+    assert!(passed, "without the switch the test skips: {text}");
+    assert!(text.contains("SKIPPED: the solve_bvp peer"), "{text}");
+    assert!(
+        text.contains("1 passed"),
+        "the peer test ran (and skipped): {text}"
+    );
+    let (passed, text) = peer(Some("1"));
+    assert!(
+        !passed,
+        "with EYESHELL_REQUIRE_SCIPY=1 a missing SciPy fails: {text}"
+    );
+    assert!(
+        text.contains("needs python3 with scipy and numpy, and EYESHELL_REQUIRE_SCIPY=1"),
+        "{text}"
+    );
+    assert!(text.contains("1 failed"), "{text}");
+}

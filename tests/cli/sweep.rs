@@ -96,6 +96,101 @@ fn a_grid_runs_every_combination_into_its_own_directory() {
     assert!(dir.path().join("plots/axial_length.svg").is_file());
 }
 
+/// sweep.csv's refraction_D is each run's pole refraction at its end (its series.csv's last
+/// refraction_D, byte for byte; summary.json the same number), for a sweep of spectacle
+/// lenses, which move it by about their power; a result.json written before eyeshell
+/// recorded it (no "refraction_D") still reads on --resume: the run is reused and its
+/// refraction_D cell is NaN (what eyeshell writes for a value it does not have).
+#[test]
+fn the_sweep_table_has_each_runs_refraction_and_older_results_still_resume() {
+    let dir = tempfile::tempdir().unwrap();
+    write_scene(
+        dir.path(),
+        &format!(
+            "{SMALL}[stimulus]\nsource = \"optics\"\n[optics]\nfocus = \"sagittal\"\npupil = 1.0\n\
+             [[sweep.runs]]\nname = \"none\"\n[[sweep.runs]]\nname = \"minus2\"\n\
+             \"optics.lenses\" = [{{ kind = \"spectacle\", power = -2.0 }}]\n"
+        ),
+    );
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "-q"]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let out = dir.path().join("out");
+    let (header, rows) = quoted_cells(&out.join("sweep.csv"));
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    // series.csv's order: the class, then the refraction.
+    assert_eq!(col("refraction_D"), col("class") + 1);
+    let mut refraction = vec![];
+    for r in &rows {
+        let (series_header, series) = csv_cells(&out.join("runs").join(&r[0]).join("series.csv"));
+        let at = series_header
+            .iter()
+            .position(|h| h == "refraction_D")
+            .unwrap();
+        assert_eq!(
+            r[col("refraction_D")],
+            series.last().unwrap()[at],
+            "{}",
+            r[0]
+        );
+        refraction.push(r[col("refraction_D")].parse::<f64>().unwrap());
+    }
+    // Behind a −2 D lens the eye grows longer (the lens moves its focus back), and its naked
+    // refraction ends less hyperopic.
+    assert!(refraction.iter().all(|d| d.is_finite()), "{refraction:?}");
+    assert!(refraction[1] < refraction[0], "{refraction:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        summary["runs"][0]["result"]["refraction_D"]
+            .as_f64()
+            .unwrap(),
+        refraction[0]
+    );
+
+    // An older eyeshell's result.json: the same without refraction_D.
+    let first = out.join("runs").join(&rows[0][0]).join("result.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&first).unwrap()).unwrap();
+    assert!(v.as_object_mut().unwrap().remove("refraction_D").is_some());
+    std::fs::write(&first, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out", "--resume"]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let (_, rows) = quoted_cells(&out.join("sweep.csv"));
+    assert_eq!(rows[0][1], "reused", "{}", run.stderr);
+    assert_eq!(rows[0][col("refraction_D")], "NaN");
+    assert!(!rows[0][col("axial_length")].is_empty());
+    assert_eq!(
+        rows[1][col("refraction_D")].parse::<f64>().unwrap(),
+        refraction[1]
+    );
+}
+
+/// sweep.csv's header and rows, a quoted cell read as one (a swept lens table holds commas
+/// and doubled quotes).
+fn quoted_cells(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let cells = |line: &str| {
+        let (mut out, mut cell, mut quoted) = (vec![], String::new(), false);
+        let mut chars = line.chars().peekable();
+        while let Some(c) = chars.next() {
+            match c {
+                '"' if quoted && chars.peek() == Some(&'"') => {
+                    cell.push('"');
+                    chars.next();
+                }
+                '"' => quoted = !quoted,
+                ',' if !quoted => out.push(std::mem::take(&mut cell)),
+                c => cell.push(c),
+            }
+        }
+        out.push(cell);
+        out
+    };
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = cells(lines.next().unwrap());
+    (header, lines.map(cells).collect())
+}
+
 #[test]
 fn a_failed_run_is_reported_and_the_others_are_kept() {
     let dir = tempfile::tempdir().unwrap();

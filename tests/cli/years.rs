@@ -141,8 +141,8 @@ fn numbers(path: &std::path::Path, name: &str) -> Vec<f64> {
     rows.iter().map(|r| r[j].parse().unwrap()).collect()
 }
 
-/// A scene in years carries the age beside t everywhere: series.csv, history.csv and
-/// sensitivities.csv end in an `age` column, the snapshot files are named by age, `plot`
+/// A scene in years carries the age beside t everywhere: series.csv, history.csv,
+/// sensitivities.csv and peripheral.csv end in an `age` column, the snapshot files are named by age, `plot`
 /// draws against age, and `fit` (data by age) reports, tabulates and draws by age.
 #[test]
 fn a_scene_in_years_has_ages_in_every_output() {
@@ -170,7 +170,12 @@ fn a_scene_in_years_has_ages_in_every_output() {
         "grow in years",
     );
     let run = d.join("run");
-    for file in ["series.csv", "history.csv", "sensitivities.csv"] {
+    for file in [
+        "series.csv",
+        "history.csv",
+        "sensitivities.csv",
+        "peripheral.csv",
+    ] {
         let path = run.join(file);
         let (h, _) = csv_cells(&path);
         assert_eq!(h.last().map(String::as_str), Some("age"), "{file}: {h:?}");

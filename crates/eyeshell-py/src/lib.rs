@@ -603,8 +603,13 @@ fn add_age(
     d.set_item("age", PyArray1::from_vec(py, ages))
 }
 
-/// The peripheral refraction of every snapshot (peripheral.csv's columns) as arrays.
-fn peripheral_dict<'py>(py: Python<'py>, snapshots: &[Snapshot]) -> PyResult<Bound<'py, PyDict>> {
+/// The peripheral refraction of every snapshot (peripheral.csv's columns, `age` last when
+/// the scene counts in ages, `g`'s time.unit) as arrays.
+fn peripheral_dict<'py>(
+    py: Python<'py>,
+    snapshots: &[Snapshot],
+    g: Option<&GrowthParams>,
+) -> PyResult<Bound<'py, PyDict>> {
     let rows: Vec<(f64, &eyeshell::growth::PeripheralRow)> = snapshots
         .iter()
         .flat_map(|s| s.peripheral.iter().map(move |p| (s.t, p)))
@@ -614,6 +619,7 @@ fn peripheral_dict<'py>(py: Python<'py>, snapshots: &[Snapshot]) -> PyResult<Bou
     d.set_item("field_deg", column(py, &rows, |r| r.1.field_deg))?;
     d.set_item("refraction_D", column(py, &rows, |r| r.1.refraction_d))?;
     d.set_item("relative_D", column(py, &rows, |r| r.1.relative_d))?;
+    add_age(py, &d, rows.iter().map(|r| r.0), g)?;
     Ok(d)
 }
 
@@ -697,7 +703,7 @@ fn grow<'py>(
         )?)?;
     }
     d.set_item("snapshots", snapshots)?;
-    d.set_item("peripheral", peripheral_dict(py, &growth.snapshots)?)?;
+    d.set_item("peripheral", peripheral_dict(py, &growth.snapshots, g)?)?;
     d.set_item(
         "sensitivities",
         sensitivities_dict(py, &growth.sensitivities, g)?,

@@ -142,8 +142,8 @@ YEARS = dict(time__unit="years", time__start=2.0, time__end=12.0, solver__nodes=
 
 
 def test_a_scene_in_years_carries_ages_as_the_command_line_writes_them(cli, tmp_path):
-    """series, history and sensitivities end in an age column (age = 2 + 10 t here), bit
-    for bit the command line's files; without time.unit there is none."""
+    """series, history, sensitivities and peripheral end in an age column (age = 2 + 10 t
+    here), bit for bit the command line's files; without time.unit there is none."""
     scene = eyeshell.Scene.from_file(SCENES / "const.toml", **YEARS)
     toml = tmp_path / "years.toml"
     toml.write_text(scene.to_toml())
@@ -151,13 +151,14 @@ def test_a_scene_in_years_carries_ages_as_the_command_line_writes_them(cli, tmp_
     cli("grow", toml, "--sensitivities", "growth.eta0", "--out", run, "--quiet")
     g = eyeshell.grow(scene, frames=False, sensitivities=["growth.eta0"])
     for name, table in [("series.csv", g.series), ("history.csv", g.history),
-                        ("sensitivities.csv", g.sensitivities)]:
+                        ("sensitivities.csv", g.sensitivities), ("peripheral.csv", g.peripheral)]:
         written = read_csv(run / name)
         assert list(written)[-1] == "age" and list(written) == list(table), name
         assert list(table["age"]) == written["age"], name
         assert np.allclose(table["age"], 2 + 10 * np.asarray(table["t"]), rtol=0, atol=1e-12)
     plain = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=21)
     assert "age" not in plain.series and "age" not in plain.sensitivities
+    assert "age" not in plain.peripheral
 
 
 def test_fit_takes_data_by_age_and_reports_by_age():

@@ -284,3 +284,206 @@ impl super::Stepper for IdaStepper<'_, '_, '_, '_> {
 pub fn default_linear() -> DaeLinear {
     DaeLinear::SchurBlock
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvp::settings::SolverSettings;
+    use crate::growth::system::GrowthSystem;
+    use crate::growth::GrowthParams;
+    use crate::model::params::Params;
+
+    /// Which kinks a run is stopped at.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    enum Events {
+        /// The crossing of φ_max passing to the next pair of points.
+        Crossing,
+        /// That, and every point's [d]⁺, [r − ρ]⁺ and [α_s − 1]⁺ switching.
+        All,
+    }
+
+    /// A signature of the kinks at y that changes exactly when one of `which` switches.
+    fn signature(dae: &mut CoupledDae, y: &[f64], which: Events) -> Vec<usize> {
+        let (cross, on) = dae.kink_state(y).expect("the kinks' state");
+        let mut sig = vec![cross.unwrap_or(usize::MAX)];
+        if which == Events::All {
+            sig.extend(on.iter().flat_map(|f| f.iter().map(|&b| usize::from(b))));
+        }
+        sig
+    }
+
+    struct Run {
+        steps: usize,
+        error_test_failures: usize,
+        residuals: usize,
+        jacobians: usize,
+        /// Axial length and equatorial radius at the output times.
+        lengths: Vec<(f64, f64)>,
+        /// Where `which` switched (located by bisection in the dense output).
+        events: Vec<f64>,
+        seconds: f64,
+    }
+
+    const OUTPUT: [f64; 4] = [0.1, 0.2, 0.4, 1.0];
+
+    /// The const scene on N = 501 to t = 1, as [`integrate`] runs it, stopped at each of
+    /// `stops` (IDASetStopTime; then IDA re-initialised there if `reinit`, else continued);
+    /// the kinks of `locate` located along the way.
+    fn run(rtol: f64, stops: &[f64], reinit: bool, locate: Option<Events>) -> Run {
+        let start = std::time::Instant::now();
+        let (p, g) = (Params::default(), GrowthParams::default());
+        let s = SolverSettings::default();
+        let mut dae = CoupledDae::new(GrowthSystem::new(&p, &s, &g).unwrap());
+        dae.set_linear(default_linear()).unwrap();
+        let y0 = dae.initial_state().unwrap();
+        let yp0 = dae.derivative(&y0).unwrap();
+        let n = y0.len();
+        let n_p = dae.differential_len();
+        let atol = dae.abs_tolerances(rtol, 1e-2 * rtol, p.r0);
+        let h0 = initial_step(&mut dae, &y0, &yp0, rtol, &atol, 1.0);
+        let options = IdaOptions {
+            rtol,
+            atol: 1e-2 * rtol,
+            atol_vector: Some(atol),
+            stop_time: Some(1.0),
+            max_steps: 100_000,
+            id: Some(dae.id()),
+            suppress_algebraic: SUPPRESS_ALGEBRAIC,
+            fixed_step_bounds: Some((1.0, STEP_GROWTH_THRESHOLD)),
+            initial_step: h0,
+            ..IdaOptions::default()
+        };
+        let mut ida = Ida::new(
+            GrowthDae { dae: &mut dae },
+            0.0,
+            &y0,
+            &yp0,
+            IdaLinearSolver::Custom,
+            &options,
+        )
+        .unwrap();
+        let (mut y, mut yp, mut yo) = (y0.clone(), yp0.clone(), vec![0.0; n]);
+        let mut stops = stops
+            .iter()
+            .copied()
+            .filter(|&t| t > 0.0 && t < 1.0)
+            .peekable();
+        let mut next_out = OUTPUT.iter().copied().peekable();
+        let mut lengths = vec![];
+        let mut events = vec![];
+        let mut total = (0, 0, 0, 0);
+        let (mut t, mut sig) = (0.0, None);
+        if let Some(which) = locate {
+            sig = Some(signature(ida.system_mut().dae, &y0, which));
+        }
+        let mut stop_set = false;
+        while t < 1.0 {
+            if !stop_set {
+                if let Some(&e) = stops.peek() {
+                    ida.set_stop_time(e).unwrap();
+                    stop_set = true;
+                }
+            }
+            let t_prev = t;
+            t = ida.step(1.0, &mut y, &mut yp).unwrap();
+            while let Some(&tout) = next_out.peek() {
+                if tout > t {
+                    break;
+                }
+                ida.interpolate(tout, &mut yo).unwrap();
+                let dae = &mut *ida.system_mut().dae;
+                dae.adopt(&yo);
+                let row = dae.sys.series(tout, &yo[..n_p]).unwrap();
+                lengths.push((row.axial_length, row.equatorial_radius));
+                next_out.next();
+            }
+            if let (Some(which), Some(s0)) = (locate, sig.as_ref()) {
+                let s1 = signature(ida.system_mut().dae, &y, which);
+                // Every switch in the step, by bisection on the dense output.
+                let mut stack = vec![(t_prev, s0.clone(), t, s1.clone())];
+                while let Some((a, sa, b, sb)) = stack.pop() {
+                    if sa == sb {
+                        continue;
+                    }
+                    if b - a < 1e-10 {
+                        events.push(b);
+                        continue;
+                    }
+                    let m = 0.5 * (a + b);
+                    ida.interpolate(m, &mut yo).unwrap();
+                    let sm = signature(ida.system_mut().dae, &yo, which);
+                    stack.push((m, sm.clone(), b, sb));
+                    stack.push((a, sa, m, sm));
+                }
+                sig = Some(s1);
+            }
+            if stop_set && stops.peek().is_some_and(|&e| t >= e) {
+                stops.next();
+                stop_set = false;
+                if reinit {
+                    let st = ida.stats();
+                    total.0 += st.steps;
+                    total.1 += st.error_test_failures;
+                    total.2 += st.residual_evaluations;
+                    total.3 += st.jacobian_evaluations;
+                    ida.reinit(t, &y, &yp).unwrap();
+                }
+            }
+        }
+        let st = ida.stats();
+        events.sort_by(f64::total_cmp);
+        events.dedup();
+        Run {
+            steps: total.0 + st.steps,
+            error_test_failures: total.1 + st.error_test_failures,
+            residuals: total.2 + st.residual_evaluations,
+            jacobians: total.3 + st.jacobian_evaluations,
+            lengths,
+            events,
+            seconds: start.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// Whether stopping IDA at the kinks (docs/MODEL.md §6: the crossing of φ_max passing to
+    /// the next pair, points stopping growth) cuts its steps and error-test failures at equal
+    /// accuracy: the best case of IDA's root finding (IDARootInit), with the roots known
+    /// exactly (located to 1e-10 on a reference run at rtol 1e-10) and no root function to
+    /// evaluate. Errors against that reference on the same mesh (the time error alone).
+    /// A measurement for BENCHMARKS.md ("Stopping at the kinks"), run by hand:
+    /// `cargo test --release -p eyeshell-core --lib stopping_at_the_kinks -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "a measurement (about a minute), recorded in BENCHMARKS.md"]
+    fn stopping_at_the_kinks() {
+        let crossing = run(1e-10, &[], false, Some(Events::Crossing));
+        let all = run(1e-10, &[], false, Some(Events::All));
+        let reference = &crossing.lengths;
+        println!(
+            "reference rtol 1e-10: {} steps, {} crossing events, {} events in all ({:.2} s)",
+            crossing.steps,
+            crossing.events.len(),
+            all.events.len(),
+            crossing.seconds
+        );
+        for rtol in [1e-5, 1e-6, 1e-7, 1e-8] {
+            for (what, stops, reinit) in [
+                ("no stops", &[][..], false),
+                ("crossing, continue", &crossing.events[..], false),
+                ("crossing, reinit", &crossing.events[..], true),
+                ("all, continue", &all.events[..], false),
+                ("all, reinit", &all.events[..], true),
+            ] {
+                let r = run(rtol, stops, reinit, None);
+                let err = r
+                    .lengths
+                    .iter()
+                    .zip(reference)
+                    .map(|(a, b)| (a.0 - b.0).abs().max((a.1 - b.1).abs()))
+                    .fold(0.0, f64::max);
+                println!(
+                    "rtol {rtol:e}, {what}: {} steps, {} error-test failures, {} residuals, {} Jacobians, error {err:.2e} mm, {:.3} s",
+                    r.steps, r.error_test_failures, r.residuals, r.jacobians, r.seconds
+                );
+            }
+        }
+    }
+}

@@ -455,8 +455,8 @@ impl GrowthSystem {
                 }
             })
             .collect();
-        let series = self.series_row(t, &stim);
         let retina: Vec<(f64, f64)> = growth.iter().map(|g| (g.z_retina, g.r_retina)).collect();
+        let series = self.series_row(t, &retina);
         let peripheral = self.growth.peripheral(t, &retina);
         Ok(super::Snapshot {
             t,
@@ -475,8 +475,36 @@ impl GrowthSystem {
         if self.solved_at.as_slice() != p {
             self.solve_elastic(p)?;
         }
-        let stim = self.stimulus(p)?;
-        Ok(self.series_row(t, &stim))
+        let u = std::mem::take(&mut self.elastic.u);
+        let retina = self.retina_at_nodes(&u, p);
+        self.elastic.u = u;
+        Ok(self.series_row(t, &retina?))
+    }
+
+    /// The retina (z, r) at every node of the shell with unknowns `u` in state `p`: what a
+    /// series row reads, the same numbers as [`Self::stimulus`] gives at the nodes' points,
+    /// without what the rates need besides (every point's depth and angle behind the blue
+    /// surface, the midpoints, the crossing of φ_max): a history point costs the point
+    /// evaluations and the quadrature of z alone.
+    fn retina_at_nodes(&mut self, u: &[f64], p: &[f64]) -> Result<Vec<(f64, f64)>, RhsError> {
+        let disc = self.elastic.discretisation_mut();
+        let quad = disc.quadratures(u).map_err(RhsError::Evaluation)?;
+        let (ev, pts) = (disc.evaluations(), &self.points);
+        let retina = (0..disc.mesh.len())
+            .map(|i| {
+                // The slot `rates` reads a node's point from: node 0 from above, every
+                // other node from below.
+                let a = match i {
+                    0 => ev.left(0).alpha_s,
+                    _ => ev.right(i - 1).alpha_s,
+                };
+                let (r, th, z) = (u[NY * i + R], u[NY * i + THETA], quad.z[i]);
+                let k = pts.node_point(i);
+                let h = pts.zeta(k, p) / (a * r / p[NP * k]);
+                stimulus::retina(z, r, h, th)
+            })
+            .collect();
+        Ok(retina)
     }
 
     /// What the stimulus sees at every point of the solved shell in state `p`.
@@ -489,18 +517,13 @@ impl GrowthSystem {
         r.map(|_| stim)
     }
 
-    /// The series row from the stimulus at every point: at the posterior pole, and the
-    /// largest retina radius through the nodes ([`crate::model::stimulus::largest_radius`]).
-    fn series_row(&self, t: f64, stim: &[PointStimulus]) -> SeriesRow {
-        let pts = &self.points;
-        let pole = &stim[pts.node_point(0)];
-        let retina = (0..pts.above.len()).map(|i| {
-            let s = &stim[pts.node_point(i)];
-            (s.z_retina, s.r_retina)
-        });
+    /// The series row from the retina (z, r) at every node: at the posterior pole (node 0),
+    /// and the largest retina radius through the nodes
+    /// ([`crate::model::stimulus::largest_radius`]).
+    fn series_row(&self, t: f64, retina: &[(f64, f64)]) -> SeriesRow {
         let eye = EyeMeasure::new(
-            (pole.z_retina, pole.r_retina),
-            retina,
+            retina[0],
+            retina.iter().copied(),
             focal(&self.growth, &self.now, true),
             focal(&self.growth, &self.now, false),
         );

@@ -18,12 +18,18 @@
 //!   quarter of the delivered run, and it depends on the mesh only through the shell it
 //!   integrates.
 //!
+//! The three runs are independent: with a second core the two on M go on a thread of their
+//! own beside M/2's ([`three_runs`]), so that on two idle cores a round takes about the wall
+//! time of its dearer side, and each round records both sides' CPU seconds.
+//!
 //! If the largest sum over the lengths and times is at most tol, M/2's run is delivered with
 //! those estimates. If not, the next round's (n, rtol) is the cheapest that the measured
 //! estimates, scaled as n^−[`MODEL_SPACE_ORDER`] and rtol^q, predict to meet [`AIM`]·tol
 //! (the estimate takes the safe order 2, the prediction the observed 2.5): the cost of a run grows
 //! as n·rtol^−β ([`COST_RTOL_EXPONENT`]), and the split of the error between space and
-//! time is searched over with n and rtol held inside their bounds. The first round reads
+//! time is searched over with n and rtol held inside their bounds. Where nothing inside
+//! them is predicted to meet AIM·tol, the next round aims at tol itself, and where nothing
+//! meets tol either the run stops with the estimate it has. The first round reads
 //! the same model with the const scene's measured constants ([`PRIOR`]), so that on the
 //! scenes like it one round is enough.
 //!
@@ -85,6 +91,8 @@ pub const PRIOR: Round = Round {
     space: 2e-4,
     time: 1.6e-4,
     seconds: 0.0,
+    delivered_cpu_seconds: 0.0,
+    companions_cpu_seconds: 0.0,
 };
 
 /// One length's estimated error (mm): space and time, and their sum.
@@ -230,6 +238,32 @@ pub struct Round {
     pub space: f64,
     pub time: f64,
     pub seconds: f64,
+    /// The CPU seconds of the delivered run (M/2), and of the two runs on M, each on its own
+    /// thread (NaN where the system does not tell a thread's CPU time): on two idle cores
+    /// the round takes about the larger, under load the wall clock says little.
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub delivered_cpu_seconds: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub companions_cpu_seconds: f64,
+}
+
+/// The CPU time of the calling thread (s), from Linux's /proc/thread-self/schedstat (its
+/// first field, in ns); None elsewhere.
+fn thread_cpu_seconds() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
+}
+
+/// The CPU seconds the calling thread spends in `f`, NaN if unknown.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let before = thread_cpu_seconds();
+    let value = f();
+    let seconds = match (before, thread_cpu_seconds()) {
+        (Some(a), Some(b)) => b - a,
+        _ => f64::NAN,
+    };
+    (value, seconds)
 }
 
 /// summary.json's `accuracy`: what `solver.tol` chose for a growth run.
@@ -316,6 +350,100 @@ fn record(
     rec.stats = stats;
     rec.sens = sens_rows;
     Ok(rec)
+}
+
+/// A round's three runs: `fine_mesh` at `at[0]` (the delivered one, which reports
+/// `progress`), and `mesh` at `at[0]` and at `at[1]`, in that order. They are independent,
+/// so with a second core the two on M run on a thread of their own beside the delivered
+/// run, which costs about as much as those two together (M/2 has twice M's nodes, and the
+/// looser run is cheaper): the round then takes about the wall time of the delivered run
+/// alone. Each run makes and drops its own SUNDIALS context on its own thread. Once one run
+/// fails the others stop at their next step (a flag their progress reads), and the error
+/// is that of the run that failed first: a failure or an interruption costs no more than
+/// it would one run after another.
+fn three_runs(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: &GrowthParams,
+    at: [GrowthSettings; 2],
+    mesh: Mesh,
+    fine_mesh: Mesh,
+    progress: &mut ProgressFn<'_>,
+) -> Result<([Recorded; 3], [f64; 2]), GrowthError> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let [tight, loose] = at;
+    if !std::thread::available_parallelism().is_ok_and(|n| n.get() > 1) {
+        let (fine, f) = timed(|| record(params, solver, growth, &tight, fine_mesh, progress));
+        let fine = fine?;
+        let (others, o) = timed(|| {
+            let coarse = record(
+                params,
+                solver,
+                growth,
+                &tight,
+                mesh.clone(),
+                &mut |_| Ok(()),
+            )?;
+            let loose = record(params, solver, growth, &loose, mesh, &mut |_| Ok(()))?;
+            Ok::<_, GrowthError>((coarse, loose))
+        });
+        let (coarse, loose) = others?;
+        return Ok(([fine, coarse, loose], [f, o]));
+    }
+    // 0 while every run goes on, else 1 + the index of the run that failed first.
+    let failed = AtomicUsize::new(0);
+    let fail = |k: usize| {
+        let _ = failed.compare_exchange(0, k + 1, Ordering::Relaxed, Ordering::Relaxed);
+    };
+    let halt = || -> Result<(), super::ObserverError> {
+        match failed.load(Ordering::Relaxed) {
+            0 => Ok(()),
+            _ => Err("stopped: another run of the round failed".into()),
+        }
+    };
+    let (fine, coarse, loose, cpu) = std::thread::scope(|scope| {
+        let helper = scope.spawn(|| {
+            timed(|| {
+                let coarse = record(params, solver, growth, &tight, mesh.clone(), &mut |_| {
+                    halt()
+                });
+                if coarse.is_err() {
+                    fail(1);
+                    let skipped = GrowthError {
+                        t: 0.0,
+                        reason: "not run: another run of the round failed".into(),
+                        stats: Box::default(),
+                    };
+                    return (coarse, Err(skipped));
+                }
+                let loose = record(params, solver, growth, &loose, mesh, &mut |_| halt());
+                if loose.is_err() {
+                    fail(2);
+                }
+                (coarse, loose)
+            })
+        });
+        let (fine, f) = timed(|| {
+            record(params, solver, growth, &tight, fine_mesh, &mut |t| {
+                halt()?;
+                progress(t)
+            })
+        });
+        if fine.is_err() {
+            fail(0);
+        }
+        let ((coarse, loose), o) = helper
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (fine, coarse, loose, [f, o])
+    });
+    let first = failed.into_inner();
+    match (fine, coarse, loose) {
+        (Ok(f), Ok(c), Ok(l)) => Ok(([f, c, l], cpu)),
+        (_, Err(e), _) if first == 2 => Err(e),
+        (_, _, Err(e)) if first == 3 => Err(e),
+        (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => Err(e),
+    }
 }
 
 /// |a − b| of each length at each output time; `stride` reads a's nodes every `stride`
@@ -418,8 +546,9 @@ fn estimate(fine: &Recorded, coarse: &Recorded, loose: &Recorded) -> ErrorEstima
 }
 
 /// The cheapest (nodes of M, rtol) that `last`'s errors, scaled as n^−`order` and rtol^q,
-/// predict to meet `target`, the split between space and time searched over in steps of 1/40.
-fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> (usize, f64) {
+/// predict to meet `target`, the split between space and time searched over in steps of 1/40;
+/// None if nothing inside the bounds of n and rtol is predicted to.
+fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> Option<(usize, f64)> {
     let space = last.space.max(1e-300);
     let time = last.time.max(1e-300);
     let mut best: Option<(f64, usize, f64)> = None;
@@ -440,11 +569,7 @@ fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> (usize, f64)
             best = Some((cost, n, rtol));
         }
     }
-    match best {
-        Some((_, n, rtol)) => (n, rtol),
-        // Nothing meets it inside the bounds: the finest the bounds allow.
-        None => (max_nodes.max(MIN_NODES), RTOL_RANGE.0),
-    }
+    best.map(|(_, n, rtol)| (n, rtol))
 }
 
 /// The growth run under `solver.tol` (module docs): rounds until the estimate is within tol,
@@ -484,7 +609,10 @@ pub(super) fn run(
     };
     // M's nodes from the model, at most half of solver.max_nodes (M/2 has 2n − 1).
     let max_nodes = solver.max_nodes.div_ceil(2);
-    let (mut nodes, mut rtol) = next(&PRIOR, AIM * tol, max_nodes, MODEL_SPACE_ORDER);
+    // The prior is another scene's: where it sees no way to tol, the finest the bounds allow
+    // is tried, and the measured estimate decides.
+    let (mut nodes, mut rtol) = next(&PRIOR, AIM * tol, max_nodes, MODEL_SPACE_ORDER)
+        .unwrap_or((max_nodes.max(MIN_NODES), RTOL_RANGE.0));
     loop {
         let round_start = std::time::Instant::now();
         let atol = ATOL_PER_RTOL * rtol;
@@ -507,20 +635,17 @@ pub(super) fn run(
         };
         let s = SolverSettings { nodes, ..base };
         let mesh = crate::bvp::solve::mesh_of(params, &s).map_err(|e| refuse(e.to_string()))?;
-        let coarse = record(params, &s, growth, &at(rtol), mesh.clone(), &mut |_| Ok(()))
-            .map_err(|e| with_rounds(e, &accuracy))?;
-        let loose = record(
+        let fine_mesh = mesh.halved();
+        let ([fine, coarse, loose], cpu) = three_runs(
             params,
             &s,
             growth,
-            &at(10.0 * rtol),
-            mesh.clone(),
-            &mut |_| Ok(()),
+            [at(rtol), at(10.0 * rtol)],
+            mesh,
+            fine_mesh.clone(),
+            progress,
         )
         .map_err(|e| with_rounds(e, &accuracy))?;
-        let fine_mesh = mesh.halved();
-        let fine = record(params, &s, growth, &at(rtol), fine_mesh.clone(), progress)
-            .map_err(|e| with_rounds(e, &accuracy))?;
         let est = estimate(&fine, &coarse, &loose);
         let worst = est.bounded();
         let round = Round {
@@ -530,6 +655,8 @@ pub(super) fn run(
             space: worst.space,
             time: worst.time,
             seconds: round_start.elapsed().as_secs_f64(),
+            delivered_cpu_seconds: cpu[0],
+            companions_cpu_seconds: cpu[1],
         };
         accuracy.rounds.push(round);
         if worst.total <= tol {
@@ -555,8 +682,12 @@ pub(super) fn run(
         } else {
             MODEL_SPACE_ORDER
         };
-        let (n, r) = next(&round, AIM * tol, max_nodes, order);
-        if accuracy.rounds.len() >= MAX_ROUNDS || (n == nodes && r == rtol) {
+        // Without the margin if the measured errors leave no room for it; if they say tol
+        // itself is out of reach (the time error at the tightest rtol, or the nodes past
+        // solver.max_nodes), the run stops here rather than run the finest mesh to learn it.
+        let choice = next(&round, AIM * tol, max_nodes, order)
+            .or_else(|| next(&round, tol, max_nodes, order));
+        if accuracy.rounds.len() >= MAX_ROUNDS || choice.is_none_or(|c| c == (nodes, rtol)) {
             let mut e = refuse(format!(
                 "solver.tol = {} cannot be reached in growth: the estimated error was {} mm{} (space {}, time {}) on {} nodes at solver.rtol = {}{}",
                 crate::text::number(tol),
@@ -583,7 +714,9 @@ pub(super) fn run(
             e.stats = Box::new(fine.stats);
             return Err(with_rounds(e, &accuracy));
         }
-        (nodes, rtol) = (n, r);
+        if let Some(c) = choice {
+            (nodes, rtol) = c;
+        }
     }
 }
 

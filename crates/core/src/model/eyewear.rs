@@ -347,7 +347,7 @@ pub fn refraction_table_at(
             return Ok(t.clone());
         }
     }
-    let table = Arc::new(trace_refraction_table(spec, key.t)?);
+    let table = Arc::new(trace_pole(spec, key.t, RefractionTable::compute_sampled)?);
     if let Ok(mut cache) = TABLES.lock() {
         if cache.len() >= CACHED {
             cache.remove(0);
@@ -357,11 +357,31 @@ pub fn refraction_table_at(
     Ok(table)
 }
 
-/// Trace the refraction table of `spec`'s naked eye at growth time `t` (no cache, no kept
-/// table). The error names the key to change.
+/// Trace the refraction table of `spec`'s naked eye at growth time `t`, every power of
+/// [`POWERS`] (no cache, no kept table): what the kept default tables are. A run's tables
+/// ([`refraction_table_at`]) trace every fifth power and fill the rest
+/// ([`RefractionTable::compute_sampled`], within 1e-5 D of this). The error names the key to
+/// change.
 pub fn trace_refraction_table(
     spec: &OpticsSpec,
     t: f64,
+) -> Result<RefractionTable, OpticsKeyError> {
+    trace_pole(spec, t, RefractionTable::compute)
+}
+
+type PoleTrace = fn(
+    &eyeshell_optics::OpticalSystem,
+    f64,
+    &eyeshell_optics::Pupil,
+    eyeshell_optics::Criterion,
+    &FocusSettings,
+    f64,
+) -> Result<RefractionTable, eyeshell_optics::OpticsError>;
+
+fn trace_pole(
+    spec: &OpticsSpec,
+    t: f64,
+    trace: PoleTrace,
 ) -> Result<RefractionTable, OpticsKeyError> {
     let (lo, hi) = super::optics::WAVELENGTH_RANGE;
     if !(spec.refraction_wavelength >= lo && spec.refraction_wavelength <= hi) {
@@ -372,7 +392,7 @@ pub fn trace_refraction_table(
         ));
     }
     let eye = spec.system_at(t)?;
-    RefractionTable::compute(
+    trace(
         &eye,
         spec.refraction_wavelength,
         &spec.pupil_stop(&eye),

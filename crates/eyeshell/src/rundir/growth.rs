@@ -9,8 +9,8 @@
 //!   time, the history times and the snapshot times, appended and flushed at once;
 //! - `sensitivities.csv` (with `GrowthSettings::sensitivities`): one row per recorded time
 //!   and parameter, [`SENSITIVITY_COLUMNS`], appended and flushed at once;
-//! - with `time.unit` set, series.csv, history.csv and sensitivities.csv end in an `age`
-//!   column (in that unit) after their columns without it, so a reader that takes the
+//! - with `time.unit` set, series.csv, history.csv, sensitivities.csv and peripheral.csv
+//!   end in an `age` column (in that unit) after their columns without it, so a reader that takes the
 //!   columns by position reads either; without a unit every file is as it always was;
 //! - `summary.json`: `"status": "running"` from the start, then `"ok"`
 //!   with every [`GrowthStats`] field, or `"failed"` with `failed_at_t`, `error` and the
@@ -52,8 +52,8 @@ pub const SENSITIVITY_COLUMNS: [&str; 6] = [
     "d_retina_minus_blue",
     "scaled_axial_length",
 ];
-/// The column series.csv, history.csv and sensitivities.csv end in when the scene counts in
-/// ages (time.unit): the age of the row's t, in that unit.
+/// The column series.csv, history.csv, sensitivities.csv and peripheral.csv end in when the
+/// scene counts in ages (time.unit): the age of the row's t, in that unit.
 pub const AGE_COLUMN: &str = "age";
 /// The peripheral refraction at each output time and field angle
 /// ([`crate::growth::PERIPHERAL_COLUMNS`]).
@@ -110,7 +110,7 @@ pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
     (times as u64 + 1)
         .saturating_mul(snapshot)
         .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len() + 1))
-        .saturating_add(peripheral_rows * row(PERIPHERAL_COLUMNS.len()))
+        .saturating_add(peripheral_rows * row(PERIPHERAL_COLUMNS.len() + 1))
 }
 
 /// The header of a snapshot file: the elastic [`COLUMNS`], then the [`GROWTH_COLUMNS`].
@@ -217,7 +217,10 @@ impl GrowthWriter {
         fs::create_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
         let series_path = target.join(SERIES_FILE);
         let series = create_with_header(&series_path, ages)?;
-        let peripheral = create_with_columns(&target.join(PERIPHERAL_FILE), &PERIPHERAL_COLUMNS)?;
+        let peripheral = create_with_columns(
+            &target.join(PERIPHERAL_FILE),
+            &with_age_column(&PERIPHERAL_COLUMNS, ages),
+        )?;
         let history = if history_points > 0 {
             Some(create_with_header(&target.join(HISTORY_FILE), ages)?)
         } else {
@@ -285,7 +288,7 @@ impl GrowthWriter {
         let age = self.age(s.t);
         append(&mut self.series, &s.series, age).map_err(|e| OutputError::io(&series_path, e))?;
         let peripheral_path = self.dir.join(PERIPHERAL_FILE);
-        append_peripheral(&mut self.peripheral, s)
+        append_peripheral(&mut self.peripheral, s, age)
             .map_err(|e| OutputError::io(&peripheral_path, e))?;
         self.snapshots.push(WrittenSnapshot {
             t: s.t,
@@ -350,15 +353,21 @@ fn append(w: &mut csv::Writer<fs::File>, row: &SeriesRow, age: Option<f64>) -> s
     w.flush()
 }
 
-/// Append the peripheral refraction rows of snapshot `s` and flush them at once.
-fn append_peripheral(w: &mut csv::Writer<fs::File>, s: &Snapshot) -> std::io::Result<()> {
+/// Append the peripheral refraction rows of snapshot `s` (each with its age, in a scene with
+/// ages) and flush them at once.
+fn append_peripheral(
+    w: &mut csv::Writer<fs::File>,
+    s: &Snapshot,
+    age: Option<f64>,
+) -> std::io::Result<()> {
     for p in &s.peripheral {
-        w.write_record([
+        let cells = [
             format_value(s.t),
             format_value(p.field_deg),
             format_value(p.refraction_d),
             format_value(p.relative_d),
-        ])?;
+        ];
+        w.write_record(cells.into_iter().chain(age.map(format_value)))?;
     }
     w.flush()
 }

@@ -232,6 +232,15 @@ pub struct RunResult {
     #[serde(deserialize_with = "f64_or_nan")]
     pub retina_minus_red: f64,
     pub class: String,
+    /// The pole's refraction (D) at `t`, series.csv's `refraction_D` (NaN for an elastic
+    /// solve of a scene without growth, and in the result.json of runs by an earlier
+    /// eyeshell, which did not record it).
+    #[serde(
+        rename = "refraction_D",
+        default = "no_value",
+        deserialize_with = "f64_or_nan"
+    )]
+    pub refraction_d: f64,
     pub newton_iterations: usize,
     pub bvp_solves: usize,
     pub steps: usize,
@@ -243,6 +252,11 @@ pub struct RunResult {
     /// and in the result.json of runs by an earlier eyeshell (`--resume` runs them again).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub files: Vec<RunFile>,
+}
+
+/// What a field missing from an older file reads as: NaN (as `null` does).
+fn no_value() -> f64 {
+    f64::NAN
 }
 
 /// One file of a finished sweep run: its path relative to the run directory (`/`

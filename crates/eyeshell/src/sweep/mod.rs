@@ -396,7 +396,7 @@ fn io(path: &Path, e: std::io::Error) -> OutputError {
 }
 
 /// The columns of sweep.csv after `run`, `status` and the swept keys.
-pub const RESULT_COLUMNS: [&str; 13] = [
+pub const RESULT_COLUMNS: [&str; 14] = [
     "kind",
     "t",
     "axial_length",
@@ -404,6 +404,7 @@ pub const RESULT_COLUMNS: [&str; 13] = [
     "retina_minus_blue",
     "retina_minus_red",
     "class",
+    "refraction_D",
     "newton_iterations",
     "bvp_solves",
     "steps",
@@ -484,6 +485,7 @@ fn result_fields(r: &RunRecord) -> Vec<String> {
             format_value(x.retina_minus_blue),
             format_value(x.retina_minus_red),
             x.class.clone(),
+            format_value(x.refraction_d),
             x.newton_iterations.to_string(),
             x.bvp_solves.to_string(),
             x.steps.to_string(),

@@ -167,10 +167,11 @@ impl Observer for SleepUntil {
 }
 
 /// With `solver.tol`, the runs of the choice share one bound: progress is reported by the
-/// third run of a round only (the delivered one), and the observer, at its first report,
-/// sleeps until the bound counted from the start of `grow` has passed; the run then stops
-/// at IDA's next residual. Counted from each run's own start, the bound would still leave
-/// the third run the time of the first two, and it would end normally.
+/// delivered run of a round only, and the observer, at its first report, sleeps until the
+/// bound counted from the start of `grow` has passed; the run then stops at IDA's next
+/// residual. On one core the delivered run goes first and on two it starts with the
+/// others, so this shows the bound reaching the delivered run, not on its own that the
+/// clock is the job's (`a_bound_counted_from_an_earlier_start_stops_the_first_stage` does).
 #[test]
 fn with_tol_the_runs_of_the_choice_share_one_bound() {
     // At tol 1e-4 the first two runs take a few hundredths of a second.
@@ -222,4 +223,48 @@ fn a_bound_counted_from_an_earlier_start_stops_the_first_stage() {
     );
     assert_eq!(e.t, 0.0);
     assert!(kept.is_empty());
+}
+
+/// Refuses the first progress report.
+struct RefuseProgress;
+
+impl Observer for RefuseProgress {
+    fn snapshot(&mut self, _: &Snapshot) -> Result<(), ObserverError> {
+        Ok(())
+    }
+
+    fn progress(&mut self, _t: f64, _t_end: f64) -> Result<(), ObserverError> {
+        Err("enough (the observer's own error)".into())
+    }
+}
+
+/// With `solver.tol` a round's runs go side by side: the observer's error at the delivered
+/// run's first step is the run's error, and it stops the round's other runs too (at tol
+/// 1e-6 those two take seconds; stopped, the whole run ends within the first steps).
+#[test]
+fn with_tol_an_observer_error_stops_every_run_of_the_round() {
+    let solver = SolverSettings {
+        tol: Some(1e-6),
+        ..SolverSettings::default()
+    };
+    let start = std::time::Instant::now();
+    let r = grow(
+        &Params::default(),
+        &solver,
+        &GrowthParams::default(),
+        &GrowthSettings::default(),
+        &mut RefuseProgress,
+    );
+    let seconds = start.elapsed().as_secs_f64();
+    let e = r.expect_err("the observer refused");
+    assert!(
+        e.reason.contains("enough (the observer's own error)"),
+        "{e}"
+    );
+    assert!(
+        seconds < 1.0,
+        "the round took {seconds:.3} s after the refusal"
+    );
+    let accuracy = e.stats.accuracy.expect("the choice is recorded");
+    assert!(accuracy.rounds.is_empty(), "{accuracy:?}");
 }

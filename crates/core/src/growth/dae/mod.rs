@@ -689,6 +689,35 @@ impl DirectSolver for NoSolver {
     }
 }
 
+/// The state of the kinks at y, for the measurement of stopping IDA at them (`ida.rs`'s
+/// tests): the first point of the crossing's stencil (it moves when the crossing passes to
+/// the next pair), and per point whether [d]⁺, [r − ρ]⁺ and [α_s − 1]⁺ are on.
+#[cfg(test)]
+impl CoupledDae {
+    pub(crate) fn kink_state(
+        &mut self,
+        y: &[f64],
+    ) -> Result<(Option<usize>, Vec<[bool; 3]>), RhsError> {
+        self.load(y)?;
+        let mut s = std::mem::take(&mut self.scratch);
+        self.locals(y, &mut s.local);
+        let crossing = self.point_rates(y, &s.local, None, &mut s.rates);
+        let d = y[self.d()];
+        let on = s
+            .rates
+            .iter()
+            .zip(&s.local)
+            .enumerate()
+            .map(|(k, (pr, l))| {
+                let depth = if pr.beyond { d } else { pr.depth };
+                [depth > 0.0, l.r - y[NP * k] > 0.0, l.alpha_s > 1.0]
+            })
+            .collect();
+        self.scratch = s;
+        Ok((crossing.map(|c| c.points()[0].0), on))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
