@@ -241,18 +241,15 @@ pub struct Round {
     /// The CPU seconds of the delivered run (M/2), and of the two runs on M, each on its own
     /// thread (NaN where the system does not tell a thread's CPU time): on two idle cores
     /// the round takes about the larger, under load the wall clock says little.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub delivered_cpu_seconds: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub companions_cpu_seconds: f64,
 }
 
-/// The CPU time of the calling thread (s), from Linux's /proc/thread-self/schedstat (its
-/// first field, in ns); None elsewhere.
+/// The CPU time of the calling thread (s): the kernel's per-thread clock
+/// (CLOCK_THREAD_CPUTIME_ID), through rustix's safe call.
 fn thread_cpu_seconds() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
-    Some(ns * 1e-9)
+    let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+    Some(t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9)
 }
 
 /// The CPU seconds the calling thread spends in `f`, NaN if unknown.

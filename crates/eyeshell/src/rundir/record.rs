@@ -321,6 +321,10 @@ struct RoundDef {
     pub time: f64,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub seconds: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub delivered_cpu_seconds: f64,
+    #[serde(deserialize_with = "crate::json::f64_or_nan")]
+    pub companions_cpu_seconds: f64,
 }
 
 #[derive(Default, Serialize, Deserialize)]
