@@ -1,6 +1,7 @@
 //! The numerics crate (crates/core, `eyeshell-core`) touches no file: it depends on no I/O
-//! crate and names no file API. Reading and writing files is the `eyeshell` crate's job
-//! (ARCHITECTURE.md); these checks keep the line where it is drawn.
+//! crate, no serialisation crate, and names no file API. Reading and writing files, and the
+//! form of what they record, are the `eyeshell` crate's job (ARCHITECTURE.md); these checks
+//! keep the line where it is drawn.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -9,6 +10,10 @@ use crate::support::repo;
 
 /// The crates that read or write files, which the numerics must not depend on.
 const IO_CRATES: [&str; 4] = ["csv", "toml", "zip", "flate2"];
+
+/// The crates of a file's format (summary.json's records are the files crate's:
+/// rundir/record.rs), which the numerics must not depend on either.
+const FORMAT_CRATES: [&str; 2] = ["serde", "serde_json"];
 
 /// The names of the crates `cargo tree -p PACKAGE -e normal` lists (normal dependencies,
 /// transitively).
@@ -45,8 +50,13 @@ fn dependencies(package: &str) -> Vec<String> {
 }
 
 fn io_crates_in(names: &[String]) -> Vec<&'static str> {
-    IO_CRATES
-        .into_iter()
+    crates_in(&IO_CRATES, names)
+}
+
+fn crates_in(these: &[&'static str], names: &[String]) -> Vec<&'static str> {
+    these
+        .iter()
+        .copied()
         .filter(|c| names.iter().any(|n| n == c))
         .collect()
 }
@@ -68,11 +78,21 @@ fn the_numerics_crate_depends_on_no_io_crate() {
         [] as [&str; 0],
         "eyeshell-core's dependencies: {core:?}"
     );
+    assert_eq!(
+        crates_in(&FORMAT_CRATES, &core),
+        [] as [&str; 0],
+        "eyeshell-core's dependencies: {core:?}"
+    );
     // The same check sees them where they belong: the files crate above it.
     let files = dependencies("eyeshell");
     assert_eq!(
         io_crates_in(&files),
         IO_CRATES,
+        "eyeshell's dependencies: {files:?}"
+    );
+    assert_eq!(
+        crates_in(&FORMAT_CRATES, &files),
+        FORMAT_CRATES,
         "eyeshell's dependencies: {files:?}"
     );
 }

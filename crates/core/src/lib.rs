@@ -1,6 +1,6 @@
 //! eyeshell-core: the numerics of the morphoelastic shell model of eye growth (Kimpton,
 //! Walker et al.): the physics ([`model`]), the material mesh ([`mesh`]), the elastic
-//! boundary value problem ([`bvp`]) and growth ([`growth`]), solved through SUNDIALS
+//! boundary value problem ([`bvp`]), growth ([`growth`]) and the fit of growth to data ([`fit`]), solved through SUNDIALS
 //! (`eyeshell-sundials`) and the safe solvers of `eyeshell-linalg`.
 //!
 //! This crate reads and writes no files: scenes, run directories, sweeps and other people's
@@ -10,9 +10,8 @@
 
 pub mod bvp;
 pub mod deadline;
+pub mod fit;
 pub mod growth;
-#[doc(hidden)]
-pub mod json;
 pub mod mesh;
 pub mod model;
 pub mod text;

@@ -35,13 +35,13 @@ pub mod error;
 pub mod fit;
 pub mod hash;
 pub mod interop;
+mod json;
 pub mod rundir;
 pub mod scene;
 pub mod sweep;
 
 // The numerics live in eyeshell-core, which touches no file; they are re-exported at the
 // paths they have always had, so `eyeshell::growth::grow` and `crate::bvp::...` are as before.
-use eyeshell_core::json;
 pub use eyeshell_core::{bvp, deadline, growth, mesh, model, text};
 
 pub use api::Growth;

@@ -86,20 +86,16 @@ impl FieldRow {
     }
 }
 
-/// Solver diagnostics of one elastic solve (written to summary.json, every field by name).
-/// Reading it back (`serde::Deserialize`), a missing field takes its default and `null`
-/// (how JSON holds a non-finite value) reads as NaN.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+/// Solver diagnostics of one elastic solve (summary.json records every field by name:
+/// eyeshell's `rundir::record`).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SolveStats {
     pub newton_iterations: usize,
     pub residual_evaluations: usize,
     pub jacobian_evaluations: usize,
     /// KINSOL's final scaled residual norm (max norm).
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub residual_norm: f64,
     /// max over nodes of |Q cos θ + r t_s sin θ − r² ΔP / 2| (docs/MODEL.md §3).
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub first_integral_max: f64,
     /// All nodes of the mesh.
     pub nodes: usize,
@@ -112,39 +108,27 @@ pub struct SolveStats {
     /// Graded nodes inserted next to the cornea (membrane limit).
     pub cornea_nodes: usize,
     /// Cornea stretch α from Adkins' equation.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub cornea_alpha: f64,
     /// Stages of pressure continuation used (0 when Newton converged directly).
     pub continuation_stages: usize,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
     /// With solver.tol: the estimated global error of the reported solution.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub error_estimate: Option<ErrorEstimate>,
     /// With solver.tol: the meshes laid after the first.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub mesh_refinements: Option<usize>,
     /// With solver.tol: the nodes of each pass's reported (halved) mesh, the last the final.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub pass_nodes: Option<Vec<usize>>,
 }
 
 /// The estimated global error of a solution (solver.tol): the largest over the nodes of
 /// each field's absolute error, in fields.csv's units, and the largest of the five.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ErrorEstimate {
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub kappa: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub alpha_s: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub r: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub theta: f64,
-    #[serde(rename = "Q", deserialize_with = "crate::json::f64_or_nan")]
     pub q: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub overall: f64,
 }
 

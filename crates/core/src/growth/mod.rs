@@ -112,10 +112,8 @@ pub struct Snapshot {
     pub peripheral: Vec<PeripheralRow>,
 }
 
-/// Work done by a growth run (summary.json).
-/// Read back like [`crate::bvp::SolveStats`]: missing fields default, `null` is NaN.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+/// Work done by a growth run (summary.json records it: eyeshell's `rundir::record`).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct GrowthStats {
     pub steps: usize,
     pub rhs_evaluations: usize,
@@ -134,23 +132,17 @@ pub struct GrowthStats {
     /// singular to eliminate unpivoted, factored by the pivoting fallback instead.
     pub linear_fallbacks: usize,
     /// IDA with forward sensitivities: their work (absent without).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub sensitivities: Option<SensitivityWork>,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub t_reached: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
     /// With `solver.tol`: what was chosen ([`tolerance`]; absent otherwise).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub accuracy: Option<tolerance::Accuracy>,
     /// With `solver.tol`: the estimated error of the outputs (absent otherwise).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub error_estimate: Option<tolerance::ErrorEstimate>,
 }
 
 /// The forward sensitivities' share of a growth run's work (summary.json), IDAS's counters.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SensitivityWork {
     /// The scene keys, in the order of sensitivities.csv.
     pub parameters: Vec<String>,

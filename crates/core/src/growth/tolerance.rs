@@ -96,14 +96,10 @@ pub const PRIOR: Round = Round {
 };
 
 /// One length's estimated error (mm): space and time, and their sum.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Split {
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub total: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub space: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub time: f64,
 }
 
@@ -126,8 +122,7 @@ impl Split {
 }
 
 /// The estimated error of each output length (mm).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Lengths {
     pub axial_length: Split,
     pub equatorial_radius: Split,
@@ -165,25 +160,19 @@ impl Lengths {
 }
 
 /// The estimate at one output time.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TimedLengths {
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub t: f64,
-    #[serde(flatten)]
     pub lengths: Lengths,
 }
 
 /// summary.json's `error_estimate` of a growth run under `solver.tol`: each length's largest
 /// over the output times, and each output time's.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ErrorEstimate {
-    #[serde(flatten)]
     pub largest: Lengths,
     pub per_time: Vec<TimedLengths>,
     /// With sensitivities: each one's estimate, the largest over the recorded times.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub sensitivities: Vec<SensitivityEstimate>,
 }
 
@@ -206,13 +195,11 @@ impl ErrorEstimate {
 /// The estimated error of one parameter's sensitivities (per unit of the parameter, as in
 /// sensitivities.csv), the largest over the recorded times. `solver.tol` bounds them scaled
 /// by the parameter's magnitude ([`Self::scaled`]).
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SensitivityEstimate {
     /// The scene key.
     pub parameter: String,
     /// Its value in the run.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub value: f64,
     pub d_axial_length: Split,
     pub d_equatorial_radius: Split,
@@ -243,35 +230,26 @@ impl SensitivityEstimate {
 
 /// One round of the choice: M's nodes, the tolerances, and the estimated error of its
 /// M/2 run (the largest over the lengths and times, mm), and the seconds of its three runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Round {
     pub nodes: usize,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub rtol: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub atol: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub space: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub time: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub seconds: f64,
     /// The CPU seconds of the delivered run (M/2), and of the two runs on M, each on its own
     /// thread (NaN where the system does not tell a thread's CPU time): on two idle cores
     /// the round takes about the larger, under load the wall clock says little.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub delivered_cpu_seconds: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub companions_cpu_seconds: f64,
 }
 
-/// The CPU time of the calling thread (s), from Linux's /proc/thread-self/schedstat (its
-/// first field, in ns); None elsewhere.
+/// The CPU time of the calling thread (s): the kernel's per-thread clock
+/// (CLOCK_THREAD_CPUTIME_ID), through rustix's safe call.
 fn thread_cpu_seconds() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
-    Some(ns * 1e-9)
+    let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+    Some(t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9)
 }
 
 /// The CPU seconds the calling thread spends in `f`, NaN if unknown.
@@ -286,21 +264,16 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
 }
 
 /// summary.json's `accuracy`: what `solver.tol` chose for a growth run.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Accuracy {
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub tol: f64,
     /// Nodes of the delivered run's mesh (M/2 of the last round).
     pub nodes: usize,
     /// The delivered run's integrator tolerances.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub rtol: f64,
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub atol: f64,
     pub rounds: Vec<Round>,
     /// Every run of every round, and the delivery.
-    #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
 }
 

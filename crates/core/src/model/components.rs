@@ -23,16 +23,15 @@
 //!   otherwise, and `growth::grow` is never called). Without growth one elastic solve of
 //!   the reference shell is the whole model.
 //!
-//! [`Components::of`] reads them off the parameters; its `Display` is one human line and
-//! its `Serialize` form is meant for summary.json.
+//! [`Components::of`] reads them off the parameters; its `Display` is one human line (summary.json's
+//! form of them is the eyeshell crate's, `rundir::record`).
 
 use super::constitutive::Law;
 use super::params::{Params, Thickness};
 use std::fmt;
 
 /// The membrane law of the sclera (docs/MODEL.md §2).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Membrane {
     /// Neo-Hookean of modulus C (kPa); no fibres, no ψ.
     NeoHookean { c: f64 },
@@ -41,8 +40,7 @@ pub enum Membrane {
 }
 
 /// The thickness of the unloaded, ungrown shell (docs/MODEL.md §4).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ThicknessComponent {
     /// H(Σ) = H0 (mm) everywhere.
     Uniform { h0: f64 },
@@ -51,7 +49,7 @@ pub enum ThicknessComponent {
 }
 
 /// The physics a scene's model contains.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Components {
     pub membrane: Membrane,
     pub thickness: ThicknessComponent,
@@ -235,28 +233,6 @@ mod tests {
         assert_eq!(
             Membrane::of(&Params::default()).law(),
             Law { c: 100.0, d: None }
-        );
-    }
-
-    #[test]
-    fn serialises_for_the_summary() {
-        let plain = serde_json::to_value(Components::of(&Params::default(), false)).unwrap();
-        assert_eq!(
-            plain,
-            serde_json::json!({
-                "membrane": { "kind": "neo_hookean", "c": 100.0 },
-                "thickness": { "kind": "uniform", "h0": 0.65 },
-                "growth": false,
-            })
-        );
-        let fibres = serde_json::to_value(Components::of(&fibre_shell(), true)).unwrap();
-        assert_eq!(
-            fibres,
-            serde_json::json!({
-                "membrane": { "kind": "reinforced", "c": 100.0, "d": 200.0 },
-                "thickness": { "kind": "profile" },
-                "growth": true,
-            })
         );
     }
 }

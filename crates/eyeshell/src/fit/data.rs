@@ -282,10 +282,8 @@ impl Observations {
 
     /// The distinct times, sorted; times closer than 1e-9·`t_end` count as one (the first).
     pub fn distinct_times(&self, t_end: f64) -> Vec<f64> {
-        let mut times: Vec<f64> = self.rows.iter().map(|r| r.t).collect();
-        times.sort_by(f64::total_cmp);
-        times.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * t_end);
-        times
+        let times: Vec<f64> = self.rows.iter().map(|r| r.t).collect();
+        eyeshell_core::fit::distinct_times(&times, t_end)
     }
 }
 

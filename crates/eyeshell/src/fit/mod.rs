@@ -1,6 +1,11 @@
 //! Calibration: the parameters of a growth scene that fit a measured growth curve
 //! (`eyeshell fit`, `eyeshell.fit`).
 //!
+//! The numerics (the minimiser, the growth model at the observations, identifiability) are
+//! eyeshell-core's `fit`, re-exported here; this module is the scene's side of them: which
+//! keys are parameters and their ranges ([`FitParam`]), the data file ([`data`]), the fit
+//! of a [`Scene`] ([`fit`]) and its report ([`report`]).
+//!
 //! The observations ([`data`]) are axial lengths yᵢ at times tᵢ with standard deviations σᵢ
 //! (1 when the file gives none). The residuals are rᵢ = (L(tᵢ; p) − yᵢ)/σᵢ, L the model's
 //! axial length from one growth run that records exactly the distinct observation times;
@@ -14,13 +19,16 @@
 //! come from the Gauss–Newton covariance.
 
 pub mod data;
-pub mod lm;
 pub mod report;
 
 use nalgebra::{DMatrix, DVector};
 
+pub use eyeshell_core::fit::{
+    lm, Bounds, FitError, GrowthModel, ModelValues, IDENTIFIABILITY_THRESHOLD,
+};
+
+use crate::growth;
 use crate::growth::dae::SensParam;
-use crate::growth::{self, SensitivityRow};
 use crate::scene::keys::{self, KeyValue, Rule};
 use crate::scene::Scene;
 use crate::text::number;
@@ -29,14 +37,6 @@ use crate::Error;
 pub use data::{Observation, Observations};
 pub use lm::{Convergence, FitOptions, IterationRecord};
 
-/// The smallest eigenvalue the correlation form of the information matrix (JᵀJ scaled to
-/// a unit diagonal) may have, and the smallest share of the largest scaled column norm a
-/// parameter's column may have: below either the data cannot tell the parameter (or a
-/// combination of parameters) apart, and the fit is refused. An eigenvalue of 1e-8 is a
-/// correlation of 1 − 1e-8 between two parameters: their standard errors would be 10⁴
-/// times their separate ones.
-pub const IDENTIFIABILITY_THRESHOLD: f64 = 1e-8;
-
 /// A fitted parameter: its key and its validity range (from the scene key's rule).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FitParam {
@@ -44,83 +44,47 @@ pub struct FitParam {
     pub bounds: Bounds,
 }
 
-/// The range a parameter may take: a lower bound, open (> lo) or closed (≥ lo), or none;
-/// and an upper bound likewise. Open bounds are approached, never reached ([`lm`]).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Bounds {
-    pub lower: Option<f64>,
-    pub lower_open: bool,
-    pub upper: Option<f64>,
-    pub upper_open: bool,
+/// The range of a key's rule (`eyeshell keys`).
+fn bounds_of_rule(rule: Rule) -> Bounds {
+    let b = Bounds::NONE;
+    match rule {
+        Rule::Positive => Bounds {
+            lower: Some(0.0),
+            lower_open: true,
+            ..b
+        },
+        Rule::NonNegative => Bounds {
+            lower: Some(0.0),
+            ..b
+        },
+        Rule::OpenUnit => Bounds {
+            lower: Some(0.0),
+            lower_open: true,
+            upper: Some(1.0),
+            upper_open: true,
+        },
+        Rule::UnitFromZero => Bounds {
+            lower: Some(0.0),
+            upper: Some(1.0),
+            upper_open: true,
+            ..b
+        },
+        Rule::OpenHalfTurn => Bounds {
+            lower: Some(0.0),
+            lower_open: true,
+            upper: Some(std::f64::consts::PI),
+            upper_open: true,
+        },
+        _ => b,
+    }
 }
 
-impl Bounds {
-    pub const NONE: Bounds = Bounds {
-        lower: None,
-        lower_open: false,
-        upper: None,
-        upper_open: false,
-    };
-
-    /// The range of a key's rule (`eyeshell keys`).
-    pub fn of_rule(rule: Rule) -> Bounds {
-        let b = Bounds::NONE;
-        match rule {
-            Rule::Positive => Bounds {
-                lower: Some(0.0),
-                lower_open: true,
-                ..b
-            },
-            Rule::NonNegative => Bounds {
-                lower: Some(0.0),
-                ..b
-            },
-            Rule::OpenUnit => Bounds {
-                lower: Some(0.0),
-                lower_open: true,
-                upper: Some(1.0),
-                upper_open: true,
-            },
-            Rule::UnitFromZero => Bounds {
-                lower: Some(0.0),
-                upper: Some(1.0),
-                upper_open: true,
-                ..b
-            },
-            Rule::OpenHalfTurn => Bounds {
-                lower: Some(0.0),
-                lower_open: true,
-                upper: Some(std::f64::consts::PI),
-                upper_open: true,
-            },
-            _ => b,
+impl From<FitError> for Error {
+    fn from(e: FitError) -> Self {
+        match e {
+            FitError::Growth(g) => g.into(),
+            e @ FitError::NotRecorded { .. } => Error::failed(e.to_string()),
         }
-    }
-
-    /// The range as text: `> 0`, `[0, 1)`, `any`.
-    pub fn describe(&self) -> String {
-        let (lo, hi) = (self.lower.map(number), self.upper.map(number));
-        match (lo, hi) {
-            (None, None) => "any".into(),
-            (Some(lo), None) => format!("{} {lo}", if self.lower_open { ">" } else { "≥" }),
-            (None, Some(hi)) => format!("{} {hi}", if self.upper_open { "<" } else { "≤" }),
-            (Some(lo), Some(hi)) => format!(
-                "{}{lo}, {hi}{}",
-                if self.lower_open { "(" } else { "[" },
-                if self.upper_open { ")" } else { "]" }
-            ),
-        }
-    }
-
-    /// Whether `x` lies outside the range (on an open bound counts as outside).
-    pub fn excludes(&self, x: f64) -> bool {
-        let below = self
-            .lower
-            .is_some_and(|lo| x < lo || (self.lower_open && x <= lo));
-        let above = self
-            .upper
-            .is_some_and(|hi| x > hi || (self.upper_open && x >= hi));
-        below || above
     }
 }
 
@@ -128,7 +92,7 @@ impl FitParam {
     /// The parameter of scene key `key`, with its range; a one-line refusal otherwise.
     pub fn from_key(key: &str) -> Result<FitParam, String> {
         let param = keys::sensitivity_param(key)?;
-        let bounds = keys::find(param.key()).map_or(Bounds::NONE, |k| Bounds::of_rule(k.rule));
+        let bounds = keys::find(param.key()).map_or(Bounds::NONE, |k| bounds_of_rule(k.rule));
         Ok(FitParam { param, bounds })
     }
 
@@ -221,18 +185,6 @@ pub fn with_values(scene: &Scene, params: &[FitParam], values: &[f64]) -> Result
     Ok(s)
 }
 
-/// The model at the observations: L(tᵢ) and ∂L(tᵢ)/∂pⱼ for every observation i (in the
-/// order of `data`) and parameter j, from one growth run with forward sensitivities that
-/// records the distinct observation times (and t = 0 and t_end, as every run does).
-#[derive(Clone, Debug)]
-pub struct ModelValues {
-    pub axial_length: Vec<f64>,
-    /// Row i, column j.
-    pub jacobian: DMatrix<f64>,
-    /// The run's wall time (s).
-    pub seconds: f64,
-}
-
 /// Run the growth of `scene` with the sensitivities to `params`, and read L and dL/dp at
 /// the observation times of `data`.
 pub fn evaluate(
@@ -257,83 +209,24 @@ pub fn evaluate_watched(
             scene.origin
         )));
     };
-    let t_end = g.t_end;
-    let times = data.distinct_times(t_end);
-    let mut settings = scene.growth_settings.clone();
-    settings.output_times = times
-        .iter()
-        .copied()
-        .filter(|&t| t > 0.0 && t < t_end)
-        .collect();
-    settings.history_points = 0;
-    settings.sensitivities = params.iter().map(|p| p.param).collect();
-    // Per distinct time: L and its sensitivities (NaN until recorded).
-    let k = params.len();
-    let mut at: Vec<(f64, Vec<f64>)> = vec![(f64::NAN, vec![f64::NAN; k]); times.len()];
-    let slot = |t: f64| times.iter().position(|&x| x == t);
-    let mut take = |rows: &[SensitivityRow]| -> Result<(), growth::ObserverError> {
-        if let Some(first) = rows.first() {
-            if let Some(i) = slot(first.t) {
-                at[i].0 = first.axial_length;
-                for (j, r) in rows.iter().enumerate().take(k) {
-                    at[i].1[j] = r.d_axial_length;
-                }
-            }
-        }
-        Ok(())
+    let times: Vec<f64> = data.rows.iter().map(|o| o.t).collect();
+    let fitted: Vec<SensParam> = params.iter().map(|p| p.param).collect();
+    let model = GrowthModel {
+        params: &scene.params,
+        solver: &scene.solver,
+        growth: g,
+        settings: &scene.growth_settings,
+        fitted: &fitted,
+        times: &times,
     };
-    let start = std::time::Instant::now();
-    growth::run_with(
-        &scene.params,
-        &scene.solver,
-        g,
-        &settings,
-        &mut take,
-        &mut |_, _, _| Ok(()),
-        step,
-    )?;
-    let seconds = start.elapsed().as_secs_f64();
-    let n = data.rows.len();
-    let mut axial_length = Vec::with_capacity(n);
-    let mut jacobian = DMatrix::zeros(n, k);
-    for (i, obs) in data.rows.iter().enumerate() {
-        // The distinct time this observation was merged into.
-        let d = times
-            .iter()
-            .position(|&x| (x - obs.t).abs() <= 1e-9 * t_end)
-            .expect("every observation time has its distinct time");
-        let (l, dl) = &at[d];
-        if !l.is_finite() || dl.iter().any(|x| !x.is_finite()) {
-            return Err(Error::failed(format!(
-                "the growth run recorded no finite axial length or sensitivity at t = {}",
-                number(times[d])
-            )));
-        }
-        axial_length.push(*l);
-        for j in 0..k {
-            jacobian[(i, j)] = dl[j];
-        }
-    }
-    Ok(ModelValues {
-        axial_length,
-        jacobian,
-        seconds,
-    })
+    Ok(model.evaluate(step)?)
 }
 
 /// The weighted residuals (L − y)/σ and Jacobian (∂L/∂p)/σ of `m` against `data`.
 pub fn weighted(m: &ModelValues, data: &Observations) -> (DVector<f64>, DMatrix<f64>) {
-    let n = data.rows.len();
-    let mut r = DVector::zeros(n);
-    let mut j = m.jacobian.clone();
-    for (i, obs) in data.rows.iter().enumerate() {
-        let w = 1.0 / obs.sigma.unwrap_or(1.0);
-        r[i] = (m.axial_length[i] - obs.axial_length) * w;
-        for c in 0..j.ncols() {
-            j[(i, c)] *= w;
-        }
-    }
-    (r, j)
+    let y: Vec<f64> = data.rows.iter().map(|o| o.axial_length).collect();
+    let sigma: Vec<Option<f64>> = data.rows.iter().map(|o| o.sigma).collect();
+    eyeshell_core::fit::weighted(m, &y, &sigma)
 }
 
 /// Why χ² = Σ rᵢ² or the information matrix JᵀJ cannot be computed in floating point, if
@@ -361,84 +254,11 @@ pub fn overflow(r: &DVector<f64>, j: &DMatrix<f64>, data: &Observations) -> Opti
     ))
 }
 
-/// Why the data cannot identify the parameters, as one line naming them, or None.
-///
-/// Each column of J is scaled by the parameter's magnitude (|p|, or 1 at p = 0): a column
-/// below [`IDENTIFIABILITY_THRESHOLD`] of the largest is a parameter the data do not depend
-/// on. Otherwise the information matrix JᵀJ is scaled to a unit diagonal (its correlation
-/// form, independent of the parameters' units) and its smallest eigenvalue compared with
-/// the threshold; the parameters with the largest components of that eigenvector (at least
-/// half the largest) are named.
+/// Why the data cannot identify `params` at `values`, as one line naming them, or None
+/// (eyeshell-core's `fit::identifiability` on the parameters' keys).
 pub fn identifiability(j: &DMatrix<f64>, params: &[FitParam], values: &[f64]) -> Option<String> {
-    let k = params.len();
-    let norms: Vec<f64> = (0..k)
-        .map(|c| {
-            j.column(c).norm()
-                * if values[c] != 0.0 {
-                    values[c].abs()
-                } else {
-                    1.0
-                }
-        })
-        .collect();
-    let top = norms.iter().fold(0.0_f64, |a, &b| a.max(b));
-    let flat: Vec<&str> = (0..k)
-        .filter(|&c| !(norms[c] > IDENTIFIABILITY_THRESHOLD * top))
-        .map(|c| params[c].key())
-        .collect();
-    if !flat.is_empty() {
-        return Some(format!(
-            "the data cannot identify {}: the model's axial length at the observation times does not depend on {} (|p|·‖∂L/∂p / σ‖ below {IDENTIFIABILITY_THRESHOLD:e} of the largest parameter's); fix {} in the scene, or add observations where {} matter{}",
-            flat.join(", "),
-            if flat.len() == 1 { "it" } else { "them" },
-            if flat.len() == 1 { "it" } else { "them" },
-            if flat.len() == 1 { "it" } else { "they" },
-            if flat.len() == 1 { "s" } else { "" },
-        ));
-    }
-    if k < 2 {
-        return None;
-    }
-    // The correlation form of JᵀWJ is (JD⁻¹)ᵀ(JD⁻¹), D the columns' norms: its eigenvalues
-    // are the squared singular values of JD⁻¹, taken from J's SVD without forming JᵀJ
-    // (whose smallest eigenvalue would carry the round-off of J's condition number squared).
-    let d: Vec<f64> = (0..k).map(|c| j.column(c).norm()).collect();
-    let scaled = DMatrix::from_fn(j.nrows(), k, |row, c| j[(row, c)] / d[c]);
-    let svd = nalgebra::SVD::new(scaled, false, true);
-    let v_t = svd.v_t.as_ref()?;
-    let (i_min, lambda) = svd
-        .singular_values
-        .iter()
-        .map(|s| s * s)
-        .enumerate()
-        .min_by(|a, b| a.1.total_cmp(&b.1))?;
-    if lambda > IDENTIFIABILITY_THRESHOLD {
-        return None;
-    }
-    let v = v_t.row(i_min).transpose();
-    let vmax = v.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
-    let mut order: Vec<usize> = (0..k).collect();
-    // Largest components first, as printed (3 decimals); equal ones in the order of the keys,
-    // so that round-off does not reorder the names.
-    let shown = |c: usize| (v[c].abs() * 1e3).round();
-    order.sort_by(|&a, &b| shown(b).total_cmp(&shown(a)).then(a.cmp(&b)));
-    let named: Vec<&str> = order
-        .iter()
-        .filter(|&&c| v[c].abs() >= 0.5 * vmax)
-        .map(|&c| params[c].key())
-        .collect();
-    let direction: Vec<String> = order
-        .iter()
-        .filter(|&&c| v[c].abs() >= 0.05)
-        .map(|&c| format!("{:+.3} {}", v[c], params[c].key()))
-        .collect();
-    Some(format!(
-        "the data cannot identify {}: the information matrix JᵀWJ is near-singular (smallest eigenvalue of its correlation form {:.2e} ≤ {IDENTIFIABILITY_THRESHOLD:e}, along {}): the data do not determine that combination of them; fix {} in the scene, or add observations that separate them",
-        named.join(" from ").replace(" from ", if named.len() > 2 { ", " } else { " from " }),
-        lambda.max(0.0),
-        direction.join(" "),
-        if named.len() == 1 { named[0].to_string() } else { format!("one of {}", named.join(", ")) },
-    ))
+    let names: Vec<&str> = params.iter().map(|p| p.key()).collect();
+    eyeshell_core::fit::identifiability(j, &names, values)
 }
 
 /// One observation against the fitted model.
@@ -513,9 +333,11 @@ pub struct FitReport {
     pub iterations: usize,
     /// Growth runs (each with its sensitivities): one per iteration and per rejected step.
     pub model_runs: usize,
+    #[serde(serialize_with = "crate::rundir::record::convergence")]
     pub convergence: Convergence,
     /// Why the iteration stopped, in words.
     pub convergence_reason: String,
+    #[serde(serialize_with = "crate::rundir::record::iteration_records")]
     pub history: Vec<IterationRecord>,
     pub residuals: Vec<ResidualRow>,
     pub wall_seconds: f64,
@@ -543,6 +365,51 @@ impl Fit {
             .iter()
             .map(|p| p.standard_error)
             .collect()
+    }
+}
+
+/// The least-squares problem of a fit: the scene with the parameters set (validated, so a
+/// trial beyond a cross-key limit is refused), one growth run with sensitivities per
+/// evaluation, weighted by the data's σ.
+struct SceneProblem<'a, 's> {
+    scene: &'a Scene,
+    params: &'a [FitParam],
+    data: &'a Observations,
+    step: &'a mut growth::ProgressFn<'s>,
+    has_sigma: bool,
+    dof: usize,
+    /// Seconds in the growth runs so far.
+    model_seconds: f64,
+}
+
+impl lm::Problem for SceneProblem<'_, '_> {
+    type Error = Error;
+
+    fn names(&self) -> Vec<&str> {
+        self.params.iter().map(|p| p.key()).collect()
+    }
+
+    fn bounds(&self) -> Vec<Bounds> {
+        self.params.iter().map(|p| p.bounds).collect()
+    }
+
+    fn evaluate(&mut self, values: &[f64]) -> Result<lm::Evaluation, Error> {
+        let s = with_values(self.scene, self.params, values)?;
+        let m = evaluate_watched(&s, self.params, self.data, self.step)?;
+        self.model_seconds += m.seconds;
+        let (r, j) = weighted(&m, self.data);
+        if let Some(why) = overflow(&r, &j, self.data) {
+            return Err(Error::input(why));
+        }
+        Ok((r, j, m.axial_length))
+    }
+
+    fn variance(&self, chi2: f64) -> f64 {
+        if self.has_sigma {
+            1.0
+        } else {
+            chi2 / self.dof as f64
+        }
     }
 }
 
@@ -608,20 +475,23 @@ pub fn fit_watched(
         )));
     }
     let p0: Vec<f64> = params.iter().map(|p| value_in(scene, p.param)).collect();
-    let mut model_seconds = 0.0;
-    let mut eval = |values: &[f64]| -> Result<lm::Evaluation, Error> {
-        let s = with_values(scene, params, values)?;
-        let m = evaluate_watched(&s, params, data, step)?;
-        model_seconds += m.seconds;
-        let (r, j) = weighted(&m, data);
-        if let Some(why) = overflow(&r, &j, data) {
-            return Err(Error::input(why));
-        }
-        Ok((r, j, m.axial_length))
-    };
     let dof = n - k;
     let variance = |chi2: f64| if has_sigma { 1.0 } else { chi2 / dof as f64 };
-    let outcome = lm::minimise(&mut eval, params, &p0, options, &variance, each)?;
+    let mut problem = SceneProblem {
+        scene,
+        params,
+        data,
+        step,
+        has_sigma,
+        dof,
+        model_seconds: 0.0,
+    };
+    let outcome = lm::minimise(&mut problem, &p0, options, each).map_err(|e| match e {
+        lm::LmError::Evaluation(e) => e,
+        lm::LmError::Unidentifiable(why) => Error::input(why),
+        lm::LmError::RankDeficient(why) => Error::failed(why),
+    })?;
+    let model_seconds = problem.model_seconds;
     let names: Vec<&str> = params.iter().map(|p| p.key()).collect();
     if let Some(why) = identifiability(&outcome.jacobian, params, &outcome.values) {
         return Err(Error::input(format!(
@@ -700,8 +570,9 @@ pub fn fit_watched(
         .sum::<f64>()
         / n as f64)
         .sqrt();
+    let bounds: Vec<Bounds> = params.iter().map(|p| p.bounds).collect();
     let held = lm::held_by_bounds(
-        params,
+        &bounds,
         &outcome.values,
         &outcome.residuals,
         &outcome.jacobian,

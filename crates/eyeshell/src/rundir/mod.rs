@@ -25,6 +25,7 @@ pub mod growth;
 pub mod lock;
 pub mod owner;
 pub mod read;
+pub mod record;
 pub mod run;
 pub mod rundata;
 pub mod summary;

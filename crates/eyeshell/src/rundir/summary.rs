@@ -86,6 +86,7 @@ pub struct RunInfo {
     pub length: f64,
     /// The model's components in one line.
     pub model: String,
+    #[serde(with = "super::record::components::option")]
     pub components: Option<Components>,
     /// Every parameter key of the scene and its value (None: the file has none).
     pub parameters: Option<serde_json::Map<String, serde_json::Value>>,
@@ -108,7 +109,7 @@ pub struct SceneInfo {
 pub struct ElasticSummary {
     #[serde(flatten)]
     pub run: RunInfo,
-    #[serde(flatten)]
+    #[serde(flatten, with = "super::record::solve_stats")]
     pub stats: SolveStats,
 }
 
@@ -209,7 +210,7 @@ pub struct GrowthSummary {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
     /// Every statistic of the run by its name (not while it runs).
-    #[serde(flatten)]
+    #[serde(flatten, with = "super::record::growth_stats::option")]
     pub stats: Option<GrowthStats>,
 }
 

@@ -12,8 +12,8 @@
 //! Gauss–Newton quantities (the full step, the χ² it would gain, the covariance) come from
 //! the QR factors of J the same way ([`GaussNewton`]). The trial p + δ is **projected** onto the range: onto a closed bound exactly
 //! (≥ 0), and towards an open bound (> 0) at most 90 % of the remaining distance, so that
-//! it is never reached. A trial the scene refuses (a cross-key limit) or whose growth run
-//! fails counts as a rejected step. A step is accepted when it lowers the cost; λ follows
+//! it is never reached. A trial the problem cannot evaluate (a fit's scene refuses it at a
+//! cross-key limit, or its growth run fails) counts as a rejected step. A step is accepted when it lowers the cost; λ follows
 //! Nielsen's rule: × max(1/3, 1 − (2ρ − 1)³) after an accepted step (ρ the actual over the
 //! predicted reduction of the projected step), × ν (ν doubling) after a rejected one.
 //! (Nielsen's smallest factor is 1/3; here 1/9, and λ starts at 1e-5: see [`LAMBDA0`].)
@@ -40,8 +40,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{Bounds, FitParam};
-use crate::Error;
+use super::Bounds;
 
 /// The first damping λ, relative to Marquardt's diagonal: small, because the growth
 /// parameters are strongly correlated (η0 and Γ near −0.99 on the const scene), and a
@@ -50,7 +49,7 @@ use crate::Error;
 const LAMBDA0: f64 = 1e-5;
 
 /// The stopping tolerances of [`minimise`].
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FitOptions {
     pub max_iterations: usize,
     /// Relative step of every parameter.
@@ -77,13 +76,11 @@ impl Default for FitOptions {
 }
 
 /// Why the iteration stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Convergence {
     Step,
     Cost,
     Gradient,
-    #[serde(rename = "standard-error")]
     StandardError,
     Stalled,
     /// λ beyond 1e16 after rejected steps of which at least one could not be evaluated.
@@ -116,7 +113,7 @@ impl Convergence {
 }
 
 /// One iteration: the step tried and what came of it.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct IterationRecord {
     pub iteration: usize,
     /// The parameters after it (the accepted trial, or unchanged).
@@ -127,7 +124,6 @@ pub struct IterationRecord {
     pub lambda: f64,
     pub accepted: bool,
     /// Why a trial was rejected: a higher cost, or the scene's or the run's refusal.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub rejected: Option<String>,
 }
 
@@ -171,15 +167,15 @@ pub fn at_closed_bound(b: &Bounds, x: f64) -> bool {
 /// pull them beyond it (towards an open bound the steps only approach it), so the estimate
 /// is the bound's, not the data's optimum, and its standard error means little.
 pub fn held_by_bounds(
-    params: &[FitParam],
+    bounds: &[Bounds],
     p: &[f64],
     r: &DVector<f64>,
     j: &DMatrix<f64>,
 ) -> Vec<bool> {
     let step = GaussNewton::of(j).map(|gn| gn.step(r));
-    (0..params.len())
+    (0..bounds.len())
         .map(|c| {
-            let b = &params[c].bounds;
+            let b = &bounds[c];
             at_closed_bound(b, p[c])
                 || step
                     .as_ref()
@@ -280,26 +276,57 @@ fn project(b: &Bounds, from: f64, step: f64) -> f64 {
     x
 }
 
-/// Minimise ½‖r(p)‖² from `p0` within the parameters' ranges; `eval` gives r, J and the
-/// model at p; `variance(χ²)` is the s² of the covariance (for the standard-error test). An evaluation that fails at the start is the error; later ones reject the
+/// A least-squares problem for [`minimise`]: its parameters (names for messages, ranges
+/// the steps are kept in), the weighted residuals and Jacobian at a parameter vector, and
+/// the s² that scales its covariance.
+pub trait Problem {
+    /// Why an evaluation failed (in words: a rejected step records it).
+    type Error: std::fmt::Display;
+    /// The parameters' names, in order (in messages).
+    fn names(&self) -> Vec<&str>;
+    /// The parameters' ranges, in order.
+    fn bounds(&self) -> Vec<Bounds>;
+    /// r, J and the model's values at `p`.
+    fn evaluate(&mut self, p: &[f64]) -> Result<Evaluation, Self::Error>;
+    /// s² at χ² (the unit of the standard-error test).
+    fn variance(&self, chi2: f64) -> f64;
+}
+
+/// Why [`minimise`] gave no outcome.
+#[derive(Debug, thiserror::Error)]
+pub enum LmError<E: std::fmt::Display> {
+    /// The first evaluation failed.
+    #[error("{0}")]
+    Evaluation(E),
+    /// The data cannot identify the parameters at the start (the user's to change).
+    #[error("{0}")]
+    Unidentifiable(String),
+    /// The damped least-squares problem has no unique solution (a failure).
+    #[error("{0}")]
+    RankDeficient(String),
+}
+
+/// Minimise ½‖r(p)‖² from `p0` within the parameters' ranges, calling `each` after every
+/// iteration. An evaluation that fails at the start is the error; later ones reject the
 /// step. The identifiability at the start is checked before the first step.
-pub fn minimise(
-    eval: &mut dyn FnMut(&[f64]) -> Result<Evaluation, Error>,
-    params: &[FitParam],
+pub fn minimise<P: Problem>(
+    problem: &mut P,
     p0: &[f64],
     o: &FitOptions,
-    variance: &dyn Fn(f64) -> f64,
     each: &mut dyn FnMut(&IterationRecord),
-) -> Result<Outcome, Error> {
-    let k = params.len();
-    let names: Vec<&str> = params.iter().map(|p| p.key()).collect();
-    let (mut r, mut j, mut model) = eval(p0)?;
+) -> Result<Outcome, LmError<P::Error>> {
+    let bounds = problem.bounds();
+    let k = bounds.len();
+    let (mut r, mut j, mut model) = problem.evaluate(p0).map_err(LmError::Evaluation)?;
     let mut evaluations = 1;
-    if let Some(why) = super::identifiability(&j, params, p0) {
-        return Err(Error::input(format!(
-            "at the start ({}): {why}",
-            show(&names, p0)
-        )));
+    {
+        let names = problem.names();
+        if let Some(why) = super::identifiability(&j, &names, p0) {
+            return Err(LmError::Unidentifiable(format!(
+                "at the start ({}): {why}",
+                show(&names, p0)
+            )));
+        }
     }
     let initial_chi2 = r.norm_squared();
     let mut p = p0.to_vec();
@@ -320,7 +347,7 @@ pub fn minimise(
         // the gradient pushing it out of the range does not count).
         let rnorm = r.norm();
         let held = |c: usize, p: &[f64], g: &DVector<f64>| {
-            let b = &params[c].bounds;
+            let b = &bounds[c];
             let held_low = !b.lower_open && b.lower == Some(p[c]) && g[c] > 0.0;
             let held_high = !b.upper_open && b.upper == Some(p[c]) && g[c] < 0.0;
             held_low || held_high
@@ -348,25 +375,23 @@ pub fn minimise(
         if !free.is_empty() {
             let j_free = DMatrix::from_fn(j.nrows(), free.len(), |row, c| j[(row, free[c])]);
             if let Some(gn) = GaussNewton::of(&j_free) {
-                if gn.gain(&r) <= o.setol * o.setol * variance(chi2) {
+                if gn.gain(&r) <= o.setol * o.setol * problem.variance(chi2) {
                     convergence = Convergence::StandardError;
                     break;
                 }
             }
         }
         let Some(step) = damped_step(&j, &r, lambda, &d) else {
-            return Err(Error::failed(format!(
+            return Err(LmError::RankDeficient(format!(
                 "Levenberg–Marquardt: the damped least-squares problem is rank-deficient at {}",
-                show(&names, &p)
+                show(&problem.names(), &p)
             )));
         };
-        let trial: Vec<f64> = (0..k)
-            .map(|c| project(&params[c].bounds, p[c], step[c]))
-            .collect();
+        let trial: Vec<f64> = (0..k).map(|c| project(&bounds[c], p[c], step[c])).collect();
         let delta = DVector::from_iterator(k, (0..k).map(|c| trial[c] - p[c]));
         // The reduction of ½‖r‖² the linear model predicts for the projected step.
         let predicted = -(g.dot(&delta) + 0.5 * delta.dot(&(&jtj * &delta)));
-        let tried = eval(&trial);
+        let tried = problem.evaluate(&trial);
         evaluations += 1;
         let (accepted, rejected) = match tried {
             Ok((r2, j2, m2)) => {
@@ -445,12 +470,35 @@ pub fn minimise(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::growth::dae::SensParam;
 
-    fn param(bounds: Bounds) -> FitParam {
-        FitParam {
-            param: SensParam::Eta0,
-            bounds,
+    /// A problem given by a closure, its parameters named p0, p1, ...
+    struct Closure<F> {
+        bounds: Vec<Bounds>,
+        names: Vec<String>,
+        f: F,
+    }
+
+    fn problem<F>(bounds: Vec<Bounds>, f: F) -> Closure<F>
+    where
+        F: FnMut(&[f64]) -> Result<Evaluation, String>,
+    {
+        let names = (0..bounds.len()).map(|c| format!("p{c}")).collect();
+        Closure { bounds, names, f }
+    }
+
+    impl<F: FnMut(&[f64]) -> Result<Evaluation, String>> Problem for Closure<F> {
+        type Error = String;
+        fn names(&self) -> Vec<&str> {
+            self.names.iter().map(String::as_str).collect()
+        }
+        fn bounds(&self) -> Vec<Bounds> {
+            self.bounds.clone()
+        }
+        fn evaluate(&mut self, p: &[f64]) -> Result<Evaluation, String> {
+            (self.f)(p)
+        }
+        fn variance(&self, _chi2: f64) -> f64 {
+            1.0
         }
     }
 
@@ -477,22 +525,14 @@ mod tests {
     #[test]
     fn a_fit_stopped_by_refused_steps_has_not_converged() {
         let p0 = [1.0];
-        let mut eval = |p: &[f64]| -> Result<Evaluation, Error> {
+        let mut refusing = problem(vec![Bounds::NONE], |p: &[f64]| {
             if p != p0 {
-                return Err(Error::input("the scene refuses it"));
+                return Err("the scene refuses it".to_string());
             }
             let r = DVector::from_vec(vec![p[0] - 3.0, p[0] - 3.5]);
             Ok((r, DMatrix::from_element(2, 1, 1.0), vec![p[0]; 2]))
-        };
-        let out = minimise(
-            &mut eval,
-            &[param(Bounds::NONE)],
-            &p0,
-            &FitOptions::default(),
-            &|_| 1.0,
-            &mut |_| {},
-        )
-        .unwrap();
+        });
+        let out = minimise(&mut refusing, &p0, &FitOptions::default(), &mut |_| {}).unwrap();
         assert_eq!(out.convergence, Convergence::Refused);
         assert!(!out.convergence.converged());
         assert!(out
@@ -515,21 +555,15 @@ mod tests {
         let j = DMatrix::from_element(2, 1, 1.0);
         // The data want p = 3.25, beyond the open bound 2: held at p = 1.99.
         let r = DVector::from_vec(vec![1.99 - 3.0, 1.99 - 3.5]);
-        assert_eq!(
-            held_by_bounds(&[param(open_above)], &[1.99], &r, &j),
-            [true]
-        );
+        assert_eq!(held_by_bounds(&[open_above], &[1.99], &r, &j), [true]);
         // The data want p = 1.5, inside: not held.
         let r = DVector::from_vec(vec![1.5 - 1.25, 1.5 - 1.75]);
-        assert_eq!(
-            held_by_bounds(&[param(open_above)], &[1.5], &r, &j),
-            [false]
-        );
+        assert_eq!(held_by_bounds(&[open_above], &[1.5], &r, &j), [false]);
         let closed = Bounds {
             lower: Some(0.0),
             ..Bounds::NONE
         };
-        assert_eq!(held_by_bounds(&[param(closed)], &[0.0], &r, &j), [true]);
+        assert_eq!(held_by_bounds(&[closed], &[0.0], &r, &j), [true]);
     }
 
     /// y = a·exp(b·x) on exact data: LM finds (a, b) from far away.
@@ -537,7 +571,7 @@ mod tests {
     fn an_exponential_is_fitted_to_round_off() {
         let xs: Vec<f64> = (0..8).map(|i| i as f64 / 4.0).collect();
         let (a0, b0) = (2.0, -1.3);
-        let mut eval = |p: &[f64]| -> Result<Evaluation, Error> {
+        let eval = |p: &[f64]| -> Result<Evaluation, String> {
             let model: Vec<f64> = xs.iter().map(|x| p[0] * (p[1] * x).exp()).collect();
             let r = DVector::from_iterator(
                 xs.len(),
@@ -553,23 +587,21 @@ mod tests {
             });
             Ok((r, j, model))
         };
-        let params = [
-            param(Bounds {
+        let bounds = vec![
+            Bounds {
                 lower: Some(0.0),
                 lower_open: true,
                 ..Bounds::NONE
-            }),
-            param(Bounds::NONE),
+            },
+            Bounds::NONE,
         ];
         let out = minimise(
-            &mut eval,
-            &params,
+            &mut problem(bounds, eval),
             &[0.5, 0.5],
             &FitOptions {
                 setol: 0.0,
                 ..FitOptions::default()
             },
-            &|_| 1.0,
             &mut |_| {},
         )
         .unwrap();
