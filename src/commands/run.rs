@@ -129,14 +129,41 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
             ),
             None => "no snapshot was written".to_string(),
         };
+        // Under solver.tol the run chose its own mesh and tolerances: say those, and the
+        // error it estimates, not the scene's rtol and atol, which it ignored.
+        let (rtol, atol, chosen) = match (&stats.accuracy, &stats.error_estimate) {
+            (Some(acc), Some(est)) => {
+                let e = est.bounded();
+                let rounds = acc.rounds.len();
+                (
+                    format!("{:.3e}", acc.rtol),
+                    format!("{:.3e}", acc.atol),
+                    format!(
+                        "  nodes           {} (chosen for solver.tol = {:e} in {} round{})\n  error estimate  {:.3e} mm (the largest over the lengths and times; their largest space part {:.2e}, time part {:.2e})\n",
+                        acc.nodes,
+                        acc.tol,
+                        rounds,
+                        plural(rounds),
+                        e.total,
+                        e.space,
+                        e.time,
+                    ),
+                )
+            }
+            _ => (
+                format!("{:e}", scene.growth_settings.rtol),
+                format!("{:e}", scene.growth_settings.atol),
+                String::new(),
+            ),
+        };
         out(&format!(
-            "eyeshell: grew {} ({})\n  final           {}\n  integrator      {} (rtol {:e}, atol {:e}), {} step{}\n  work            {} rhs evaluation{}, {} BVP solve{}, {} Newton iteration{}\n  time            {:.3} s\n  output          {}\n",
+            "eyeshell: grew {} ({})\n  final           {}\n{chosen}  integrator      {} (rtol {}, atol {}), {} step{}\n  work            {} rhs evaluation{}, {} BVP solve{}, {} Newton iteration{}\n  time            {:.3} s\n  output          {}\n",
             scene.origin,
             one_line(&scene.display_name()),
             end,
             scene.growth_settings.integrator.name(),
-            scene.growth_settings.rtol,
-            scene.growth_settings.atol,
+            rtol,
+            atol,
             stats.steps,
             plural(stats.steps),
             stats.rhs_evaluations,

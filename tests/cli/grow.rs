@@ -400,3 +400,52 @@ fn solver_tol_out_of_reach_in_growth_stops_after_the_round_that_shows_it() {
     assert!(rounds[0]["space"].as_f64().unwrap() > 1e-4, "{rounds:?}");
     assert!(snapshots(&out).is_empty());
 }
+
+/// Under solver.tol the report says what the run chose and what it estimates (the mesh, the
+/// integrator's rtol and atol, the error and its split), the numbers summary.json records,
+/// not the scene's rtol and atol, which solver.tol overrides.
+#[test]
+fn a_run_to_a_tolerance_reports_the_mesh_tolerances_and_error_it_chose() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("tol");
+    let run = eyeshell_in(
+        repo(),
+        &[
+            "grow",
+            "scenes/const.toml",
+            "--set",
+            "solver.tol=1e-3",
+            "--set",
+            "solver.rtol=1e-3",
+            "--out",
+            s(&out),
+        ],
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let acc = &v["accuracy"];
+    let rounds = acc["rounds"].as_array().unwrap().len();
+    let nodes = format!(
+        "  nodes           {} (chosen for solver.tol = 1e-3 in {rounds} round{})",
+        acc["nodes"],
+        if rounds == 1 { "" } else { "s" }
+    );
+    assert!(run.stdout.contains(&nodes), "{nodes}\n{}", run.stdout);
+    let (rtol, atol) = (acc["rtol"].as_f64().unwrap(), acc["atol"].as_f64().unwrap());
+    assert!(rtol != 1e-3, "solver.tol chooses rtol, not the scene's");
+    let line = format!("  integrator      ida (rtol {rtol:.3e}, atol {atol:.3e}), ");
+    assert!(run.stdout.contains(&line), "{line}\n{}", run.stdout);
+    let est = run
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("  error estimate  "))
+        .expect("an error estimate line");
+    let total: f64 = est.split(' ').next().unwrap().parse().unwrap();
+    assert!(total > 0.0 && total <= 1e-3, "{est}");
+    assert!(
+        est.contains(" mm (the largest over the lengths and times; their largest space part ")
+            && est.contains(", time part "),
+        "{est}"
+    );
+}
