@@ -239,7 +239,7 @@ pub struct Round {
     pub time: f64,
     pub seconds: f64,
     /// The CPU seconds of the delivered run (M/2), and of the two runs on M, each on its own
-    /// thread (NaN where the system does not tell a thread's CPU time): on two idle cores
+    /// thread (NaN in a summary.json that predates them): on two idle cores
     /// the round takes about the larger, under load the wall clock says little.
     pub delivered_cpu_seconds: f64,
     pub companions_cpu_seconds: f64,
@@ -247,20 +247,16 @@ pub struct Round {
 
 /// The CPU time of the calling thread (s): the kernel's per-thread clock
 /// (CLOCK_THREAD_CPUTIME_ID), through rustix's safe call.
-fn thread_cpu_seconds() -> Option<f64> {
+fn thread_cpu_seconds() -> f64 {
     let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
-    Some(t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9)
+    t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
 }
 
-/// The CPU seconds the calling thread spends in `f`, NaN if unknown.
+/// The CPU seconds the calling thread spends in `f`.
 fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let before = thread_cpu_seconds();
     let value = f();
-    let seconds = match (before, thread_cpu_seconds()) {
-        (Some(a), Some(b)) => b - a,
-        _ => f64::NAN,
-    };
-    (value, seconds)
+    (value, thread_cpu_seconds() - before)
 }
 
 /// summary.json's `accuracy`: what `solver.tol` chose for a growth run.
