@@ -1,6 +1,7 @@
 //! A run traces its eye with the fewest rays across the pupil whose foci agree with twice as
-//! many to 1e-5 mm (`OpticsSpec::focus_settings`), chosen once at growth time 0. Against the
-//! default sampling (16 rays across) over the scenes that trace optics: every best focus of
+//! many to 1e-5 mm, and its gradient-index lens to 1e-6 mm a step (`OpticsSpec::focus_settings`),
+//! chosen once at growth time 0. Against the default trace (16 rays across, 1e-8 mm a step)
+//! over the scenes that trace optics: every best focus of
 //! the stimulus's surfaces within 1e-5 mm, and the pole's refraction (with the sampled
 //! table's fill) and every field's peripheral refraction within 1e-3 D, at the first and last
 //! table times of scenes/optics-age.toml.
