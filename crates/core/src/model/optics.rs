@@ -590,7 +590,7 @@ impl TimedSurfaces {
                 .map(|&p| {
                     w.iter()
                         .zip(splines)
-                        .map(|(w, s)| w * super::stimulus::Focal::Computed(s).radius_and_slope(p).0)
+                        .map(|(w, s)| w * continued_radius(s, p))
                         .sum()
                 })
                 .collect();
@@ -603,6 +603,20 @@ impl TimedSurfaces {
         };
         Ok((blend(&self.blue)?, blend(&self.red)?))
     }
+}
+
+/// The radius of `s` at φ, continued beyond its φ_max along its end slope: the radius the
+/// stimulus reads (`Focal::radius_and_slope`), without the slope where it is not needed
+/// (the blend evaluates it at every angle of every traced time, once per time step).
+fn continued_radius(s: &PolarSpline, phi: f64) -> f64 {
+    s.radius(phi).unwrap_or_else(|| {
+        let top = s.phi_max();
+        let (r, d) = (
+            s.radius(top).unwrap_or(f64::NAN),
+            s.slope(top).unwrap_or(f64::NAN),
+        );
+        r + d * (phi - top)
+    })
 }
 
 /// Two computations of the same spec about the same centre are the same surfaces (the
