@@ -23,8 +23,8 @@ mod vec3;
 
 pub use error::{OpticsError, RayError, RayFailure};
 pub use focus::{
-    best_focus, best_focus_with, coddington, ray_fan, Criterion, Focus, FocusSettings, Pupil,
-    MAX_FIELD_DEG,
+    best_focus, best_focus_with, coddington, ray_fan, rays_for, Criterion, Focus, FocusSettings,
+    Probe, Pupil, MAX_FIELD_DEG, RAYS_TRIED,
 };
 pub use medium::{Dispersion, Grin, GrinDispersion, Medium, MediumKind};
 pub use paraxial::{paraxial, paraxial_grin_error, Paraxial};

@@ -303,6 +303,9 @@ struct RefractionKey {
     wavelength: f64,
     /// The growth time the surface tables were read at (0 for an eye without tables).
     t: f64,
+    /// The rays across the pupil the table is traced with (0 before they are chosen: the
+    /// kept default tables are recognised without choosing them).
+    rays_across: usize,
 }
 
 impl RefractionKey {
@@ -316,6 +319,16 @@ impl RefractionKey {
             focus: spec.focus,
             wavelength: spec.refraction_wavelength,
             t: if spec.times().is_empty() { 0.0 } else { t },
+            rays_across: 0,
+        }
+    }
+
+    /// This key with the rays `spec`'s traces use ([`OpticsSpec::focus_settings`]): the
+    /// lenses worn can change them, so the same naked eye may be traced with another count.
+    fn traced(self, spec: &OpticsSpec) -> RefractionKey {
+        RefractionKey {
+            rays_across: spec.focus_settings().rays_across,
+            ..self
         }
     }
 }
@@ -342,12 +355,18 @@ pub fn refraction_table_at(
     if key == RefractionKey::of(&OpticsSpec::default(), 0.0) {
         return Ok(default_tables().0);
     }
+    let key = key.traced(spec);
     if let Ok(cache) = TABLES.lock() {
         if let Some((_, t)) = cache.iter().find(|(k, _)| *k == key) {
             return Ok(t.clone());
         }
     }
-    let table = Arc::new(trace_pole(spec, key.t, RefractionTable::compute_sampled)?);
+    let table = Arc::new(trace_pole(
+        spec,
+        key.t,
+        RefractionTable::compute_sampled,
+        &spec.focus_settings(),
+    )?);
     if let Ok(mut cache) = TABLES.lock() {
         if cache.len() >= CACHED {
             cache.remove(0);
@@ -358,7 +377,8 @@ pub fn refraction_table_at(
 }
 
 /// Trace the refraction table of `spec`'s naked eye at growth time `t`, every power of
-/// [`POWERS`] (no cache, no kept table): what the kept default tables are. A run's tables
+/// [`POWERS`], with the default pupil sampling (no cache, no kept table): what the kept
+/// default tables are. A run's tables
 /// ([`refraction_table_at`]) trace every fifth power and fill the rest
 /// ([`RefractionTable::compute_sampled`], within 1e-5 D of this). The error names the key to
 /// change.
@@ -366,7 +386,7 @@ pub fn trace_refraction_table(
     spec: &OpticsSpec,
     t: f64,
 ) -> Result<RefractionTable, OpticsKeyError> {
-    trace_pole(spec, t, RefractionTable::compute)
+    trace_pole(spec, t, RefractionTable::compute, &FocusSettings::default())
 }
 
 type PoleTrace = fn(
@@ -382,6 +402,7 @@ fn trace_pole(
     spec: &OpticsSpec,
     t: f64,
     trace: PoleTrace,
+    settings: &FocusSettings,
 ) -> Result<RefractionTable, OpticsKeyError> {
     let (lo, hi) = super::optics::WAVELENGTH_RANGE;
     if !(spec.refraction_wavelength >= lo && spec.refraction_wavelength <= hi) {
@@ -397,7 +418,7 @@ fn trace_pole(
         spec.refraction_wavelength,
         &spec.pupil_stop(&eye),
         spec.criterion(),
-        &FocusSettings::default(),
+        settings,
         VERTEX_MM,
     )
     .map_err(|e| {
@@ -467,6 +488,7 @@ pub fn peripheral_table_at(
     if key == RefractionKey::of(&default, 0.0) && spec.max_field == default.max_field {
         return Ok(default_tables().1);
     }
+    let key = key.traced(spec);
     if let Ok(cache) = PERIPHERAL.lock() {
         if let Some((_, _, t)) = cache
             .iter()
@@ -477,7 +499,7 @@ pub fn peripheral_table_at(
     }
     // The pole's table checks the wavelength and the eye, and names the key that fails.
     refraction_table_at(spec, key.t)?;
-    let table = Arc::new(trace_peripheral_table(spec, key.t)?);
+    let table = Arc::new(trace_peripheral(spec, key.t, &spec.focus_settings())?);
     if let Ok(mut cache) = PERIPHERAL.lock() {
         if cache.len() >= CACHED {
             cache.remove(0);
@@ -487,11 +509,19 @@ pub fn peripheral_table_at(
     Ok(table)
 }
 
-/// Trace the peripheral refraction table of `spec`'s naked eye at growth time `t` (no
-/// cache, no kept table).
+/// Trace the peripheral refraction table of `spec`'s naked eye at growth time `t` with the
+/// default pupil sampling (no cache, no kept table): what the kept default table is.
 pub fn trace_peripheral_table(
     spec: &OpticsSpec,
     t: f64,
+) -> Result<PeripheralTable, OpticsKeyError> {
+    trace_peripheral(spec, t, &FocusSettings::default())
+}
+
+fn trace_peripheral(
+    spec: &OpticsSpec,
+    t: f64,
+    settings: &FocusSettings,
 ) -> Result<PeripheralTable, OpticsKeyError> {
     let eye = spec.system_at(t)?;
     PeripheralTable::compute(
@@ -499,7 +529,7 @@ pub fn trace_peripheral_table(
         spec.refraction_wavelength,
         &spec.pupil_stop(&eye),
         spec.criterion(),
-        &FocusSettings::default(),
+        settings,
         VERTEX_MM,
         &peripheral_fields(spec.max_field),
     )

@@ -7,7 +7,7 @@
 //! blue surface's polar centre `stimulus.blue.z_B`, so that d and φ_max keep their meaning
 //! (docs/MODEL.md §6): φ_max is where the computed surface ends.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use eyeshell_optics as optics;
 use eyeshell_optics::{Criterion, OpticalSystem, OpticsError, PolarSpline, Pupil, Surfaces};
@@ -40,6 +40,21 @@ const FOCI: [Criterion; 4] = [
 
 /// The wavelengths (nm) the eyes' dispersion laws hold for.
 pub const WAVELENGTH_RANGE: (f64, f64) = (300.0, 1200.0);
+/// How closely a run's best foci follow the converged ones (mm): the agreement
+/// [`OpticsSpec::focus_settings`] asks of a ray count and twice as many. About 3e-5 D of
+/// refraction at the pole.
+pub const RAYS_TOLERANCE_MM: f64 = 1e-5;
+
+/// The gradient-index lens's integration in a run's traces: a local error of 1e-6 mm a step
+/// moves a best focus by at most about 1e-6 mm (docs/optics.md's convergence table: 1.0e-6 mm
+/// at 40°), a tenth of [`RAYS_TOLERANCE_MM`], in 40 % of the steps of the default 1e-8 mm.
+fn run_grin() -> optics::GrinSettings {
+    optics::GrinSettings {
+        tolerance: 1e-6,
+        ..Default::default()
+    }
+}
+
 /// The widest pupil (mm): wider than any eye's (about 8 mm dilated), and beyond it the built-in
 /// eyes' lens surfaces turn back before the rays reach them.
 pub const MAX_PUPIL: f64 = 10.0;
@@ -349,6 +364,77 @@ impl OpticsSpec {
         })
     }
 
+    /// The pupil's sampling for every trace of these optics: the fewest rays across the pupil
+    /// whose best foci agree with twice as many to [`RAYS_TOLERANCE_MM`]
+    /// ([`optics::rays_for`]), checked once on the eye at growth time 0 and kept for every
+    /// table time and every table. The probes are where the count matters most: the eye as
+    /// worn on the axis and at `optics.max_field` at the stimulus's wavelengths, and the
+    /// naked eye behind the strongest spectacle lenses of the refraction tables (the pole's
+    /// on the axis, the peripheral table's at the largest field) at the refraction's
+    /// wavelength. Optics that cannot be built keep the default; their error comes from the
+    /// trace itself.
+    pub fn focus_settings(&self) -> optics::FocusSettings {
+        static CHOSEN: Mutex<Vec<(OpticsSpec, optics::FocusSettings)>> = Mutex::new(Vec::new());
+        if let Ok(cache) = CHOSEN.lock() {
+            if let Some((_, s)) = cache.iter().find(|(spec, _)| spec == self) {
+                return *s;
+            }
+        }
+        let grin = run_grin();
+        let settings = optics::FocusSettings {
+            rays_across: self.rays_across(grin),
+            grin,
+        };
+        if let Ok(mut cache) = CHOSEN.lock() {
+            if cache.len() >= 16 {
+                cache.remove(0);
+            }
+            cache.push((self.clone(), settings));
+        }
+        settings
+    }
+
+    fn rays_across(&self, grin: optics::GrinSettings) -> usize {
+        use optics::refraction::{PERIPHERAL_POWERS, POWERS, VERTEX_MM};
+        let default = optics::FocusSettings::default().rays_across;
+        let (Ok(worn), Ok(naked)) = (super::eyewear::worn_at(self, 0.0), self.system_at(0.0))
+        else {
+            return default;
+        };
+        let spectacles: Vec<(OpticalSystem, f64)> = [
+            (POWERS.0, 0.0),
+            (POWERS.1, 0.0),
+            (PERIPHERAL_POWERS.0, self.max_field),
+            (PERIPHERAL_POWERS.1, self.max_field),
+        ]
+        .into_iter()
+        .filter_map(|(power, field)| {
+            let lens = optics::lens::Lens::spectacle(power, VERTEX_MM);
+            optics::lens::wear(&naked, &[lens]).ok().map(|s| (s, field))
+        })
+        .collect();
+        let mut probes = Vec::new();
+        for &wavelength_nm in &self.wavelengths[..2.min(self.wavelengths.len())] {
+            for field_deg in [0.0, self.max_field] {
+                probes.push(optics::Probe {
+                    system: &worn,
+                    pupil: self.pupil_stop(&worn),
+                    wavelength_nm,
+                    field_deg,
+                });
+            }
+        }
+        for (system, field_deg) in &spectacles {
+            probes.push(optics::Probe {
+                system,
+                pupil: self.pupil_stop(&naked),
+                wavelength_nm: self.refraction_wavelength,
+                field_deg: *field_deg,
+            });
+        }
+        optics::rays_for(&probes, self.criterion(), grin, RAYS_TOLERANCE_MM)
+    }
+
     /// The surfaces of the eye at growth time `t` and their blue and red splines about `z_c`.
     fn compute_at(
         &self,
@@ -366,7 +452,7 @@ impl OpticsSpec {
             max_field_deg: self.max_field,
             // One field a degree (41 for the paper's 40°).
             fields: (self.max_field.ceil() as usize + 1).max(4),
-            ..Default::default()
+            focus: self.focus_settings(),
         };
         let surfaces = Surfaces::compute(
             &system,
@@ -504,7 +590,7 @@ impl TimedSurfaces {
                 .map(|&p| {
                     w.iter()
                         .zip(splines)
-                        .map(|(w, s)| w * super::stimulus::Focal::Computed(s).radius_and_slope(p).0)
+                        .map(|(w, s)| w * continued_radius(s, p))
                         .sum()
                 })
                 .collect();
@@ -517,6 +603,20 @@ impl TimedSurfaces {
         };
         Ok((blend(&self.blue)?, blend(&self.red)?))
     }
+}
+
+/// The radius of `s` at φ, continued beyond its φ_max along its end slope: the radius the
+/// stimulus reads (`Focal::radius_and_slope`), without the slope where it is not needed
+/// (the blend evaluates it at every angle of every traced time, once per time step).
+fn continued_radius(s: &PolarSpline, phi: f64) -> f64 {
+    s.radius(phi).unwrap_or_else(|| {
+        let top = s.phi_max();
+        let (r, d) = (
+            s.radius(top).unwrap_or(f64::NAN),
+            s.slope(top).unwrap_or(f64::NAN),
+        );
+        r + d * (phi - top)
+    })
 }
 
 /// Two computations of the same spec about the same centre are the same surfaces (the

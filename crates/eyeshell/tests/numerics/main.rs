@@ -18,5 +18,6 @@ mod jacobian;
 mod max_seconds;
 mod property_jacobian;
 mod property_residual;
+mod run_rays;
 mod sensitivities;
 mod solve_features;
