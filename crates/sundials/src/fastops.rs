@@ -28,20 +28,50 @@ unsafe fn parts(v: N_Vector) -> (*mut f64, usize) {
     )
 }
 
+/// Elements a block at a time in the loops below: a block's inputs are all read into locals
+/// before its outputs are written, so that the loops vectorise whatever aliases what (z may
+/// be x or y), and every element is computed by the same expression as alone.
+const LANES: usize = 4;
+
+/// z_i = f(x_i, y_i) for i < n, [`LANES`] elements at a time.
+///
+/// # Safety
+/// `xp`, `yp` and `zp` must each address n live elements (they may be the same).
+#[inline(always)]
+unsafe fn map2(
+    n: usize,
+    xp: *const f64,
+    yp: *const f64,
+    zp: *mut f64,
+    f: impl Fn(f64, f64) -> f64,
+) {
+    let blocks = n / LANES;
+    for b in 0..blocks {
+        let i = b * LANES;
+        let (mut x, mut y) = ([0.0; LANES], [0.0; LANES]);
+        for l in 0..LANES {
+            x[l] = *xp.add(i + l);
+            y[l] = *yp.add(i + l);
+        }
+        for l in 0..LANES {
+            *zp.add(i + l) = f(x[l], y[l]);
+        }
+    }
+    for i in blocks * LANES..n {
+        *zp.add(i) = f(*xp.add(i), *yp.add(i));
+    }
+}
+
 /// z = a x + b y.
 unsafe extern "C" fn linear_sum(a: realtype, x: N_Vector, b: realtype, y: N_Vector, z: N_Vector) {
     let ((xp, n), (yp, _), (zp, _)) = (parts(x), parts(y), parts(z));
-    for i in 0..n {
-        *zp.add(i) = a * *xp.add(i) + b * *yp.add(i);
-    }
+    map2(n, xp, yp, zp, |x, y| a * x + b * y);
 }
 
 /// z = c x.
 unsafe extern "C" fn scale(c: realtype, x: N_Vector, z: N_Vector) {
     let ((xp, n), (zp, _)) = (parts(x), parts(z));
-    for i in 0..n {
-        *zp.add(i) = c * *xp.add(i);
-    }
+    map2(n, xp, xp, zp, |x, _| c * x);
 }
 
 /// z = c.
@@ -165,7 +195,6 @@ unsafe extern "C" fn linear_combination(
     // + c_j x_j for j = 1, 2, …): the lanes' loops vectorise, where a loop over j inside
     // one over the elements did not. A block's inputs are all read before its outputs are
     // written, so z = X_0 stays correct.
-    const LANES: usize = 4;
     let blocks = n / LANES;
     for b in 0..blocks {
         let i = b * LANES;
@@ -207,9 +236,7 @@ unsafe extern "C" fn scale_add_multi(
     for j in 0..nvec {
         let aj = *a.add(j);
         let (yp, zp) = (parts(*ys.add(j)).0, parts(*zs.add(j)).0);
-        for i in 0..n {
-            *zp.add(i) = aj * *xp.add(i) + *yp.add(i);
-        }
+        map2(n, xp, yp, zp, |x, y| aj * x + y);
     }
     0
 }
@@ -367,6 +394,59 @@ mod tests {
                             g.to_bits(),
                             e.to_bits(),
                             "n {n} nvec {nvec} aliased {aliased} element {i}: {g} vs {e}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// The blocked two-input kernels compute each element by the same expression as alone
+    /// (z = a x + b y, z = c x, z = a x + y), at lengths that are and are not multiples of
+    /// the block, with z apart, z = x and z = y.
+    #[test]
+    fn blocked_kernels_are_the_element_loops_to_the_bit() {
+        let ctx = Context::new().unwrap();
+        for n in [1, 3, 4, 7, 1013] {
+            let x0: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+            let y0: Vec<f64> = (0..n).map(|i| (i as f64 * 0.71).cos() * 1e-2).collect();
+            let (a, b) = (0.3, -1.7);
+            let cases: [(&str, fn(f64, f64) -> f64); 3] = [
+                ("linear sum", |x, y| 0.3 * x + -1.7 * y),
+                ("scale", |x, _| 0.3 * x),
+                ("scale add", |x, y| 0.3 * x + y),
+            ];
+            for (what, f) in cases {
+                for target in 0..3 {
+                    let (x, y) = (
+                        NVector::from_slice(&ctx, &x0).unwrap(),
+                        NVector::from_slice(&ctx, &y0).unwrap(),
+                    );
+                    let z = NVector::from_slice(&ctx, &vec![f64::NAN; n]).unwrap();
+                    let zr = [z.raw(), x.raw(), y.raw()][target];
+                    unsafe {
+                        match what {
+                            "linear sum" => super::linear_sum(a, x.raw(), b, y.raw(), zr),
+                            "scale" => super::scale(a, x.raw(), zr),
+                            _ => {
+                                let (mut aa, mut ys, mut zs) = ([a], [y.raw()], [zr]);
+                                super::scale_add_multi(
+                                    1,
+                                    aa.as_mut_ptr(),
+                                    x.raw(),
+                                    ys.as_mut_ptr(),
+                                    zs.as_mut_ptr(),
+                                );
+                            }
+                        }
+                    }
+                    let got = [&z, &x, &y][target].as_slice();
+                    for i in 0..n {
+                        let e = f(x0[i], y0[i]);
+                        assert_eq!(
+                            got[i].to_bits(),
+                            e.to_bits(),
+                            "{what}, n {n}, target {target}, element {i}"
                         );
                     }
                 }
