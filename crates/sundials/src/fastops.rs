@@ -411,7 +411,8 @@ mod tests {
             let x0: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
             let y0: Vec<f64> = (0..n).map(|i| (i as f64 * 0.71).cos() * 1e-2).collect();
             let (a, b) = (0.3, -1.7);
-            let cases: [(&str, fn(f64, f64) -> f64); 3] = [
+            type Element = fn(f64, f64) -> f64;
+            let cases: [(&str, Element); 3] = [
                 ("linear sum", |x, y| 0.3 * x + -1.7 * y),
                 ("scale", |x, _| 0.3 * x),
                 ("scale add", |x, y| 0.3 * x + y),
