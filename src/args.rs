@@ -68,7 +68,7 @@ pub(crate) struct FiguresArgs {
     /// Output directory: the figures, index.html, and the runs in data/
     #[arg(long, value_name = "DIR", default_value = "figures")]
     pub(crate) out: PathBuf,
-    /// Runs at once (default: one per core)
+    /// Runs and drawings at once (default: one per core and one more, which computes while a run waits for the disk)
     #[arg(long, short, value_name = "N")]
     pub(crate) jobs: Option<usize>,
     /// Draw again from the runs already in DIR/data (no computation)

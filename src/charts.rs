@@ -362,25 +362,41 @@ impl PaperRuns {
     /// Read the runs under `data`: `const/`, `thick/`, and the sweeps `fibre/`, `grow/`
     /// (as `eyeshell figures` writes them).
     pub fn read(data: &Path) -> Result<PaperRuns, FigureError> {
-        let mut fibre: Vec<(f64, RunData)> = sweep_runs(&data.join("fibre"))?
-            .into_iter()
-            .map(|r| (r.scene.params.d, r))
-            .collect();
-        fibre.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let grid = sweep_runs(&data.join("grow"))?
-            .into_iter()
-            .map(|r| {
-                let g = r.scene.growth.clone().unwrap_or_default();
-                (g.gamma, g.delta, r)
-            })
-            .collect();
+        let fibre = read_fibre(&data.join("fibre"))?;
+        let grid = read_grid(&data.join("grow"))?;
         Ok(PaperRuns {
-            constant: sweep_or_run(&data.join("const"))?,
-            thick: sweep_or_run(&data.join("thick"))?,
+            constant: read_single(&data.join("const"))?,
+            thick: read_single(&data.join("thick"))?,
             fibre,
             grid,
         })
     }
+}
+
+/// The fibre sweep's runs as (D, run), increasing D.
+pub fn read_fibre(dir: &Path) -> Result<Vec<(f64, RunData)>, FigureError> {
+    let mut fibre: Vec<(f64, RunData)> = sweep_runs(dir)?
+        .into_iter()
+        .map(|r| (r.scene.params.d, r))
+        .collect();
+    fibre.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Ok(fibre)
+}
+
+/// The growth-zone grid's runs as (Γ, δ, run), in the order of its table.
+pub fn read_grid(dir: &Path) -> Result<Vec<(f64, f64, RunData)>, FigureError> {
+    Ok(sweep_runs(dir)?
+        .into_iter()
+        .map(|r| {
+            let g = r.scene.growth.clone().unwrap_or_default();
+            (g.gamma, g.delta, r)
+        })
+        .collect())
+}
+
+/// A one-run scene's run: a run directory, or a sweep of one run.
+pub fn read_single(dir: &Path) -> Result<RunData, FigureError> {
+    Ok(sweep_or_run(dir)?)
 }
 
 /// The longest run directory a sweep's summary may name: a sweep names them `runs/<name>`,
@@ -465,9 +481,59 @@ pub const PAPER_STEMS: [&str; 6] = [
 /// quarter of `eyeshell figures`' wall time on two cores.
 pub fn paper_figures(runs: &PaperRuns, out: &Path) -> Result<Vec<Written>, FigureError> {
     use rayon::prelude::*;
-    type Draw = fn(&PaperRuns, &Path) -> Result<Written, FigureError>;
-    const DRAW: [Draw; 6] = [figure_a, figure_b, figure_c, figure_d, figure_e, figure_f];
-    DRAW.par_iter().map(|draw| draw(runs, out)).collect()
+    (0..PAPER_STEMS.len())
+        .into_par_iter()
+        .map(|k| paper_figure(k, runs.parts(), out))
+        .collect()
+}
+
+/// What the paper's figures are drawn from: the const and thick runs, the fibre sweep and
+/// the growth-zone grid (None: not read, and not needed by the figure asked for).
+#[derive(Clone, Copy, Default)]
+pub struct PaperParts<'a> {
+    pub constant: Option<&'a RunData>,
+    pub thick: Option<&'a RunData>,
+    pub fibre: Option<&'a [(f64, RunData)]>,
+    pub grid: Option<&'a [(f64, f64, RunData)]>,
+}
+
+/// The parts each of figures (a)–(f) is drawn from, as indices into
+/// [const, thick, fibre, grid].
+pub const PAPER_NEEDS: [&[usize]; 6] = [&[0], &[0], &[0, 1], &[2], &[3], &[3]];
+
+impl PaperRuns {
+    pub fn parts(&self) -> PaperParts<'_> {
+        PaperParts {
+            constant: Some(&self.constant),
+            thick: Some(&self.thick),
+            fibre: Some(&self.fibre),
+            grid: Some(&self.grid),
+        }
+    }
+}
+
+/// Draw figure `k` of (a)–(f) (0 is (a)) from `parts`, which hold at least what
+/// [`PAPER_NEEDS`]`[k]` names.
+pub fn paper_figure(k: usize, parts: PaperParts<'_>, out: &Path) -> Result<Written, FigureError> {
+    let missing = || {
+        FigureError::Read(ExportError {
+            bad_input: false,
+            message: format!("figure {k}: drawn before its runs were read (a bug)"),
+        })
+    };
+    match k {
+        0 => figure_a(parts.constant.ok_or_else(missing)?, out),
+        1 => figure_b(parts.constant.ok_or_else(missing)?, out),
+        2 => figure_c(
+            parts.thick.ok_or_else(missing)?,
+            parts.constant.ok_or_else(missing)?,
+            out,
+        ),
+        3 => figure_d(parts.fibre.ok_or_else(missing)?, out),
+        4 => figure_e(parts.grid.ok_or_else(missing)?, out),
+        5 => figure_f(parts.grid.ok_or_else(missing)?, out),
+        _ => Err(missing()),
+    }
 }
 
 fn written(id: &str, title: &str, caption: String, files: (PathBuf, PathBuf)) -> Written {
@@ -481,8 +547,7 @@ fn written(id: &str, title: &str, caption: String, files: (PathBuf, PathBuf)) ->
 }
 
 /// (a) The const shell at t = 0.1, 0.2, 0.4, 1, shaded by η, with retina and surfaces.
-fn figure_a(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
-    let run = &runs.constant;
+fn figure_a(run: &RunData, out: &Path) -> Result<Written, FigureError> {
     let snaps = snapshots_at(run, &[0.1, 0.2, 0.4, 1.0]);
     let top = eta_max(&snaps);
     let panels = snaps
@@ -523,8 +588,7 @@ fn describe_refraction(p: &SeriesPoint) -> String {
 }
 
 /// (b) α_s and α_φ against σ at t = 0, 0.1, 0.2, 0.4, 1 for the const shell.
-fn figure_b(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
-    let run = &runs.constant;
+fn figure_b(run: &RunData, out: &Path) -> Result<Written, FigureError> {
     let snaps = snapshots_at(run, &[0.0, 0.1, 0.2, 0.4, 1.0]);
     let panels = vec![
         profile_panel("(f) stretch α_s", "alpha_s", "α_s", &snaps, T)?,
@@ -547,8 +611,7 @@ fn figure_b(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
 }
 
 /// (c) Non-uniform against uniform thickness: shells at t = 0 and 1, and the stretches.
-fn figure_c(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
-    let (thick, constant) = (&runs.thick, &runs.constant);
+fn figure_c(thick: &RunData, constant: &RunData, out: &Path) -> Result<Written, FigureError> {
     let mut shells = Figure::new("(a) initial and final shells", "z (mm)", "r (mm)");
     shells.aspect_equal = true;
     let mut alpha_s = Figure::new(
@@ -618,7 +681,7 @@ fn figure_c(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
 
 /// (d) The fibre sweep: final shells, a close-up of the posterior pole, axial length
 /// against t, and the final stretches, one colour per D.
-fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
+fn figure_d(fibre: &[(f64, RunData)], out: &Path) -> Result<Written, FigureError> {
     let mut shells = Figure::new("(a) final shells", "z (mm)", "r (mm)");
     shells.aspect_equal = true;
     let mut close = Figure::new("(a, inset) posterior retina at t = 1", "z (mm)", "r (mm)");
@@ -626,7 +689,7 @@ fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
     let mut alpha_phi = Figure::new("(d) α_φ at t = 1", "σ (mm)", "α_φ");
     let mut axial_runs = Vec::new();
     let mut pole_z: Vec<f64> = Vec::new();
-    for (k, (d, run)) in runs.fibre.iter().enumerate() {
+    for (k, (d, run)) in fibre.iter().enumerate() {
         let Some(s) = run.snapshots().last() else {
             continue;
         };
@@ -672,8 +735,7 @@ fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         PANEL.1,
         &out.join(PAPER_STEMS[3]),
     )?;
-    let lengths: Vec<String> = runs
-        .fibre
+    let lengths: Vec<String> = fibre
         .iter()
         .map(|(d, r)| {
             format!(
@@ -687,16 +749,16 @@ fn figure_d(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
         .collect();
     let caption = format!(
         "The paper's figure 'fibre' for D = {} kPa: the final shells (outer face and retina), a close-up of the posterior retina (the paper's inset), the axial length against t, and the stretches at t = 1. Axial length at t = 1: {}. Scene scenes/fibre.toml (a sweep over D): {}.",
-        runs.fibre.iter().map(|(d, _)| trim(*d)).collect::<Vec<_>>().join(", "),
+        fibre.iter().map(|(d, _)| trim(*d)).collect::<Vec<_>>().join(", "),
         lengths.join("; "),
-        runs.fibre.first().map_or(String::new(), |(_, r)| parameters(&r.scene))
+        fibre.first().map_or(String::new(), |(_, r)| parameters(&r.scene))
     );
     Ok(written("d", title, caption, files))
 }
 
 /// (e) The retinas of the Γ × δ grid at t = 0, 0.1 and 1, shaded by η.
-fn figure_e(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
-    let mut grid: Vec<&(f64, f64, RunData)> = runs.grid.iter().collect();
+fn figure_e(grid: &[(f64, f64, RunData)], out: &Path) -> Result<Written, FigureError> {
+    let mut grid: Vec<&(f64, f64, RunData)> = grid.iter().collect();
     grid.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
     let all: Vec<&RunSnapshot> = grid
         .iter()
@@ -751,15 +813,14 @@ fn figure_e(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
 }
 
 /// (f) Axial length against t for the grid, one panel per δ.
-fn figure_f(runs: &PaperRuns, out: &Path) -> Result<Written, FigureError> {
-    let mut deltas: Vec<f64> = runs.grid.iter().map(|g| g.1).collect();
+fn figure_f(grid: &[(f64, f64, RunData)], out: &Path) -> Result<Written, FigureError> {
+    let mut deltas: Vec<f64> = grid.iter().map(|g| g.1).collect();
     deltas.sort_by(f64::total_cmp);
     deltas.dedup();
     let mut panels = Vec::new();
     let mut finals = Vec::new();
     for delta in &deltas {
-        let mut rows: Vec<&(f64, f64, RunData)> =
-            runs.grid.iter().filter(|g| g.1 == *delta).collect();
+        let mut rows: Vec<&(f64, f64, RunData)> = grid.iter().filter(|g| g.1 == *delta).collect();
         rows.sort_by(|a, b| a.0.total_cmp(&b.0));
         let named: Vec<(String, &RunData)> = rows
             .iter()

@@ -433,3 +433,39 @@ fn plot_draws_several_growth_runs_together() {
     );
     assert!(!nothing.exists());
 }
+
+/// Ctrl-C (SIGINT) during `eyeshell figures`: the runs waiting for a core never start (all
+/// twelve wait at once, so a run that only checked for the interruption before it queued
+/// would start anyway), the running ones finish, and the exit is 1 with one line saying
+/// where the runs so far are. About 0.5 s.
+#[test]
+fn ctrl_c_during_figures_starts_no_waiting_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut child, mut stderr, _) = spawn_in_own_group(
+        dir.path(),
+        &["figures", "--out", "f", "--jobs", "2"],
+        "eyeshell: ",
+    );
+    let start = std::time::Instant::now();
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", "--", &format!("-{}", child.id())])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(1), "{rest}");
+    let last = rest.lines().last().unwrap();
+    assert!(
+        last.starts_with("eyeshell: error: interrupted during scenes/")
+            && last.ends_with("the runs so far are in f/data"),
+        "{rest}"
+    );
+    // One run had finished and at most two were running (--jobs 2; a third may have started
+    // before the signal came): of the twelve, at least eight never started.
+    let not_run = rest.lines().filter(|l| l.ends_with(" not run")).count();
+    assert!(not_run >= 8, "{not_run} not run:\n{rest}");
+    assert!(start.elapsed().as_secs_f64() < 5.0, "{rest}");
+    assert!(!dir.path().join("f/index.html").exists());
+}
