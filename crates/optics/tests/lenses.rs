@@ -9,6 +9,27 @@ use eyeshell_optics::{best_focus, eyes, paraxial, Criterion, FocusSettings, Pupi
 
 /// The eye's paraxial image of an object of vergence `k` (D) at its first vertex: from the
 /// eye's own system matrix, with no lens in it.
+/// A spectacle lens at 12 mm of power `centre` (D) inside a 9 mm zone and `periphery` out to
+/// 50 mm: the peripheral-plus design of scenes/eyewear.
+fn peripheral_plus(centre: f64, periphery: f64) -> Lens {
+    Lens {
+        mount: Mount::Spectacle { vertex: 12.0 },
+        body: LensBody::Thin(
+            PowerProfile::zones(vec![
+                Zone {
+                    radius: 4.5,
+                    power: centre,
+                },
+                Zone {
+                    radius: 25.0,
+                    power: periphery,
+                },
+            ])
+            .unwrap(),
+        ),
+    }
+}
+
 fn image_of_vergence(eye: &eyeshell_optics::OpticalSystem, k: f64) -> f64 {
     let p = paraxial(eye, 555.0).unwrap();
     let [[a, b], [c, d]] = p.matrix;
@@ -104,22 +125,7 @@ fn a_plus_periphery_moves_the_peripheral_foci_not_the_axial_one() {
         position: eye.pupil_position.unwrap(),
     };
     let single = wear(&eye, &[Lens::spectacle(-2.0, 12.0)]).unwrap();
-    let zoned = Lens {
-        mount: Mount::Spectacle { vertex: 12.0 },
-        body: LensBody::Thin(
-            PowerProfile::zones(vec![
-                Zone {
-                    radius: 4.5,
-                    power: -2.0,
-                },
-                Zone {
-                    radius: 25.0,
-                    power: 0.5,
-                },
-            ])
-            .unwrap(),
-        ),
-    };
+    let zoned = peripheral_plus(-2.0, 0.5);
     let zoned = wear(&eye, &[zoned]).unwrap();
     let at = |s: &eyeshell_optics::OpticalSystem, field: f64| {
         best_focus(s, 555.0, field, &pupil, Criterion::MeanSphere).unwrap()
@@ -363,22 +369,7 @@ fn the_ray_count_is_the_fewest_that_agree_with_twice_as_many() {
     }
     eprintln!("4 against 16 rays across a 1 mm pupil: worst {worst:.2e} mm");
     // A peripheral-plus design: the zone's edge may cross some field's pencil.
-    let zoned = Lens {
-        mount: Mount::Spectacle { vertex: 12.0 },
-        body: LensBody::Thin(
-            PowerProfile::zones(vec![
-                Zone {
-                    radius: 4.5,
-                    power: 0.0,
-                },
-                Zone {
-                    radius: 25.0,
-                    power: 2.5,
-                },
-            ])
-            .unwrap(),
-        ),
-    };
+    let zoned = peripheral_plus(0.0, 2.5);
     let worn = wear(&eye, &[zoned]).unwrap();
     let probe = Probe {
         system: &worn,
