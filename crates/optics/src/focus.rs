@@ -98,7 +98,8 @@ pub struct Probe<'a> {
 /// that agrees with its double is within about `tolerance` of the converged focus. A small
 /// pupil's nearly spherical wavefront needs few rays (4 across a 1 mm pupil of the Atchison
 /// eye: 3e-6 mm), a 3 mm pupil more (6: 3e-7 mm; 4 is off by 4e-4 mm). A probe where neither
-/// count forms a focus says nothing; where one does and the other not, the counts disagree.
+/// count forms a focus says nothing; where one does and the other not, the counts disagree;
+/// a count that no probe speaks for is not taken (nothing checked it).
 /// A thin lens whose power changes across its face (zones, a table) keeps the default: a zone's
 /// edge inside some field's pencil makes that focus converge slowly in the count, and the
 /// probes need not be at that field.
@@ -135,13 +136,16 @@ pub fn rays_for(
     RAYS_TRIED
         .into_iter()
         .find(|&n| {
-            probes
+            // Some(agree), or None where neither count forms a focus.
+            let verdicts: Vec<Option<bool>> = probes
                 .par_iter()
-                .all(|p| match (focus(p, n), focus(p, 2 * n)) {
-                    (Some(a), Some(b)) => (a.0 - b.0).hypot(a.1 - b.1) <= tolerance,
-                    (None, None) => true,
-                    _ => false,
+                .map(|p| match (focus(p, n), focus(p, 2 * n)) {
+                    (Some(a), Some(b)) => Some((a.0 - b.0).hypot(a.1 - b.1) <= tolerance),
+                    (None, None) => None,
+                    _ => Some(false),
                 })
+                .collect();
+            verdicts.contains(&Some(true)) && !verdicts.contains(&Some(false))
         })
         .unwrap_or(default)
 }

@@ -267,6 +267,19 @@ fn a_lens_that_forms_no_image_is_an_error() {
     };
     let worn = wear(&eye, &[ball]).unwrap();
     assert!(best_focus(&worn, 555.0, 0.0, &pupil, Criterion::MeanSphere).is_err());
+    // Nor does it vouch for a ray count: where no probe forms a focus, the count is the
+    // default, not the fewest tried.
+    let probe = eyeshell_optics::Probe {
+        system: &worn,
+        pupil,
+        wavelength_nm: 555.0,
+        field_deg: 0.0,
+    };
+    let grin = eyeshell_optics::GrinSettings::default();
+    assert_eq!(
+        eyeshell_optics::rays_for(&[probe], Criterion::MeanSphere, grin, 1e-5),
+        eyeshell_optics::FocusSettings::default().rays_across
+    );
     assert!(wear(&eye, &[Lens::spectacle(-2.0, -3.0)]).is_err());
 }
 
