@@ -478,15 +478,42 @@ impl GrowthSystem {
         let u = std::mem::take(&mut self.elastic.u);
         let retina = self.retina_at_nodes(&u, p);
         self.elastic.u = u;
-        Ok(self.series_row(t, &retina?))
+        Ok(self.series_row(t, &retina?.0))
+    }
+
+    /// The series row and the mid-surface (r, z) at every node, of the shell in state `p`
+    /// at time `t` polished as [`Self::snapshot`] polishes it: the numbers of a snapshot
+    /// that an error estimate compares, without the fields, the stimulus and the peripheral
+    /// refraction a snapshot also writes.
+    pub fn outline(&mut self, t: f64, p: &[f64]) -> Result<(SeriesRow, Vec<(f64, f64)>), RhsError> {
+        self.set_time(t)?;
+        self.solve_elastic(p)?;
+        let u = std::mem::take(&mut self.elastic.u);
+        let outline = self.retina_at_nodes(&u, p).map(|(retina, z)| {
+            let shell = z
+                .iter()
+                .enumerate()
+                .map(|(i, &z)| (u[NY * i + R], z))
+                .collect();
+            (retina, shell)
+        });
+        self.elastic.u = u;
+        let (retina, shell) = outline?;
+        Ok((self.series_row(t, &retina), shell))
     }
 
     /// The retina (z, r) at every node of the shell with unknowns `u` in state `p`: what a
     /// series row reads, the same numbers as [`Self::stimulus`] gives at the nodes' points,
     /// without what the rates need besides (every point's depth and angle behind the blue
     /// surface, the midpoints, the crossing of φ_max): a history point costs the point
-    /// evaluations and the quadrature of z alone.
-    fn retina_at_nodes(&mut self, u: &[f64], p: &[f64]) -> Result<Vec<(f64, f64)>, RhsError> {
+    /// evaluations and the quadrature of z alone. The mid-surface's z at every node comes
+    /// with it.
+    #[allow(clippy::type_complexity)] // (the retina's (z, r), the mid-surface's z) per node
+    fn retina_at_nodes(
+        &mut self,
+        u: &[f64],
+        p: &[f64],
+    ) -> Result<(Vec<(f64, f64)>, Vec<f64>), RhsError> {
         let disc = self.elastic.discretisation_mut();
         let quad = disc.quadratures(u).map_err(RhsError::Evaluation)?;
         let (ev, pts) = (disc.evaluations(), &self.points);
@@ -504,7 +531,7 @@ impl GrowthSystem {
                 stimulus::retina(z, r, h, th)
             })
             .collect();
-        Ok(retina)
+        Ok((retina, quad.z))
     }
 
     /// What the stimulus sees at every point of the solved shell in state `p`.

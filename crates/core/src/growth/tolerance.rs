@@ -287,13 +287,15 @@ struct Recorded {
     stats: GrowthStats,
 }
 
-/// Run the scene on `mesh` at `settings`, recording its outputs.
+/// Run the scene on `mesh` at `settings`, recording its outputs, and with `keep_states`
+/// the states [`replay`] hands the caller (the delivered run's only).
 fn record(
     params: &Params,
     solver: &SolverSettings,
     growth: &GrowthParams,
     settings: &GrowthSettings,
     mesh: Mesh,
+    keep_states: bool,
     progress: &mut ProgressFn<'_>,
 ) -> Result<Recorded, GrowthError> {
     let snapshots = super::snapshot_times(settings, growth.t_end);
@@ -309,15 +311,16 @@ fn record(
     let mut sens_rows = vec![];
     let mut output = |sys: &mut GrowthSystem, t: f64, p: &[f64]| {
         let (row, shell) = if t == 0.0 || snapshots.contains(&t) {
-            let snap = sys.snapshot(t, p)?;
-            let shell = snap.fields.iter().map(|f| (f.r, f.z)).collect();
-            (snap.series, Some(shell))
+            let (row, shell) = sys.outline(t, p)?;
+            (row, Some(shell))
         } else {
             (sys.series(t, p)?, None)
         };
         rec.t.push(t);
-        rec.p.push(p.to_vec());
-        rec.u.push(sys.elastic.u.clone());
+        if keep_states {
+            rec.p.push(p.to_vec());
+            rec.u.push(sys.elastic.u.clone());
+        }
         rec.series.push([
             row.axial_length,
             row.equatorial_radius,
@@ -366,7 +369,7 @@ fn three_runs(
     use std::sync::atomic::{AtomicUsize, Ordering};
     let [tight, loose] = at;
     if !std::thread::available_parallelism().is_ok_and(|n| n.get() > 1) {
-        let (fine, f) = timed(|| record(params, solver, growth, &tight, fine_mesh, progress));
+        let (fine, f) = timed(|| record(params, solver, growth, &tight, fine_mesh, true, progress));
         let fine = fine?;
         let (others, o) = timed(|| {
             let coarse = record(
@@ -375,9 +378,10 @@ fn three_runs(
                 growth,
                 &tight,
                 mesh.clone(),
+                false,
                 &mut |_| Ok(()),
             )?;
-            let loose = record(params, solver, growth, &loose, mesh, &mut |_| Ok(()))?;
+            let loose = record(params, solver, growth, &loose, mesh, false, &mut |_| Ok(()))?;
             Ok::<_, GrowthError>((coarse, loose))
         });
         let (coarse, loose) = others?;
@@ -397,9 +401,15 @@ fn three_runs(
     let (fine, coarse, loose, cpu) = std::thread::scope(|scope| {
         let helper = scope.spawn(|| {
             timed(|| {
-                let coarse = record(params, solver, growth, &tight, mesh.clone(), &mut |_| {
-                    halt()
-                });
+                let coarse = record(
+                    params,
+                    solver,
+                    growth,
+                    &tight,
+                    mesh.clone(),
+                    false,
+                    &mut |_| halt(),
+                );
                 if coarse.is_err() {
                     fail(1);
                     let skipped = GrowthError {
@@ -409,7 +419,7 @@ fn three_runs(
                     };
                     return (coarse, Err(skipped));
                 }
-                let loose = record(params, solver, growth, &loose, mesh, &mut |_| halt());
+                let loose = record(params, solver, growth, &loose, mesh, false, &mut |_| halt());
                 if loose.is_err() {
                     fail(2);
                 }
@@ -417,7 +427,7 @@ fn three_runs(
             })
         });
         let (fine, f) = timed(|| {
-            record(params, solver, growth, &tight, fine_mesh, &mut |t| {
+            record(params, solver, growth, &tight, fine_mesh, true, &mut |t| {
                 halt()?;
                 progress(t)
             })

@@ -624,9 +624,10 @@ impl CoupledDae {
     /// data become p and its elastic unknowns y's, without a re-solve.
     pub fn adopt(&mut self, y: &[f64]) {
         let p = &y[..self.n_p];
-        let u: Vec<f64> = (0..self.m)
-            .flat_map(|i| y[self.wcol(i, 0)..self.wcol(i, NY)].to_vec())
-            .collect();
+        let mut u = Vec::with_capacity(NY * self.m);
+        for i in 0..self.m {
+            u.extend_from_slice(&y[self.wcol(i, 0)..self.wcol(i, NY)]);
+        }
         self.sys.adopt(p, &u);
         self.at_p.clear();
     }
