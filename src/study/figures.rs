@@ -107,7 +107,7 @@ pub fn make(
             },
         )?;
     }
-    let mut runs = Runs::default();
+    let mut counts = Runs::default();
     let figures = if replot {
         owned = Some(own(out, &rundir::OwnedDir::resume)?);
         // Data given to --replot that does not read is the user's.
@@ -118,7 +118,7 @@ pub fn make(
         paper_figures(&runs, out).map_err(|e| failed(e.to_string()))?
     } else {
         let (figures, solved) = run_scenes(out, &data, jobs, cancel, progress)?;
-        runs = solved;
+        counts = solved;
         figures
     };
     let preamble = format!(
@@ -144,8 +144,8 @@ pub fn make(
             data: Some(DATA_DIR.into()),
             index: Some(INDEX_FILE.into()),
             status: "ok".into(),
-            runs_solved: runs.solved,
-            runs_shared: runs.shared,
+            runs_solved: counts.solved,
+            runs_shared: counts.shared,
         },
     )?;
     drop(owned);
