@@ -11,7 +11,7 @@ use eyeshell_cli::charts::sweep_runs;
 
 use eyeshell_cli::charts::PAPER_STEMS as FIGURES;
 
-/// `eyeshell figures` once for the whole file (it runs twelve growth runs).
+/// `eyeshell figures` once for the whole file (twelve growth runs, eleven of them solved).
 fn figures() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
@@ -87,6 +87,78 @@ fn every_figure_is_a_valid_non_trivial_png_and_svg() {
     ] {
         assert!(index.contains(p), "{p} not in index.html");
     }
+}
+
+/// scenes/thick.toml is the fibre sweep's D = 0 run: solved once, and the twin's directory
+/// holds the same data files byte for byte under its own scene.toml and summary.json; the
+/// figures' summary.json says 11 runs were solved and 1 shared.
+#[test]
+fn the_thick_run_is_solved_once_and_shared_with_fibre_d0() {
+    let dir = figures();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["runs_solved"], 11);
+    assert_eq!(summary["runs_shared"], 1);
+    let (thick, d0) = (
+        dir.join("data/thick/runs/run"),
+        dir.join("data/fibre/runs/D=0"),
+    );
+    let files = |run: &Path| {
+        let mut v: Vec<_> = walk(run)
+            .into_iter()
+            .map(|p| p.strip_prefix(run).unwrap().to_path_buf())
+            .collect();
+        v.sort();
+        v
+    };
+    let names = files(&thick);
+    assert_eq!(names, files(&d0));
+    for data in ["series.csv", "history.csv", "peripheral.csv"] {
+        assert!(names.contains(&PathBuf::from(data)), "{data}: {names:?}");
+    }
+    assert_eq!(
+        names.iter().filter(|p| p.starts_with("snapshots")).count(),
+        5
+    );
+    for name in &names {
+        let (a, b) = (
+            std::fs::read(thick.join(name)).unwrap(),
+            std::fs::read(d0.join(name)).unwrap(),
+        );
+        let own = ["scene.toml", "summary.json", "result.json"]
+            .iter()
+            .any(|o| name == Path::new(o));
+        assert_eq!(a == b, !own, "{}", name.display());
+    }
+    let toml = |run: &Path| std::fs::read_to_string(run.join("scene.toml")).unwrap();
+    assert!(
+        toml(&thick).starts_with("name = \"thick/run\"\ndescription = \"The paper's thick scene")
+    );
+    assert!(toml(&d0).starts_with("name = \"fibre/D=0\"\ndescription = \"The paper's fibre scenes"));
+    let scene = |run: &Path| {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap())
+                .unwrap();
+        v["scene"].clone()
+    };
+    assert_eq!(scene(&thick)["name"], "thick/run");
+    assert_eq!(scene(&thick)["path"], "scenes/thick.toml");
+    assert_eq!(scene(&d0)["name"], "fibre/D=0");
+    assert_eq!(scene(&d0)["path"], "scenes/fibre.toml");
+}
+
+/// Every regular file below `dir` (the marker and hidden names included).
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
 }
 
 /// The numbers written as text in an SVG (tick labels among them).

@@ -185,6 +185,8 @@ fn summary_seeds() -> Vec<Vec<u8>> {
         data: Some("data".into()),
         index: Some("index.html".into()),
         status: "ok".into(),
+        runs_solved: Some(11),
+        runs_shared: Some(1),
     };
     seeds.push(Summary::Figures(figures).to_text().into_bytes());
     seeds

@@ -326,6 +326,12 @@ pub struct FiguresSummary {
     pub index: Option<String>,
     /// "running", then "ok".
     pub status: String,
+    /// The runs solved, and those copied from a run that is the same (once finished; not
+    /// for a replot, which runs nothing).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub runs_solved: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub runs_shared: Option<usize>,
 }
 
 /// One figure: its files relative to the figures' directory.

@@ -20,10 +20,7 @@ fn recorded(name: &str) -> bool {
 
 /// Every regular file below `dir` (result.json and hidden names aside), sorted by path.
 pub fn record(dir: &Path) -> std::io::Result<Vec<RunFile>> {
-    let mut paths = Vec::new();
-    walk(dir, "", &mut paths)?;
-    paths.sort();
-    paths
+    list(dir)?
         .into_iter()
         .map(|rel| {
             let (bytes, hash) = checksum(&dir.join(&rel))?;
@@ -34,6 +31,14 @@ pub fn record(dir: &Path) -> std::io::Result<Vec<RunFile>> {
             })
         })
         .collect()
+}
+
+/// The paths, relative to `dir`, of the files [`record`] records, sorted.
+pub fn list(dir: &Path) -> std::io::Result<Vec<String>> {
+    let mut paths = Vec::new();
+    walk(dir, "", &mut paths)?;
+    paths.sort();
+    Ok(paths)
 }
 
 fn walk(dir: &Path, prefix: &str, out: &mut Vec<String>) -> std::io::Result<()> {

@@ -28,7 +28,8 @@
 //! - [`resume`]: which runs of an earlier sweep are reused;
 //! - [`shard`]: one shard of a sweep (`--shard K/N`), and the merge of the shards' runs;
 //! - [`target`]: the output directory, refused when resuming would read or write outside
-//!   it, or mix a sweep with something else.
+//!   it, or mix a sweep with something else;
+//! - [`twin`]: runs that are the same run, solved once and copied to each.
 
 pub mod compact;
 pub mod files;
@@ -37,6 +38,7 @@ pub mod resume;
 pub mod run;
 pub mod shard;
 pub mod target;
+pub mod twin;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
