@@ -19,8 +19,8 @@
 //! node and so no second evaluation at πR0/2; no component adds thickness derivatives.
 
 use super::equations::{
-    self, Equations, Mat5, MaterialPoint, PointError, PointEval, Shell, Vec5, KAPPA, QS, R, THETA,
-    TS,
+    self, Equations, Mat5, MaterialPoint, Part, PointError, PointEval, Shell, Vec5, KAPPA, QS, R,
+    THETA, TS,
 };
 use crate::bvp::settings::Scheme;
 use crate::mesh::Mesh;
@@ -47,7 +47,7 @@ pub struct EvalFailure {
 
 /// The shell's material data on the mesh: at each node from either side, and at the
 /// interval midpoints (used by Hermite–Simpson).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct MaterialData {
     /// Node i seen from interval i (the limit from above). Length M.
     pub above: Vec<MaterialPoint>,
@@ -76,6 +76,9 @@ pub struct Evaluations {
     /// Hermite–Simpson midpoint of interval i, and y there.
     mid: Vec<PointEval>,
     y_mid: Vec<Vec5>,
+    /// Whether ∂f/∂y and ∂α_s/∂(r, t_s) are those at `u` too ([`Part::Full`]), or only
+    /// the values ([`Part::Values`]).
+    full: bool,
 }
 
 impl Evaluations {
@@ -168,6 +171,13 @@ impl Discretisation {
     }
 
     /// Replace the unloaded shell's data (after growth); evaluations at the old data are dropped.
+    /// The data, handed out to be written over ([`Self::set_data`] gives them back): no
+    /// point evaluation holds until then.
+    pub fn take_data(&mut self) -> MaterialData {
+        self.evals.u.clear();
+        std::mem::take(&mut self.data)
+    }
+
     pub fn set_data(&mut self, data: MaterialData) {
         let m = self.mesh.len();
         assert!(data.above.len() == m && data.below.len() == m && data.mid.len() == m - 1);
@@ -180,7 +190,7 @@ impl Discretisation {
     /// Hermite–Simpson midpoints, else trapezoidal): ds/dΣ = γ α_s from s(ε) = σ_ε α_s,
     /// dz/dΣ = −γ α_s sin θ from the cornea's z(L) = z*.
     pub fn quadratures(&mut self, u: &[f64]) -> Result<Quadratures, EvalFailure> {
-        self.evaluate(u)?;
+        self.evaluate(u, Part::Values)?;
         let (m, ev, data) = (self.mesh.len(), &self.evals, &self.data);
         let rates = |mp: &MaterialPoint, e: &PointEval| {
             [mp.gamma * e.alpha_s, -mp.gamma * e.alpha_s * e.sin_theta]
@@ -222,7 +232,7 @@ impl Discretisation {
     /// z(Σ_{i+1}) − z(Σ_i) interval by interval, as [`Discretisation::quadratures`] has it,
     /// into `dz` (length M − 1), without the rest of the quadratures.
     pub fn z_steps(&mut self, u: &[f64], dz: &mut [f64]) -> Result<(), EvalFailure> {
-        self.evaluate(u)?;
+        self.evaluate(u, Part::Values)?;
         let (ev, data) = (&self.evals, &self.data);
         let slope = |mp: &MaterialPoint, e: &PointEval| -mp.gamma * e.alpha_s * e.sin_theta;
         for (i, d) in dz.iter_mut().enumerate() {
@@ -248,18 +258,26 @@ impl Discretisation {
         self.mesh.is_empty()
     }
 
-    /// Evaluate f (and ∂f/∂y) at every point the scheme uses, unless already done at `u`,
-    /// with the equations of the shell's membrane component (resolved here, once a pass).
-    fn evaluate(&mut self, u: &[f64]) -> Result<(), EvalFailure> {
-        if !self.evals.u.is_empty() && self.evals.u.as_slice() == u {
-            return Ok(());
-        }
+    /// Evaluate at every point the scheme uses what `need` asks ([`Part::Values`] or
+    /// [`Part::Full`]), unless already done at `u`, with the equations of the shell's
+    /// membrane component (resolved here, once a pass). Values taken at `u` are completed
+    /// with their derivatives without a new α_s solve ([`Part::Derivatives`]), so that a
+    /// residual and then a Jacobian at one `u` cost one solve per point, as one full pass.
+    fn evaluate(&mut self, u: &[f64], need: Part) -> Result<(), EvalFailure> {
+        let part = if !self.evals.u.is_empty() && self.evals.u.as_slice() == u {
+            match (need, self.evals.full) {
+                (Part::Values, _) | (_, true) => return Ok(()),
+                _ => Part::Derivatives,
+            }
+        } else {
+            need
+        };
         match self.shell.membrane() {
             Membrane::NeoHookean { .. } => {
-                self.evaluate_with(&Equations::neo_hookean(&self.shell), u)
+                self.evaluate_with(&Equations::neo_hookean(&self.shell), u, part)
             }
             Membrane::Reinforced { d, .. } => {
-                self.evaluate_with(&Equations::reinforced(&self.shell, d), u)
+                self.evaluate_with(&Equations::reinforced(&self.shell, d), u, part)
             }
         }
     }
@@ -271,6 +289,7 @@ impl Discretisation {
         &mut self,
         eq: &Equations<Rf>,
         u: &[f64],
+        part: Part,
     ) -> Result<(), EvalFailure> {
         let ev = &mut self.evals;
         ev.u.clear(); // invalid until every point is done
@@ -293,7 +312,7 @@ impl Discretisation {
                 &self.data.below[i]
             };
             let e = &mut ev.node[i];
-            eq.evaluate_into(mp, &y_at(u, i), guess(e), e)
+            eq.evaluate_part(mp, &y_at(u, i), guess(e), e, part)
                 .map_err(fail(i, mp))?;
         }
         ev.below.truncate(self.jump_nodes.len());
@@ -304,7 +323,7 @@ impl Discretisation {
             let mp = &self.data.below[i];
             let e = &mut ev.below[k];
             e.0 = i;
-            eq.evaluate_into(mp, &y_at(u, i), guess(&e.1), &mut e.1)
+            eq.evaluate_part(mp, &y_at(u, i), guess(&e.1), &mut e.1, part)
                 .map_err(fail(i, mp))?;
         }
         if self.scheme == Scheme::HermiteSimpson {
@@ -316,12 +335,13 @@ impl Discretisation {
                     + (h / 8.0) * (ev.left(i).f - ev.right(i).f);
                 let mp = &self.data.mid[i];
                 let e = &mut ev.mid[i];
-                eq.evaluate_into(mp, &ym, guess(e), e)
+                eq.evaluate_part(mp, &ym, guess(e), e, part)
                     .map_err(fail(i, mp))?;
                 ev.y_mid[i] = ym;
             }
         }
         ev.u.extend_from_slice(u);
+        ev.full = part != Part::Values;
         Ok(())
     }
 
@@ -332,7 +352,7 @@ impl Discretisation {
 
     /// F(u) into `f`.
     pub fn residual(&mut self, u: &[f64], f: &mut [f64]) -> Result<(), EvalFailure> {
-        self.evaluate(u)?;
+        self.evaluate(u, Part::Values)?;
         let ev = &self.evals;
         let m = self.mesh.len();
         // Pole (docs/MODEL.md §3): r = σ_ε α_s, θ = σ_ε α_s κ, and the first integral over r.
@@ -366,7 +386,7 @@ impl Discretisation {
         u: &[f64],
         jac: &mut S,
     ) -> Result<(), EvalFailure> {
-        self.evaluate(u)?;
+        self.evaluate(u, Part::Full)?;
         let ev = &self.evals;
         let m = self.mesh.len();
         let y0 = y_at(u, 0);
@@ -443,9 +463,16 @@ impl Discretisation {
         (row_ptr, col_idx)
     }
 
-    /// Make sure the point evaluations are those at `u` (see [`Self::evaluations`]).
+    /// Make sure the point evaluations are those at `u`, derivatives included (see
+    /// [`Self::evaluations`]).
     pub fn evaluate_at(&mut self, u: &[f64]) -> Result<(), EvalFailure> {
-        self.evaluate(u)
+        self.evaluate(u, Part::Full)
+    }
+
+    /// Make sure the point evaluations' values (f, α_s, the tensions, sin θ, cos θ) are
+    /// those at `u`; their derivatives may be another state's until [`Self::evaluate_at`].
+    pub fn evaluate_values_at(&mut self, u: &[f64]) -> Result<(), EvalFailure> {
+        self.evaluate(u, Part::Values)
     }
 
     /// The point evaluations of the last state evaluated.
@@ -575,6 +602,65 @@ mod tests {
         forced.jacobian(&u, &mut jb).unwrap();
         for (a, b) in ja.data.iter().zip(&jb.data) {
             assert!((a - b).abs() <= 1e-11 * (1.0 + a.abs()), "{a} vs {b}");
+        }
+    }
+
+    /// A residual's values at u, completed by a Jacobian at the same u, and a values-only
+    /// pass that finds the full one already there, give every number a fresh full
+    /// evaluation gives, with and without fibres; a Jacobian at a state evaluated for its
+    /// values only at another state is that state's own.
+    #[test]
+    fn values_completed_later_are_a_full_evaluation() {
+        for d in [0.0, 150.0] {
+            let p = Params {
+                thickness: Thickness::NonUniform,
+                d,
+                ..Params::default()
+            };
+            let s = SolverSettings {
+                nodes: 41,
+                ..SolverSettings::default()
+            };
+            let fresh = discretise(&p, &s).unwrap();
+            let mut u = sphere_guess(&fresh, p.r0);
+            for (k, v) in u.iter_mut().enumerate() {
+                *v *= 1.0 + 1e-3 * ((k % 7) as f64 - 3.0);
+            }
+            let mut v = u.clone();
+            v[7] *= 1.0 + 1e-4;
+            let n = fresh.len();
+            let jacobian_of = |disc: &mut Discretisation, at: &[f64]| {
+                let mut j = DenseSink::new(n);
+                disc.jacobian(at, &mut j).unwrap();
+                j.data
+            };
+            let residual_of = |disc: &mut Discretisation, at: &[f64]| {
+                let mut f = vec![0.0; n];
+                disc.residual(at, &mut f).unwrap();
+                f
+            };
+            // Each path starts from the same previous evaluation (v's), as α_s is seeded
+            // from it.
+            let mut full = discretise(&p, &s).unwrap();
+            residual_of(&mut full, &v);
+            let j_full = jacobian_of(&mut full, &u);
+            let f_full = residual_of(&mut full, &u);
+            let mut split = discretise(&p, &s).unwrap();
+            residual_of(&mut split, &v);
+            let f_split = residual_of(&mut split, &u);
+            let j_split = jacobian_of(&mut split, &u);
+            assert_eq!(f_split, f_full);
+            assert_eq!(j_split, j_full);
+            // A values-only pass at u after v's, then the Jacobian at v: v's, recomputed.
+            let mut back = discretise(&p, &s).unwrap();
+            residual_of(&mut back, &u);
+            let j_u = jacobian_of(&mut back, &u);
+            residual_of(&mut back, &v);
+            let j_v = jacobian_of(&mut back, &v);
+            assert_ne!(j_u, j_v);
+            let mut only_v = discretise(&p, &s).unwrap();
+            residual_of(&mut only_v, &u);
+            assert_eq!(jacobian_of(&mut only_v, &v), j_v);
         }
     }
 }

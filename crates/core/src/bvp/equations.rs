@@ -174,7 +174,7 @@ pub fn stretch(
 
 /// f and ∂f/∂y at one point. `guess` seeds the α_s solve (dispatching once on the shell's
 /// membrane component; see [`Equations::evaluate`]). The assembly calls
-/// [`Equations::evaluate_into`]; this allocating form serves the tests.
+/// [`Equations::evaluate_part`]; this allocating form serves the tests.
 #[cfg(test)]
 pub fn evaluate(
     shell: &Shell,
@@ -230,51 +230,74 @@ impl<R: Reinforcement> Equations<R> {
         guess: f64,
     ) -> Result<PointEval, PointError> {
         let mut out = PointEval::unset();
-        self.evaluate_into(mp, y, guess, &mut out)?;
+        self.evaluate_part(mp, y, guess, &mut out, Part::Full)?;
         Ok(out)
     }
 
-    /// f and ∂f/∂y at one point, written in place (the assembly's buffers: no 300-byte copies).
-    /// On error `out` is left as it was.
+    /// What `part` asks of one point, written in place (the assembly's buffers: no
+    /// 300-byte copies); on error `out` is left as it was.
+    /// [`Part::Values`] leaves ∂f/∂y and ∂α_s/∂(r, t_s) as they were; [`Part::Derivatives`]
+    /// reads α_s and the tensions from `out`, which must hold the values at this `y` and
+    /// these data, and writes the rest: every number as the full evaluation writes it.
     #[inline]
-    pub fn evaluate_into(
+    pub fn evaluate_part(
         &self,
         mp: &MaterialPoint,
         y: &Vec5,
         guess: f64,
         out: &mut PointEval,
+        part: Part,
     ) -> Result<(), PointError> {
         if !y.iter().all(|v| v.is_finite()) {
             return Err(PointError::NotFinite);
         }
         let (kappa, r, theta, q, ts) = (y[KAPPA], y[R], y[THETA], y[QS], y[TS]);
-        let (a, a_r, a_ts, t) = self.stretch(mp, r, ts, guess)?;
+        let (a, t) = match part {
+            Part::Derivatives => (out.alpha_s, out.tensions),
+            Part::Values | Part::Full => {
+                if !r.is_finite() || r <= 0.0 {
+                    return Err(PointError::NonPositiveRadius);
+                }
+                self.law
+                    .alpha_s_from_ts(mp.zeta, R::direction(&mp.fibre), ts, r / mp.rho, guess)
+                    .ok_or(PointError::StretchNotFound)?
+            }
+        };
         let g = mp.gamma;
         let (sn, cs) = theta.sin_cos();
         let inv_r = 1.0 / r;
         let inv_eb = self.inv_e_b;
-        // t_φ along the solution: total derivatives through α_s(r, t_s).
         let p = t.tphi;
+        let u = sn * inv_r - kappa;
+        let d = p - ts;
+        // Each right side is γ α_s g(y).
+        let gv = [
+            u * cs * inv_r - q * inv_eb,
+            cs,
+            kappa,
+            self.dp - kappa * ts - sn * p * inv_r - q * cs * inv_r,
+            kappa * q + d * cs * inv_r,
+        ];
+        for (fk, gk) in out.f.iter_mut().zip(gv) {
+            *fk = g * a * gk;
+        }
+        out.alpha_s = a;
+        out.tensions = t;
+        out.sin_theta = sn;
+        out.cos_theta = cs;
+        if matches!(part, Part::Values) {
+            return Ok(());
+        }
+        // The IFT derivatives of α_s(r, t_s), as [`Self::stretch`] has them.
+        let a_ts = 1.0 / t.ts_a;
+        let a_r = -t.ts_phi * a_ts / mp.rho;
+        // t_φ along the solution: total derivatives through α_s(r, t_s).
         let p_r = t.tphi_a * a_r + t.tphi_phi / mp.rho;
         let p_ts = t.tphi_a * a_ts;
-
-        // Each right side is γ α_s g(y); its row is γ (α_s ∂g/∂y + g ∂α_s/∂y), where α_s
-        // depends on r and t_s only. `grad` holds ∂g/∂(κ, r, θ, q_s, t_s). Every entry of
-        // f and ∂f/∂y is written.
-        let PointEval { f, jac: j, .. } = out;
-        let mut row = |k: usize, gv: f64, grad: [f64; 5]| {
-            f[k] = g * a * gv;
-            for c in 0..5 {
-                j[(k, c)] = g * a * grad[c];
-            }
-            j[(k, R)] += g * gv * a_r;
-            j[(k, TS)] += g * gv * a_ts;
-        };
-        let u = sn * inv_r - kappa;
+        // Each row is γ (α_s ∂g/∂y + g ∂α_s/∂y), where α_s depends on r and t_s only.
+        // `grad` holds ∂g/∂(κ, r, θ, q_s, t_s). Every entry of ∂f/∂y is written.
         let r2 = inv_r * inv_r;
-        row(
-            KAPPA,
-            u * cs * inv_r - q * inv_eb,
+        let grads = [
             [
                 -cs * inv_r,
                 -sn * cs * r2 * inv_r - u * cs * r2,
@@ -282,12 +305,8 @@ impl<R: Reinforcement> Equations<R> {
                 -inv_eb,
                 0.0,
             ],
-        );
-        row(R, cs, [0.0, 0.0, -sn, 0.0, 0.0]);
-        row(THETA, kappa, [1.0, 0.0, 0.0, 0.0, 0.0]);
-        row(
-            QS,
-            self.dp - kappa * ts - sn * p * inv_r - q * cs * inv_r,
+            [0.0, 0.0, -sn, 0.0, 0.0],
+            [1.0, 0.0, 0.0, 0.0, 0.0],
             [
                 -ts,
                 -sn * p_r * inv_r + sn * p * r2 + q * cs * r2,
@@ -295,11 +314,6 @@ impl<R: Reinforcement> Equations<R> {
                 -cs * inv_r,
                 -kappa - sn * p_ts * inv_r,
             ],
-        );
-        let d = p - ts;
-        row(
-            TS,
-            kappa * q + d * cs * inv_r,
             [
                 q,
                 p_r * cs * inv_r - d * cs * r2,
@@ -307,16 +321,31 @@ impl<R: Reinforcement> Equations<R> {
                 kappa,
                 (p_ts - 1.0) * cs * inv_r,
             ],
-        );
-
-        out.alpha_s = a;
+        ];
+        let j = &mut out.jac;
+        for (k, (grad, gk)) in grads.iter().zip(gv).enumerate() {
+            for c in 0..5 {
+                j[(k, c)] = g * a * grad[c];
+            }
+            j[(k, R)] += g * gk * a_r;
+            j[(k, TS)] += g * gk * a_ts;
+        }
         out.alpha_s_r = a_r;
         out.alpha_s_ts = a_ts;
-        out.tensions = t;
-        out.sin_theta = sn;
-        out.cos_theta = cs;
         Ok(())
     }
+}
+
+/// What an evaluation of a point writes ([`Equations::evaluate_part`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// f, α_s, the tensions, sin θ and cos θ: what a residual, the quadratures and the
+    /// growth rates read.
+    Values,
+    /// ∂f/∂y and ∂α_s/∂(r, t_s) besides, from the values already in the slot (the same y).
+    Derivatives,
+    /// Both, from scratch.
+    Full,
 }
 
 /// ∂f and ∂α_s with respect to a point's data (ρ, ζ, γ) at fixed y: what the coupled growth
@@ -464,6 +493,49 @@ mod tests {
         );
         assert_eq!((a.f, a.jac, a.alpha_s), (b.f, b.jac, b.alpha_s));
         assert_eq!(evaluate(&shell, &with, &y, 1.0).unwrap().f, a.f);
+    }
+
+    /// The values alone, then their derivatives from them, write exactly the numbers one
+    /// full evaluation writes (with and without fibres), and the values alone leave the
+    /// derivatives' slots as they were.
+    #[test]
+    fn values_then_derivatives_are_the_full_evaluation() {
+        for d in [None, Some(200.0)] {
+            let (shell, mp, y) = test_point(d);
+            let run = |eq: &dyn Fn(&mut PointEval, Part)| {
+                let mut full = PointEval::unset();
+                eq(&mut full, Part::Full);
+                let mut split = PointEval::unset();
+                split.jac[(2, 3)] = 7.0;
+                split.alpha_s_r = 5.0;
+                eq(&mut split, Part::Values);
+                assert_eq!(split.f, full.f);
+                assert_eq!(split.alpha_s, full.alpha_s);
+                assert_eq!(split.tensions, full.tensions);
+                assert_eq!(
+                    (split.sin_theta, split.cos_theta),
+                    (full.sin_theta, full.cos_theta)
+                );
+                assert_eq!((split.jac[(2, 3)], split.alpha_s_r), (7.0, 5.0));
+                eq(&mut split, Part::Derivatives);
+                assert_eq!(split.jac, full.jac);
+                assert_eq!(
+                    (split.alpha_s_r, split.alpha_s_ts),
+                    (full.alpha_s_r, full.alpha_s_ts)
+                );
+                assert_eq!(split.f, full.f);
+            };
+            match d {
+                None => {
+                    let eq = Equations::neo_hookean(&shell);
+                    run(&|out, part| eq.evaluate_part(&mp, &y, 1.0, out, part).unwrap());
+                }
+                Some(d) => {
+                    let eq = Equations::reinforced(&shell, d);
+                    run(&|out, part| eq.evaluate_part(&mp, &y, 1.0, out, part).unwrap());
+                }
+            }
+        }
     }
 
     /// A shell (with fibres of stiffness `d`, if any), a grown point and a state off

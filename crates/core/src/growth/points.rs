@@ -147,20 +147,15 @@ impl GrowthPoints {
     /// The unloaded shell's data for the elastic scheme in state `p`. σ comes from the
     /// scheme's quadrature of γ_s, with σ_ε = ε γ_s over the truncated cap.
     pub fn material_data(&self, p: &[f64]) -> MaterialData {
+        let mut data = MaterialData::default();
+        self.material_data_into(p, &mut data);
+        data
+    }
+
+    /// [`Self::material_data`] written over `data`'s buffers (a residual's, every call).
+    pub fn material_data_into(&self, p: &[f64], data: &mut MaterialData) {
         let m = self.above.len();
         let gamma = |k: usize| p[NP * k + 1];
-        let mut sigma = vec![0.0; m];
-        sigma[0] = self.epsilon * gamma(self.above[0]);
-        for i in 0..m - 1 {
-            let h = self.steps[i];
-            let (a, b) = (gamma(self.above[i]), gamma(self.below[i + 1]));
-            sigma[i + 1] = sigma[i]
-                + if self.hermite_simpson {
-                    h / 6.0 * (a + 4.0 * gamma(self.mid[i]) + b)
-                } else {
-                    0.5 * h * (a + b)
-                };
-        }
         let point = |k: usize, s: f64| MaterialPoint {
             sigma_ref: self.sigma_ref[k],
             sigma: s,
@@ -169,22 +164,31 @@ impl GrowthPoints {
             gamma: gamma(k),
             fibre: self.fibre[k],
         };
-        let mid = if self.hermite_simpson {
-            (0..m - 1)
-                .map(|i| {
-                    let (a, b) = (gamma(self.above[i]), gamma(self.below[i + 1]));
-                    let s = 0.5 * (sigma[i] + sigma[i + 1]) + self.steps[i] / 8.0 * (a - b);
-                    point(self.mid[i], s)
-                })
-                .collect()
-        } else {
-            // The trapezoidal scheme never reads midpoints; keep the slots well-formed.
-            (0..m - 1).map(|i| point(self.above[i], sigma[i])).collect()
-        };
-        MaterialData {
-            above: (0..m).map(|i| point(self.above[i], sigma[i])).collect(),
-            below: (0..m).map(|i| point(self.below[i], sigma[i])).collect(),
-            mid,
+        let (above, below, mid) = (&mut data.above, &mut data.below, &mut data.mid);
+        above.clear();
+        below.clear();
+        mid.clear();
+        let mut sigma = self.epsilon * gamma(self.above[0]);
+        for i in 0..m {
+            above.push(point(self.above[i], sigma));
+            below.push(point(self.below[i], sigma));
+            if i + 1 < m {
+                let h = self.steps[i];
+                let (a, b) = (gamma(self.above[i]), gamma(self.below[i + 1]));
+                let next = sigma
+                    + if self.hermite_simpson {
+                        h / 6.0 * (a + 4.0 * gamma(self.mid[i]) + b)
+                    } else {
+                        0.5 * h * (a + b)
+                    };
+                mid.push(if self.hermite_simpson {
+                    point(self.mid[i], 0.5 * (sigma + next) + h / 8.0 * (a - b))
+                } else {
+                    // The trapezoidal scheme never reads midpoints; keep the slots well-formed.
+                    point(self.above[i], sigma)
+                });
+                sigma = next;
+            }
         }
     }
 }

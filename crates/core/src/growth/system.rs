@@ -222,8 +222,7 @@ impl GrowthSystem {
             return Ok(());
         }
         if !same {
-            let data = self.points.material_data(p);
-            self.elastic.discretisation_mut().set_data(data);
+            self.load_data(p);
         }
         self.solved_at.clear();
         self.work.bvp_solves += 1;
@@ -562,14 +561,20 @@ impl GrowthSystem {
     /// snapshot first polishes u into the exact elastic state of p (a warm Newton solve), so
     /// that its fields carry only the growth state's error, as CVODE's do.
     pub fn adopt(&mut self, p: &[f64], u: &[f64]) {
-        self.elastic
-            .discretisation_mut()
-            .set_data(self.points.material_data(p));
+        self.load_data(p);
         self.elastic.u.clear();
         self.elastic.u.extend_from_slice(u);
         self.solved_at.clear();
         self.solved_at.extend_from_slice(p);
         self.exact = false;
+    }
+
+    /// The discretisation's data become those of state `p`, written over its buffers.
+    fn load_data(&mut self, p: &[f64]) {
+        let disc = self.elastic.discretisation_mut();
+        let mut data = disc.take_data();
+        self.points.material_data_into(p, &mut data);
+        self.elastic.discretisation_mut().set_data(data);
     }
 
     /// The thickness law of the growth points.

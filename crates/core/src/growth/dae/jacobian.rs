@@ -7,7 +7,7 @@ use super::*;
 impl CoupledDae {
     /// Assemble ∂F/∂y + c ∂F/∂y' at y into the CSR matrix.
     pub fn assemble(&mut self, c: f64, y: &[f64]) -> Result<(), DaeError> {
-        self.load(y)?;
+        self.load(y, Part::Full)?;
         let mut derivs = std::mem::take(&mut self.derivs);
         self.data_derivs(&mut derivs);
         self.derivs = derivs;

@@ -43,8 +43,8 @@ use super::system::{GrowthSystem, RhsError};
 use super::ThicknessLaw;
 use crate::bvp::discretisation::{Discretisation, EvalFailure, Evaluations, NY, POLE_ROWS};
 use crate::bvp::equations::{
-    constant_partials, data_partials, ConstantPartials, Mat5, MaterialPoint, PointError, PointEval,
-    ShellConstant, Vec5, KAPPA, R, THETA, TS,
+    constant_partials, data_partials, ConstantPartials, Mat5, MaterialPoint, Part, PointError,
+    PointEval, ShellConstant, Vec5, KAPPA, R, THETA, TS,
 };
 use crate::bvp::settings::Scheme;
 use crate::model::growth_law::positive_smooth;
@@ -527,24 +527,28 @@ impl CoupledDae {
         perm
     }
 
-    /// Set the discretisation's data to p and its evaluations to the elastic unknowns of y.
-    fn load(&mut self, y: &[f64]) -> Result<(), RhsError> {
+    /// Set the discretisation's data to p and its evaluations to the elastic unknowns of y:
+    /// their values, or with [`Part::Full`] their derivatives too.
+    fn load(&mut self, y: &[f64], part: Part) -> Result<(), RhsError> {
         let p = &y[..self.n_p];
         for i in 0..self.m {
             let w = &y[self.n_p + NW * i..self.n_p + NW * i + NY];
             self.u[NY * i..NY * i + NY].copy_from_slice(w);
         }
         if self.at_p.as_slice() != p {
-            let data = self.sys.points.material_data(p);
+            let disc = self.sys.elastic.discretisation_mut();
+            let mut data = disc.take_data();
+            self.sys.points.material_data_into(p, &mut data);
             self.sys.elastic.discretisation_mut().set_data(data);
             self.at_p.clear();
             self.at_p.extend_from_slice(p);
         }
-        self.sys
-            .elastic
-            .discretisation_mut()
-            .evaluate_at(&self.u)
-            .map_err(RhsError::Evaluation)
+        let disc = self.sys.elastic.discretisation_mut();
+        match part {
+            Part::Values => disc.evaluate_values_at(&self.u),
+            _ => disc.evaluate_at(&self.u),
+        }
+        .map_err(RhsError::Evaluation)
     }
 
     /// The consistent state at t = 0 from the elastic solution the system holds: y with z
@@ -564,7 +568,7 @@ impl CoupledDae {
             y[w + Z] = quad.z[i];
         }
         self.at_p.clear();
-        self.load(&y)?;
+        self.load(&y, Part::Values)?;
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(&y, &mut s.local);
         let crossing = self.point_rates(&y, &s.local, None, &mut s.rates);
@@ -699,7 +703,7 @@ impl CoupledDae {
         &mut self,
         y: &[f64],
     ) -> Result<(Option<usize>, Vec<[bool; 3]>), RhsError> {
-        self.load(y)?;
+        self.load(y, Part::Values)?;
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(y, &mut s.local);
         let crossing = self.point_rates(y, &s.local, None, &mut s.rates);

@@ -314,7 +314,7 @@ impl CoupledDae {
     pub fn residual(&mut self, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), RhsError> {
         let start = std::time::Instant::now();
         self.counters.residuals += 1;
-        self.load(y)?;
+        self.load(y, Part::Values)?;
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(y, &mut s.local);
         let crossing = self.point_rates(y, &s.local, None, &mut s.rates);

@@ -225,7 +225,7 @@ impl CoupledDae {
         params: &[SensParam],
         out: &mut [&mut [f64]],
     ) -> Result<(), RhsError> {
-        self.load(y)?;
+        self.load(y, Part::Full)?;
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(y, &mut s.local);
         let model = params.iter().any(|p| !p.is_growth());
