@@ -368,20 +368,16 @@ fn three_runs(
 ) -> Result<([Recorded; 3], [f64; 2]), GrowthError> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     let [tight, loose] = at;
+    // One run of the round: the delivered one keeps its states for the replay.
+    let run = |at: &GrowthSettings, mesh: Mesh, delivered: bool, progress: &mut ProgressFn<'_>| {
+        record(params, solver, growth, at, mesh, delivered, progress)
+    };
     if !std::thread::available_parallelism().is_ok_and(|n| n.get() > 1) {
-        let (fine, f) = timed(|| record(params, solver, growth, &tight, fine_mesh, true, progress));
+        let (fine, f) = timed(|| run(&tight, fine_mesh, true, progress));
         let fine = fine?;
         let (others, o) = timed(|| {
-            let coarse = record(
-                params,
-                solver,
-                growth,
-                &tight,
-                mesh.clone(),
-                false,
-                &mut |_| Ok(()),
-            )?;
-            let loose = record(params, solver, growth, &loose, mesh, false, &mut |_| Ok(()))?;
+            let coarse = run(&tight, mesh.clone(), false, &mut |_| Ok(()))?;
+            let loose = run(&loose, mesh, false, &mut |_| Ok(()))?;
             Ok::<_, GrowthError>((coarse, loose))
         });
         let (coarse, loose) = others?;
@@ -401,15 +397,7 @@ fn three_runs(
     let (fine, coarse, loose, cpu) = std::thread::scope(|scope| {
         let helper = scope.spawn(|| {
             timed(|| {
-                let coarse = record(
-                    params,
-                    solver,
-                    growth,
-                    &tight,
-                    mesh.clone(),
-                    false,
-                    &mut |_| halt(),
-                );
+                let coarse = run(&tight, mesh.clone(), false, &mut |_| halt());
                 if coarse.is_err() {
                     fail(1);
                     let skipped = GrowthError {
@@ -419,7 +407,7 @@ fn three_runs(
                     };
                     return (coarse, Err(skipped));
                 }
-                let loose = record(params, solver, growth, &loose, mesh, false, &mut |_| halt());
+                let loose = run(&loose, mesh, false, &mut |_| halt());
                 if loose.is_err() {
                     fail(2);
                 }
@@ -427,7 +415,7 @@ fn three_runs(
             })
         });
         let (fine, f) = timed(|| {
-            record(params, solver, growth, &tight, fine_mesh, true, &mut |t| {
+            run(&tight, fine_mesh, true, &mut |t| {
                 halt()?;
                 progress(t)
             })
