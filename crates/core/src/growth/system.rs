@@ -406,9 +406,7 @@ impl GrowthSystem {
         let delta = f64::EPSILON.sqrt() * p_max / v_max;
         let pv: Vec<f64> = p.iter().zip(v).map(|(a, b)| a + delta * b).collect();
         // δ F_p v at fixed u*, then δ w = −F_u⁻¹ (δ F_p v).
-        self.elastic
-            .discretisation_mut()
-            .set_data(self.points.material_data(&pv));
+        self.load_data(&pv);
         let u = self.elastic.u.clone();
         let f = self.factored.as_mut().expect("set up above");
         {
@@ -423,9 +421,7 @@ impl GrowthSystem {
         let u1: Vec<f64> = u.iter().zip(f.x.as_slice()).map(|(a, dx)| a - dx).collect();
         // g(u* + δw, p + δv) − g(u*, p) = δ (g_u w + g_p v).
         let result = self.rates(&u1, &pv, out, None);
-        self.elastic
-            .discretisation_mut()
-            .set_data(self.points.material_data(p));
+        self.load_data(p);
         result?;
         for (o, g0) in out.iter_mut().zip(fy) {
             *o = (*o - g0) / delta;
@@ -570,7 +566,7 @@ impl GrowthSystem {
     }
 
     /// The discretisation's data become those of state `p`, written over its buffers.
-    fn load_data(&mut self, p: &[f64]) {
+    pub(crate) fn load_data(&mut self, p: &[f64]) {
         let disc = self.elastic.discretisation_mut();
         let mut data = disc.take_data();
         self.points.material_data_into(p, &mut data);

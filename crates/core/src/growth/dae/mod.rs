@@ -536,10 +536,7 @@ impl CoupledDae {
             self.u[NY * i..NY * i + NY].copy_from_slice(w);
         }
         if self.at_p.as_slice() != p {
-            let disc = self.sys.elastic.discretisation_mut();
-            let mut data = disc.take_data();
-            self.sys.points.material_data_into(p, &mut data);
-            self.sys.elastic.discretisation_mut().set_data(data);
+            self.sys.load_data(p);
             self.at_p.clear();
             self.at_p.extend_from_slice(p);
         }
