@@ -13,6 +13,26 @@
 //! of fields.csv: κ (1/mm), α_s, r (mm), θ (rad), Q (kPa·mm²); the overall error is the
 //! largest of the five.
 //!
+//! **Where the error is not yet asymptotic** the factor 1/(2^p − 1) is too small, and two
+//! safety margins, both measured, take over. (1) The observed order: a pass also solves on
+//! M0, M with every other node dropped ([`coarsened`]), and at each of M0's nodes where
+//! the difference matters, log2(|u(M0) − u(M)| / |u(M) − u(M/2)|) below p puts
+//! |u(M) − u(M/2)|/(2^{p_obs} − 1) in the estimate ([`pre_asymptotic`]). (2) The
+//! estimate's record: each pass measures how far the last pass's estimate fell short of
+//! that pass's error, against its own far finer solution, and every later estimate is
+//! multiplied by that factor ([`measured_optimism`]); where the fibres go slack the
+//! solution has a [·]⁺ kink (MODEL.md §2), less smooth than order 4 assumes, and the
+//! estimate is optimistic by about the same factor at every resolution.
+//!
+//! **Soft shells.** A cold solve on the coarse start mesh that fails (E_b ≲ 1e-4: the
+//! cornea's layer inside one interval) is tried again on the start mesh halved, up to
+//! [`START_HALVINGS`] times; a warm start that fails on a new mesh is tried again cold,
+//! with the continuation of a cold solve. Newton's iterate counts as converged when its
+//! correction is within Newton's tolerance although the residual stalled at round-off
+//! (`Convergence::ToPrecision`); the start is solved to [`START_NEWTON_TOL`] at most, and
+//! a first pass solved so is never delivered. A Newton failure after a pass has been
+//! estimated stops the solve as a tolerance out of reach, with the best estimate.
+//!
 //! **The adaptation.** The local error indicator of interval i is how far the halved
 //! solution at the interval's midpoint lies from M's own interpolant there (cubic Hermite
 //! for Hermite–Simpson, linear for the trapezoid), less the smooth part of the global
@@ -40,7 +60,7 @@
 //! would exceed `solver.max_nodes`, it is out of reach. Either way the solve stops with the
 //! best error and its nodes. `solver.max_seconds` bounds all the passes together.
 
-use super::solve::{cornea_layer, mesh_of, solve_on_mesh, Solution};
+use super::solve::{cornea_layer, mesh_of, solve_on_mesh_adaptive, Solution};
 use super::{BvpError, ErrorEstimate, FieldRow};
 use crate::bvp::settings::{Scheme, SolverSettings};
 use crate::deadline::Deadline;
@@ -81,6 +101,9 @@ pub enum UnreachedWhy {
     NodeCap { max_nodes: usize },
     /// MAX_PASSES passes did not reach tol.
     Passes,
+    /// Newton did not converge on the next, finer mesh (its scaled residual where it
+    /// stopped), after a pass had solved and estimated.
+    Newton { residual: f64 },
 }
 
 impl std::fmt::Display for Unreached {
@@ -106,6 +129,10 @@ impl std::fmt::Display for Unreached {
                 "the next mesh would need more than solver.max_nodes = {max_nodes} nodes"
             ),
             UnreachedWhy::Passes => write!(f, "{MAX_PASSES} refinements did not reach it"),
+            UnreachedWhy::Newton { residual } => write!(
+                f,
+                "Newton did not converge on the next, finer mesh (scaled residual {residual:.1e}): ask for a larger tol"
+            ),
         }
     }
 }
@@ -424,6 +451,78 @@ pub fn extrapolate(coarse: &Solution, fine: &Solution) -> Solution {
     }
 }
 
+/// M with every other node dropped between its fixed nodes (ε, the breakpoints, L), and
+/// the indices in M of the nodes kept: the mesh M halves, nearly (exactly where M was a
+/// halving). None when nothing would be dropped.
+fn coarsened(mesh: &Mesh) -> Option<(Mesh, Vec<usize>)> {
+    let mut fixed: Vec<usize> = vec![0];
+    fixed.extend(mesh.breakpoint_nodes.iter().copied());
+    fixed.push(mesh.len() - 1);
+    fixed.sort_unstable();
+    fixed.dedup();
+    let mut kept = vec![0usize];
+    for w in fixed.windows(2) {
+        let mut i = w[0] + 2;
+        while i < w[1] {
+            kept.push(i);
+            i += 2;
+        }
+        kept.push(w[1]);
+    }
+    if kept.len() == mesh.len() {
+        return None;
+    }
+    let nodes = kept.iter().map(|&i| mesh.nodes[i]).collect();
+    let breakpoint_nodes = mesh
+        .breakpoint_nodes
+        .iter()
+        .map(|b| kept.iter().position(|k| k == b).unwrap())
+        .collect();
+    Some((Mesh::adapted(nodes, breakpoint_nodes), kept))
+}
+
+/// Each field's estimate where the error is not yet asymptotic there: at each node of M0
+/// (the mesh M halves, [`coarsened`]) the observed order p_j = log2(|u(M0) − u(M)| /
+/// |u(M) − u(M/2)|); where it is below the scheme's p, (u(M/2) − u(M))/(2^p − 1) is too
+/// small by (2^p − 1)/(2^p_j − 1), and the node's estimate is |u(M) − u(M/2)|/(2^p_j − 1)
+/// (p_j at least 1). Node by node, because what is pre-asymptotic is local: a fibre's
+/// [·]⁺ kink, where the fibres go slack, costs the solution its smoothness at one point
+/// (MODEL.md §2), and a soft shell's cornea layer is resolved last. Only nodes whose
+/// difference is at least a tenth of the field's largest count (an error crossing zero
+/// makes the ratio meaningless where it is small), and none at the round-off floor.
+/// Returns the largest per field.
+fn pre_asymptotic(c0: &Solution, kept: &[usize], coarse: &Solution, fine: &Solution) -> [f64; 5] {
+    let p = coarse.scheme.order() as f64;
+    let floor = round_off_floor(fine);
+    let diffs: Vec<([f64; 5], [f64; 5])> = kept
+        .iter()
+        .enumerate()
+        .map(|(j, &i)| {
+            let (a, b, c) = (
+                five(&c0.rows[j]),
+                five(&coarse.rows[i]),
+                five(&fine.rows[2 * i]),
+            );
+            (
+                std::array::from_fn(|k| (a[k] - b[k]).abs()),
+                std::array::from_fn(|k| (b[k] - c[k]).abs()),
+            )
+        })
+        .collect();
+    std::array::from_fn(|k| {
+        let top = diffs.iter().fold(0.0f64, |a, d| a.max(d.1[k]));
+        let mut est = 0.0f64;
+        for (d0, d1) in &diffs {
+            let (d0, d1) = (d0[k], d1[k]);
+            if d1 >= 0.1 * top && d1 > 16.0 * floor {
+                let observed = (d0 / d1).log2().clamp(1.0, p);
+                est = est.max(d1 / (2f64.powf(observed) - 1.0));
+            }
+        }
+        est
+    })
+}
+
 /// One pass's answer: the solution reported, its estimate and the local errors that lay
 /// the next mesh (with the order they fall at).
 struct PassResult {
@@ -442,8 +541,29 @@ fn pass(
     work: &mut Work,
 ) -> Result<PassResult, BvpError> {
     let fine = work.solve(params, s, coarse.mesh.halved(), Some(coarse))?;
-    let est = estimate(coarse, &fine);
+    let mut est = estimate(coarse, &fine);
     if !s.richardson {
+        // With fibres the solution has a kink where they go slack ([·]⁺, MODEL.md §2), a
+        // point the mesh does not know: the interval holding it converges an order lower
+        // (measured: the estimate fell short by 2–2.6× on the fibre shells of E_b ≤ 0.05),
+        // so its share of the error is (u(M/2) − u(M))/(2^{p−1} − 1).
+        if params.has_fibres() {
+            let p = s.scheme.order() as i32;
+            let kink = (2f64.powi(p) - 1.0) / (2f64.powi(p - 1) - 1.0);
+            for g in &mut est.global {
+                *g *= kink;
+            }
+        }
+        // The estimate where the observed order is below the scheme's: one more solve, on
+        // M0 (about half M's nodes, an eighth of the pass's work).
+        if let Some((m0, kept)) = coarsened(&coarse.mesh) {
+            if let Ok(c0) = work.solve(params, s, m0, Some(coarse)) {
+                let local = pre_asymptotic(&c0, &kept, coarse, &fine);
+                for k in 0..5 {
+                    est.global[k] = est.global[k].max(local[k]);
+                }
+            }
+        }
         return Ok(PassResult {
             report: fine,
             global: est.global,
@@ -525,7 +645,7 @@ impl Work {
             clock_start: self.clock_start,
             ..*s
         };
-        let sol = solve_on_mesh(params, &s, mesh, warm).map_err(|e| match e {
+        let sol = solve_on_mesh_adaptive(params, &s, mesh, warm).map_err(|e| match e {
             BvpError::OutOfTime(_) => out_of_time(),
             e => e,
         })?;
@@ -562,20 +682,63 @@ pub fn solve_to_tolerance(
     } else {
         mesh_of(params, &s)?
     };
-    let mut coarse = work.solve(params, &s, start, None)?;
+    // The start only seeds the first pass: its Newton error enters that pass's estimate
+    // (over 2^p − 1, which a coarse mesh's error dwarfs), never a reported solution. On a
+    // soft shell's coarse mesh 1e-12 can lie below the residual's round-off.
+    let loose = SolverSettings {
+        newton_tol: s.newton_tol.max(START_NEWTON_TOL),
+        ..s
+    };
+    let mut coarse = solve_start(params, &loose, start, &mut work)?;
+    // The first pass too: it is accepted only if it solved at the strict tolerance.
+    let mut pass_settings = loose;
+    // The last pass's report and its estimate, to measure how far the estimate was from
+    // the truth there against this pass's far finer solution.
+    let mut previous: Option<(Solution, f64)> = None;
+    let mut optimism = 1.0f64;
     let mut pass_nodes = vec![];
     let mut best: Option<(f64, usize)> = None;
     // The last pass's (error, nodes), and how many passes in a row the error stalled.
     let mut last: Option<(f64, usize)> = None;
     let mut stalls = 0;
+    // A Newton solve that fails after a pass has solved and estimated (a finer mesh of a
+    // soft shell, whose discrete equations need more digits than double precision has) ends
+    // the adaptation with the best estimate so far, as a tolerance out of reach.
+    let beyond = |e: BvpError, best: Option<(f64, usize)>| match (e, tol, best) {
+        (BvpError::NewtonFailed { residual_norm, .. }, Some(tol), Some((error, nodes))) => {
+            BvpError::Unreached(Unreached {
+                tol,
+                best_error: error,
+                best_nodes: nodes,
+                why: UnreachedWhy::Newton {
+                    residual: residual_norm,
+                },
+            })
+        }
+        (e, ..) => e,
+    };
     loop {
         let PassResult {
             report,
             global,
             local,
             order,
-        } = pass(params, &s, &coarse, &mut work)?;
-        let est = PassEstimate { global, local };
+        } = pass(params, &pass_settings, &coarse, &mut work).map_err(|e| beyond(e, best))?;
+        let strict = pass_settings.newton_tol <= s.newton_tol;
+        pass_settings = s;
+        let mut est = PassEstimate { global, local };
+        if let Some((last_report, last_error)) = &previous {
+            optimism = optimism.max(measured_optimism(
+                last_report,
+                *last_error,
+                &report,
+                est.overall(),
+            ));
+        }
+        previous = Some((report.clone(), est.overall()));
+        for g in &mut est.global {
+            *g *= optimism;
+        }
         let error = est.overall();
         pass_nodes.push(report.mesh.len());
         // Below a few hundred ulps of a field's size, the estimate is round-off, not error.
@@ -598,7 +761,7 @@ pub fn solve_to_tolerance(
         if error <= floor.max(tol) && tol < floor {
             return Err(unreached(UnreachedWhy::RoundOff { floor }));
         }
-        if error <= tol {
+        if error <= tol && strict {
             return Ok(finish(report, &est, pass_nodes, &work));
         }
         // Twice in a row: once may be a coarse mesh's estimate, not yet asymptotic.
@@ -622,8 +785,70 @@ pub fn solve_to_tolerance(
             let max_nodes = settings.max_nodes;
             return Err(unreached(UnreachedWhy::NodeCap { max_nodes }));
         };
-        coarse = work.solve(params, &s, mesh, Some(&report))?;
+        coarse = work
+            .solve(params, &s, mesh, Some(&report))
+            .map_err(|e| beyond(e, best))?;
     }
+}
+
+/// How much the last pass's estimate `last_error` of `last` fell short of its error, as
+/// this pass's report `now` (estimated at `now_error`) measures it at `last`'s nodes:
+/// 1 when it did not, at most [`MAX_OPTIMISM`]. The estimate is asymptotic, and where the
+/// solution is less smooth than the scheme's order assumes (a fibre's [·]⁺ kink, where the
+/// fibres go slack, MODEL.md §2) it is optimistic at every resolution by about the same
+/// factor, which the next pass sees at no cost. Only when `now` is at least 4 times finer
+/// (its own error does not blur the measurement).
+fn measured_optimism(last: &Solution, last_error: f64, now: &Solution, now_error: f64) -> f64 {
+    if !(last_error > 4.0 * now_error) {
+        return 1.0;
+    }
+    let mut truth = 0.0f64;
+    for row in &last.rows {
+        if let Ok(r) = now.at(row.sigma_ref) {
+            for (a, b) in five(row).iter().zip(five(&r)) {
+                truth = truth.max((a - b).abs());
+            }
+        }
+    }
+    (truth / last_error).clamp(1.0, MAX_OPTIMISM)
+}
+
+/// The most [`measured_optimism`] corrects.
+const MAX_OPTIMISM: f64 = 16.0;
+
+/// Newton's tolerance on the start mesh, at most.
+const START_NEWTON_TOL: f64 = 1e-10;
+
+/// How many times the start mesh is halved when a cold solve on it fails.
+const START_HALVINGS: usize = 4;
+
+/// The first solve, cold, on `start`. A soft shell (E_b ≲ 1e-4) on the coarse start mesh
+/// is a different discrete problem from the shell's (its cornea layer spans one interval)
+/// and may have no root near the sphere: then the start mesh is halved, up to
+/// [`START_HALVINGS`] times, until Newton (with its continuation) converges. The error of
+/// the first failure is the one reported if none does.
+fn solve_start(
+    params: &Params,
+    s: &SolverSettings,
+    start: Mesh,
+    work: &mut Work,
+) -> Result<Solution, BvpError> {
+    let mut mesh = start;
+    let mut first = None;
+    for _ in 0..=START_HALVINGS {
+        match work.solve(params, s, mesh.clone(), None) {
+            Ok(sol) => return Ok(sol),
+            Err(e) if e.is_out_of_time() => return Err(e),
+            Err(e) => {
+                first.get_or_insert(e);
+            }
+        }
+        if 2 * mesh.len() > s.max_nodes {
+            break;
+        }
+        mesh = mesh.halved();
+    }
+    Err(first.expect("at least one solve"))
 }
 
 /// Has the error stopped falling? From `e0` on `n0` nodes to `e1` on `n1`: the observed

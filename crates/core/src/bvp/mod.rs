@@ -174,16 +174,37 @@ pub enum BvpError {
     },
     #[error("the equations cannot be evaluated at node {} (Σ = {}): {}", .0.node, decimals6(.0.sigma_ref), .0.why)]
     Evaluation(EvalFailure),
+    #[error("Newton stalled at a scaled residual of {residual:.2e} on {nodes} nodes, its Newton correction only {step:.1e} (scaled): the residual's round-off; solver.newton_tol = {} is below what double precision reaches on this mesh: ask for solver.newton_tol = {} or more", number(*newton_tol), number(precision_reached(*residual)))]
+    PrecisionLimit {
+        newton_tol: f64,
+        residual: f64,
+        step: f64,
+        nodes: usize,
+    },
     #[error(transparent)]
     OutOfTime(#[from] OutOfTime),
     #[error("{0}")]
     Unreached(adapt::Unreached),
 }
 
+/// The newton_tol a stalled residual shows to be within reach: the power of ten above it.
+fn precision_reached(residual: f64) -> f64 {
+    10f64.powf(residual.log10().ceil())
+}
+
 impl BvpError {
     /// Did `solver.max_seconds` stop the solve? (Then nothing is tried again.)
     pub fn is_out_of_time(&self) -> bool {
         matches!(self, BvpError::OutOfTime(_))
+    }
+
+    /// Is there no point in a continuation after this? Out of time, or a Newton iterate
+    /// already at the round-off of its residual (a gentler path reaches the same root).
+    pub(crate) fn ends_continuation(&self) -> bool {
+        matches!(
+            self,
+            BvpError::OutOfTime(_) | BvpError::PrecisionLimit { .. }
+        )
     }
 }
 

@@ -34,6 +34,22 @@ struct ElasticSystem {
     /// solver.max_seconds, and whether it stopped the current Newton solve.
     deadline: Deadline,
     out_of_time: bool,
+    /// Whether an iterate whose residual stalls at round-off counts as converged
+    /// ([`Convergence::ToPrecision`]), or is reported as a precision limit.
+    convergence: Convergence,
+}
+
+/// What a Newton solve that stops short of solver.newton_tol may still deliver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Convergence {
+    /// The scaled residual must reach newton_tol; a solve whose residual stalls above it
+    /// with its Newton correction within newton_tol (round-off: u is the root as far as
+    /// double precision finds it) is a [`BvpError::PrecisionLimit`], as the user asked for
+    /// that residual.
+    ToTolerance,
+    /// Such a solve has converged: the adaptive solve's Newton tolerance is its own
+    /// choice, and what bounds the error it leaves in u is the correction's size.
+    ToPrecision,
 }
 
 /// Residual evaluations one Newton solve may make per allowed iteration (solver.max_newton).
@@ -361,18 +377,22 @@ fn newton(
         Err(e) => {
             let k = kin.last_stats();
             work.add(&k);
+            let newton_tol = kin.options().fnorm_tol;
             let sys = kin.system_mut();
             if sys.out_of_time {
                 let n = k.iterations;
                 let place = format!("in {stage}, after {n} Newton iteration{}", plural(n));
                 return Err(sys.deadline.reached(place).into());
             }
-            if let Some(f) = sys.failure {
-                return Err(BvpError::Evaluation(f));
-            }
+            // Where KINSOL stopped. Its line search fails when no step lowers ‖F‖ any more,
+            // which near a root is round-off, not divergence: so the iterate is judged by
+            // its own residual and Newton correction before the failure is believed (and an
+            // evaluation that failed at a trial point of the search is the cause only when
+            // the iterate is no root).
             let mut f = vec![0.0; u.len()];
             let (mut worst, mut node, mut equation) = (f64::NAN, 0, "?");
-            if sys.disc.residual(u, &mut f).is_ok() {
+            let evaluated = sys.disc.residual(u, &mut f).is_ok();
+            if evaluated {
                 let (row, val) = f
                     .iter()
                     .zip(&f_scale)
@@ -384,6 +404,33 @@ fn newton(
                     );
                 worst = val;
                 (node, equation) = sys.disc.locate_row(row);
+                // KINSOL's own test (the max norm of the scaled residual), which its line
+                // search can fail before making.
+                if worst <= newton_tol {
+                    return Ok(());
+                }
+                // The residual stalled above newton_tol. If the Newton correction there is
+                // within newton_tol (or round-off) of the unknowns' scale, u is the root as
+                // far as the residual's round-off lets it be found: a precision limit, not
+                // divergence.
+                if let Some(step) = newton_correction(kin, u, &f, &u_scale) {
+                    if step <= newton_tol.max(ROUND_OFF_STEP) {
+                        let sys = kin.system();
+                        return match sys.convergence {
+                            Convergence::ToPrecision => Ok(()),
+                            Convergence::ToTolerance => Err(BvpError::PrecisionLimit {
+                                newton_tol,
+                                residual: worst,
+                                step,
+                                nodes: sys.disc.mesh.len(),
+                            }),
+                        };
+                    }
+                }
+            }
+            let sys = kin.system_mut();
+            if let Some(f) = sys.failure {
+                return Err(BvpError::Evaluation(f));
             }
             Err(BvpError::NewtonFailed {
                 dp: sys.disc.shell.dp,
@@ -396,6 +443,29 @@ fn newton(
             })
         }
     }
+}
+
+/// A Newton correction this small (scaled: a thousand ulps of the unknowns' typical size)
+/// is round-off, whatever newton_tol asked for.
+const ROUND_OFF_STEP: f64 = 1e3 * f64::EPSILON;
+
+/// The size of the Newton correction J⁻¹F at u, scaled as KINSOL scales the unknowns
+/// (max norm of |δ_j| · u_scale_j), with the factorisation of KINSOL's last setup: after a
+/// failed line search, the Jacobian at u itself (KINSOL sets up at every iteration's
+/// start). None when that solve fails.
+fn newton_correction(
+    kin: &mut Kinsol<ElasticSystem>,
+    u: &[f64],
+    f: &[f64],
+    u_scale: &[f64],
+) -> Option<f64> {
+    let mut dx = vec![0.0; u.len()];
+    kin.solve_with_last_factorization(&mut dx, f).ok()?;
+    let step = dx
+        .iter()
+        .zip(u_scale)
+        .fold(0.0f64, |a, (d, s)| a.max((d * s).abs()));
+    step.is_finite().then_some(step)
 }
 
 fn plural(n: usize) -> &'static str {
@@ -463,6 +533,16 @@ impl ElasticSolver {
         settings: &SolverSettings,
         mesh: Mesh,
     ) -> Result<Self, BvpError> {
+        Self::on_mesh_to(params, settings, mesh, Convergence::ToTolerance)
+    }
+
+    /// [`Self::on_mesh`], its Newton solves converging as `convergence` says.
+    pub(crate) fn on_mesh_to(
+        params: &Params,
+        settings: &SolverSettings,
+        mesh: Mesh,
+        convergence: Convergence,
+    ) -> Result<Self, BvpError> {
         let disc = discretise_on(params, settings, mesh)?;
         let spec = linear_spec(&disc, settings.linear);
         let n = disc.len();
@@ -475,6 +555,7 @@ impl ElasticSolver {
                 max_evaluations: usize::MAX,
                 deadline: Deadline::since(settings.clock_start, settings.max_seconds),
                 out_of_time: false,
+                convergence,
             },
             n,
             spec,
@@ -586,7 +667,7 @@ impl ElasticSolver {
         self.u = sphere_guess(self.discretisation(), self.params.r0);
         let err = match self.newton() {
             Ok(()) => return Ok(0),
-            Err(e) if self.params.dp == 0.0 || e.is_out_of_time() => return Err(e),
+            Err(e) if self.params.dp == 0.0 || e.ends_continuation() => return Err(e),
             Err(e) => e,
         };
         // Pressure continuation from the unloaded sphere: each stage starts from the last.
@@ -595,7 +676,7 @@ impl ElasticSolver {
         for count in [4usize, 16] {
             match self.ramp_pressure(count, &mut stages) {
                 Ok(()) => return Ok(stages),
-                Err(e) if e.is_out_of_time() => return Err(e),
+                Err(e) if e.ends_continuation() => return Err(e),
                 Err(e) => last_err = e,
             }
         }
@@ -606,7 +687,7 @@ impl ElasticSolver {
             for count in [8usize, 32] {
                 match self.ramp_material(count, &mut stages) {
                     Ok(()) => return Ok(stages),
-                    Err(e) if e.is_out_of_time() => return Err(e),
+                    Err(e) if e.ends_continuation() => return Err(e),
                     Err(e) => last_err = e,
                 }
             }
@@ -709,8 +790,37 @@ pub fn solve_on_mesh(
     mesh: Mesh,
     warm: Option<&Solution>,
 ) -> Result<Solution, BvpError> {
+    solve_on_mesh_to(params, settings, mesh, warm, Convergence::ToTolerance)
+}
+
+/// [`solve_on_mesh`] for the adaptive solve: Newton converges to precision
+/// ([`Convergence::ToPrecision`]), and a warm start that fails (a coarse mesh's
+/// interpolant can lie outside the new mesh's basin: a soft shell's cornea layer it did
+/// not resolve) starts again cold, with the continuation of [`ElasticSolver::solve_cold`].
+pub(crate) fn solve_on_mesh_adaptive(
+    params: &Params,
+    settings: &SolverSettings,
+    mesh: Mesh,
+    warm: Option<&Solution>,
+) -> Result<Solution, BvpError> {
+    let to = Convergence::ToPrecision;
+    match solve_on_mesh_to(params, settings, mesh.clone(), warm, to) {
+        Err(e) if warm.is_some() && !e.is_out_of_time() => {
+            solve_on_mesh_to(params, settings, mesh, None, to).map_err(|_| e)
+        }
+        solved => solved,
+    }
+}
+
+fn solve_on_mesh_to(
+    params: &Params,
+    settings: &SolverSettings,
+    mesh: Mesh,
+    warm: Option<&Solution>,
+    convergence: Convergence,
+) -> Result<Solution, BvpError> {
     let start = Instant::now();
-    let mut solver = ElasticSolver::on_mesh(params, settings, mesh)?;
+    let mut solver = ElasticSolver::on_mesh_to(params, settings, mesh, convergence)?;
     let stages = match warm {
         Some(w) => {
             solver.u = resample(w, &solver.discretisation().mesh)?;
