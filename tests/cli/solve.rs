@@ -195,7 +195,7 @@ fn a_tolerance_below_round_off_fails_in_one_line() {
     assert!(!out.exists());
 }
 
-/// Soft shells under solver.tol (issue 49): E_b = 1e-4 and 1e-6 on the fibre shell solve to
+/// Soft shells under solver.tol: E_b = 1e-4 and 1e-6 on the fibre shell solve to
 /// tol 1e-6. (E_b = 1e-4 used to exit 1 with "Newton did not converge … (scaled residual
 /// 7.975e-11)", a residual below the default newton_tol of 1e-10: KINSOL's line search had
 /// failed at a root. The true error of these solves is checked against a reference in
