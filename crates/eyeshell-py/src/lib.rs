@@ -461,11 +461,9 @@ impl Solved {
 
     /// The sol struct `eyeshell export --mat` writes, shaped like bvp4c's solution.
     fn bvp4c<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let extras = ElasticExtras {
-            breaks: eyeshell::model::profiles::breakpoints(&self.scene.params),
-            stats: Some(self.solution.stats.clone()),
-        };
-        let mut vars = elastic_mat_vars(&table_of(&self.solution), &extras);
+        let extras = ElasticExtras::of_solution(&self.solution);
+        let mut vars = elastic_mat_vars(&table_of(&self.solution), &extras)
+            .map_err(|e| py_err(e.into()))?;
         let (_, sol) = vars.remove(0);
         mat_to_py(py, sol)
     }
@@ -487,10 +485,7 @@ impl Solved {
     /// eyeshell did not write only with `force`); returns the path.
     fn write_mat(&self, py: Python<'_>, path: std::path::PathBuf, force: bool) -> PyResult<String> {
         use eyeshell::interop::export::{export_table, Format};
-        let extras = ElasticExtras {
-            breaks: eyeshell::model::profiles::breakpoints(&self.scene.params),
-            stats: Some(self.solution.stats.clone()),
-        };
+        let extras = ElasticExtras::of_solution(&self.solution);
         let table = table_of(&self.solution);
         let format = Format::Mat { compress: false };
         py.detach(|| export_table(&table, &extras, &path, format, force))

@@ -227,12 +227,13 @@ class Solution:
     ``sol.fields`` maps each column of fields.csv (``Sigma``, ``sigma``, ``kappa``,
     ``alpha_s``, ``r``, ``theta``, ``Q``, ``z``, ``s``, ``alpha_phi``, ``alpha_n``, ``h``,
     ``t_s``, ``t_phi``) to an array over the nodes, each also an attribute (``sol.r``).
-    ``sol.x``, ``sol.y`` (5×N: κ, α_s, r, θ, Q) and ``sol.yp`` (their d/dΣ) are bvp4c's;
+    ``sol.x``, ``sol.y`` (5×N: κ, α_s, r, θ, Q) and ``sol.yp`` (their d/dΣ, f(x, y)) are
+    bvp4c's (x holds each interface of the material data twice, as bvp4c does);
     :meth:`at` evaluates the continuous interpolant; :attr:`summary` is summary.json's
     content; :meth:`to_bvp4c` is the ``sol`` struct of ``eyeshell export --mat``.
 
     >>> sol = eyeshell.solve(solver__nodes=101)
-    >>> sol.y.shape == (5, len(sol))
+    >>> sol.y.shape == sol.yp.shape == (5, len(sol.x))
     True
     >>> bool(np.all(np.diff(sol.Sigma) > 0))
     True
@@ -291,8 +292,9 @@ class Solution:
 
     @property
     def x(self) -> np.ndarray:
-        """Σ at the nodes (bvp4c's ``sol.x``)."""
-        return self.fields["Sigma"]
+        """Σ at the nodes (bvp4c's ``sol.x``): :attr:`Sigma`, with each interface (where the
+        material data jump or kink: docs/guide/files.md) twice, the limit from below first."""
+        return self._export()["x"]
 
     @property
     def y(self) -> np.ndarray:
@@ -301,8 +303,9 @@ class Solution:
 
     @property
     def yp(self) -> np.ndarray:
-        """5×N: d/dΣ of the rows of :attr:`y` at the nodes (bvp4c's ``sol.yp``; at a
-        breakpoint of the thickness, the derivative from below)."""
+        """5×N: d/dΣ of the rows of :attr:`y` at the points of :attr:`x` (bvp4c's ``sol.yp``):
+        f(x, y) of docs/MODEL.md §3 on κ, r, θ and Q, and on the algebraic row α_s its
+        derivative along the same flow; each copy of an interface from its own side."""
         return self._export()["yp"]
 
     @property
