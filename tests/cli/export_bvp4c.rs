@@ -76,16 +76,29 @@ fn yp_is_f_and_the_interfaces_are_repeated() {
             a * kappa,
             a * (r * dp - kappa * r * t_s[k] - th.sin() * t_phi[k]),
         ];
-        for (w, (i, fi)) in worst.iter_mut().zip([(0, f[0]), (2, f[1]), (3, f[2]), (4, f[3])]) {
+        for (w, (i, fi)) in worst
+            .iter_mut()
+            .zip([(0, f[0]), (2, f[1]), (3, f[2]), (4, f[3])])
+        {
             *w = w.max((e.yp[i][k] - fi).abs() / fi.abs().max(1.0));
         }
     }
-    assert!(worst[1] <= 1e-10 && worst[2] <= 1e-10, "r′, θ′ − f: {worst:?}");
-    assert!(worst[0] <= 1e-9 && worst[3] <= 1e-9, "κ′, Q′ − f: {worst:?}");
+    assert!(
+        worst[1] <= 1e-10 && worst[2] <= 1e-10,
+        "r′, θ′ − f: {worst:?}"
+    );
+    assert!(
+        worst[0] <= 1e-9 && worst[3] <= 1e-9,
+        "κ′, Q′ − f: {worst:?}"
+    );
 
     // a, b, Σ_e twice each, and nothing else repeated.
     let se = PI * 10.0 / 2.0;
-    let repeated: Vec<f64> = e.x.windows(2).filter(|w| w[0] == w[1]).map(|w| w[0]).collect();
+    let repeated: Vec<f64> =
+        e.x.windows(2)
+            .filter(|w| w[0] == w[1])
+            .map(|w| w[0])
+            .collect();
     assert_eq!(repeated.len(), 3, "{repeated:?}");
     for (got, want) in repeated.iter().zip([se / 20.0, se / 4.0, se]) {
         assert!((got - want).abs() < 1e-12, "{got} vs {want}");
@@ -133,7 +146,16 @@ fn deval_on_the_export_reproduces_solve_at() {
         }
         // On κ, r, θ deval's cubic is --at's own (the same node values and slopes f); on
         // α_s and Q, which --at takes from the interpolated t_s and r q_s, both are O(h⁴).
-        let tol = if matches!(*name, "alpha_s" | "Q") { 1e-8 } else { 1e-12 };
-        assert!(worst.0 <= tol, "{name}: deval − --at = {:.2e} at Σ = {}", worst.0, worst.1);
+        let tol = if matches!(*name, "alpha_s" | "Q") {
+            1e-8
+        } else {
+            1e-12
+        };
+        assert!(
+            worst.0 <= tol,
+            "{name}: deval − --at = {:.2e} at Σ = {}",
+            worst.0,
+            worst.1
+        );
     }
 }

@@ -132,10 +132,7 @@ fn one_sided(
         t_phi: e.tensions.tphi,
         ..*row
     };
-    Ok((
-        fields,
-        [f[KAPPA], alpha_s_slope, f[R], f[THETA], q_slope],
-    ))
+    Ok((fields, [f[KAPPA], alpha_s_slope, f[R], f[THETA], q_slope]))
 }
 
 /// ∂T/∂Σ at fixed (α_s, r): the slope of the tension t_s(α_s, r/ρ(Σ); ζ(Σ), ψ(Σ)) that the

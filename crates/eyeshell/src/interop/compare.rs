@@ -164,7 +164,30 @@ fn from_run(dir: &Path) -> Result<Vec<Sample>, CompareError> {
             .collect(),
     };
     Ok(match run {
-        Run::Elastic { file, table } => vec![sample(file.display().to_string(), None, &table)],
+        Run::Elastic { file, table } => {
+            let label = file.display().to_string();
+            // As its export holds it: each interface twice, its one-sided values from the
+            // scene's data (exact there, where the node's single row would leave the limit
+            // from above to extrapolation). Fields that do not evaluate are compared as read.
+            let extras = super::export::ElasticExtras::of(dir);
+            match super::export::bvp4c_form(&table, &extras) {
+                Ok(form) => vec![Sample {
+                    label,
+                    time: None,
+                    breaks: breaks.clone(),
+                    not_compared: Vec::new(),
+                    vars: crate::bvp::COLUMNS
+                        .iter()
+                        .enumerate()
+                        .map(|(j, c)| {
+                            let v = form.rows.iter().map(|r| r.values()[j]).collect();
+                            (c.to_string(), v)
+                        })
+                        .collect(),
+                }],
+                Err(_) => vec![sample(label, None, &table)],
+            }
+        }
         Run::Growth(snaps) => snaps
             .iter()
             .map(|s| sample(s.file.display().to_string(), Some(s.t), &s.table))

@@ -64,6 +64,8 @@ pub struct ElasticExtras {
     /// yp would not be f).
     pub params: Option<Result<crate::model::params::Params, String>>,
     pub stats: Option<crate::bvp::SolveStats>,
+    /// The file the fields come from, named when they cannot be evaluated.
+    pub fields_file: Option<PathBuf>,
 }
 
 impl ElasticExtras {
@@ -79,6 +81,7 @@ impl ElasticExtras {
         ElasticExtras {
             params: Some(params),
             stats,
+            fields_file: Some(run_dir.join(rundir::FIELDS_FILE)),
         }
     }
 
@@ -87,6 +90,7 @@ impl ElasticExtras {
         ElasticExtras {
             params: Some(Ok(solution.params)),
             stats: Some(solution.stats.clone()),
+            fields_file: None,
         }
     }
 }
@@ -105,7 +109,11 @@ pub fn bvp4c_form(
                 crate::text::excerpt(why, 200)
             )))
         }
-        None => return Err(bad("the run's scene is not known; sol.yp = f(x, y) needs it")),
+        None => {
+            return Err(bad(
+                "the run's scene is not known; sol.yp = f(x, y) needs it",
+            ))
+        }
     };
     let columns = crate::bvp::COLUMNS
         .iter()
@@ -118,9 +126,14 @@ pub fn bvp4c_form(
     let rows: Vec<crate::bvp::FieldRow> = (0..table.rows.len())
         .map(|i| crate::bvp::FieldRow::from_values(std::array::from_fn(|j| columns[j][i])))
         .collect();
+    // The fields are what was given: a value the equations cannot take is the file's.
     crate::bvp::bvp4c::bvp4c_form(params, &rows).map_err(|e| {
-        failed(format!(
-            "sol.yp = f(x, y) cannot be evaluated on the run's fields: {e}"
+        let file = extras
+            .fields_file
+            .as_ref()
+            .map_or(String::new(), |f| format!("{}: ", f.display()));
+        bad(format!(
+            "{file}sol.yp = f(x, y) cannot be evaluated on these fields: {e}"
         ))
     })
 }
@@ -350,11 +363,15 @@ pub fn export(
 ) -> Result<Exported, ExportError> {
     let run = read_run(run_dir)?;
     match run {
-        Run::Elastic { table, .. } => {
+        Run::Elastic { table, file } => {
             if !out.is_dir() {
                 check_file_target(run_dir, out, format, force)?;
             }
-            export_table(&table, &ElasticExtras::of(run_dir), out, format, force)
+            let extras = ElasticExtras {
+                fields_file: Some(file),
+                ..ElasticExtras::of(run_dir)
+            };
+            export_table(&table, &extras, out, format, force)
         }
         Run::Growth(snapshots) => export_snapshots(&snapshots, out, format, &[run_dir]),
     }
