@@ -996,6 +996,7 @@ fn compare<'py>(
             fd.set_item("failures", f.failures)?;
             fd.set_item("worst_ratio", f.worst_ratio)?;
             fd.set_item("interpolation", f.interpolation)?;
+            fd.set_item("allowed", f.allowed)?;
             fields.set_item(&f.field, fd)?;
         }
         d.set_item("fields", fields)?;

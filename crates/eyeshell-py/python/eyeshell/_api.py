@@ -1210,7 +1210,8 @@ def _measures(r: RunResult) -> dict[str, list[Any]]:
 class Comparison:
     """What :func:`compare` found: ``passed``, one report per compared pair (``pairs``:
     dicts with reference, run, time, coordinate, points, passed, per-field ``fields``
-    maxima and ``not_compared``: the reference's variables left out, name → why), and
+    maxima (with ``allowed``, the absolute tolerance applied: tol + rtol·|ref| where |ref|
+    is largest) and ``not_compared``: the reference's variables left out, name → why), and
     ``text``, the table ``eyeshell compare`` prints."""
 
     passed: bool

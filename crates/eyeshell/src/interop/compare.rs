@@ -528,6 +528,8 @@ pub struct FieldDiff {
     pub worst_ratio: f64,
     /// The largest estimate of the run's interpolation error at the reference's points.
     pub interpolation: f64,
+    /// The largest absolute tolerance applied, tol + rtol·|ref| where |ref| is largest.
+    pub allowed: f64,
 }
 
 /// One reference sample against its run sample.
@@ -641,6 +643,7 @@ pub fn compare_pair(
             failures: 0,
             worst_ratio: 0.0,
             interpolation: 0.0,
+            allowed: tol,
         };
         for &j in &inside {
             let x = xref[j].clamp(lo, hi);
@@ -671,6 +674,7 @@ pub fn compare_pair(
                 abs / b.abs()
             };
             let allowed = tol + rtol * if b.is_finite() { b.abs() } else { 0.0 };
+            d.allowed = d.allowed.max(allowed);
             let ratio = if abs == 0.0 {
                 0.0
             } else if allowed > 0.0 {
@@ -776,7 +780,9 @@ pub fn compare_paths(
 }
 
 /// The reports as text: per pair a heading and a table
-/// `field  max|Δ|  at  max rel  at  status`.
+/// `field  max|Δ|  at  max rel  at  interp. ±  allowed  status`, `allowed` the absolute
+/// tolerance applied where it is widest (tol + rtol·|ref|: rtol = 1e-8 at r ≈ 10 adds 1e-7
+/// to a tol of 1e-8, which the summary's formula alone leaves to the reader).
 pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
     let mut s = String::new();
     for r in reports {
@@ -798,24 +804,26 @@ pub fn format_reports(reports: &[PairReport], tol: f64, rtol: f64) -> String {
             }
         ));
         s.push_str(&format!(
-            "  {:<10} {:>12} {:>12} {:>12} {:>12} {:>12}  {}\n",
+            "  {:<10} {:>12} {:>12} {:>12} {:>12} {:>12} {:>10}  {}\n",
             "field",
             "max |Δ|",
             format!("at {}", r.coordinate),
             "max rel",
             format!("at {}", r.coordinate),
             "interp. ±",
+            "allowed",
             "status"
         ));
         for f in &r.fields {
             s.push_str(&format!(
-                "  {:<10} {:>12.3e} {:>12.6} {:>12.3e} {:>12.6} {:>12.1e}  {}\n",
+                "  {:<10} {:>12.3e} {:>12.6} {:>12.3e} {:>12.6} {:>12.1e} {:>10.2e}  {}\n",
                 f.field,
                 f.max_abs,
                 f.at_abs,
                 f.max_rel,
                 f.at_rel,
                 f.interpolation,
+                f.allowed,
                 if f.failures > 0 {
                     format!(
                         "FAIL ({} point{})",
