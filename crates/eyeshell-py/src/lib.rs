@@ -730,6 +730,7 @@ fn grow<'py>(
     scene
         .set_sensitivities(&sensitivities, sensitivity_error_control)
         .map_err(py_err)?;
+    scene.solver.threads = eyeshell::scene::jobs_from_env().map_err(py_err)?;
     let (result, raised) = py.detach(|| {
         let mut watch = Watch {
             progress: progress.as_ref(),
