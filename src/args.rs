@@ -244,6 +244,9 @@ pub(crate) struct GrowArgs {
     /// Include the sensitivities in the local error test (IDASetSensErrCon): 4–75× slower, and the sensitivities converge with solver.rtol (see BENCHMARKS.md)
     #[arg(long, requires = "sensitivities")]
     pub(crate) sensitivity_error_control: bool,
+    /// Threads for solver.tol's rounds of three runs: 1 runs them one after another, 2 (or more) the two test runs beside the delivered one; default: the environment's EYESHELL_JOBS, else 2 when the machine has a second core. Results are the same bit for bit
+    #[arg(long, short, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub(crate) jobs: Option<u64>,
     /// Print nothing on success and draw no progress bar
     #[arg(long, short)]
     pub(crate) quiet: bool,

@@ -92,6 +92,10 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
         )));
     }
     set_sensitivities(&mut scene, &a.sensitivities, a.sensitivity_error_control)?;
+    scene.solver.threads = match a.jobs {
+        Some(n) => Some(n as usize),
+        None => eyeshell::scene::jobs_from_env()?,
+    };
     let writer = GrowthWriter::create(&a.out, &scene, &[a.scene.scene.as_path()])?;
     let choosing = scene.solver.tol.map(|tol| {
         format!("choosing the mesh for solver.tol = {tol:e} (test runs on halved meshes)")

@@ -131,6 +131,62 @@ fn compare_accepts_the_same_and_detects_a_perturbed_field() {
     );
 }
 
+/// `--tol 1e-8` with the default `--rtol 1e-8` lets a 1e-7 error in r ≈ 10 through: the
+/// report says so, naming the absolute tolerance it applied, and `--rtol 0` catches it.
+#[test]
+fn compare_prints_the_absolute_tolerance_it_applied() {
+    let dir = tempfile::tempdir().unwrap();
+    let (solve, _) = small_runs(dir.path());
+    let mat_file = dir.path().join("solve.mat");
+    ok(&["export", s(&solve), "--mat", s(&mat_file), "--quiet"]);
+    let r_last = *column(&solve.join("fields.csv"), "r")
+        .iter()
+        .fold(&0.0, |a, b| if b > a { b } else { a });
+    let mut vars = mat::read(&mat_file).unwrap();
+    let k = column(&solve.join("fields.csv"), "r")
+        .iter()
+        .position(|&v| v == r_last)
+        .unwrap();
+    if let MatValue::Struct(fields) = &mut vars[0].1 {
+        let y = &mut fields.iter_mut().find(|(n, _)| n == "y").unwrap().1;
+        perturb(y, 5 * k + 2, 1e-7);
+    }
+    let bad = dir.path().join("bad.mat");
+    mat::write(&bad, &vars, false).unwrap();
+    let r = ok(&["compare", s(&solve), s(&bad), "--tol", "1e-8"]);
+    let allowed = 1e-8 + 1e-8 * r_last;
+    let line = r
+        .stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("r "))
+        .unwrap();
+    let cells: Vec<&str> = line.split_whitespace().collect();
+    assert_eq!(
+        cells[cells.len() - 2],
+        format!("{allowed:.2e}"),
+        "{}",
+        r.stdout
+    );
+    assert_eq!(cells[cells.len() - 1], "ok", "{line}");
+    assert!(r.stdout.contains("    allowed  status"), "{}", r.stdout);
+    let r = eyeshell(&[
+        "compare",
+        s(&solve),
+        s(&bad),
+        "--tol",
+        "1e-8",
+        "--rtol",
+        "0",
+    ]);
+    assert_fails(&r, 1, "r");
+    let line = r
+        .stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("r "))
+        .unwrap();
+    assert!(line.contains("1.00e-8  FAIL (1 point)"), "{line}");
+}
+
 #[test]
 fn compare_interpolates_to_the_reference_points() {
     let dir = tempfile::tempdir().unwrap();

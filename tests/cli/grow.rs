@@ -449,3 +449,53 @@ fn a_run_to_a_tolerance_reports_the_mesh_tolerances_and_error_it_chose() {
         "{est}"
     );
 }
+
+/// Growth under solver.tol takes its thread count from `--jobs`, else from EYESHELL_JOBS:
+/// the summary says how many threads the rounds used, the results are the same bit for
+/// bit, and a count that is not one is refused in one line before anything is written.
+#[test]
+fn growth_to_a_tolerance_takes_a_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, jobs: Option<&str>, env: &[(&str, &str)]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "grow",
+            "scenes/const.toml",
+            "--set",
+            "solver.tol=1e-3",
+            "--out",
+            s(&out),
+            "--quiet",
+        ];
+        if let Some(j) = jobs {
+            args.extend(["--jobs", j]);
+        }
+        (eyeshell_with(repo(), &args, env), out)
+    };
+    let threads = |out: &std::path::Path| {
+        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v["accuracy"]["threads"].as_u64()
+    };
+    let (r, one) = run("one", Some("1"), &[("EYESHELL_JOBS", "2")]);
+    succeeded(&r, "--jobs 1");
+    assert_eq!(threads(&one), Some(1), "--jobs wins over the environment");
+    let (r, two) = run("two", None, &[("EYESHELL_JOBS", "2")]);
+    succeeded(&r, "EYESHELL_JOBS=2");
+    assert_eq!(threads(&two), Some(2));
+    let (r, env_one) = run("env-one", None, &[("EYESHELL_JOBS", "1")]);
+    succeeded(&r, "EYESHELL_JOBS=1");
+    assert_eq!(threads(&env_one), Some(1));
+    for file in ["series.csv", "history.csv"] {
+        let a = std::fs::read(one.join(file)).unwrap();
+        assert_eq!(a, std::fs::read(two.join(file)).unwrap(), "{file}");
+    }
+    for bad in ["0", "two", "1025", "-1"] {
+        let (r, out) = run("bad", None, &[("EYESHELL_JOBS", bad)]);
+        assert_fails(&r, 2, "EYESHELL_JOBS");
+        one_clean_line(&r, bad);
+        assert!(!out.exists(), "EYESHELL_JOBS={bad} wrote {}", out.display());
+    }
+    let (r, _) = run("bad", Some("0"), &[]);
+    assert_fails(&r, 2, "--jobs");
+}

@@ -9,6 +9,7 @@ mod bad_input;
 mod cohorts;
 mod destinations;
 mod docs;
+mod export_bvp4c;
 mod export_compare;
 mod export_roundtrip;
 mod export_scipy;

@@ -459,13 +459,17 @@ impl Solved {
         fields_dict(py, &rows)
     }
 
+    /// The unknowns at the nodes, (κ, r, θ, q_s, t_s) node by node: what `residual` and
+    /// `jacobian` take.
+    fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        array1(py, self.solution.u.clone())
+    }
+
     /// The sol struct `eyeshell export --mat` writes, shaped like bvp4c's solution.
     fn bvp4c<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let extras = ElasticExtras {
-            breaks: eyeshell::model::profiles::breakpoints(&self.scene.params),
-            stats: Some(self.solution.stats.clone()),
-        };
-        let mut vars = elastic_mat_vars(&table_of(&self.solution), &extras);
+        let extras = ElasticExtras::of_solution(&self.solution);
+        let mut vars =
+            elastic_mat_vars(&table_of(&self.solution), &extras).map_err(|e| py_err(e.into()))?;
         let (_, sol) = vars.remove(0);
         mat_to_py(py, sol)
     }
@@ -487,10 +491,7 @@ impl Solved {
     /// eyeshell did not write only with `force`); returns the path.
     fn write_mat(&self, py: Python<'_>, path: std::path::PathBuf, force: bool) -> PyResult<String> {
         use eyeshell::interop::export::{export_table, Format};
-        let extras = ElasticExtras {
-            breaks: eyeshell::model::profiles::breakpoints(&self.scene.params),
-            stats: Some(self.solution.stats.clone()),
-        };
+        let extras = ElasticExtras::of_solution(&self.solution);
         let table = table_of(&self.solution);
         let format = Format::Mat { compress: false };
         py.detach(|| export_table(&table, &extras, &path, format, force))
@@ -509,6 +510,59 @@ impl Solved {
             inner: self.scene.clone(),
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// The discrete equations
+
+/// The discrete problem of `scene` and the state checked against it.
+fn discrete(scene: &Scene) -> PyResult<eyeshell::discrete::DiscreteProblem> {
+    scene.discrete_problem().map_err(py_err)
+}
+
+/// F(state) of the scene's discrete elastic problem (scaled as Newton's test scales it
+/// when `scaled`), with the GIL released.
+#[pyfunction]
+fn residual<'py>(
+    py: Python<'py>,
+    scene: PyScene,
+    state: Vec<f64>,
+    scaled: bool,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let scene = scene.inner;
+    let f = py
+        .detach(|| {
+            let mut d = scene.discrete_problem()?;
+            let mut f = d.residual(&state)?;
+            if scaled {
+                f.iter_mut().zip(d.scales()).for_each(|(v, s)| *v *= s);
+            }
+            Ok::<_, eyeshell::Error>(f)
+        })
+        .map_err(py_err)?;
+    Ok(array1(py, f))
+}
+
+/// ∂F/∂u at `state` in compressed rows: (values, column indices, row pointers, n).
+#[pyfunction]
+fn jacobian<'py>(
+    py: Python<'py>,
+    scene: PyScene,
+    state: Vec<f64>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let scene = scene.inner;
+    let mut d = discrete(&scene)?;
+    let m = py.detach(|| d.jacobian(&state)).map_err(py_err)?;
+    let idx = |v: Vec<usize>| v.into_iter().map(|k| k as i64).collect::<Vec<i64>>();
+    PyTuple::new(
+        py,
+        [
+            array1(py, m.values).into_any(),
+            PyArray1::from_vec(py, idx(m.col_idx)).into_any(),
+            PyArray1::from_vec(py, idx(m.row_ptr)).into_any(),
+            m.n.into_pyobject(py)?.into_any(),
+        ],
+    )
 }
 
 // ---------------------------------------------------------------------------------------
@@ -676,6 +730,7 @@ fn grow<'py>(
     scene
         .set_sensitivities(&sensitivities, sensitivity_error_control)
         .map_err(py_err)?;
+    scene.solver.threads = eyeshell::scene::jobs_from_env().map_err(py_err)?;
     let (result, raised) = py.detach(|| {
         let mut watch = Watch {
             progress: progress.as_ref(),
@@ -942,6 +997,7 @@ fn compare<'py>(
             fd.set_item("failures", f.failures)?;
             fd.set_item("worst_ratio", f.worst_ratio)?;
             fd.set_item("interpolation", f.interpolation)?;
+            fd.set_item("allowed", f.allowed)?;
             fields.set_item(&f.field, fd)?;
         }
         d.set_item("fields", fields)?;
@@ -1019,6 +1075,8 @@ fn _eyeshell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(keys, m)?)?;
     m.add_function(wrap_pyfunction!(toml_literal, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(residual, m)?)?;
+    m.add_function(wrap_pyfunction!(jacobian, m)?)?;
     m.add_function(wrap_pyfunction!(grow, m)?)?;
     m.add_function(wrap_pyfunction!(optics, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;

@@ -124,3 +124,19 @@ def test_grow_tol_refuses_what_is_not_a_tolerance(tol):
 def test_grow_tol_and_solver_tol_together_is_refused():
     with pytest.raises(TypeError, match="both tol and solver__tol"):
         eyeshell.grow(SCENES / "const.toml", tol=1e-3, solver__tol=1e-4)
+
+
+def test_growth_to_a_tolerance_reads_its_thread_count_from_the_environment(monkeypatch):
+    """EYESHELL_JOBS, as for `eyeshell grow`: the rounds' threads, recorded in the summary,
+    the same series bit for bit, and a bad count refused in one line."""
+    runs = {}
+    for jobs in ["1", "2"]:
+        monkeypatch.setenv("EYESHELL_JOBS", jobs)
+        g = eyeshell.grow(SCENES / "const.toml", solver__tol=1e-3)
+        assert g.summary["accuracy"]["threads"] == int(jobs)
+        runs[jobs] = np.asarray(g.series["axial_length"])
+    assert np.array_equal(runs["1"], runs["2"])
+    monkeypatch.setenv("EYESHELL_JOBS", "0")
+    with pytest.raises(eyeshell.InputError, match="EYESHELL_JOBS") as e:
+        eyeshell.grow(SCENES / "const.toml", solver__tol=1e-3)
+    assert "\n" not in str(e.value)

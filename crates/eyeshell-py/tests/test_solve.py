@@ -55,23 +55,32 @@ def test_arrays_are_handed_over_not_copied():
     # NumPy owns no copy: the buffer is the Rust Vec's, kept alive by its container.
     for a in [sol.r, sol.Sigma, sol.y, sol.yp]:
         assert not a.flags.owndata and type(a.base).__name__ == "PySliceContainer"
-    assert sol.r is sol.fields["r"] and sol.x is sol.Sigma
+    assert sol.r is sol.fields["r"]
+    # No interface on the uniform shell without fibres: bvp4c's x is the nodes.
+    assert np.array_equal(sol.x, sol.Sigma)
     assert sol.y.flags.f_contiguous  # MATLAB's order, as the export built it
 
 
-def test_yp_is_the_derivative_of_y():
-    sol = eyeshell.solve(solver__nodes=2001)
-    # d/dΣ of r is α_s cos θ (docs/MODEL.md §1): the exported slope agrees to the scheme's accuracy.
-    r_row = 2
-    assert np.abs(sol.yp[r_row] - sol.alpha_s * np.cos(sol.theta)).max() < 1e-8
+def test_yp_is_f_of_y():
+    sol = eyeshell.solve(SCENES / "fibres-nonuniform.toml", solver__nodes=201)
+    # bvp4c's yp is f(x, y): r′ = α_s cos θ and θ′ = α_s κ (docs/MODEL.md §3) at every
+    # point of x, the interfaces' two copies each from its own side (a difference of the
+    # node values, before, was off by 8.7e-8).
+    kappa, alpha_s, r, theta, q = sol.y
+    assert np.abs(sol.yp[2] - alpha_s * np.cos(theta)).max() <= 1e-13
+    assert np.abs(sol.yp[3] - alpha_s * kappa).max() <= 1e-13
+    repeated = sol.x[1:][np.diff(sol.x) == 0]
+    assert np.allclose(repeated, np.pi * 10 / 2 * np.array([1 / 20, 1 / 4, 1]), rtol=1e-15)
+    assert len(sol.x) == len(sol) + 3
 
 
 def test_to_bvp4c_saved_by_scipy_is_read_back_by_eyeshell_compare(cli, tmp_path):
     scipy_io = optional("scipy.io")
     sol = eyeshell.solve(SCENES / "fibres-nonuniform.toml", solver__nodes=401)
     sol4c = sol.to_bvp4c()
-    assert sol4c["solver"] == "bvp4c" and sol4c["y"].shape == (5, len(sol))
-    assert sol4c["stats"]["nmeshpoints"] == len(sol)
+    # Σ_e and the fibre kinks a, b are in x twice (bvp4c's interfaces).
+    assert sol4c["solver"] == "bvp4c" and sol4c["y"].shape == (5, len(sol) + 3)
+    assert sol4c["stats"]["nmeshpoints"] == len(sol.x)
     scipy_io.savemat(tmp_path / "sol.mat", {"sol": sol4c})
     back = scipy_io.loadmat(tmp_path / "sol.mat", squeeze_me=True)["sol"]
     assert np.array_equal(back["y"].item(), sol.y)
@@ -81,7 +90,7 @@ def test_to_bvp4c_saved_by_scipy_is_read_back_by_eyeshell_compare(cli, tmp_path)
     r = cli("compare", tmp_path / "run", tmp_path / "sol.mat", "--tol", "1e-13", "--rtol", "0")
     assert "sol" in r.stdout
     c = eyeshell.compare(tmp_path / "run", tmp_path / "sol.mat", tol=1e-13, rtol=0)
-    assert c.passed and c.pairs[0]["points"] == len(sol)
+    assert c.passed and c.pairs[0]["points"] == len(sol.x)
     assert set(c.pairs[0]["fields"]) >= {"kappa", "r", "theta"}
     # ... and a perturbed copy fails, by the amount put in.
     sol4c["y"] = sol4c["y"].copy()

@@ -31,6 +31,7 @@
 //! prints nothing.
 
 mod api;
+pub mod discrete;
 pub mod error;
 pub mod fit;
 pub mod hash;

@@ -27,6 +27,25 @@ pub(crate) fn text(size: f64) -> TextStyle<'static> {
     ("sans-serif", size).into_font().color(&BLACK)
 }
 
+/// The smallest size a title is shrunk to (px); a longer title is clipped at both ends.
+pub(crate) const MIN_TITLE_SIZE: f64 = 12.0;
+
+/// `size`, or smaller so that `title` fits the width of `area` less a margin on each side
+/// (plotters centres a title and clips what overhangs the canvas).
+pub(crate) fn title_size<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    size: f64,
+) -> f64 {
+    let room = f64::from(area.dim_in_pixel().0.saturating_sub(2 * MARGIN));
+    match area.estimate_text_size(title, &text(size)) {
+        Ok((w, _)) if f64::from(w) > room && w > 0 => {
+            (size * room / f64::from(w)).floor().max(MIN_TITLE_SIZE)
+        }
+        _ => size,
+    }
+}
+
 /// Draw the whole canvas on `root`: the overall title, then each panel in its cell.
 pub(crate) fn draw_canvas<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
@@ -35,7 +54,8 @@ pub(crate) fn draw_canvas<DB: DrawingBackend>(
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(e)?;
     if !canvas.title.is_empty() {
-        let style = text(PANELS_TITLE_SIZE).pos(Pos::new(HPos::Center, VPos::Center));
+        let size = title_size(root, canvas.title, PANELS_TITLE_SIZE);
+        let style = text(size).pos(Pos::new(HPos::Center, VPos::Center));
         let at = ((canvas.size.0 / 2) as i32, (PANELS_TITLE_BAND / 2) as i32);
         root.draw_text(canvas.title, &style, at).map_err(e)?;
     }
@@ -57,7 +77,8 @@ pub(crate) fn draw<DB: DrawingBackend>(
     let area = if fig.title.is_empty() {
         root.clone()
     } else {
-        root.titled(&fig.title, text(TITLE_SIZE)).map_err(e)?
+        let size = title_size(root, &fig.title, TITLE_SIZE);
+        root.titled(&fig.title, text(size)).map_err(e)?
     };
     // The colour bar's strip comes off the right before the chart is laid out, so that
     // an equal aspect ratio is computed for the plot that is actually drawn.

@@ -668,3 +668,30 @@ fn bad_panels_are_refused_and_write_nothing() {
     }
     only(dir.path(), &[]);
 }
+
+/// A title wider than the figure is drawn smaller, whole: nothing dark in the title band's
+/// outer margins (it used to be centred at its full size and cut at both edges).
+#[test]
+fn a_long_title_is_shrunk_to_fit_not_clipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let fig = Figure {
+        title: "growth to t_end: axial-length error (largest over the output times) against CVODE rtol 1e-10".into(),
+        ..convergence_figure()
+    };
+    keep_sample(&fig, "long_title");
+    let (png_path, _) = write(&fig, &dir.path().join("long")).unwrap();
+    let (w, _, rgb) = decode_png(&png_path);
+    let dark_at = |x: u32, y: u32| {
+        let k = 3 * (y * w + x) as usize;
+        rgb[k..k + 3].iter().all(|&c| c < 128)
+    };
+    let band = 0..40; // the title's row, above the chart
+    let dark = |xs: std::ops::Range<u32>| {
+        xs.flat_map(|x| band.clone().map(move |y| (x, y)))
+            .filter(|&(x, y)| dark_at(x, y))
+            .count()
+    };
+    assert_eq!(dark(0..6), 0, "text at the left edge");
+    assert_eq!(dark(w - 6..w), 0, "text at the right edge");
+    assert!(dark(0..w) > 200, "the title is drawn");
+}

@@ -174,8 +174,8 @@ pub fn stretch(
 
 /// f and ∂f/∂y at one point. `guess` seeds the α_s solve (dispatching once on the shell's
 /// membrane component; see [`Equations::evaluate`]). The assembly calls
-/// [`Equations::evaluate_part`]; this allocating form serves the tests.
-#[cfg(test)]
+/// [`Equations::evaluate_part`]; this allocating form serves one-off points (the tests,
+/// bvp4c's yp at the nodes).
 pub fn evaluate(
     shell: &Shell,
     mp: &MaterialPoint,
@@ -222,7 +222,6 @@ impl<R: Reinforcement> Equations<R> {
     }
 
     /// f and ∂f/∂y at one point. `guess` seeds the α_s solve.
-    #[cfg(test)]
     pub fn evaluate(
         &self,
         mp: &MaterialPoint,

@@ -133,6 +133,7 @@ pub struct ErrorEstimate {
 }
 
 pub mod adapt;
+pub mod bvp4c;
 // The discretisation is public for the numerics tests and the benches (its residual and
 // Jacobian are checked and timed directly), not as API.
 #[doc(hidden)]

@@ -74,6 +74,12 @@ pub struct SolverSettings {
     /// solver.richardson: report Richardson's extrapolation of the solutions on M and M
     /// halved (order p + 2), with its error estimated from M halved twice.
     pub richardson: bool,
+    /// The threads a growth round under `tol` may use for its three runs: 1 runs them one
+    /// after another, 2 or more runs the two test runs beside the delivered one (a round
+    /// has no more to share); None, the default, is 2 when the machine has a second core.
+    /// The results are the same bit for bit. Not a scene key: `eyeshell grow --jobs`, or
+    /// the environment's `EYESHELL_JOBS`.
+    pub threads: Option<usize>,
 }
 
 impl SolverSettings {
@@ -105,6 +111,7 @@ impl Default for SolverSettings {
             tol: None,
             max_nodes: DEFAULT_MAX_NODES,
             richardson: false,
+            threads: None,
         }
     }
 }

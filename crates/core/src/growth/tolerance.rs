@@ -271,6 +271,9 @@ pub struct Accuracy {
     pub rounds: Vec<Round>,
     /// Every run of every round, and the delivery.
     pub wall_seconds: f64,
+    /// The threads each round ran its three runs on: 1 (one after another) or 2 (the test
+    /// runs beside the delivered one): [`round_threads`].
+    pub threads: usize,
 }
 
 /// The outputs of one run, recorded at every output time.
@@ -348,9 +351,16 @@ fn record(
     Ok(rec)
 }
 
+/// The threads a round's three runs use: `solver.threads` (a round has work for two),
+/// else two when the machine has a second core.
+pub fn round_threads(solver: &SolverSettings) -> usize {
+    let cores = || std::thread::available_parallelism().map_or(1, |n| n.get());
+    solver.threads.unwrap_or_else(cores).clamp(1, 2)
+}
+
 /// A round's three runs: `fine_mesh` at `at[0]` (the delivered one, which reports
 /// `progress`), and `mesh` at `at[0]` and at `at[1]`, in that order. They are independent,
-/// so with a second core the two on M run on a thread of their own beside the delivered
+/// so with a second core (and `solver.threads` not 1) the two on M run on a thread of their own beside the delivered
 /// run, which costs about as much as those two together (M/2 has twice M's nodes, and the
 /// looser run is cheaper): the round then takes about the wall time of the delivered run
 /// alone. Each run makes and drops its own SUNDIALS context on its own thread. Once one run
@@ -372,7 +382,7 @@ fn three_runs(
     let run = |at: &GrowthSettings, mesh: Mesh, delivered: bool, progress: &mut ProgressFn<'_>| {
         record(params, solver, growth, at, mesh, delivered, progress)
     };
-    if !std::thread::available_parallelism().is_ok_and(|n| n.get() > 1) {
+    if round_threads(solver) < 2 {
         let (fine, f) = timed(|| run(&tight, fine_mesh, true, progress));
         let fine = fine?;
         let (others, o) = timed(|| {
@@ -596,6 +606,7 @@ pub(super) fn run(
     };
     let mut accuracy = Accuracy {
         tol,
+        threads: round_threads(solver),
         ..Accuracy::default()
     };
     // M's nodes from the model, at most half of solver.max_nodes (M/2 has 2n − 1).

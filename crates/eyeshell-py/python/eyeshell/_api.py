@@ -227,12 +227,13 @@ class Solution:
     ``sol.fields`` maps each column of fields.csv (``Sigma``, ``sigma``, ``kappa``,
     ``alpha_s``, ``r``, ``theta``, ``Q``, ``z``, ``s``, ``alpha_phi``, ``alpha_n``, ``h``,
     ``t_s``, ``t_phi``) to an array over the nodes, each also an attribute (``sol.r``).
-    ``sol.x``, ``sol.y`` (5×N: κ, α_s, r, θ, Q) and ``sol.yp`` (their d/dΣ) are bvp4c's;
+    ``sol.x``, ``sol.y`` (5×N: κ, α_s, r, θ, Q) and ``sol.yp`` (their d/dΣ, f(x, y)) are
+    bvp4c's (x holds each interface of the material data twice, as bvp4c does);
     :meth:`at` evaluates the continuous interpolant; :attr:`summary` is summary.json's
     content; :meth:`to_bvp4c` is the ``sol`` struct of ``eyeshell export --mat``.
 
     >>> sol = eyeshell.solve(solver__nodes=101)
-    >>> sol.y.shape == (5, len(sol))
+    >>> sol.y.shape == sol.yp.shape == (5, len(sol.x))
     True
     >>> bool(np.all(np.diff(sol.Sigma) > 0))
     True
@@ -245,6 +246,7 @@ class Solution:
         self.summary: dict[str, Any] = json.loads(native.summary_text())
         # Measured here, where the native solution is: an unpickled one would solve again.
         self._eye: dict[str, Any] = dict(native.eye())
+        self._state: np.ndarray = native.state()
         self._bvp4c: dict[str, Any] | None = None
 
     @property
@@ -291,8 +293,9 @@ class Solution:
 
     @property
     def x(self) -> np.ndarray:
-        """Σ at the nodes (bvp4c's ``sol.x``)."""
-        return self.fields["Sigma"]
+        """Σ at the nodes (bvp4c's ``sol.x``): :attr:`Sigma`, with each interface (where the
+        material data jump or kink: docs/guide/files.md) twice, the limit from below first."""
+        return self._export()["x"]
 
     @property
     def y(self) -> np.ndarray:
@@ -301,9 +304,24 @@ class Solution:
 
     @property
     def yp(self) -> np.ndarray:
-        """5×N: d/dΣ of the rows of :attr:`y` at the nodes (bvp4c's ``sol.yp``; at a
-        breakpoint of the thickness, the derivative from below)."""
+        """5×N: d/dΣ of the rows of :attr:`y` at the points of :attr:`x` (bvp4c's ``sol.yp``):
+        f(x, y) of docs/MODEL.md §3 on κ, r, θ and Q, and on the algebraic row α_s its
+        derivative along the same flow; each copy of an interface from its own side."""
         return self._export()["yp"]
+
+    @property
+    def state(self) -> np.ndarray:
+        """The unknowns of the discrete problem at the nodes, 5 per node in node order:
+        ``[κ_0, r_0, θ_0, q_s0, t_s0, κ_1, …]`` with q_s = Q / r (the shear), as
+        :func:`residual` and :func:`jacobian` take them. ``state.reshape(-1, 5)`` has a row
+        per node of :attr:`Sigma`.
+
+        >>> sol = eyeshell.solve(solver__nodes=101)
+        >>> st = sol.state.reshape(-1, 5)
+        >>> bool(np.array_equal(st[:, 1], sol.r)), bool(np.allclose(st[:, 1] * st[:, 3], sol.Q))
+        (True, True)
+        """
+        return self._state.copy()
 
     @property
     def eye(self) -> dict[str, Any]:
@@ -370,6 +388,58 @@ def solve(scene: SceneLike = None, /, **overrides: Any) -> Solution:
     """
     s = _as_scene(scene, overrides)
     return Solution(_eyeshell.solve(s._s))
+
+
+def _state_list(state: Any) -> list[float]:
+    a = np.asarray(state, dtype=float)
+    if a.ndim != 1:
+        raise InputError(
+            f"state must be a 1-D array (5 values per node, as Solution.state), not of shape {a.shape}"
+        )
+    return a.tolist()
+
+
+def residual(scene: SceneLike, state: Any, /, *, scaled: bool = False, **overrides: Any) -> np.ndarray:
+    """The residuals F(state) of the discrete elastic problem of ``scene`` (with
+    ``overrides`` set on a copy): the equations eyeshell's Newton iteration solves, on the
+    mesh of ``solver.nodes`` (``solver.tol`` and ``solver.richardson`` adapt the mesh and
+    are refused). ``state`` is :attr:`Solution.state`'s layout: (κ, r, θ, q_s, t_s) at each
+    node in turn, 5 per node. The residuals are, in order, the three pole conditions at
+    Σ = ε, five per interval (the scheme's step for κ, r, θ, q_s, t_s) and the two cornea
+    conditions: as many as the unknowns. With ``scaled=True`` each is multiplied by the
+    scale Newton's convergence test uses (1 over its unknown's typical size: 1/R0 for r,
+    1 for θ, …), so that a solved state has ``max |F| <= solver.newton_tol``.
+
+    Raises :class:`InputError` for a state of the wrong length, a value that is not
+    finite, or a state at which the equations cannot be evaluated (r <= 0 at a node).
+
+    >>> scene = eyeshell.Scene(solver__nodes=101)
+    >>> sol = eyeshell.solve(scene)
+    >>> bool(np.max(np.abs(eyeshell.residual(scene, sol.state, scaled=True))) <= 1e-10)
+    True
+    """
+    s = _as_scene(scene, overrides)
+    return _eyeshell.residual(s._s, _state_list(state), bool(scaled))
+
+
+def jacobian(scene: SceneLike, state: Any, /, **overrides: Any) -> Any:
+    """The analytic Jacobian ∂F/∂state of :func:`residual` (the matrix eyeshell's Newton
+    iteration factors) as a ``scipy.sparse.csr_array`` of 5M × 5M, every entry of its band
+    pattern stored (zeros included). SciPy is needed for this function only.
+
+    >>> scene = eyeshell.Scene(solver__nodes=21)
+    >>> sol = eyeshell.solve(scene)
+    >>> J = eyeshell.jacobian(scene, sol.state)
+    >>> J.shape == (sol.state.size, sol.state.size) == (5 * len(sol), 5 * len(sol))
+    True
+    """
+    try:
+        import scipy.sparse as sparse
+    except ImportError as e:  # pragma: no cover - scipy is optional at import
+        raise ImportError("eyeshell.jacobian needs SciPy (pip install scipy)") from e
+    s = _as_scene(scene, overrides)
+    values, cols, rows, n = _eyeshell.jacobian(s._s, _state_list(state))
+    return sparse.csr_array((values, cols, rows), shape=(n, n))
 
 
 def optics(scene: SceneLike = None, /, **overrides: Any) -> dict[str, Any]:
@@ -1140,7 +1210,8 @@ def _measures(r: RunResult) -> dict[str, list[Any]]:
 class Comparison:
     """What :func:`compare` found: ``passed``, one report per compared pair (``pairs``:
     dicts with reference, run, time, coordinate, points, passed, per-field ``fields``
-    maxima and ``not_compared``: the reference's variables left out, name → why), and
+    maxima (with ``allowed``, the absolute tolerance applied: tol + rtol·|ref| where |ref|
+    is largest) and ``not_compared``: the reference's variables left out, name → why), and
     ``text``, the table ``eyeshell compare`` prints."""
 
     passed: bool

@@ -8,8 +8,9 @@
 //! Layouts:
 //! - elastic solve: `OUT` is one file. In .mat, the struct `sol` shaped like bvp4c's
 //!   solution: `sol.solver` ('bvp4c'), `sol.x` (1×N, the material coordinate Σ of the
-//!   nodes), `sol.y` (5×N, rows κ, α_s, r, θ, Q), `sol.yp` (5×N, their d/dΣ: [`yp_rows`]),
-//!   `sol.stats` (nmeshpoints, maxres, nODEevals, nBCevals: [`stats_struct`]), plus the other
+//!   nodes, each interface twice, as bvp4c holds a multipoint problem's), `sol.y` (5×N,
+//!   rows κ, α_s, r, θ, Q), `sol.yp` (5×N, their d/dΣ: f(x, y) on the differential rows,
+//!   α_s's derivative along the same flow: [`bvp4c_form`]), `sol.stats` (nmeshpoints, maxres, nODEevals, nBCevals: [`stats_struct`]), plus the other
 //!   columns of fields.csv as further fields (`sol.sigma`, `sol.z`, `sol.s`,
 //!   `sol.alpha_phi`, `sol.alpha_n`, `sol.h`, `sol.t_s`, `sol.t_phi`, 1×N each). In .npz the
 //!   same names as arrays: `x` (N,), `y` and `yp` (5, N) and the others (N,).
@@ -30,7 +31,7 @@ pub use crate::rundir::read::{
 use crate::rundir::{self, Marker, OutputDir, OutputError, MARKER_FILE};
 
 /// The rows of `sol.y`, in order (bvp4c's unknowns of the published scripts).
-pub const Y_ROWS: [&str; 5] = ["kappa", "alpha_s", "r", "theta", "Q"];
+pub use crate::bvp::bvp4c::Y_ROWS;
 /// The further fields of an elastic export, beside `x` and `y`.
 pub const ELASTIC_EXTRA: [&str; 8] = [
     "sigma",
@@ -54,39 +55,96 @@ fn col(table: &Table, name: &str) -> Vec<f64> {
     table.column(name).unwrap_or_default()
 }
 
-/// What an elastic export needs beyond fields.csv: the breakpoints (for yp) and the
-/// solver's statistics (for `sol.stats`), from the run's summary.json.
+/// What an elastic export needs beyond fields.csv: the scene's parameters (yp = f(x, y)
+/// and the interfaces come from its equations and data) and the solver's statistics (for
+/// `sol.stats`), from the run's summary.json.
 #[derive(Clone, Debug, Default)]
 pub struct ElasticExtras {
-    pub breaks: Vec<f64>,
+    /// The scene solved, or why it cannot be read (then nothing is exported: without it
+    /// yp would not be f).
+    pub params: Option<Result<crate::model::params::Params, String>>,
     pub stats: Option<crate::bvp::SolveStats>,
+    /// The file the fields come from, named when they cannot be evaluated.
+    pub fields_file: Option<PathBuf>,
 }
 
 impl ElasticExtras {
-    /// Read from the run directory; what cannot be read is left out (an old or partial
-    /// summary gives no stats, and yp is then taken without breakpoints).
+    /// Read from the run directory; an old or partial summary gives no stats.
     pub fn of(run_dir: &Path) -> ElasticExtras {
         let stats = match rundir::Summary::read(run_dir) {
             Ok(rundir::Summary::Elastic(e)) => Some(e.stats),
             _ => None,
         };
-        let breaks = crate::rundir::rundata::scene(run_dir)
-            .map(|s| crate::model::profiles::breakpoints(&s.params))
-            .unwrap_or_default();
-        ElasticExtras { breaks, stats }
+        let params = crate::rundir::rundata::scene(run_dir)
+            .map(|s| s.params)
+            .map_err(|e| e.message);
+        ElasticExtras {
+            params: Some(params),
+            stats,
+            fields_file: Some(run_dir.join(rundir::FIELDS_FILE)),
+        }
+    }
+
+    /// The extras of a solution in memory: its scene's parameters and its statistics.
+    pub fn of_solution(solution: &crate::bvp::Solution) -> ElasticExtras {
+        ElasticExtras {
+            params: Some(Ok(solution.params)),
+            stats: Some(solution.stats.clone()),
+            fields_file: None,
+        }
     }
 }
 
-/// yp: d/dΣ of each row of y at each node, as the derivative of the degree-5 local
-/// interpolant ([`super::interp::Pieces::slope`], O(h⁵), never across a breakpoint; at a
-/// breakpoint node the left derivative).
-pub fn yp_rows(table: &Table, breaks: &[f64]) -> [Vec<f64>; 5] {
-    let x = col(table, "Sigma");
-    let pieces = super::interp::Pieces::new(x.clone(), breaks);
-    Y_ROWS.map(|c| {
-        let y = col(table, c);
-        (0..x.len()).map(|k| pieces.slope(&y, k)).collect()
+/// fields.csv's `table` in bvp4c's form ([`crate::bvp::bvp4c`]): x with each interface
+/// twice, y, and yp = f(x, y) at every point of x.
+pub fn bvp4c_form(
+    table: &Table,
+    extras: &ElasticExtras,
+) -> Result<crate::bvp::bvp4c::Bvp4cForm, ExportError> {
+    let params = match &extras.params {
+        Some(Ok(p)) => p,
+        Some(Err(why)) => {
+            return Err(bad(format!(
+                "the run's scene cannot be read, and sol.yp = f(x, y) needs its equations: {}",
+                crate::text::excerpt(why, 200)
+            )))
+        }
+        None => {
+            return Err(bad(
+                "the run's scene is not known; sol.yp = f(x, y) needs it",
+            ))
+        }
+    };
+    let columns = crate::bvp::COLUMNS
+        .iter()
+        .map(|&c| {
+            table
+                .column(c)
+                .ok_or_else(|| bad(format!("fields.csv has no column {c}")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let rows: Vec<crate::bvp::FieldRow> = (0..table.rows.len())
+        .map(|i| crate::bvp::FieldRow::from_values(std::array::from_fn(|j| columns[j][i])))
+        .collect();
+    // The fields are what was given: a value the equations cannot take is the file's.
+    crate::bvp::bvp4c::bvp4c_form(params, &rows).map_err(|e| {
+        let file = extras
+            .fields_file
+            .as_ref()
+            .map_or(String::new(), |f| format!("{}: ", f.display()));
+        bad(format!(
+            "{file}sol.yp = f(x, y) cannot be evaluated on these fields: {e}"
+        ))
     })
+}
+
+/// A field of fields.csv (a name of [`crate::bvp::COLUMNS`]) over the form's x.
+fn form_column(form: &crate::bvp::bvp4c::Bvp4cForm, name: &str) -> Vec<f64> {
+    let j = crate::bvp::COLUMNS
+        .iter()
+        .position(|&c| c == name)
+        .unwrap_or(0);
+    form.rows.iter().map(|r| r.values()[j]).collect()
 }
 
 /// bvp4c's `sol.stats`: nmeshpoints (nodes), maxres (the final Newton residual's max
@@ -109,28 +167,30 @@ fn stats_struct(nodes: usize, stats: &crate::bvp::SolveStats) -> MatValue {
 /// The variables of an elastic export as a .mat file: the struct `sol`, shaped like
 /// bvp4c's solution (`solver`, `x`, `y`, `yp`, `stats`) so that MATLAB's `deval(sol, xi)`
 /// and `bvpinit(sol, ...)` take it, plus the other columns as further fields.
-pub fn elastic_mat_vars(table: &Table, extras: &ElasticExtras) -> Vec<(String, MatValue)> {
+pub fn elastic_mat_vars(
+    table: &Table,
+    extras: &ElasticExtras,
+) -> Result<Vec<(String, MatValue)>, ExportError> {
+    let form = bvp4c_form(table, extras)?;
     let mut fields = vec![
         ("solver".to_string(), MatValue::Char("bvp4c".to_string())),
-        ("x".to_string(), MatValue::row(&col(table, "Sigma"))),
+        ("x".to_string(), MatValue::row(&form.x)),
         (
             "y".to_string(),
-            MatValue::from_rows(&Y_ROWS.map(|c| col(table, c))),
+            MatValue::from_rows(&std::array::from_fn::<_, 5, _>(|k| form.y_row(k))),
         ),
         (
             "yp".to_string(),
-            MatValue::from_rows(&yp_rows(table, &extras.breaks)),
+            MatValue::from_rows(&std::array::from_fn::<_, 5, _>(|k| form.yp_row(k))),
         ),
     ];
     if let Some(stats) = &extras.stats {
-        fields.push(("stats".to_string(), stats_struct(table.rows.len(), stats)));
+        fields.push(("stats".to_string(), stats_struct(form.x.len(), stats)));
     }
     for c in ELASTIC_EXTRA {
-        if let Some(v) = table.column(c) {
-            fields.push((c.to_string(), MatValue::row(&v)));
-        }
+        fields.push((c.to_string(), MatValue::row(&form_column(&form, c))));
     }
-    vec![("sol".to_string(), MatValue::Struct(fields))]
+    Ok(vec![("sol".to_string(), MatValue::Struct(fields))])
 }
 
 /// The variables of one growth snapshot as a .mat file.
@@ -146,24 +206,26 @@ pub fn growth_mat_vars(s: &RunSnapshot) -> Vec<(String, MatValue)> {
 }
 
 /// The arrays of an elastic export as a .npz file: x, y, yp as in .mat, and the others.
-pub fn elastic_npz_arrays(table: &Table, extras: &ElasticExtras) -> Vec<(String, NpyArray)> {
+pub fn elastic_npz_arrays(
+    table: &Table,
+    extras: &ElasticExtras,
+) -> Result<Vec<(String, NpyArray)>, ExportError> {
+    let form = bvp4c_form(table, extras)?;
     let mut arrays = vec![
-        ("x".to_string(), NpyArray::vector(&col(table, "Sigma"))),
+        ("x".to_string(), NpyArray::vector(&form.x)),
         (
             "y".to_string(),
-            NpyArray::from_rows(&Y_ROWS.map(|c| col(table, c))),
+            NpyArray::from_rows(&std::array::from_fn::<_, 5, _>(|k| form.y_row(k))),
         ),
         (
             "yp".to_string(),
-            NpyArray::from_rows(&yp_rows(table, &extras.breaks)),
+            NpyArray::from_rows(&std::array::from_fn::<_, 5, _>(|k| form.yp_row(k))),
         ),
     ];
     for c in ELASTIC_EXTRA {
-        if let Some(v) = table.column(c) {
-            arrays.push((c.to_string(), NpyArray::vector(&v)));
-        }
+        arrays.push((c.to_string(), NpyArray::vector(&form_column(&form, c))));
     }
-    arrays
+    Ok(arrays)
 }
 
 /// The arrays of one growth snapshot as a .npz file.
@@ -228,14 +290,14 @@ pub struct Exported {
 fn write_one(
     path: &Path,
     format: Format,
-    mat_vars: impl FnOnce() -> Vec<(String, MatValue)>,
-    npz_arrays: impl FnOnce() -> Vec<(String, NpyArray)>,
+    mat_vars: impl FnOnce() -> Result<Vec<(String, MatValue)>, ExportError>,
+    npz_arrays: impl FnOnce() -> Result<Vec<(String, NpyArray)>, ExportError>,
 ) -> Result<(), ExportError> {
     match format {
         Format::Mat { compress } => {
-            mat::write(path, &mat_vars(), compress).map_err(|e| failed(e.to_string()))
+            mat::write(path, &mat_vars()?, compress).map_err(|e| failed(e.to_string()))
         }
-        Format::Npz => npz::write(path, &npz_arrays()).map_err(|e| failed(e.to_string())),
+        Format::Npz => npz::write(path, &npz_arrays()?).map_err(|e| failed(e.to_string())),
     }
 }
 
@@ -301,11 +363,15 @@ pub fn export(
 ) -> Result<Exported, ExportError> {
     let run = read_run(run_dir)?;
     match run {
-        Run::Elastic { table, .. } => {
+        Run::Elastic { table, file } => {
             if !out.is_dir() {
                 check_file_target(run_dir, out, format, force)?;
             }
-            export_table(&table, &ElasticExtras::of(run_dir), out, format, force)
+            let extras = ElasticExtras {
+                fields_file: Some(file),
+                ..ElasticExtras::of(run_dir)
+            };
+            export_table(&table, &extras, out, format, force)
         }
         Run::Growth(snapshots) => export_snapshots(&snapshots, out, format, &[run_dir]),
     }
@@ -367,8 +433,8 @@ pub fn export_snapshots(
         write_one(
             &dir.file(&name),
             format,
-            || growth_mat_vars(s),
-            || growth_npz_arrays(s),
+            || Ok(growth_mat_vars(s)),
+            || Ok(growth_npz_arrays(s)),
         )?;
         files.push(out.join(name));
     }

@@ -342,6 +342,7 @@ struct AccuracyDef {
     pub rounds: Vec<Round>,
     #[serde(deserialize_with = "crate::json::f64_or_nan")]
     pub wall_seconds: f64,
+    pub threads: usize,
 }
 
 #[derive(Serialize, Deserialize)]

@@ -1168,6 +1168,29 @@ fn line_column(text: &str, at: usize) -> (usize, usize) {
     (line, column)
 }
 
+/// The environment variable giving a growth run's threads under solver.tol
+/// ([`crate::bvp::settings::SolverSettings::threads`]) when `eyeshell grow --jobs` does not.
+pub const JOBS_ENV: &str = "EYESHELL_JOBS";
+
+/// [`JOBS_ENV`]'s value: None when unset or empty, else an integer from 1 to 1024.
+pub fn jobs_from_env() -> Result<Option<usize>, crate::Error> {
+    let Some(raw) = std::env::var_os(JOBS_ENV) else {
+        return Ok(None);
+    };
+    let text = raw.to_string_lossy();
+    let text = text.trim();
+    if text.is_empty() {
+        return Ok(None);
+    }
+    match text.parse::<usize>() {
+        Ok(n) if (1..=1024).contains(&n) => Ok(Some(n)),
+        _ => Err(crate::Error::Input(format!(
+            "{JOBS_ENV} = {:?} is not a thread count (an integer from 1 to 1024)",
+            crate::text::excerpt(text, 40)
+        ))),
+    }
+}
+
 /// The most bytes a scene file may have (a sweep listing 10⁵ runs by hand is a few MB): a
 /// larger file, or a device that never ends, is refused before it is read into memory.
 pub const MAX_SCENE_BYTES: u64 = 64 << 20;
