@@ -61,6 +61,10 @@ pub enum OpticsError {
     /// A fit (polar form, interpolant) cannot be made from the points given.
     #[error("{0}")]
     Fit(String),
+    /// Lens `lens` (counted from 0, in the order given) cannot be worn with the others or
+    /// where it sits: the reason in words (no number of the lens is wrong by itself).
+    #[error("lens {lens}: {reason}")]
+    Eyewear { lens: usize, reason: String },
 }
 
 impl OpticsError {
