@@ -1021,10 +1021,13 @@ pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<
         for (i, row) in draws.iter().enumerate() {
             if let Err(e) = spec.rule.check_float(row[d]) {
                 if bad.len() < SHOWN {
-                    bad.push(format!("{} = {}", sample.run_name(i), number(row[d])));
+                    // Six significant digits: the message stays one short line.
+                    let x: f64 = format!("{:.5e}", row[d]).parse().unwrap_or(row[d]);
+                    bad.push(format!("{} = {}", sample.run_name(i), number(x)));
                 }
                 if why.is_empty() {
-                    why = e;
+                    // The rule without its reason (the key's documentation has it).
+                    why = e.split(':').next().unwrap_or(&e).to_string();
                 }
                 total += 1;
             }
@@ -1047,7 +1050,7 @@ pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<
     Err(SceneError::BadSweep {
         origin: origin.to_string(),
         problem: format!(
-            "sample: {total} of {} drawn values lie outside their key's range and are not clipped: {}; narrow the distribution or bound it (dist = \"truncated-normal\" with low and high)",
+            "sample: {total} of {} drawn values lie outside their key's range and are not clipped: {}; narrow the distribution or bound it (truncated-normal)",
             draws.len() * sample.keys.len(),
             problems.join("; ")
         ),
