@@ -110,7 +110,7 @@ impl PowerProfile {
                 } else {
                     format!(
                         "must be larger than the previous zone's radius ({} mm): zones go outwards in order",
-                        inner
+                        crate::error::num(inner)
                     )
                 };
                 return Err(bad(format!("zones[{i}].radius"), z.radius, problem));
@@ -434,7 +434,7 @@ pub fn wear(
                 *vertex,
                 format!(
                     "puts the lens at or behind the surface in front of which it must sit (at {} mm)",
-                    -front
+                    crate::error::num(-front)
                 ),
             ));
         }

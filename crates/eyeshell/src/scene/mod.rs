@@ -129,11 +129,7 @@ pub enum SceneError {
         expected: String,
         found: String,
     },
-    #[error(
-        "{}: {key} = {} {problem}",
-        short(origin, MAX_ORIGIN),
-        short(value, MAX_VALUE)
-    )]
+    #[error("{}", invalid_line(origin, key, value, problem))]
     Invalid {
         origin: String,
         key: String,
@@ -166,10 +162,28 @@ impl SceneError {
 const MAX_ORIGIN: usize = 100;
 const MAX_VALUE: usize = 80;
 
-/// At most `max` characters of `s`, cut with `…`.
-fn short(s: &str, max: usize) -> String {
-    crate::text::excerpt(s, max)
+/// The line an error of a key shows: about [`MAX_LINE`] characters at most, with the
+/// command line's `eyeshell: error: ` before it, however long the input. The problem (the
+/// explanation) is never cut: the origin and the value are shortened first to at most
+/// [`MAX_ORIGIN`] and [`MAX_VALUE`] characters, then, if the line is still too long, to
+/// their beginnings (the key and the problem name what is wrong).
+fn invalid_line(origin: &str, key: &str, value: &str, problem: &str) -> String {
+    let line = |o: usize, v: usize| {
+        format!(
+            "{}: {key} = {} {problem}",
+            crate::text::excerpt(origin, o),
+            crate::text::excerpt(value, v)
+        )
+    };
+    let full = line(MAX_ORIGIN, MAX_VALUE);
+    if full.chars().count() <= MAX_LINE {
+        return full;
+    }
+    line(40, 24)
 }
+
+/// The longest line [`invalid_line`] aims at (300 with the command line's prefix).
+const MAX_LINE: usize = 280;
 
 fn suggest(s: &Option<String>) -> String {
     s.as_ref()

@@ -1037,11 +1037,16 @@ pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<
                 .iter()
                 .filter(|r| spec.rule.check_float(r[d]).is_err())
                 .count();
-            problems.push(format!(
-                "{count} of {key} ({why}: {}{})",
-                bad.join(", "),
-                if count > SHOWN { ", ..." } else { "" }
-            ));
+            // The first key with its eyes, the others by their count: one short line.
+            problems.push(if problems.is_empty() {
+                format!(
+                    "{count} of {key} ({why}: {}{})",
+                    bad.join(", "),
+                    if count > SHOWN { ", ..." } else { "" }
+                )
+            } else {
+                format!("{count} of {key}")
+            });
         }
     }
     if problems.is_empty() {
