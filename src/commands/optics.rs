@@ -109,7 +109,6 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     )
     .map_err(|e| io(SURFACES_FILE, e))?;
     write(SURFACES_FILE, &table)?;
-    let reach = eyeshell::model::eyewear::lens_reach(&spec).map_err(|e| key_error(&scene, e))?;
     let json = optics_json(
         &spec,
         &computed,
@@ -117,7 +116,6 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         &system,
         z_c,
         t,
-        &reach,
         start.elapsed().as_secs_f64(),
     );
     write(OPTICS_FILE, json.as_bytes())?;
@@ -225,7 +223,6 @@ fn optics_json(
     system: &eyeshell_optics::OpticalSystem,
     z_b: f64,
     t: f64,
-    reach: &[f64],
     wall_seconds: f64,
 ) -> String {
     use serde_json::json;
@@ -280,12 +277,15 @@ fn optics_json(
     // Eyewear: how far out the pupil's rays cross each lens, and the zones they never
     // reach (allowed: a real lens is wider than what the eye looks through).
     if !spec.lenses.is_empty() {
+        // The same fan the surfaces' computation checked the lenses' edges with, so it
+        // traces here.
+        let reach = eyeshell::model::eyewear::lens_reach(spec).unwrap_or_default();
         let lenses: Vec<_> = spec
             .lenses
             .iter()
             .zip(reach)
             .enumerate()
-            .map(|(i, (lens, &reach))| {
+            .map(|(i, (lens, reach))| {
                 let unseen: Vec<_> = lens
                     .zone_starts()
                     .into_iter()

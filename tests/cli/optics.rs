@@ -226,7 +226,7 @@ fn tables_over_time_are_checked_over_the_whole_run() {
         "grow",
         scene,
         &["optics.surfaces[4].radius={ t = [0.9, 1.0], value = [-6, -100] }"],
-        "optics.surfaces[4].radius = { t = [0.9, 1], value = [-6, -100] } reaches 840 at t = 0 (its spline between or beyond its points): it must stay between 0.5 and 10000 mm in magnitude, of one sign for all t in [0, 1]",
+        "optics.surfaces[4].radius = { t = [0.9, … reaches 840 at t = 0 (its spline between or beyond its points): it must stay between 0.5 and 10000 mm in magnitude, of one sign for all t in [0, 1]",
         "--set optics.surfaces[4].radius=",
     );
     // Beyond the last point, up to growth.t_end = 2.

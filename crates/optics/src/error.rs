@@ -3,9 +3,11 @@
 
 use thiserror::Error;
 
-/// A number in a message: exact (the shortest form that reads back), in scientific notation
-/// outside [1e-4, 1e15), so that 1e280 is not 281 digits long.
+/// A number in a message: six significant digits in its shortest form, in scientific
+/// notation outside [1e-4, 1e15), so that 1e280 is not 281 digits long and a ray's position
+/// not 18 (where a ray fails is told, not measured).
 pub fn num(x: f64) -> String {
+    let x: f64 = format!("{x:.5e}").parse().unwrap_or(x);
     if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
         format!("{x}")
     } else {
@@ -24,7 +26,7 @@ pub enum RayFailure {
     OutsideAperture { r: f64, semi_diameter: f64 },
     #[error("the gradient-index integration did not converge ({reason})")]
     GrinNotConverged { reason: String },
-    #[error("the refractive index is {} at z = {} mm, r = {} mm, which is not physical", num(*n), num(*z), num(*r))]
+    #[error("the refractive index {} at z = {} mm, r = {} mm is not physical", num(*n), num(*z), num(*r))]
     NonPhysicalIndex { n: f64, z: f64, r: f64 },
 }
 

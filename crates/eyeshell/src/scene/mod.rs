@@ -179,7 +179,7 @@ fn invalid_line(origin: &str, key: &str, value: &str, problem: &str) -> String {
     if full.chars().count() <= MAX_LINE {
         return full;
     }
-    line(40, 24)
+    line(32, 12)
 }
 
 /// The longest line [`invalid_line`] aims at (300 with the command line's prefix).

@@ -1009,7 +1009,7 @@ fn correlation_factor(c: &toml::Table, keys: &[(String, Dist)]) -> Result<Vec<Ve
 /// The draws of `sample` outside their key's range, refused with their count, the key and
 /// the first eyes: never clipped.
 pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<(), SceneError> {
-    const SHOWN: usize = 3;
+    const SHOWN: usize = 2;
     let mut problems = Vec::new();
     let mut total = 0;
     for (d, (key, _)) in sample.keys.iter().enumerate() {
