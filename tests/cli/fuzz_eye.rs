@@ -263,7 +263,7 @@ fn accepted(what: &str, scene: &Scene) -> Result<(), TestCaseError> {
         return Ok(());
     };
     let t_end = g.t_end;
-    let ts: Vec<f64> = (0..=64).map(|k| t_end * k as f64 / 64.0).collect();
+    let ts: Vec<f64> = (0..=64).map(|k| t_end * (k as f64 / 64.0)).collect();
     // The clock: every age finite.
     for &t in &ts {
         let a = g.clock.age(t, t_end);

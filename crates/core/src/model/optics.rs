@@ -280,7 +280,11 @@ impl OpticsSpec {
         let timed = !self.times().is_empty();
         let at_time = |mut e: OpticsKeyError| {
             if timed {
-                e.problem = format!("{} (the eye at growth time t = {})", e.problem, number(t));
+                e.problem = format!(
+                    "{} (the eye at growth time t = {})",
+                    e.problem,
+                    significant(t)
+                );
             }
             e
         };
@@ -529,7 +533,11 @@ impl OpticsSpec {
     ) -> Result<(Surfaces, PolarSpline, PolarSpline), OpticsKeyError> {
         let at_time = |mut e: OpticsKeyError| {
             if !self.times().is_empty() {
-                e.problem = format!("{} (the eye at growth time t = {})", e.problem, number(t));
+                e.problem = format!(
+                    "{} (the eye at growth time t = {})",
+                    e.problem,
+                    significant(t)
+                );
             }
             e
         };
@@ -710,6 +718,11 @@ pub struct ComputedOptics {
     /// With tables over time: the splines at every traced time, blended between them.
     pub timed: Option<TimedSurfaces>,
     pub wall_seconds: f64,
+}
+
+/// `x` to 6 significant digits, shortest form: a growth time in a message.
+fn significant(x: f64) -> String {
+    number(format!("{x:.5e}").parse().unwrap_or(x))
 }
 
 /// A surface's key error as the optics keys' error.

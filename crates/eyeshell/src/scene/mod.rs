@@ -179,7 +179,12 @@ fn invalid_line(origin: &str, key: &str, value: &str, problem: &str) -> String {
     if full.chars().count() <= MAX_LINE {
         return full;
     }
-    line(32, 12)
+    // An override's origin keeps its key (`--set optics.surfaces[1].thickness=…`).
+    let keep = origin
+        .find('=')
+        .map_or(32, |at| origin[..at].chars().count() + 1)
+        .min(80);
+    line(keep, 12)
 }
 
 /// The longest line [`invalid_line`] aims at (300 with the command line's prefix).
