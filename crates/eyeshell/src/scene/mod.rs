@@ -179,11 +179,13 @@ fn invalid_line(origin: &str, key: &str, value: &str, problem: &str) -> String {
     if full.chars().count() <= MAX_LINE {
         return full;
     }
-    // An override's origin keeps its key (`--set optics.surfaces[1].thickness=…`).
-    let keep = origin
-        .find('=')
-        .map_or(32, |at| origin[..at].chars().count() + 1)
-        .min(80);
+    // An override's origin keeps its key (`--set optics.surfaces[1].thickness=…`); any
+    // other (a file, a sweep's run) its first 48 characters.
+    let keep = match origin.find('=') {
+        Some(at) if origin[..at].matches(' ').count() <= 1 => origin[..at].chars().count() + 1,
+        _ => 48,
+    }
+    .min(80);
     line(keep, 12)
 }
 
