@@ -42,7 +42,9 @@ fn key_error(scene: &Scene, e: OpticsKeyError) -> Error {
 pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
     let spec: OpticsSpec = scene.optics().clone();
-    spec.check().map_err(|e| key_error(&scene, e))?;
+    // The eye over the whole span it can be drawn at (`--at`), not only at its tables' points.
+    let span = scene.growth.as_ref().map_or(1.0, |g| g.t_end);
+    spec.check_over(span).map_err(|e| key_error(&scene, e))?;
     let z_c = scene.blue().z_b;
     let t = growth_time(&scene, a.at)?;
     let start = std::time::Instant::now();
@@ -272,6 +274,31 @@ fn optics_json(
         "rays_traced": c.surfaces.rays_traced,
         "wall_seconds": wall_seconds,
     });
+    // Eyewear: how far out the pupil's rays cross each lens, and the zones they never
+    // reach (allowed: a real lens is wider than what the eye looks through).
+    if !spec.lenses.is_empty() {
+        // The same fan the surfaces' computation checked the lenses' edges with, so it
+        // traces here.
+        let reach = eyeshell::model::eyewear::lens_reach(spec).unwrap_or_default();
+        let lenses: Vec<_> = spec
+            .lenses
+            .iter()
+            .zip(reach)
+            .enumerate()
+            .map(|(i, (lens, reach))| {
+                let unseen: Vec<_> = lens
+                    .zone_starts()
+                    .into_iter()
+                    .filter(|(_, start)| *start >= reach)
+                    .map(|(item, start)| {
+                        json!({ "zone": format!("optics.lenses[{i}].{item}"), "starts_mm": start })
+                    })
+                    .collect();
+                json!({ "lens": i, "rays_reach_mm": reach, "zones_no_ray_crosses": unseen })
+            })
+            .collect();
+        doc["lenses"] = json!(lenses);
+    }
     // An eye that changes with age says which time it was traced at.
     if !spec.times().is_empty() {
         doc["t"] = json!(t);

@@ -17,6 +17,7 @@ mod extremes;
 mod eyewear;
 mod figures;
 mod fit;
+mod fuzz_eye;
 mod fuzz_readers;
 mod fuzz_run_files;
 mod fuzz_scene;

@@ -214,3 +214,88 @@ fn optics_at_a_growth_time_draws_the_eye_of_that_time() {
         assert!(!out.exists());
     }
 }
+
+/// A scene is checked over its whole run, not only at its tables' points: a table whose end
+/// slope carries a surface through a plane before its first time (−6 mm at t = 0.9, −100 mm
+/// at 1: +840 mm at t = 0) is refused naming the key, the time and the value, and so is a
+/// thickness whose cubic dips below zero between its points.
+#[test]
+fn tables_over_time_are_checked_over_the_whole_run() {
+    let scene = "growth.eta0 = 70\nstimulus.source = \"optics\"\n";
+    fails(
+        "grow",
+        scene,
+        &["optics.surfaces[4].radius={ t = [0.9, 1.0], value = [-6, -100] }"],
+        "optics.surfaces[4].radius = { t = [0.9, … reaches 840 at t = 0 (its spline between or beyond its points): it must stay between 0.5 and 10000 mm in magnitude, of one sign for all t in [0, 1]",
+        "--set optics.surfaces[4].radius=",
+    );
+    // Beyond the last point, up to growth.t_end = 2.
+    fails(
+        "grow",
+        "growth.eta0 = 70\ngrowth.t_end = 2\nstimulus.source = \"optics\"\n",
+        &["optics.surfaces[1].thickness={ t = [0, 1], value = [3.15, 0.2] }"],
+        "reaches -2.75 at t = 2",
+        "--set optics.surfaces[1].thickness=",
+    );
+    // Between points: 0.2 at 0.5 and 1, far larger at 0.7; the natural cubic overshoots
+    // below zero between 0.5 and 0.7.
+    fails(
+        "optics",
+        "optics.max_field = 10\n",
+        &["optics.surfaces[1].thickness={ t = [0, 0.5, 0.7, 1], value = [3.15, 0.2, 6, 0.2] }"],
+        "optics.surfaces[1].thickness = { t = [0, 0.… reaches -1.85162 at t = 0.336661",
+        "--set optics.surfaces[1].thickness=",
+    );
+}
+
+/// A wavelength outside the range the eye's source gives its dispersion for is refused
+/// naming the eye and the key (the Liou & Brennan eye's power rises again beyond 757 nm), and
+/// so is red given before blue.
+#[test]
+fn wavelengths_outside_the_eyes_dispersion_or_reversed_are_refused() {
+    let scene =
+        "growth.eta0 = 70\nstimulus.source = \"optics\"\noptics.eye = \"liou-brennan-1997\"\n";
+    fails(
+        "grow",
+        scene,
+        &["optics.wavelengths=[400, 1200]"],
+        "optics.wavelengths = [400, 1200] must lie between 380 and 750 nm for the liou-brennan-1997 eye: Liou & Brennan (1997) give their dispersion for 380-750 nm (1200 does not)",
+        "--set optics.wavelengths=[400, 1200]",
+    );
+    fails(
+        "grow",
+        scene,
+        &["optics.refraction_wavelength=1000"],
+        "optics.refraction_wavelength = 1000 must lie between 380 and 750 nm for the liou-brennan-1997 eye",
+        "--set optics.refraction_wavelength=1000",
+    );
+    fails(
+        "optics",
+        "",
+        &["optics.wavelengths=[600, 400]"],
+        "optics.wavelengths = [600, 400] must list the blue wavelength first, then a longer red one (600 nm is not shorter than 400 nm)",
+        "--set optics.wavelengths=[600, 400]",
+    );
+}
+
+/// A ray that fails because of a surface key given by --set is that key's failure, from its
+/// --set, not the pupil's from the scene file: the Atchison eye traces a 6 mm pupil, but not
+/// with a cornea of 2.9 mm, which the pupil's rays miss.
+#[test]
+fn a_trace_failure_names_the_surface_key_that_caused_it() {
+    fails(
+        "optics",
+        "optics.pupil = 6\noptics.max_field = 10\n",
+        &["optics.surfaces[0].radius=2.9"],
+        "optics.surfaces[0].radius = 2.9 cannot be traced in the atchison-2006 eye: the ray at 0° and 400 nm fails at 'anterior cornea': the ray misses the surface",
+        "--set optics.surfaces[0].radius=2.9",
+    );
+    // The pupil itself, when the eye's own surfaces are not to blame.
+    fails(
+        "optics",
+        "optics.pupil = 10\noptics.max_field = 80\n",
+        &[],
+        "cannot be traced in the atchison-2006 eye",
+        "scene.toml",
+    );
+}

@@ -270,3 +270,62 @@ fn a_scene_in_years_has_ages_in_every_output() {
     let svg = std::fs::read_to_string(d.join("fit/fit.svg")).unwrap();
     assert!(svg.contains("age (years)"), "fit.svg: no age axis");
 }
+
+/// What a run would find only once it started is refused before it starts: a schedule whose
+/// integral over the window is 0 (check says so too, exit 2, nothing written), a clock whose
+/// rate of ages per unit of t overflows (every age would be NaN), and sensitivities or a fit
+/// to a schedule's parameter the scene's schedule does not have.
+#[test]
+fn a_run_that_cannot_grow_is_refused_before_it_starts() {
+    let zero = "[growth]\neta0 = 70\nschedule = \"table\"\nschedule_times = [0, 1]\nschedule_factors = [0, 0]\n";
+    let needle = "growth.schedule_factors = [0, 0] makes the schedule grow nothing that can be integrated: ∫ s dt over the growth window is 0";
+    grow_fails(zero, needle);
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("zero.toml"), zero).unwrap();
+    let r = eyeshell_in(dir.path(), &["check", "zero.toml"]);
+    assert_bad(&r, needle, "check of a schedule of zeros");
+    // 1e300 years over t_end = 1e-50: 1e350 years per unit of t.
+    grow_fails(
+        "[growth]\neta0 = 70\nt_end = 1e-50\n[time]\nunit = \"years\"\nstart = 0\nend = 1e300\n",
+        "time.end = 1e300 maps onto growth.t_end = 1e-50 at inf years per unit of t, which is not a finite positive rate",
+    );
+    let constant = "[growth]\neta0 = 70\n[solver]\nnodes = 21\n";
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("scene.toml"), constant).unwrap();
+    std::fs::write(
+        dir.path().join("data.csv"),
+        "t,axial_length\n0.5,22\n1,23\n",
+    )
+    .unwrap();
+    for args in [
+        vec![
+            "grow",
+            "scene.toml",
+            "--sensitivities",
+            "growth.schedule_tau",
+            "--out",
+            "out",
+        ],
+        vec![
+            "fit",
+            "scene.toml",
+            "--data",
+            "data.csv",
+            "--fit",
+            "growth.schedule_tau",
+            "--out",
+            "out",
+        ],
+    ] {
+        let r = eyeshell_in(dir.path(), &args);
+        assert_bad(
+            &r,
+            "growth.schedule_tau needs growth.schedule = \"exponential\" (scene.toml has \"constant\")",
+            &format!("{args:?}"),
+        );
+        assert!(
+            !dir.path().join("out").exists(),
+            "{args:?}: out/ was written"
+        );
+    }
+}

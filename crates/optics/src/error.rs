@@ -3,6 +3,18 @@
 
 use thiserror::Error;
 
+/// A number in a message: six significant digits in its shortest form, in scientific
+/// notation outside [1e-4, 1e15), so that 1e280 is not 281 digits long and a ray's position
+/// not 18 (where a ray fails is told, not measured).
+pub fn num(x: f64) -> String {
+    let x: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// Why one ray could not be traced (without the field and wavelength, which the caller adds).
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum RayFailure {
@@ -10,11 +22,11 @@ pub enum RayFailure {
     Miss,
     #[error("the ray is totally internally reflected")]
     TotalInternalReflection,
-    #[error("the ray meets the surface {r} mm from the axis, outside its semi-diameter {semi_diameter} mm")]
+    #[error("the ray meets the surface {} mm from the axis, outside its semi-diameter {} mm", num(*r), num(*semi_diameter))]
     OutsideAperture { r: f64, semi_diameter: f64 },
     #[error("the gradient-index integration did not converge ({reason})")]
     GrinNotConverged { reason: String },
-    #[error("the refractive index is {n} at z = {z} mm, r = {r} mm, which is not physical")]
+    #[error("the refractive index {} at z = {} mm, r = {} mm is not physical", num(*n), num(*z), num(*r))]
     NonPhysicalIndex { n: f64, z: f64, r: f64 },
 }
 
@@ -29,7 +41,7 @@ pub struct RayError {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum OpticsError {
     /// A ray of a field failed: the surface, the field angle and the wavelength are named.
-    #[error("the ray at {field_deg}° and {wavelength_nm} nm fails at '{surface}': {failure}")]
+    #[error("the ray at {}° and {} nm fails at '{surface}': {failure}", num(*field_deg), num(*wavelength_nm))]
     Ray {
         surface: String,
         field_deg: f64,
@@ -38,21 +50,21 @@ pub enum OpticsError {
     },
     /// The system itself is not an optical system (a radius of zero, a negative thickness,
     /// a non-physical index, ...): `what` names the surface or medium and its key.
-    #[error("{what} is {value}: {reason}")]
+    #[error("{what} is {}: {reason}", num(*value))]
     InvalidSystem {
         what: String,
         value: f64,
         reason: String,
     },
     /// A request's own number is unusable (a pupil of zero, a wavelength of 5 nm, ...).
-    #[error("{what} is {value}: {reason}")]
+    #[error("{what} is {}: {reason}", num(*value))]
     InvalidInput {
         what: String,
         value: f64,
         reason: String,
     },
     /// The wavefront of a field has no focus the criterion can find.
-    #[error("no best focus at {field_deg}° and {wavelength_nm} nm: {reason}")]
+    #[error("no best focus at {}° and {} nm: {reason}", num(*field_deg), num(*wavelength_nm))]
     NoFocus {
         field_deg: f64,
         wavelength_nm: f64,
@@ -61,6 +73,10 @@ pub enum OpticsError {
     /// A fit (polar form, interpolant) cannot be made from the points given.
     #[error("{0}")]
     Fit(String),
+    /// Lens `lens` (counted from 0, in the order given) cannot be worn with the others or
+    /// where it sits: the reason in words (no number of the lens is wrong by itself).
+    #[error("lens {lens}: {reason}")]
+    Eyewear { lens: usize, reason: String },
 }
 
 impl OpticsError {

@@ -12,6 +12,45 @@ pub const BUILTIN: [&str; 3] = [
     "escudero-sanz-navarro-1999",
 ];
 
+/// The wavelengths (nm) a built-in eye's dispersion holds for: where its source gives it
+/// (or fits it to its data) and every medium's index falls with wavelength, so that the
+/// eye's power does too (docs/optics.md, "Built-in eyes and their sources").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WavelengthRange {
+    pub lo: f64,
+    pub hi: f64,
+    /// Where the range comes from, for messages.
+    pub source: &'static str,
+}
+
+/// The wavelength range of the built-in eye `name`.
+pub fn wavelength_range(name: &str) -> Option<WavelengthRange> {
+    match name {
+        // The source's own range; its quadratic shift turns at 757 nm, beyond which the
+        // eye's power would rise again with wavelength.
+        "liou-brennan-1997" => Some(WavelengthRange {
+            lo: 380.0,
+            hi: 750.0,
+            source: "Liou & Brennan (1997) give their dispersion for 380-750 nm",
+        }),
+        // Indices tabulated at 458-632.8 nm, read through a Cauchy fit: the visible range
+        // is as far as the fit is carried.
+        "escudero-sanz-navarro-1999" | "navarro-1999" => Some(WavelengthRange {
+            lo: 380.0,
+            hi: 750.0,
+            source: "the source tabulates its indices at 458-632.8 nm; their Cauchy fit is carried over the visible range only",
+        }),
+        // Atchison & Smith (2005)'s Cauchy laws, fitted to visible data and extended by
+        // their authors into the near infrared, where ocular media were measured to 1100 nm.
+        "atchison-2006" => Some(WavelengthRange {
+            lo: 380.0,
+            hi: 1100.0,
+            source: "its Cauchy laws (Atchison & Smith 2005) hold over the visible and the near infrared to 1100 nm",
+        }),
+        _ => None,
+    }
+}
+
 /// A built-in eye by name.
 pub fn builtin(name: &str) -> Option<OpticalSystem> {
     match name {

@@ -110,7 +110,7 @@ impl PowerProfile {
                 } else {
                     format!(
                         "must be larger than the previous zone's radius ({} mm): zones go outwards in order",
-                        inner
+                        crate::error::num(inner)
                     )
                 };
                 return Err(bad(format!("zones[{i}].radius"), z.radius, problem));
@@ -367,11 +367,10 @@ pub fn wear(
             (Mount::Contact, LensBody::Thin(profile)) => {
                 let first = &mut system.elements[0];
                 if first.surface.phase.is_some() {
-                    return Err(OpticsError::system(
-                        format!("lens {i}"),
-                        f64::NAN,
-                        "the cornea holds one contact lens only",
-                    ));
+                    return Err(OpticsError::Eyewear {
+                        lens: i,
+                        reason: "is a second contact lens: two contact lenses cannot be worn at once (the cornea holds one)".into(),
+                    });
                 }
                 first.surface.phase = Some(profile.clone());
                 if let Some(edge) = profile.edge() {
@@ -379,11 +378,10 @@ pub fn wear(
                 }
             }
             (Mount::Contact, LensBody::Real { .. }) => {
-                return Err(OpticsError::system(
-                    format!("lens {i}"),
-                    f64::NAN,
-                    "a contact lens is thin here (its power profile on the cornea)",
-                ))
+                return Err(OpticsError::Eyewear {
+                    lens: i,
+                    reason: "is a contact lens with a real lens's surfaces: a contact lens is thin here (its power profile on the cornea)".into(),
+                })
             }
             (Mount::Spectacle { vertex }, _) => {
                 if !(vertex.is_finite() && *vertex > 0.0) {
@@ -436,7 +434,7 @@ pub fn wear(
                 *vertex,
                 format!(
                     "puts the lens at or behind the surface in front of which it must sit (at {} mm)",
-                    -front
+                    crate::error::num(-front)
                 ),
             ));
         }

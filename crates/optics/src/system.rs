@@ -211,7 +211,10 @@ impl OpticalSystem {
         let check = |name: &str, n: f64| {
             if !(n >= INDEX_RANGE.0 && n <= INDEX_RANGE.1) {
                 Err(OpticsError::system(
-                    format!("the refractive index of '{name}' at {wavelength_nm} nm"),
+                    format!(
+                        "the refractive index of '{name}' at {} nm",
+                        crate::error::num(wavelength_nm)
+                    ),
                     n,
                     format!(
                         "is not physical (must be between {} and {})",
@@ -243,7 +246,8 @@ impl OpticalSystem {
                 "the pupil position (mm from the corneal apex)",
                 z,
                 format!(
-                    "must lie behind the first surface and not behind the last one (at {last} mm)"
+                    "must lie behind the first surface and not behind the last one (at {} mm)",
+                    crate::error::num(last)
                 ),
             ));
         }

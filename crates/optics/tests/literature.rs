@@ -139,3 +139,34 @@ fn a_traced_path_runs_through_the_gradient_lens() {
     assert!(inside >= 3, "{path:?}");
     assert!(path.windows(2).all(|w| w[1].z > w[0].z), "{path:?}");
 }
+
+/// Every built-in eye's power falls with wavelength over the whole range its dispersion is
+/// accepted on (`eyes::wavelength_range`), at every 5 nm: the Liou & Brennan eye's rose again
+/// beyond about 757 nm (62.14 D at 1200 nm against 60.35 D at 555 nm) while 300–1200 nm was
+/// accepted.
+#[test]
+fn every_eyes_power_falls_with_wavelength_over_its_range() {
+    for name in eyeshell_optics::eyes::BUILTIN {
+        let eye = eyeshell_optics::eyes::builtin(name).unwrap();
+        let range = eyeshell_optics::eyes::wavelength_range(name).unwrap();
+        assert!(range.lo <= 400.0 && range.hi >= 600.0, "{name}: {range:?}");
+        let n = ((range.hi - range.lo) / 5.0).round() as usize;
+        let powers: Vec<f64> = (0..=n)
+            .map(|k| paraxial(&eye, range.lo + 5.0 * k as f64).unwrap().power)
+            .collect();
+        for (k, w) in powers.windows(2).enumerate() {
+            assert!(
+                w[1] < w[0],
+                "{name}: {} D at {} nm, {} D at {} nm",
+                w[0],
+                range.lo + 5.0 * k as f64,
+                w[1],
+                range.lo + 5.0 * (k + 1) as f64
+            );
+        }
+    }
+    // The Liou & Brennan eye beyond its range: the power rises (what the range keeps out).
+    let lb = eyeshell_optics::eyes::builtin("liou-brennan-1997").unwrap();
+    let p = |w: f64| paraxial(&lb, w).unwrap().power;
+    assert!(p(1200.0) > p(800.0), "{} {}", p(1200.0), p(800.0));
+}

@@ -123,6 +123,30 @@ impl Clock {
     }
 }
 
+impl Clock {
+    /// Why the clock cannot be used over a growth window of length `t_end`, as (key,
+    /// problem): ages whose rate k = (time.end − time.start)/t_end is not a finite positive
+    /// number (the age of every output time would be NaN or infinite).
+    pub fn check_window(&self, t_end: f64) -> Result<(), (&'static str, String)> {
+        if !self.has_ages() {
+            return Ok(());
+        }
+        let (a0, k) = self.affine(t_end);
+        if !(k.is_finite() && k > 0.0 && (a0 + k * t_end).is_finite()) {
+            return Err((
+                "time.end",
+                format!(
+                    "maps onto growth.t_end = {} at {} {} per unit of t, which is not a finite positive rate: bring time.start and time.end closer or growth.t_end nearer 1",
+                    number(t_end),
+                    number(k),
+                    self.unit.name()
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// growth.schedule: the form of the factor s on η0.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Form {
@@ -250,6 +274,37 @@ impl Schedule {
                     i + 1,
                     number(*f),
                     number(MAX_FACTOR)
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Schedule {
+    /// Why the schedule cannot run over a growth window of length `t_end` on `clock`, as
+    /// (key, problem): its clock S(t_end) = ∫₀^t_end s dt must be finite and at least
+    /// [`super::settings::MIN_T_END`], or the run would grow nothing it can integrate.
+    pub fn check_window(&self, clock: &Clock, t_end: f64) -> Result<(), (&'static str, String)> {
+        if self.is_constant() {
+            return Ok(());
+        }
+        let tau_end = Warp::new(self, clock, t_end).clock(t_end);
+        let min = super::settings::MIN_T_END;
+        if !(tau_end.is_finite() && tau_end >= min) {
+            let key = match self.form {
+                Form::Exponential => "growth.schedule_tau",
+                Form::Logistic => "growth.schedule_centre",
+                Form::Table => "growth.schedule_factors",
+                Form::Constant => "growth.schedule",
+            };
+            return Err((
+                key,
+                format!(
+                    "makes the schedule grow nothing that can be integrated: ∫ s dt over the growth window is {} (growth.schedule = \"{}\"); it must be finite and at least {}",
+                    number(tau_end),
+                    Form::NAMES[self.form as usize],
+                    number(min)
                 ),
             ));
         }

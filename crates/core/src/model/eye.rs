@@ -63,6 +63,72 @@ impl EyeValue {
         }
     }
 
+    /// The least and the greatest value over growth times [0, `t_end`] and at the table's
+    /// own points, each with its time: `((min, t), (max, t))`. Exact: on each interval the
+    /// natural spline is a cubic, extreme at its ends or where its derivative (a quadratic)
+    /// vanishes, and beyond the table's ends it is linear, extreme at 0 or `t_end`.
+    pub fn extremes(&self, t_end: f64) -> ((f64, f64), (f64, f64)) {
+        let mut candidates: Vec<f64> = vec![0.0, t_end.max(0.0)];
+        if let EyeValue::Table { t: ts, value } = self {
+            candidates.extend_from_slice(ts);
+            let h: Vec<f64> = ts.windows(2).map(|p| p[1] - p[0]).collect();
+            let s = natural_second_derivatives(ts, &h);
+            let m: Vec<f64> = s
+                .iter()
+                .map(|row| row.iter().zip(value).map(|(w, v)| w * v).sum())
+                .collect();
+            for (i, &hi) in h.iter().enumerate() {
+                // ds/db on the interval, b = (t − tᵢ)/hᵢ: A b² + B b + C.
+                let (m0, m1) = (m[i], m[i + 1]);
+                let a = hi * hi * (m1 - m0) / 2.0;
+                let b = hi * hi * m0;
+                let c = (value[i + 1] - value[i]) - hi * hi * (2.0 * m0 + m1) / 6.0;
+                let roots = if a.abs() <= 1e-300 {
+                    if b != 0.0 {
+                        vec![-c / b]
+                    } else {
+                        vec![]
+                    }
+                } else {
+                    let d = b * b - 4.0 * a * c;
+                    if d < 0.0 {
+                        vec![]
+                    } else {
+                        let q = -0.5 * (b + b.signum() * d.sqrt());
+                        let mut r = vec![q / a];
+                        if q != 0.0 {
+                            r.push(c / q);
+                        }
+                        r
+                    }
+                };
+                candidates.extend(
+                    roots
+                        .into_iter()
+                        .filter(|x| *x > 0.0 && *x < 1.0)
+                        .map(|x| ts[i] + x * hi),
+                );
+            }
+        }
+        let inside = |t: &f64| *t >= 0.0 && (*t <= t_end || self.times().contains(t));
+        let mut lo = (f64::INFINITY, 0.0);
+        let mut hi = (f64::NEG_INFINITY, 0.0);
+        for t in candidates.into_iter().filter(inside) {
+            let x = self.at(t);
+            // A NaN is the worst of both.
+            if x.is_nan() {
+                return ((x, t), (x, t));
+            }
+            if x < lo.0 {
+                lo = (x, t);
+            }
+            if x > hi.0 {
+                hi = (x, t);
+            }
+        }
+        (lo, hi)
+    }
+
     fn values(&self) -> Vec<f64> {
         match self {
             EyeValue::Fixed(x) => vec![*x],
@@ -432,6 +498,178 @@ impl SurfaceSpec {
         }
         Ok(())
     }
+}
+
+impl SurfaceSpec {
+    /// The keys this table gives, in [`SURFACE_KEYS`]' order.
+    pub fn given(&self) -> Vec<&'static str> {
+        let mut out = Vec::new();
+        if self.radius.is_some() {
+            out.push("radius");
+        }
+        if self.conic.is_some() {
+            out.push("conic");
+        }
+        if self.aspheric.is_some() {
+            out.push("aspheric");
+        }
+        if self.thickness.is_some() {
+            out.push("thickness");
+        }
+        if let Some(m) = &self.medium {
+            out.push(m.key());
+        }
+        out
+    }
+
+    /// The value of key `name` as messages show it (tables and lists shortened).
+    pub fn shown(&self, name: &str) -> Option<String> {
+        let value = |v: &EyeValue| match v {
+            EyeValue::Fixed(x) => number(*x),
+            EyeValue::Table { t, value } => {
+                format!("{{ t = {}, value = {} }}", list_text(t), list_text(value))
+            }
+        };
+        match (name, &self.medium) {
+            ("radius", _) => self.radius.as_ref().map(value),
+            ("conic", _) => self.conic.as_ref().map(value),
+            ("thickness", _) => self.thickness.as_ref().map(value),
+            ("aspheric", _) => self.aspheric.as_deref().map(list_text),
+            ("index", Some(MediumSpec::Index(v))) => Some(value(v)),
+            ("cauchy", Some(MediumSpec::Cauchy(c))) => Some(list_text(c)),
+            ("sellmeier", Some(MediumSpec::Sellmeier { b, c })) => {
+                Some(format!("{{ b = {}, c = {} }}", list_text(b), list_text(c)))
+            }
+            _ => None,
+        }
+    }
+
+    /// True when key `name` is a table over time.
+    pub fn is_table(&self, name: &str) -> bool {
+        let table = |v: &Option<EyeValue>| matches!(v, Some(EyeValue::Table { .. }));
+        match name {
+            "radius" => table(&self.radius),
+            "conic" => table(&self.conic),
+            "thickness" => table(&self.thickness),
+            "index" => matches!(
+                &self.medium,
+                Some(MediumSpec::Index(EyeValue::Table { .. }))
+            ),
+            _ => false,
+        }
+    }
+
+    /// The table without key `name` (a built-in eye's surface then keeps its source's).
+    pub fn clear(&mut self, name: &str) {
+        match name {
+            "radius" => self.radius = None,
+            "conic" => self.conic = None,
+            "aspheric" => self.aspheric = None,
+            "thickness" => self.thickness = None,
+            _ => self.medium = None,
+        }
+    }
+
+    /// Each table's values over the whole run, growth times [0, `t_end`], between and beyond
+    /// its points (checked there by [`SurfaceSpec::check`]): within the key's range, a radius
+    /// of one sign. The error names the key, the time and the value reached.
+    pub fn check_over(&self, i: usize, t_end: f64) -> Result<(), SurfaceKeyError> {
+        let (rlo, rhi) = RADIUS_RANGE;
+        let (nlo, nhi) = optics::INDEX_RANGE;
+        let radius_range = format!(
+            "between {rlo} and {} mm in magnitude, of one sign",
+            number(rhi)
+        );
+        let conic_range = format!("between −{CONIC_LIMIT} and {CONIC_LIMIT}");
+        let thickness_range = format!("positive and at most {MAX_THICKNESS} mm");
+        let index_range = format!("a refractive index between {nlo} and {nhi}");
+        let index = match &self.medium {
+            Some(MediumSpec::Index(v)) => Some(v),
+            _ => None,
+        };
+        type Ok = fn(f64) -> bool;
+        let keys: [(&str, Option<&EyeValue>, Ok, &str); 4] = [
+            (
+                "radius",
+                self.radius.as_ref(),
+                |x| x.abs() >= RADIUS_RANGE.0 && x.abs() <= RADIUS_RANGE.1,
+                &radius_range,
+            ),
+            (
+                "conic",
+                self.conic.as_ref(),
+                |x| x.abs() <= CONIC_LIMIT,
+                &conic_range,
+            ),
+            (
+                "thickness",
+                self.thickness.as_ref(),
+                |x| x > 0.0 && x <= MAX_THICKNESS,
+                &thickness_range,
+            ),
+            (
+                "index",
+                index,
+                |x| x >= optics::INDEX_RANGE.0 && x <= optics::INDEX_RANGE.1,
+                &index_range,
+            ),
+        ];
+        for (name, value, ok, range) in keys {
+            let Some(v @ EyeValue::Table { t, value: vs }) = value else {
+                continue;
+            };
+            let ((lo, t_lo), (hi, t_hi)) = v.extremes(t_end);
+            let bad = if !ok(lo) || lo.is_nan() {
+                Some((lo, t_lo))
+            } else if !ok(hi) {
+                Some((hi, t_hi))
+            } else if name == "radius" && lo < 0.0 && hi > 0.0 {
+                // A radius of each sign at two times passes through zero between them: the
+                // extreme of the sign the table's points do not have is shown.
+                Some(if vs[0] > 0.0 { (lo, t_lo) } else { (hi, t_hi) })
+            } else {
+                None
+            };
+            if let Some((x, at)) = bad {
+                return Err(SurfaceKeyError {
+                    key: surface_key(i, name),
+                    value: format!("{{ t = {}, value = {} }}", list_text(t), list_text(vs)),
+                    problem: format!(
+                        "reaches {} at t = {} (its spline between or beyond its points): it must stay {range} for all t in [0, {}]",
+                        significant(x),
+                        significant(at),
+                        number(t_end)
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The times [`SurfaceSpec::check_over`] found each table extreme at, within [0, `t_end`]:
+    /// where the eye, checked at its table times, is checked too.
+    pub fn extreme_times(&self, t_end: f64) -> Vec<f64> {
+        let index = match &self.medium {
+            Some(MediumSpec::Index(v)) => Some(v),
+            _ => None,
+        };
+        [&self.radius, &self.conic, &self.thickness]
+            .into_iter()
+            .flatten()
+            .chain(index)
+            .filter(|v| matches!(v, EyeValue::Table { .. }))
+            .flat_map(|v| {
+                let ((_, a), (_, b)) = v.extremes(t_end);
+                [a, b]
+            })
+            .collect()
+    }
+}
+
+/// `x` to 6 significant digits, shortest form: a value the spline reaches between points
+/// (840, not 840.0000000000002).
+fn significant(x: f64) -> String {
+    number(format!("{x:.5e}").parse().unwrap_or(x))
 }
 
 fn list_text(xs: &[f64]) -> String {

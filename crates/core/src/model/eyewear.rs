@@ -119,15 +119,13 @@ impl LensSpec {
         Ok(Lens { mount, body })
     }
 
-    /// The radii where the lens's zones (or table points) begin, with their item names:
-    /// what the pupil must reach.
-    fn starts(&self) -> Vec<(String, f64)> {
+    /// The radii where the lens's zones begin after the first, with their items: the
+    /// zones the pupil's rays may or may not cross (a table's points are one smooth profile,
+    /// not zones).
+    pub fn zone_starts(&self) -> Vec<(String, f64)> {
         match &self.profile {
             ProfileSpec::Zones(z) => (1..z.len())
-                .map(|k| (format!("zones[{}].radius", k - 1), z[k - 1].0))
-                .collect(),
-            ProfileSpec::Table(t) => (0..t.len())
-                .map(|k| (format!("table[{k}].radius"), t[k].0))
+                .map(|k| (format!("zones[{k}]"), z[k - 1].0))
                 .collect(),
             _ => vec![],
         }
@@ -143,6 +141,21 @@ impl LensSpec {
                 .last()
                 .map(|l| (format!("table[{}].radius", t.len() - 1), l.0)),
             _ => None,
+        }
+    }
+
+    /// The lens in a few words, for messages (never its whole profile):
+    /// `spectacle lens at 12 mm, 20 zones`.
+    pub fn describe(&self) -> String {
+        let body = match &self.profile {
+            ProfileSpec::Power(p) => format!("{} D", number(*p)),
+            ProfileSpec::Zones(z) => format!("{} zones", z.len()),
+            ProfileSpec::Table(t) => format!("a table of {} points", t.len()),
+            ProfileSpec::Real { .. } => "a real lens".into(),
+        };
+        match self.kind {
+            1 => format!("(contact lens, {body})"),
+            _ => format!("(spectacle lens at {} mm, {body})", number(self.vertex)),
         }
     }
 
@@ -180,6 +193,18 @@ impl LensSpec {
     }
 }
 
+/// The lenses in a few words, for messages: `2 lenses: (spectacle lens at 12 mm, -2 D),
+/// (contact lens, 20 zones)`.
+pub fn lenses_text(lenses: &[LensSpec]) -> String {
+    let n = lenses.len();
+    let items: Vec<String> = lenses.iter().map(LensSpec::describe).collect();
+    format!(
+        "({n} lens{}: {})",
+        if n == 1 { "" } else { "es" },
+        items.join(", ")
+    )
+}
+
 /// The lenses as TOML (an inline array of tables).
 pub fn lenses_toml(lenses: &[LensSpec]) -> String {
     format!(
@@ -212,19 +237,18 @@ pub fn worn_at(spec: &OpticsSpec, t: f64) -> Result<optics::OpticalSystem, Optic
     optics::lens::wear(&eye, &lenses).map_err(|e| {
         key_error(
             LENSES_KEY.into(),
-            lenses_toml(&spec.lenses),
+            lenses_text(&spec.lenses),
             format!("cannot be worn: {}", crate::text::one_line(&e.to_string())),
         )
     })
 }
 
-/// Each lens must cover what the pupil sees through it out to `optics.max_field`, and each
-/// of its zones must begin where some of that light crosses: a zone beyond it would change
-/// nothing the eye sees. The heights are those of the meridional fan at the largest field
-/// (the beam's far edge), traced with the lenses' edges removed.
-pub fn check_coverage(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
+/// How far from each lens's axis the pupil's rays cross it (mm), in the order of
+/// `spec.lenses`: the heights of the meridional fan at `optics.max_field` (the beam's far
+/// edge) at the plane where the lens's profile acts, traced with the lenses' edges removed.
+pub fn lens_reach(spec: &OpticsSpec) -> Result<Vec<f64>, OpticsKeyError> {
     if spec.lenses.is_empty() {
-        return Ok(());
+        return Ok(vec![]);
     }
     let mut open = spec.clone();
     // Zones of one power with an edge far out: the heights at the lens barely depend on the
@@ -245,13 +269,26 @@ pub fn check_coverage(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
         system.last_vertex() + 1.0,
     )
     .map_err(|e| spec.explain_worn(&e))?;
-    for (i, lens) in spec.lenses.iter().enumerate() {
-        // The plane where the lens's profile acts: its vertex, or the corneal apex.
-        let z = if lens.kind == 1 { 0.0 } else { -lens.vertex };
-        let reach = fan
-            .iter()
-            .filter_map(|path| height_at(path, z))
-            .fold(0.0_f64, f64::max);
+    Ok(spec
+        .lenses
+        .iter()
+        .map(|lens| {
+            // The plane where the lens's profile acts: its vertex, or the corneal apex.
+            let z = if lens.kind == 1 { 0.0 } else { -lens.vertex };
+            fan.iter()
+                .filter_map(|path| height_at(path, z))
+                .fold(0.0_f64, f64::max)
+        })
+        .collect())
+}
+
+/// Each lens must cover what the pupil sees through it out to `optics.max_field`: rays
+/// beyond a lens's edge would miss it. Zones beyond what the pupil sees are allowed (every
+/// real lens is wider than the part of it an eye looks through); optics.json lists them
+/// (`zones_no_ray_crosses`).
+pub fn check_coverage(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
+    let reach = lens_reach(spec)?;
+    for (i, (lens, reach)) in spec.lenses.iter().zip(reach).enumerate() {
         if let Some((item, edge)) = lens.edge() {
             if edge < reach {
                 return Err(key_error(
@@ -260,19 +297,6 @@ pub fn check_coverage(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
                     format!(
                         "is the lens's edge, but the pupil's rays cross the lens up to {} mm from its axis at optics.max_field = {}°: make it at least that",
                         number((reach * 100.0).ceil() / 100.0),
-                        number(spec.max_field)
-                    ),
-                ));
-            }
-        }
-        for (item, start) in lens.starts() {
-            if start > 0.0 && start >= reach {
-                return Err(key_error(
-                    format!("{LENSES_KEY}[{i}].{item}"),
-                    number(start),
-                    format!(
-                        "puts a zone beyond what the pupil sees: its rays cross the lens at most {} mm from its axis (at optics.max_field = {}°)",
-                        number((reach * 100.0).floor() / 100.0),
                         number(spec.max_field)
                     ),
                 ));

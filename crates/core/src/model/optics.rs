@@ -38,7 +38,9 @@ const FOCI: [Criterion; 4] = [
     Criterion::Tangential,
 ];
 
-/// The wavelengths (nm) the eyes' dispersion laws hold for.
+/// The wavelengths (nm) a custom eye may be traced at (its media are the scene's own laws,
+/// checked physical at each); a built-in eye has its source's range
+/// ([`OpticsSpec::wavelength_range`]).
 pub const WAVELENGTH_RANGE: (f64, f64) = (300.0, 1200.0);
 /// How closely a run's best foci follow the converged ones (mm): the agreement
 /// [`OpticsSpec::focus_settings`] asks of a ray count and twice as many. About 3e-5 D of
@@ -217,8 +219,82 @@ impl OpticsSpec {
     }
 
     fn wavelengths_text(&self) -> String {
-        let items: Vec<String> = self.wavelengths.iter().map(|w| number(*w)).collect();
-        format!("[{}]", items.join(", "))
+        let items: Vec<String> = self
+            .wavelengths
+            .iter()
+            .take(8)
+            .map(|w| number(*w))
+            .collect();
+        let more = if self.wavelengths.len() > 8 {
+            ", …"
+        } else {
+            ""
+        };
+        format!("[{}{more}]", items.join(", "))
+    }
+
+    /// The wavelengths (nm) this eye's dispersion holds for, and why: a built-in eye's, as
+    /// its source gives them ([`optics::eyes::wavelength_range`]); a custom eye's media are
+    /// the scene's own laws, checked physical at each wavelength, within
+    /// [`WAVELENGTH_RANGE`].
+    pub fn wavelength_range(&self) -> (f64, f64, String) {
+        match optics::eyes::wavelength_range(self.eye_name()) {
+            Some(r) => (
+                r.lo,
+                r.hi,
+                format!("for the {} eye: {}", self.eye_name(), r.source),
+            ),
+            None => (
+                WAVELENGTH_RANGE.0,
+                WAVELENGTH_RANGE.1,
+                "where the eyes' dispersion laws are used".into(),
+            ),
+        }
+    }
+
+    /// The check of [`OpticsSpec::check`] and the eye over the whole run, growth times
+    /// [0, `t_end`]: every table over time between and beyond its points
+    /// ([`eye::SurfaceSpec::check_over`]), and the eye a valid system wherever a table
+    /// is extreme and at both ends of the run.
+    pub fn check_over(&self, t_end: f64) -> Result<(), OpticsKeyError> {
+        self.check()?;
+        if self.times().is_empty() {
+            return Ok(());
+        }
+        let mut times = vec![0.0, t_end];
+        for (i, s) in self.surfaces.iter().enumerate() {
+            s.check_over(i, t_end).map_err(surface_error)?;
+            times.extend(s.extreme_times(t_end));
+        }
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        for t in times {
+            self.system_checked_at(t)?;
+        }
+        Ok(())
+    }
+
+    /// The eye at growth time `t` a valid system at every wavelength; an error names the
+    /// time when the eye changes with it.
+    fn system_checked_at(&self, t: f64) -> Result<(), OpticsKeyError> {
+        let timed = !self.times().is_empty();
+        let at_time = |mut e: OpticsKeyError| {
+            if timed {
+                e.problem = format!(
+                    "{} (the eye at growth time t = {})",
+                    e.problem,
+                    significant(t)
+                );
+            }
+            e
+        };
+        let system = self.system_at(t).map_err(at_time)?;
+        for &w in &self.wavelengths {
+            system
+                .check_wavelength(w)
+                .map_err(|e| at_time(self.explain(&e)))?;
+        }
+        Ok(())
     }
 
     /// The checks that need no ray: counts and ranges, each naming its key.
@@ -242,14 +318,39 @@ impl OpticsSpec {
                 "must list at least two wavelengths (nm): blue, then red".into(),
             ));
         }
-        let (lo, hi) = WAVELENGTH_RANGE;
+        let (lo, hi, why) = self.wavelength_range();
         if let Some(w) = self.wavelengths.iter().find(|w| !(**w >= lo && **w <= hi)) {
             return Err(err(
                 "optics.wavelengths",
                 self.wavelengths_text(),
                 format!(
-                    "must lie between {lo} and {hi} nm, where the eyes' dispersion laws hold ({} does not)",
+                    "must lie between {lo} and {hi} nm {why} ({} does not)",
                     number(*w)
+                ),
+            ));
+        }
+        let (blue, red) = (self.wavelengths[0], self.wavelengths[1]);
+        if !(blue < red) {
+            return Err(err(
+                "optics.wavelengths",
+                self.wavelengths_text(),
+                format!(
+                    "must list the blue wavelength first, then a longer red one ({} nm is not shorter than {} nm): the blue surface is the stimulus, the red one classifies the eye",
+                    number(blue),
+                    number(red)
+                ),
+            ));
+        }
+        let contacts: Vec<usize> = (self.lenses.iter().enumerate())
+            .filter(|(_, l)| l.kind == 1)
+            .map(|(i, _)| i)
+            .collect();
+        if let [first, second, ..] = contacts[..] {
+            return Err(err(
+                &format!("{}[{second}].kind", super::eyewear::LENSES_KEY),
+                "\"contact\"".into(),
+                format!(
+                    "is a second contact lens (optics.lenses[{first}] is one): two contact lenses cannot be worn at once, the cornea holds one"
                 ),
             ));
         }
@@ -289,18 +390,7 @@ impl OpticsSpec {
         } else {
             &times[..]
         } {
-            let at_time = |mut e: OpticsKeyError| {
-                if !times.is_empty() {
-                    e.problem = format!("{} (the eye at growth time t = {})", e.problem, number(t));
-                }
-                e
-            };
-            let system = self.system_at(t).map_err(at_time)?;
-            for &w in &self.wavelengths {
-                system
-                    .check_wavelength(w)
-                    .map_err(|e| at_time(self.explain(&e)))?;
-            }
+            self.system_checked_at(t)?;
         }
         Ok(())
     }
@@ -443,7 +533,11 @@ impl OpticsSpec {
     ) -> Result<(Surfaces, PolarSpline, PolarSpline), OpticsKeyError> {
         let at_time = |mut e: OpticsKeyError| {
             if !self.times().is_empty() {
-                e.problem = format!("{} (the eye at growth time t = {})", e.problem, number(t));
+                e.problem = format!(
+                    "{} (the eye at growth time t = {})",
+                    e.problem,
+                    significant(t)
+                );
             }
             e
         };
@@ -485,7 +579,7 @@ impl OpticsSpec {
             if naked.is_ok() {
                 return OpticsKeyError {
                     key: super::eyewear::LENSES_KEY.into(),
-                    value: super::eyewear::lenses_toml(&self.lenses),
+                    value: super::eyewear::lenses_text(&self.lenses),
                     problem: format!(
                         "form no image in the {} eye: {}",
                         self.eye_name(),
@@ -499,39 +593,115 @@ impl OpticsSpec {
 
     /// An optics error as a problem with the key that causes it: a ray failing on the axis
     /// (or any error of the pupil) is the pupil's; failing off the axis, the largest field's;
-    /// a surface that cannot be interpolated, the criterion's.
+    /// a surface that cannot be interpolated, the criterion's. A ray that fails only because
+    /// of a surface key (the built-in eye traces without the scene's changes to it) is that
+    /// key's ([`OpticsSpec::surface_to_blame`]).
     pub fn explain(&self, e: &OpticsError) -> OpticsKeyError {
         let text = crate::text::one_line(&e.to_string());
-        let (key, value) = match e {
-            OpticsError::Ray { field_deg, .. } | OpticsError::NoFocus { field_deg, .. }
-                if *field_deg > 0.0 =>
-            {
-                ("optics.max_field", number(self.max_field))
+        let (key, value): (String, String) = match e {
+            OpticsError::Ray {
+                field_deg,
+                wavelength_nm,
+                ..
             }
-            OpticsError::Ray { .. } | OpticsError::NoFocus { .. } => {
-                ("optics.pupil", number(self.pupil))
-            }
+            | OpticsError::NoFocus {
+                field_deg,
+                wavelength_nm,
+                ..
+            } => match self.surface_to_blame(*field_deg, *wavelength_nm) {
+                Some(blame) => blame,
+                None if *field_deg > 0.0 => ("optics.max_field".into(), number(self.max_field)),
+                None => ("optics.pupil".into(), number(self.pupil)),
+            },
             OpticsError::InvalidInput { what, .. } if what.contains("wavelength") => {
-                ("optics.wavelengths", self.wavelengths_text())
+                ("optics.wavelengths".into(), self.wavelengths_text())
             }
             // A surface's own number (the tables' ranges are checked first, so this is a
             // combination of them: an ellipsoid that ends before the next surface, ...).
             OpticsError::InvalidSystem { what, .. } if what.starts_with("surface '") => (
-                "optics.surfaces",
+                "optics.surfaces".into(),
                 format!("({} surface tables)", self.surfaces.len()),
             ),
-            OpticsError::InvalidSystem { .. } => ("optics.wavelengths", self.wavelengths_text()),
-            OpticsError::InvalidInput { what, .. } if what.contains("field") => {
-                ("optics.max_field", number(self.max_field))
+            OpticsError::InvalidSystem { .. } => {
+                ("optics.wavelengths".into(), self.wavelengths_text())
             }
-            OpticsError::InvalidInput { .. } => ("optics.pupil", number(self.pupil)),
-            OpticsError::Fit(_) => ("optics.focus", format!("\"{}\"", FOCUS_NAMES[self.focus])),
+            OpticsError::InvalidInput { what, .. } if what.contains("field") => {
+                ("optics.max_field".into(), number(self.max_field))
+            }
+            OpticsError::InvalidInput { .. } => ("optics.pupil".into(), number(self.pupil)),
+            OpticsError::Fit(_) => (
+                "optics.focus".into(),
+                format!("\"{}\"", FOCUS_NAMES[self.focus]),
+            ),
+            OpticsError::Eyewear { lens, .. } => (
+                format!("{}[{lens}]", super::eyewear::LENSES_KEY),
+                self.lenses
+                    .get(*lens)
+                    .map_or_else(|| "(none)".into(), super::eyewear::LensSpec::describe),
+            ),
         };
         OpticsKeyError {
-            key: key.to_string(),
+            key,
             value,
             problem: format!("cannot be traced in the {} eye: {text}", self.eye_name()),
         }
+    }
+
+    /// The surface key a ray's failure at `field_deg` and `wavelength_nm` is due to, with its
+    /// value: `None` unless the built-in eye without the scene's surface keys traces there
+    /// (then the pupil and the field are not to blame). The key is the first whose removal
+    /// alone lets the eye trace, else the first table over time (the eye fails at a later
+    /// time), else `optics.surfaces` as a whole.
+    fn surface_to_blame(&self, field_deg: f64, wavelength_nm: f64) -> Option<(String, String)> {
+        if self.surfaces.is_empty() || self.base().is_none() {
+            return None;
+        }
+        let traces = |spec: &OpticsSpec| {
+            spec.system().is_ok_and(|eye| {
+                optics::best_focus(
+                    &eye,
+                    wavelength_nm,
+                    field_deg,
+                    &spec.pupil_stop(&eye),
+                    spec.criterion(),
+                )
+                .is_ok()
+            })
+        };
+        let bare = OpticsSpec {
+            surfaces: vec![],
+            ..self.clone()
+        };
+        if !traces(&bare) {
+            return None;
+        }
+        let given: Vec<(usize, &'static str)> = (self.surfaces.iter().enumerate())
+            .flat_map(|(i, s)| s.given().into_iter().map(move |name| (i, name)))
+            .collect();
+        let shown = |i: usize, name: &str| {
+            (
+                eye::surface_key(i, name),
+                self.surfaces[i].shown(name).unwrap_or_default(),
+            )
+        };
+        if traces(self) {
+            // The eye traces at growth time 0: a table makes it fail later.
+            return given
+                .iter()
+                .find(|(i, name)| self.surfaces[*i].is_table(name))
+                .map(|&(i, name)| shown(i, name));
+        }
+        for &(i, name) in &given {
+            let mut without = self.clone();
+            without.surfaces[i].clear(name);
+            if traces(&without) {
+                return Some(shown(i, name));
+            }
+        }
+        Some((
+            "optics.surfaces".into(),
+            format!("({} surface tables)", self.surfaces.len()),
+        ))
     }
 }
 
@@ -548,6 +718,11 @@ pub struct ComputedOptics {
     /// With tables over time: the splines at every traced time, blended between them.
     pub timed: Option<TimedSurfaces>,
     pub wall_seconds: f64,
+}
+
+/// `x` to 6 significant digits, shortest form: a growth time in a message.
+fn significant(x: f64) -> String {
+    number(format!("{x:.5e}").parse().unwrap_or(x))
 }
 
 /// A surface's key error as the optics keys' error.

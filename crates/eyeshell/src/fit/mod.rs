@@ -129,6 +129,24 @@ pub fn check_params(scene: &Scene, params: &[FitParam], what: &str) -> Result<()
     {
         return Err(Error::input(format!("{what}: {why} ({})", scene.origin)));
     }
+    // A schedule's parameter is a parameter of its form alone: with another form the run
+    // has no such parameter to differentiate by.
+    let form = scene
+        .growth
+        .as_ref()
+        .map_or(growth::schedule::Form::Constant, |g| g.schedule.form);
+    if let Some(sp) = params.iter().find_map(|p| p.param.schedule_param()) {
+        if sp.form() != form {
+            use growth::schedule::Form;
+            return Err(Error::input(format!(
+                "{what}: {} needs growth.schedule = \"{}\" ({} has \"{}\"): the schedule has no such parameter",
+                sp.key(),
+                Form::NAMES[sp.form() as usize],
+                scene.origin_of_key("growth.schedule"),
+                Form::NAMES[form as usize]
+            )));
+        }
+    }
     let integrator = scene.growth_settings.integrator;
     if integrator != growth::Integrator::Ida {
         return Err(Error::input(format!(

@@ -129,7 +129,7 @@ pub enum SceneError {
         expected: String,
         found: String,
     },
-    #[error("{origin}: {key} = {value} {problem}")]
+    #[error("{}", invalid_line(origin, key, value, problem))]
     Invalid {
         origin: String,
         key: String,
@@ -157,6 +157,41 @@ impl SceneError {
     }
 }
 
+/// The most characters of an origin (a path, a `--set` text) and of a value an error shows:
+/// a message is one line of at most about 300 characters however long the input.
+const MAX_ORIGIN: usize = 100;
+const MAX_VALUE: usize = 80;
+
+/// The line an error of a key shows: about [`MAX_LINE`] characters at most, with the
+/// command line's `eyeshell: error: ` before it, however long the input. The problem (the
+/// explanation) is never cut: the origin and the value are shortened first to at most
+/// [`MAX_ORIGIN`] and [`MAX_VALUE`] characters, then, if the line is still too long, to
+/// their beginnings (the key and the problem name what is wrong).
+fn invalid_line(origin: &str, key: &str, value: &str, problem: &str) -> String {
+    let line = |o: usize, v: usize| {
+        format!(
+            "{}: {key} = {} {problem}",
+            crate::text::excerpt(origin, o),
+            crate::text::excerpt(value, v)
+        )
+    };
+    let full = line(MAX_ORIGIN, MAX_VALUE);
+    if full.chars().count() <= MAX_LINE {
+        return full;
+    }
+    // An override's origin keeps its key (`--set optics.surfaces[1].thickness=…`); any
+    // other (a file, a sweep's run) its first 48 characters.
+    let keep = match origin.find('=') {
+        Some(at) if origin[..at].matches(' ').count() <= 1 => origin[..at].chars().count() + 1,
+        _ => 48,
+    }
+    .min(80);
+    line(keep, 12)
+}
+
+/// The longest line [`invalid_line`] aims at (300 with the command line's prefix).
+const MAX_LINE: usize = 280;
+
 fn suggest(s: &Option<String>) -> String {
     s.as_ref()
         .map(|s| format!(" (did you mean '{s}'?)"))
@@ -173,7 +208,9 @@ pub(crate) use crate::text::one_line;
 
 /// The origin shown for an override (`--set key=value` on the command line).
 fn override_origin(text: &str) -> String {
-    crate::text::advice(&crate::text::Advice::Override { text })
+    // The key and the start of its value: a value may be kilobytes long (a list of lenses).
+    let text = crate::text::excerpt(text, 72);
+    crate::text::advice(&crate::text::Advice::Override { text: &text })
 }
 
 /// Which origin set each key last; a later set wins (sequence number first).
@@ -755,7 +792,9 @@ impl Scene {
         self.validate_mesh(sources)?;
         self.validate_sizes(sources)?;
         if self.stimulus_source() == Source::Optics {
-            if let Err(e) = self.optics().check() {
+            // The whole run: growth.t_end, or the [0, 1] an elastic scene's eye is drawn over.
+            let t_end = self.growth.as_ref().map_or(1.0, |g| g.t_end);
+            if let Err(e) = self.optics().check_over(t_end) {
                 return Err(SceneError::Invalid {
                     origin: self.origin_of(sources, &[source_key(&e.key)]),
                     key: e.key,
@@ -769,7 +808,7 @@ impl Scene {
             if !o.lenses.is_empty() && self.stimulus_source() != Source::Optics {
                 return Err(invalid(
                     &["optics.lenses"],
-                    crate::model::eyewear::lenses_toml(&o.lenses),
+                    crate::model::eyewear::lenses_text(&o.lenses),
                     "need stimulus.source = \"optics\": the published surfaces are of the naked eye".into(),
                 ));
             }
@@ -787,14 +826,12 @@ impl Scene {
                     "must lie in [0, 25] D".into(),
                 ));
             }
-            let (lo, hi) = crate::model::optics::WAVELENGTH_RANGE;
+            let (lo, hi, why) = o.wavelength_range();
             if !(o.refraction_wavelength >= lo && o.refraction_wavelength <= hi) {
                 return Err(invalid(
-                    &["optics.refraction_wavelength"],
+                    &["optics.refraction_wavelength", "optics.eye"],
                     number(o.refraction_wavelength),
-                    format!(
-                        "must lie between {lo} and {hi} nm, where the eyes' dispersion laws hold"
-                    ),
+                    format!("must lie between {lo} and {hi} nm {why}"),
                 ));
             }
         }
@@ -807,7 +844,12 @@ impl Scene {
         }
         if let Some(g) = &self.growth {
             // The clock and the schedule: each problem names its key and shows its value.
-            if let Some((key, problem)) = g.clock.check().err().or(g.schedule.check().err()) {
+            if let Some((key, problem)) = (g.clock.check())
+                .and_then(|()| g.clock.check_window(g.t_end))
+                .and_then(|()| g.schedule.check())
+                .and_then(|()| g.schedule.check_window(&g.clock, g.t_end))
+                .err()
+            {
                 let value =
                     crate::scene::keys::find(key).map_or_else(String::new, |k| show(&k.get(self)));
                 return Err(invalid(&[key], value, problem));

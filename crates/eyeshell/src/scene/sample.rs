@@ -1009,7 +1009,7 @@ fn correlation_factor(c: &toml::Table, keys: &[(String, Dist)]) -> Result<Vec<Ve
 /// The draws of `sample` outside their key's range, refused with their count, the key and
 /// the first eyes: never clipped.
 pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<(), SceneError> {
-    const SHOWN: usize = 3;
+    const SHOWN: usize = 2;
     let mut problems = Vec::new();
     let mut total = 0;
     for (d, (key, _)) in sample.keys.iter().enumerate() {
@@ -1021,10 +1021,13 @@ pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<
         for (i, row) in draws.iter().enumerate() {
             if let Err(e) = spec.rule.check_float(row[d]) {
                 if bad.len() < SHOWN {
-                    bad.push(format!("{} = {}", sample.run_name(i), number(row[d])));
+                    // Six significant digits: the message stays one short line.
+                    let x: f64 = format!("{:.5e}", row[d]).parse().unwrap_or(row[d]);
+                    bad.push(format!("{} = {}", sample.run_name(i), number(x)));
                 }
                 if why.is_empty() {
-                    why = e;
+                    // The rule without its reason (the key's documentation has it).
+                    why = e.split(':').next().unwrap_or(&e).to_string();
                 }
                 total += 1;
             }
@@ -1034,11 +1037,16 @@ pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<
                 .iter()
                 .filter(|r| spec.rule.check_float(r[d]).is_err())
                 .count();
-            problems.push(format!(
-                "{count} of {key} ({why}: {}{})",
-                bad.join(", "),
-                if count > SHOWN { ", ..." } else { "" }
-            ));
+            // The first key with its eyes, the others by their count: one short line.
+            problems.push(if problems.is_empty() {
+                format!(
+                    "{count} of {key} ({why}: {}{})",
+                    bad.join(", "),
+                    if count > SHOWN { ", ..." } else { "" }
+                )
+            } else {
+                format!("{count} of {key}")
+            });
         }
     }
     if problems.is_empty() {
@@ -1047,7 +1055,7 @@ pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<
     Err(SceneError::BadSweep {
         origin: origin.to_string(),
         problem: format!(
-            "sample: {total} of {} drawn values lie outside their key's range and are not clipped: {}; narrow the distribution or bound it (dist = \"truncated-normal\" with low and high)",
+            "sample: {total} of {} drawn values lie outside their key's range and are not clipped: {}; narrow the distribution or bound it (truncated-normal)",
             draws.len() * sample.keys.len(),
             problems.join("; ")
         ),
