@@ -169,7 +169,7 @@ impl GrowthParams {
         }
         let computed = self
             .optics
-            .compute(self.blue.z_b)
+            .compute_over(self.blue.z_b, self.t_end)
             .map_err(|e| e.to_string())?;
         Ok(std::borrow::Cow::Owned(GrowthParams {
             computed: Some(std::sync::Arc::new(computed)),

@@ -399,10 +399,35 @@ impl OpticsSpec {
     /// does not change, else at each of [`OpticsSpec::times`] (the surfaces at time 0 are
     /// those of `surfaces`, `blue` and `red`).
     pub fn compute(&self, z_c: f64) -> Result<ComputedOptics, OpticsKeyError> {
+        self.trace(z_c, self.times())
+    }
+
+    /// The surfaces a growth run to `t_end` reads: as [`OpticsSpec::compute`], traced at
+    /// [`OpticsSpec::times_until`] `t_end`, so that the blend interpolates between traced
+    /// eyes over the whole run and never extrapolates them (a table ending early leaves the
+    /// eye changing along its end slope, which the traced surfaces' continuation does not
+    /// follow: a blend carried far beyond its last time can fold the surface).
+    pub fn compute_over(&self, z_c: f64, t_end: f64) -> Result<ComputedOptics, OpticsKeyError> {
+        self.trace(z_c, self.times_until(t_end))
+    }
+
+    /// [`OpticsSpec::times`], and `t_end` where it lies beyond the last of them (none for an
+    /// eye that does not change).
+    pub fn times_until(&self, t_end: f64) -> Vec<f64> {
+        let mut ts = self.times();
+        if ts
+            .last()
+            .is_some_and(|&last| t_end.is_finite() && t_end > last)
+        {
+            ts.push(t_end);
+        }
+        ts
+    }
+
+    fn trace(&self, z_c: f64, times: Vec<f64>) -> Result<ComputedOptics, OpticsKeyError> {
         self.check()?;
         let start = std::time::Instant::now();
         super::eyewear::check_coverage(self)?;
-        let times = self.times();
         let mut first = self.compute_at(0.0, z_c)?;
         if times.len() > 1 {
             let mut blue = vec![first.1.clone()];
@@ -869,6 +894,28 @@ mod tests {
             left > 0.0 && (left - right).abs() < 1e-3 * left.abs(),
             "{left} {right}"
         );
+    }
+
+    /// A table that ends before the run does: the eye is traced at the run's end too, so
+    /// the blend there is the eye traced there (not the traced surfaces carried along their
+    /// slope in t far beyond the last table time).
+    #[test]
+    fn a_table_ending_before_the_run_is_traced_at_the_runs_end() {
+        let mut spec = flattening();
+        spec.surfaces[0].radius = Some(EyeValue::Table {
+            t: vec![0.0, 0.08],
+            value: vec![7.47, 7.60],
+        });
+        assert_eq!(spec.times_until(1.0), vec![0.0, 0.08, 1.0]);
+        assert_eq!(spec.times_until(0.05), vec![0.0, 0.08]);
+        let c = spec.compute_over(-0.5, 1.0).unwrap();
+        let timed = c.timed.as_ref().expect("a table over time");
+        let (blue, _) = timed.at(1.0).unwrap();
+        let alone = spec.compute_eye_at(1.0, -0.5).unwrap();
+        for phi in [0.0, 0.05, 0.09] {
+            let (b, a) = (blue.radius(phi).unwrap(), alone.blue.radius(phi).unwrap());
+            assert!((b - a).abs() < 1e-5, "φ {phi}: blend {b}, traced {a}");
+        }
     }
 
     /// A table's error names the key and the growth time of the eye that fails.

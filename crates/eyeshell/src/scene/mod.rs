@@ -424,7 +424,9 @@ impl Scene {
             return Ok(());
         };
         if !g.is_resolved() {
-            g.computed = Some(std::sync::Arc::new(g.optics.compute(g.blue.z_b)?));
+            g.computed = Some(std::sync::Arc::new(
+                g.optics.compute_over(g.blue.z_b, g.t_end)?,
+            ));
         }
         crate::model::eyewear::refraction_table(&g.refraction_optics())?;
         Ok(())
