@@ -214,6 +214,19 @@ pub(crate) fn population_lines(head: &eyeshell::sweep::Head<'_>, dir: &std::path
             dir.join(SOBOL_TABLE).display()
         ));
     }
+    // What the statistics could not include (eyes without refraction_D, eyes not classed,
+    // unreliable indices) is said here as well as in population.json, never only there.
+    let notes = std::fs::read_to_string(dir.join(POPULATION_FILE))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v.get("notes").and_then(|n| n.as_array()).cloned())
+        .unwrap_or_default();
+    for note in notes.iter().filter_map(|n| n.as_str()) {
+        text.push_str(&format!(
+            "  note            {}\n",
+            eyeshell::text::one_line(note)
+        ));
+    }
     text
 }
 

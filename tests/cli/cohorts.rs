@@ -312,6 +312,11 @@ fn bad_samples_are_refused_before_anything_runs() {
             "[sweep.sample]\neyes = 20\n[sweep.sample.keys]\n\"material.C\" = { dist = \"uniform\", low = 90.0, high = 110.0 }\n",
             "give seed",
         ),
+        // Sobol indices of 4 base points came out as 1.41 [1.25, 1.77] without a word.
+        (
+            "[sweep.sample]\neyes = 4\nseed = 1\ndesign = \"saltelli\"\n[sweep.sample.keys]\n\"pressure.dP\" = { dist = \"uniform\", low = 1.5, high = 2.5 }\n",
+            "eyes = 4: the saltelli design needs at least 32 base points",
+        ),
     ];
     for (sample, needle) in cases {
         std::fs::write(dir.path().join("s.toml"), format!("{SPHERE}{sample}")).unwrap();
@@ -464,4 +469,73 @@ fn a_cohort_kept_as_a_table_equals_the_per_eye_output_and_resumes_to_the_same_by
         "per_run must be \"directory\" (a run directory per eye) or \"table\"",
         "per_run",
     );
+}
+
+/// A quantity that cannot be computed is NaN with a note, never another rule's answer, and
+/// never dropped from a summary. Eyes of 14.9–15.6 mm, classed by dioptres: those beyond
+/// +25 D (refraction_D NaN, from geometry.R0 below about 5.7 mm) are "unknown", not the
+/// surfaces' "hyperopic"; refraction_D stays in population.json's final with its n, the
+/// eyes that have it, and notes say how many have none and could not be classed.
+#[test]
+fn an_eye_the_dioptre_rule_cannot_class_is_unknown_and_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = "name = \"small\"\n[fibres]\nD = 0.0\n[growth]\neta0 = 70.0\nt_end = 0.1\n[solver]\nnodes = 21\nrtol = 1e-3\n[output]\ntimes = [0.05, 0.1]\nhistory_points = 5\n[stimulus]\nclassify = \"dioptres\"\n[cornea]\nR0 = 5.5\n[sweep.sample]\neyes = 6\ndesign = \"latin-hypercube\"\nseed = 1\n[sweep.sample.keys]\n\"geometry.R0\" = { dist = \"uniform\", low = 5.3, high = 6.0 }\n";
+    std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out"]);
+    succeeded(&run, "cohort");
+    let out = dir.path().join("out");
+    let (header, rows) = csv_cells(&out.join("sweep.csv"));
+    let at = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (class, refraction) = (at("class"), at("refraction_D"));
+    let nan = rows.iter().filter(|r| r[refraction] == "NaN").count();
+    assert!((1..rows.len() - 1).contains(&nan), "{rows:?}");
+    for r in &rows {
+        let d: f64 = r[refraction].parse().unwrap();
+        let expected = if d.is_nan() { "unknown" } else { "hyperopic" };
+        assert_eq!(r[class], expected, "{r:?}");
+    }
+    let p = population(&out);
+    let have = rows.len() - nan;
+    assert_eq!(p["final"]["refraction_D"]["n"], have, "{}", p["final"]);
+    let finite: Vec<f64> = rows
+        .iter()
+        .filter_map(|r| r[refraction].parse::<f64>().ok().filter(|d| d.is_finite()))
+        .collect();
+    let mean = finite.iter().sum::<f64>() / finite.len() as f64;
+    let got = p["final"]["refraction_D"]["mean"].as_f64().unwrap();
+    assert!((got - mean).abs() < 1e-12 * mean.abs(), "{got} vs {mean}");
+    let unknown = p["classes"]["unknown"]["share"].as_f64().unwrap();
+    assert!((unknown - nan as f64 / rows.len() as f64).abs() < 1e-15);
+    let notes: Vec<&str> = p["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    let counted = format!("{nan} of {} eyes", rows.len());
+    assert!(
+        notes.iter().any(|n| n.starts_with(&format!(
+            "refraction_D at the final time: {counted} have no value"
+        ))),
+        "{notes:?}"
+    );
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.starts_with(&format!("{counted} could not be classed"))),
+        "{notes:?}"
+    );
+    // The notes are on the summary as well, and population.csv has the row.
+    assert!(
+        run.stdout
+            .contains(&format!("  note            {counted} could not be classed")),
+        "{}",
+        run.stdout
+    );
+    let table = std::fs::read_to_string(out.join("population.csv")).unwrap();
+    assert!(
+        table.contains(&format!("\nfinal,refraction_D,{have},")),
+        "{table}"
+    );
+    assert!(table.contains("\nfinal,class=unknown,"), "{table}");
 }
