@@ -539,3 +539,60 @@ fn an_eye_the_dioptre_rule_cannot_class_is_unknown_and_counted() {
     );
     assert!(table.contains("\nfinal,class=unknown,"), "{table}");
 }
+
+/// SIGTERM (what Slurm sends at a time limit) ends a run as Ctrl-C does: a cohort kept as
+/// a table stops starting eyes, says "interrupted" in summary.json with its finished eyes
+/// "ok" in sweep.csv (not "running" with every row "not run"), exits 1 with one line on how
+/// to resume, and `--resume` gives the bytes of an uninterrupted cohort.
+#[test]
+fn sigterm_interrupts_a_cohort_as_ctrl_c_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let eyes = 40;
+    let scene = GROWING.replace(
+        "[sweep.sample.keys]",
+        &format!("eyes = {eyes}\nper_run = \"table\"\n[sweep.sample.keys]"),
+    );
+    std::fs::write(dir.path().join("t.toml"), &scene).unwrap();
+    succeeded(
+        &eyeshell_in(
+            dir.path(),
+            &["sweep", "t.toml", "--out", "whole", "--quiet"],
+        ),
+        "whole",
+    );
+    let (mut child, mut stderr, _) = spawn_in_own_group(
+        dir.path(),
+        &["sweep", "t.toml", "--out", "out", "--jobs", "1"],
+        "eyeshell: [1/40] eye-",
+    );
+    let sent = std::process::Command::new("kill")
+        .args(["-TERM", "--", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(1), "{rest}");
+    let last = rest.lines().last().unwrap();
+    assert!(
+        last.starts_with("eyeshell: error: sweep interrupted: ") && last.contains("--resume"),
+        "{last}"
+    );
+    let out = dir.path().join("out");
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("\"status\": \"interrupted\""), "{summary}");
+    let (_, rows) = csv_cells(&out.join("sweep.csv"));
+    let ok = rows.iter().filter(|r| r[1] == "ok").count();
+    let not_run = rows.iter().filter(|r| r[1] == "not run").count();
+    assert!((1..eyes).contains(&ok) && ok + not_run == eyes, "{rows:?}");
+    let run = eyeshell_in(dir.path(), &["sweep", "t.toml", "--out", "out", "--resume"]);
+    succeeded(&run, "resume");
+    for f in ["population.json", "population.csv", "series.csv"] {
+        assert_eq!(
+            std::fs::read(dir.path().join("whole").join(f)).unwrap(),
+            std::fs::read(out.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+}
