@@ -596,3 +596,39 @@ fn sigterm_interrupts_a_cohort_as_ctrl_c_does() {
         );
     }
 }
+
+/// Over 10,000 eyes kept as a table: the refusal's advice is what works. It used to
+/// advise shards, which refuse a table cohort; now it says so and advises per_run =
+/// "directory" with shards, whose script is then written.
+#[test]
+fn a_table_cohort_too_large_for_one_process_is_advised_what_works() {
+    let dir = tempfile::tempdir().unwrap();
+    let cohort = |per_run: &str| {
+        format!("{SPHERE}[sweep.sample]\neyes = 10001\nseed = 1\nper_run = \"{per_run}\"\n[sweep.sample.keys]\n\"pressure.dP\" = {{ dist = \"uniform\", low = 1.5, high = 2.5 }}\n")
+    };
+    std::fs::write(dir.path().join("t.toml"), cohort("table")).unwrap();
+    std::fs::write(dir.path().join("d.toml"), cohort("directory")).unwrap();
+    let run = bounded(dir.path(), &["sweep", "t.toml", "--out", "out"]);
+    refused(
+        &run,
+        "a cohort kept as a table (per_run = \"table\") runs in one process and cannot be sharded: give at most 10000 eyes, or set per_run = \"directory\" and run it in shards",
+        "table cohort of 10001",
+    );
+    assert!(!dir.path().join("out").exists());
+    let shard = bounded(
+        dir.path(),
+        &["sweep", "t.toml", "--out", "out", "--shard", "1/2"],
+    );
+    refused(&shard, "per_run = \"table\"", "shard of a table cohort");
+    // The advice followed: the directory form's shards are planned.
+    let script = bounded(
+        dir.path(),
+        &["sweep", "d.toml", "--out", "out", "--slurm-script"],
+    );
+    succeeded(&script, "slurm script of the directory form");
+    assert!(
+        script.stdout.contains("#SBATCH --array"),
+        "{}",
+        script.stdout
+    );
+}

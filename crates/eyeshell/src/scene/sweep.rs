@@ -85,12 +85,22 @@ impl Sweep {
     /// building only its own runs).
     pub fn from_plan(plan: SweepPlan) -> Result<Sweep, SceneError> {
         if plan.len() > MAX_RUNS {
+            let shards = crate::text::advice(&crate::text::Advice::Shards { max: MAX_RUNS });
+            // A cohort kept as a table is one process's checkpoint, which shards cannot
+            // share (they are refused): the advice is what works for it.
+            let table =
+                plan.sample.as_ref().map(|s| s.per_run) == Some(super::sample::PerRun::Table);
+            let advice = match table {
+                true => format!(
+                    "a cohort kept as a table (per_run = \"table\") runs in one process and cannot be sharded: give at most {MAX_RUNS} eyes, or set per_run = \"directory\" and {shards}"
+                ),
+                false => shards,
+            };
             return Err(SceneError::BadSweep {
                 origin: plan.origin.clone(),
                 problem: format!(
-                    "declares {} runs, more than the {MAX_RUNS} allowed in one process: {}",
+                    "declares {} runs, more than the {MAX_RUNS} allowed in one process: {advice}",
                     plan.len(),
-                    crate::text::advice(&crate::text::Advice::Shards { max: MAX_RUNS })
                 ),
             });
         }
