@@ -632,3 +632,31 @@ fn a_table_cohort_too_large_for_one_process_is_advised_what_works() {
         script.stdout
     );
 }
+
+/// `plot` of a cohort kept as a table says what there is to draw (its population figure,
+/// named), not that a run "points outside the sweep's runs", as if it were damaged.
+#[test]
+fn plot_of_a_table_cohort_names_its_population_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("t.toml"),
+        format!("{SPHERE}[sweep.sample]\neyes = 4\nseed = 1\nper_run = \"table\"\n[sweep.sample.keys]\n\"pressure.dP\" = {{ dist = \"uniform\", low = 1.5, high = 2.5 }}\n"),
+    )
+    .unwrap();
+    succeeded(
+        &eyeshell_in(dir.path(), &["sweep", "t.toml", "--out", "out", "--quiet"]),
+        "table cohort",
+    );
+    let run = bounded(dir.path(), &["plot", "out", "--out", "p"]);
+    refused(
+        &run,
+        "out: a cohort kept as a table (per_run = \"table\") has no run directories to draw",
+        "plot of a table cohort",
+    );
+    assert!(
+        run.stderr.contains("its figure is out/population.png"),
+        "{}",
+        run.stderr
+    );
+    assert!(!dir.path().join("p").exists());
+}
