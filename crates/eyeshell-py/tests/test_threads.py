@@ -187,7 +187,7 @@ def test_ctrl_c_stops_a_fit_at_3001_nodes_within_half_a_second_at_any_moment(aft
         try:
             eyeshell.fit({str(SCENES / 'const.toml')!r}, data,
                          fit=["growth.eta0", "growth.Gamma"],
-                         solver__nodes=3001, growth__t_end=0.2)
+                         solver__nodes=3001, growth__t_end=0.2, output__times=[0.2])
             print("finished")
         except KeyboardInterrupt:
             print("interrupted")
