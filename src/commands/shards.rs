@@ -76,7 +76,7 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
             if missing.is_empty() {
                 text.push_str(&super::sweep::population_lines(&(&merged.plan).into(), dir));
                 if let Some(png) = &figure {
-                    text.push_str(&format!("  figure          {}\n", crate::shown(&png)));
+                    text.push_str(&format!("  figure          {}\n", crate::shown(png)));
                 }
             }
         }
@@ -97,7 +97,7 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
     Err(Error::failed(format!(
         "{} of {total} runs of the sweep in {} are not done ({} failed, {} missing): run them with the --resume command above",
         failed.len() + missing.len(),
-        crate::shown(&dir),
+        crate::shown(dir),
         failed.len(),
         missing.len()
     )))

@@ -188,7 +188,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
                 text.push_str(&format!("  table           {}\n", crate::shown(&table)));
                 text.push_str(&population_lines(&head, out_dir));
                 if let Some(png) = &figure {
-                    text.push_str(&format!("  figure          {}\n", crate::shown(&png)));
+                    text.push_str(&format!("  figure          {}\n", crate::shown(png)));
                 }
             }
         }
@@ -301,7 +301,7 @@ pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
     let target = dir.commit()?;
     if !a.quiet {
         let from = match a.dirs.as_slice() {
-            [one] => crate::shown(&one),
+            [one] => crate::shown(one),
             several => format!("{} runs", several.len()),
         };
         out(&format!(

@@ -180,6 +180,8 @@ type Row = (f64, Vec<(String, f64)>, String);
 type AtTime = (f64, Vec<(String, Stats)>, Shares);
 /// Each class's share and its standard error.
 type Shares = BTreeMap<String, (f64, f64)>;
+/// An output not every eye has: (output, how many eyes have it, how many eyes).
+type Missing = (String, usize, usize);
 
 /// One eye's outputs: (name, value) at the final time and, per output time, its row.
 struct Eye {
@@ -249,7 +251,7 @@ fn eye(record: &RunRecord, series: &dyn Fn(&RunRecord) -> Option<String>) -> Opt
 /// have it, how many eyes), and an output fewer than 2 eyes have has no statistics there.
 fn outputs<'a>(
     rows: impl Iterator<Item = &'a [(String, f64)]> + Clone,
-) -> (Vec<(String, Stats)>, Vec<(String, usize, usize)>) {
+) -> (Vec<(String, Stats)>, Vec<Missing>) {
     let eyes = rows.clone().count();
     let mut names: Vec<&String> = Vec::new();
     for r in rows.clone() {
@@ -278,7 +280,7 @@ fn outputs<'a>(
 }
 
 /// The note of an output that not every eye has (`outputs`' second list), at `when`.
-fn missing_note((name, have, eyes): &(String, usize, usize), when: &str) -> String {
+fn missing_note((name, have, eyes): &Missing, when: &str) -> String {
     let why = if name == "refraction_D" {
         " (NaN: the refraction is traced over -25 to +25 D)"
     } else {
