@@ -80,7 +80,7 @@ class Scene:
     >>> eyeshell.Scene(fibres__D=-1)
     Traceback (most recent call last):
     ...
-    eyeshell.InputError: defaults: fibres.D = -1 must be non-negative
+    eyeshell.InputError: set fibres.D=-1: fibres.D = -1 must be non-negative
     >>> eyeshell.Scene(solver__nodes=np.int64(301))["solver.nodes"]
     301
     >>> eyeshell.Scene(growth__t_end=0.2, output__times=[0.1, 0.2])["output.times"]
