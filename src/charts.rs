@@ -421,6 +421,20 @@ pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
         .iter()
         .filter(|r| r.status == "ok" || r.status == "reused" || r.status == "failed")
         .map(|r| {
+            // A cohort kept as a table (`per_run = "table"`) has rows, not run directories:
+            // what there is to see of it is its population figure, drawn by the sweep.
+            if r.dir.is_empty() && dir.join(eyeshell::sweep::compact::CHECKPOINT_FILE).is_file() {
+                let figure = dir.join(format!("{}.png", crate::commands::sweep::POPULATION_FIGURE));
+                let shown = if figure.is_file() {
+                    format!("its figure is {}", crate::shown(&figure))
+                } else {
+                    "its figure (population.png) is drawn once every eye has run".to_string()
+                };
+                return Err(bad(format!(
+                    "{}: a cohort kept as a table (per_run = \"table\") has no run directories to draw, only its rows (series.csv, sweep.csv) and population bands: {shown}; set per_run = \"directory\" for a directory per eye",
+                    crate::shown(dir)
+                )));
+            }
             // A run lives below the sweep: a plain relative path, no `..`, not the sweep,
             // nothing a message could not show, no longer than a sweep names its runs.
             let inside = !r.dir.is_empty()

@@ -173,6 +173,12 @@ pub(crate) fn out(text: &str) {
     let _ = std::io::stdout().lock().write_all(safe.as_bytes());
 }
 
+/// A path as a summary line shows it: its control characters escaped (`\n`), so that an
+/// `--out` holding a line break cannot forge a line of the report.
+pub(crate) fn shown(path: &std::path::Path) -> String {
+    eyeshell::text::one_line(&path.display().to_string())
+}
+
 pub(crate) fn plural(n: usize) -> &'static str {
     if n == 1 {
         ""

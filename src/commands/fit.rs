@@ -127,6 +127,6 @@ pub fn report_text(
     format!(
         "{}  output           {}\n",
         fit::report::report_table(scene, r),
-        target.display()
+        crate::shown(target)
     )
 }

@@ -46,9 +46,9 @@ pub(crate) fn cmd_export(a: &ExportArgs) -> Result<(), Error> {
             };
             out(&format!(
                 "eyeshell: exported {} ({} nodes) to {}: {}\n",
-                a.run.display(),
+                crate::shown(&a.run),
                 done.nodes,
-                done.path.display(),
+                crate::shown(&done.path),
                 what
             ));
         }

@@ -158,7 +158,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
             computed.surfaces.surfaces.len(),
             blue.points.len(),
             computed.surfaces.rays_traced,
-            target.display()
+            crate::shown(&target)
         ));
     }
     Ok(())

@@ -77,7 +77,7 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
             s.residual_norm,
             s.first_integral_max,
             s.wall_seconds,
-            target.display(),
+            crate::shown(&target),
         ));
     }
     Ok(())
@@ -177,7 +177,7 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
             stats.newton_iterations,
             plural(stats.newton_iterations),
             stats.wall_seconds,
-            dir.display(),
+            crate::shown(&dir),
         ));
     }
     Ok(())

@@ -71,12 +71,12 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
         if write {
             text.push_str(&format!(
                 "  table           {}\n",
-                dir.join(TABLE_FILE).display()
+                crate::shown(&dir.join(TABLE_FILE))
             ));
             if missing.is_empty() {
                 text.push_str(&super::sweep::population_lines(&(&merged.plan).into(), dir));
                 if let Some(png) = &figure {
-                    text.push_str(&format!("  figure          {}\n", png.display()));
+                    text.push_str(&format!("  figure          {}\n", crate::shown(png)));
                 }
             }
         }
@@ -97,7 +97,7 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
     Err(Error::failed(format!(
         "{} of {total} runs of the sweep in {} are not done ({} failed, {} missing): run them with the --resume command above",
         failed.len() + missing.len(),
-        dir.display(),
+        crate::shown(dir),
         failed.len(),
         missing.len()
     )))

@@ -27,7 +27,7 @@ pub(crate) fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Error> {
     out(&format!(
         "eyeshell: {} cases written to {}\n",
         results.len(),
-        a.out.display()
+        crate::shown(&a.out)
     ));
     Ok(())
 }
@@ -75,7 +75,7 @@ pub(crate) fn cmd_study(
     let target = dir.commit()?;
     out(&format!(
         "eyeshell: {name} written to {}\n{text}",
-        target.display()
+        crate::shown(&target)
     ));
     Ok(())
 }

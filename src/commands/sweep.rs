@@ -181,14 +181,14 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         match shard {
             Some(_) => text.push_str(&format!(
                 "  record          {}\n  once every shard has run: eyeshell sweep merge {}\n",
-                table.display(),
+                crate::shown(&table),
                 crate::shell::word(out_dir)
             )),
             None => {
-                text.push_str(&format!("  table           {}\n", table.display()));
+                text.push_str(&format!("  table           {}\n", crate::shown(&table)));
                 text.push_str(&population_lines(&head, out_dir));
                 if let Some(png) = &figure {
-                    text.push_str(&format!("  figure          {}\n", png.display()));
+                    text.push_str(&format!("  figure          {}\n", crate::shown(png)));
                 }
             }
         }
@@ -205,13 +205,26 @@ pub(crate) fn population_lines(head: &eyeshell::sweep::Head<'_>, dir: &std::path
     };
     let mut text = format!(
         "  population      {}\n  table           {}\n",
-        dir.join(POPULATION_FILE).display(),
-        dir.join(POPULATION_TABLE).display()
+        crate::shown(&dir.join(POPULATION_FILE)),
+        crate::shown(&dir.join(POPULATION_TABLE))
     );
     if sample.design == eyeshell::scene::sample::Design::Saltelli {
         text.push_str(&format!(
             "  sobol indices   {}\n",
-            dir.join(SOBOL_TABLE).display()
+            crate::shown(&dir.join(SOBOL_TABLE))
+        ));
+    }
+    // What the statistics could not include (eyes without refraction_D, eyes not classed,
+    // unreliable indices) is said here as well as in population.json, never only there.
+    let notes = std::fs::read_to_string(dir.join(POPULATION_FILE))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v.get("notes").and_then(|n| n.as_array()).cloned())
+        .unwrap_or_default();
+    for note in notes.iter().filter_map(|n| n.as_str()) {
+        text.push_str(&format!(
+            "  note            {}\n",
+            eyeshell::text::one_line(note)
         ));
     }
     text
@@ -252,12 +265,12 @@ pub(crate) fn cmd_figures(a: &FiguresArgs) -> Result<(), Error> {
                 "  ({}) {:<50} {}\n",
                 f.id,
                 f.title,
-                f.png.display()
+                crate::shown(&f.png)
             ));
         }
         text.push_str(&format!(
             "  index           {}\n",
-            a.out.join(crate::study::figures::INDEX_FILE).display()
+            crate::shown(&a.out.join(crate::study::figures::INDEX_FILE))
         ));
         out(&text);
     }
@@ -288,13 +301,13 @@ pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
     let target = dir.commit()?;
     if !a.quiet {
         let from = match a.dirs.as_slice() {
-            [one] => one.display().to_string(),
+            [one] => crate::shown(one),
             several => format!("{} runs", several.len()),
         };
         out(&format!(
             "eyeshell: {} files drawn from {from} into {}\n",
             files.len(),
-            target.display()
+            crate::shown(&target)
         ));
     }
     Ok(())

@@ -142,4 +142,118 @@ mod tests {
             assert_eq!(scene_of(&request).unwrap(), run.scene);
         }
     }
+
+    /// Every key of the key table, swept over two or more values on an elastic scene, a
+    /// growing one of the published surfaces and a growing one of everything (optics,
+    /// dioptres, an exponential schedule, ages): each sweep is refused up front naming the
+    /// key, or every run reaches a worker whole. Sweeping a key no run reads used to fail
+    /// every run with "internal error ... does not read back from its TOML"; it is refused
+    /// naming why, and a key some runs read (optics.pupil crossed with stimulus.source)
+    /// is swept, the runs that do not read it carrying it as given.
+    #[test]
+    fn every_key_of_the_key_table_is_swept_or_refused_naming_why() {
+        use eyeshell::scene::{Access, KeyValue, KEYS};
+        let bases = [
+            ("elastic", "[solver]\nnodes = 21\n"),
+            ("growing", "[solver]\nnodes = 21\n[growth]\neta0 = 70.0\n"),
+            ("everything", "[solver]\nnodes = 21\n[growth]\neta0 = 70.0\nschedule = \"exponential\"\nschedule_tau = 2.0\n[stimulus]\nsource = \"optics\"\nclassify = \"dioptres\"\n[time]\nunit = \"years\"\nstart = 2.0\nend = 12.0\n"),
+        ];
+        let (mut swept, mut refused, mut not_in_effect) = (0, 0, 0);
+        for (base, text) in bases {
+            let scene = Scene::from_toml_str(text, "b.toml", &[]).unwrap();
+            for spec in KEYS {
+                let values: Vec<String> = match (spec.access, spec.get(&scene)) {
+                    (Access::Float { .. }, KeyValue::Float(d)) if d.is_finite() => {
+                        let other = if d == 0.0 { 0.5 } else { d * 1.05 };
+                        vec![
+                            eyeshell::text::toml_float(d),
+                            eyeshell::text::toml_float(other),
+                        ]
+                    }
+                    (Access::OptionalFloat { .. }, _) => vec!["0.5".into(), "2.0".into()],
+                    (Access::Count { .. }, KeyValue::Count(n)) => {
+                        vec![n.to_string(), (n + 1).to_string()]
+                    }
+                    (Access::Bool { .. }, _) => vec!["true".into(), "false".into()],
+                    (Access::Choice { names, .. }, _) => {
+                        names.iter().map(|n| format!("{n:?}")).collect()
+                    }
+                    // Metadata and array-valued keys (lists of times, lenses, surface
+                    // tables) are not swept here: their grids are lists of lists.
+                    _ => continue,
+                };
+                let sweep = format!(
+                    "{text}[sweep.grid]\n\"{}\" = [{}]\n",
+                    spec.key,
+                    values.join(", ")
+                );
+                let what = format!("{base}: {} = [{}]", spec.key, values.join(", "));
+                match Sweep::from_toml_str(&sweep, "s.toml", &[]) {
+                    Err(e) => {
+                        let e = e.to_string();
+                        assert!(!e.contains("internal error"), "{what}: {e}");
+                        assert!(e.contains(spec.key), "{what}: {e}");
+                        refused += 1;
+                        if e.contains("which no run reads") {
+                            not_in_effect += 1;
+                        }
+                    }
+                    Ok(sweep) => {
+                        for run in &sweep.runs {
+                            let request = Request::of(run, "runs/x".into())
+                                .unwrap_or_else(|e| panic!("{what}: {}: {e}", run.name));
+                            assert_eq!(scene_of(&request).unwrap(), run.scene, "{what}");
+                        }
+                        swept += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            swept > 100 && not_in_effect > 10,
+            "{swept} swept, {refused} refused ({not_in_effect} not in effect)"
+        );
+        // The three, refused naming why; as samples too.
+        let growing = bases[1].1;
+        for (key, values, why) in [
+            ("optics.pupil", "[2.0, 4.0]", "stimulus.source = \"optics\""),
+            (
+                "stimulus.myopia_D",
+                "[-1.0, -2.0]",
+                "stimulus.classify = \"dioptres\"",
+            ),
+            (
+                "growth.schedule_tau",
+                "[1.0, 2.0]",
+                "growth.schedule = \"exponential\"",
+            ),
+        ] {
+            let text = format!("{growing}[sweep.grid]\n\"{key}\" = {values}\n");
+            let e = Sweep::from_toml_str(&text, "s.toml", &[])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(&format!(
+                    "sweeps {key}, which no run reads ({key} is not in effect: "
+                )) && e.contains(why),
+                "{e}"
+            );
+        }
+        let sampled = format!("{growing}[sweep.sample]\neyes = 4\nseed = 1\n[sweep.sample.keys]\n\"optics.pupil\" = {{ dist = \"uniform\", low = 2.0, high = 4.0 }}\n");
+        let e = Sweep::from_toml_str(&sampled, "s.toml", &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("samples optics.pupil, which no run reads"),
+            "{e}"
+        );
+        // Read by some runs: swept, and every run whole.
+        let mixed = format!("{growing}[sweep.grid]\n\"stimulus.source\" = [\"polynomial\", \"optics\"]\n\"optics.pupil\" = [2.0, 4.0]\n");
+        let sweep = Sweep::from_toml_str(&mixed, "s.toml", &[]).unwrap();
+        assert_eq!(sweep.runs.len(), 4);
+        for run in &sweep.runs {
+            let request = Request::of(run, "runs/x".into()).unwrap();
+            assert_eq!(scene_of(&request).unwrap(), run.scene, "{}", run.name);
+        }
+    }
 }

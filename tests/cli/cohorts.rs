@@ -312,6 +312,11 @@ fn bad_samples_are_refused_before_anything_runs() {
             "[sweep.sample]\neyes = 20\n[sweep.sample.keys]\n\"material.C\" = { dist = \"uniform\", low = 90.0, high = 110.0 }\n",
             "give seed",
         ),
+        // Sobol indices of 4 base points came out as 1.41 [1.25, 1.77] without a word.
+        (
+            "[sweep.sample]\neyes = 4\nseed = 1\ndesign = \"saltelli\"\n[sweep.sample.keys]\n\"pressure.dP\" = { dist = \"uniform\", low = 1.5, high = 2.5 }\n",
+            "eyes = 4: the saltelli design needs at least 32 base points",
+        ),
     ];
     for (sample, needle) in cases {
         std::fs::write(dir.path().join("s.toml"), format!("{SPHERE}{sample}")).unwrap();
@@ -464,4 +469,194 @@ fn a_cohort_kept_as_a_table_equals_the_per_eye_output_and_resumes_to_the_same_by
         "per_run must be \"directory\" (a run directory per eye) or \"table\"",
         "per_run",
     );
+}
+
+/// A quantity that cannot be computed is NaN with a note, never another rule's answer, and
+/// never dropped from a summary. Eyes of 14.9–15.6 mm, classed by dioptres: those beyond
+/// +25 D (refraction_D NaN, from geometry.R0 below about 5.7 mm) are "unknown", not the
+/// surfaces' "hyperopic"; refraction_D stays in population.json's final with its n, the
+/// eyes that have it, and notes say how many have none and could not be classed.
+#[test]
+fn an_eye_the_dioptre_rule_cannot_class_is_unknown_and_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = "name = \"small\"\n[fibres]\nD = 0.0\n[growth]\neta0 = 70.0\nt_end = 0.1\n[solver]\nnodes = 21\nrtol = 1e-3\n[output]\ntimes = [0.05, 0.1]\nhistory_points = 5\n[stimulus]\nclassify = \"dioptres\"\n[cornea]\nR0 = 5.5\n[sweep.sample]\neyes = 6\ndesign = \"latin-hypercube\"\nseed = 1\n[sweep.sample.keys]\n\"geometry.R0\" = { dist = \"uniform\", low = 5.3, high = 6.0 }\n";
+    std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let run = eyeshell_in(dir.path(), &["sweep", "s.toml", "--out", "out"]);
+    succeeded(&run, "cohort");
+    let out = dir.path().join("out");
+    let (header, rows) = csv_cells(&out.join("sweep.csv"));
+    let at = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (class, refraction) = (at("class"), at("refraction_D"));
+    let nan = rows.iter().filter(|r| r[refraction] == "NaN").count();
+    assert!((1..rows.len() - 1).contains(&nan), "{rows:?}");
+    for r in &rows {
+        let d: f64 = r[refraction].parse().unwrap();
+        let expected = if d.is_nan() { "unknown" } else { "hyperopic" };
+        assert_eq!(r[class], expected, "{r:?}");
+    }
+    let p = population(&out);
+    let have = rows.len() - nan;
+    assert_eq!(p["final"]["refraction_D"]["n"], have, "{}", p["final"]);
+    let finite: Vec<f64> = rows
+        .iter()
+        .filter_map(|r| r[refraction].parse::<f64>().ok().filter(|d| d.is_finite()))
+        .collect();
+    let mean = finite.iter().sum::<f64>() / finite.len() as f64;
+    let got = p["final"]["refraction_D"]["mean"].as_f64().unwrap();
+    assert!((got - mean).abs() < 1e-12 * mean.abs(), "{got} vs {mean}");
+    let unknown = p["classes"]["unknown"]["share"].as_f64().unwrap();
+    assert!((unknown - nan as f64 / rows.len() as f64).abs() < 1e-15);
+    let notes: Vec<&str> = p["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    let counted = format!("{nan} of {} eyes", rows.len());
+    assert!(
+        notes.iter().any(|n| n.starts_with(&format!(
+            "refraction_D at the final time: {counted} have no value"
+        ))),
+        "{notes:?}"
+    );
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.starts_with(&format!("{counted} could not be classed"))),
+        "{notes:?}"
+    );
+    // The notes are on the summary as well, and population.csv has the row.
+    assert!(
+        run.stdout
+            .contains(&format!("  note            {counted} could not be classed")),
+        "{}",
+        run.stdout
+    );
+    let table = std::fs::read_to_string(out.join("population.csv")).unwrap();
+    assert!(
+        table.contains(&format!("\nfinal,refraction_D,{have},")),
+        "{table}"
+    );
+    assert!(table.contains("\nfinal,class=unknown,"), "{table}");
+}
+
+/// SIGTERM (what Slurm sends at a time limit) ends a run as Ctrl-C does: a cohort kept as
+/// a table stops starting eyes, says "interrupted" in summary.json with its finished eyes
+/// "ok" in sweep.csv (not "running" with every row "not run"), exits 1 with one line on how
+/// to resume, and `--resume` gives the bytes of an uninterrupted cohort.
+#[test]
+fn sigterm_interrupts_a_cohort_as_ctrl_c_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let eyes = 40;
+    let scene = GROWING.replace(
+        "[sweep.sample.keys]",
+        &format!("eyes = {eyes}\nper_run = \"table\"\n[sweep.sample.keys]"),
+    );
+    std::fs::write(dir.path().join("t.toml"), &scene).unwrap();
+    succeeded(
+        &eyeshell_in(
+            dir.path(),
+            &["sweep", "t.toml", "--out", "whole", "--quiet"],
+        ),
+        "whole",
+    );
+    let (mut child, mut stderr, _) = spawn_in_own_group(
+        dir.path(),
+        &["sweep", "t.toml", "--out", "out", "--jobs", "1"],
+        "eyeshell: [1/40] eye-",
+    );
+    let sent = std::process::Command::new("kill")
+        .args(["-TERM", "--", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(1), "{rest}");
+    let last = rest.lines().last().unwrap();
+    assert!(
+        last.starts_with("eyeshell: error: sweep interrupted: ") && last.contains("--resume"),
+        "{last}"
+    );
+    let out = dir.path().join("out");
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("\"status\": \"interrupted\""), "{summary}");
+    let (_, rows) = csv_cells(&out.join("sweep.csv"));
+    let ok = rows.iter().filter(|r| r[1] == "ok").count();
+    let not_run = rows.iter().filter(|r| r[1] == "not run").count();
+    assert!((1..eyes).contains(&ok) && ok + not_run == eyes, "{rows:?}");
+    let run = eyeshell_in(dir.path(), &["sweep", "t.toml", "--out", "out", "--resume"]);
+    succeeded(&run, "resume");
+    for f in ["population.json", "population.csv", "series.csv"] {
+        assert_eq!(
+            std::fs::read(dir.path().join("whole").join(f)).unwrap(),
+            std::fs::read(out.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+}
+
+/// Over 10,000 eyes kept as a table: the refusal's advice is what works. It used to
+/// advise shards, which refuse a table cohort; now it says so and advises per_run =
+/// "directory" with shards, whose script is then written.
+#[test]
+fn a_table_cohort_too_large_for_one_process_is_advised_what_works() {
+    let dir = tempfile::tempdir().unwrap();
+    let cohort = |per_run: &str| {
+        format!("{SPHERE}[sweep.sample]\neyes = 10001\nseed = 1\nper_run = \"{per_run}\"\n[sweep.sample.keys]\n\"pressure.dP\" = {{ dist = \"uniform\", low = 1.5, high = 2.5 }}\n")
+    };
+    std::fs::write(dir.path().join("t.toml"), cohort("table")).unwrap();
+    std::fs::write(dir.path().join("d.toml"), cohort("directory")).unwrap();
+    let run = bounded(dir.path(), &["sweep", "t.toml", "--out", "out"]);
+    refused(
+        &run,
+        "a cohort kept as a table (per_run = \"table\") runs in one process and cannot be sharded: give at most 10000 eyes, or set per_run = \"directory\" and run it in shards",
+        "table cohort of 10001",
+    );
+    assert!(!dir.path().join("out").exists());
+    let shard = bounded(
+        dir.path(),
+        &["sweep", "t.toml", "--out", "out", "--shard", "1/2"],
+    );
+    refused(&shard, "per_run = \"table\"", "shard of a table cohort");
+    // The advice followed: the directory form's shards are planned.
+    let script = bounded(
+        dir.path(),
+        &["sweep", "d.toml", "--out", "out", "--slurm-script"],
+    );
+    succeeded(&script, "slurm script of the directory form");
+    assert!(
+        script.stdout.contains("#SBATCH --array"),
+        "{}",
+        script.stdout
+    );
+}
+
+/// `plot` of a cohort kept as a table says what there is to draw (its population figure,
+/// named), not that a run "points outside the sweep's runs", as if it were damaged.
+#[test]
+fn plot_of_a_table_cohort_names_its_population_figure() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("t.toml"),
+        format!("{SPHERE}[sweep.sample]\neyes = 4\nseed = 1\nper_run = \"table\"\n[sweep.sample.keys]\n\"pressure.dP\" = {{ dist = \"uniform\", low = 1.5, high = 2.5 }}\n"),
+    )
+    .unwrap();
+    succeeded(
+        &eyeshell_in(dir.path(), &["sweep", "t.toml", "--out", "out", "--quiet"]),
+        "table cohort",
+    );
+    let run = bounded(dir.path(), &["plot", "out", "--out", "p"]);
+    refused(
+        &run,
+        "out: a cohort kept as a table (per_run = \"table\") has no run directories to draw",
+        "plot of a table cohort",
+    );
+    assert!(
+        run.stderr.contains("its figure is out/population.png"),
+        "{}",
+        run.stderr
+    );
+    assert!(!dir.path().join("p").exists());
 }

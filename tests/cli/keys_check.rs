@@ -189,3 +189,49 @@ fn hostile_names_are_printed_escaped() {
     assert_eq!(bad.stderr.lines().count(), 1, "{:?}", bad.stderr);
     assert!(!bad.stderr.contains('\u{1b}'), "{:?}", bad.stderr);
 }
+
+/// An `--out` holding a line break is printed escaped in every summary that names it
+/// (solve, grow, a sweep, a shard and its merge), so that a path cannot forge a line of
+/// the report.
+#[test]
+fn an_out_path_with_a_line_break_cannot_forge_a_report_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = "[solver]\nnodes = 21\n[growth]\nt_end = 0.05\n[output]\ntimes = [0.05]\n";
+    std::fs::write(d.join("g.toml"), scene).unwrap();
+    std::fs::write(d.join("e.toml"), "[solver]\nnodes = 21\n").unwrap();
+    std::fs::write(
+        d.join("s.toml"),
+        "[solver]\nnodes = 21\n[sweep.grid]\n\"pressure.dP\" = [1.5, 2.0]\n",
+    )
+    .unwrap();
+    let forged = "  output          /etc/passwd";
+    let outs: Vec<String> = ["a", "b", "c", "d"]
+        .iter()
+        .map(|k| format!("{k}\n{forged}"))
+        .collect();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["solve", "e.toml", "--out", &outs[0]],
+        vec!["grow", "g.toml", "--out", &outs[1], "-q"],
+        vec!["grow", "g.toml", "--out", &outs[1]],
+        vec!["sweep", "s.toml", "--out", &outs[2]],
+        vec!["sweep", "s.toml", "--out", &outs[3], "--shard", "1/1"],
+        vec!["sweep", "merge", &outs[3]],
+    ];
+    for args in cases {
+        let run = eyeshell_in(d, &args);
+        succeeded(&run, &args.join(" "));
+        assert!(
+            !run.stdout.lines().any(|l| l == forged) && !run.stderr.lines().any(|l| l == forged),
+            "{args:?}: {}",
+            run.stdout
+        );
+        if !args.contains(&"-q") {
+            assert!(
+                run.stdout.contains("\\n  output"),
+                "{args:?}: {}",
+                run.stdout
+            );
+        }
+    }
+}

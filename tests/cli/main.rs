@@ -32,6 +32,7 @@ mod optics;
 mod ownership;
 mod peer;
 mod readers;
+mod rerun;
 mod sensitivities;
 mod shards;
 mod slurm;

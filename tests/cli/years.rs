@@ -329,3 +329,49 @@ fn a_run_that_cannot_grow_is_refused_before_it_starts() {
         );
     }
 }
+
+/// The fit report's residuals by age stay short whatever σ is: with σ = 1e-140 mm the
+/// weighted residuals are about 5e139 σ, printed as `+5.68e139 σ`, not 140 digits on a
+/// 227-character line.
+#[test]
+fn residuals_by_age_are_short_with_a_tiny_sigma() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("years.toml"),
+        "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\nhistory_points = 4\n[solver]\nnodes = 21\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("tiny.csv"),
+        "age,axial_length,sigma\n3,20,1e-140\n5,21,1e-140\n8,23,1e-140\n",
+    )
+    .unwrap();
+    let r = eyeshell_in(
+        d,
+        &[
+            "fit",
+            "years.toml",
+            "--data",
+            "tiny.csv",
+            "--fit",
+            "growth.eta0",
+            "--out",
+            "fit",
+        ],
+    );
+    succeeded(&r, "fit with a tiny sigma");
+    let rows: Vec<&str> = r.stdout.lines().filter(|l| l.ends_with(" σ)")).collect();
+    assert_eq!(rows.len(), 3, "{}", r.stdout);
+    for line in &rows {
+        assert!(
+            line.chars().count() <= 100,
+            "{} characters: {line}",
+            line.chars().count()
+        );
+        assert!(line.contains("e139 σ)"), "{line}");
+    }
+    for line in r.stdout.lines() {
+        assert!(line.chars().count() <= 130, "{line}");
+    }
+}

@@ -46,10 +46,11 @@ def test_the_message_is_the_command_lines(cli, tmp_path):
     assert r.returncode == 2
     with pytest.raises(eyeshell.InputError) as e:
         eyeshell.solve(SCENES / "default.toml", pressure__dP=1e3)
-    # The same line but for where the value came from: `--set` there, the scene here.
+    # The same line but for where the value came from: `--set` there, the keyword here
+    # (not the scene file, which did not set it).
     cli_where, cli_what = r.stderr.strip().removeprefix("eyeshell: error: ").split(": ", 1)
     where, what = str(e.value).split(": ", 1)
-    assert (cli_where, where) == ("--set pressure.dP=1e3", str(SCENES / "default.toml"))
+    assert (cli_where, where) == ("--set pressure.dP=1e3", "set pressure.dP=1000.0")
     assert what == cli_what
 
 

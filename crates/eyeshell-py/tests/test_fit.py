@@ -178,3 +178,31 @@ def test_fit_takes_data_by_age_and_reports_by_age():
         eyeshell.fit(scene, {**data, "t": [0.1] * len(data["age"])}, fit=["growth.eta0"])
     with pytest.raises(eyeshell.InputError, match="lies outside the scene's ages"):
         eyeshell.fit(scene, {**data, "age": [1.0] * len(data["age"])}, fit=["growth.eta0"])
+
+
+@pytest.mark.parametrize("frame", [False, True])
+@pytest.mark.parametrize("name, needle", [
+    ("sd", "column 'sd' (the standard deviation is the column 'sigma')"),
+    ("Sigma", "column 'Sigma' (did you mean 'sigma'?)"),
+    ("weight", "column 'weight' is not one the fit reads"),
+])
+def test_fit_data_with_a_column_it_does_not_read_is_refused(frame, name, needle):
+    # The command line refuses the header; a dict or DataFrame used to drop the column and
+    # fit unweighted.
+    data = {"t": [0.5, 0.75, 1.0], "axial_length": [23.0, 23.5, 24.0], name: [0.05] * 3}
+    if frame:
+        pandas = pytest.importorskip("pandas")
+        data = pandas.DataFrame(data)
+    with pytest.raises(eyeshell.InputError, match=needle.replace("(", r"\(").replace(")", r"\)").replace("?", r"\?")):
+        eyeshell.fit(SCENES / "const.toml", data, fit=["growth.Gamma"], solver__nodes=101)
+
+
+def test_an_out_of_range_keyword_is_blamed_on_the_keyword():
+    # Not on the scene file, nor on "defaults:", which did not set it.
+    for scene in (SCENES / "const.toml", None):
+        with pytest.raises(eyeshell.InputError) as e:
+            eyeshell.grow(scene, growth__eta0=-1)
+        assert str(e.value).startswith("set growth.eta0=-1: growth.eta0"), str(e.value)
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma"], solver__nodes=3)
+    assert str(e.value).startswith("set solver.nodes=3: solver.nodes"), str(e.value)

@@ -7,6 +7,8 @@ import textwrap
 import threading
 import time
 
+import pytest
+
 import eyeshell
 from conftest import SCENES
 
@@ -171,3 +173,24 @@ def test_ctrl_c_at_random_moments_never_hangs_a_sweep():
         """, signal_after=None)
     # No thread, and no worker process, is left behind.
     assert code == 0 and out.split() == ["done", "1", "none"], (out, err)
+
+
+@pytest.mark.parametrize("after", [0.05, 0.4, 1.2, 2.5])
+def test_ctrl_c_stops_a_fit_at_3001_nodes_within_half_a_second_at_any_moment(after):
+    # In every phase: the first growth run and the later ones. After the first run an
+    # interrupted trial used to be taken as a rejected step, and the fit went on damping
+    # trial after trial (90 s at this mesh) before raising KeyboardInterrupt.
+    seconds, out, err, code = interrupt(f"""
+        import time, eyeshell
+        data = {{"t": [0.1, 0.15, 0.2], "axial_length": [22.0, 22.3, 22.5]}}
+        print("started", flush=True)
+        try:
+            eyeshell.fit({str(SCENES / 'const.toml')!r}, data,
+                         fit=["growth.eta0", "growth.Gamma"],
+                         solver__nodes=3001, growth__t_end=0.2, output__times=[0.2])
+            print("finished")
+        except KeyboardInterrupt:
+            print("interrupted")
+    """, signal_after=after)
+    assert code == 0 and out.startswith("interrupted"), (out, err)
+    assert seconds < 0.5, (seconds, after)

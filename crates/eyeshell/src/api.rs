@@ -50,6 +50,9 @@ impl Scene {
     /// assert_eq!(scene.params.d, 200.0);
     /// assert!(scene.set("fibres.D", -1).is_err());
     /// assert_eq!(scene.params.d, 200.0);
+    /// // The error blames the value set, not the scene it was set on.
+    /// let e = scene.set("fibres.D", -1).unwrap_err().to_string();
+    /// assert!(e.starts_with("--set fibres.D=-1: fibres.D"), "{e}");
     /// # Ok::<(), eyeshell::scene::SceneError>(())
     /// ```
     pub fn set(&mut self, key: &str, value: impl std::fmt::Display) -> Result<(), SceneError> {
@@ -71,10 +74,11 @@ impl Scene {
         assignments: impl IntoIterator<Item = (K, V)>,
     ) -> Result<(), SceneError> {
         let mut changed = self.clone();
-        for (key, value) in assignments {
-            changed.apply_override(&format!("{}={value}", key.as_ref()))?;
-        }
-        changed.validate()?;
+        let texts: Vec<String> = assignments
+            .into_iter()
+            .map(|(key, value)| format!("{}={value}", key.as_ref()))
+            .collect();
+        changed.apply_overrides_and_validate(&texts)?;
         changed.resolve_optics()?;
         *self = changed;
         Ok(())

@@ -290,6 +290,12 @@ pub trait Problem {
     fn evaluate(&mut self, p: &[f64]) -> Result<Evaluation, Self::Error>;
     /// s² at χ² (the unit of the standard-error test).
     fn variance(&self, chi2: f64) -> f64;
+    /// Whether the evaluation that failed with `e` ends the fit instead of rejecting its
+    /// step: a caller's interruption (Ctrl-C in a growth run's step), which every further
+    /// trial would meet again, or not at all once it was heard. None by default.
+    fn stops(&self, _e: &Self::Error) -> bool {
+        false
+    }
 }
 
 /// Why [`minimise`] gave no outcome.
@@ -421,6 +427,7 @@ pub fn minimise<P: Problem>(
                     (false, Some(format!("χ² {chi2_new:.6e} ≥ {chi2:.6e}")))
                 }
             }
+            Err(e) if problem.stops(&e) => return Err(LmError::Evaluation(e)),
             Err(e) => {
                 last_refusal = Some(e.to_string());
                 (false, last_refusal.clone())
@@ -517,6 +524,45 @@ mod tests {
         assert_eq!(project(&closed, 1.0, -5.0), 0.0);
         assert_eq!(project(&open, 1.0, 0.5), 1.5);
         assert_eq!(project(&Bounds::NONE, 1.0, -5.0), -4.0);
+    }
+
+    /// An evaluation the problem says stops the fit (a caller's interruption) ends it at
+    /// once, at any iteration: it used to reject the step and go on damping, trial after
+    /// trial, for as long as the damping took to pass its limit (90 s of a fit at 3001
+    /// nodes after a Ctrl-C).
+    #[test]
+    fn an_evaluation_that_stops_ends_the_fit_at_once() {
+        struct Interrupted {
+            evaluations: usize,
+        }
+        impl Problem for Interrupted {
+            type Error = String;
+            fn names(&self) -> Vec<&str> {
+                vec!["p0"]
+            }
+            fn bounds(&self) -> Vec<Bounds> {
+                vec![Bounds::NONE]
+            }
+            fn evaluate(&mut self, p: &[f64]) -> Result<Evaluation, String> {
+                self.evaluations += 1;
+                if self.evaluations == 3 {
+                    return Err("interrupted".into());
+                }
+                let r = DVector::from_vec(vec![(p[0] - 3.0).powi(3), p[0] - 3.5]);
+                let j = DMatrix::from_vec(2, 1, vec![3.0 * (p[0] - 3.0).powi(2), 1.0]);
+                Ok((r, j, vec![p[0]; 2]))
+            }
+            fn variance(&self, _chi2: f64) -> f64 {
+                1.0
+            }
+            fn stops(&self, e: &String) -> bool {
+                e == "interrupted"
+            }
+        }
+        let mut problem = Interrupted { evaluations: 0 };
+        let out = minimise(&mut problem, &[0.0], &FitOptions::default(), &mut |_| {});
+        assert!(matches!(out, Err(LmError::Evaluation(ref e)) if e == "interrupted"));
+        assert_eq!(problem.evaluations, 3);
     }
 
     /// Steps that cannot be evaluated (the scene refuses them, their run fails) are

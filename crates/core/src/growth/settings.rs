@@ -140,10 +140,14 @@ impl GrowthParams {
     }
 
     /// `eye` at growth time `t` with its refraction, classified as `stimulus.classify` says.
+    /// By dioptres, an eye whose refraction_D is NaN (beyond the ±25 D it is traced over)
+    /// is [`Refraction::Unknown`]: the surfaces' rule answers another question (a 35 mm
+    /// eye between the two surfaces is not emmetropic in dioptres).
     pub fn measure(&self, t: f64, eye: EyeMeasure) -> EyeMeasure {
         let refraction_d = self.refraction(t, eye.axial_length);
         let class = match self.optics.classify {
-            1 if refraction_d.is_finite() => {
+            1 if !refraction_d.is_finite() => Refraction::Unknown,
+            1 => {
                 if refraction_d > self.optics.hyperopia_d {
                     Refraction::Hyperopic
                 } else if refraction_d < self.optics.myopia_d {

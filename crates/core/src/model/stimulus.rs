@@ -284,6 +284,10 @@ pub enum Refraction {
     Emmetropic,
     /// Behind the red surface.
     Myopic,
+    /// Not classed: the rule's quantity could not be computed (`stimulus.classify =
+    /// "dioptres"` with a refraction_D of NaN, beyond the ±25 D the refraction is traced
+    /// over). Never replaced by another rule's answer.
+    Unknown,
 }
 
 impl Refraction {
@@ -304,6 +308,7 @@ impl Refraction {
             Refraction::Hyperopic,
             Refraction::Emmetropic,
             Refraction::Myopic,
+            Refraction::Unknown,
         ]
         .into_iter()
         .find(|r| r.as_str() == name)
@@ -314,6 +319,7 @@ impl Refraction {
             Refraction::Hyperopic => "hyperopic",
             Refraction::Emmetropic => "emmetropic",
             Refraction::Myopic => "myopic",
+            Refraction::Unknown => "unknown",
         }
     }
 }

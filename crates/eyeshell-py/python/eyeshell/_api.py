@@ -80,7 +80,7 @@ class Scene:
     >>> eyeshell.Scene(fibres__D=-1)
     Traceback (most recent call last):
     ...
-    eyeshell.InputError: defaults: fibres.D = -1 must be non-negative
+    eyeshell.InputError: set fibres.D=-1: fibres.D = -1 must be non-negative
     >>> eyeshell.Scene(solver__nodes=np.int64(301))["solver.nodes"]
     301
     >>> eyeshell.Scene(growth__t_end=0.2, output__times=[0.1, 0.2])["output.times"]
@@ -835,6 +835,8 @@ def fit(
     if isinstance(data, _PATH_TYPES):
         done = _eyeshell.fit(s._s, list(fit), path=_path(data, "data"), max_iterations=max_iterations)
     elif isinstance(data, Mapping) or hasattr(data, "columns"):
+        _check_data_columns(data)
+
         def col(name: str) -> list[float] | None:
             if name not in data:
                 return None
@@ -854,6 +856,33 @@ def fit(
         )
     report, text, notes, native = done
     return FitResult(report, text, notes, Scene._wrap(native), frames)
+
+
+_DATA_COLUMNS = ("t", "age", "axial_length", "sigma")
+
+
+def _check_data_columns(data: Any) -> None:
+    """Refuse a column the fit does not read, as the command line refuses its header: a
+    sigma spelt ``sd`` or ``Sigma`` dropped in silence would make the fit unweighted."""
+    names = list(data.columns) if hasattr(data, "columns") else list(data.keys())
+    unknown = [n for n in names if n not in _DATA_COLUMNS]
+    if not unknown:
+        return
+    first = unknown[0]
+    shown = repr(first) if isinstance(first, str) else f"{type(first).__name__} {first!r}"
+    shown = shown if len(shown) <= 60 else shown[:59] + "…"
+    hint = ""
+    if isinstance(first, str):
+        close = [c for c in _DATA_COLUMNS if c == first.strip().lower()]
+        if close:
+            hint = f" (did you mean {close[0]!r}?)"
+        elif first.strip().lower() in ("sd", "se", "std", "error", "sigma_mm"):
+            hint = " (the standard deviation is the column 'sigma')"
+    more = f" and {len(unknown) - 1} more" if len(unknown) > 1 else ""
+    raise InputError(
+        f"data: column {shown}{hint}{more} is not one the fit reads: give t (or age), "
+        "axial_length and optionally sigma, and nothing else"
+    )
 
 
 @dataclass

@@ -398,6 +398,8 @@ struct SceneProblem<'a, 's> {
     dof: usize,
     /// Seconds in the growth runs so far.
     model_seconds: f64,
+    /// Whether `step` stopped a run (the caller's interruption): the fit ends there.
+    stopped: bool,
 }
 
 impl lm::Problem for SceneProblem<'_, '_> {
@@ -413,13 +415,23 @@ impl lm::Problem for SceneProblem<'_, '_> {
 
     fn evaluate(&mut self, values: &[f64]) -> Result<lm::Evaluation, Error> {
         let s = with_values(self.scene, self.params, values)?;
-        let m = evaluate_watched(&s, self.params, self.data, self.step)?;
+        let step = &mut *self.step;
+        let stopped = &mut self.stopped;
+        let m = evaluate_watched(&s, self.params, self.data, &mut |t| {
+            let heard = step(t);
+            *stopped |= heard.is_err();
+            heard
+        })?;
         self.model_seconds += m.seconds;
         let (r, j) = weighted(&m, self.data);
         if let Some(why) = overflow(&r, &j, self.data) {
             return Err(Error::input(why));
         }
         Ok((r, j, m.axial_length))
+    }
+
+    fn stops(&self, _e: &Error) -> bool {
+        self.stopped
     }
 
     fn variance(&self, chi2: f64) -> f64 {
@@ -503,6 +515,7 @@ pub fn fit_watched(
         has_sigma,
         dof,
         model_seconds: 0.0,
+        stopped: false,
     };
     let outcome = lm::minimise(&mut problem, &p0, options, each).map_err(|e| match e {
         lm::LmError::Evaluation(e) => e,

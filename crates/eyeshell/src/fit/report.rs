@@ -79,6 +79,17 @@ fn correlation_table(r: &FitReport) -> String {
     text
 }
 
+/// `x` with its sign and `places` decimals, in scientific notation where decimals would
+/// not show it ([`decimals`]): a residual of 1e148 σ (a tiny σ) is `+1.00e148`, not 150
+/// digits.
+fn signed(x: f64, places: usize) -> String {
+    let text = decimals(x, places);
+    match text.starts_with('-') || x.is_nan() {
+        true => text,
+        false => format!("+{text}"),
+    }
+}
+
 /// In a scene that counts in ages (time.unit), each observation against the model by age,
 /// one line each in the data's order: what a growth curve's reader looks at first (where
 /// in life the model runs ahead of the data or behind it). Empty without ages, so a fit in
@@ -97,13 +108,13 @@ fn residuals_by_age(scene: &Scene, r: &FitReport) -> String {
     for x in &r.residuals {
         let Some(age) = x.age else { continue };
         text.push_str(&format!(
-            "                   {:>10}  {:>10}  {:>10}  {:>+10.4}{}\n",
+            "                   {:>10}  {:>10}  {:>10}  {:>10}{}\n",
             decimals(age, 4),
             decimals(x.axial_length, 4),
             decimals(x.model, 4),
-            x.residual,
+            signed(x.residual, 4),
             if x.sigma.is_some() {
-                format!("  ({:+.2} σ)", x.weighted)
+                format!("  ({} σ)", signed(x.weighted, 2))
             } else {
                 String::new()
             }

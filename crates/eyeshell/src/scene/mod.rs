@@ -310,6 +310,17 @@ impl Scene {
         self.apply_override_from(text, &mut Sources::new())
     }
 
+    /// Apply `texts` (`key=value`, each as [`Scene::apply_override`]) in order, then
+    /// validate: a value out of range is blamed on the override that set it (`--set`, or a
+    /// front end's keyword), never on the scene file or "defaults", which did not.
+    pub fn apply_overrides_and_validate(&mut self, texts: &[String]) -> Result<(), SceneError> {
+        let mut sources = Sources::new();
+        for text in texts {
+            self.apply_override_from(text, &mut sources)?;
+        }
+        self.validate_from(&sources)
+    }
+
     /// Check every key's range and the limits that tie keys together.
     pub fn validate(&self) -> Result<(), SceneError> {
         self.validate_from(&Sources::new())
@@ -462,6 +473,39 @@ impl Scene {
         }
     }
 
+    /// Why nothing in this scene reads key `key` (None when something does): a key the
+    /// scene does not use ([`KeySpec::applies_to`]) or an idle one ([`Scene::idle`]), in
+    /// words naming the key that would turn it on. A sweep refuses to sweep a key that no
+    /// run reads: its runs would all be the same eye under different labels.
+    pub fn not_in_effect(&self, key: &str) -> Option<String> {
+        let spec = keys::find(key)?;
+        if spec.applies_to(self) && !self.idle(key) {
+            return None;
+        }
+        let growing = self.growth.is_some();
+        let why = match key {
+            "stimulus.myopia_D" | "stimulus.hyperopia_D" => {
+                "it is read only with stimulus.classify = \"dioptres\" in a growing scene"
+            }
+            "stimulus.source" => "it is read only by a growing scene",
+            "growth.schedule" => "the schedule is constant (a factor of 1)",
+            "growth.schedule_tau" => "it is read only with growth.schedule = \"exponential\"",
+            "growth.schedule_centre" | "growth.schedule_width" => {
+                "it is read only with growth.schedule = \"logistic\""
+            }
+            "growth.schedule_times" | "growth.schedule_factors" => {
+                "it is read only with growth.schedule = \"table\""
+            }
+            "time.unit" => "the scene counts no ages",
+            _ if spec.section() == Some("optics") && growing => {
+                "the optics keys are read only with stimulus.source = \"optics\" (the stimulus computed from the eye's optics)"
+            }
+            _ if spec.growth && !growing => "it is read only by a growing scene",
+            _ => "nothing in this scene reads it",
+        };
+        Some(format!("{key} is not in effect: {why}"))
+    }
+
     /// The effective parameters (every key in use but the metadata and the unset keys) as a
     /// JSON object: the growth keys only when the scene grows.
     pub fn parameters_json(&self) -> serde_json::Value {
@@ -478,10 +522,19 @@ impl Scene {
     }
 
     /// The effective scene as TOML (dotted keys), which reads back to the same scene (the
-    /// growth keys only when the scene grows).
+    /// growth keys only when the scene grows). A key nothing reads is left out at its
+    /// default, so that the files of scenes that do not use it stay byte for byte as they
+    /// were, and written when it holds another value: a scene carries it (a sweep's run of
+    /// the polynomial stimulus with optics.pupil = 2 beside runs of the computed one), and
+    /// the text must give that scene back.
     pub fn to_toml(&self) -> String {
         let mut out = String::new();
-        for k in self.keys().filter(|k| !self.idle(k.key)) {
+        let default = Scene::default();
+        let written = |k: &&KeySpec| {
+            (k.applies_to(self) && !self.idle(k.key))
+                || (!(k.growth && self.growth.is_none()) && k.get(self) != k.get(&default))
+        };
+        for k in KEYS.iter().filter(written) {
             // A red surface that follows the blue one is derived, not given: written as a
             // key it would be given (and stop following) when the text is read back, so it
             // is shown as a comment.

@@ -85,17 +85,65 @@ impl Sweep {
     /// building only its own runs).
     pub fn from_plan(plan: SweepPlan) -> Result<Sweep, SceneError> {
         if plan.len() > MAX_RUNS {
+            let shards = crate::text::advice(&crate::text::Advice::Shards { max: MAX_RUNS });
+            // A cohort kept as a table is one process's checkpoint, which shards cannot
+            // share (they are refused): the advice is what works for it.
+            let table =
+                plan.sample.as_ref().map(|s| s.per_run) == Some(super::sample::PerRun::Table);
+            let advice = match table {
+                true => format!(
+                    "a cohort kept as a table (per_run = \"table\") runs in one process and cannot be sharded: give at most {MAX_RUNS} eyes, or set per_run = \"directory\" and {shards}"
+                ),
+                false => shards,
+            };
             return Err(SceneError::BadSweep {
                 origin: plan.origin.clone(),
                 problem: format!(
-                    "declares {} runs, more than the {MAX_RUNS} allowed in one process: {}",
+                    "declares {} runs, more than the {MAX_RUNS} allowed in one process: {advice}",
                     plan.len(),
-                    crate::text::advice(&crate::text::Advice::Shards { max: MAX_RUNS })
                 ),
             });
         }
-        plan.sweep_of(&(0..plan.len()).collect::<Vec<_>>())
+        let sweep = plan.sweep_of(&(0..plan.len()).collect::<Vec<_>>())?;
+        refuse_keys_not_in_effect(&plan, sweep.runs.iter().map(|r| &r.scene))?;
+        Ok(sweep)
     }
+}
+
+/// Refuse a swept or sampled key of `plan` that no run of `scenes` reads
+/// ([`Scene::not_in_effect`]): its runs would be one eye under as many labels, and a
+/// cohort's spread in it a spread in nothing. A key that some runs read (optics.pupil
+/// crossed with stimulus.source) is swept; the runs that do not read it carry it as given.
+pub fn refuse_keys_not_in_effect<'a>(
+    plan: &SweepPlan,
+    scenes: impl Iterator<Item = &'a Scene> + Clone,
+) -> Result<(), SceneError> {
+    for key in &plan.keys {
+        let mut why = None;
+        for scene in scenes.clone() {
+            match scene.not_in_effect(key) {
+                None => {
+                    why = None;
+                    break;
+                }
+                Some(w) => why = why.or(Some(w)),
+            }
+        }
+        if let Some(why) = why {
+            let verb = if plan.sample.is_some() {
+                "samples"
+            } else {
+                "sweeps"
+            };
+            return Err(SceneError::BadSweep {
+                origin: plan.origin.clone(),
+                problem: format!(
+                    "{verb} {key}, which no run reads ({why}): its runs would all be the same eye; set what turns it on, or leave it out"
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The most runs one sweep may plan (a typo such as a grid of many long lists is caught

@@ -954,9 +954,11 @@ fn absurd_sizes_are_refused_before_allocation() {
 
 use crate::model::optics::Source;
 
-/// The default source is the published polynomial: no optics key is in effect, shown or
-/// summarised, and nothing is traced. With `stimulus.source = "optics"` the keys are in
-/// effect and the surfaces are traced once, as the scene is read.
+/// The default source is the published polynomial: no optics key is in effect or
+/// summarised, and nothing is traced; the effective TOML shows an optics key only when the
+/// scene gives it another value than its default (so that the text reads back to the same
+/// scene). With `stimulus.source = "optics"` the keys are in effect and the surfaces are
+/// traced once, as the scene is read.
 #[test]
 fn the_optics_keys_apply_to_the_optics_source_only() {
     let s = parse("growth.eta0 = 70\noptics.pupil = 2").unwrap();
@@ -967,7 +969,14 @@ fn the_optics_keys_apply_to_the_optics_source_only() {
     );
     let params = s.parameters_json();
     assert!(params.get("stimulus.source").is_none() && params.get("optics.pupil").is_none());
-    assert!(!s.to_toml().contains("optics"));
+    let text = s.to_toml();
+    assert!(text.contains("optics.pupil = 2.0\n"), "{text}");
+    assert_eq!(text.matches("optics.").count(), 1, "{text}");
+    assert_eq!(parse(&text).unwrap(), s);
+    assert!(!parse("growth.eta0 = 70")
+        .unwrap()
+        .to_toml()
+        .contains("optics"));
     let s = parse(
         "growth.eta0 = 70\nstimulus.source = \"optics\"\n[optics]\npupil = 1.5\nfocus = \"sagittal\"\nmax_field = 30\nwavelengths = [450, 650]",
     )

@@ -26,6 +26,7 @@ use std::path::Path;
 
 use serde_json::{json, Map, Value};
 
+use crate::model::stimulus::Refraction;
 use crate::rundir::{format_value, write_atomic, OutputError};
 use crate::scene::sample::{Design, Resampler, Role, Sample, BOOTSTRAP};
 
@@ -37,6 +38,10 @@ pub const POPULATION_FILE: &str = "population.json";
 pub const POPULATION_TABLE: &str = "population.csv";
 /// The Sobol indices of a Saltelli design: one row per output and key.
 pub const SOBOL_TABLE: &str = "sobol.csv";
+/// The figure the command line draws beside them (`eyeshell sweep`, `sweep merge`):
+/// claimed in the sweep's marker with the population files, so that a sweep that drew it
+/// can be rerun, resumed, merged and read back.
+pub const FIGURE_FILES: [&str; 2] = ["population.png", "population.svg"];
 /// The quantiles reported.
 pub const QUANTILES: [f64; 5] = [0.05, 0.25, 0.5, 0.75, 0.95];
 
@@ -175,6 +180,8 @@ type Row = (f64, Vec<(String, f64)>, String);
 type AtTime = (f64, Vec<(String, Stats)>, Shares);
 /// Each class's share and its standard error.
 type Shares = BTreeMap<String, (f64, f64)>;
+/// An output not every eye has: (output, how many eyes have it, how many eyes).
+type Missing = (String, usize, usize);
 
 /// One eye's outputs: (name, value) at the final time and, per output time, its row.
 struct Eye {
@@ -237,23 +244,57 @@ fn eye(record: &RunRecord, series: &dyn Fn(&RunRecord) -> Option<String>) -> Opt
     })
 }
 
-/// The statistics of each output over `eyes` (outputs every eye has, finite), in order.
-fn outputs<'a>(rows: impl Iterator<Item = &'a [(String, f64)]> + Clone) -> Vec<(String, Stats)> {
-    let Some(first) = rows.clone().next() else {
-        return Vec::new();
+/// The statistics of each output over `rows` (one per eye), in the order the outputs
+/// first appear: over the eyes that have the output finite, `Stats::n` saying how many. An
+/// output some eyes lack (refraction_D is NaN beyond ±25 D) is never dropped for them, nor
+/// filled in: the second list holds, per output that not every eye has, (output, how many
+/// have it, how many eyes), and an output fewer than 2 eyes have has no statistics there.
+fn outputs<'a>(
+    rows: impl Iterator<Item = &'a [(String, f64)]> + Clone,
+) -> (Vec<(String, Stats)>, Vec<Missing>) {
+    let eyes = rows.clone().count();
+    let mut names: Vec<&String> = Vec::new();
+    for r in rows.clone() {
+        for (name, _) in r {
+            if !names.contains(&name) {
+                names.push(name);
+            }
+        }
+    }
+    let mut stats_of = Vec::new();
+    let mut missing = Vec::new();
+    for name in names {
+        let xs: Vec<f64> = rows
+            .clone()
+            .filter_map(|r| r.iter().find(|(k, _)| k == name).map(|(_, x)| *x))
+            .filter(|x| x.is_finite())
+            .collect();
+        if xs.len() < eyes {
+            missing.push((name.clone(), xs.len(), eyes));
+        }
+        if xs.len() >= 2 {
+            stats_of.push((name.clone(), stats(&xs)));
+        }
+    }
+    (stats_of, missing)
+}
+
+/// The note of an output that not every eye has (`outputs`' second list), at `when`.
+fn missing_note((name, have, eyes): &Missing, when: &str) -> String {
+    let why = if name == "refraction_D" {
+        " (NaN: the refraction is traced over -25 to +25 D)"
+    } else {
+        " (NaN)"
     };
-    first
-        .iter()
-        .filter_map(|(name, _)| {
-            let xs: Vec<f64> = rows
-                .clone()
-                .filter_map(|r| r.iter().find(|(k, _)| k == name).map(|(_, x)| *x))
-                .filter(|x| x.is_finite())
-                .collect();
-            let complete = xs.len() == rows.clone().count();
-            (complete && xs.len() >= 2).then(|| (name.clone(), stats(&xs)))
-        })
-        .collect()
+    let over = if *have >= 2 {
+        format!("its statistics are over the {have} that have it")
+    } else {
+        "too few have it for statistics, so it has none".to_string()
+    };
+    format!(
+        "{name}{when}: {} of {eyes} eyes have no value{why}; {over}",
+        eyes - have
+    )
 }
 
 fn shares<'a>(classes: impl Iterator<Item = &'a str>) -> BTreeMap<String, (f64, f64)> {
@@ -313,6 +354,8 @@ pub struct Written {
     /// Eyes (or Saltelli rows) that finished, and all of them.
     pub finished: usize,
     pub total: usize,
+    /// What the statistics could not include, as population.json's `notes` say it.
+    pub notes: Vec<String>,
 }
 
 /// Write population.json, population.csv and (Saltelli) sobol.csv into `out` from the
@@ -336,8 +379,23 @@ pub fn write(
     let total = (0..records.len())
         .filter(|&i| !matches!(sample.role(i).0, Some(Role::AB(_))))
         .count();
-    let final_stats = outputs(members.iter().map(|e| e.final_values.as_slice()));
+    let (final_stats, final_missing) = outputs(members.iter().map(|e| e.final_values.as_slice()));
     let final_shares = shares(members.iter().map(|e| e.final_class.as_str()));
+    let mut notes: Vec<String> = final_missing
+        .iter()
+        .map(|m| missing_note(m, " at the final time"))
+        .collect();
+    let unclassed = members
+        .iter()
+        .filter(|e| e.final_class == Refraction::Unknown.as_str())
+        .count();
+    if unclassed > 0 {
+        notes.push(format!(
+            "{unclassed} of {} eyes could not be classed at the final time (class \"unknown\": stimulus.classify = \"dioptres\" and refraction_D NaN, beyond -25 to +25 D); the class shares are over all {} eyes, \"unknown\" among them",
+            members.len(),
+            members.len()
+        ));
+    }
     // Per output time: the times every member eye reached (exactly the same t).
     let mut times: Vec<f64> = members
         .first()
@@ -348,6 +406,8 @@ pub fn write(
             .iter()
             .all(|e| e.series.iter().any(|(s, _, _)| s == t))
     });
+    // Outputs some eyes lack at an output time: (output, at how many times), noted once.
+    let mut missing_at: Vec<(String, usize)> = Vec::new();
     let per_time: Vec<AtTime> = times
         .iter()
         .map(|&t| {
@@ -360,18 +420,30 @@ pub fn write(
                         .map(|(_, v, c)| (v.as_slice(), c.as_str()))
                 })
                 .collect();
-            (
-                t,
-                outputs(rows.iter().map(|(v, _)| *v)),
-                shares(rows.iter().map(|(_, c)| *c)),
-            )
+            let (stats_at, missing) = outputs(rows.iter().map(|(v, _)| *v));
+            for (name, _, _) in missing {
+                match missing_at.iter_mut().find(|(k, _)| *k == name) {
+                    Some((_, count)) => *count += 1,
+                    None => missing_at.push((name, 1)),
+                }
+            }
+            (t, stats_at, shares(rows.iter().map(|(_, c)| *c)))
         })
         .collect();
+    for (name, count) in &missing_at {
+        notes.push(format!(
+            "{name}: some eyes have no value at {count} of {} output times; the statistics there are over the eyes that have it (each time's n)",
+            times.len()
+        ));
+    }
     let sobol = match sample.design {
         Design::Saltelli => Some(sobol_of(sample, &eyes, &final_stats)),
         _ => None,
     };
 
+    if let Some(sobol) = &sobol {
+        notes.extend(sobol_note(sobol));
+    }
     let object = |s: &[(String, Stats)]| -> Value {
         Value::Object(s.iter().map(|(k, v)| (k.clone(), stats_json(v))).collect())
     };
@@ -391,6 +463,11 @@ pub fn write(
     doc.insert("eyes_finished".into(), json!(members.len()));
     doc.insert("eyes_failed".into(), json!(total - members.len()));
     doc.insert("final".into(), object(&final_stats));
+    // Only where there is something to say: a cohort every eye of which has every output
+    // writes the bytes it always wrote.
+    if !notes.is_empty() {
+        doc.insert("notes".into(), json!(notes));
+    }
     doc.insert("classes".into(), shares_json(&final_shares));
     doc.insert(
         "times".into(),
@@ -434,6 +511,15 @@ pub fn write(
     }
     let mut text = serde_json::to_string_pretty(&Value::Object(doc)).unwrap_or_default();
     text.push('\n');
+    // Every file the population adds to the sweep's directory is claimed in its marker
+    // before it is written: an entry the marker does not list is somebody else's, and a
+    // rerun, `--resume`, a second merge or `sweep status` would refuse the directory.
+    let mut claimed = vec![POPULATION_FILE, POPULATION_TABLE];
+    if sobol.is_some() {
+        claimed.push(SOBOL_TABLE);
+    }
+    claimed.extend(FIGURE_FILES);
+    crate::rundir::owner::claim(out, &claimed)?;
     let io = |file: &str, e: std::io::Error| OutputError::Io {
         path: out.join(file),
         source: e,
@@ -521,7 +607,40 @@ pub fn write(
         files,
         finished: members.len(),
         total,
+        notes,
     })
+}
+
+/// The note of Sobol indices outside [0, 1], where a share of variance lies: their Monte
+/// Carlo error, said with the largest excursion (None when every index lies in [0, 1]).
+fn sobol_note(sobol: &[(String, Vec<(String, Index)>)]) -> Option<String> {
+    let mut count = 0;
+    let mut all = 0;
+    let mut worst: Option<(f64, String)> = None;
+    for (output, indices) in sobol {
+        for (key, ix) in indices {
+            for (what, x) in [("first-order", ix.first), ("total", ix.total)] {
+                all += 1;
+                let beyond = (x - x.clamp(0.0, 1.0)).abs();
+                if beyond > 0.0 {
+                    count += 1;
+                    if worst.as_ref().is_none_or(|(w, _)| beyond > *w) {
+                        worst = Some((
+                            beyond,
+                            format!(
+                                "the {what} index of {key} for {output}, {}",
+                                crate::text::number(x)
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    let (_, which) = worst?;
+    Some(format!(
+        "{count} of {all} Sobol indices lie outside [0, 1], where a share of variance lies (the farthest: {which}): that is their Monte Carlo error, and more eyes narrow it"
+    ))
 }
 
 /// The Sobol indices of each final output, over the base points whose A, B and every AB_i

@@ -232,16 +232,44 @@ pub fn costs_of(plan: &SweepPlan) -> Result<Costs, Error> {
     }
     let runs = plan.len();
     if runs > MAX_RUNS {
-        for i in plan.representatives() {
-            plan.run(i)?;
-        }
+        let representatives: Vec<Scene> = plan
+            .representatives()
+            .into_iter()
+            .map(|i| plan.run(i).map(|r| r.scene))
+            .collect::<Result<_, _>>()?;
+        crate::scene::sweep::refuse_keys_not_in_effect(plan, representatives.iter())?;
         let inputs = |s: &Scene| (s.solver.nodes, s.growth.as_ref().map(|g| g.t_end.to_bits()));
         if !plan.varies(inputs)? {
             return Ok(Costs::Equal(runs));
         }
     }
     let mut costs = Vec::with_capacity(runs);
-    plan.each_run(|_, run| costs.push(run_cost(&run.scene)))?;
+    // Whether each swept key is read by some run, gathered as the runs are built (one
+    // scene at a time), then refused as a plain sweep refuses it.
+    let mut read = vec![false; plan.keys.len()];
+    let mut unread: Option<Scene> = None;
+    plan.each_run(|_, run| {
+        costs.push(run_cost(&run.scene));
+        for (k, key) in plan.keys.iter().enumerate() {
+            read[k] |= run.scene.not_in_effect(key).is_none();
+        }
+        if unread.is_none() {
+            unread = Some(run.scene.clone());
+        }
+    })?;
+    if read.iter().any(|r| !r) {
+        // Some key no run reads: the first run's reason names it.
+        let keep: Vec<String> = plan
+            .keys
+            .iter()
+            .zip(&read)
+            .filter(|(_, r)| !**r)
+            .map(|(k, _)| k.clone())
+            .collect();
+        let mut only = plan.clone();
+        only.keys = keep;
+        crate::scene::sweep::refuse_keys_not_in_effect(&only, unread.iter())?;
+    }
     Ok(Costs::Each(costs))
 }
 
