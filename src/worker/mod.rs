@@ -146,9 +146,8 @@ mod tests {
     /// Every key of the key table, swept over two or more values on an elastic scene, a
     /// growing one of the published surfaces and a growing one of everything (optics,
     /// dioptres, an exponential schedule, ages): each sweep is refused up front naming the
-    /// key, or every run reaches a worker whole. Sweeping a key no run reads used to fail
-    /// every run with "internal error ... does not read back from its TOML"; it is refused
-    /// naming why, and a key some runs read (optics.pupil crossed with stimulus.source)
+    /// key, or every run reaches a worker whole. A key no run reads is refused naming why
+    /// (every run would otherwise fail to read back from its TOML), and a key some runs read (optics.pupil crossed with stimulus.source)
     /// is swept, the runs that do not read it carrying it as given.
     #[test]
     fn every_key_of_the_key_table_is_swept_or_refused_naming_why() {

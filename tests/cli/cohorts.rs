@@ -597,9 +597,9 @@ fn sigterm_interrupts_a_cohort_as_ctrl_c_does() {
     }
 }
 
-/// Over 10,000 eyes kept as a table: the refusal's advice is what works. It used to
-/// advise shards, which refuse a table cohort; now it says so and advises per_run =
-/// "directory" with shards, whose script is then written.
+/// Over 10,000 eyes kept as a table: the refusal's advice is what works. Shards refuse a
+/// table cohort, so it says so and advises per_run = "directory" with shards, whose script
+/// is then written.
 #[test]
 fn a_table_cohort_too_large_for_one_process_is_advised_what_works() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,10 +1,10 @@
-//! The elastic export is bvp4c's (issue 49): on the non-uniform fibre shell, `yp` is
+//! The elastic export is bvp4c's: on the non-uniform fibre shell, `yp` is
 //! f(x, y) of docs/MODEL.md §3 at every point of x (checked against the equations written
 //! out here from the export's own fields, not from eyeshell's code), each interface of the
 //! material data (a, b, Σ_e) is in x twice with its one-sided values, and deval's cubic
 //! Hermite on (x, y, yp) reproduces `eyeshell solve --at` at the quarter points of every
-//! interval (before, yp was a difference of the node values: r′ − α_s cos θ up to 8.7e-8 at
-//! N = 201, and deval's κ 1.1e-9 from --at's at N = 801).
+//! interval (a difference of the node values as yp would miss r′ − α_s cos θ by about 1e-7
+//! at N = 201).
 
 use crate::support::*;
 use eyeshell::interop::npz;

@@ -187,8 +187,8 @@ def test_fit_takes_data_by_age_and_reports_by_age():
     ("weight", "column 'weight' is not one the fit reads"),
 ])
 def test_fit_data_with_a_column_it_does_not_read_is_refused(frame, name, needle):
-    # The command line refuses the header; a dict or DataFrame used to drop the column and
-    # fit unweighted.
+    # The command line refuses the header, and so does Python: a dropped sigma column would
+    # fit unweighted without a word.
     data = {"t": [0.5, 0.75, 1.0], "axial_length": [23.0, 23.5, 24.0], name: [0.05] * 3}
     if frame:
         pandas = pytest.importorskip("pandas")

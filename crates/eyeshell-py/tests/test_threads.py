@@ -177,9 +177,9 @@ def test_ctrl_c_at_random_moments_never_hangs_a_sweep():
 
 @pytest.mark.parametrize("after", [0.05, 0.4, 1.2, 2.5])
 def test_ctrl_c_stops_a_fit_at_3001_nodes_within_half_a_second_at_any_moment(after):
-    # In every phase: the first growth run and the later ones. After the first run an
-    # interrupted trial used to be taken as a rejected step, and the fit went on damping
-    # trial after trial (90 s at this mesh) before raising KeyboardInterrupt.
+    # In every phase: the first growth run and the later ones. An interrupted trial is no
+    # rejected step: taken as one, the fit would go on damping trial after trial (tens of
+    # seconds at this mesh) before raising KeyboardInterrupt.
     seconds, out, err, code = interrupt(f"""
         import time, eyeshell
         data = {{"t": [0.1, 0.15, 0.2], "axial_length": [22.0, 22.3, 22.5]}}

@@ -670,7 +670,7 @@ fn bad_panels_are_refused_and_write_nothing() {
 }
 
 /// A title wider than the figure is drawn smaller, whole: nothing dark in the title band's
-/// outer margins (it used to be centred at its full size and cut at both edges).
+/// outer margins (centred at its full size, it would be cut at both edges).
 #[test]
 fn a_long_title_is_shrunk_to_fit_not_clipped() {
     let dir = tempfile::tempdir().unwrap();

@@ -527,9 +527,8 @@ mod tests {
     }
 
     /// An evaluation the problem says stops the fit (a caller's interruption) ends it at
-    /// once, at any iteration: it used to reject the step and go on damping, trial after
-    /// trial, for as long as the damping took to pass its limit (90 s of a fit at 3001
-    /// nodes after a Ctrl-C).
+    /// once, at any iteration: taken as a rejected step, the fit would go on damping, trial
+    /// after trial, for as long as the damping took to pass its limit.
     #[test]
     fn an_evaluation_that_stops_ends_the_fit_at_once() {
         struct Interrupted {
