@@ -266,6 +266,14 @@ impl RefractionTable {
 /// dioptres either way later); beyond it the refraction is NaN.
 pub const PERIPHERAL_POWERS: (f64, f64, usize) = (-10.0, 20.0, 13);
 
+/// Where a [`PeripheralTable`] is traced: the spectacle lens's vertex distance (mm in front
+/// of the corneal apex) and the field angles (degrees, in air, increasing).
+#[derive(Clone, Copy, Debug)]
+pub struct FieldsAt<'a> {
+    pub vertex: f64,
+    pub fields: &'a [f64],
+}
+
 /// An eye's best focus at each of a few field angles against the power of a thin spectacle
 /// lens in front of it: the peripheral refraction of a retina is read from it as the pole's
 /// is from a [`RefractionTable`], by finding the power that puts the field's focus on it.
@@ -293,9 +301,9 @@ impl PeripheralTable {
         pupil: &Pupil,
         criterion: Criterion,
         settings: &FocusSettings,
-        vertex: f64,
-        fields: &[f64],
+        at: FieldsAt<'_>,
     ) -> Result<Self, OpticsError> {
+        let FieldsAt { vertex, fields } = at;
         let powers = power_grid(PERIPHERAL_POWERS);
         let n = powers.len();
         let systems = powers

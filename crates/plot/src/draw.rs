@@ -338,15 +338,13 @@ pub(crate) fn segment_color(a: f64, b: f64, shade: (f64, f64)) -> Rgb {
 
 /// Draw a curve in the colours of its values: consecutive segments of one colour as one
 /// path. Thick lines get round caps where the colour changes, or the joins would show gaps.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn draw_shaded<DB, CT>(
     chart: &mut ChartContext<'_, DB, CT>,
     view: &View,
     points: &[(f64, f64)],
     values: &[f64],
     shade: (f64, f64),
-    width: u32,
-    dashed: bool,
+    (width, dashed): (u32, bool),
 ) -> Result<(), String>
 where
     DB: DrawingBackend,
@@ -397,7 +395,7 @@ where
 
     if with_line {
         match values {
-            Some(v) => draw_shaded(chart, view, &curve.points, v, shade, width, dashed)?,
+            Some(v) => draw_shaded(chart, view, &curve.points, v, shade, (width, dashed))?,
             None => {
                 let style = ShapeStyle::from(color).stroke_width(width);
                 for run in visible_runs(view, &curve.points) {

@@ -12,7 +12,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 use eyeshell_optics as optics;
 use eyeshell_optics::lens::{Lens, LensBody, Mount, PowerProfile, ProfileError, Zone};
 use eyeshell_optics::refraction::{
-    power_grid, PeripheralTable, RefractionTable, PERIPHERAL_POWERS, POWERS, VERTEX_MM,
+    power_grid, FieldsAt, PeripheralTable, RefractionTable, PERIPHERAL_POWERS, POWERS, VERTEX_MM,
 };
 use eyeshell_optics::FocusSettings;
 
@@ -554,8 +554,10 @@ fn trace_peripheral(
         &spec.pupil_stop(&eye),
         spec.criterion(),
         settings,
-        VERTEX_MM,
-        &peripheral_fields(spec.max_field),
+        FieldsAt {
+            vertex: VERTEX_MM,
+            fields: &peripheral_fields(spec.max_field),
+        },
     )
     .map_err(|e| spec.explain(&e))
 }
