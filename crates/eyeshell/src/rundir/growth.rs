@@ -60,16 +60,9 @@ pub const AGE_COLUMN: &str = "age";
 pub const PERIPHERAL_FILE: &str = "peripheral.csv";
 /// The directory of the snapshot files.
 pub const SNAPSHOT_DIR: &str = "snapshots";
-/// The columns of series.csv.
-pub const SERIES_COLUMNS: [&str; 7] = [
-    "t",
-    "axial_length",
-    "equatorial_radius",
-    "retina_minus_blue",
-    "retina_minus_red",
-    "class",
-    "refraction_D",
-];
+// The columns of series.csv, and what a run's files take at most: the plan a scene is
+// checked against before the run, which the writer follows.
+pub use crate::plan::{planned_bytes, CELL_BYTES, MAX_RUN_BYTES, SERIES_COLUMNS};
 
 /// The file name of output time number `k` (0 for t = 0) at time `t`: names sort in time
 /// order (`snapshot_00002_t0.200000.csv`); a time of 1e9 or more is written in scientific
@@ -87,30 +80,6 @@ pub fn snapshot_name_at(k: usize, t: f64, age: Option<f64>) -> String {
         Some(a) => format!("snapshot_{k:05}_age{}.csv", crate::text::decimals6(a)),
         None => snapshot_name(k, t),
     }
-}
-
-/// The most bytes one number takes in a run's CSV files ([`format_value`]: a sign, 17
-/// digits, the point, `e-308`) with its separator.
-pub const CELL_BYTES: u64 = 26;
-/// The most bytes the files of one growth run may take together, as counted before it
-/// starts ([`planned_bytes`]; `Scene` validation refuses more).
-pub const MAX_RUN_BYTES: u64 = 8 << 30;
-
-/// The most bytes a growth run writes: a snapshot of every node at t = 0 and at each of
-/// `times` output times, the series, history and peripheral rows (summary.json and the marker
-/// are small beside them).
-pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
-    let row = |cells: usize| cells as u64 * CELL_BYTES;
-    let snapshot = (nodes as u64 + 1) * row(COLUMNS.len() + GROWTH_COLUMNS.len());
-    let series_rows = times as u64 + 2;
-    let history_rows = (history_points + times) as u64 + 2;
-    // With room for the age column of a scene with time.unit; peripheral.csv: a row per
-    // field angle, every 5° to at most 90°, per output time.
-    let peripheral_rows = series_rows * 20;
-    (times as u64 + 1)
-        .saturating_mul(snapshot)
-        .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len() + 1))
-        .saturating_add(peripheral_rows * row(PERIPHERAL_COLUMNS.len() + 1))
 }
 
 /// The header of a snapshot file: the elastic [`COLUMNS`], then the [`GROWTH_COLUMNS`].

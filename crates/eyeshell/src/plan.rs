@@ -1,0 +1,42 @@
+//! What a growth run writes, planned before it starts: the columns of its series and the
+//! most bytes its files take together. A scene is checked against the plan (a run that
+//! would write more is refused), and the run directory's writer follows it; neither
+//! needs the other for that.
+
+use crate::bvp::COLUMNS;
+use crate::growth::{GROWTH_COLUMNS, PERIPHERAL_COLUMNS};
+
+/// The columns of series.csv.
+pub const SERIES_COLUMNS: [&str; 7] = [
+    "t",
+    "axial_length",
+    "equatorial_radius",
+    "retina_minus_blue",
+    "retina_minus_red",
+    "class",
+    "refraction_D",
+];
+
+/// The most bytes one number takes in a run's CSV files (as the run directory formats it:
+/// a sign, 17 digits, the point, `e-308`) with its separator.
+pub const CELL_BYTES: u64 = 26;
+/// The most bytes the files of one growth run may take together, as counted before it
+/// starts ([`planned_bytes`]; `Scene` validation refuses more).
+pub const MAX_RUN_BYTES: u64 = 8 << 30;
+
+/// The most bytes a growth run writes: a snapshot of every node at t = 0 and at each of
+/// `times` output times, the series, history and peripheral rows (summary.json and the marker
+/// are small beside them).
+pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
+    let row = |cells: usize| cells as u64 * CELL_BYTES;
+    let snapshot = (nodes as u64 + 1) * row(COLUMNS.len() + GROWTH_COLUMNS.len());
+    let series_rows = times as u64 + 2;
+    let history_rows = (history_points + times) as u64 + 2;
+    // With room for the age column of a scene with time.unit; peripheral.csv: a row per
+    // field angle, every 5° to at most 90°, per output time.
+    let peripheral_rows = series_rows * 20;
+    (times as u64 + 1)
+        .saturating_mul(snapshot)
+        .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len() + 1))
+        .saturating_add(peripheral_rows * row(PERIPHERAL_COLUMNS.len() + 1))
+}
