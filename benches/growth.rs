@@ -26,6 +26,28 @@ impl Observer for Discard {
     }
 }
 
+/// [`eyeshell::growth::grow`] of the problem these parts make (checked by its builder: a
+/// few microseconds beside a run of a tenth of a second and more).
+fn grow(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+    observer: &mut dyn Observer,
+) -> Result<GrowthStats, GrowthError> {
+    let elastic = eyeshell::problem::ElasticProblem::builder()
+        .params(*params)
+        .solver(*solver)
+        .build()
+        .expect("the bench's shell is a valid problem");
+    let problem = eyeshell::problem::GrowthProblem::builder(elastic)
+        .growth(growth.clone())
+        .settings(settings.clone())
+        .build()
+        .expect("the bench's growth is a valid problem");
+    eyeshell::growth::grow(&problem, observer)
+}
+
 fn settings() -> SolverSettings {
     SolverSettings {
         nodes: 501,

@@ -335,11 +335,12 @@ pub fn run(case: &Case) -> Outcome {
         },
         Some((g, gs)) => {
             let mut last = None;
+            let problem = match super::growth_problem(&case.params, &case.solver, g, gs) {
+                Ok(problem) => problem,
+                Err(e) => return failed(e.to_string()),
+            };
             let r = growth::run(
-                &case.params,
-                &case.solver,
-                g,
-                gs,
+                &problem,
                 &mut |sys, t, p| {
                     let snap = sys.snapshot(t, p)?;
                     last = Some(snap);

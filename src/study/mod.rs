@@ -35,6 +35,11 @@ pub enum StudyError {
         what: String,
         source: Box<GrowthError>,
     },
+    #[error("{what}: {source}")]
+    Problem {
+        what: String,
+        source: eyeshell::problem::ProblemError,
+    },
     #[error("{0}")]
     Invalid(String),
     #[error("{}: {source}", path.display())]
@@ -71,6 +76,23 @@ impl Run {
     }
 }
 
+/// The checked growth problem of a study's parameters and settings.
+pub fn growth_problem(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: &GrowthParams,
+    settings: &GrowthSettings,
+) -> Result<eyeshell::problem::GrowthProblem, eyeshell::problem::ProblemError> {
+    let elastic = (eyeshell::problem::ElasticProblem::builder())
+        .params(*params)
+        .solver(*solver)
+        .build()?;
+    eyeshell::problem::GrowthProblem::builder(elastic)
+        .growth(growth.clone())
+        .settings(settings.clone())
+        .build()
+}
+
 /// Solve the elastic problem, or run the growth when `growth` is given, and time it.
 pub fn run(
     params: &Params,
@@ -100,14 +122,18 @@ pub fn run(
             let mut series = vec![];
             // The scene's output times as well as t_end: an integrator's error in axial
             // length is not monotone in t, and one instant can flatter it.
+            let settings = GrowthSettings {
+                history_points: 0,
+                ..s.clone()
+            };
+            let problem = growth_problem(params, solver, g, &settings).map_err(|source| {
+                StudyError::Problem {
+                    what: what.into(),
+                    source,
+                }
+            })?;
             let stats = eyeshell::growth::run(
-                params,
-                solver,
-                g,
-                &GrowthSettings {
-                    history_points: 0,
-                    ..s.clone()
-                },
+                &problem,
                 &mut |sys, t, p| {
                     if t > 0.0 {
                         // A snapshot, as the run directory would have it (IDA's elastic

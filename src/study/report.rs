@@ -185,12 +185,12 @@ pub fn wpd(scene: &Scene, dir: &Path) -> Result<String, StudyError> {
     );
     write_tolerance(&curves, dir, &mut text)?;
     write_efficiency(&wpd::efficiency(p, s, &wpd::TOLERANCES)?, dir, &mut text)?;
-    if let Some(g) = &scene.growth {
+    let problem = scene
+        .growth_problem()
+        .map_err(|e| StudyError::Invalid(e.to_string()))?;
+    if let Some(problem) = &problem {
         let curves = wpd::growth(
-            p,
-            s,
-            g,
-            &scene.growth_settings,
+            problem,
             &[50, 100, 200, 400, 800],
             &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
             1e-10,
@@ -217,10 +217,7 @@ pub fn wpd(scene: &Scene, dir: &Path) -> Result<String, StudyError> {
             "growth (axial length)",
         );
         let tol = wpd::growth_tolerance(
-            p,
-            s,
-            g,
-            &scene.growth_settings,
+            problem,
             &wpd::GROWTH_TOLERANCES,
             &wpd::GROWTH_LADDER,
             wpd::GROWTH_REFERENCE,

@@ -12,8 +12,9 @@
 
 use super::{max_diff, run, sample, worst, StudyError};
 use eyeshell::bvp::settings::{Scheme, SolverSettings};
-use eyeshell::growth::{GrowthParams, GrowthSettings, Integrator};
+use eyeshell::growth::{GrowthSettings, Integrator};
 use eyeshell::model::params::Params;
+use eyeshell::problem::GrowthProblem;
 
 /// One method's points: (knob value, error, seconds), coarse to fine.
 #[derive(Clone, Debug)]
@@ -245,14 +246,13 @@ fn largest_axial_difference(run: &[(f64, f64)], reference: &[(f64, f64)]) -> f64
 /// The growth diagram: Euler over `steps`, CVODE and IDA over `rtols`, against CVODE at
 /// `reference_rtol`, all on the scene's mesh.
 pub fn growth(
-    params: &Params,
-    solver: &SolverSettings,
-    g: &GrowthParams,
-    settings: &GrowthSettings,
+    problem: &GrowthProblem,
     steps: &[usize],
     rtols: &[f64],
     reference_rtol: f64,
 ) -> Result<Vec<Curve>, StudyError> {
+    let (params, solver) = (problem.params(), problem.solver());
+    let (g, settings) = (problem.growth(), problem.settings());
     let tight = GrowthSettings {
         integrator: Integrator::Cvode,
         rtol: reference_rtol,
@@ -344,14 +344,13 @@ pub const GROWTH_REFERENCE: (usize, f64) = (3201, 1e-10);
 /// error of each, the largest over the output times and t_end, against IDA on the mesh of
 /// `reference.0` nodes at rtol `reference.1`. Field errors are NaN: the meshes differ.
 pub fn growth_tolerance(
-    params: &Params,
-    solver: &SolverSettings,
-    g: &GrowthParams,
-    settings: &GrowthSettings,
+    problem: &GrowthProblem,
     tols: &[f64],
     ladder: &[(usize, f64)],
     reference: (usize, f64),
 ) -> Result<Vec<Curve>, StudyError> {
+    let (params, solver) = (problem.params(), problem.solver());
+    let (g, settings) = (problem.growth(), problem.settings());
     let ida = |rtol: f64| GrowthSettings {
         integrator: Integrator::Ida,
         rtol,
@@ -646,17 +645,8 @@ mod tests {
             &[],
         )
         .unwrap();
-        let g = scene.growth.as_ref().unwrap();
-        let curves = growth_tolerance(
-            &scene.params,
-            &scene.solver,
-            g,
-            &scene.growth_settings,
-            &[1e-3, 1e-4],
-            &[(51, 1e-5)],
-            (201, 1e-7),
-        )
-        .unwrap();
+        let problem = scene.growth_problem().unwrap().unwrap();
+        let curves = growth_tolerance(&problem, &[1e-3, 1e-4], &[(51, 1e-5)], (201, 1e-7)).unwrap();
         let tol = curves.iter().find(|c| c.knob == "tol").unwrap();
         assert_eq!(
             tol.points.iter().map(|p| p.value).collect::<Vec<_>>(),

@@ -16,7 +16,7 @@
 
 use std::path::Path;
 
-use crate::bvp::{self, Solution};
+use crate::bvp::Solution;
 use crate::growth::{
     self, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
 };
@@ -95,7 +95,7 @@ impl Scene {
     /// [`Solution::column`]), the continuous interpolant ([`Solution::at`]) and the
     /// diagnostics ([`Solution::stats`]: Newton iterations, residual, first integral).
     pub fn solve(&self) -> Result<Solution, Error> {
-        Ok(bvp::solve(&self.params, &self.solver, None)?)
+        Ok(self.elastic_problem()?.solve()?)
     }
 
     /// Grow the eye of the scene from t = 0 to `growth.t_end`, handing every snapshot to
@@ -114,7 +114,7 @@ impl Scene {
     /// # Ok::<(), eyeshell::Error>(())
     /// ```
     pub fn grow(&self, observer: &mut dyn Observer) -> Result<Growth, Error> {
-        let Some(params) = &self.growth else {
+        let Some(problem) = self.growth_problem()? else {
             return Err(Error::input(format!(
                 "{}: the scene has no [growth] section (set a growth key, e.g. growth.eta0)",
                 self.origin
@@ -126,13 +126,7 @@ impl Scene {
             history: Vec::new(),
             sensitivities: Vec::new(),
         };
-        let stats = growth::grow(
-            &self.params,
-            &self.solver,
-            params,
-            &self.growth_settings,
-            &mut record,
-        )?;
+        let stats = growth::grow(&problem, &mut record)?;
         Ok(Growth {
             stats,
             series: record.snapshots.iter().map(|s| s.series).collect(),

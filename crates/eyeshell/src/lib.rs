@@ -37,6 +37,8 @@ pub mod fit;
 pub mod hash;
 pub mod interop;
 mod json;
+pub mod plan;
+pub mod problem;
 pub mod rundir;
 pub mod scene;
 pub mod sweep;

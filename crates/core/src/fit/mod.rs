@@ -20,10 +20,8 @@ pub mod lm;
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::bvp::settings::SolverSettings;
 use crate::growth::dae::SensParam;
-use crate::growth::{self, GrowthError, GrowthParams, GrowthSettings, SensitivityRow};
-use crate::model::params::Params;
+use crate::growth::{self, GrowthError, SensitivityRow};
 use crate::text::number;
 
 /// The smallest eigenvalue the correlation form of the information matrix (JᵀJ scaled to
@@ -111,14 +109,12 @@ pub struct ModelValues {
     pub seconds: f64,
 }
 
-/// The growth model of a fit: an eye, its growth and solver settings, the parameters
-/// fitted and the observation times (in the model's time, in the order of the data).
+/// The growth model of a fit: the growth problem (an eye, its growth and solver settings),
+/// the parameters fitted and the observation times (in the model's time, in the order of
+/// the data).
 #[derive(Clone, Copy, Debug)]
 pub struct GrowthModel<'a> {
-    pub params: &'a Params,
-    pub solver: &'a SolverSettings,
-    pub growth: &'a GrowthParams,
-    pub settings: &'a GrowthSettings,
+    pub problem: &'a crate::problem::GrowthProblem,
     pub fitted: &'a [SensParam],
     pub times: &'a [f64],
 }
@@ -128,9 +124,9 @@ impl GrowthModel<'_> {
     /// at the observation times, calling `step(t)` after every step of the run: an error
     /// from it stops the run there (a caller's Ctrl-C).
     pub fn evaluate(&self, step: &mut growth::ProgressFn<'_>) -> Result<ModelValues, FitError> {
-        let t_end = self.growth.t_end;
+        let t_end = self.problem.growth().t_end;
         let times = distinct_times(self.times, t_end);
-        let mut settings = self.settings.clone();
+        let mut settings = self.problem.settings().clone();
         settings.output_times = times
             .iter()
             .copied()
@@ -154,15 +150,10 @@ impl GrowthModel<'_> {
             Ok(())
         };
         let start = std::time::Instant::now();
-        growth::run_with(
-            self.params,
-            self.solver,
-            self.growth,
-            &settings,
-            &mut take,
-            &mut |_, _, _| Ok(()),
-            step,
-        )?;
+        // The observation times and the fitted parameters are what is recorded, not the
+        // problem: the problem checked stays checked.
+        let problem = self.problem.recording(settings);
+        growth::run_with(&problem, &mut take, &mut |_, _, _| Ok(()), step)?;
         let seconds = start.elapsed().as_secs_f64();
         let n = self.times.len();
         let mut axial_length = Vec::with_capacity(n);
@@ -289,28 +280,31 @@ pub fn identifiability(j: &DMatrix<f64>, names: &[&str], values: &[f64]) -> Opti
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::growth::Integrator;
+    use crate::bvp::settings::SolverSettings;
+    use crate::growth::{GrowthSettings, Integrator};
+    use crate::problem::{ElasticProblem, GrowthProblem};
 
     /// One growth run gives L and ∂L/∂η0 at each observation, in the data's order (a time
     /// given twice reads the same value), and a time the run does not reach is refused.
     #[test]
     fn the_model_is_read_at_each_observation_time() {
-        let params = Params::default();
         let solver = SolverSettings {
             nodes: 41,
             ..SolverSettings::default()
         };
-        let growth = GrowthParams::default();
         let settings = GrowthSettings {
             integrator: Integrator::Ida,
             ..GrowthSettings::default()
         };
+        let elastic = ElasticProblem::builder().solver(solver).build().unwrap();
+        let problem = GrowthProblem::builder(elastic)
+            .settings(settings)
+            .build()
+            .unwrap();
+        let growth = problem.growth();
         let times = [0.5 * growth.t_end, 0.25 * growth.t_end, 0.5 * growth.t_end];
         let model = GrowthModel {
-            params: &params,
-            solver: &solver,
-            growth: &growth,
-            settings: &settings,
+            problem: &problem,
             fitted: &[SensParam::Eta0],
             times: &times,
         };

@@ -5,7 +5,6 @@
 //! CVODE cuts the step and tries again.
 
 use super::system::GrowthSystem;
-use super::GrowthSettings;
 use crate::text::decimals6;
 use eyeshell_sundials::{
     CallbackResult, Cvode, CvodeLinearSolver, CvodeOptions, CvodeStats, OdeSystem,
@@ -46,18 +45,17 @@ impl OdeSystem for GrowthOde<'_> {
 /// The Krylov subspace of GMRES.
 const MAX_KRYLOV: usize = 30;
 
-/// Integrate to `t_end`, calling `output(sys, t, p)` at each of `times` (increasing, in
-/// (0, t_end]) and `progress(t)` after every internal step. Returns CVODE's counters and,
-/// on failure, the time reached and why.
+/// Integrate to `span.t_end`, calling `output(sys, t, p)` at each of `span.times`
+/// (increasing, in (0, t_end]) and `progress(t)` after every internal step. Returns CVODE's
+/// counters and, on failure, the time reached and why.
 pub fn integrate(
     sys: &mut GrowthSystem,
     p0: &[f64],
-    t_end: f64,
-    settings: &GrowthSettings,
-    times: &[f64],
+    span: &super::Span<'_>,
     output: &mut super::OutputFn<'_>,
     progress: &mut super::ProgressFn<'_>,
 ) -> (CvodeStats, Result<(), (f64, String)>) {
+    let (settings, t_end, times) = (span.settings, span.t_end, span.times);
     let options = CvodeOptions {
         rtol: settings.rtol,
         atol: settings.atol,

@@ -4,18 +4,18 @@
 
 use super::system::{GrowthSystem, RhsError};
 
-/// Integrate from t = 0 to `t_end` in `steps` equal steps; `output(t, p)` is called at each
-/// of `times` (increasing, in (0, t_end]) and `progress(t)` after each step. Returns the state at t_end, or the time and error
-/// where a right-hand side failed.
+/// Integrate from t = 0 to `span.t_end` in `span.settings.steps` equal steps; `output(t, p)`
+/// is called at each of `span.times` (increasing, in (0, t_end]) and `progress(t)` after
+/// each step. Returns the state at t_end, or the time and error where a right-hand side
+/// failed.
 pub fn integrate(
     sys: &mut GrowthSystem,
     p0: &[f64],
-    t_end: f64,
-    steps: usize,
-    times: &[f64],
+    span: &super::Span<'_>,
     output: &mut super::OutputFn<'_>,
     progress: &mut super::ProgressFn<'_>,
 ) -> Result<Vec<f64>, (f64, EulerError)> {
+    let (t_end, steps, times) = (span.t_end, span.settings.steps, span.times);
     let dt = t_end / steps as f64;
     let mut p = p0.to_vec();
     let mut rate = vec![0.0; p.len()];

@@ -11,7 +11,6 @@
 
 use super::dae::CoupledDae;
 use super::settings::DaeLinear;
-use super::GrowthSettings;
 use crate::text::decimals6;
 use eyeshell_sundials::{
     CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaSensStats,
@@ -139,22 +138,27 @@ pub type SensOutput<'a> =
 /// against 3e-4 at rtol 1e-6): the elastic state is what the retina is measured on.
 pub const SUPPRESS_ALGEBRAIC: bool = false;
 
-/// Integrate the coupled system from its consistent state at t = 0 to `t_end`, calling
-/// `output(dae, t, y)` at each of `times` (increasing, in (0, t_end]) and `progress(t)`
+/// The consistent state of the coupled system at t = 0 that IDA starts from: y and y'.
+pub struct ConsistentStart<'a> {
+    pub y: &'a [f64],
+    pub yp: &'a [f64],
+}
+
+/// Integrate the coupled system from its consistent state at t = 0 to `span.t_end`, calling
+/// `output(dae, t, y)` at each of `span.times` (increasing, in (0, t_end]) and `progress(t)`
 /// after every step. Returns IDA's counters and, on failure, the time reached and why.
-#[allow(clippy::too_many_arguments)] // the integrator's whole set-up, each argument distinct
 pub fn integrate(
     dae: &mut CoupledDae,
-    y0: &[f64],
-    yp0: &[f64],
-    t_end: f64,
-    settings: &GrowthSettings,
-    r0: f64,
-    times: &[f64],
+    start: ConsistentStart<'_>,
+    span: &super::Span<'_>,
     output: &mut DaeOutput<'_>,
     progress: &mut super::ProgressFn<'_>,
     sens: Option<Sensitivities<'_>>,
 ) -> (IdaStats, IdaSensStats, Result<(), (f64, String)>) {
+    let (y0, yp0) = (start.y, start.yp);
+    let (settings, t_end, times) = (span.settings, span.t_end, span.times);
+    // The absolute tolerances scale with the shell's radius (the lengths are in mm).
+    let r0 = dae.sys.elastic.params().r0;
     let atol = dae.abs_tolerances(settings.rtol, settings.atol, r0);
     let h0 = initial_step(dae, y0, yp0, settings.rtol, &atol, t_end);
     // With the sensitivities in the error test, the test leaves out the border d, whose

@@ -25,6 +25,8 @@ use crate::model::optics::Source;
 use crate::model::stimulus::{EyeMeasure, Refraction};
 pub use settings::{DaeLinear, GrowthParams, GrowthSettings, Integrator};
 
+pub use crate::problem::GrowthProblem;
+
 /// One row of series.csv: the eye at one output time, at the posterior pole.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SeriesRow {
@@ -357,25 +359,23 @@ pub struct GrowthError {
     pub stats: Box<GrowthStats>,
 }
 
-/// Run the growth of `growth` on the shell of `params` from t = 0 to t_end, handing each
-/// snapshot (t = 0, each output time, t_end) to `observer` as soon as it is computed.
+/// Run the growth `problem` from t = 0 to t_end, handing each snapshot (t = 0, each
+/// output time, t_end) to `observer` as soon as it is computed.
+///
+/// # Errors
+/// A [`GrowthError`] (the time reached, why, the work done) when the run stops: a failed
+/// integration or elastic solve, rates too fast to follow, the observer's own error.
 pub fn grow(
-    params: &crate::model::params::Params,
-    solver: &crate::bvp::settings::SolverSettings,
-    growth: &GrowthParams,
-    settings: &GrowthSettings,
+    problem: &GrowthProblem,
     observer: &mut dyn Observer,
 ) -> Result<GrowthStats, GrowthError> {
     // Both the snapshots and the progress reports go to the one observer.
     let observer = std::cell::RefCell::new(observer);
-    let t_end = growth.t_end;
+    let (settings, t_end) = (problem.settings(), problem.growth().t_end);
     let snapshot_times = snapshot_times(settings, t_end);
     let with_history = settings.history_points > 0;
     run_with(
-        params,
-        solver,
-        growth,
-        settings,
+        problem,
         &mut |rows| observer.borrow_mut().sensitivities(rows),
         &mut |sys, t, p| {
             let mut obs = observer.borrow_mut();
@@ -429,55 +429,87 @@ pub type OutputFn<'a> =
 /// time (t = 0, the output times, t_end): `output(sys, t, p)` with p the growth state.
 /// With `solver.tol` the mesh and the integrator's tolerances are chosen for it, and the
 /// outputs are those of the delivered run, with their estimated error ([`tolerance`]).
+///
+/// # Errors
+/// As [`grow`]'s, `output`'s and `progress`'s errors among them.
 pub fn run(
-    params: &crate::model::params::Params,
-    solver: &crate::bvp::settings::SolverSettings,
-    growth: &GrowthParams,
-    settings: &GrowthSettings,
+    problem: &GrowthProblem,
     output: &mut OutputFn<'_>,
     progress: &mut ProgressFn<'_>,
 ) -> Result<GrowthStats, GrowthError> {
-    run_with(
-        params,
-        solver,
-        growth,
-        settings,
-        &mut |_| Ok(()),
-        output,
-        progress,
-    )
+    run_with(problem, &mut |_| Ok(()), output, progress)
 }
 
 /// What receives the sensitivity rows of one recorded time.
 pub type SensitivityFn<'a> = dyn FnMut(&[SensitivityRow]) -> Result<(), ObserverError> + 'a;
 
-/// [`run`] with the forward sensitivities of `settings.sensitivities` handed to `sens`.
+/// [`run`] with the forward sensitivities of the problem's settings handed to `sens`.
+///
+/// # Errors
+/// As [`run`]'s, `sens`'s errors among them.
 pub fn run_with(
-    params: &crate::model::params::Params,
-    solver: &crate::bvp::settings::SolverSettings,
-    growth: &GrowthParams,
-    settings: &GrowthSettings,
+    problem: &GrowthProblem,
     sens: &mut SensitivityFn<'_>,
     output: &mut OutputFn<'_>,
     progress: &mut ProgressFn<'_>,
 ) -> Result<GrowthStats, GrowthError> {
-    let outside = settings.sensitivities.iter().any(|p| !p.in_dae());
-    if growth.schedule.is_constant() && !outside {
-        return run_plain(params, solver, growth, settings, sens, output, progress);
+    let parts = Parts::of(problem);
+    let hooks = Hooks {
+        sens,
+        output,
+        progress,
+    };
+    let outside = parts.settings.sensitivities.iter().any(|p| !p.in_dae());
+    if parts.growth.schedule.is_constant() && !outside {
+        return run_plain(parts, hooks);
     }
-    schedule::run(params, solver, growth, settings, sens, output, progress)
+    schedule::run(parts, hooks)
+}
+
+/// The pieces of a [`GrowthProblem`] as the run's stages hand them on: a schedule runs the
+/// model on its own clock (other growth parameters and output times), `solver.tol` starts
+/// the solver's clock and chooses the mesh, each a variation of the checked problem.
+#[derive(Clone, Copy)]
+pub(crate) struct Parts<'a> {
+    pub params: &'a crate::model::params::Params,
+    pub solver: &'a crate::bvp::settings::SolverSettings,
+    pub growth: &'a GrowthParams,
+    pub settings: &'a GrowthSettings,
+}
+
+impl<'a> Parts<'a> {
+    fn of(problem: &'a GrowthProblem) -> Parts<'a> {
+        Parts {
+            params: problem.params(),
+            solver: problem.solver(),
+            growth: problem.growth(),
+            settings: problem.settings(),
+        }
+    }
+}
+
+/// What a growth run hands its results to as they come: the sensitivity rows of each
+/// recorded time, the growth state at each recorded time, the time reached after each step.
+pub(crate) struct Hooks<'h, 'f> {
+    pub sens: &'h mut SensitivityFn<'f>,
+    pub output: &'h mut OutputFn<'f>,
+    pub progress: &'h mut ProgressFn<'f>,
+}
+
+/// The stretch of time an integrator covers: from t = 0 to `t_end`, handing on the state at
+/// `times` (increasing, in (0, t_end]), with the tolerances and steps of `settings`.
+pub(crate) struct Span<'a> {
+    pub t_end: f64,
+    pub times: &'a [f64],
+    pub settings: &'a GrowthSettings,
 }
 
 /// [`run_with`] on the model's own clock, every sensitivity from the DAE.
 pub(crate) fn run_plain(
-    params: &crate::model::params::Params,
-    solver: &crate::bvp::settings::SolverSettings,
-    growth: &GrowthParams,
-    settings: &GrowthSettings,
-    sens: &mut SensitivityFn<'_>,
-    output: &mut OutputFn<'_>,
-    progress: &mut ProgressFn<'_>,
+    parts: Parts<'_>,
+    hooks: Hooks<'_, '_>,
 ) -> Result<GrowthStats, GrowthError> {
+    let Parts { solver, growth, .. } = parts;
     // The stimulus's surfaces, when computed from the eye's optics, are traced once here,
     // before t = 0, and shared by the mesh choice and the run.
     let growth = &*growth.resolved().map_err(|reason| GrowthError {
@@ -485,36 +517,32 @@ pub(crate) fn run_plain(
         reason,
         stats: Box::default(),
     })?;
+    let parts = Parts { growth, ..parts };
     let Some(_) = solver.tol else {
-        return run_on(
-            params, solver, growth, settings, None, sens, output, progress,
-        );
+        return run_on(parts, None, hooks);
     };
     // solver.max_seconds bounds every run of the choice together: one clock for all.
-    tolerance::run(
-        params,
-        &solver.clock_started(),
-        growth,
-        settings,
-        sens,
-        output,
-        progress,
-    )
+    let solver = &solver.clock_started();
+    tolerance::run(Parts { solver, ..parts }, hooks)
 }
 
 /// The growth run on `mesh` (None: the mesh of `solver.nodes`).
-// The run's settings, its mesh and its three callbacks: bundling them would only rename them.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn run_on(
-    params: &crate::model::params::Params,
-    solver: &crate::bvp::settings::SolverSettings,
-    growth: &GrowthParams,
-    settings: &GrowthSettings,
+    parts: Parts<'_>,
     mesh: Option<crate::mesh::Mesh>,
-    sens: &mut SensitivityFn<'_>,
-    output: &mut OutputFn<'_>,
-    progress: &mut ProgressFn<'_>,
+    hooks: Hooks<'_, '_>,
 ) -> Result<GrowthStats, GrowthError> {
+    let Parts {
+        params,
+        solver,
+        growth,
+        settings,
+    } = parts;
+    let Hooks {
+        sens,
+        output,
+        progress,
+    } = hooks;
     let start = std::time::Instant::now();
     let t_end = growth.t_end;
     let fail = |t: f64, reason: String, stats: GrowthStats| GrowthError {
@@ -565,24 +593,20 @@ pub(crate) fn run_on(
     let times = recorded_times(settings, t_end);
     output(&mut sys, 0.0, &p0).map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let mut stats = GrowthStats::default();
+    let span = Span {
+        t_end,
+        times: &times,
+        settings,
+    };
     let outcome = match settings.integrator {
         Integrator::Euler => {
-            let r = euler::integrate(
-                &mut sys,
-                &p0,
-                t_end,
-                settings.steps,
-                &times,
-                output,
-                progress,
-            );
+            let r = euler::integrate(&mut sys, &p0, &span, output, progress);
             stats.steps = settings.steps;
             stats.rhs_evaluations = sys.work.rhs_evaluations;
             r.map(|_| ()).map_err(|(t, e)| (t, e.to_string()))
         }
         Integrator::Cvode => {
-            let (cv, r) =
-                cvode::integrate(&mut sys, &p0, t_end, settings, &times, output, progress);
+            let (cv, r) = cvode::integrate(&mut sys, &p0, &span, output, progress);
             stats.steps = cv.steps;
             stats.rhs_evaluations = cv.rhs_evaluations;
             stats.error_test_failures = cv.error_test_failures;
@@ -593,9 +617,12 @@ pub(crate) fn run_on(
             r
         }
         Integrator::Ida => {
-            let (back, r) = run_ida(
-                sys, params.r0, settings, t_end, &times, output, progress, sens, &mut stats,
-            );
+            let hooks = Hooks {
+                sens,
+                output,
+                progress,
+            };
+            let (back, r) = run_ida(sys, &span, hooks, &mut stats);
             sys = back;
             r
         }
@@ -619,18 +646,18 @@ pub(crate) fn run_on(
 /// The IDA branch of [`run`]: the coupled system built on `sys` (solved at t = 0), its
 /// consistent start, and the integration; outputs hand the interpolated state to the growth
 /// system (no re-solve). Returns the growth system for the caller's counters.
-#[allow(clippy::too_many_arguments)]
 fn run_ida(
     sys: system::GrowthSystem,
-    r0: f64,
-    settings: &GrowthSettings,
-    t_end: f64,
-    times: &[f64],
-    output: &mut OutputFn<'_>,
-    progress: &mut ProgressFn<'_>,
-    sens: &mut SensitivityFn<'_>,
+    span: &Span<'_>,
+    hooks: Hooks<'_, '_>,
     stats: &mut GrowthStats,
 ) -> (system::GrowthSystem, Result<(), (f64, String)>) {
+    let settings = span.settings;
+    let Hooks {
+        sens,
+        output,
+        progress,
+    } = hooks;
     let mut dae = dae::CoupledDae::new(sys);
     dae.set_sensitivities(&settings.sensitivities);
     let start = dae
@@ -687,18 +714,9 @@ fn run_ida(
                     output: &mut sens_out,
                 });
             }
-            let (st, sst, r) = ida::integrate(
-                &mut dae,
-                &y0,
-                &yp0,
-                t_end,
-                settings,
-                r0,
-                times,
-                &mut out,
-                progress,
-                sensitivities,
-            );
+            let start = ida::ConsistentStart { y: &y0, yp: &yp0 };
+            let (st, sst, r) =
+                ida::integrate(&mut dae, start, span, &mut out, progress, sensitivities);
             if !settings.sensitivities.is_empty() {
                 stats.sensitivities = Some(SensitivityWork {
                     parameters: settings

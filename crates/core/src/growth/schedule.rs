@@ -543,193 +543,75 @@ pub const RADIUS_STEP: f64 = 1e-3;
 /// its records relabelled with t, the schedule's sensitivities from η0's and R0's from two
 /// more runs at R0(1 ± [`RADIUS_STEP`]).
 pub(crate) fn run(
-    params: &crate::model::params::Params,
-    solver: &crate::bvp::settings::SolverSettings,
-    growth: &super::GrowthParams,
-    settings: &super::GrowthSettings,
-    sens: &mut super::SensitivityFn<'_>,
-    output: &mut super::OutputFn<'_>,
-    progress: &mut super::ProgressFn<'_>,
+    parts: super::Parts<'_>,
+    hooks: super::Hooks<'_, '_>,
 ) -> Result<super::GrowthStats, super::GrowthError> {
     use super::dae::SensParam;
-    use super::{GrowthError, GrowthStats};
-    let fail = |reason: String| GrowthError {
+    let super::Parts {
+        growth, settings, ..
+    } = parts;
+    let fail = |reason: String| super::GrowthError {
         t: 0.0,
         reason,
         stats: Box::default(),
     };
-    let t_end = growth.t_end;
-    for p in &settings.sensitivities {
-        if let Some(sp) = p.schedule_param() {
-            if growth.schedule.form != sp.form() {
-                let want = Form::NAMES[sp.form() as usize];
-                return Err(fail(format!(
-                    "the sensitivity to {} needs growth.schedule = \"{want}\" (the scene has \"{}\")",
-                    sp.key(),
-                    Form::NAMES[growth.schedule.form as usize]
-                )));
-            }
-        }
-    }
-    let warp = Warp::new(&growth.schedule, &growth.clock, t_end);
-    let tau_end = warp.clock(t_end);
-    let min = super::settings::MIN_T_END;
-    if !(tau_end.is_finite() && tau_end >= min) {
-        return Err(fail(format!(
-            "the schedule grows nothing that can be integrated: ∫ s dt over the growth window is {} (growth.schedule = \"{}\"); it must be finite and at least {}",
-            number(tau_end),
-            Form::NAMES[growth.schedule.form as usize],
-            number(min)
-        )));
-    }
-    // Every recorded time after 0 in t, with its τ.
-    let times = super::recorded_times(settings, t_end);
-    let mut pairs: Vec<(f64, f64)> = vec![(0.0, 0.0)];
-    pairs.extend(
-        times
-            .iter()
-            .map(|&t| (if t == t_end { tau_end } else { warp.clock(t) }, t)),
-    );
-    let mut warped = settings.clone();
-    warped.history_points = 0;
-    warped.output_times = pairs[1..]
-        .iter()
-        .map(|p| p.0)
-        .filter(|&tau| tau > 0.0 && tau < tau_end)
-        .collect();
-    warped.output_times.dedup();
+    check_schedule_sensitivities(growth, settings).map_err(fail)?;
+    let clocked = OnClock::new(growth, settings).map_err(fail)?;
     let wanted = settings.sensitivities.clone();
-    warped.sensitivities = wanted.iter().copied().filter(|p| p.in_dae()).collect();
-    let outside = wanted.iter().any(|p| !p.in_dae());
-    if outside && !warped.sensitivities.contains(&SensParam::Eta0) {
-        warped.sensitivities.push(SensParam::Eta0);
-    }
-    let clocked = super::GrowthParams {
-        t_end: tau_end,
-        ..growth.clone()
-    };
-    // The records at τ: those of every time t whose τ lies within the run's merging of
-    // close times (1e-12 of its end), each once.
-    let near = |a: f64, b: f64| (a - b).abs() <= 1e-12 * tau_end;
     // geometry.R0: the eye measured at every τ in runs at R0(1 ± step).
-    let radius = if wanted.contains(&SensParam::Radius) {
-        let h = RADIUS_STEP * params.r0;
-        let mut sides = vec![];
-        for r0 in [params.r0 + h, params.r0 - h] {
-            let shifted = crate::model::params::Params { r0, ..*params };
-            let plain = super::GrowthSettings {
-                sensitivities: vec![],
-                ..warped.clone()
-            };
-            let mut rows: Vec<(f64, [f64; 3])> = vec![];
-            super::run_plain(
-                &shifted,
-                solver,
-                &clocked,
-                &plain,
-                &mut |_| Ok(()),
-                &mut |sys, tau, p| {
-                    let r = sys.series(tau, p)?;
-                    rows.push((
-                        tau,
-                        [r.axial_length, r.equatorial_radius, r.retina_minus_blue],
-                    ));
-                    Ok(())
-                },
-                &mut |_| Ok(()),
-            )
-            .map_err(|e| GrowthError {
-                t: warp.time_at(e.t, t_end),
-                reason: format!(
-                    "the run at geometry.R0 = {} for the sensitivity to geometry.R0: {}",
-                    number(r0),
-                    e.reason
-                ),
-                stats: e.stats,
-            })?;
-            sides.push(rows);
-        }
-        Some((h, sides))
-    } else {
-        None
+    let radius = match wanted.contains(&SensParam::Radius) {
+        true => Some(radius_runs(parts, &clocked)?),
+        false => None,
     };
+    let super::Hooks {
+        sens,
+        output,
+        progress,
+    } = hooks;
+    let (warp, t_end, pairs) = (&clocked.warp, clocked.t_end, &clocked.pairs);
+    let near = |a: f64, b: f64| clocked.near(a, b);
     let mut sens_done = vec![false; pairs.len()];
     let mut out_done = vec![false; pairs.len()];
-    let eta0 = growth.eta0;
+    let relabel_rows = |rows: &[super::SensitivityRow], t: f64| {
+        let at = RowsAt {
+            rows,
+            t,
+            tau: rows[0].t,
+        };
+        at.in_time(&wanted, parts, &clocked, radius.as_ref())
+    };
     let result = super::run_plain(
-        params,
-        solver,
-        &clocked,
-        &warped,
-        &mut |rows| {
-            let Some(first) = rows.first() else {
-                return Ok(());
-            };
-            let tau = first.t;
-            let eta_row = rows.iter().find(|r| r.parameter == SensParam::Eta0.key());
-            for (i, &(tau_i, t)) in pairs.iter().enumerate() {
-                if sens_done[i] || !near(tau_i, tau) {
-                    continue;
-                }
-                sens_done[i] = true;
-                let mut out = Vec::with_capacity(wanted.len());
-                for &p in &wanted {
-                    let mut row = match rows.iter().find(|r| r.parameter == p.key()) {
-                        Some(r) => *r,
-                        None => super::SensitivityRow {
-                            parameter: p.key(),
-                            value: p.value(params, growth),
-                            d_axial_length: 0.0,
-                            d_equatorial_radius: 0.0,
-                            d_retina_minus_blue: 0.0,
-                            ..*first
-                        },
-                    };
-                    row.t = t;
-                    if let Some(sp) = p.schedule_param() {
-                        // ∂x(t)/∂θ = x̃'(τ) ∂S/∂θ, x̃'(τ) = (η0/τ) ∂x̃/∂η0.
-                        let e =
-                            eta_row.expect("η0's sensitivity is integrated with the schedule's");
-                        let rate = if tau > 0.0 { eta0 / tau } else { 0.0 };
-                        let ds = warp.clock_partial(t, sp);
-                        row.d_axial_length = rate * e.d_axial_length * ds;
-                        row.d_equatorial_radius = rate * e.d_equatorial_radius * ds;
-                        row.d_retina_minus_blue = rate * e.d_retina_minus_blue * ds;
-                    }
-                    if let (SensParam::Radius, Some((h, sides))) = (p, &radius) {
-                        let at = |side: &Vec<(f64, [f64; 3])>| {
-                            side.iter().find(|(x, _)| near(*x, tau)).map(|(_, v)| *v)
-                        };
-                        let (Some(up), Some(down)) = (at(&sides[0]), at(&sides[1])) else {
-                            return Err(format!(
-                                "the runs at geometry.R0 ± {} recorded nothing at t = {}",
-                                number(*h),
-                                number(t)
-                            )
-                            .into());
-                        };
-                        row.d_axial_length = (up[0] - down[0]) / (2.0 * h);
-                        row.d_equatorial_radius = (up[1] - down[1]) / (2.0 * h);
-                        row.d_retina_minus_blue = (up[2] - down[2]) / (2.0 * h);
-                    }
-                    out.push(row);
-                }
-                sens(&out)?;
-            }
-            Ok(())
+        super::Parts {
+            growth: &clocked.growth,
+            settings: &clocked.settings,
+            ..parts
         },
-        &mut |sys, tau, p| {
-            for (i, &(tau_i, t)) in pairs.iter().enumerate() {
-                if !out_done[i] && near(tau_i, tau) {
-                    out_done[i] = true;
-                    output(sys, t, p)?;
+        super::Hooks {
+            sens: &mut |rows| {
+                let Some(first) = rows.first() else {
+                    return Ok(());
+                };
+                for (i, &(tau_i, t)) in pairs.iter().enumerate() {
+                    if !sens_done[i] && near(tau_i, first.t) {
+                        sens_done[i] = true;
+                        sens(&relabel_rows(rows, t)?)?;
+                    }
                 }
-            }
-            Ok(())
+                Ok(())
+            },
+            output: &mut |sys, tau, p| {
+                for (i, &(tau_i, t)) in pairs.iter().enumerate() {
+                    if !out_done[i] && near(tau_i, tau) {
+                        out_done[i] = true;
+                        output(sys, t, p)?;
+                    }
+                }
+                Ok(())
+            },
+            progress: &mut |tau| progress(warp.time_at(tau, t_end)),
         },
-        &mut |tau| progress(warp.time_at(tau, t_end)),
     );
-    let relabel = |stats: &mut GrowthStats| {
+    let relabel = |stats: &mut super::GrowthStats| {
         stats.t_reached = warp.time_at(stats.t_reached, t_end);
     };
     match result {
@@ -742,6 +624,223 @@ pub(crate) fn run(
             relabel(&mut e.stats);
             Err(e)
         }
+    }
+}
+
+/// A schedule parameter's sensitivity needs the schedule of its form.
+fn check_schedule_sensitivities(
+    growth: &super::GrowthParams,
+    settings: &super::GrowthSettings,
+) -> Result<(), String> {
+    for p in &settings.sensitivities {
+        if let Some(sp) = p.schedule_param() {
+            if growth.schedule.form != sp.form() {
+                let want = Form::NAMES[sp.form() as usize];
+                return Err(format!(
+                    "the sensitivity to {} needs growth.schedule = \"{want}\" (the scene has \"{}\")",
+                    sp.key(),
+                    Form::NAMES[growth.schedule.form as usize]
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The constant-rate run on the clock τ = S(t): its growth parameters (t_end = S(t_end)),
+/// its settings (output times in τ, the DAE's sensitivities with η0's, no history), and
+/// every recorded time t after 0 paired with its τ.
+struct OnClock {
+    warp: Warp,
+    /// The run's t_end and S(t_end).
+    t_end: f64,
+    tau_end: f64,
+    /// (τ, t) of every recorded time, (0, 0) first.
+    pairs: Vec<(f64, f64)>,
+    growth: super::GrowthParams,
+    settings: super::GrowthSettings,
+}
+
+impl OnClock {
+    fn new(
+        growth: &super::GrowthParams,
+        settings: &super::GrowthSettings,
+    ) -> Result<OnClock, String> {
+        use super::dae::SensParam;
+        let t_end = growth.t_end;
+        let warp = Warp::new(&growth.schedule, &growth.clock, t_end);
+        let tau_end = warp.clock(t_end);
+        let min = super::settings::MIN_T_END;
+        if !(tau_end.is_finite() && tau_end >= min) {
+            return Err(format!(
+                "the schedule grows nothing that can be integrated: ∫ s dt over the growth window is {} (growth.schedule = \"{}\"); it must be finite and at least {}",
+                number(tau_end),
+                Form::NAMES[growth.schedule.form as usize],
+                number(min)
+            ));
+        }
+        // Every recorded time after 0 in t, with its τ.
+        let times = super::recorded_times(settings, t_end);
+        let mut pairs: Vec<(f64, f64)> = vec![(0.0, 0.0)];
+        pairs.extend(
+            times
+                .iter()
+                .map(|&t| (if t == t_end { tau_end } else { warp.clock(t) }, t)),
+        );
+        let mut warped = settings.clone();
+        warped.history_points = 0;
+        warped.output_times = pairs[1..]
+            .iter()
+            .map(|p| p.0)
+            .filter(|&tau| tau > 0.0 && tau < tau_end)
+            .collect();
+        warped.output_times.dedup();
+        let wanted = &settings.sensitivities;
+        warped.sensitivities = wanted.iter().copied().filter(|p| p.in_dae()).collect();
+        let outside = wanted.iter().any(|p| !p.in_dae());
+        if outside && !warped.sensitivities.contains(&SensParam::Eta0) {
+            warped.sensitivities.push(SensParam::Eta0);
+        }
+        let clocked = super::GrowthParams {
+            t_end: tau_end,
+            ..growth.clone()
+        };
+        Ok(OnClock {
+            warp,
+            t_end,
+            tau_end,
+            pairs,
+            growth: clocked,
+            settings: warped,
+        })
+    }
+
+    /// The records at τ: those of every time t whose τ lies within the run's merging of
+    /// close times (1e-12 of its end), each once.
+    fn near(&self, a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-12 * self.tau_end
+    }
+}
+
+/// The eye measured at every τ in the runs at R0 + h and R0 − h (the step h, then those
+/// two records of (τ, [axial length, equatorial radius, retina − blue])).
+type RadiusRuns = (f64, Vec<Vec<(f64, [f64; 3])>>);
+
+/// The two runs at R0(1 ± [`RADIUS_STEP`]) for the sensitivity to geometry.R0.
+fn radius_runs(
+    parts: super::Parts<'_>,
+    clocked: &OnClock,
+) -> Result<RadiusRuns, super::GrowthError> {
+    let params = parts.params;
+    let h = RADIUS_STEP * params.r0;
+    let mut sides = vec![];
+    for r0 in [params.r0 + h, params.r0 - h] {
+        let shifted = crate::model::params::Params { r0, ..*params };
+        let plain = super::GrowthSettings {
+            sensitivities: vec![],
+            ..clocked.settings.clone()
+        };
+        let mut rows: Vec<(f64, [f64; 3])> = vec![];
+        super::run_plain(
+            super::Parts {
+                params: &shifted,
+                growth: &clocked.growth,
+                settings: &plain,
+                ..parts
+            },
+            super::Hooks {
+                sens: &mut |_| Ok(()),
+                output: &mut |sys, tau, p| {
+                    let r = sys.series(tau, p)?;
+                    rows.push((
+                        tau,
+                        [r.axial_length, r.equatorial_radius, r.retina_minus_blue],
+                    ));
+                    Ok(())
+                },
+                progress: &mut |_| Ok(()),
+            },
+        )
+        .map_err(|e| super::GrowthError {
+            t: clocked.warp.time_at(e.t, clocked.t_end),
+            reason: format!(
+                "the run at geometry.R0 = {} for the sensitivity to geometry.R0: {}",
+                number(r0),
+                e.reason
+            ),
+            stats: e.stats,
+        })?;
+        sides.push(rows);
+    }
+    Ok((h, sides))
+}
+
+/// The sensitivity rows the run on the clock recorded at `tau`, to be handed on at `t`.
+struct RowsAt<'a> {
+    rows: &'a [super::SensitivityRow],
+    t: f64,
+    tau: f64,
+}
+
+impl RowsAt<'_> {
+    /// The rows of the parameters `wanted` at t: the DAE's own relabelled, the schedule's
+    /// from η0's, geometry.R0's from the runs at R0 ± h, zero for one the run has none of.
+    fn in_time(
+        &self,
+        wanted: &[super::dae::SensParam],
+        parts: super::Parts<'_>,
+        clocked: &OnClock,
+        radius: Option<&RadiusRuns>,
+    ) -> Result<Vec<super::SensitivityRow>, super::ObserverError> {
+        use super::dae::SensParam;
+        let (rows, t, tau) = (self.rows, self.t, self.tau);
+        let first = &rows[0];
+        let eta_row = rows.iter().find(|r| r.parameter == SensParam::Eta0.key());
+        let eta0 = parts.growth.eta0;
+        let mut out = Vec::with_capacity(wanted.len());
+        for &p in wanted {
+            let mut row = match rows.iter().find(|r| r.parameter == p.key()) {
+                Some(r) => *r,
+                None => super::SensitivityRow {
+                    parameter: p.key(),
+                    value: p.value(parts.params, parts.growth),
+                    d_axial_length: 0.0,
+                    d_equatorial_radius: 0.0,
+                    d_retina_minus_blue: 0.0,
+                    ..*first
+                },
+            };
+            row.t = t;
+            if let Some(sp) = p.schedule_param() {
+                // ∂x(t)/∂θ = x̃'(τ) ∂S/∂θ, x̃'(τ) = (η0/τ) ∂x̃/∂η0.
+                let e = eta_row.expect("η0's sensitivity is integrated with the schedule's");
+                let rate = if tau > 0.0 { eta0 / tau } else { 0.0 };
+                let ds = clocked.warp.clock_partial(t, sp);
+                row.d_axial_length = rate * e.d_axial_length * ds;
+                row.d_equatorial_radius = rate * e.d_equatorial_radius * ds;
+                row.d_retina_minus_blue = rate * e.d_retina_minus_blue * ds;
+            }
+            if let (SensParam::Radius, Some((h, sides))) = (p, radius) {
+                let at = |side: &Vec<(f64, [f64; 3])>| {
+                    side.iter()
+                        .find(|(x, _)| clocked.near(*x, tau))
+                        .map(|(_, v)| *v)
+                };
+                let (Some(up), Some(down)) = (at(&sides[0]), at(&sides[1])) else {
+                    return Err(format!(
+                        "the runs at geometry.R0 ± {} recorded nothing at t = {}",
+                        number(*h),
+                        number(t)
+                    )
+                    .into());
+                };
+                row.d_axial_length = (up[0] - down[0]) / (2.0 * h);
+                row.d_equatorial_radius = (up[1] - down[1]) / (2.0 * h);
+                row.d_retina_minus_blue = (up[2] - down[2]) / (2.0 * h);
+            }
+            out.push(row);
+        }
+        Ok(out)
     }
 }
 

@@ -334,17 +334,21 @@ fn record(
         Ok(())
     };
     let stats = super::run_on(
-        params,
-        solver,
-        growth,
-        settings,
-        Some(mesh),
-        &mut |rows| {
-            sens_rows.push(rows.to_vec());
-            Ok(())
+        super::Parts {
+            params,
+            solver,
+            growth,
+            settings,
         },
-        &mut output,
-        progress,
+        Some(mesh),
+        super::Hooks {
+            sens: &mut |rows| {
+                sens_rows.push(rows.to_vec());
+                Ok(())
+            },
+            output: &mut output,
+            progress,
+        },
     )?;
     rec.stats = stats;
     rec.sens = sens_rows;
@@ -577,14 +581,20 @@ fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> Option<(usiz
 /// then the delivered run's outputs and sensitivities are handed to the callbacks, in the
 /// order of the run. `solver` has its clock started: every run shares `solver.max_seconds`.
 pub(super) fn run(
-    params: &Params,
-    solver: &SolverSettings,
-    growth: &GrowthParams,
-    settings: &GrowthSettings,
-    sens: &mut SensitivityFn<'_>,
-    output: &mut OutputFn<'_>,
-    progress: &mut ProgressFn<'_>,
+    parts: super::Parts<'_>,
+    hooks: super::Hooks<'_, '_>,
 ) -> Result<GrowthStats, GrowthError> {
+    let super::Parts {
+        params,
+        solver,
+        growth,
+        settings,
+    } = parts;
+    let super::Hooks {
+        sens,
+        output,
+        progress,
+    } = hooks;
     let start = std::time::Instant::now();
     let tol = solver.tol.expect("growth to a tolerance is for solver.tol");
     let refuse = |reason: String| GrowthError {

@@ -27,8 +27,8 @@ pub use eyeshell_core::fit::{
     lm, Bounds, FitError, GrowthModel, ModelValues, IDENTIFIABILITY_THRESHOLD,
 };
 
-use crate::growth;
 use crate::growth::dae::SensParam;
+use crate::growth::{self, GrowthParams};
 use crate::scene::keys::{self, KeyValue, Rule};
 use crate::scene::Scene;
 use crate::text::number;
@@ -221,7 +221,7 @@ pub fn evaluate_watched(
     data: &Observations,
     step: &mut growth::ProgressFn<'_>,
 ) -> Result<ModelValues, Error> {
-    let Some(g) = &scene.growth else {
+    let Some(problem) = scene.growth_problem()? else {
         return Err(Error::input(format!(
             "{}: the scene has no [growth] section (a fit needs a growth run)",
             scene.origin
@@ -230,10 +230,7 @@ pub fn evaluate_watched(
     let times: Vec<f64> = data.rows.iter().map(|o| o.t).collect();
     let fitted: Vec<SensParam> = params.iter().map(|p| p.param).collect();
     let model = GrowthModel {
-        params: &scene.params,
-        solver: &scene.solver,
-        growth: g,
-        settings: &scene.growth_settings,
+        problem: &problem,
         fitted: &fitted,
         times: &times,
     };
@@ -468,42 +465,13 @@ pub fn fit_watched(
     step: &mut growth::ProgressFn<'_>,
 ) -> Result<Fit, Error> {
     let start = std::time::Instant::now();
-    let Some(g) = &scene.growth else {
-        return Err(Error::input(format!(
-            "{}: the scene has no [growth] section: a fit needs a growth run (set a growth key, e.g. growth.eta0)",
-            scene.origin
-        )));
-    };
-    if scene.growth_settings.integrator != growth::Integrator::Ida {
-        return Err(Error::input(format!(
-            "a fit needs solver.integrator = \"ida\" (its Jacobian is IDAS's forward sensitivities; {} has \"{}\")",
-            scene.origin,
-            scene.growth_settings.integrator.name()
-        )));
-    }
-    if params.is_empty() {
-        return Err(Error::input("no parameter to fit"));
-    }
-    check_params(scene, params, "fit")?;
+    let g = fit_refusals(scene, params)?;
     let params: &[FitParam] = &params.iter().map(|p| p.in_scene(scene)).collect::<Vec<_>>();
     let data = &data.on_clock(g)?;
     data.check_times(g.t_end)?;
     let (n, k) = (data.rows.len(), params.len());
     let has_sigma = data.has_sigma();
-    if n < k || (!has_sigma && n == k) {
-        return Err(Error::input(format!(
-            "{}: {n} observation{} for {k} parameter{}: a fit needs at least {}{}",
-            data.origin,
-            if n == 1 { "" } else { "s" },
-            if k == 1 { "" } else { "s" },
-            if has_sigma { k } else { k + 1 },
-            if has_sigma {
-                ""
-            } else {
-                " (without σ one more, for the residual variance)"
-            },
-        )));
-    }
+    check_counts(data, n, k)?;
     let p0: Vec<f64> = params.iter().map(|p| value_in(scene, p.param)).collect();
     let dof = n - k;
     let variance = |chi2: f64| if has_sigma { 1.0 } else { chi2 / dof as f64 };
@@ -546,55 +514,8 @@ pub fn fit_watched(
         },
         variance(chi2),
     );
-    let inverse = lm::GaussNewton::of(&outcome.jacobian)
-        .and_then(|gn| gn.inverse_information())
-        .ok_or_else(|| {
-            Error::input(format!(
-                "the information matrix JᵀWJ at the estimate cannot be inverted ({})",
-                lm::show(&names, &outcome.values)
-            ))
-        })?;
-    let cov = inverse * s2;
-    let se: Vec<f64> = (0..k).map(|a| cov[(a, a)].max(0.0).sqrt()).collect();
-    if let Some(a) = (0..k).find(|&a| !se[a].is_finite()) {
-        return Err(Error::failed(format!(
-            "the standard error of {} at the estimate is {} ({}): the information matrix JᵀWJ is too close to singular to invert",
-            params[a].key(),
-            number(se[a]),
-            lm::show(&names, &outcome.values)
-        )));
-    }
-    let correlation = (0..k)
-        .map(|a| {
-            (0..k)
-                .map(|b| {
-                    if a == b {
-                        1.0
-                    } else {
-                        cov[(a, b)] / (se[a] * se[b])
-                    }
-                })
-                .collect()
-        })
-        .collect();
-    let covariance = (0..k)
-        .map(|a| (0..k).map(|b| cov[(a, b)]).collect())
-        .collect();
-    let residuals: Vec<ResidualRow> = data
-        .rows
-        .iter()
-        .zip(&outcome.model)
-        .zip(outcome.residuals.iter())
-        .map(|((o, &m), &w)| ResidualRow {
-            t: o.t,
-            age: g.age_of(o.t).map(|a| o.age.unwrap_or(a)),
-            axial_length: o.axial_length,
-            sigma: o.sigma,
-            model: m,
-            residual: m - o.axial_length,
-            weighted: w,
-        })
-        .collect();
+    let spread = Spread::at(&outcome, params, &names, s2)?;
+    let residuals = residual_rows(data, &outcome, g);
     let rms = (residuals
         .iter()
         .map(|r| r.residual * r.residual)
@@ -615,7 +536,7 @@ pub fn fit_watched(
             key: p.key().to_string(),
             initial: p0[a],
             estimate: outcome.values[a],
-            standard_error: se[a],
+            standard_error: spread.se[a],
             range: p.bounds.describe(),
             at_bound: held[a],
         })
@@ -631,8 +552,8 @@ pub fn fit_watched(
             sigma: has_sigma,
         },
         parameters,
-        correlation,
-        covariance,
+        correlation: spread.correlation,
+        covariance: spread.covariance,
         covariance_scaling: scaling,
         residual_variance: s2,
         chi2,
@@ -662,6 +583,126 @@ pub fn fit_watched(
     })
 }
 
+/// What refuses a fit of `params` in `scene` before the data are read: no growth, not IDA,
+/// no parameter, a parameter the scene cannot fit. The scene's growth model otherwise.
+fn fit_refusals<'s>(scene: &'s Scene, params: &[FitParam]) -> Result<&'s GrowthParams, Error> {
+    let Some(g) = &scene.growth else {
+        return Err(Error::input(format!(
+            "{}: the scene has no [growth] section: a fit needs a growth run (set a growth key, e.g. growth.eta0)",
+            scene.origin
+        )));
+    };
+    if scene.growth_settings.integrator != growth::Integrator::Ida {
+        return Err(Error::input(format!(
+            "a fit needs solver.integrator = \"ida\" (its Jacobian is IDAS's forward sensitivities; {} has \"{}\")",
+            scene.origin,
+            scene.growth_settings.integrator.name()
+        )));
+    }
+    if params.is_empty() {
+        return Err(Error::input("no parameter to fit"));
+    }
+    check_params(scene, params, "fit")?;
+    Ok(g)
+}
+
+/// `n` observations fit `k` parameters: at least k with σ, k + 1 without (the residual
+/// variance needs a degree of freedom).
+fn check_counts(data: &Observations, n: usize, k: usize) -> Result<(), Error> {
+    let has_sigma = data.has_sigma();
+    if n < k || (!has_sigma && n == k) {
+        return Err(Error::input(format!(
+            "{}: {n} observation{} for {k} parameter{}: a fit needs at least {}{}",
+            data.origin,
+            if n == 1 { "" } else { "s" },
+            if k == 1 { "" } else { "s" },
+            if has_sigma { k } else { k + 1 },
+            if has_sigma {
+                ""
+            } else {
+                " (without σ one more, for the residual variance)"
+            },
+        )));
+    }
+    Ok(())
+}
+
+/// The spread of the estimate: the covariance s² (JᵀWJ)⁻¹, the standard errors and the
+/// correlations.
+struct Spread {
+    se: Vec<f64>,
+    correlation: Vec<Vec<f64>>,
+    covariance: Vec<Vec<f64>>,
+}
+
+impl Spread {
+    fn at(
+        outcome: &lm::Outcome,
+        params: &[FitParam],
+        names: &[&str],
+        s2: f64,
+    ) -> Result<Spread, Error> {
+        let k = params.len();
+        let inverse = lm::GaussNewton::of(&outcome.jacobian)
+            .and_then(|gn| gn.inverse_information())
+            .ok_or_else(|| {
+                Error::input(format!(
+                    "the information matrix JᵀWJ at the estimate cannot be inverted ({})",
+                    lm::show(names, &outcome.values)
+                ))
+            })?;
+        let cov = inverse * s2;
+        let se: Vec<f64> = (0..k).map(|a| cov[(a, a)].max(0.0).sqrt()).collect();
+        if let Some(a) = (0..k).find(|&a| !se[a].is_finite()) {
+            return Err(Error::failed(format!(
+                "the standard error of {} at the estimate is {} ({}): the information matrix JᵀWJ is too close to singular to invert",
+                params[a].key(),
+                number(se[a]),
+                lm::show(names, &outcome.values)
+            )));
+        }
+        let correlation = (0..k)
+            .map(|a| {
+                (0..k)
+                    .map(|b| {
+                        if a == b {
+                            1.0
+                        } else {
+                            cov[(a, b)] / (se[a] * se[b])
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let covariance = (0..k)
+            .map(|a| (0..k).map(|b| cov[(a, b)]).collect())
+            .collect();
+        Ok(Spread {
+            se,
+            correlation,
+            covariance,
+        })
+    }
+}
+
+/// The observations against the model at the estimate.
+fn residual_rows(data: &Observations, outcome: &lm::Outcome, g: &GrowthParams) -> Vec<ResidualRow> {
+    data.rows
+        .iter()
+        .zip(&outcome.model)
+        .zip(outcome.residuals.iter())
+        .map(|((o, &m), &w)| ResidualRow {
+            t: o.t,
+            age: g.age_of(o.t).map(|a| o.age.unwrap_or(a)),
+            axial_length: o.axial_length,
+            sigma: o.sigma,
+            model: m,
+            residual: m - o.axial_length,
+            weighted: w,
+        })
+        .collect()
+}
+
 /// fit.json's text: the report as pretty JSON (non-finite numbers as null), newline-ended.
 pub fn report_json(report: &FitReport) -> String {
     let mut text = serde_json::to_string_pretty(report).unwrap_or_default();
@@ -672,22 +713,21 @@ pub fn report_json(report: &FitReport) -> String {
 /// The model's axial length at `points` + 1 evenly spaced times in [0, t_end] (the fitted
 /// curve of the plot): one growth run without sensitivities.
 pub fn curve(scene: &Scene, points: usize) -> Result<Vec<(f64, f64)>, Error> {
-    let Some(g) = &scene.growth else {
+    let Some(problem) = scene.growth_problem()? else {
         return Err(Error::input(format!(
             "{}: the scene has no [growth] section",
             scene.origin
         )));
     };
-    let mut settings = scene.growth_settings.clone();
+    let mut settings = problem.settings().clone();
     settings.output_times = vec![];
     settings.history_points = points.max(1);
     settings.sensitivities = vec![];
+    let problem = (problem.to_builder().settings(settings).build())
+        .map_err(|e| Error::input(format!("{}: {e}", scene.origin)))?;
     let mut out = Vec::with_capacity(points + 1);
     growth::run(
-        &scene.params,
-        &scene.solver,
-        g,
-        &settings,
+        &problem,
         &mut |sys, t, p| {
             out.push((t, sys.series(t, p)?.axial_length));
             Ok(())

@@ -250,10 +250,7 @@ fn the_model_records_exactly_the_observation_times() {
     s.growth_settings.sensitivities = vec![SensParam::Eta0, SensParam::Delta];
     let mut rows = vec![];
     growth::run_with(
-        &s.params,
-        &s.solver,
-        s.growth.as_ref().unwrap(),
-        &s.growth_settings,
+        &s.growth_problem().unwrap().unwrap(),
         &mut |r| {
             rows.extend_from_slice(r);
             Ok(())

@@ -38,7 +38,7 @@ pub fn solve_into(
     inputs: &[&Path],
 ) -> Result<SolvedRun, Error> {
     let dir = OutputDir::create(target, "solve", inputs)?;
-    let solution = crate::bvp::solve(&scene.params, &scene.solver, None)?;
+    let solution = scene.elastic_problem()?.solve()?;
     let at_rows = at
         .iter()
         .map(|&s| solution.at(s))
@@ -110,23 +110,29 @@ impl std::fmt::Display for GrowthFailure {
 /// its run directory as results come; `watch` sees every event after the writer (a
 /// progress bar: a snapshot reaches it once it is on disk).
 pub fn grow_with(scene: &Scene, mut writer: GrowthWriter, watch: &mut dyn Observer) -> GrownRun {
-    let Some(growth) = &scene.growth else {
-        let error = GrowthError {
-            t: 0.0,
-            reason: "the scene has no [growth] section".into(),
-            stats: Box::default(),
-        };
-        let summary = writer.fail(&error).err();
-        return GrownRun {
-            last: None,
-            outcome: Err(GrowthFailure::Stopped { error, summary }),
-        };
+    let problem = match scene.growth_problem() {
+        Ok(Some(problem)) => Ok(problem),
+        Ok(None) => Err("the scene has no [growth] section".to_string()),
+        // Unreachable for a scene read as a scene is (validated when read and set).
+        Err(e) => Err(e.to_string()),
+    };
+    let problem = match problem {
+        Ok(problem) => problem,
+        Err(reason) => {
+            let error = GrowthError {
+                t: 0.0,
+                reason,
+                stats: Box::default(),
+            };
+            let summary = writer.fail(&error).err();
+            return GrownRun {
+                last: None,
+                outcome: Err(GrowthFailure::Stopped { error, summary }),
+            };
+        }
     };
     let outcome = crate::growth::grow(
-        &scene.params,
-        &scene.solver,
-        growth,
-        &scene.growth_settings,
+        &problem,
         &mut Tee {
             writer: &mut writer,
             watch,

@@ -111,28 +111,23 @@ pub fn compute(scene: &Scene) -> (RunStatus, Option<RunResult>, Vec<String>) {
 }
 
 fn compute_eye(scene: &Scene) -> (RunStatus, Option<RunResult>, Vec<SeriesRow>) {
-    let Some(growth) = &scene.growth else {
-        return match crate::bvp::solve(&scene.params, &scene.solver, None) {
+    let problem = match scene.growth_problem() {
+        Ok(problem) => problem,
+        Err(e) => return (RunStatus::Failed(e.to_string()), None, Vec::new()),
+    };
+    let Some(problem) = problem else {
+        let solved = scene.elastic_problem().map_err(Error::from);
+        return match solved.and_then(|p| p.solve().map_err(Error::from)) {
             Ok(solution) => (
                 RunStatus::Ok,
                 Some(super::run::elastic_result(scene, &solution)),
                 Vec::new(),
             ),
-            Err(e) => (
-                RunStatus::Failed(Error::from(e).to_string()),
-                None,
-                Vec::new(),
-            ),
+            Err(e) => (RunStatus::Failed(e.to_string()), None, Vec::new()),
         };
     };
     let mut rows = Rows(Vec::new());
-    let outcome = crate::growth::grow(
-        &scene.params,
-        &scene.solver,
-        growth,
-        &scene.growth_settings,
-        &mut rows,
-    );
+    let outcome = crate::growth::grow(&problem, &mut rows);
     let last = rows.0.last().copied();
     match (outcome, last) {
         (Ok(stats), Some(last)) => (

@@ -76,3 +76,25 @@ pub fn exact_sphere_fields(p: &Params, a: f64, x: f64) -> [f64; 5] {
         0.0,
     ]
 }
+
+/// [`eyeshell::growth::grow`] of the problem these parts make, checked by its builder (a
+/// part the builder refuses is a mistake in the test).
+pub fn grow(
+    params: &Params,
+    solver: &SolverSettings,
+    growth: &eyeshell::growth::GrowthParams,
+    settings: &eyeshell::growth::GrowthSettings,
+    observer: &mut dyn eyeshell::growth::Observer,
+) -> Result<eyeshell::growth::GrowthStats, eyeshell::growth::GrowthError> {
+    let elastic = eyeshell::problem::ElasticProblem::builder()
+        .params(*params)
+        .solver(*solver)
+        .build()
+        .expect("the test's shell is a valid problem");
+    let problem = eyeshell::problem::GrowthProblem::builder(elastic)
+        .growth(growth.clone())
+        .settings(settings.clone())
+        .build()
+        .expect("the test's growth is a valid problem");
+    eyeshell::growth::grow(&problem, observer)
+}

@@ -1,6 +1,7 @@
 //! Growth in time (docs/MODEL.md §5–6): the implicit-function Jacobian product, CVODE against
 //! the published explicit Euler, monotone growth, and what a failed run keeps.
 
+use crate::common::grow;
 use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::system::GrowthSystem;
 use eyeshell::growth::*;

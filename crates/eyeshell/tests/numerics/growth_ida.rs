@@ -1,6 +1,7 @@
 //! Growth by IDA on the coupled DAE: it agrees with CVODE on the paper's scenes,
 //! survives the growth extremes of TESTING.md, and every linear solver gives the same run.
 
+use crate::common::grow;
 use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::DaeLinear;
 use eyeshell::growth::*;

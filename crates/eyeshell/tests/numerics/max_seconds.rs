@@ -8,6 +8,7 @@
 
 use std::time::Duration;
 
+use crate::common::grow;
 use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::bvp::{self, BvpError};
 use eyeshell::growth::*;

@@ -25,6 +25,7 @@
 //! changes sign; retina − blue for z_B on the thick scene at t = 0.4, −0.024 as the
 //! difference of two near-unit moves: 7e-5 absolute, as in the other columns).
 
+use crate::common::grow;
 use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::dae::SensParam;
 use eyeshell::growth::*;
