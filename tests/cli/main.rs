@@ -35,6 +35,7 @@ mod readers;
 mod rerun;
 mod sensitivities;
 mod shards;
+mod signatures;
 mod slurm;
 mod solve;
 mod status;
