@@ -114,12 +114,18 @@ mod tests {
 
     /// The key a scene's validation blames, and the key its problem's refusal names.
     fn keys(scene: &Scene) -> (Option<String>, Option<String>) {
-        let validated = scene.validate().err().and_then(|e| e.key().map(str::to_string));
+        let validated = scene
+            .validate()
+            .err()
+            .and_then(|e| e.key().map(str::to_string));
         let built = match scene.growth {
             Some(_) => scene.growth_problem().map(|_| ()),
             None => scene.elastic_problem().map(|_| ()),
         };
-        (validated, built.err().and_then(|e| e.key().map(str::to_string)))
+        (
+            validated,
+            built.err().and_then(|e| e.key().map(str::to_string)),
+        )
     }
 
     /// Values only a change of the scene's fields can give (Scene::set refuses them): a
@@ -137,7 +143,11 @@ mod tests {
             ("geometry.fraction", |s| s.params.fraction = 1.5, false),
             ("solver.richardson", |s| s.solver.richardson = true, true),
             ("growth.t_end", |s| s.growth_mut().t_end = 1e-200, true),
-            ("output.times", |s| s.growth_settings.output_times = vec![0.5, 3.0], true),
+            (
+                "output.times",
+                |s| s.growth_settings.output_times = vec![0.5, 3.0],
+                true,
+            ),
             ("solver.rtol", |s| s.growth_settings.rtol = 0.0, true),
             ("growth.delta", |s| s.growth_mut().delta = -1.0, true),
         ];
