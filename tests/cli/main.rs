@@ -31,6 +31,7 @@ mod max_seconds;
 mod optics;
 mod ownership;
 mod peer;
+mod plan;
 mod readers;
 mod rerun;
 mod sensitivities;

@@ -441,7 +441,7 @@ pub const MAX_STEPS: usize = 1_000_000;
 /// The most history rows (history.csv: about 100 bytes each).
 pub const MAX_HISTORY_POINTS: usize = 1_000_000;
 /// The most output times (snapshot files) of a growth run; the bytes they take together
-/// are bounded too ([`crate::rundir::growth::MAX_RUN_BYTES`]).
+/// are bounded too ([`crate::plan::MAX_RUN_BYTES`]).
 pub const MAX_OUTPUT_TIMES: usize = 1_000;
 
 const THICKNESS: &[&str] = &["uniform", "nonuniform"];

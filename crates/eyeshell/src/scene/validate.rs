@@ -191,7 +191,7 @@ impl Scene {
     /// largest mesh any of its solves lays (with solver.richardson, the mesh halved twice)
     /// must fit [`crate::mesh::MAX_NODES`], which bounds a solve's memory
     /// ([`crate::mesh::BYTES_PER_NODE`] a node); a growth run's files together must fit
-    /// [`crate::rundir::growth::MAX_RUN_BYTES`]. The mesh itself is valid by now.
+    /// [`crate::plan::MAX_RUN_BYTES`]. The mesh itself is valid by now.
     fn validate_sizes(&self, sources: &Sources) -> Result<(), SceneError> {
         use crate::mesh::{BYTES_PER_NODE, MAX_NODES};
         let invalid = |keys: &[&str], value: String, problem: String| SceneError::Invalid {
@@ -240,7 +240,7 @@ impl Scene {
             }
         }
         if self.growth.is_some() {
-            use crate::rundir::growth::{planned_bytes, MAX_RUN_BYTES};
+            use crate::plan::{planned_bytes, MAX_RUN_BYTES};
             let g = &self.growth_settings;
             // With solver.tol the mesh is chosen as the run starts: at most max_nodes.
             let (nodes, keys): (usize, &[&str]) = match self.solver.tol {
