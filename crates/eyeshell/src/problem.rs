@@ -183,10 +183,11 @@ mod tests {
     /// solved or grown: no solve runs on values nobody checked.
     #[test]
     fn a_changed_scene_is_checked_before_it_is_solved() {
+        // A shell past the equator: the solver would take it, the scene's range does not.
         let mut scene = Scene::default_scene();
-        scene.params.dp = -1.0;
+        scene.params.fraction = 1.5;
         let e = scene.solve().unwrap_err().to_string();
-        assert!(e.contains("pressure.dP") && e.contains("-1"), "{e}");
+        assert!(e.contains("geometry.fraction") && e.contains("1.5"), "{e}");
         let mut scene = growing();
         scene.growth_settings.output_times = vec![2.0];
         let e = scene.grow(&mut ()).unwrap_err().to_string();
