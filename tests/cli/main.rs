@@ -33,6 +33,7 @@ mod ownership;
 mod peer;
 mod readers;
 mod rerun;
+mod rooms;
 mod sensitivities;
 mod shards;
 mod slurm;
