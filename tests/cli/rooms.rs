@@ -42,7 +42,7 @@ fn workspace_rust_files() -> Vec<PathBuf> {
     }
     let root = repo();
     let mut files = Vec::new();
-    walk(&root, &root, &mut files);
+    walk(root, root, &mut files);
     files
 }
 
@@ -388,7 +388,7 @@ fn module_graph(src: &Path) -> BTreeMap<String, BTreeMap<String, String>> {
                 );
             }
             let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-            let place = format!("{}:{line}", f.strip_prefix(&root).unwrap().display());
+            let place = format!("{}:{line}", f.strip_prefix(root).unwrap().display());
             for name in names {
                 if !name.is_empty() && name != module && name != "self" {
                     graph
