@@ -20,6 +20,7 @@ mod optics;
 mod panels;
 mod paper;
 mod plots;
+mod population;
 mod runs;
 
 pub use fit::fit_figure;
@@ -28,6 +29,7 @@ pub use optics::{optics_figure, published_figure, RayFan};
 pub use panels::{parameters, TimeAxis};
 pub use paper::{paper_figure, paper_figures, PaperParts, PAPER_NEEDS, PAPER_STEMS};
 pub use plots::{is_sweep, plot_compare, plot_run};
+pub use population::{population_figure, POPULATION_FIGURE};
 pub use runs::{read_fibre, read_grid, read_single, sweep_runs, PaperRuns};
 
 /// Size of one panel, in pixels.

@@ -86,7 +86,7 @@ pub fn sweep_runs(dir: &Path) -> Result<Vec<RunData>, ExportError> {
             // A cohort kept as a table (`per_run = "table"`) has rows, not run directories:
             // what there is to see of it is its population figure, drawn by the sweep.
             if r.dir.is_empty() && dir.join(eyeshell::sweep::compact::CHECKPOINT_FILE).is_file() {
-                let figure = dir.join(format!("{}.png", crate::commands::sweep::POPULATION_FIGURE));
+                let figure = dir.join(format!("{}.png", super::POPULATION_FIGURE));
                 let shown = if figure.is_file() {
                     format!("its figure is {}", crate::shown(&figure))
                 } else {

@@ -55,7 +55,7 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
         .collect();
     let complete = failed.is_empty() && missing.is_empty();
     let figure = match write && missing.is_empty() {
-        true => super::sweep::population_figure(dir, &merged.report.records)?,
+        true => crate::charts::population_figure(dir, &merged.report.records)?,
         false => None,
     };
     if !(args.quiet && complete) {

@@ -1,7 +1,10 @@
-//! The numerics crate (crates/core, `eyeshell-core`) touches no file: it depends on no I/O
-//! crate, no serialisation crate, and names no file API. Reading and writing files, and the
-//! form of what they record, are the `eyeshell` crate's job (ARCHITECTURE.md); these checks
-//! keep the line where it is drawn.
+//! The layers below the files crate, as ARCHITECTURE.md draws them: the numerics crate
+//! (crates/core, `eyeshell-core`), the optics (crates/optics), the safe solvers
+//! (crates/linalg) and the charts (crates/plot) each depend on what the document says and
+//! on nothing else, and touch no file (the charts read their font, and write nothing).
+//! Reading and writing files, and the form of what they record, are the `eyeshell` crate's
+//! job; these checks keep the lines where they are drawn. The command line names
+//! eyeshell-sundials in its benches only, so it is a dev-dependency.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -137,4 +140,149 @@ fn the_numerics_crate_names_no_file_api() {
     );
     // The same search finds them in the files crate, which writes run directories.
     assert!(!file_api_uses(&repo().join("crates/eyeshell/src/rundir")).is_empty());
+}
+
+/// The normal dependencies each lower crate has directly (`cargo tree -e normal --depth 1`),
+/// as ARCHITECTURE.md lists them: a new one is a decision to write down there first.
+const LAYERS: [(&str, &[&str]); 4] = [
+    (
+        "eyeshell-core",
+        &[
+            "eyeshell-linalg",
+            "eyeshell-optics",
+            "eyeshell-sundials",
+            "nalgebra",
+            "rustix",
+            "thiserror",
+        ],
+    ),
+    ("eyeshell-optics", &["rayon", "thiserror"]),
+    ("eyeshell-linalg", &["thiserror"]),
+    (
+        "eyeshell-plot",
+        &["plotters", "plotters-backend", "png", "thiserror"],
+    ),
+];
+
+/// The names of the crates `package` depends on directly (normal dependencies).
+fn direct_dependencies(package: &str) -> Vec<String> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = Command::new(cargo)
+        .current_dir(repo())
+        .args([
+            "tree",
+            "--offline",
+            "-e",
+            "normal",
+            "--depth",
+            "1",
+            "--prefix",
+            "none",
+            "-p",
+            package,
+        ])
+        .output()
+        .expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "cargo tree -p {package}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let mut names: Vec<String> = text
+        .lines()
+        .skip(1) // the package itself
+        .filter_map(|l| l.split_whitespace().next())
+        .map(str::to_string)
+        .collect();
+    names.sort();
+    names.dedup();
+    names
+}
+
+#[test]
+fn each_lower_crate_depends_on_what_architecture_md_says() {
+    for (package, expected) in LAYERS {
+        assert_eq!(
+            direct_dependencies(package),
+            expected,
+            "{package}'s direct dependencies (ARCHITECTURE.md lists them)"
+        );
+    }
+    // The optics and the solvers hold no I/O or format crate anywhere below them either.
+    for package in ["eyeshell-optics", "eyeshell-linalg"] {
+        let all = dependencies(package);
+        assert!(all.iter().any(|n| n == "thiserror"), "{all:?}");
+        assert_eq!(io_crates_in(&all), [] as [&str; 0], "{package}: {all:?}");
+        assert_eq!(
+            crates_in(&FORMAT_CRATES, &all),
+            [] as [&str; 0],
+            "{package}: {all:?}"
+        );
+    }
+}
+
+#[test]
+fn the_command_line_depends_on_sundials_only_to_bench_it() {
+    let cli = direct_dependencies("eyeshell-cli");
+    assert!(cli.iter().any(|n| n == "eyeshell"), "{cli:?}");
+    for dev_only in ["eyeshell-sundials", "eyeshell-linalg"] {
+        assert!(!cli.iter().any(|n| n == dev_only), "{dev_only} in {cli:?}");
+    }
+    // What names it: the benches alone.
+    let mut named = Vec::new();
+    for dir in ["src", "tests/cli", "examples"] {
+        let mut files = Vec::new();
+        rust_files(&repo().join(dir), &mut files);
+        // This file names it only to search for it.
+        for f in files
+            .into_iter()
+            .filter(|f| !f.ends_with("tests/cli/layers.rs"))
+        {
+            if std::fs::read_to_string(&f)
+                .unwrap()
+                .contains("eyeshell_sundials")
+            {
+                named.push(f.display().to_string());
+            }
+        }
+    }
+    assert_eq!(named, Vec::<String>::new());
+}
+
+/// The file APIs that write (the charts read their font, so std::fs itself is allowed there).
+const WRITE_APIS: [&str; 6] = [
+    "fs::write",
+    "File::create",
+    "OpenOptions",
+    "create_dir",
+    "remove_file",
+    "fs::rename",
+];
+
+#[test]
+fn the_optics_the_solvers_and_the_charts_touch_no_file() {
+    for dir in ["crates/optics/src", "crates/linalg/src"] {
+        let hits = file_api_uses(&repo().join(dir));
+        assert!(hits.is_empty(), "file I/O in {dir}:\n{}", hits.join("\n"));
+    }
+    let mut files = Vec::new();
+    rust_files(&repo().join("crates/plot/src"), &mut files);
+    let (mut writes, mut reads) = (Vec::new(), 0);
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        for (i, line) in text.lines().enumerate() {
+            if WRITE_APIS.iter().any(|api| line.contains(api)) {
+                writes.push(format!("{}:{}: {}", f.display(), i + 1, line.trim()));
+            }
+            reads += line.contains("std::fs::read") as usize;
+        }
+    }
+    assert!(
+        writes.is_empty(),
+        "crates/plot writes:\n{}",
+        writes.join("\n")
+    );
+    // Not vacuous: the same search sees the font being read.
+    assert!(reads > 0);
 }

@@ -34,6 +34,7 @@ mod peer;
 mod plan;
 mod readers;
 mod rerun;
+mod rooms;
 mod sensitivities;
 mod shards;
 mod signatures;

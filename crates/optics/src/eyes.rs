@@ -5,12 +5,70 @@ use crate::medium::{Dispersion, Grin, GrinDispersion, Medium};
 use crate::surface::Surface;
 use crate::system::{Element, OpticalSystem};
 
-/// The names `builtin` accepts.
-pub const BUILTIN: [&str; 3] = [
-    "atchison-2006",
-    "liou-brennan-1997",
-    "escudero-sanz-navarro-1999",
+/// A built-in eye: the name `optics.eye` selects it by (and older names it answers to), the
+/// system as its source gives it, and the wavelengths its dispersion holds for. Every list
+/// of the built-in eyes (the scene key's names, [`builtin`], [`wavelength_range`], the
+/// eyes' tests) is read from [`REGISTRY`], so that an eye added there is selectable
+/// everywhere.
+#[derive(Debug, Clone, Copy)]
+pub struct BuiltinEye {
+    pub name: &'static str,
+    /// Other names `builtin` accepts for it.
+    pub aliases: &'static [&'static str],
+    pub build: fn() -> OpticalSystem,
+    pub wavelengths: WavelengthRange,
+}
+
+/// The built-in eyes.
+pub const REGISTRY: [BuiltinEye; 3] = [
+    BuiltinEye {
+        name: "atchison-2006",
+        aliases: &[],
+        build: atchison_2006,
+        // Atchison & Smith (2005)'s Cauchy laws, fitted to visible data and extended by
+        // their authors into the near infrared, where ocular media were measured to 1100 nm.
+        wavelengths: WavelengthRange {
+            lo: 380.0,
+            hi: 1100.0,
+            source: "its Cauchy laws (Atchison & Smith 2005) hold over the visible and the near infrared to 1100 nm",
+        },
+    },
+    BuiltinEye {
+        name: "liou-brennan-1997",
+        aliases: &[],
+        build: liou_brennan_1997,
+        // The source's own range; its quadratic shift turns at 757 nm, beyond which the
+        // eye's power would rise again with wavelength.
+        wavelengths: WavelengthRange {
+            lo: 380.0,
+            hi: 750.0,
+            source: "Liou & Brennan (1997) give their dispersion for 380-750 nm",
+        },
+    },
+    BuiltinEye {
+        name: "escudero-sanz-navarro-1999",
+        aliases: &["navarro-1999"],
+        build: escudero_sanz_navarro_1999,
+        // Indices tabulated at 458-632.8 nm, read through a Cauchy fit: the visible range
+        // is as far as the fit is carried.
+        wavelengths: WavelengthRange {
+            lo: 380.0,
+            hi: 750.0,
+            source: "the source tabulates its indices at 458-632.8 nm; their Cauchy fit is carried over the visible range only",
+        },
+    },
 ];
+
+/// The names of the built-in eyes, in the order of [`REGISTRY`].
+pub const BUILTIN: [&str; REGISTRY.len()] = {
+    let mut names = [""; REGISTRY.len()];
+    let mut i = 0;
+    while i < REGISTRY.len() {
+        names[i] = REGISTRY[i].name;
+        i += 1;
+    }
+    names
+};
 
 /// The wavelengths (nm) a built-in eye's dispersion holds for: where its source gives it
 /// (or fits it to its data) and every medium's index falls with wavelength, so that the
@@ -23,42 +81,22 @@ pub struct WavelengthRange {
     pub source: &'static str,
 }
 
-/// The wavelength range of the built-in eye `name`.
-pub fn wavelength_range(name: &str) -> Option<WavelengthRange> {
-    match name {
-        // The source's own range; its quadratic shift turns at 757 nm, beyond which the
-        // eye's power would rise again with wavelength.
-        "liou-brennan-1997" => Some(WavelengthRange {
-            lo: 380.0,
-            hi: 750.0,
-            source: "Liou & Brennan (1997) give their dispersion for 380-750 nm",
-        }),
-        // Indices tabulated at 458-632.8 nm, read through a Cauchy fit: the visible range
-        // is as far as the fit is carried.
-        "escudero-sanz-navarro-1999" | "navarro-1999" => Some(WavelengthRange {
-            lo: 380.0,
-            hi: 750.0,
-            source: "the source tabulates its indices at 458-632.8 nm; their Cauchy fit is carried over the visible range only",
-        }),
-        // Atchison & Smith (2005)'s Cauchy laws, fitted to visible data and extended by
-        // their authors into the near infrared, where ocular media were measured to 1100 nm.
-        "atchison-2006" => Some(WavelengthRange {
-            lo: 380.0,
-            hi: 1100.0,
-            source: "its Cauchy laws (Atchison & Smith 2005) hold over the visible and the near infrared to 1100 nm",
-        }),
-        _ => None,
-    }
+/// The built-in eye called `name` (or one of its aliases).
+pub fn find(name: &str) -> Option<BuiltinEye> {
+    REGISTRY
+        .iter()
+        .find(|e| e.name == name || e.aliases.contains(&name))
+        .copied()
 }
 
-/// A built-in eye by name.
+/// The wavelength range of the built-in eye `name`.
+pub fn wavelength_range(name: &str) -> Option<WavelengthRange> {
+    find(name).map(|e| e.wavelengths)
+}
+
+/// A built-in eye by name (or alias).
 pub fn builtin(name: &str) -> Option<OpticalSystem> {
-    match name {
-        "atchison-2006" => Some(atchison_2006()),
-        "liou-brennan-1997" => Some(liou_brennan_1997()),
-        "escudero-sanz-navarro-1999" | "navarro-1999" => Some(escudero_sanz_navarro_1999()),
-        _ => None,
-    }
+    find(name).map(|e| (e.build)())
 }
 
 fn air() -> Medium {

@@ -20,12 +20,15 @@ pub const SOURCES: [&str; 2] = ["polynomial", "optics"];
 
 /// The names `optics.eye` takes: the optics crate's built-in eyes, then `custom` (the eye of
 /// `[[optics.surfaces]]`).
-pub const EYES: [&str; 4] = [
-    optics::eyes::BUILTIN[0],
-    optics::eyes::BUILTIN[1],
-    optics::eyes::BUILTIN[2],
-    CUSTOM,
-];
+pub const EYES: [&str; optics::eyes::BUILTIN.len() + 1] = {
+    let mut names = [CUSTOM; optics::eyes::BUILTIN.len() + 1];
+    let mut i = 0;
+    while i < optics::eyes::BUILTIN.len() {
+        names[i] = optics::eyes::BUILTIN[i];
+        i += 1;
+    }
+    names
+};
 /// The name of the eye a scene describes itself.
 pub const CUSTOM: &str = "custom";
 

@@ -151,3 +151,48 @@ fn sensitivity_parameters_and_their_keys() {
         .check(&crate::model::params::Params::default())
         .is_ok());
 }
+
+/// Every eye of the optics crate's registry is selectable from a scene by its name, traces,
+/// and has the registry's wavelength range; `custom` is the last name `optics.eye` takes. An
+/// eye added to the registry needs no other list to be selectable.
+#[test]
+fn every_registered_eye_is_selectable_from_a_scene() {
+    use eyeshell_optics::eyes::REGISTRY;
+    let names = crate::model::optics::EYES;
+    assert_eq!(names.len(), REGISTRY.len() + 1);
+    assert_eq!(names[REGISTRY.len()], crate::model::optics::CUSTOM);
+    let base =
+        "growth.eta0 = 70\nstimulus.source = \"optics\"\n[optics]\npupil = 1\nmax_field = 10\n";
+    for eye in REGISTRY {
+        let s = parse(&format!("{base}eye = \"{}\"\n", eye.name)).unwrap();
+        let spec = s.optics();
+        assert_eq!(spec.eye_name(), eye.name);
+        let system = spec.system().unwrap();
+        assert_eq!(
+            system.elements.len(),
+            (eye.build)().elements.len(),
+            "{}",
+            eye.name
+        );
+        let (lo, hi, why) = spec.wavelength_range();
+        assert_eq!(
+            (lo, hi),
+            (eye.wavelengths.lo, eye.wavelengths.hi),
+            "{}",
+            eye.name
+        );
+        assert!(why.contains(eye.wavelengths.source), "{why}");
+        let g = s.growth.as_ref().unwrap();
+        assert!(
+            g.computed.is_some(),
+            "{} traced as the scene is read",
+            eye.name
+        );
+        for alias in eye.aliases {
+            assert_eq!(
+                eyeshell_optics::eyes::builtin(alias).map(|e| e.elements.len()),
+                Some(system.elements.len())
+            );
+        }
+    }
+}
