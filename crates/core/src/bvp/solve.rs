@@ -423,7 +423,9 @@ fn newton(
                         Convergence::ToPrecision { budget } => budget,
                         Convergence::ToTolerance => 0.0,
                     };
-                    if step.scaled <= newton_tol.max(ROUND_OFF_STEP) || step.absolute <= budget {
+                    let within_budget =
+                        step.absolute <= budget && worst <= BUDGET_RESIDUAL_SPAN * newton_tol;
+                    if step.scaled <= newton_tol.max(ROUND_OFF_STEP) || within_budget {
                         return match sys.convergence {
                             Convergence::ToPrecision { .. } => Ok(()),
                             Convergence::ToTolerance => Err(BvpError::PrecisionLimit {
@@ -549,7 +551,11 @@ impl ElasticSolver {
         settings: &SolverSettings,
         mesh: Mesh,
     ) -> Result<Self, BvpError> {
-        Self::on_mesh_to(params, settings, mesh, Convergence::ToTolerance)
+        let convergence = match settings.newton_budget {
+            Some(budget) => Convergence::ToPrecision { budget },
+            None => Convergence::ToTolerance,
+        };
+        Self::on_mesh_to(params, settings, mesh, convergence)
     }
 
     /// [`Self::on_mesh`], its Newton solves converging as `convergence` says.
@@ -810,8 +816,15 @@ pub fn solve_on_mesh(
 }
 
 /// The share of solver.tol a stalled Newton correction may be within to count as converged
-/// in the adaptive solve ([`Convergence::ToPrecision`]).
-const NEWTON_SHARE: f64 = 0.02;
+/// in the adaptive solve and in a growth run under tol ([`Convergence::ToPrecision`]).
+pub(crate) const NEWTON_SHARE: f64 = 0.02;
+
+/// How far above newton_tol a stalled residual may lie for the correction's budget to be
+/// believed: the correction is taken with the last setup's factorisation, which far from
+/// the root may understate it (E_b = 1e-6, D = 1e4, C = 1 on 57 nodes stalled at a scaled
+/// residual of 4e-7 with a correction of 2e-9, and the next mesh's Newton started from it
+/// failed). The stalls the budget is for lie within a few tens of newton_tol.
+const BUDGET_RESIDUAL_SPAN: f64 = 1e3;
 
 /// [`solve_on_mesh`] for the adaptive solve: Newton converges to precision
 /// ([`Convergence::ToPrecision`]), and a warm start that fails (a coarse mesh's
@@ -824,7 +837,10 @@ pub(crate) fn solve_on_mesh_adaptive(
     warm: Option<&Solution>,
 ) -> Result<Solution, BvpError> {
     let to = Convergence::ToPrecision {
-        budget: settings.tol.map_or(0.0, |t| NEWTON_SHARE * t),
+        budget: settings
+            .newton_budget
+            .or(settings.tol.map(|t| NEWTON_SHARE * t))
+            .unwrap_or(0.0),
     };
     match solve_on_mesh_to(params, settings, mesh.clone(), warm, to) {
         Err(e) if warm.is_some() && !e.is_out_of_time() => {

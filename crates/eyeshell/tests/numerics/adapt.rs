@@ -324,6 +324,11 @@ mod sweep {
         pub passes: Vec<usize>,
     }
 
+    /// Whether the sweep runs with solver.richardson (`EYESHELL_TOL_SWEEP_RICHARDSON=1`).
+    pub fn richardson() -> bool {
+        std::env::var_os("EYESHELL_TOL_SWEEP_RICHARDSON").is_some_and(|v| v == "1")
+    }
+
     /// A case that did not deliver: refused as below the fields' round-off floor, or
     /// anything else (a failure, listed).
     pub enum Failure {
@@ -342,6 +347,7 @@ mod sweep {
                 let p = shell.params();
                 let s = SolverSettings {
                     tol: Some(tol),
+                    richardson: richardson(),
                     linear: test_linear(),
                     ..SolverSettings::default()
                 };
