@@ -523,6 +523,50 @@ fn pre_asymptotic(c0: &Solution, kept: &[usize], coarse: &Solution, fine: &Solut
     })
 }
 
+/// The error Richardson's extrapolation leaves where the solutions on M, M/2 and M/4 do not
+/// yet fall at the scheme's order p (a soft shell's coarse mesh; the fibres' kink, where
+/// they go slack, which converges an order lower): with u(h) − u = C h^q at the order q
+/// observed node by node from the two differences, the extrapolation assuming p leaves
+/// C (h/2)^q (2^{p−q} − 1)/(2^p − 1) at M/2, which is d₁ (2^{p−q} − 1)/((1 − 2^{−q})(2^p − 1))
+/// in terms of d₁ = |u(M/2) − u(M/4)|. It vanishes as q reaches p, where the estimate from
+/// the two extrapolations takes over. Measured before this term: on the default grid of the
+/// parameter sweep the extrapolation's estimate fell to 0.13–0.9 of the true error in 9 of
+/// 100 cases, all with the error in Q or κ near the fibres' kink or a soft shell's layer.
+fn not_extrapolated(coarse: &Solution, fine: &Solution, finer: &Solution) -> [f64; 5] {
+    let p = coarse.scheme.order() as f64;
+    let floor = round_off_floor(finer);
+    let diffs: Vec<([f64; 5], [f64; 5])> = (0..coarse.mesh.len())
+        .map(|i| {
+            let (a, b, c) = (
+                five(&coarse.rows[i]),
+                five(&fine.rows[2 * i]),
+                five(&finer.rows[4 * i]),
+            );
+            (
+                std::array::from_fn(|k| (a[k] - b[k]).abs()),
+                std::array::from_fn(|k| (b[k] - c[k]).abs()),
+            )
+        })
+        .collect();
+    // Where d₁ is a small part of the field's largest, its ratio to d₀ is mostly the
+    // solutions' round-off and the observed order noise (a soft shell's estimate stalled
+    // on it, far above tol): those nodes are left to the extrapolations' estimate.
+    let top: [f64; 5] = std::array::from_fn(|k| diffs.iter().fold(0.0f64, |a, d| a.max(d.1[k])));
+    let mut est = [0.0f64; 5];
+    for (d0, d1) in &diffs {
+        for k in 0..5 {
+            let (d0, d1) = (d0[k], d1[k]);
+            if d1 > 16.0 * floor && d1 >= 0.01 * top[k] {
+                let q = (d0 / d1).log2().clamp(1.0, p);
+                let share =
+                    (2f64.powf(p - q) - 1.0) / ((1.0 - 2f64.powf(-q)) * (2f64.powf(p) - 1.0));
+                est[k] = est[k].max(d1 * share);
+            }
+        }
+    }
+    est
+}
+
 /// One pass's answer: the solution reported, its estimate and the local errors that lay
 /// the next mesh (with the order they fall at).
 struct PassResult {
@@ -584,6 +628,10 @@ fn pass(
         for k in 0..5 {
             global[k] = global[k].max(factor * (b[k] - a[k]).abs());
         }
+    }
+    let unextrapolated = not_extrapolated(coarse, &fine, &finer);
+    for k in 0..5 {
+        global[k] = global[k].max(unextrapolated[k]);
     }
     // The local errors of order p + 1 from the (M, M/2) pair, raised to fall as h^{p+3}.
     let power = (p as f64 + 1.0) / (s.scheme.order() as f64 + 1.0);

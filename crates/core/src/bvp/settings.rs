@@ -80,6 +80,12 @@ pub struct SolverSettings {
     /// The results are the same bit for bit. Not a scene key: `eyeshell grow --jobs`, or
     /// the environment's `EYESHELL_JOBS`.
     pub threads: Option<usize>,
+    /// Newton to precision, within this absolute budget: a solve whose residual stalls at
+    /// round-off above newton_tol has converged when its Newton correction is within
+    /// newton_tol (scaled) or within the budget (in the fields' units). None, the default:
+    /// such a stall is a precision limit, reported. Not a scene key: a growth run under
+    /// `tol` sets it to a share of tol, as the adaptive elastic solve does.
+    pub newton_budget: Option<f64>,
 }
 
 impl SolverSettings {
@@ -112,6 +118,7 @@ impl Default for SolverSettings {
             max_nodes: DEFAULT_MAX_NODES,
             richardson: false,
             threads: None,
+            newton_budget: None,
         }
     }
 }

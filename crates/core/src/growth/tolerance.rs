@@ -607,11 +607,13 @@ pub(super) fn run(
             "solver.tol in a growth scene needs solver.integrator = \"ida\" or \"cvode\" (Euler's fixed steps have no tolerance to choose)".into(),
         ));
     }
-    // Each run's elastic solves as tight as the adaptive elastic solve's.
+    // Each run's elastic solves as tight as the adaptive elastic solve's, and like it to
+    // precision: a soft shell's residual stalls at round-off above 1e-2·tol.
     let base = SolverSettings {
         tol: None,
         richardson: false,
         newton_tol: crate::bvp::adapt::newton_tol_for(solver),
+        newton_budget: Some(crate::bvp::solve::NEWTON_SHARE * tol),
         ..*solver
     };
     let mut accuracy = Accuracy {

@@ -5,6 +5,7 @@
 //! clear error.
 
 use crate::common::*;
+use eyeshell::bvp::adapt::UnreachedWhy;
 use eyeshell::bvp::settings::{Scheme, SolverSettings};
 use eyeshell::bvp::solve::solve_on_mesh;
 use eyeshell::bvp::{self, BvpError, Solution};
@@ -323,9 +324,21 @@ mod sweep {
         pub passes: Vec<usize>,
     }
 
+    /// Whether the sweep runs with solver.richardson (`EYESHELL_TOL_SWEEP_RICHARDSON=1`).
+    pub fn richardson() -> bool {
+        std::env::var_os("EYESHELL_TOL_SWEEP_RICHARDSON").is_some_and(|v| v == "1")
+    }
+
+    /// A case that did not deliver: refused as below the fields' round-off floor, or
+    /// anything else (a failure, listed).
+    pub enum Failure {
+        BelowRoundOff { shell: Shell, tol: f64, floor: f64 },
+        Other(String),
+    }
+
     /// Solve every (shell, tol) to tol and measure it; the references are solved once per
-    /// shell. Failures are returned as text, to be listed all at once.
-    pub fn run(cases: &[(Shell, f64)]) -> Vec<Result<Outcome, String>> {
+    /// shell. Failures are returned, to be listed all at once.
+    pub fn run(cases: &[(Shell, f64)]) -> Vec<Result<Outcome, Failure>> {
         use rayon::prelude::*;
         cases
             .par_iter()
@@ -334,14 +347,31 @@ mod sweep {
                 let p = shell.params();
                 let s = SolverSettings {
                     tol: Some(tol),
+                    richardson: richardson(),
                     linear: test_linear(),
                     ..SolverSettings::default()
                 };
-                let sol =
-                    bvp::solve(&p, &s, None).map_err(|e| format!("{shell:?} tol {tol:e}: {e}"))?;
+                let sol = match bvp::solve(&p, &s, None) {
+                    Ok(sol) => sol,
+                    // A tolerance below the round-off floor of the fields (ROUND_OFF_ULPS ulps
+                    // of the largest) is refused, as it should be: the floor is measured
+                    // again here from the fields of a fixed-N solve.
+                    Err(BvpError::Unreached(u)) => match u.why {
+                        UnreachedWhy::RoundOff { floor } => {
+                            return Err(Failure::BelowRoundOff { shell, tol, floor })
+                        }
+                        _ => {
+                            return Err(Failure::Other(format!(
+                                "{shell:?} tol {tol:e}: {}",
+                                BvpError::Unreached(u)
+                            )))
+                        }
+                    },
+                    Err(e) => return Err(Failure::Other(format!("{shell:?} tol {tol:e}: {e}"))),
+                };
                 let estimate = sol.stats.error_estimate.expect("an estimate").overall;
-                let (reference, stride, own) =
-                    reference(&p, &sol).map_err(|e| format!("{shell:?} tol {tol:e}: {e}"))?;
+                let (reference, stride, own) = reference(&p, &sol)
+                    .map_err(|e| Failure::Other(format!("{shell:?} tol {tol:e}: {e}")))?;
                 let (errors, field, at) = error_against(&sol, &reference, stride);
                 let truth = worst(&errors);
                 Ok(Outcome {
@@ -367,9 +397,43 @@ mod sweep {
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
         println!("| E_b | D | C | tol | nodes | estimate | true error | est/true | seconds | reference's error |");
         println!("|---|---|---|---|---|---|---|---|---|---|");
+        let mut refused = vec![];
         for o in &outcomes {
             match o {
-                Err(e) => bad.push(e.clone()),
+                Err(Failure::Other(e)) => bad.push(e.clone()),
+                Err(Failure::BelowRoundOff { shell, tol, floor }) => {
+                    // The floor is the largest field's ROUND_OFF_ULPS ulps: measured again on
+                    // a fixed mesh, it must be above tol for the refusal to be honest.
+                    let p = shell.params();
+                    // Only the fields' sizes matter here: a loose newton_tol.
+                    let s = SolverSettings {
+                        nodes: 1601,
+                        newton_tol: 1e-8,
+                        linear: test_linear(),
+                        ..SolverSettings::default()
+                    };
+                    match bvp::solve(&p, &s, None) {
+                        Ok(sol) => {
+                            let size = sol
+                                .rows
+                                .iter()
+                                .flat_map(|r| five(r).map(f64::abs))
+                                .fold(0.0f64, f64::max);
+                            let measured = 256.0 * f64::EPSILON * size;
+                            if !(measured > *tol && (measured / floor - 1.0).abs() < 0.05) {
+                                bad.push(format!(
+                                    "{shell:?} tol {tol:e}: refused below a round-off floor of {floor:.2e}, but the fields' largest is {size:.4e} ({measured:.2e})"
+                                ));
+                            }
+                            refused.push(format!(
+                                "{shell:?} tol {tol:e}: refused, below the round-off floor {floor:.2e} (largest field {size:.4e})"
+                            ));
+                        }
+                        Err(e) => {
+                            bad.push(format!("{shell:?}: the floor's check at N = 1601: {e}"))
+                        }
+                    }
+                }
                 Ok(o) => {
                     let ratio = o.estimate / o.truth;
                     lo = lo.min(ratio);
@@ -393,9 +457,13 @@ mod sweep {
                 }
             }
         }
+        for r in &refused {
+            println!("{r}");
+        }
         println!(
-            "{} cases, est/true {lo:.2}–{hi:.2}, {} failed, {:.1} s",
+            "{} cases, est/true {lo:.2}–{hi:.2}, {} refused below round-off, {} failed, {:.1} s",
             outcomes.len(),
+            refused.len(),
             bad.len(),
             t0.elapsed().as_secs_f64()
         );
@@ -426,6 +494,18 @@ mod sweep {
             }
         }
         v
+    }
+
+    /// The full grid's extreme corners at tol 1e-9 and 1e-10: E_b ≤ 1e-4 with D = 1e4 or
+    /// C = 1, and D = 1e4 with C = 1 at every E_b, where double precision runs out first.
+    pub fn corners() -> Vec<(Shell, f64)> {
+        full_grid()
+            .into_iter()
+            .filter(|(s, tol)| {
+                *tol <= 1e-9
+                    && ((s.e_b <= 1e-4 && (s.d == 1e4 || s.c == 1.0)) || (s.d == 1e4 && s.c == 1.0))
+            })
+            .collect()
     }
 
     /// The default grid, 100 cases: the grid a numerical analyst's review tried (E_b ∈ {0.05, 0.5, 2, 18} × D ∈ {0,
@@ -467,12 +547,15 @@ mod sweep {
 /// 6401 nodes with Richardson, the estimate's ratio to it printed.
 #[test]
 fn tolerance_holds_over_the_parameter_space() {
-    let cases = if std::env::var_os("EYESHELL_TOL_SWEEP").is_some_and(|v| v == "full") {
-        sweep::full_grid()
-    } else {
-        sweep::default_grid()
+    let cases = match std::env::var("EYESHELL_TOL_SWEEP").as_deref() {
+        Ok("full") => sweep::full_grid(),
+        Ok("corners") => sweep::corners(),
+        _ => {
+            let grid = sweep::default_grid();
+            assert!(grid.len() >= 60);
+            grid
+        }
     };
-    assert!(cases.len() >= 60);
     sweep::check(&cases);
 }
 

@@ -14,6 +14,7 @@ mod default_tables;
 mod exact_solution;
 mod growth;
 mod growth_ida;
+mod growth_tol_sweep;
 mod jacobian;
 mod max_seconds;
 mod property_jacobian;
