@@ -9,6 +9,7 @@
 //! the run on half those nodes at rtol 1e-9 (the whole difference, not a Richardson share),
 //! asserted below tol/10.
 
+use crate::common::grow;
 use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::*;
 use eyeshell::model::cornea;
