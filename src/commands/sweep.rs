@@ -340,7 +340,7 @@ pub(crate) fn population_figure(
         .collect();
     let lengths: Vec<f64> = eyes
         .iter()
-        .filter_map(|r| r.result.as_ref().map(|x| x.axial_length))
+        .filter_map(|r| r.result.as_ref().map(|x| x.eye.number("axial_length")))
         .filter(|x| x.is_finite())
         .collect();
     // The final refraction of each eye, from its series.csv's last row, if it has one.

@@ -339,9 +339,7 @@ impl Normaliser {
                         text = json_value(&text, "eyeshell_version", "\"<version>\"");
                         text = json_value(&text, "sundials_version", "\"<version>\"");
                     }
-                    "csv" => {
-                        text = csv_numbers(&csv_column(&text, "wall_seconds", "<timing>"))
-                    }
+                    "csv" => text = csv_numbers(&csv_column(&text, "wall_seconds", "<timing>")),
                     // The ownership marker `.eyeshell` names the version that wrote it.
                     "eyeshell" => text = json_value(&text, "written_by", "\"<version>\""),
                     "html" => {
@@ -541,7 +539,10 @@ fn normalisers_touch_only_their_spans() {
     assert!(old.starts_with("t,class,x\n#4036a2"), "{old}");
     assert!(old.contains(",myopic,#4020000000000000\n"), "{old}");
     assert!(old.contains(",\"a,b\",#7ff8000000000000\n"), "{old}");
-    assert_ne!(csv_numbers("x\n1.5\n"), csv_numbers("x\n1.5000000000000002\n"));
+    assert_ne!(
+        csv_numbers("x\n1.5\n"),
+        csv_numbers("x\n1.5000000000000002\n")
+    );
     let result = "{\"files\": [\n {\"path\": \"series.csv\", \"bytes\": 12, \"fnv1a64\": \"ab\"},\n {\"path\": \"summary.json\", \"bytes\": 3, \"fnv1a64\": \"cd\"},\n {\"path\": \"snapshots/a.mat\", \"bytes\": 4, \"fnv1a64\": \"ef\"}]}";
     let n = file_entries(result);
     assert_eq!(n.matches("<checksum>").count(), 2, "{n}");

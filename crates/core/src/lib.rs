@@ -14,4 +14,5 @@ pub mod fit;
 pub mod growth;
 pub mod mesh;
 pub mod model;
+pub mod outputs;
 pub mod text;

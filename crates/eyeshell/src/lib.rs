@@ -37,6 +37,7 @@ pub mod fit;
 pub mod hash;
 pub mod interop;
 mod json;
+pub mod outputs;
 pub mod rundir;
 pub mod scene;
 pub mod sweep;

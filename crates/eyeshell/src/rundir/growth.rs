@@ -34,6 +34,7 @@ use crate::growth::{
     GrowthError, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
     GROWTH_COLUMNS, PERIPHERAL_COLUMNS,
 };
+use crate::outputs::{series_cells, series_columns};
 use crate::scene::Scene;
 
 /// The time series at the posterior pole, one row per output time.
@@ -60,16 +61,6 @@ pub const AGE_COLUMN: &str = "age";
 pub const PERIPHERAL_FILE: &str = "peripheral.csv";
 /// The directory of the snapshot files.
 pub const SNAPSHOT_DIR: &str = "snapshots";
-/// The columns of series.csv.
-pub const SERIES_COLUMNS: [&str; 7] = [
-    "t",
-    "axial_length",
-    "equatorial_radius",
-    "retina_minus_blue",
-    "retina_minus_red",
-    "class",
-    "refraction_D",
-];
 
 /// The file name of output time number `k` (0 for t = 0) at time `t`: names sort in time
 /// order (`snapshot_00002_t0.200000.csv`); a time of 1e9 or more is written in scientific
@@ -109,7 +100,7 @@ pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
     let peripheral_rows = series_rows * 20;
     (times as u64 + 1)
         .saturating_mul(snapshot)
-        .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len() + 1))
+        .saturating_add((series_rows + history_rows) * row(series_columns().len() + 1))
         .saturating_add(peripheral_rows * row(PERIPHERAL_COLUMNS.len() + 1))
 }
 
@@ -123,9 +114,9 @@ pub fn snapshot_header() -> String {
         .join(",")
 }
 
-/// The header of series.csv.
+/// The header of series.csv: the table of outputs' [`series_columns`].
 pub fn series_header() -> String {
-    SERIES_COLUMNS.join(",")
+    series_columns().join(",")
 }
 
 /// `columns`, then [`AGE_COLUMN`] when `ages` (a scene with time.unit).
@@ -137,17 +128,9 @@ pub fn with_age_column<'a>(columns: &[&'a str], ages: bool) -> Vec<&'a str> {
     out
 }
 
-/// The cells of one row of series.csv.
-pub fn series_record(row: &SeriesRow) -> [String; 7] {
-    [
-        format_value(row.t),
-        format_value(row.axial_length),
-        format_value(row.equatorial_radius),
-        format_value(row.retina_minus_blue),
-        format_value(row.retina_minus_red),
-        row.class.as_str().to_string(),
-        format_value(row.refraction_d),
-    ]
+/// The cells of one row of series.csv, as the table of outputs computes them.
+pub fn series_record(row: &SeriesRow) -> Vec<String> {
+    series_cells(row)
 }
 
 /// The text of a snapshot file: the [`snapshot_header`] columns, one row per node.
@@ -330,7 +313,7 @@ impl GrowthWriter {
 
 /// Create `path` with the series header (and the age column with `ages`) as its first line.
 fn create_with_header(path: &Path, ages: bool) -> Result<csv::Writer<fs::File>, OutputError> {
-    create_with_columns(path, &with_age_column(&SERIES_COLUMNS, ages))
+    create_with_columns(path, &with_age_column(&series_columns(), ages))
 }
 
 /// Create `path` with `columns` as its first line.
