@@ -7,6 +7,9 @@ use pyo3::types::{PyDict, PyList};
 
 use super::errors::{input_err, py_err};
 
+/// A table of a growth run from Python: its stem, its columns and each row's cells.
+type TableCells = (String, Vec<String>, Vec<Vec<String>>);
+
 /// Write a growth run's `snapshots` ((t, {column: values}), in time order, each with every
 /// column of a snapshot file) to the directory `out` as `eyeshell export --mat` writes a
 /// growth run: one .mat file per output time in the published scripts' layout, named by
@@ -21,7 +24,7 @@ pub(super) fn export_growth(
     snapshots: Vec<(f64, std::collections::HashMap<String, Vec<f64>>)>,
     compress: bool,
     ages: Option<Vec<f64>>,
-    tables: Option<Vec<(String, Vec<String>, Vec<Vec<String>>)>>,
+    tables: Option<Vec<TableCells>>,
 ) -> PyResult<Vec<std::path::PathBuf>> {
     use eyeshell::interop::export::{SeriesTable, SERIES_TABLES};
     let tables = tables
