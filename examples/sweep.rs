@@ -24,7 +24,8 @@ fn main() -> Result<(), Error> {
         let result = run.result.as_ref().expect("a finished run has a result");
         println!(
             "{:<12} equatorial radius {:.6} mm",
-            run.name, result.equatorial_radius
+            run.name,
+            result.eye.number("equatorial_radius")
         );
     }
     println!("runs, sweep.csv and summary.json are in {}", out.display());

@@ -29,7 +29,7 @@ pub fn population_figure(dir: &Path, records: &[RunRecord]) -> Result<Option<Pat
         .collect();
     let lengths: Vec<f64> = eyes
         .iter()
-        .filter_map(|r| r.result.as_ref().map(|x| x.axial_length))
+        .filter_map(|r| r.result.as_ref().map(|x| x.eye.number("axial_length")))
         .filter(|x| x.is_finite())
         .collect();
     let refraction = final_refractions(dir, &eyes);

@@ -95,7 +95,7 @@ fn a_cohorts_mean_and_sd_match_the_exact_sphere() {
     assert!(table.starts_with("t,output,n,mean,sd,q0.05,"), "{table}");
     assert!(table.contains("\nfinal,axial_length,400,"), "{table}");
     assert!(
-        table.contains("\nfinal,class=hyperopic,400,1e0,"),
+        table.contains("\nfinal,class=hyperopic,400,1.0,"),
         "{table}"
     );
 }

@@ -778,6 +778,23 @@ fn keys_reference_is_current() {
     );
 }
 
+/// docs/guide/outputs.md is the table of outputs as this build lays it out
+/// (`eyeshell::outputs::reference`).
+#[test]
+fn outputs_reference_is_current() {
+    let path = repo().join("docs/guide/outputs.md");
+    let now = eyeshell::outputs::reference();
+    if std::env::var_os("EYESHELL_WRITE_DOCS").is_some() {
+        std::fs::write(&path, &now).expect("write outputs.md");
+    }
+    let written = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        written == now,
+        "docs/guide/outputs.md is not the table of outputs of this build: rewrite it with \
+         EYESHELL_WRITE_DOCS=1 cargo test --release --test cli docs::outputs"
+    );
+}
+
 /// The comparison of shown output itself: elisions, numbers, whitespace.
 #[test]
 fn shown_output_is_compared_as_documented() {

@@ -266,3 +266,70 @@ print(json.dumps({}))
         r.stdout
     );
 }
+
+/// A growth run's .mat export holds its series.csv and history.csv too (series.mat,
+/// history.mat): SciPy reads each numeric column as a 1×R row equal to the file's values
+/// bit for bit, and the classes as one char row separated by commas; eyeshell's own .mat
+/// reader reads the same; the snapshot files are as before (scipy_loads_what_eyeshell_writes)
+/// and `compare` still takes the export directory as the run's snapshots.
+#[test]
+fn scipy_loads_the_series_and_history_of_a_growth_export() {
+    if !scipy_available("scipy_loads_the_series_and_history_of_a_growth_export") {
+        return;
+    }
+    const SERIES: &str = r#"
+import json, sys
+import numpy as np, scipy.io
+out = {}
+for f in sys.argv[1:]:
+    d = {}
+    for k, a in scipy.io.loadmat(f).items():
+        if k.startswith('__'):
+            continue
+        if a.dtype.kind == 'U':
+            d[k] = {'text': str(a[0])}
+        else:
+            bits = np.ascontiguousarray(a.ravel(order='F'), dtype='<f8').view('<u8')
+            d[k] = {'shape': list(a.shape), 'data': [int(b) for b in bits]}
+    out[f] = d
+print(json.dumps(out))
+"#;
+    let dir = tempfile::tempdir().unwrap();
+    let (_, grow) = small_runs(dir.path());
+    let out = dir.path().join("grow-mat");
+    ok(&["export", s(&grow), "--mat", s(&out), "--quiet"]);
+    let files: Vec<String> = ["series", "history"]
+        .iter()
+        .map(|t| s(&out.join(format!("{t}.mat"))).to_string())
+        .collect();
+    let args: Vec<&str> = files.iter().map(String::as_str).collect();
+    let dump = python(SERIES, &args);
+    for (stem, file) in ["series", "history"].iter().zip(&files) {
+        let csv = grow.join(format!("{stem}.csv"));
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        assert!(rows.len() >= 5, "{stem}: {} rows", rows.len());
+        let d = &dump[file];
+        assert_eq!(d.as_object().unwrap().len(), header.len(), "{stem}: {d}");
+        let ours = eyeshell::interop::mat::read(std::path::Path::new(file)).unwrap();
+        for (j, name) in header.iter().enumerate() {
+            let ours = &ours.iter().find(|(k, _)| k == name).unwrap().1;
+            if *name == "class" {
+                let words: Vec<&str> = rows.iter().map(|r| r[j]).collect();
+                assert_eq!(d[name]["text"], words.join(","), "{stem}");
+                assert!(
+                    matches!(ours, eyeshell::interop::mat::MatValue::Char(t) if *t == words.join(","))
+                );
+                continue;
+            }
+            let want: Vec<f64> = rows.iter().map(|r| r[j].parse().unwrap()).collect();
+            assert_eq!(shape(&d[name]), vec![1, rows.len()], "{stem}: {name}");
+            assert_bits(&data(&d[name]), &want, name);
+            assert_bits(ours.data().unwrap(), &want, name);
+        }
+    }
+    // compare reads the export directory as the snapshots alone.
+    ok(&["compare", s(&grow), s(&out), "--quiet"]);
+}

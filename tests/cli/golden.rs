@@ -15,9 +15,13 @@
 //! none holds an absolute path today):
 //! - `*.json`: the values of `"wall_seconds"` (run time) and of `"eyeshell_version"` /
 //!   `"sundials_version"`; in a sweep run's `result.json`, the `bytes` and `fnv1a64` of
-//!   its `summary.json` entry (that file holds the run time);
+//!   its `summary.json` entry (that file holds the run time) and of its `.csv` entries
+//!   (their text follows the number format; their values are compared below);
 //! - `*.csv`: the `wall_seconds` column (sweep.csv of the figures' sweeps), found by its
-//!   header, every other cell byte for byte;
+//!   header; every other cell that reads as a number is hashed by its value (the bits of
+//!   the f64 it parses to), so `2.263564555774848e1` and `22.63564555774848` hash the
+//!   same and a change of the number format is not a change of the outputs; every other
+//!   byte (headers, text cells, quoting, line ends) as it is;
 //! - `index.html`: the version text `eyeshell <v> (SUNDIALS <v>)`;
 //! - `.eyeshell` (the ownership marker): the version in `"written_by"`;
 //! - `*.mat`: the version in the 116-byte text header (`Platform: eyeshell <v>,`) and the
@@ -329,13 +333,13 @@ impl Normaliser {
                 match ext {
                     "json" => {
                         if rel.ends_with("/result.json") {
-                            text = summary_entry(&text);
+                            text = file_entries(&text);
                         }
                         text = json_value(&text, "wall_seconds", "\"<timing>\"");
                         text = json_value(&text, "eyeshell_version", "\"<version>\"");
                         text = json_value(&text, "sundials_version", "\"<version>\"");
                     }
-                    "csv" => text = csv_column(&text, "wall_seconds", "<timing>"),
+                    "csv" => text = csv_numbers(&csv_column(&text, "wall_seconds", "<timing>")),
                     // The ownership marker `.eyeshell` names the version that wrote it.
                     "eyeshell" => text = json_value(&text, "written_by", "\"<version>\""),
                     "html" => {
@@ -408,22 +412,35 @@ fn json_value(text: &str, key: &str, with: &str) -> String {
 }
 
 /// A sweep run's result.json with the size and checksum of its summary.json (which holds
-/// the run time) replaced; the other files' kept.
-fn summary_entry(text: &str) -> String {
-    let Some(i) = text.find("\"path\": \"summary.json\"") else {
-        return text.to_string();
-    };
-    let end = text[i..].find('}').map_or(text.len(), |j| i + j);
-    let entry = json_value(&text[i..end], "bytes", "\"<size>\"");
-    let entry = json_value(&entry, "fnv1a64", "\"<checksum>\"");
-    format!("{}{entry}{}", &text[..i], &text[end..])
+/// the run time) and of its CSV files (whose text follows the number format, their values
+/// being compared by [`csv_numbers`]) replaced; the other files' kept.
+fn file_entries(text: &str) -> String {
+    const PATH: &str = "\"path\": \"";
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(i) = rest.find(PATH) {
+        let start = i + PATH.len();
+        let Some(close) = rest[start..].find('"') else {
+            break;
+        };
+        let path = &rest[start..start + close];
+        let end = rest[i..].find('}').map_or(rest.len(), |j| i + j);
+        out.push_str(&rest[..i]);
+        if path == "summary.json" || path.ends_with(".csv") {
+            let entry = json_value(&rest[i..end], "bytes", "\"<size>\"");
+            out.push_str(&json_value(&entry, "fnv1a64", "\"<checksum>\""));
+        } else {
+            out.push_str(&rest[i..end]);
+        }
+        rest = &rest[end..];
+    }
+    out.push_str(rest);
+    out
 }
 
-/// `text` (CSV as eyeshell writes it: fields quoted when they hold `,`, `"` or a line
-/// break) with every data cell of the column headed `column` replaced; every other byte
-/// kept.
-fn csv_column(text: &str, column: &str, with: &str) -> String {
-    // Records as lists of (start, end) byte spans of their fields, plus the record's end.
+/// The (start, end) byte spans of the fields of each record of `text` (CSV as eyeshell
+/// writes it: fields quoted when they hold `,`, `"` or a line break; `\r\n` or `\n`).
+fn csv_spans(text: &str) -> Vec<Vec<(usize, usize)>> {
     let bytes = text.as_bytes();
     let mut records: Vec<Vec<(usize, usize)>> = vec![Vec::new()];
     let (mut start, mut quoted) = (0, false);
@@ -450,6 +467,34 @@ fn csv_column(text: &str, column: &str, with: &str) -> String {
     if start < bytes.len() {
         records.last_mut().unwrap().push((start, bytes.len()));
     }
+    records
+}
+
+/// `text` (CSV) with every data cell that reads as a number (Rust's f64 parser: `8e0`,
+/// `8.0`, `1e-05`, `NaN`, `inf`) replaced by the 16 hex digits of its f64's bits: the value
+/// exactly, whatever its spelling. Header and text cells are kept byte for byte.
+fn csv_numbers(text: &str) -> String {
+    let records = csv_spans(text);
+    let mut out = String::with_capacity(text.len());
+    let mut at = 0;
+    for record in records.iter().skip(1) {
+        for &(a, b) in record {
+            if let Ok(x) = text[a..b].parse::<f64>() {
+                out.push_str(&text[at..a]);
+                write!(out, "#{:016x}", x.to_bits()).unwrap();
+                at = b;
+            }
+        }
+    }
+    out.push_str(&text[at..]);
+    out
+}
+
+/// `text` (CSV as eyeshell writes it: fields quoted when they hold `,`, `"` or a line
+/// break) with every data cell of the column headed `column` replaced; every other byte
+/// kept.
+fn csv_column(text: &str, column: &str, with: &str) -> String {
+    let records = csv_spans(text);
     let Some(col) = records[0].iter().position(|&(a, b)| &text[a..b] == column) else {
         return text.to_string();
     };
@@ -486,6 +531,22 @@ fn normalisers_touch_only_their_spans() {
         "run,wall_seconds,error\na,T,\nb,T,\"x,\ny\"\n"
     );
     assert_eq!(csv_column("t,x\n1,2\n", "wall_seconds", "T"), "t,x\n1,2\n");
+    // Numbers by value: old and new spellings of one f64 normalise alike, text cells and
+    // the header stay, and a different value stays different.
+    let old = csv_numbers("t,class,x\n2.263564555774848e1,myopic,8e0\n1e-5,\"a,b\",NaN\n");
+    let new = csv_numbers("t,class,x\n22.63564555774848,myopic,8.0\n1e-05,\"a,b\",NaN\n");
+    assert_eq!(old, new);
+    assert!(old.starts_with("t,class,x\n#4036a2"), "{old}");
+    assert!(old.contains(",myopic,#4020000000000000\n"), "{old}");
+    assert!(old.contains(",\"a,b\",#7ff8000000000000\n"), "{old}");
+    assert_ne!(
+        csv_numbers("x\n1.5\n"),
+        csv_numbers("x\n1.5000000000000002\n")
+    );
+    let result = "{\"files\": [\n {\"path\": \"series.csv\", \"bytes\": 12, \"fnv1a64\": \"ab\"},\n {\"path\": \"summary.json\", \"bytes\": 3, \"fnv1a64\": \"cd\"},\n {\"path\": \"snapshots/a.mat\", \"bytes\": 4, \"fnv1a64\": \"ef\"}]}";
+    let n = file_entries(result);
+    assert_eq!(n.matches("<checksum>").count(), 2, "{n}");
+    assert!(n.contains("\"bytes\": 4, \"fnv1a64\": \"ef\""), "{n}");
 
     let mut mat =
         format!("MATLAB 5.0 MAT-file, Platform: eyeshell {VERSION}, Created by: eyeshell export")

@@ -219,7 +219,7 @@ fn a_failed_run_is_reported_and_the_others_are_kept() {
         rows[1]
     );
     // The failed run keeps what it wrote before it failed (t = 0), and says so.
-    assert_eq!(rows[1][col("t")], "0e0");
+    assert_eq!(rows[1][col("t")], "0.0");
     let summary = std::fs::read_to_string(out.join("runs/bad/summary.json")).unwrap();
     assert!(summary.contains("\"status\": \"failed\""));
     assert!(out.join("runs/good/result.json").is_file());

@@ -14,5 +14,6 @@ pub mod fit;
 pub mod growth;
 pub mod mesh;
 pub mod model;
+pub mod outputs;
 pub mod problem;
 pub mod text;

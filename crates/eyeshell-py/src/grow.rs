@@ -4,6 +4,7 @@
 use eyeshell::growth::{
     GrowthParams, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot, GROWTH_COLUMNS,
 };
+use eyeshell::outputs::{Cell, Kind};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -53,35 +54,30 @@ impl Observer for Watch<'_> {
     }
 }
 
-const SERIES_NAMES: [&str; 5] = [
-    "t",
-    "axial_length",
-    "equatorial_radius",
-    "retina_minus_blue",
-    "retina_minus_red",
-];
-
-/// Series rows as a dict of arrays (series.csv's columns, in its order; `class` as a list
-/// of str; `age` last when the scene counts in ages, `g`'s time.unit, as series.csv).
+/// Series rows as a dict of arrays: series.csv's columns, from the table of outputs, in
+/// its order (a class as a list of str); `age` last when the scene counts in ages, `g`'s
+/// time.unit, as series.csv.
 fn series_dict<'py>(
     py: Python<'py>,
     rows: &[SeriesRow],
     g: Option<&GrowthParams>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    let getters: [fn(&SeriesRow) -> f64; 5] = [
-        |r| r.t,
-        |r| r.axial_length,
-        |r| r.equatorial_radius,
-        |r| r.retina_minus_blue,
-        |r| r.retina_minus_red,
-    ];
-    for (name, get) in SERIES_NAMES.iter().zip(getters) {
-        d.set_item(*name, column(py, rows, get))?;
+    for q in eyeshell::outputs::series_quantities() {
+        match q.kind {
+            Kind::Number => d.set_item(q.name, column(py, rows, |r| q.value(r).number()))?,
+            Kind::Class => {
+                let words: Vec<&str> = rows
+                    .iter()
+                    .map(|r| match q.value(r) {
+                        Cell::Text(s) => s,
+                        Cell::Number(_) => "",
+                    })
+                    .collect();
+                d.set_item(q.name, PyList::new(py, words)?)?
+            }
+        }
     }
-    let classes: Vec<&str> = rows.iter().map(|r| r.class.as_str()).collect();
-    d.set_item("class", PyList::new(py, classes)?)?;
-    d.set_item("refraction_D", column(py, rows, |r| r.refraction_d))?;
     add_age(py, &d, rows.iter().map(|r| r.t), g)?;
     Ok(d)
 }

@@ -7,20 +7,41 @@ use pyo3::types::{PyDict, PyList};
 
 use super::errors::{input_err, py_err};
 
+/// A table of a growth run from Python: its stem, its columns and each row's cells.
+type TableCells = (String, Vec<String>, Vec<Vec<String>>);
+
 /// Write a growth run's `snapshots` ((t, {column: values}), in time order, each with every
 /// column of a snapshot file) to the directory `out` as `eyeshell export --mat` writes a
 /// growth run: one .mat file per output time in the published scripts' layout, named by
-/// `ages` (one per snapshot) in a scene with `time.unit` as its snapshot files are. Returns
-/// the files written.
+/// `ages` (one per snapshot) in a scene with `time.unit` as its snapshot files are, and
+/// `tables` (stem "series" or "history", columns, each row's cells as text) as
+/// series.mat and history.mat. Returns the files written.
 #[pyfunction]
-#[pyo3(signature = (out, snapshots, compress = false, ages = None))]
+#[pyo3(signature = (out, snapshots, compress = false, ages = None, tables = None))]
 pub(super) fn export_growth(
     py: Python<'_>,
     out: std::path::PathBuf,
     snapshots: Vec<(f64, std::collections::HashMap<String, Vec<f64>>)>,
     compress: bool,
     ages: Option<Vec<f64>>,
+    tables: Option<Vec<TableCells>>,
 ) -> PyResult<Vec<std::path::PathBuf>> {
+    use eyeshell::interop::export::{SeriesTable, SERIES_TABLES};
+    let tables = tables
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(stem, columns, cells)| {
+            let stem = SERIES_TABLES
+                .into_iter()
+                .find(|s| *s == stem)
+                .ok_or_else(|| input_err(format!("to_mat: no table {stem:?}")))?;
+            Ok(SeriesTable {
+                stem,
+                columns,
+                cells,
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
     if let Some(ages) = &ages {
         if ages.len() != snapshots.len() {
             return Err(input_err(format!(
@@ -30,7 +51,7 @@ pub(super) fn export_growth(
             )));
         }
     }
-    use eyeshell::interop::export::{export_snapshots, Format, RunSnapshot, Table};
+    use eyeshell::interop::export::{export_growth, Format, RunSnapshot, Table};
     let columns: Vec<String> = COLUMNS
         .iter()
         .chain(GROWTH_COLUMNS.iter())
@@ -74,7 +95,7 @@ pub(super) fn export_growth(
         });
     }
     let done = py
-        .detach(|| export_snapshots(&runs, &out, Format::Mat { compress }, &[]))
+        .detach(|| export_growth(&runs, &tables, &out, Format::Mat { compress }, &[]))
         .map_err(|e| py_err(e.into()))?;
     Ok(done.files)
 }

@@ -20,6 +20,7 @@ mod fit;
 mod grow;
 mod interop;
 mod optics;
+mod outputs;
 mod scene;
 mod solve;
 mod sweep;
@@ -66,5 +67,7 @@ fn _eyeshell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(interop::compare, m)?)?;
     m.add_function(wrap_pyfunction!(interop::export_growth, m)?)?;
     m.add_function(wrap_pyfunction!(sundials_version, m)?)?;
+    m.add_function(wrap_pyfunction!(outputs::output_quantities, m)?)?;
+    m.add_function(wrap_pyfunction!(outputs::_register_output_for_tests, m)?)?;
     Ok(())
 }

@@ -105,16 +105,21 @@ impl Solved {
         mat_to_py(py, sol)
     }
 
-    /// The eye of the loaded, ungrown shell as a sweep's table measures it: axial_length,
-    /// equatorial_radius, retina_minus_blue, retina_minus_red, class.
+    /// The eye of the loaded, ungrown shell as a sweep's table measures it: the measures of
+    /// the table of outputs that an elastic solve computes (axial_length,
+    /// equatorial_radius, retina_minus_blue, retina_minus_red, class; not refraction_D,
+    /// which needs growth's optics, NaN here).
     fn eye<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        use eyeshell::outputs::{Measures, Value};
         let eye = eyeshell::sweep::run::unloaded_eye(&self.scene, &self.solution.rows);
         let d = PyDict::new(py);
-        d.set_item("axial_length", eye.axial_length)?;
-        d.set_item("equatorial_radius", eye.equatorial_radius)?;
-        d.set_item("retina_minus_blue", eye.retina_minus_blue)?;
-        d.set_item("retina_minus_red", eye.retina_minus_red)?;
-        d.set_item("class", eye.class.as_str())?;
+        for (name, value) in Measures::of(&eyeshell::growth::SeriesRow::new(0.0, eye)).0 {
+            match value {
+                Value::Number(x) if x.is_nan() => {}
+                Value::Number(x) => d.set_item(name, x)?,
+                Value::Text(s) => d.set_item(name, s)?,
+            }
+        }
         Ok(d)
     }
 

@@ -273,7 +273,9 @@ def test_growth_to_mat_writes_what_the_command_lines_export_writes(cli, tmp_path
     g = eyeshell.grow(SCENES / "const.toml", solver__nodes=101)
     files = g.to_mat(tmp_path / "py")
     names = sorted(p.name for p in (tmp_path / "cli").iterdir() if not p.name.startswith("."))
-    assert [f.rsplit("/", 1)[1] for f in files] == names and len(names) == 5
+    # The snapshots in time order, then the series and history (each compared below, by value).
+    assert sorted(f.rsplit("/", 1)[1] for f in files) == names and len(names) == 5 + 2
+    assert [f.rsplit("/", 1)[1] for f in files][-2:] == ["series.mat", "history.mat"]
     for name in names:
         ours = scipy_io.loadmat(tmp_path / "py" / name)
         theirs = scipy_io.loadmat(tmp_path / "cli" / name)
@@ -302,8 +304,8 @@ def test_growth_to_mat_names_a_scene_in_years_by_age_as_the_command_line_does(cl
                       time__start=2.0, time__end=12.0)
     files = [f.rsplit("/", 1)[1] for f in g.to_mat(tmp_path / "py")]
     names = sorted(p.name for p in (tmp_path / "cli").iterdir() if not p.name.startswith("."))
-    assert files == names and len(names) == 5
-    assert "age" in files[-1] and "12" in files[-1], files
+    assert sorted(files) == names and len(names) == 5 + 2
+    assert "age" in files[-3] and "12" in files[-3], files
 
 
 def test_solution_to_mat_is_the_command_lines_export(cli, tmp_path):

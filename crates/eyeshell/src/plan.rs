@@ -1,21 +1,11 @@
 //! What a growth run writes, planned before it starts: the columns of its series and the
-//! most bytes its files take together. A scene is checked against the plan (a run that
+//! most bytes its files take together (the series' columns are the table of outputs'). A scene is checked against the plan (a run that
 //! would write more is refused), and the run directory's writer follows it; neither
 //! needs the other for that.
 
 use crate::bvp::COLUMNS;
 use crate::growth::{GROWTH_COLUMNS, PERIPHERAL_COLUMNS};
-
-/// The columns of series.csv.
-pub const SERIES_COLUMNS: [&str; 7] = [
-    "t",
-    "axial_length",
-    "equatorial_radius",
-    "retina_minus_blue",
-    "retina_minus_red",
-    "class",
-    "refraction_D",
-];
+use crate::outputs::series_columns;
 
 /// The most bytes one number takes in a run's CSV files (as the run directory formats it:
 /// a sign, 17 digits, the point, `e-308`) with its separator.
@@ -37,6 +27,6 @@ pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
     let peripheral_rows = series_rows * 20;
     (times as u64 + 1)
         .saturating_mul(snapshot)
-        .saturating_add((series_rows + history_rows) * row(SERIES_COLUMNS.len() + 1))
+        .saturating_add((series_rows + history_rows) * row(series_columns().len() + 1))
         .saturating_add(peripheral_rows * row(PERIPHERAL_COLUMNS.len() + 1))
 }

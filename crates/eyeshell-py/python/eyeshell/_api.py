@@ -544,16 +544,21 @@ class Growth:
         one .mat file per output time in the published scripts' layout
         (``snapshot_00002_t0.200000.mat``, each with the row vectors h, s, z, r, sigma,
         rho, zeta, alpha_s, alpha_phi, alpha_n, eta, z_retina, r_retina, Sigma and the
-        scalar ``time``); ``compress``: each variable zlib-compressed (MATLAB's default).
-        The directory is written whole or not at all, and replaces only an earlier
-        eyeshell export. Returns the files written, in time order.
+        scalar ``time``), then ``series.mat`` and (with a history) ``history.mat``: the
+        series' and history's columns as 1×R rows, ``class`` one char row of the classes
+        separated by commas; ``compress``: each variable zlib-compressed (MATLAB's
+        default). The directory is written whole or not at all, and replaces only an
+        earlier eyeshell export. Returns the files written, the snapshots in time order
+        first.
 
         >>> import tempfile, scipy.io
         >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=101)
         >>> files = g.to_mat(tempfile.mkdtemp() + "/mat")
         >>> [f.rsplit("/", 1)[1] for f in files][:2]
         ['snapshot_00000_t0.000000.mat', 'snapshot_00001_t0.100000.mat']
-        >>> m = scipy.io.loadmat(files[-1])
+        >>> [f.rsplit("/", 1)[1] for f in files][-2:]
+        ['series.mat', 'history.mat']
+        >>> m = scipy.io.loadmat(files[-3])
         >>> float(m["time"][0, 0]), m["r"].shape == (1, len(g.final["r"]))
         (1.0, True)
         """
@@ -572,8 +577,18 @@ class Growth:
             ages = [age_of.get(t) for t, _ in snapshots]
             if any(a is None for a in ages):
                 ages = None
+        # The series and history as the command line's export holds them (series.mat,
+        # history.mat): each cell as text that reads back to the same value.
+        def cells(v: Any) -> str:
+            return v if isinstance(v, str) else repr(float(v))
+        tables = []
+        for stem in ("series", "history"):
+            columns = self._columns[stem]
+            if len(columns.get("t", [])) > 0:
+                rows = list(zip(*(list(v) for v in columns.values())))
+                tables.append((stem, list(columns), [[cells(v) for v in r] for r in rows]))
         files = _eyeshell.export_growth(
-            _path(directory, "directory"), snapshots, bool(compress), ages
+            _path(directory, "directory"), snapshots, bool(compress), ages, tables
         )
         return [os.fsdecode(f) for f in files]
 
@@ -1177,10 +1192,10 @@ def sweep(
     return SweepResults(results)
 
 
-# The columns of SweepResults.to_frame() after run, status and the swept keys: sweep.csv's
-# measures of the eye, at each output time.
-_FRAME_COLUMNS = ["t", "axial_length", "equatorial_radius", "retina_minus_blue", "retina_minus_red", "class",
-                  "refraction_D"]
+def _frame_columns() -> list[str]:
+    """The columns of SweepResults.to_frame() after run, status and the swept keys: t and
+    sweep.csv's measures of the eye (the table of outputs), at each output time."""
+    return ["t", *(q["name"] for q in _eyeshell.output_quantities())]
 
 
 class SweepResults(list):
@@ -1209,30 +1224,33 @@ class SweepResults(list):
         keys: list[str] = []
         for r in self:
             keys += [k for k in r.values if k not in keys]
-        columns: dict[str, list[Any]] = {c: [] for c in ["run", "status", *keys, *_FRAME_COLUMNS, "error"]}
+        measured = _frame_columns()
+        columns: dict[str, list[Any]] = {c: [] for c in ["run", "status", *keys, *measured, "error"]}
         for r in self:
-            measures = _measures(r)
+            measures = _measures(r, measured)
             rows = len(measures["t"])
             columns["run"] += [r.name] * rows
             columns["status"] += [r.status] * rows
             for k in keys:
                 missing = math.nan if any(isinstance(x.values.get(k), (int, float)) for x in self) else None
                 columns[k] += [r.values.get(k, missing)] * rows
-            for c in _FRAME_COLUMNS:
+            for c in measured:
                 columns[c] += list(measures[c])
             columns["error"] += [r.error or ""] * rows
         return _frame(columns, frames)
 
 
-def _measures(r: RunResult) -> dict[str, list[Any]]:
-    """A run's measures of the eye at its output times: one row of NaN for a failed run."""
+def _measures(r: RunResult, columns: list[str]) -> dict[str, list[Any]]:
+    """A run's measures of the eye (``columns``) at its output times: one row of NaN for a
+    failed run."""
     if isinstance(r.result, Growth):
         series = r.result._columns["series"]
-        return {c: [x.item() if hasattr(x, "item") else x for x in series[c]] for c in _FRAME_COLUMNS}
+        return {c: [x.item() if hasattr(x, "item") else x for x in series[c]] for c in columns}
     if isinstance(r.result, Solution):
-        # An elastic run does not grow and has no refraction.
-        return {"t": [0.0], "refraction_D": [math.nan], **{c: [v] for c, v in r.result.eye.items()}}
-    return {c: [math.nan] if c != "class" else [""] for c in _FRAME_COLUMNS}
+        # An elastic run does not grow: what needs growth (refraction_D) is NaN.
+        eye = r.result.eye
+        return {c: [0.0 if c == "t" else eye.get(c, math.nan)] for c in columns}
+    return {c: [math.nan] if c != "class" else [""] for c in columns}
 
 
 @dataclass

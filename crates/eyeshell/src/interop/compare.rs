@@ -117,6 +117,10 @@ pub fn load_with(path: &Path, field: Option<&FieldSpec>) -> Result<Vec<Sample>, 
             .filter(|p| {
                 p.is_file()
                     && p.extension().is_some_and(|x| x == "mat" || x == "npz")
+                    // An export's series and history are not fields on the nodes.
+                    && !p.file_stem().is_some_and(|s| {
+                        super::export::SERIES_TABLES.iter().any(|t| s == *t)
+                    })
                     && !p
                         .file_name()
                         .unwrap_or_default()

@@ -18,7 +18,11 @@
 //!   snapshot (`snapshot_00002_t0.200000.mat` / `.npz`). Each holds the row vectors (1×N)
 //!   h, s, z, r, sigma, rho, zeta, alpha_s, alpha_phi, alpha_n, eta, z_retina, r_retina,
 //!   `time` (1×1) and, beyond the published scripts' variables, `Sigma` (1×N, the material
-//!   coordinate). In .npz the vectors are 1-D and `time` is 0-D.
+//!   coordinate). In .npz the vectors are 1-D and `time` is 0-D. A .mat export also holds
+//!   `series.mat` and, when the run has history.csv, `history.mat`: series.csv's and
+//!   history.csv's columns (the table of outputs', [`crate::outputs`]), each numeric one a
+//!   row vector (1×R) named after its column, and `class` a char row of the rows' classes
+//!   separated by commas (MATLAB: `strsplit(class, ',')`).
 
 use std::path::{Path, PathBuf};
 
@@ -373,7 +377,13 @@ pub fn export(
             };
             export_table(&table, &extras, out, format, force)
         }
-        Run::Growth(snapshots) => export_snapshots(&snapshots, out, format, &[run_dir]),
+        Run::Growth(snapshots) => {
+            let tables = match format {
+                Format::Mat { .. } => read_series_tables(run_dir)?,
+                Format::Npz => Vec::new(),
+            };
+            export_growth(&snapshots, &tables, out, format, &[run_dir])
+        }
     }
 }
 
@@ -420,6 +430,82 @@ pub fn export_snapshots(
     format: Format,
     inputs: &[&Path],
 ) -> Result<Exported, ExportError> {
+    export_growth(snapshots, &[], out, format, inputs)
+}
+
+/// The stems of the tables a .mat export of a growth run holds beside its snapshots.
+pub const SERIES_TABLES: [&str; 2] = ["series", "history"];
+
+/// series.csv or history.csv as an export writes it: its stem ([`SERIES_TABLES`]), its
+/// columns and each row's cells as text.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SeriesTable {
+    pub stem: &'static str,
+    pub columns: Vec<String>,
+    pub cells: Vec<Vec<String>>,
+}
+
+/// The series.csv and history.csv of the run in `run_dir` (those it has).
+pub fn read_series_tables(run_dir: &Path) -> Result<Vec<SeriesTable>, ExportError> {
+    let mut out = Vec::new();
+    for stem in SERIES_TABLES {
+        let path = run_dir.join(format!("{stem}.csv"));
+        if !path.is_file() {
+            continue;
+        }
+        let records = crate::rundir::table::read_records(&path)?;
+        out.push(SeriesTable {
+            stem,
+            columns: records.header.clone().unwrap_or_default(),
+            cells: records
+                .iter()
+                .map(|r| r.cells.iter().map(str::to_string).collect())
+                .collect(),
+        });
+    }
+    Ok(out)
+}
+
+/// The variables of `table` as a .mat file: each column a row vector named after it, the
+/// numbers as they read back (exactly the file's), a class column a char row of its
+/// words separated by commas.
+pub fn series_mat_vars(table: &SeriesTable) -> Result<Vec<(String, MatValue)>, ExportError> {
+    let file = format!("{}.csv", table.stem);
+    let mut vars = Vec::with_capacity(table.columns.len());
+    for (j, name) in table.columns.iter().enumerate() {
+        let cell = |row: &Vec<String>| row.get(j).cloned().unwrap_or_default();
+        let class =
+            crate::outputs::quantity(name).is_some_and(|q| q.kind == crate::outputs::Kind::Class);
+        if class {
+            let words: Vec<String> = table.cells.iter().map(cell).collect();
+            vars.push((name.clone(), MatValue::Char(words.join(","))));
+            continue;
+        }
+        let mut values = Vec::with_capacity(table.cells.len());
+        for (i, row) in table.cells.iter().enumerate() {
+            let text = cell(row);
+            values.push(text.parse::<f64>().map_err(|_| {
+                bad(format!(
+                    "{file}: row {}: {name} is not a number: {:?}",
+                    i + 1,
+                    crate::text::excerpt(&text, 40)
+                ))
+            })?);
+        }
+        vars.push((name.clone(), MatValue::row(&values)));
+    }
+    Ok(vars)
+}
+
+/// [`export_snapshots`], and with a .mat format each of `tables` as `<stem>.mat`
+/// ([`series_mat_vars`]).
+pub fn export_growth(
+    snapshots: &[RunSnapshot],
+    tables: &[SeriesTable],
+    out: &Path,
+    format: Format,
+    inputs: &[&Path],
+) -> Result<Exported, ExportError> {
     let dir = OutputDir::create(out, "export", inputs).map_err(output_error)?;
     let mut files = Vec::new();
     for s in snapshots {
@@ -437,6 +523,14 @@ pub fn export_snapshots(
             || Ok(growth_npz_arrays(s)),
         )?;
         files.push(out.join(name));
+    }
+    if let Format::Mat { compress } = format {
+        for table in tables {
+            let name = format!("{}.mat", table.stem);
+            mat::write(&dir.file(&name), &series_mat_vars(table)?, compress)
+                .map_err(|e| failed(e.to_string()))?;
+            files.push(out.join(name));
+        }
     }
     let path = dir.commit().map_err(output_error)?;
     Ok(Exported {

@@ -34,6 +34,7 @@ use crate::growth::{
     GrowthError, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
     GROWTH_COLUMNS, PERIPHERAL_COLUMNS,
 };
+use crate::outputs::{series_cells, series_columns};
 use crate::scene::Scene;
 
 /// The time series at the posterior pole, one row per output time.
@@ -62,7 +63,7 @@ pub const PERIPHERAL_FILE: &str = "peripheral.csv";
 pub const SNAPSHOT_DIR: &str = "snapshots";
 // The columns of series.csv, and what a run's files take at most: the plan a scene is
 // checked against before the run, which the writer follows.
-pub use crate::plan::{planned_bytes, CELL_BYTES, MAX_RUN_BYTES, SERIES_COLUMNS};
+pub use crate::plan::{planned_bytes, CELL_BYTES, MAX_RUN_BYTES};
 
 /// The file name of output time number `k` (0 for t = 0) at time `t`: names sort in time
 /// order (`snapshot_00002_t0.200000.csv`); a time of 1e9 or more is written in scientific
@@ -92,9 +93,9 @@ pub fn snapshot_header() -> String {
         .join(",")
 }
 
-/// The header of series.csv.
+/// The header of series.csv: the table of outputs' [`series_columns`].
 pub fn series_header() -> String {
-    SERIES_COLUMNS.join(",")
+    series_columns().join(",")
 }
 
 /// `columns`, then [`AGE_COLUMN`] when `ages` (a scene with time.unit).
@@ -106,17 +107,9 @@ pub fn with_age_column<'a>(columns: &[&'a str], ages: bool) -> Vec<&'a str> {
     out
 }
 
-/// The cells of one row of series.csv.
-pub fn series_record(row: &SeriesRow) -> [String; 7] {
-    [
-        format_value(row.t),
-        format_value(row.axial_length),
-        format_value(row.equatorial_radius),
-        format_value(row.retina_minus_blue),
-        format_value(row.retina_minus_red),
-        row.class.as_str().to_string(),
-        format_value(row.refraction_d),
-    ]
+/// The cells of one row of series.csv, as the table of outputs computes them.
+pub fn series_record(row: &SeriesRow) -> Vec<String> {
+    series_cells(row)
 }
 
 /// The text of a snapshot file: the [`snapshot_header`] columns, one row per node.
@@ -299,7 +292,7 @@ impl GrowthWriter {
 
 /// Create `path` with the series header (and the age column with `ages`) as its first line.
 fn create_with_header(path: &Path, ages: bool) -> Result<csv::Writer<fs::File>, OutputError> {
-    create_with_columns(path, &with_age_column(&SERIES_COLUMNS, ages))
+    create_with_columns(path, &with_age_column(&series_columns(), ages))
 }
 
 /// Create `path` with `columns` as its first line.

@@ -4,6 +4,7 @@
 //! - [`atomic`]: the one atomic writer of files and directories;
 //! - [`summary`]: summary.json, typed ([`Summary`]);
 //! - [`table`]: the CSV files, written and read through the `csv` crate;
+//! - [`number`]: one number in them, as Python's `repr` writes it;
 //! - [`growth`]: a growth run's directory, written as the results come;
 //! - [`read`], [`rundata`]: a run directory read back, for export and for figures.
 //!
@@ -23,6 +24,7 @@
 pub mod atomic;
 pub mod growth;
 pub mod lock;
+pub mod number;
 pub mod owner;
 pub mod read;
 pub mod record;
@@ -39,6 +41,7 @@ use crate::bvp::{FieldRow, COLUMNS};
 
 pub use atomic::{write_atomic, write_atomic_unsynced, AtomicDir};
 pub use growth::GrowthWriter;
+pub use number::{format_value, push_value};
 pub use owner::{check_file, check_target, Marker, OutputDir, OwnedDir, MARKER_FILE};
 pub use summary::Summary;
 
@@ -119,110 +122,6 @@ impl OutputError {
     }
 }
 
-/// One value in the CSV files: Rust's shortest representation that reads back to the same
-/// f64, in scientific notation (`1.0136216901111e0`), as `format!("{x:e}")` writes it.
-pub fn format_value(x: f64) -> String {
-    let mut out = Vec::with_capacity(24);
-    push_value(&mut out, x);
-    String::from_utf8(out).expect("digits, signs, '.' and 'e' are ASCII")
-}
-
-/// Append [`format_value`]`(x)` to `out` without allocating. The shortest digits come from
-/// ryu (the same digits as `{:e}`'s, which a test checks over a million values) and are
-/// rewritten into `{:e}`'s notation: ryu is about four times faster, and a snapshot of 501
-/// nodes holds 10 000 values (formatting them was a tenth of a const-scene run).
-pub fn push_value(out: &mut Vec<u8>, x: f64) {
-    if !x.is_finite() || may_tie(x) {
-        out.extend_from_slice(format!("{x:e}").as_bytes());
-        return;
-    }
-    let mut buffer = ryu::Buffer::new();
-    let text = buffer.format_finite(x).as_bytes();
-    let (negative, text) = match text.split_first() {
-        Some((b'-', rest)) => (true, rest),
-        _ => (false, text),
-    };
-    let (mantissa, exponent) = match text.iter().position(|&c| c == b'e') {
-        Some(e) => (&text[..e], parse_exponent(&text[e + 1..])),
-        None => (text, 0),
-    };
-    // The mantissa's digits without the point, and how many came before it.
-    let mut digits = [0u8; 32];
-    let (mut len, mut before_point, mut seen_point) = (0usize, 0i32, false);
-    for &c in mantissa {
-        if c == b'.' {
-            seen_point = true;
-        } else if len < digits.len() {
-            digits[len] = c;
-            len += 1;
-            if !seen_point {
-                before_point += 1;
-            }
-        }
-    }
-    let first = digits[..len].iter().position(|&c| c != b'0');
-    if negative {
-        out.push(b'-');
-    }
-    let Some(first) = first else {
-        out.extend_from_slice(b"0e0");
-        return;
-    };
-    let last = digits[..len]
-        .iter()
-        .rposition(|&c| c != b'0')
-        .unwrap_or(first);
-    out.push(digits[first]);
-    if last > first {
-        out.push(b'.');
-        out.extend_from_slice(&digits[first + 1..=last]);
-    }
-    out.push(b'e');
-    push_i32(out, exponent + before_point - 1 - first as i32);
-}
-
-/// Whether x's exact decimal expansion could end in a 5 at the 18th significant digit, the
-/// one case where ryu (ties to even) and `{:e}` (ties away) may choose different 17th
-/// digits. x = m 2^e with m odd has −e decimals ending in 5 when e < 0, and m 5^−e has at
-/// least 19 digits once −e ≥ 26 (5^26 > 10^18): only e ≥ −25 can tie. Computed values
-/// (full mantissas near 1) have e near −52 and take the fast path.
-fn may_tie(x: f64) -> bool {
-    let bits = x.to_bits();
-    let (exp_field, frac) = (((bits >> 52) & 0x7ff) as i32, bits & ((1u64 << 52) - 1));
-    let (m, e) = if exp_field == 0 {
-        (frac, -1074)
-    } else {
-        (frac | (1u64 << 52), exp_field - 1075)
-    };
-    m != 0 && e + m.trailing_zeros() as i32 >= -25
-}
-
-fn parse_exponent(text: &[u8]) -> i32 {
-    let (sign, digits) = match text.split_first() {
-        Some((b'-', rest)) => (-1, rest),
-        _ => (1, text),
-    };
-    sign * digits
-        .iter()
-        .fold(0i32, |acc, &c| acc * 10 + i32::from(c - b'0'))
-}
-
-fn push_i32(out: &mut Vec<u8>, v: i32) {
-    if v < 0 {
-        out.push(b'-');
-    }
-    let (mut n, mut buf, mut i) = (v.unsigned_abs(), [0u8; 10], 10);
-    loop {
-        i -= 1;
-        buf[i] = b'0' + (n % 10) as u8;
-        n /= 10;
-        if n == 0 {
-            break;
-        }
-    }
-    out.extend_from_slice(&buf[i..]);
-}
-
 /// A CSV table of numbers: the header, then one line per row of [`push_value`]s (numbers
 /// never need quoting), as the csv writer would write it, without a String per value.
 pub fn numeric_csv<'a, R, C>(header: impl IntoIterator<Item = &'a str>, rows: R) -> Vec<u8>
@@ -276,60 +175,43 @@ mod tests {
     use super::*;
     use crate::bvp::SolveStats;
 
-    /// push_value writes exactly what `{:e}` writes, over a million random bit patterns (of
-    /// every magnitude, half of them through the tie fallback), a million values as a run
-    /// computes them (the fast path), the round numbers and the special values.
-    #[test]
-    fn values_are_written_as_rust_writes_them() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut specials = vec![
-            0.0,
-            -0.0,
-            1.0,
-            -1.0,
-            0.1,
-            100.0,
-            1e-3,
-            123456.0,
-            1e21,
-            1e22,
-            1e-7,
-            5e-324,
-            f64::MAX,
-            f64::MIN_POSITIVE,
-            23.037595267862706,
-            f64::NAN,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        ];
-        specials.extend((0..40).map(|k| 10f64.powi(k - 20)));
-        let mut out = Vec::new();
-        let mut check = |x: f64| {
-            out.clear();
-            push_value(&mut out, x);
-            assert_eq!(
-                std::str::from_utf8(&out).unwrap(),
-                format!("{x:e}"),
-                "{x:?}"
-            );
-        };
-        for x in specials {
-            check(x);
-        }
-        for k in 0..2_000_000 {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            if k % 2 == 0 {
-                check(f64::from_bits(state));
-            } else {
-                // Values as a run computes them: full mantissas, moderate magnitudes.
-                let unit = (state >> 11) as f64 / (1u64 << 53) as f64;
-                check((unit - 0.5) * 10f64.powi(k % 41 - 20));
-            }
-        }
-    }
     use crate::scene::Scene;
+
+    /// The time of writing a cohort's tables: 2,000 eyes' sweep.csv rows (14 cells, 8 of
+    /// them numbers, through `format_value` and the csv writer, as sweep.csv is written)
+    /// and 2,000 × 5 rows of series (7 numbers each, through `numeric_csv`), best of 20.
+    /// `cargo test --release -p eyeshell --lib -- --ignored --nocapture cohort_tables`
+    #[test]
+    #[ignore = "a timing, run by hand"]
+    fn cohort_tables_write_time() {
+        let value =
+            |i: usize, j: usize| (i as f64 * 0.731 + j as f64).sin() * 10f64.powi(j as i32 % 5);
+        let mut best = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..20 {
+            let start = std::time::Instant::now();
+            let rows = (0..2000).map(|i| {
+                let mut cells = vec![format!("run_{i:04}"), "ok".to_string(), "grow".to_string()];
+                cells.extend((0..8).map(|j| format_value(value(i, j))));
+                cells.extend(["myopic".to_string(), "12".to_string(), String::new()]);
+                cells
+            });
+            let table = table::csv_bytes(["h"; 14], rows, table::QuoteStyle::Necessary).unwrap();
+            let a = start.elapsed().as_secs_f64();
+            let start = std::time::Instant::now();
+            let series = numeric_csv(
+                ["h"; 7],
+                (0..10_000).map(|i| (0..7).map(move |j| value(i, j))),
+            );
+            let b = start.elapsed().as_secs_f64();
+            assert!(table.len() > 100_000 && series.len() > 500_000);
+            best = (best.0.min(a), best.1.min(b));
+        }
+        eprintln!(
+            "cohort tables: sweep.csv of 2,000 eyes {:.2} ms, 10,000 series rows {:.2} ms",
+            best.0 * 1e3,
+            best.1 * 1e3
+        );
+    }
 
     fn row(k: f64) -> FieldRow {
         FieldRow {

@@ -45,6 +45,7 @@ use crate::bvp::SolveStats;
 use crate::growth::{GrowthError, GrowthStats, SeriesRow};
 use crate::json::{f64_or_nan, f64s_or_nan};
 use crate::model::components::Components;
+use crate::outputs::Measures;
 use crate::scene::Scene;
 use crate::text::excerpt;
 
@@ -144,24 +145,15 @@ pub struct SnapshotEntry {
     pub file: String,
 }
 
-/// The last row of series.csv.
+/// The last row of series.csv: its t and the measures of the eye (the table of outputs';
+/// a number null where none was computed, NaN in series.csv).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct SeriesEntry {
     #[serde(deserialize_with = "f64_or_nan")]
     pub t: f64,
-    #[serde(deserialize_with = "f64_or_nan")]
-    pub axial_length: f64,
-    #[serde(deserialize_with = "f64_or_nan")]
-    pub equatorial_radius: f64,
-    #[serde(deserialize_with = "f64_or_nan")]
-    pub retina_minus_blue: f64,
-    #[serde(deserialize_with = "f64_or_nan")]
-    pub retina_minus_red: f64,
-    pub class: String,
-    /// The pole's refraction (D); null where none was computed (NaN in series.csv).
-    #[serde(rename = "refraction_D", deserialize_with = "f64_or_nan")]
-    pub refraction_d: f64,
+    #[serde(flatten, deserialize_with = "Measures::deserialize_lenient")]
+    pub eye: Measures,
 }
 
 /// summary.json of `eyeshell grow`: rewritten at the start (`running`), and at the end
@@ -222,25 +214,11 @@ pub struct RunResult {
     /// The time reached (growth), 0 for an elastic solve.
     #[serde(deserialize_with = "f64_or_nan")]
     pub t: f64,
-    /// z of the retina at the posterior pole (docs/MODEL.md §6).
-    #[serde(deserialize_with = "f64_or_nan")]
-    pub axial_length: f64,
-    #[serde(deserialize_with = "f64_or_nan")]
-    pub equatorial_radius: f64,
-    #[serde(deserialize_with = "f64_or_nan")]
-    pub retina_minus_blue: f64,
-    #[serde(deserialize_with = "f64_or_nan")]
-    pub retina_minus_red: f64,
-    pub class: String,
-    /// The pole's refraction (D) at `t`, series.csv's `refraction_D` (NaN for an elastic
-    /// solve of a scene without growth, and in the result.json of runs by an earlier
-    /// eyeshell, which did not record it).
-    #[serde(
-        rename = "refraction_D",
-        default = "no_value",
-        deserialize_with = "f64_or_nan"
-    )]
-    pub refraction_d: f64,
+    /// The measures of the eye at `t` (the table of outputs': docs/MODEL.md §6). One
+    /// [`crate::outputs::Quantity::added_later`] reads as NaN from the result.json of a run
+    /// by an earlier eyeshell, which did not record it; any other missing is an error.
+    #[serde(flatten, deserialize_with = "Measures::deserialize_strict")]
+    pub eye: Measures,
     pub newton_iterations: usize,
     pub bvp_solves: usize,
     pub steps: usize,
@@ -252,11 +230,6 @@ pub struct RunResult {
     /// and in the result.json of runs by an earlier eyeshell (`--resume` runs them again).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub files: Vec<RunFile>,
-}
-
-/// What a field missing from an older file reads as: NaN (as `null` does).
-fn no_value() -> f64 {
-    f64::NAN
 }
 
 /// One file of a finished sweep run: its path relative to the run directory (`/`
@@ -441,12 +414,7 @@ impl GrowthSummary {
             last_output_t: snapshots.last().map(|s| s.t),
             last: last.map(|r| SeriesEntry {
                 t: r.t,
-                axial_length: r.axial_length,
-                equatorial_radius: r.equatorial_radius,
-                retina_minus_blue: r.retina_minus_blue,
-                retina_minus_red: r.retina_minus_red,
-                class: r.class.as_str().to_string(),
-                refraction_d: r.refraction_d,
+                eye: Measures::of(r),
             }),
             failed_at_t,
             error,

@@ -157,8 +157,8 @@ impl RunRecord {
             (s, Some(x)) => format!(
                 "{}: axial length {:.4} mm, {} ({:.2} s)",
                 s.as_str(),
-                x.axial_length,
-                x.class,
+                x.eye.number("axial_length"),
+                x.eye.class(),
                 x.wall_seconds
             ),
             (s, None) => s.as_str().to_string(),
@@ -397,22 +397,24 @@ fn io(path: &Path, e: std::io::Error) -> OutputError {
     }
 }
 
-/// The columns of sweep.csv after `run`, `status` and the swept keys.
-pub const RESULT_COLUMNS: [&str; 14] = [
-    "kind",
-    "t",
-    "axial_length",
-    "equatorial_radius",
-    "retina_minus_blue",
-    "retina_minus_red",
-    "class",
-    "refraction_D",
+/// The columns of sweep.csv after `run`, `status` and the swept keys: `kind`, `t`, the
+/// measures of the eye (the table of outputs, [`crate::outputs::quantities`]), then the
+/// run's work and its error.
+pub fn result_columns() -> Vec<&'static str> {
+    let mut columns = vec!["kind", "t"];
+    columns.extend(crate::outputs::quantities().iter().map(|q| q.name));
+    columns.extend(WORK_COLUMNS);
+    columns.push("error");
+    columns
+}
+
+/// The columns of sweep.csv after the measures: what a run cost.
+const WORK_COLUMNS: [&str; 5] = [
     "newton_iterations",
     "bvp_solves",
     "steps",
     "rhs_evaluations",
     "wall_seconds",
-    "error",
 ];
 
 /// What sweep.csv and summary.json say of the sweep itself: a [`Sweep`]'s or a
@@ -463,7 +465,7 @@ pub fn table_csv(sweep: Head<'_>, report: &SweepReport) -> std::io::Result<Vec<u
         .iter()
         .map(|s| s.to_string())
         .chain(sweep.keys.iter().cloned())
-        .chain(RESULT_COLUMNS.iter().map(|s| s.to_string()));
+        .chain(result_columns().into_iter().map(str::to_string));
     let rows = report.records.iter().map(|r| {
         let mut fields = vec![r.name.clone(), r.status.as_str().to_string()];
         fields.extend(r.values.iter().cloned());
@@ -479,24 +481,21 @@ fn result_fields(r: &RunRecord) -> Vec<String> {
         _ => String::new(),
     };
     match &r.result {
-        Some(x) => vec![
-            x.kind.clone(),
-            format_value(x.t),
-            format_value(x.axial_length),
-            format_value(x.equatorial_radius),
-            format_value(x.retina_minus_blue),
-            format_value(x.retina_minus_red),
-            x.class.clone(),
-            format_value(x.refraction_d),
-            x.newton_iterations.to_string(),
-            x.bvp_solves.to_string(),
-            x.steps.to_string(),
-            x.rhs_evaluations.to_string(),
-            format_value(x.wall_seconds),
-            error,
-        ],
+        Some(x) => {
+            let mut v = vec![x.kind.clone(), format_value(x.t)];
+            v.extend(x.eye.0.iter().map(|(_, value)| value.text()));
+            v.extend([
+                x.newton_iterations.to_string(),
+                x.bvp_solves.to_string(),
+                x.steps.to_string(),
+                x.rhs_evaluations.to_string(),
+                format_value(x.wall_seconds),
+                error,
+            ]);
+            v
+        }
         None => {
-            let mut v = vec![String::new(); RESULT_COLUMNS.len() - 1];
+            let mut v = vec![String::new(); result_columns().len() - 1];
             v.push(error);
             v
         }

@@ -198,13 +198,17 @@ fn eye(record: &RunRecord, series: &dyn Fn(&RunRecord) -> Option<String>) -> Opt
         return None;
     }
     let r = record.result.as_ref()?;
-    let mut final_values = vec![
-        ("axial_length".to_string(), r.axial_length),
-        ("equatorial_radius".to_string(), r.equatorial_radius),
-        ("retina_minus_blue".to_string(), r.retina_minus_blue),
-        ("retina_minus_red".to_string(), r.retina_minus_red),
-    ];
+    let mut final_values: Vec<(String, f64)> = r
+        .eye
+        .numbers()
+        .map(|(name, x)| (name.to_string(), x))
+        .collect();
     let text = series(record);
+    if text.is_none() {
+        // An elastic solve has no series and does not compute what needs growth (NaN in
+        // its result, refraction_D): not a value missing, so not an output of its eyes.
+        final_values.retain(|(_, x)| !x.is_nan());
+    }
     let mut series = Vec::new();
     if let Some(text) = text {
         let mut lines = text.lines();
@@ -228,18 +232,21 @@ fn eye(record: &RunRecord, series: &dyn Fn(&RunRecord) -> Option<String>) -> Opt
                 .map_or(String::new(), |c| c.to_string());
             series.push((t, values, class));
         }
-        // Outputs series.csv has and the result has not (refraction_D) at the final time.
+        // Outputs series.csv has at the final time and the result has not: a column beyond
+        // the table, or one an earlier eyeshell's result.json did not record (NaN there).
         if let Some((_, last, _)) = series.last() {
             for (h, x) in last {
-                if !final_values.iter().any(|(k, _)| k == h) {
-                    final_values.push((h.clone(), *x));
+                match final_values.iter_mut().find(|(k, _)| k == h) {
+                    Some((_, v)) if v.is_nan() => *v = *x,
+                    Some(_) => {}
+                    None => final_values.push((h.clone(), *x)),
                 }
             }
         }
     }
     Some(Eye {
         final_values,
-        final_class: r.class.clone(),
+        final_class: r.eye.class().to_string(),
         series,
     })
 }
@@ -358,6 +365,24 @@ pub struct Written {
     pub notes: Vec<String>,
 }
 
+/// The Sobol indices of each output by key.
+type Sobol = Vec<(String, Vec<(String, Index)>)>;
+
+/// The population's statistics, as the files say them.
+struct Population {
+    /// The statistics of each output at the final time, and the class shares.
+    final_stats: Vec<(String, Stats)>,
+    final_shares: Shares,
+    /// The same at each output time every member eye reached.
+    per_time: Vec<AtTime>,
+    /// Saltelli designs: the indices.
+    sobol: Option<Sobol>,
+    /// Eyes that finished, and all of them (Saltelli: the A and B rows).
+    finished: usize,
+    total: usize,
+    notes: Vec<String>,
+}
+
 /// Write population.json, population.csv and (Saltelli) sobol.csv into `out` from the
 /// finished runs of `records` (in the sweep's run order, as the sample names them), each
 /// eye's series.csv text given by `series` (from its run directory, or the sweep's table).
@@ -368,35 +393,99 @@ pub fn write(
     records: &[RunRecord],
     series: &dyn Fn(&RunRecord) -> Option<String>,
 ) -> Result<Written, OutputError> {
-    let eyes: Vec<Option<Eye>> = records.iter().map(|r| eye(r, series)).collect();
-    // The population: every eye (for Saltelli, the A and B rows: draws of the cohort).
-    let members: Vec<&Eye> = eyes
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| !matches!(sample.role(*i).0, Some(Role::AB(_))))
-        .filter_map(|(_, e)| e.as_ref())
-        .collect();
-    let total = (0..records.len())
-        .filter(|&i| !matches!(sample.role(i).0, Some(Role::AB(_))))
-        .count();
-    let (final_stats, final_missing) = outputs(members.iter().map(|e| e.final_values.as_slice()));
-    let final_shares = shares(members.iter().map(|e| e.final_class.as_str()));
-    let mut notes: Vec<String> = final_missing
-        .iter()
-        .map(|m| missing_note(m, " at the final time"))
-        .collect();
-    let unclassed = members
-        .iter()
-        .filter(|e| e.final_class == Refraction::Unknown.as_str())
-        .count();
-    if unclassed > 0 {
-        notes.push(format!(
-            "{unclassed} of {} eyes could not be classed at the final time (class \"unknown\": stimulus.classify = \"dioptres\" and refraction_D NaN, beyond -25 to +25 D); the class shares are over all {} eyes, \"unknown\" among them",
-            members.len(),
-            members.len()
-        ));
+    let pop = Population::of(sample, records, series);
+    let text = population_json(&pop, name, sample);
+    // Every file the population adds to the sweep's directory is claimed in its marker
+    // before it is written: an entry the marker does not list is somebody else's, and a
+    // rerun, `--resume`, a second merge or `sweep status` would refuse the directory.
+    let mut claimed = vec![POPULATION_FILE, POPULATION_TABLE];
+    if pop.sobol.is_some() {
+        claimed.push(SOBOL_TABLE);
     }
-    // Per output time: the times every member eye reached (exactly the same t).
+    claimed.extend(FIGURE_FILES);
+    crate::rundir::owner::claim(out, &claimed)?;
+    let io = |file: &str, e: std::io::Error| OutputError::Io {
+        path: out.join(file),
+        source: e,
+    };
+    write_atomic(&out.join(POPULATION_FILE), text.as_bytes())
+        .map_err(|e| io(POPULATION_FILE, e))?;
+    write_atomic(&out.join(POPULATION_TABLE), population_csv(&pop).as_bytes())
+        .map_err(|e| io(POPULATION_TABLE, e))?;
+    let mut files = vec![POPULATION_FILE, POPULATION_TABLE];
+    if let Some(sobol) = &pop.sobol {
+        write_atomic(&out.join(SOBOL_TABLE), sobol_csv(sobol).as_bytes())
+            .map_err(|e| io(SOBOL_TABLE, e))?;
+        files.push(SOBOL_TABLE);
+    }
+    Ok(Written {
+        files,
+        finished: pop.finished,
+        total: pop.total,
+        notes: pop.notes,
+    })
+}
+
+impl Population {
+    /// The statistics of the finished eyes of `records` (see [`write`]).
+    fn of(
+        sample: &Sample,
+        records: &[RunRecord],
+        series: &dyn Fn(&RunRecord) -> Option<String>,
+    ) -> Population {
+        let eyes: Vec<Option<Eye>> = records.iter().map(|r| eye(r, series)).collect();
+        // The population: every eye (for Saltelli, the A and B rows: draws of the cohort).
+        let members: Vec<&Eye> = eyes
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !matches!(sample.role(*i).0, Some(Role::AB(_))))
+            .filter_map(|(_, e)| e.as_ref())
+            .collect();
+        let total = (0..records.len())
+            .filter(|&i| !matches!(sample.role(i).0, Some(Role::AB(_))))
+            .count();
+        let (final_stats, final_missing) =
+            outputs(members.iter().map(|e| e.final_values.as_slice()));
+        let final_shares = shares(members.iter().map(|e| e.final_class.as_str()));
+        let mut notes: Vec<String> = final_missing
+            .iter()
+            .map(|m| missing_note(m, " at the final time"))
+            .collect();
+        let unclassed = members
+            .iter()
+            .filter(|e| e.final_class == Refraction::Unknown.as_str())
+            .count();
+        if unclassed > 0 {
+            notes.push(format!(
+                "{unclassed} of {} eyes could not be classed at the final time (class \"unknown\": stimulus.classify = \"dioptres\" and refraction_D NaN, beyond -25 to +25 D); the class shares are over all {} eyes, \"unknown\" among them",
+                members.len(),
+                members.len()
+            ));
+        }
+        let (per_time, time_notes) = per_time(&members);
+        notes.extend(time_notes);
+        let sobol = match sample.design {
+            Design::Saltelli => Some(sobol_of(sample, &eyes, &final_stats)),
+            _ => None,
+        };
+        if let Some(sobol) = &sobol {
+            notes.extend(sobol_note(sobol));
+        }
+        Population {
+            final_stats,
+            final_shares,
+            per_time,
+            sobol,
+            finished: members.len(),
+            total,
+            notes,
+        }
+    }
+}
+
+/// The statistics at each output time every member eye reached (exactly the same t), and
+/// the notes of outputs some eyes lack there (one per output, with at how many times).
+fn per_time(members: &[&Eye]) -> (Vec<AtTime>, Vec<String>) {
     let mut times: Vec<f64> = members
         .first()
         .map(|e| e.series.iter().map(|(t, _, _)| *t).collect())
@@ -406,7 +495,6 @@ pub fn write(
             .iter()
             .all(|e| e.series.iter().any(|(s, _, _)| s == t))
     });
-    // Outputs some eyes lack at an output time: (output, at how many times), noted once.
     let mut missing_at: Vec<(String, usize)> = Vec::new();
     let per_time: Vec<AtTime> = times
         .iter()
@@ -430,20 +518,20 @@ pub fn write(
             (t, stats_at, shares(rows.iter().map(|(_, c)| *c)))
         })
         .collect();
-    for (name, count) in &missing_at {
-        notes.push(format!(
-            "{name}: some eyes have no value at {count} of {} output times; the statistics there are over the eyes that have it (each time's n)",
-            times.len()
-        ));
-    }
-    let sobol = match sample.design {
-        Design::Saltelli => Some(sobol_of(sample, &eyes, &final_stats)),
-        _ => None,
-    };
+    let notes = missing_at
+        .iter()
+        .map(|(name, count)| {
+            format!(
+                "{name}: some eyes have no value at {count} of {} output times; the statistics there are over the eyes that have it (each time's n)",
+                times.len()
+            )
+        })
+        .collect();
+    (per_time, notes)
+}
 
-    if let Some(sobol) = &sobol {
-        notes.extend(sobol_note(sobol));
-    }
+/// The text of population.json.
+fn population_json(pop: &Population, name: &str, sample: &Sample) -> String {
     let object = |s: &[(String, Stats)]| -> Value {
         Value::Object(s.iter().map(|(k, v)| (k.clone(), stats_json(v))).collect())
     };
@@ -459,76 +547,60 @@ pub fn write(
             .map(|(k, _)| k.clone())
             .collect::<Vec<_>>()),
     );
-    doc.insert("eyes".into(), json!(total));
-    doc.insert("eyes_finished".into(), json!(members.len()));
-    doc.insert("eyes_failed".into(), json!(total - members.len()));
-    doc.insert("final".into(), object(&final_stats));
+    doc.insert("eyes".into(), json!(pop.total));
+    doc.insert("eyes_finished".into(), json!(pop.finished));
+    doc.insert("eyes_failed".into(), json!(pop.total - pop.finished));
+    doc.insert("final".into(), object(&pop.final_stats));
     // Only where there is something to say: a cohort every eye of which has every output
     // writes the bytes it always wrote.
-    if !notes.is_empty() {
-        doc.insert("notes".into(), json!(notes));
+    if !pop.notes.is_empty() {
+        doc.insert("notes".into(), json!(pop.notes));
     }
-    doc.insert("classes".into(), shares_json(&final_shares));
+    doc.insert("classes".into(), shares_json(&pop.final_shares));
     doc.insert(
         "times".into(),
         Value::Array(
-            per_time
+            pop.per_time
                 .iter()
                 .map(|(t, s, c)| json!({ "t": num(*t), "outputs": object(s), "classes": shares_json(c) }))
                 .collect(),
         ),
     );
-    if let Some(sobol) = &sobol {
-        doc.insert(
-            "sobol".into(),
-            Value::Object(
-                sobol
-                    .iter()
-                    .map(|(output, indices)| {
-                        (
-                            output.clone(),
-                            Value::Object(
-                                indices
-                                    .iter()
-                                    .map(|(key, ix)| {
-                                        (
-                                            key.clone(),
-                                            json!({
-                                                "first": num(ix.first),
-                                                "first_ci": [num(ix.first_ci[0]), num(ix.first_ci[1])],
-                                                "total": num(ix.total),
-                                                "total_ci": [num(ix.total_ci[0]), num(ix.total_ci[1])],
-                                            }),
-                                        )
-                                    })
-                                    .collect(),
-                            ),
-                        )
-                    })
-                    .collect(),
-            ),
-        );
+    if let Some(sobol) = &pop.sobol {
+        doc.insert("sobol".into(), sobol_json(sobol));
     }
     let mut text = serde_json::to_string_pretty(&Value::Object(doc)).unwrap_or_default();
     text.push('\n');
-    // Every file the population adds to the sweep's directory is claimed in its marker
-    // before it is written: an entry the marker does not list is somebody else's, and a
-    // rerun, `--resume`, a second merge or `sweep status` would refuse the directory.
-    let mut claimed = vec![POPULATION_FILE, POPULATION_TABLE];
-    if sobol.is_some() {
-        claimed.push(SOBOL_TABLE);
-    }
-    claimed.extend(FIGURE_FILES);
-    crate::rundir::owner::claim(out, &claimed)?;
-    let io = |file: &str, e: std::io::Error| OutputError::Io {
-        path: out.join(file),
-        source: e,
-    };
-    write_atomic(&out.join(POPULATION_FILE), text.as_bytes())
-        .map_err(|e| io(POPULATION_FILE, e))?;
+    text
+}
 
-    // The table: t ("final" for the final time), output, then the statistics; class shares
-    // as rows `class=myopic` with the share as the mean.
+/// population.json's `sobol`: by output, by key, the indices and their intervals.
+fn sobol_json(sobol: &Sobol) -> Value {
+    let index = |ix: &Index| {
+        json!({
+            "first": num(ix.first),
+            "first_ci": [num(ix.first_ci[0]), num(ix.first_ci[1])],
+            "total": num(ix.total),
+            "total_ci": [num(ix.total_ci[0]), num(ix.total_ci[1])],
+        })
+    };
+    Value::Object(
+        sobol
+            .iter()
+            .map(|(output, indices)| {
+                let by_key = indices
+                    .iter()
+                    .map(|(key, ix)| (key.clone(), index(ix)))
+                    .collect();
+                (output.clone(), Value::Object(by_key))
+            })
+            .collect(),
+    )
+}
+
+/// The text of population.csv: t ("final" for the final time), output, then the
+/// statistics; class shares as rows `class=myopic` with the share as the mean.
+fn population_csv(pop: &Population) -> String {
     let mut csv = String::from("t,output,n,mean,sd");
     for p in QUANTILES {
         csv.push_str(&format!(",q{p}"));
@@ -538,11 +610,7 @@ pub fn write(
         csv.push_str(&format!(",q{p}_se"));
     }
     csv.push('\n');
-    let rows = |csv: &mut String,
-                t: &str,
-                s: &[(String, Stats)],
-                c: &BTreeMap<String, (f64, f64)>,
-                n: usize| {
+    let rows = |csv: &mut String, t: &str, s: &[(String, Stats)], c: &Shares, n: usize| {
         for (k, st) in s {
             csv.push_str(&format!(
                 "{t},{k},{},{},{}",
@@ -574,46 +642,39 @@ pub fn write(
     rows(
         &mut csv,
         "final",
-        &final_stats,
-        &final_shares,
-        members.len(),
+        &pop.final_stats,
+        &pop.final_shares,
+        pop.finished,
     );
-    for (t, s, c) in &per_time {
-        rows(&mut csv, &format_value(*t), s, c, members.len());
+    for (t, s, c) in &pop.per_time {
+        rows(&mut csv, &format_value(*t), s, c, pop.finished);
     }
-    write_atomic(&out.join(POPULATION_TABLE), csv.as_bytes())
-        .map_err(|e| io(POPULATION_TABLE, e))?;
-    let mut files = vec![POPULATION_FILE, POPULATION_TABLE];
-    if let Some(sobol) = &sobol {
-        let mut csv =
-            String::from("output,key,first,first_low,first_high,total,total_low,total_high\n");
-        for (output, indices) in sobol {
-            for (key, ix) in indices {
-                csv.push_str(&format!(
-                    "{output},{key},{},{},{},{},{},{}\n",
-                    format_value(ix.first),
-                    format_value(ix.first_ci[0]),
-                    format_value(ix.first_ci[1]),
-                    format_value(ix.total),
-                    format_value(ix.total_ci[0]),
-                    format_value(ix.total_ci[1])
-                ));
-            }
+    csv
+}
+
+/// The text of sobol.csv: one row per output and key.
+fn sobol_csv(sobol: &Sobol) -> String {
+    let mut csv =
+        String::from("output,key,first,first_low,first_high,total,total_low,total_high\n");
+    for (output, indices) in sobol {
+        for (key, ix) in indices {
+            csv.push_str(&format!(
+                "{output},{key},{},{},{},{},{},{}\n",
+                format_value(ix.first),
+                format_value(ix.first_ci[0]),
+                format_value(ix.first_ci[1]),
+                format_value(ix.total),
+                format_value(ix.total_ci[0]),
+                format_value(ix.total_ci[1])
+            ));
         }
-        write_atomic(&out.join(SOBOL_TABLE), csv.as_bytes()).map_err(|e| io(SOBOL_TABLE, e))?;
-        files.push(SOBOL_TABLE);
     }
-    Ok(Written {
-        files,
-        finished: members.len(),
-        total,
-        notes,
-    })
+    csv
 }
 
 /// The note of Sobol indices outside [0, 1], where a share of variance lies: their Monte
 /// Carlo error, said with the largest excursion (None when every index lies in [0, 1]).
-fn sobol_note(sobol: &[(String, Vec<(String, Index)>)]) -> Option<String> {
+fn sobol_note(sobol: &Sobol) -> Option<String> {
     let mut count = 0;
     let mut all = 0;
     let mut worst: Option<(f64, String)> = None;
@@ -645,11 +706,7 @@ fn sobol_note(sobol: &[(String, Vec<(String, Index)>)]) -> Option<String> {
 
 /// The Sobol indices of each final output, over the base points whose A, B and every AB_i
 /// finished (a base point with a failed row is left out whole).
-fn sobol_of(
-    sample: &Sample,
-    eyes: &[Option<Eye>],
-    final_stats: &[(String, Stats)],
-) -> Vec<(String, Vec<(String, Index)>)> {
+fn sobol_of(sample: &Sample, eyes: &[Option<Eye>], final_stats: &[(String, Stats)]) -> Sobol {
     let per = sample.keys.len() + 2;
     final_stats
         .iter()
