@@ -83,7 +83,8 @@ impl From<FitError> for Error {
     fn from(e: FitError) -> Self {
         match e {
             FitError::Growth(g) => g.into(),
-            e @ FitError::NotRecorded { .. } => Error::failed(e.to_string()),
+            // A run that records nothing, or a failure the fit adds later: not the user's.
+            e => Error::failed(e.to_string()),
         }
     }
 }
@@ -521,6 +522,7 @@ pub fn fit_watched(
         lm::LmError::Evaluation(e) => e,
         lm::LmError::Unidentifiable(why) => Error::input(why),
         lm::LmError::RankDeficient(why) => Error::failed(why),
+        e => Error::failed(e.to_string()),
     })?;
     let model_seconds = problem.model_seconds;
     let names: Vec<&str> = params.iter().map(|p| p.key()).collect();

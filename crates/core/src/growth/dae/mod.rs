@@ -324,6 +324,7 @@ pub struct DaeCounters {
 
 /// Why the coupled system could not be evaluated or solved.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum DaeError {
     #[error(transparent)]
     Rhs(#[from] RhsError),
