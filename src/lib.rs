@@ -10,7 +10,7 @@
 //! run, sweep, interop, study) and maps the library's one error to the exit code in one
 //! place ([`exit_code`]). Other people's formats are the library's `eyeshell::interop`.
 //! Beside the commands: `study/` (the
-//! studies and the paper's figures), `charts.rs` (the charts drawn from runs), `image.rs`
+//! studies and the paper's figures), `charts/` (the charts drawn from runs), `image.rs`
 //! (a chart written as PNG and SVG), `progress.rs` (the
 //! growth bar) and `worker/` (a sweep's runs in worker processes, the hidden
 //! `sweep-worker` subcommand).

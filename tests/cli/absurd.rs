@@ -2,7 +2,7 @@
 //! a memory limit and a time limit ([`bounded`]). Each is refused on one line before any
 //! output exists, or (where the scene is legal but the solve cannot succeed) fails cleanly
 //! within the time limit, saying where. The scene-level checks behind them are unit-tested
-//! in `crates/eyeshell/src/scene/tests.rs`.
+//! in `crates/eyeshell/src/scene/tests/`.
 
 use crate::support::*;
 

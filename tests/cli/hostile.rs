@@ -4,7 +4,7 @@
 //! module covers so far: broken run files (6), sweeps that point outside themselves
 //! (5, 6), a sweep run that aborts its process, and `--resume` into directories that are
 //! not the sweep's: planted symbolic links, other outputs, other sweeps (5). Finite but
-//! absurd values (1) are in `crates/eyeshell/src/scene/tests.rs`, the mesh and solver
+//! absurd values (1) are in `crates/eyeshell/src/scene/tests/`, the mesh and solver
 //! tests; names with control characters (7) in `keys_check.rs`; foreign .mat/.npz files in
 //! `readers.rs` and `fuzz_readers.rs`; run files (CSV and summary.json) mutated at random in
 //! `fuzz_run_files.rs`; `solver.max_seconds` in `max_seconds.rs`.

@@ -1,0 +1,212 @@
+//! Growth runs: the series, snapshots and sensitivities as dicts of arrays, with the
+//! progress callback and Ctrl-C between steps.
+
+use eyeshell::growth::{
+    GrowthParams, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot, GROWTH_COLUMNS,
+};
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
+
+use super::convert::{column, fields_dict};
+use super::errors::py_err;
+use super::scene::PyScene;
+
+/// Why a run stopped early on the caller's behalf.
+#[derive(Debug)]
+struct Stopped(&'static str);
+
+impl std::fmt::Display for Stopped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.0)
+    }
+}
+
+impl std::error::Error for Stopped {}
+
+/// The observer of a growth run from Python: after each step, with the GIL taken back
+/// briefly, Python's pending signals (Ctrl-C) and the progress callback.
+pub(super) struct Watch<'a> {
+    pub(super) progress: Option<&'a Py<PyAny>>,
+    /// The Python exception that stopped the run (KeyboardInterrupt, or the callback's).
+    pub(super) raised: Option<PyErr>,
+}
+
+impl Observer for Watch<'_> {
+    fn snapshot(&mut self, _s: &Snapshot) -> Result<(), ObserverError> {
+        Ok(())
+    }
+
+    fn progress(&mut self, t: f64, t_end: f64) -> Result<(), ObserverError> {
+        let outcome = Python::attach(|py| {
+            py.check_signals()?;
+            if let Some(f) = self.progress {
+                f.call1(py, (t, t_end))?;
+            }
+            Ok::<(), PyErr>(())
+        });
+        if let Err(e) = outcome {
+            self.raised = Some(e);
+            return Err(Box::new(Stopped("interrupted")));
+        }
+        Ok(())
+    }
+}
+
+const SERIES_NAMES: [&str; 5] = [
+    "t",
+    "axial_length",
+    "equatorial_radius",
+    "retina_minus_blue",
+    "retina_minus_red",
+];
+
+/// Series rows as a dict of arrays (series.csv's columns, in its order; `class` as a list
+/// of str; `age` last when the scene counts in ages, `g`'s time.unit, as series.csv).
+fn series_dict<'py>(
+    py: Python<'py>,
+    rows: &[SeriesRow],
+    g: Option<&GrowthParams>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let getters: [fn(&SeriesRow) -> f64; 5] = [
+        |r| r.t,
+        |r| r.axial_length,
+        |r| r.equatorial_radius,
+        |r| r.retina_minus_blue,
+        |r| r.retina_minus_red,
+    ];
+    for (name, get) in SERIES_NAMES.iter().zip(getters) {
+        d.set_item(*name, column(py, rows, get))?;
+    }
+    let classes: Vec<&str> = rows.iter().map(|r| r.class.as_str()).collect();
+    d.set_item("class", PyList::new(py, classes)?)?;
+    d.set_item("refraction_D", column(py, rows, |r| r.refraction_d))?;
+    add_age(py, &d, rows.iter().map(|r| r.t), g)?;
+    Ok(d)
+}
+
+/// The `age` column of the times `t` in a scene that counts in ages (`g`'s time.unit), as
+/// the command line's files end in it; nothing without a unit.
+fn add_age(
+    py: Python<'_>,
+    d: &Bound<'_, PyDict>,
+    t: impl Iterator<Item = f64>,
+    g: Option<&GrowthParams>,
+) -> PyResult<()> {
+    let Some(g) = g.filter(|g| g.age_unit().is_some()) else {
+        return Ok(());
+    };
+    let ages: Vec<f64> = t.map(|t| g.age_of(t).unwrap_or(f64::NAN)).collect();
+    d.set_item("age", PyArray1::from_vec(py, ages))
+}
+
+/// The peripheral refraction of every snapshot (peripheral.csv's columns, `age` last when
+/// the scene counts in ages, `g`'s time.unit) as arrays.
+fn peripheral_dict<'py>(
+    py: Python<'py>,
+    snapshots: &[Snapshot],
+    g: Option<&GrowthParams>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let rows: Vec<(f64, &eyeshell::growth::PeripheralRow)> = snapshots
+        .iter()
+        .flat_map(|s| s.peripheral.iter().map(move |p| (s.t, p)))
+        .collect();
+    let d = PyDict::new(py);
+    d.set_item("t", column(py, &rows, |r| r.0))?;
+    d.set_item("field_deg", column(py, &rows, |r| r.1.field_deg))?;
+    d.set_item("refraction_D", column(py, &rows, |r| r.1.refraction_d))?;
+    d.set_item("relative_D", column(py, &rows, |r| r.1.relative_d))?;
+    add_age(py, &d, rows.iter().map(|r| r.0), g)?;
+    Ok(d)
+}
+
+/// One snapshot's fields (fields.csv's columns, then the growth columns) as arrays.
+fn snapshot_dict<'py>(py: Python<'py>, s: &Snapshot) -> PyResult<Bound<'py, PyDict>> {
+    let d = fields_dict(py, &s.fields)?;
+    for (j, name) in GROWTH_COLUMNS.iter().enumerate() {
+        d.set_item(*name, column(py, &s.growth, |g| g.values()[j]))?;
+    }
+    Ok(d)
+}
+
+/// sensitivities.csv's columns of `rows` (`parameter` as a list of str; the scaled column
+/// computed as the command line computes it, so the values are the file's bit for bit).
+fn sensitivities_dict<'py>(
+    py: Python<'py>,
+    rows: &[SensitivityRow],
+    g: Option<&GrowthParams>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("t", column(py, rows, |r| r.t))?;
+    let names: Vec<&str> = rows.iter().map(|r| r.parameter).collect();
+    d.set_item("parameter", PyList::new(py, names)?)?;
+    d.set_item("d_axial_length", column(py, rows, |r| r.d_axial_length))?;
+    d.set_item(
+        "d_equatorial_radius",
+        column(py, rows, |r| r.d_equatorial_radius),
+    )?;
+    d.set_item(
+        "d_retina_minus_blue",
+        column(py, rows, |r| r.d_retina_minus_blue),
+    )?;
+    d.set_item(
+        "scaled_axial_length",
+        column(py, rows, SensitivityRow::scaled_axial_length),
+    )?;
+    add_age(py, &d, rows.iter().map(|r| r.t), g)?;
+    Ok(d)
+}
+
+/// Grow the eye of `scene` with the GIL released, calling `progress(t, t_end)` after each
+/// step; returns a dict: series, history, snapshots (a list of (t, fields)), sensitivities
+/// (with `sensitivities`: the keys, as `eyeshell grow --sensitivities`), summary_text.
+#[pyfunction]
+#[pyo3(signature = (scene, progress = None, sensitivities = Vec::new(), sensitivity_error_control = false))]
+pub(super) fn grow<'py>(
+    py: Python<'py>,
+    scene: PyScene,
+    progress: Option<Py<PyAny>>,
+    sensitivities: Vec<String>,
+    sensitivity_error_control: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut scene = scene.inner;
+    scene
+        .set_sensitivities(&sensitivities, sensitivity_error_control)
+        .map_err(py_err)?;
+    scene.solver.threads = eyeshell::scene::jobs_from_env().map_err(py_err)?;
+    let (result, raised) = py.detach(|| {
+        let mut watch = Watch {
+            progress: progress.as_ref(),
+            raised: None,
+        };
+        let result = scene.grow(&mut watch);
+        (result, watch.raised)
+    });
+    if let Some(e) = raised {
+        return Err(e);
+    }
+    let growth = result.map_err(py_err)?;
+    let d = PyDict::new(py);
+    let g = scene.growth.as_ref();
+    d.set_item("series", series_dict(py, &growth.series, g)?)?;
+    d.set_item("history", series_dict(py, &growth.history, g)?)?;
+    let snapshots = PyList::empty(py);
+    for s in &growth.snapshots {
+        snapshots.append(PyTuple::new(
+            py,
+            [
+                s.t.into_pyobject(py)?.into_any(),
+                snapshot_dict(py, s)?.into_any(),
+            ],
+        )?)?;
+    }
+    d.set_item("snapshots", snapshots)?;
+    d.set_item("peripheral", peripheral_dict(py, &growth.snapshots, g)?)?;
+    d.set_item(
+        "sensitivities",
+        sensitivities_dict(py, &growth.sensitivities, g)?,
+    )?;
+    d.set_item("summary_text", scene.grow_summary(&growth))?;
+    Ok(d)
+}

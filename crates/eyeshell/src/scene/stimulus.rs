@@ -1,0 +1,111 @@
+//! The stimulus a scene sets (the blue and red best-focus surfaces, or the eye's optics
+//! traced to give them).
+
+use super::{Scene, SceneError, Stimulus};
+use crate::model::optics::{OpticsSpec, Source};
+use crate::model::stimulus::{Surface, RED_OFFSET};
+
+impl Scene {
+    /// The blue best-focus surface in effect.
+    pub fn blue(&self) -> Surface {
+        self.growth.as_ref().map_or(self.stimulus.blue, |g| g.blue)
+    }
+
+    /// The red best-focus surface in effect.
+    pub fn red(&self) -> Surface {
+        self.growth.as_ref().map_or(self.stimulus.red, |g| g.red)
+    }
+
+    /// Change the blue surface; the red one follows it (pushed back by [`RED_OFFSET`]) as
+    /// long as no red key was given.
+    pub fn set_blue(&mut self, change: impl FnOnce(&mut Surface)) {
+        self.edit_stimulus(|st| {
+            change(&mut st.blue);
+            if st.red_follows_blue {
+                st.red = Surface {
+                    offset: RED_OFFSET,
+                    ..st.blue
+                };
+            }
+        });
+    }
+
+    /// Change the red surface. The first red key starts from the default red surface
+    /// (the published blue one pushed back by [`RED_OFFSET`]), not from the scene's blue.
+    pub fn set_red(&mut self, change: impl FnOnce(&mut Surface)) {
+        self.edit_stimulus(|st| {
+            if st.red_follows_blue {
+                st.red = Surface::default_red();
+                st.red_follows_blue = false;
+            }
+            change(&mut st.red);
+        });
+    }
+
+    /// The source of the stimulus's surfaces in effect.
+    pub fn stimulus_source(&self) -> Source {
+        self.growth
+            .as_ref()
+            .map_or(self.stimulus.source, |g| g.source)
+    }
+
+    /// The optics keys in effect.
+    pub fn optics(&self) -> &OpticsSpec {
+        self.growth
+            .as_ref()
+            .map_or(&self.stimulus.optics, |g| &g.optics)
+    }
+
+    /// Change the stimulus's source.
+    pub fn set_stimulus_source(&mut self, source: Source) {
+        self.edit_stimulus(|st| st.source = source);
+    }
+
+    /// Change the optics keys.
+    pub fn set_optics(&mut self, change: impl FnOnce(&mut OpticsSpec)) {
+        self.edit_stimulus(|st| change(&mut st.optics));
+    }
+
+    /// Edit the surfaces in effect (those of the growth model when the scene grows) and
+    /// keep the two copies equal.
+    fn edit_stimulus(&mut self, edit: impl FnOnce(&mut Stimulus)) {
+        if let Some(g) = &self.growth {
+            self.stimulus.blue = g.blue;
+            self.stimulus.red = g.red;
+            self.stimulus.source = g.source;
+            self.stimulus.optics = g.optics.clone();
+        }
+        edit(&mut self.stimulus);
+        if let Some(g) = &mut self.growth {
+            g.blue = self.stimulus.blue;
+            g.red = self.stimulus.red;
+            g.source = self.stimulus.source;
+            g.optics = self.stimulus.optics.clone();
+        }
+    }
+
+    /// Trace the surfaces of a growing scene whose stimulus is computed from its optics
+    /// (once: nothing is traced while the keys and the centre stay as they were traced).
+    /// The error names the optics key to change.
+    pub fn resolve_optics(&mut self) -> Result<(), SceneError> {
+        self.trace_optics().map_err(|e| SceneError::Invalid {
+            origin: self.origin_of_key(&e.key),
+            key: e.key.to_string(),
+            value: e.value,
+            problem: e.problem,
+        })
+    }
+
+    pub(super) fn trace_optics(&mut self) -> Result<(), crate::model::optics::OpticsKeyError> {
+        let Some(g) = &mut self.growth else {
+            return Ok(());
+        };
+        if !g.is_resolved() {
+            g.computed = Some(std::sync::Arc::new(
+                g.optics.compute_over(g.blue.z_b, g.t_end)?,
+            ));
+        }
+        crate::model::eyewear::refraction_table(&g.refraction_optics())?;
+        Ok(())
+    }
+}

@@ -1,0 +1,153 @@
+//! Unit tests of the stimulus computed from the eye's optics.
+
+use super::*;
+use crate::model::optics::Source;
+
+/// The default source is the published polynomial: no optics key is in effect or
+/// summarised, and nothing is traced; the effective TOML shows an optics key only when the
+/// scene gives it another value than its default (so that the text reads back to the same
+/// scene). With `stimulus.source = "optics"` the keys are in effect and the surfaces are
+/// traced once, as the scene is read.
+#[test]
+fn the_optics_keys_apply_to_the_optics_source_only() {
+    let s = parse("growth.eta0 = 70\noptics.pupil = 2").unwrap();
+    let g = s.growth.as_ref().unwrap();
+    assert_eq!(
+        (g.source, g.optics.pupil, g.computed.is_none()),
+        (Source::Polynomial, 2.0, true)
+    );
+    let params = s.parameters_json();
+    assert!(params.get("stimulus.source").is_none() && params.get("optics.pupil").is_none());
+    let text = s.to_toml();
+    assert!(text.contains("optics.pupil = 2.0\n"), "{text}");
+    assert_eq!(text.matches("optics.").count(), 1, "{text}");
+    assert_eq!(parse(&text).unwrap(), s);
+    assert!(!parse("growth.eta0 = 70")
+        .unwrap()
+        .to_toml()
+        .contains("optics"));
+    let s = parse(
+        "growth.eta0 = 70\nstimulus.source = \"optics\"\n[optics]\npupil = 1.5\nfocus = \"sagittal\"\nmax_field = 30\nwavelengths = [450, 650]",
+    )
+    .unwrap();
+    let params = s.parameters_json();
+    assert_eq!(params["stimulus.source"], "optics");
+    assert_eq!(params["optics.eye"], "atchison-2006");
+    assert_eq!(params["optics.pupil"], 1.5);
+    assert_eq!(params["optics.focus"], "sagittal");
+    let g = s.growth.as_ref().unwrap();
+    let c = g.computed.as_ref().expect("traced as the scene is read");
+    assert_eq!(c.surfaces.surfaces.len(), 2);
+    assert_eq!(c.surfaces.surfaces[0].points.len(), 31);
+    assert_eq!(c.surfaces.surfaces[1].wavelength_nm, 650.0);
+    assert_eq!(c.z_c, g.blue.z_b);
+    assert!(matches!(
+        g.blue_focal(),
+        crate::model::stimulus::Focal::Computed(_)
+    ));
+    // Resolving again traces nothing: the same shared surfaces.
+    let again = g.resolved().unwrap();
+    assert!(std::sync::Arc::ptr_eq(again.computed.as_ref().unwrap(), c));
+    // The scene reads back, surfaces and all.
+    let back = parse(&s.to_toml()).unwrap();
+    assert_eq!(back, s);
+}
+
+/// Bad optics keys are refused as the scene is read, in one line naming the key, from the
+/// file or from --set: an unknown eye, a pupil wider than the eye admits, wavelengths the
+/// dispersion laws do not cover or too few of them, a largest field that cannot be traced.
+#[test]
+fn bad_optics_keys_are_refused_naming_the_key() {
+    let base = "growth.eta0 = 70\nstimulus.source = \"optics\"";
+    for (set, key, problem) in [
+        (
+            "optics.eye=gullstrand",
+            "optics.eye",
+            "must be one of \"atchison-2006\"",
+        ),
+        ("optics.pupil=12", "optics.pupil", "must lie in (0, 10] mm"),
+        ("optics.pupil=0", "optics.pupil", "positive"),
+        ("optics.pupil=nan", "optics.pupil", "finite"),
+        (
+            "optics.wavelengths=[400, 5000]",
+            "optics.wavelengths",
+            "(5000 does not)",
+        ),
+        (
+            "optics.wavelengths=[400]",
+            "optics.wavelengths",
+            "at least two",
+        ),
+        (
+            "optics.wavelengths=[nan, 600]",
+            "optics.wavelengths",
+            "finite",
+        ),
+        (
+            "optics.max_field=85",
+            "optics.max_field",
+            "must lie in [5, 80] degrees",
+        ),
+        ("optics.focus=best", "optics.focus", "must be one of"),
+        (
+            "stimulus.source=zemax",
+            "stimulus.source",
+            "\"polynomial\", \"optics\"",
+        ),
+    ] {
+        let e = err(parse_set(base, &[set]), &format!("--set {set}"), key);
+        assert!(e.contains(problem), "{set}: {e}");
+    }
+    // Traced and failing: at 80° with an 8 mm pupil a ray misses the posterior lens; the
+    // error names the field, the wavelength and the surface, and blames the largest field.
+    let e = err(
+        parse_set(base, &["optics.pupil=8", "optics.max_field=80"]),
+        "--set optics.max_field=80",
+        "optics.max_field",
+    );
+    assert!(
+        e.contains("cannot be traced in the atchison-2006 eye")
+            && e.contains("at 80° and 400 nm fails at 'posterior lens'"),
+        "{e}"
+    );
+    // From the file, the file is named.
+    let e = err(
+        parse(&format!("{base}\noptics.pupil = 11")),
+        "x.toml",
+        "optics.pupil",
+    );
+    assert!(e.contains("11"), "{e}");
+    // A polynomial scene does not check (or trace) optics keys it does not use.
+    assert!(parse_set("growth.eta0 = 70", &["optics.pupil=12"]).is_ok());
+}
+
+/// Every parameter round-trips through its scene key, `set` and `value` touch the
+/// field the key names (as the scene's own key does), and the refusals name the key.
+#[test]
+fn sensitivity_parameters_and_their_keys() {
+    for param in crate::growth::dae::SensParam::ALL {
+        assert_eq!(super::keys::sensitivity_param(param.key()), Ok(param));
+        let mut scene = Scene::default_scene();
+        scene.params.d = 200.0;
+        let mut g = crate::growth::GrowthParams::default();
+        param.set(&mut scene.params, &mut g, 0.75);
+        assert_eq!(param.value(&scene.params, &g), 0.75, "{}", param.key());
+        scene.growth = Some(crate::growth::GrowthParams::default());
+        scene.set(param.key(), 0.75).unwrap();
+        let ours = (scene.params, scene.growth.clone().unwrap());
+        assert_eq!(param.value(&ours.0, &ours.1), 0.75, "{}", param.key());
+        assert!(crate::growth::dae::SensParam::SUPPORTED.contains(param.key()));
+    }
+    let why = super::keys::sensitivity_param("stimulus.red.offset").unwrap_err();
+    assert!(why.contains("only affects the classification"), "{why}");
+    let why = crate::growth::dae::SensParam::FibreStiffness
+        .check(&crate::model::params::Params::default())
+        .unwrap_err();
+    assert!(
+        why.starts_with("fibres.D = 0: the scene has no fibres"),
+        "{why}"
+    );
+    assert!(crate::growth::dae::SensParam::Modulus
+        .check(&crate::model::params::Params::default())
+        .is_ok());
+}

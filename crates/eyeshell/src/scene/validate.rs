@@ -1,0 +1,299 @@
+//! Validating a scene's effective values: each key's own range, then the limits that tie
+//! keys together, then the sizes a run will allocate and write.
+
+use super::keys::{KeyValue, KEYS};
+use super::parse::{override_origin, source_key, LENSES_KEY, SURFACES_KEY};
+use super::view::show;
+use super::{Scene, SceneError, Sources};
+use crate::model::optics::Source;
+use crate::text::{decimals6, number};
+
+impl Scene {
+    /// Where the value of `key` came from: the last `--set` of it (or, for a surface's key,
+    /// of any surface), else the scene's origin. For errors found after the scene was read
+    /// (an optics key that cannot be traced).
+    pub fn origin_of_key(&self, key: &str) -> String {
+        let family = |k: &str| {
+            if k.starts_with(SURFACES_KEY) {
+                SURFACES_KEY.to_string()
+            } else if k.starts_with(LENSES_KEY) {
+                LENSES_KEY.to_string()
+            } else {
+                k.to_string()
+            }
+        };
+        self.overrides
+            .iter()
+            .rev()
+            .find(|text| {
+                text.split_once('=')
+                    .is_some_and(|(k, _)| family(k.trim()) == family(key))
+            })
+            .map(|text| override_origin(text.as_str()))
+            .unwrap_or_else(|| self.origin.clone())
+    }
+
+    /// The origin of the most recent of `keys` to be set, else the scene's origin.
+    pub(super) fn origin_of(&self, sources: &Sources, keys: &[&str]) -> String {
+        keys.iter()
+            .filter_map(|k| sources.get(k))
+            .max_by_key(|(n, _)| *n)
+            .map(|(_, o)| o.clone())
+            .unwrap_or_else(|| self.origin.clone())
+    }
+
+    pub(super) fn validate_from(&self, sources: &Sources) -> Result<(), SceneError> {
+        let invalid = |keys: &[&str], value: String, problem: String| SceneError::Invalid {
+            origin: self.origin_of(sources, keys),
+            key: keys[0].to_string(),
+            value,
+            problem,
+        };
+        for spec in KEYS {
+            let check = match spec.get(self) {
+                KeyValue::Float(x) => spec.rule.check_float(x),
+                KeyValue::Count(n) => spec.rule.check_count(n),
+                KeyValue::Floats(xs) => spec.rule.check_floats(&xs),
+                _ => Ok(()),
+            };
+            if let Err(problem) = check {
+                return Err(invalid(&[spec.key], show(&spec.get(self)), problem));
+            }
+        }
+        // Limits that tie keys together; every key is finite and in its own range by now.
+        let p = &self.params;
+        let p_max = crate::model::cornea::max_pressure(&p.cornea);
+        if p.dp > p_max {
+            return Err(invalid(
+                &["pressure.dP", "cornea.C", "cornea.H", "cornea.R0"],
+                show(&KeyValue::Float(p.dp)),
+                format!(
+                    "is above the cornea's limit: the largest admissible ΔP is {} kPa \
+                     (4 C_c H_c / R_c · (6/7) · 7^(-1/6) with cornea.C = {}, cornea.H = {}, cornea.R0 = {})",
+                    decimals6(p_max),
+                    number(p.cornea.c),
+                    number(p.cornea.h),
+                    number(p.cornea.r0)
+                ),
+            ));
+        }
+        let length = p.length();
+        if self.solver.epsilon >= length {
+            return Err(invalid(
+                &["solver.epsilon", "geometry.R0", "geometry.fraction"],
+                show(&KeyValue::Float(self.solver.epsilon)),
+                format!(
+                    "must be below the shell's length L = π·fraction·R0 = {} mm \
+                     (geometry.fraction = {}, geometry.R0 = {})",
+                    decimals6(length),
+                    number(p.fraction),
+                    number(p.r0)
+                ),
+            ));
+        }
+        self.validate_mesh(sources)?;
+        self.validate_sizes(sources)?;
+        if self.stimulus_source() == Source::Optics {
+            // The whole run: growth.t_end, or the [0, 1] an elastic scene's eye is drawn over.
+            let t_end = self.growth.as_ref().map_or(1.0, |g| g.t_end);
+            if let Err(e) = self.optics().check_over(t_end) {
+                return Err(SceneError::Invalid {
+                    origin: self.origin_of(sources, &[source_key(&e.key)]),
+                    key: e.key,
+                    value: e.value,
+                    problem: e.problem,
+                });
+            }
+        }
+        if self.growth.is_some() {
+            let o = self.optics();
+            if !o.lenses.is_empty() && self.stimulus_source() != Source::Optics {
+                return Err(invalid(
+                    &["optics.lenses"],
+                    crate::model::eyewear::lenses_text(&o.lenses),
+                    "need stimulus.source = \"optics\": the published surfaces are of the naked eye".into(),
+                ));
+            }
+            if !(o.myopia_d >= -25.0 && o.myopia_d <= 0.0) {
+                return Err(invalid(
+                    &["stimulus.myopia_D"],
+                    number(o.myopia_d),
+                    "must lie in [-25, 0] D".into(),
+                ));
+            }
+            if !(o.hyperopia_d >= 0.0 && o.hyperopia_d <= 25.0) {
+                return Err(invalid(
+                    &["stimulus.hyperopia_D"],
+                    number(o.hyperopia_d),
+                    "must lie in [0, 25] D".into(),
+                ));
+            }
+            let (lo, hi, why) = o.wavelength_range();
+            if !(o.refraction_wavelength >= lo && o.refraction_wavelength <= hi) {
+                return Err(invalid(
+                    &["optics.refraction_wavelength", "optics.eye"],
+                    number(o.refraction_wavelength),
+                    format!("must lie between {lo} and {hi} nm {why}"),
+                ));
+            }
+        }
+        if self.solver.richardson && self.growth.is_some() {
+            return Err(invalid(
+                &["solver.richardson"],
+                show(&KeyValue::Bool(true)),
+                "is for elastic solves only: a growth run is not extrapolated".into(),
+            ));
+        }
+        if let Some(g) = &self.growth {
+            // The clock and the schedule: each problem names its key and shows its value.
+            if let Some((key, problem)) = (g.clock.check())
+                .and_then(|()| g.clock.check_window(g.t_end))
+                .and_then(|()| g.schedule.check())
+                .and_then(|()| g.schedule.check_window(&g.clock, g.t_end))
+                .err()
+            {
+                let value =
+                    crate::scene::keys::find(key).map_or_else(String::new, |k| show(&k.get(self)));
+                return Err(invalid(&[key], value, problem));
+            }
+            // A schedule runs the model on its own clock S(t) (growth/schedule.rs), which is
+            // exact only while nothing but the rates depends on t: optics that change with
+            // age read t itself.
+            if !g.schedule.is_constant()
+                && self.stimulus_source() == Source::Optics
+                && !self.optics().times().is_empty()
+            {
+                return Err(invalid(
+                    &["growth.schedule"],
+                    show(&crate::scene::keys::find("growth.schedule").map_or(KeyValue::Unset, |k| k.get(self))),
+                    "cannot be combined with optics that change with age (tables over t in optics.surfaces): the schedule runs the model on its own clock".into(),
+                ));
+            }
+            let times = &self.growth_settings.output_times;
+            if let Some(&last) = times.last().filter(|&&t| t > g.t_end) {
+                return Err(invalid(
+                    &["output.times", "growth.t_end"],
+                    show(&KeyValue::Floats(times.clone())),
+                    format!(
+                        "must lie in (0, growth.t_end]: {} is after growth.t_end = {}",
+                        number(last),
+                        number(g.t_end)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// What a run of this scene will allocate and write, counted before it starts: the
+    /// largest mesh any of its solves lays (with solver.richardson, the mesh halved twice)
+    /// must fit [`crate::mesh::MAX_NODES`], which bounds a solve's memory
+    /// ([`crate::mesh::BYTES_PER_NODE`] a node); a growth run's files together must fit
+    /// [`crate::rundir::growth::MAX_RUN_BYTES`]. The mesh itself is valid by now.
+    fn validate_sizes(&self, sources: &Sources) -> Result<(), SceneError> {
+        use crate::mesh::{BYTES_PER_NODE, MAX_NODES};
+        let invalid = |keys: &[&str], value: String, problem: String| SceneError::Invalid {
+            origin: self.origin_of(sources, keys),
+            key: keys[0].to_string(),
+            value,
+            problem,
+        };
+        let gb = |bytes: u64| format!("{:.1} GB", bytes as f64 / 1e9);
+        // The nodes of the mesh solver.nodes lays (breakpoints at most 3 more).
+        let planned = crate::bvp::solve::mesh_plan(&self.params, &self.solver)
+            .map(|plan| plan.nodes(3))
+            .unwrap_or(MAX_NODES);
+        if self.solver.richardson {
+            // Without solver.tol: solves on M, M halved and M halved twice (4M − 3 nodes).
+            // With it, the adapted mesh M has at most ⌈max_nodes / 2⌉ nodes, so M halved
+            // twice at most 2·max_nodes + 1.
+            let (keys, value, finest, fix): (&[&str], usize, usize, String) = match self.solver.tol
+            {
+                None => (
+                    &["solver.nodes", "solver.richardson"],
+                    self.solver.nodes,
+                    4 * planned.saturating_sub(1) + 1,
+                    format!(
+                        "solver.nodes at most about {}",
+                        (MAX_NODES - 1) / 4 + 1 - (planned - self.solver.nodes.min(planned))
+                    ),
+                ),
+                Some(_) => (
+                    &["solver.max_nodes", "solver.richardson"],
+                    self.solver.max_nodes,
+                    2 * self.solver.max_nodes + 1,
+                    format!("solver.max_nodes at most {}", (MAX_NODES - 1) / 2),
+                ),
+            };
+            if finest > MAX_NODES {
+                return Err(invalid(
+                    keys,
+                    value.to_string(),
+                    format!(
+                        "is too large with solver.richardson: its solve on the mesh halved twice would lay {finest} nodes, about {} of memory, more than the {MAX_NODES} nodes ({}) a solve may: give {fix}, or leave out solver.richardson",
+                        gb(finest as u64 * BYTES_PER_NODE),
+                        gb(MAX_NODES as u64 * BYTES_PER_NODE)
+                    ),
+                ));
+            }
+        }
+        if self.growth.is_some() {
+            use crate::rundir::growth::{planned_bytes, MAX_RUN_BYTES};
+            let g = &self.growth_settings;
+            // With solver.tol the mesh is chosen as the run starts: at most max_nodes.
+            let (nodes, keys): (usize, &[&str]) = match self.solver.tol {
+                None => (planned, &["output.times", "solver.nodes"]),
+                Some(_) => (self.solver.max_nodes, &["output.times", "solver.max_nodes"]),
+            };
+            let bytes = planned_bytes(nodes, g.output_times.len(), g.history_points);
+            if bytes > MAX_RUN_BYTES {
+                return Err(invalid(
+                    keys,
+                    show(&KeyValue::Floats(g.output_times.clone())),
+                    format!(
+                        "would have the run write about {} ({} snapshot files of up to {nodes} nodes each, and the series), more than the {} a growth run may write: give fewer output.times or fewer nodes",
+                        gb(bytes),
+                        g.output_times.len() + 1,
+                        gb(MAX_RUN_BYTES)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The mesh the solver will lay, counted before anything is allocated: every derived
+    /// size (the shell's length, the pole's and the cornea's graded nodes, the total) must
+    /// be finite and bounded (docs/MODEL.md §3–4, [`crate::mesh::plan`]).
+    fn validate_mesh(&self, sources: &Sources) -> Result<(), SceneError> {
+        use crate::mesh::MeshError;
+        let Err(e) = crate::bvp::solve::mesh_plan(&self.params, &self.solver) else {
+            return Ok(());
+        };
+        let (keys, value, problem): (&[&str], String, String) = match &e {
+            MeshError::Interval { length, .. } => (
+                &["geometry.R0", "geometry.fraction", "solver.epsilon"],
+                number(self.params.r0),
+                format!("makes the shell's length L = π·fraction·R0 = {} mm, which is not finite", number(*length)),
+            ),
+            MeshError::TooFewNodes { .. } | MeshError::TooManyNodes { .. } => (
+                &["solver.nodes", "solver.epsilon", "material.bending", "solver.cornea_grading"],
+                self.solver.nodes.to_string(),
+                format!("is too large for the mesh: {e}"),
+            ),
+            MeshError::LayerUnresolvable { .. } => (
+                &["material.bending", "solver.cornea_grading"],
+                number(self.params.e_b),
+                format!("is too small for this shell (ΔP, R0): {e}; raise material.bending or set solver.cornea_grading = false"),
+            ),
+        };
+        Err(SceneError::Invalid {
+            origin: self.origin_of(sources, keys),
+            key: keys[0].to_string(),
+            value,
+            problem,
+        })
+    }
+}
