@@ -527,7 +527,7 @@ pub(crate) fn run_on(
         .iter()
         .find_map(|s| s.check(params).err())
     {
-        return Err(fail(0.0, why, GrowthStats::default()));
+        return Err(fail(0.0, why.to_string(), GrowthStats::default()));
     }
     if growth.source == Source::Optics
         && settings.sensitivities.contains(&dae::SensParam::BlueCentre)

@@ -90,8 +90,11 @@ impl From<FitError> for Error {
 }
 
 impl FitParam {
-    /// The parameter of scene key `key`, with its range; a one-line refusal otherwise.
-    pub fn from_key(key: &str) -> Result<FitParam, String> {
+    /// The parameter of scene key `key`, with its range.
+    ///
+    /// # Errors
+    /// [`keys::SensitivityKeyError`] for a key that is not such a parameter.
+    pub fn from_key(key: &str) -> Result<FitParam, keys::SensitivityKeyError> {
         let param = keys::sensitivity_param(key)?;
         let bounds = keys::find(param.key()).map_or(Bounds::NONE, |k| bounds_of_rule(k.rule));
         Ok(FitParam { param, bounds })

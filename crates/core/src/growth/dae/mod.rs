@@ -34,7 +34,7 @@ mod jacobian;
 mod residual;
 mod sensitivities;
 
-pub use sensitivities::SensParam;
+pub use sensitivities::{SensParam, SensitivityError};
 
 use super::crossing::Crossing;
 use super::points::NP;
