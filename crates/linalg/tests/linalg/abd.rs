@@ -229,7 +229,7 @@ fn six_wide_blocks_pivot_across_blocks_and_report_singular() {
     check::<6, 12>(&a, 3, "6-wide, zero first columns");
     let mut a = random_abd::<6>(10, 3, Kind::General { diag: 3.0 }, 1);
     a.column_mut(26).fill(0.0);
-    let mut lu: AbdLu6 = abd_of::<6, 12>(&a, 3);
+    let lu: AbdLu6 = abd_of::<6, 12>(&a, 3);
     match lu.factor() {
         Err(LinalgError::Singular(why)) => assert!(why.contains("column 26"), "{why}"),
         other => panic!("expected singular, got {other:?}"),
@@ -239,7 +239,7 @@ fn six_wide_blocks_pivot_across_blocks_and_report_singular() {
     for j in 0..60 {
         a[(3 + 6 * 2 + 1, j)] = a[(3 + 6 * 2 + 4, j)];
     }
-    let mut lu = abd_of::<6, 12>(&a, 3);
+    let lu = abd_of::<6, 12>(&a, 3);
     assert!(
         matches!(lu.factor(), Err(LinalgError::Singular(_))),
         "two equal rows"
@@ -398,7 +398,7 @@ fn zero_diagonal_blocks_need_pivoting_across_blocks() {
         },
         7,
     );
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     lu.factor().unwrap();
     check::<5, 10>(&a, 3, "zero first column in every left block");
 }
@@ -419,7 +419,7 @@ fn singular_matrices_are_reported_singular() {
     for j in 0..50 {
         a[(3 + 5 * 6 + 1, j)] = a[(3 + 5 * 6 + 3, j)];
     }
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     assert!(
         matches!(lu.factor(), Err(LinalgError::Singular(_))),
         "two equal rows"
@@ -429,7 +429,7 @@ fn singular_matrices_are_reported_singular() {
     for j in 5..15 {
         a[(9, j)] = 0.5 * a[(10, j)] + 0.25 * a[(11, j)];
     }
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     assert!(
         matches!(lu.factor(), Err(LinalgError::Singular(_))),
         "a row that is a combination of two others"
@@ -437,14 +437,14 @@ fn singular_matrices_are_reported_singular() {
     // Non-finite entries.
     let mut a = random_abd::<5>(4, 3, Kind::General { diag: 3.0 }, 4);
     a[(10, 9)] = f64::NAN;
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     assert!(matches!(lu.factor(), Err(LinalgError::Singular(_))));
     // The bottom rows alone cannot fix the last node: the last stage is singular.
     let mut a = random_abd::<5>(3, 3, Kind::General { diag: 3.0 }, 5);
     for j in 0..15 {
         a[(14, j)] = a[(13, j)];
     }
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     assert!(matches!(lu.factor(), Err(LinalgError::Singular(_))));
 }
 
