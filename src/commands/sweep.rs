@@ -53,9 +53,9 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     let shard = match a.shard.as_deref() {
         None => None,
         Some("slurm") => {
-            Some(Shard::from_slurm(|name| std::env::var(name).ok()).map_err(Error::input)?)
+            Some(Shard::from_slurm(|name| std::env::var(name).ok()).map_err(Error::from)?)
         }
-        Some(text) => Some(Shard::parse(text).map_err(Error::input)?),
+        Some(text) => Some(Shard::parse(text).map_err(Error::from)?),
     };
     // A shard, or the script of a sharded sweep, plans the runs without building them all
     // (up to MAX_PLANNED_RUNS); a plain sweep builds every run (up to MAX_RUNS).

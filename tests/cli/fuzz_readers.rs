@@ -85,7 +85,7 @@ fn decode_npz(bytes: &[u8]) -> Result<Vec<(String, NpyArray)>, String> {
 }
 
 fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
-    npz::parse_npy(bytes)
+    npz::parse_npy(bytes).map_err(|e| e.to_string())
 }
 
 fn fixtures(ext: &str) -> Vec<Vec<u8>> {

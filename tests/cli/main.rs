@@ -43,4 +43,5 @@ mod solve;
 mod status;
 mod study;
 mod sweep;
+mod typed_errors;
 mod years;

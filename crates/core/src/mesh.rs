@@ -24,6 +24,7 @@ pub const BYTES_PER_NODE: u64 = 2400;
 
 /// Why a mesh cannot be laid; found by [`plan`] before anything is allocated.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum MeshError {
     #[error("the shell [ε, L] = [{}, {}] mm is not an interval of finite, positive numbers with ε < L", number(*epsilon), number(*length))]
     Interval { epsilon: f64, length: f64 },

@@ -20,6 +20,7 @@ use eyeshell_sundials::SundialsError;
 /// Everything that can go wrong in eyeshell, one line each (Display has no line breaks of
 /// its own; a message quoting a file may, and printers escape it).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// A scene that does not parse or validate, or overrides that do not apply (user).
     #[error(transparent)]
@@ -47,6 +48,10 @@ pub enum Error {
     /// otherwise a failure.
     #[error(transparent)]
     Read(#[from] ReadError),
+    /// A sweep's shard that cannot be had: `--shard K/N` out of range, or a Slurm job
+    /// array's environment that does not give one (user).
+    #[error(transparent)]
+    Shard(#[from] crate::sweep::shard::ShardError),
     /// A file that could not be read or written (not the user's).
     #[error("{}: {source}", path.display())]
     Io {
@@ -77,7 +82,7 @@ impl Error {
     /// failure of the computation or of the machine (exit 1)?
     pub fn is_user_error(&self) -> bool {
         match self {
-            Error::Scene(_) | Error::Model(_) | Error::Input(_) => true,
+            Error::Scene(_) | Error::Model(_) | Error::Shard(_) | Error::Input(_) => true,
             Error::Output(e) => e.is_refusal(),
             Error::Read(e) => e.bad_input,
             Error::Bvp(_)
@@ -112,6 +117,8 @@ mod tests {
         assert!(Error::from(refused).is_user_error());
         assert!(!Error::from(io).is_user_error());
         assert!(Error::input("--jobs 0").is_user_error());
+        let shard = crate::sweep::shard::Shard::new(4, 3).unwrap_err();
+        assert!(Error::from(shard).is_user_error());
         assert!(!Error::failed("diverged").is_user_error());
         assert!(Error::from(crate::rundir::read::bad("no summary.json")).is_user_error());
         assert!(Error::from(ModelError::NegativePressure { dp: -1.0 }).is_user_error());

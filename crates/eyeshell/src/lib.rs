@@ -44,9 +44,11 @@ pub mod rundir;
 pub mod scene;
 pub mod sweep;
 
+pub mod text;
+
 // The numerics live in eyeshell-core, which touches no file; they are re-exported at the
 // paths they have always had, so `eyeshell::growth::grow` and `crate::bvp::...` are as before.
-pub use eyeshell_core::{bvp, deadline, growth, mesh, model, text};
+pub use eyeshell_core::{bvp, deadline, growth, mesh, model};
 
 pub use api::Growth;
 pub use bvp::Solution;

@@ -40,7 +40,7 @@
 //! A pivot of at most 1e-14 of its column's largest original entry (the tolerance of
 //! [`BandLu`](super::BandLu)) is reported as [`LinalgError::Singular`], naming the node and
 //! the column; non-finite entries are reported too. The growth factor
-//! max |U| / max |A| of the last factorisation is kept ([`Abd::growth`]) as a diagnostic.
+//! max |U| / max |A| is kept with the factors ([`AbdFactors::growth`]) as a diagnostic.
 //!
 //! # Storage
 //!
@@ -68,10 +68,16 @@ pub type AbdLu = Abd<NODE, { 2 * NODE }>;
 /// An almost-block-diagonal matrix of 6×6 node blocks (the reduced matrix of
 /// [`super::SchurSolver`], [`super::Reduced::Block`]).
 pub type AbdLu6 = Abd<6, 12>;
+/// The factors of an [`AbdLu`].
+pub type AbdLuFactors = AbdFactors<NODE, { 2 * NODE }>;
+/// The factors of an [`AbdLu6`].
+pub type AbdLu6Factors = AbdFactors<6, 12>;
 
 /// An almost-block-diagonal matrix with N×N node blocks (see the module docs; W = 2N, the
 /// columns of an interval's block, a parameter of its own because stable Rust cannot
-/// write array lengths 2N) and, after [`Abd::factor`], its LU factors.
+/// write array lengths 2N). [`Abd::factor`] makes its LU factors, [`AbdFactors`], the only
+/// thing that solves: a solve without a factorisation, or with the factors of a matrix
+/// since rewritten, cannot be written.
 #[derive(Clone, Debug)]
 pub struct Abd<const N: usize, const W: usize> {
     nodes: usize,
@@ -82,6 +88,16 @@ pub struct Abd<const N: usize, const W: usize> {
     blocks: Vec<[[f64; N]; W]>,
     /// The bottom rows over the last five columns.
     bottom_rows: Vec<[f64; N]>,
+    outside: usize,
+}
+
+/// The LU factors of an [`Abd`] matrix as it was when [`Abd::factor`] succeeded: P A = L U,
+/// stage by stage (module docs). They hold no reference to the matrix, which may be
+/// rewritten and factored again into the same storage ([`Abd::factor_reusing`]).
+#[derive(Clone, Debug)]
+pub struct AbdFactors<const N: usize, const W: usize> {
+    nodes: usize,
+    top: usize,
     /// Stage k's working block after elimination, column-major (`lu[k][j][r]`): rows
     /// 0..p+N (0..N at the last stage).
     lu: Vec<[[f64; W]; W]>,
@@ -90,8 +106,6 @@ pub struct Abd<const N: usize, const W: usize> {
     /// Stage k: 1 / U_cc.
     inv_diag: Vec<[f64; N]>,
     growth: f64,
-    outside: usize,
-    factored: bool,
 }
 
 impl<const N: usize, const W: usize> Abd<N, W> {
@@ -118,12 +132,7 @@ impl<const N: usize, const W: usize> Abd<N, W> {
             top_rows: vec![[0.0; N]; top],
             blocks: vec![[[0.0; N]; W]; nodes - 1],
             bottom_rows: vec![[0.0; N]; N - top],
-            lu: vec![[[0.0; W]; W]; nodes],
-            piv: vec![[0; N]; nodes],
-            inv_diag: vec![[0.0; N]; nodes],
-            growth: 0.0,
             outside: 0,
-            factored: false,
         })
     }
 
@@ -141,7 +150,7 @@ impl<const N: usize, const W: usize> Abd<N, W> {
         self.top
     }
 
-    /// Set every entry to zero (and forget the factors).
+    /// Set every entry to zero.
     pub fn zero(&mut self) {
         self.zero_boundary();
         for b in &mut self.blocks {
@@ -154,7 +163,6 @@ impl<const N: usize, const W: usize> Abd<N, W> {
     pub fn zero_boundary(&mut self) {
         self.top_rows.fill([0.0; N]);
         self.bottom_rows.fill([0.0; N]);
-        self.factored = false;
     }
 
     /// Fill every interval block with NaN: an assembler that leaves an entry unwritten then
@@ -164,7 +172,6 @@ impl<const N: usize, const W: usize> Abd<N, W> {
         for b in &mut self.blocks {
             *b = [[f64::NAN; N]; W];
         }
-        self.factored = false;
     }
 
     /// Where (i, j) is stored: (which part, index of the row in it, column in the row).
@@ -195,22 +202,39 @@ impl<const N: usize, const W: usize> Abd<N, W> {
 
     /// Row i's columns in the structure: (first, count), N columns for a boundary row and
     /// 2N for an interval's.
-    pub fn row_span(&self, i: usize) -> (usize, usize) {
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if there is no row i (i ≥ n).
+    pub fn row_span(&self, i: usize) -> Result<(usize, usize), LinalgError> {
         let (n, p) = (self.size(), self.top);
-        assert!(i < n, "row {i} of a matrix of size {n}");
-        if i < p {
+        if i >= n {
+            return Err(LinalgError::Length(format!(
+                "row {i} of a matrix of size {n}"
+            )));
+        }
+        Ok(if i < p {
             (0, N)
         } else if i >= n - (N - p) {
             (n - N, N)
         } else {
             (N * ((i - p) / N), W)
-        }
+        })
     }
 
     /// Overwrite row i over its [`Abd::row_span`] (`values` of exactly that length).
-    pub fn set_row(&mut self, i: usize, values: &[f64]) {
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if there is no row i or `values` is not as long as its span;
+    /// the matrix is then unchanged.
+    pub fn set_row(&mut self, i: usize, values: &[f64]) -> Result<(), LinalgError> {
+        let (first, len) = self.row_span(i)?;
+        if values.len() != len {
+            return Err(LinalgError::Length(format!(
+                "{} values for row {i}, which spans {len} columns from column {first}",
+                values.len()
+            )));
+        }
         let (n, p) = (self.size(), self.top);
-        self.factored = false;
         if i < p {
             self.top_rows[i].copy_from_slice(values);
         } else if i >= n - (N - p) {
@@ -218,11 +242,11 @@ impl<const N: usize, const W: usize> Abd<N, W> {
         } else {
             let a = (i - p) % N;
             let block = &mut self.blocks[(i - p) / N];
-            assert_eq!(values.len(), W, "row {i} spans {W} columns");
             for (col, &v) in block.iter_mut().zip(values) {
                 col[a] = v;
             }
         }
+        Ok(())
     }
 
     /// The number of writes outside the structure since the last call, and reset it.
@@ -230,45 +254,85 @@ impl<const N: usize, const W: usize> Abd<N, W> {
         std::mem::take(&mut self.outside)
     }
 
-    /// Whether [`Abd::factor`] succeeded since the matrix was last written.
-    pub fn is_factored(&self) -> bool {
-        self.factored
-    }
-
-    /// The growth factor max |U| / max |A| of the last successful factorisation.
-    pub fn growth(&self) -> f64 {
-        self.growth
-    }
-
     /// Factorise the matrix as set: P A = L U by Gaussian elimination with partial pivoting,
-    /// stage by stage (module docs). A pivot of zero or at most 1e-14 of its column's
-    /// largest original entry, or a non-finite entry, is [`LinalgError::Singular`].
-    pub fn factor(&mut self) -> Result<(), LinalgError> {
-        self.factored = false;
+    /// stage by stage (module docs). The matrix is left as it is.
+    ///
+    /// # Errors
+    /// [`LinalgError::Singular`] for a pivot of zero or at most 1e-14 of its column's
+    /// largest original entry, or a non-finite entry, naming the node and the column.
+    pub fn factor(&self) -> Result<AbdFactors<N, W>, LinalgError> {
+        self.factor_reusing(None)
+    }
+
+    /// [`Abd::factor`] into the storage of `old` factors (of a matrix of the same shape;
+    /// other factors or `None` are replaced by new storage): no allocation in a loop that
+    /// factors a matrix after every rewrite. On an error the old factors are gone.
+    ///
+    /// # Errors
+    /// As [`Abd::factor`].
+    pub fn factor_reusing(
+        &self,
+        old: Option<AbdFactors<N, W>>,
+    ) -> Result<AbdFactors<N, W>, LinalgError> {
+        let mut f = match old {
+            Some(f) if f.nodes == self.nodes && f.top == self.top => f,
+            _ => AbdFactors {
+                nodes: self.nodes,
+                top: self.top,
+                lu: vec![[[0.0; W]; W]; self.nodes],
+                piv: vec![[0; N]; self.nodes],
+                inv_diag: vec![[0.0; N]; self.nodes],
+                growth: 0.0,
+            },
+        };
         let m = self.nodes;
         let (mut a_max, mut u_max) = (0.0f64, 0.0f64);
         for k in 0..m {
             // Fixed sizes let the compiler unroll the elimination and vectorise its columns:
             // R = top + N rows, instantiated for the block widths in use (5 and 6).
             let result = match (k == m - 1, self.top + N) {
-                (true, _) => self.stage::<N, N>(k),
-                (false, 5) => self.stage::<5, W>(k),
-                (false, 6) => self.stage::<6, W>(k),
-                (false, 7) => self.stage::<7, W>(k),
-                (false, 8) => self.stage::<8, W>(k),
-                (false, 9) => self.stage::<9, W>(k),
-                (false, 10) => self.stage::<10, W>(k),
-                (false, 11) => self.stage::<11, W>(k),
-                (false, 12) => self.stage::<12, W>(k),
-                (false, r) => unreachable!("{r} rows in a stage: new() admits N ≤ 6"),
+                (true, _) => f.stage::<N, N>(self, k),
+                (false, 5) => f.stage::<5, W>(self, k),
+                (false, 6) => f.stage::<6, W>(self, k),
+                (false, 7) => f.stage::<7, W>(self, k),
+                (false, 8) => f.stage::<8, W>(self, k),
+                (false, 9) => f.stage::<9, W>(self, k),
+                (false, 10) => f.stage::<10, W>(self, k),
+                (false, 11) => f.stage::<11, W>(self, k),
+                (false, 12) => f.stage::<12, W>(self, k),
+                (false, r) => {
+                    return Err(LinalgError::Structure(format!(
+                        "{r} rows in a block LU stage (new() admits N ≤ 6)"
+                    )))
+                }
             };
             let (stage_a, stage_u) = result?;
             a_max = a_max.max(stage_a);
             u_max = u_max.max(stage_u);
         }
-        self.growth = if a_max > 0.0 { u_max / a_max } else { 0.0 };
-        self.factored = true;
-        Ok(())
+        f.growth = if a_max > 0.0 { u_max / a_max } else { 0.0 };
+        Ok(f)
+    }
+
+    fn count_outside(&mut self, i: usize, j: usize) {
+        debug_assert!(
+            false,
+            "({i},{j}) is outside the almost-block-diagonal structure ({} nodes, {} top rows)",
+            self.nodes, self.top
+        );
+        self.outside += 1;
+    }
+}
+
+impl<const N: usize, const W: usize> AbdFactors<N, W> {
+    /// n = N · nodes, the size of the matrix factored.
+    pub fn size(&self) -> usize {
+        N * self.nodes
+    }
+
+    /// The growth factor max |U| / max |A| of the factorisation.
+    pub fn growth(&self) -> f64 {
+        self.growth
     }
 
     /// Stage k: gather its R×C working block (the rows carried from stage k − 1, or the top
@@ -282,6 +346,7 @@ impl<const N: usize, const W: usize> Abd<N, W> {
     #[inline(always)]
     fn stage<const R: usize, const C: usize>(
         &mut self,
+        m: &Abd<N, W>,
         k: usize,
     ) -> Result<(f64, f64), LinalgError> {
         // A constant but at the last stage: fixed-length copies, no memmove calls.
@@ -291,7 +356,7 @@ impl<const N: usize, const W: usize> Abd<N, W> {
         // (or the top rows) and this stage's new rows.
         let mut col_max = [0.0f64; N];
         if k == 0 {
-            for (r, row) in self.top_rows.iter().enumerate() {
+            for (r, row) in m.top_rows.iter().enumerate() {
                 for j in 0..N {
                     a[j][r] = row[j];
                     col_max[j] = col_max[j].max(row[j].abs());
@@ -301,19 +366,19 @@ impl<const N: usize, const W: usize> Abd<N, W> {
             let prev = &self.lu[k - 1];
             for j in 0..N {
                 a[j][..p].copy_from_slice(&prev[N + j][N..N + p]);
-                col_max[j] = self.blocks[k - 1][N + j]
+                col_max[j] = m.blocks[k - 1][N + j]
                     .iter()
                     .fold(0.0f64, |x, v| x.max(v.abs()));
             }
         }
         if C == N {
-            for (r, row) in self.bottom_rows.iter().enumerate() {
+            for (r, row) in m.bottom_rows.iter().enumerate() {
                 for j in 0..N {
                     a[j][p + r] = row[j];
                 }
             }
         } else {
-            for (col, src) in a.iter_mut().zip(&self.blocks[k]) {
+            for (col, src) in a.iter_mut().zip(&m.blocks[k]) {
                 col[p..].copy_from_slice(src);
             }
         }
@@ -389,19 +454,19 @@ impl<const N: usize, const W: usize> Abd<N, W> {
         Ok((stage_max, big.iter().fold(0.0f64, |x, &y| x.max(y))))
     }
 
-    /// b ← A⁻¹ b with the factors of the last [`Abd::factor`], which must have succeeded
-    /// since the matrix was last written ([`Abd::is_factored`]): panics otherwise, or if
-    /// b's length is not n. The factors are not changed: any number of right sides.
-    pub fn solve_in_place(&self, b: &mut [f64]) {
+    /// b ← A⁻¹ b. The factors are not changed: any number of right sides.
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if b's length is not n (b is then unchanged).
+    pub fn solve_in_place(&self, b: &mut [f64]) -> Result<(), LinalgError> {
         let (m, p) = (self.nodes, self.top);
-        assert!(self.factored, "block LU solve without a successful factor");
-        assert_eq!(
-            b.len(),
-            self.size(),
-            "right side of length {} for size {}",
-            b.len(),
-            self.size()
-        );
+        if b.len() != self.size() {
+            return Err(LinalgError::Length(format!(
+                "right side of length {} for a block LU of size {}",
+                b.len(),
+                self.size()
+            )));
+        }
         // Forward: stage k reads its rows' right sides (carried ones and interval k's, which
         // start at p + 5k ≥ 5k) and leaves y_k at 5k..5k+5: in place, read before written.
         let carry = match p {
@@ -453,6 +518,7 @@ impl<const N: usize, const W: usize> Abd<N, W> {
             b[N * k..N * k + N].copy_from_slice(&y);
             next = y;
         }
+        Ok(())
     }
 
     /// The forward elimination of every stage but the last, P = top rows (a constant, so
@@ -482,13 +548,13 @@ impl<const N: usize, const W: usize> Abd<N, W> {
         carry
     }
 
-    /// x = A⁻¹ b (see [`Abd::solve_in_place`]); `NotFactored` without a factorisation.
+    /// x = A⁻¹ b (see [`AbdFactors::solve_in_place`]).
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if b's or x's length is not n.
     pub fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
-        if !self.factored {
-            return Err(LinalgError::NotFactored);
-        }
         if b.len() != self.size() || x.len() != self.size() {
-            return Err(LinalgError::Size(format!(
+            return Err(LinalgError::Length(format!(
                 "right side {} and solution {} for a matrix of size {}",
                 b.len(),
                 x.len(),
@@ -496,17 +562,7 @@ impl<const N: usize, const W: usize> Abd<N, W> {
             )));
         }
         x.copy_from_slice(b);
-        self.solve_in_place(x);
-        Ok(())
-    }
-
-    fn count_outside(&mut self, i: usize, j: usize) {
-        debug_assert!(
-            false,
-            "({i},{j}) is outside the almost-block-diagonal structure ({} nodes, {} top rows)",
-            self.nodes, self.top
-        );
-        self.outside += 1;
+        self.solve_in_place(x)
     }
 }
 
@@ -526,7 +582,6 @@ impl<const N: usize, const W: usize> MatrixSink for Abd<N, W> {
 
     #[inline]
     fn set(&mut self, i: usize, j: usize, v: f64) {
-        self.factored = false;
         match self.locate(i, j) {
             Some((Part::Top, a, b)) => self.top_rows[a][b] = v,
             Some((Part::Bottom, a, b)) => self.bottom_rows[a][b] = v,
@@ -547,7 +602,6 @@ impl<const N: usize, const W: usize> MatrixSink for Abd<N, W> {
             && col0 == row0 - p
             && (row0 - p) / N < self.blocks.len()
         {
-            self.factored = false;
             let block = &mut self.blocks[(row0 - p) / N];
             for (a, src) in values.chunks_exact(W).enumerate() {
                 for (col, &v) in block.iter_mut().zip(src) {

@@ -24,30 +24,42 @@ use crate::MatrixSink;
 /// A pivot at most this much of its column's largest original entry counts as singular.
 const PIVOT_TOLERANCE: f64 = 1e-14;
 
-/// An n×n band matrix (kl below, ku above the diagonal) and, after [`BandLu::factor`], its
-/// LU factors.
+/// An n×n band matrix (kl below, ku above the diagonal). [`BandLu::factor`] makes its LU
+/// factors, [`BandFactors`], the only thing that solves.
 #[derive(Clone, Debug)]
 pub struct BandLu {
     n: usize,
     kl: usize,
     ku: usize,
-    /// Row stride: 2 kl + ku + 1.
+    /// Row stride: 2 kl + ku + 1 (the factors' layout, so that a row is copied whole).
     w: usize,
     /// Row i, column j at `i * w + j + kl − i`.
     data: Vec<f64>,
-    /// After factoring: column k's multipliers (rows k + 1 ..= k + kl) at `k * kl ..`.
-    mult: Vec<f64>,
-    /// After factoring: the row swapped with row k at step k.
-    piv: Vec<usize>,
-    /// After factoring: the last column of U's row k.
-    last: Vec<usize>,
-    /// After factoring: 1 / U_kk.
-    inv_diag: Vec<f64>,
-    /// Largest |entry| of each column, the pivots' scale.
-    col_max: Vec<f64>,
     /// Writes outside the band since the last [`BandLu::take_outside`].
     outside: usize,
-    factored: bool,
+}
+
+/// The LU factors of a [`BandLu`] matrix as it was when [`BandLu::factor`] succeeded,
+/// PA = LU with partial pivoting in the band; independent of the matrix, which may be
+/// rewritten and factored again into the same storage ([`BandLu::factor_reusing`]).
+#[derive(Clone, Debug)]
+pub struct BandFactors {
+    n: usize,
+    kl: usize,
+    ku: usize,
+    w: usize,
+    /// U by rows, in the matrix's layout (with the fill columns).
+    data: Vec<f64>,
+    /// Column k's multipliers (rows k + 1 ..= k + kl) at `k * kl ..`.
+    mult: Vec<f64>,
+    /// The row swapped with row k at step k.
+    piv: Vec<usize>,
+    /// The last column of U's row k.
+    last: Vec<usize>,
+    /// 1 / U_kk.
+    inv_diag: Vec<f64>,
+    /// Largest |entry| of each column, the pivots' scale (scratch of the factorisation).
+    col_max: Vec<f64>,
 }
 
 impl BandLu {
@@ -70,13 +82,7 @@ impl BandLu {
             ku,
             w,
             data: vec![0.0; len],
-            mult: vec![0.0; n * kl],
-            piv: vec![0; n],
-            last: vec![0; n],
-            inv_diag: vec![0.0; n],
-            col_max: vec![0.0; n],
             outside: 0,
-            factored: false,
         })
     }
 
@@ -90,10 +96,9 @@ impl BandLu {
         (self.kl, self.ku)
     }
 
-    /// Set every entry to zero (and forget the factors).
+    /// Set every entry to zero.
     pub fn zero(&mut self) {
         self.data.fill(0.0);
-        self.factored = false;
     }
 
     fn index(&self, i: usize, j: usize) -> Option<usize> {
@@ -115,7 +120,59 @@ impl BandLu {
             Some(k) => self.data[k] += v,
             None => self.count_outside(i, j),
         }
-        self.factored = false;
+    }
+
+    /// Row i's band: columns i − kl ..= i + ku, in that order (kl + ku + 1 entries), to be
+    /// written in place. Entries for columns outside 0..n are ignored by the factorisation.
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if there is no row i (i ≥ n).
+    pub fn row_mut(&mut self, i: usize) -> Result<&mut [f64], LinalgError> {
+        if i >= self.n {
+            return Err(LinalgError::Length(format!(
+                "row {i} of a band matrix of size {}",
+                self.n
+            )));
+        }
+        let start = i * self.w;
+        Ok(&mut self.data[start..start + self.kl + self.ku + 1])
+    }
+
+    /// Factorise the matrix as set: PA = LU with partial pivoting in the band. The matrix
+    /// is left as it is.
+    ///
+    /// # Errors
+    /// [`LinalgError::Singular`] for a pivot of zero or at most 1e-14 of its column's
+    /// largest entry, naming the column.
+    pub fn factor(&self) -> Result<BandFactors, LinalgError> {
+        self.factor_reusing(None)
+    }
+
+    /// [`BandLu::factor`] into the storage of `old` factors (of a matrix of the same size
+    /// and widths; other factors or `None` are replaced by new storage). On an error the
+    /// old factors are gone.
+    ///
+    /// # Errors
+    /// As [`BandLu::factor`].
+    pub fn factor_reusing(&self, old: Option<BandFactors>) -> Result<BandFactors, LinalgError> {
+        let (n, kl, ku, w) = (self.n, self.kl, self.ku, self.w);
+        let mut f = match old {
+            Some(f) if (f.n, f.kl, f.ku) == (n, kl, ku) => f,
+            _ => BandFactors {
+                n,
+                kl,
+                ku,
+                w,
+                data: vec![0.0; self.data.len()],
+                mult: vec![0.0; n * kl],
+                piv: vec![0; n],
+                last: vec![0; n],
+                inv_diag: vec![0.0; n],
+                col_max: vec![0.0; n],
+            },
+        };
+        f.eliminate(self)?;
+        Ok(f)
     }
 
     fn count_outside(&mut self, i: usize, j: usize) {
@@ -131,28 +188,30 @@ impl BandLu {
     pub fn take_outside(&mut self) -> usize {
         std::mem::take(&mut self.outside)
     }
+}
 
-    /// Row i's band: columns i − kl ..= i + ku, in that order (kl + ku + 1 entries), to be
-    /// written in place. Entries for columns outside 0..n are ignored by the factorisation.
-    pub fn row_mut(&mut self, i: usize) -> &mut [f64] {
-        self.factored = false;
-        let start = i * self.w;
-        &mut self.data[start..start + self.kl + self.ku + 1]
+impl BandFactors {
+    /// The size n.
+    pub fn size(&self) -> usize {
+        self.n
     }
 
-    /// Factorise the matrix as set, in place: PA = LU with partial pivoting in the band.
-    /// A pivot of zero or at most 1e-14 of its column's largest entry is an error naming
-    /// the column; the matrix is then left half factored (set it again before retrying).
-    pub fn factor(&mut self) -> Result<(), LinalgError> {
+    /// Gaussian elimination of `a` into these factors (their storage has a's shape).
+    fn eliminate(&mut self, a: &BandLu) -> Result<(), LinalgError> {
         let (n, kl, ku, w) = (self.n, self.kl, self.ku, self.w);
-        self.factored = false;
-        // Clear what is not the matrix (columns outside 0..n, the fill columns) and take
-        // each column's scale.
+        // Copy the matrix, clearing what is not the matrix (columns outside 0..n, the fill
+        // columns), and take each column's scale.
         self.col_max.fill(0.0);
-        for (i, row) in self.data.chunks_exact_mut(w).enumerate() {
+        for (i, (row, src)) in self
+            .data
+            .chunks_exact_mut(w)
+            .zip(a.data.chunks_exact(w))
+            .enumerate()
+        {
             let first = kl.saturating_sub(i);
             let end = (kl + ku + 1).min(n + kl - i);
             row[..first].fill(0.0);
+            row[first..end].copy_from_slice(&src[first..end]);
             row[end..].fill(0.0);
             let c0 = i + first - kl;
             for (m, v) in self.col_max[c0..c0 + end - first]
@@ -212,22 +271,21 @@ impl BandLu {
                 }
             }
         }
-        self.factored = true;
         Ok(())
     }
 
-    /// Whether [`BandLu::factor`] succeeded since the matrix was last written.
-    pub fn is_factored(&self) -> bool {
-        self.factored
-    }
-
-    /// b ← A⁻¹ b with the factors of the last [`BandLu::factor`], which must have
-    /// succeeded since the matrix was last written ([`BandLu::is_factored`]): panics
-    /// otherwise, or if b's length is not n.
-    pub fn solve_in_place(&self, b: &mut [f64]) {
+    /// b ← A⁻¹ b. The factors are not changed: any number of right sides.
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if b's length is not n (b is then unchanged).
+    pub fn solve_in_place(&self, b: &mut [f64]) -> Result<(), LinalgError> {
         let (n, kl, w) = (self.n, self.kl, self.w);
-        assert!(self.factored, "band LU solve without a successful factor");
-        assert_eq!(b.len(), n, "right side of length {} for size {n}", b.len());
+        if b.len() != n {
+            return Err(LinalgError::Length(format!(
+                "right side of length {} for a band LU of size {n}",
+                b.len()
+            )));
+        }
         // L: the swaps and multipliers in the order they were made.
         for k in 0..n {
             let p = self.piv[k];
@@ -253,6 +311,7 @@ impl BandLu {
             };
             b[k] = (b[k] - s) * self.inv_diag[k];
         }
+        Ok(())
     }
 }
 
@@ -282,7 +341,6 @@ impl MatrixSink for BandLu {
     }
 
     fn set(&mut self, i: usize, j: usize, v: f64) {
-        self.factored = false;
         match self.index(i, j) {
             Some(k) => self.data[k] = v,
             None => self.count_outside(i, j),

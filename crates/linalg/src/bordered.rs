@@ -9,40 +9,62 @@
 //! Also here: [`InterleavedBand`], band LU of a whole CSR matrix in a given order with one
 //! unknown as the border.
 
-use super::{AbdLu6, BandLu, Csr, DirectSolver, LinalgError, MatrixSink};
+use super::{
+    AbdLu6, AbdLu6Factors, BandFactors, BandLu, Csr, DirectSolver, LinalgError, MatrixSink,
+};
 
-/// The square matrix A inside a border: factored in place, then solved with any number of
-/// times ([`BandLu`], or the almost-block-diagonal [`AbdLu6`]).
+/// The square matrix A inside a border: factored into [`Bordering::Factors`], which then
+/// solve any number of times ([`BandLu`], or the almost-block-diagonal [`AbdLu6`]).
 pub trait Bordering {
+    /// A's LU factors.
+    type Factors: Solve;
     /// n, A's size.
     fn size(&self) -> usize;
-    /// Factorise A as it was written.
-    fn factor(&mut self) -> Result<(), LinalgError>;
-    /// x ← A⁻¹ x after a successful [`Bordering::factor`].
-    fn solve_in_place(&self, x: &mut [f64]);
+    /// Factorise A as it was written, into the storage of `old` if it fits.
+    ///
+    /// # Errors
+    /// [`LinalgError::Singular`] for a singular A.
+    fn factor_reusing(&self, old: Option<Self::Factors>) -> Result<Self::Factors, LinalgError>;
+}
+
+/// LU factors that solve: x ← A⁻¹ x.
+pub trait Solve {
+    /// x ← A⁻¹ x.
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if x's length is not A's size.
+    fn solve_in_place(&self, x: &mut [f64]) -> Result<(), LinalgError>;
 }
 
 impl Bordering for BandLu {
+    type Factors = BandFactors;
     fn size(&self) -> usize {
         BandLu::size(self)
     }
-    fn factor(&mut self) -> Result<(), LinalgError> {
-        BandLu::factor(self)
+    fn factor_reusing(&self, old: Option<BandFactors>) -> Result<BandFactors, LinalgError> {
+        BandLu::factor_reusing(self, old)
     }
-    fn solve_in_place(&self, x: &mut [f64]) {
-        BandLu::solve_in_place(self, x)
+}
+
+impl Solve for BandFactors {
+    fn solve_in_place(&self, x: &mut [f64]) -> Result<(), LinalgError> {
+        BandFactors::solve_in_place(self, x)
     }
 }
 
 impl Bordering for AbdLu6 {
+    type Factors = AbdLu6Factors;
     fn size(&self) -> usize {
         AbdLu6::size(self)
     }
-    fn factor(&mut self) -> Result<(), LinalgError> {
-        AbdLu6::factor(self)
+    fn factor_reusing(&self, old: Option<AbdLu6Factors>) -> Result<AbdLu6Factors, LinalgError> {
+        AbdLu6::factor_reusing(self, old)
     }
-    fn solve_in_place(&self, x: &mut [f64]) {
-        AbdLu6::solve_in_place(self, x)
+}
+
+impl Solve for AbdLu6Factors {
+    fn solve_in_place(&self, x: &mut [f64]) -> Result<(), LinalgError> {
+        AbdLu6Factors::solve_in_place(self, x)
     }
 }
 
@@ -53,11 +75,18 @@ pub struct Bordered<L> {
     col: Vec<f64>,
     row: Vec<f64>,
     corner: f64,
-    /// A⁻¹ c and σ = s − rᵀ A⁻¹ c, from the last factorisation.
+}
+
+/// The factors of a [`Bordered`] matrix as it was when [`Bordered::factor`] succeeded:
+/// A's, the border row r, v = A⁻¹ c and σ = s − rᵀ v.
+pub struct BorderedFactors<F> {
+    lu: F,
+    /// A's size.
+    n: usize,
+    border: bool,
+    row: Vec<f64>,
     v: Vec<f64>,
     sigma: f64,
-    /// The last factorisation succeeded, border included, and nothing was filled since.
-    factored: bool,
 }
 
 /// A band matrix with a border.
@@ -67,6 +96,9 @@ pub type BorderedAbd = Bordered<AbdLu6>;
 
 impl BorderedBand {
     /// A zero matrix of size n (+ 1 with a border) whose band has these widths.
+    ///
+    /// # Errors
+    /// [`LinalgError::Size`] for a band too large to store.
     pub fn new(n: usize, lower: usize, upper: usize, border: bool) -> Result<Self, LinalgError> {
         Ok(Bordered::around(BandLu::new(n, lower, upper)?, border))
     }
@@ -78,6 +110,9 @@ impl BorderedBand {
 
     /// Fill the matrix: `f(a, c, r, s)` sets the band entries of A and the border, all of
     /// which start at zero.
+    ///
+    /// # Errors
+    /// [`LinalgError::OutsidePattern`] if `f` wrote entries outside the band.
     pub fn fill(
         &mut self,
         f: impl FnOnce(&mut dyn MatrixSink, &mut [f64], &mut [f64], &mut f64),
@@ -103,9 +138,6 @@ impl<L: Bordering> Bordered<L> {
             col: vec![0.0; border_len],
             row: vec![0.0; border_len],
             corner: 0.0,
-            v: vec![0.0; border_len],
-            sigma: 1.0,
-            factored: false,
         }
     }
 
@@ -123,80 +155,144 @@ impl<L: Bordering> Bordered<L> {
         self.len() == 0
     }
 
-    /// A (and after a factorisation, its factors).
+    /// A.
     pub fn inner(&self) -> &L {
         &self.lu
     }
 
     /// Fill the matrix row by row in place: `f(a, c, r, s)` must write every row of A in
-    /// full (for a band, through [`BandLu::row_mut`]: they hold the last factors, not
+    /// full (for a band, through [`BandLu::row_mut`]: they hold the last rows written, not
     /// zeros); the border starts at zero. Cheaper than [`BorderedBand::fill`] for a caller
     /// that builds whole rows.
-    pub fn fill_rows(&mut self, f: impl FnOnce(&mut L, &mut [f64], &mut [f64], &mut f64)) {
+    ///
+    /// # Errors
+    /// What `f` returns.
+    pub fn fill_rows(
+        &mut self,
+        f: impl FnOnce(&mut L, &mut [f64], &mut [f64], &mut f64) -> Result<(), LinalgError>,
+    ) -> Result<(), LinalgError> {
         self.clear_border();
-        f(&mut self.lu, &mut self.col, &mut self.row, &mut self.corner);
+        f(&mut self.lu, &mut self.col, &mut self.row, &mut self.corner)
     }
 
     fn clear_border(&mut self) {
-        self.factored = false;
         self.col.fill(0.0);
         self.row.fill(0.0);
         self.corner = 0.0;
     }
 
-    /// Factorise what was filled: A = LU, v = A⁻¹ c and σ = s − rᵀ v. A σ at most 1e-14
-    /// of |s| + Σ |r_i v_i| (the size of the terms it is the difference of) is singular.
-    pub fn factor(&mut self) -> Result<(), LinalgError> {
-        self.factored = false;
-        self.lu.factor()?;
-        if !self.border {
-            self.factored = true;
-            return Ok(());
-        }
-        self.v.copy_from_slice(&self.col);
-        self.lu.solve_in_place(&mut self.v);
-        let rv: f64 = self.row.iter().zip(&self.v).map(|(a, b)| a * b).sum();
-        self.sigma = self.corner - rv;
-        let scale = self.corner.abs()
-            + self
-                .row
-                .iter()
-                .zip(&self.v)
-                .map(|(a, b)| (a * b).abs())
-                .sum::<f64>();
-        if !(self.sigma.abs() > 1e-14 * scale) {
-            return Err(LinalgError::Singular(format!(
-                "the border's Schur complement is {:e} (scale {scale:e})",
-                self.sigma
-            )));
-        }
-        self.factored = true;
-        Ok(())
+    /// Factorise what was filled: A = LU, v = A⁻¹ c and σ = s − rᵀ v.
+    ///
+    /// # Errors
+    /// [`LinalgError::Singular`] for a singular A, or a σ at most 1e-14 of
+    /// |s| + Σ |r_i v_i| (the size of the terms it is the difference of).
+    pub fn factor(&self) -> Result<BorderedFactors<L::Factors>, LinalgError> {
+        self.factor_reusing(None)
     }
 
-    /// x = M⁻¹ b, both of length [`Bordered::len`].
-    pub fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
+    /// [`Bordered::factor`] into the storage of `old` factors where it fits; on an error
+    /// the old factors are gone.
+    ///
+    /// # Errors
+    /// As [`Bordered::factor`].
+    pub fn factor_reusing(
+        &self,
+        old: Option<BorderedFactors<L::Factors>>,
+    ) -> Result<BorderedFactors<L::Factors>, LinalgError> {
+        let (old_lu, mut row, mut v) = match old {
+            Some(f) => (Some(f.lu), f.row, f.v),
+            None => (None, Vec::new(), Vec::new()),
+        };
+        let lu = self.lu.factor_reusing(old_lu)?;
+        if !self.border {
+            return Ok(BorderedFactors {
+                lu,
+                n: self.band_size(),
+                border: false,
+                row,
+                v,
+                sigma: 1.0,
+            });
+        }
+        v.clear();
+        v.extend_from_slice(&self.col);
+        lu.solve_in_place(&mut v)?;
+        row.clear();
+        row.extend_from_slice(&self.row);
+        let rv: f64 = row.iter().zip(&v).map(|(a, b)| a * b).sum();
+        let sigma = self.corner - rv;
+        let scale = self.corner.abs() + row.iter().zip(&v).map(|(a, b)| (a * b).abs()).sum::<f64>();
+        if !(sigma.abs() > 1e-14 * scale) {
+            return Err(LinalgError::Singular(format!(
+                "the border's Schur complement is {sigma:e} (scale {scale:e})"
+            )));
+        }
+        Ok(BorderedFactors {
+            lu,
+            n: self.band_size(),
+            border: true,
+            row,
+            v,
+            sigma,
+        })
+    }
+}
+
+impl<F: Solve> BorderedFactors<F> {
+    /// The whole size: A and the border.
+    pub fn len(&self) -> usize {
+        self.n + usize::from(self.border)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// A's factors.
+    pub fn inner(&self) -> &F {
+        &self.lu
+    }
+
+    /// x = M⁻¹ b, both of length [`BorderedFactors::len`].
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if b or x is not of that length.
+    pub fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
+        if b.len() != x.len() {
+            return Err(LinalgError::Length(format!(
+                "right side {} and solution {} of a bordered solve",
+                b.len(),
+                x.len()
+            )));
+        }
         x.copy_from_slice(b);
         self.solve_in_place(x)
     }
 
-    /// x ← M⁻¹ x, of length [`Bordered::len`]; an error without a successful
-    /// [`Bordered::factor`] since the last fill.
+    /// x ← M⁻¹ x, of length [`BorderedFactors::len`].
+    ///
+    /// # Errors
+    /// [`LinalgError::Length`] if x is not of that length.
     pub fn solve_in_place(&self, x: &mut [f64]) -> Result<(), LinalgError> {
-        if !self.factored {
-            return Err(LinalgError::NotFactored);
+        if !self.border {
+            return self.lu.solve_in_place(x);
         }
-        let n = self.band_size();
+        let n = self.n;
+        if x.len() != n + 1 {
+            return Err(LinalgError::Length(format!(
+                "right side of length {} for a bordered matrix of size {}",
+                x.len(),
+                n + 1
+            )));
+        }
         let (xa, xs) = x.split_at_mut(n);
-        self.lu.solve_in_place(xa);
-        if self.border {
-            let rx: f64 = self.row.iter().zip(&*xa).map(|(a, b)| a * b).sum();
-            let s = (xs[0] - rx) / self.sigma;
-            for (xi, vi) in xa.iter_mut().zip(&self.v) {
-                *xi -= vi * s;
-            }
-            xs[0] = s;
+        self.lu.solve_in_place(xa)?;
+        let rx: f64 = self.row.iter().zip(&*xa).map(|(a, b)| a * b).sum();
+        let s = (xs[0] - rx) / self.sigma;
+        for (xi, vi) in xa.iter_mut().zip(&self.v) {
+            *xi -= vi * s;
         }
+        xs[0] = s;
         Ok(())
     }
 }
@@ -218,9 +314,13 @@ fn widths_under(a: &Csr, perm: &[usize], skip: Option<usize>) -> (usize, usize) 
 /// Band LU of a whole CSR matrix after the symmetric permutation `perm` (chosen to keep
 /// the band narrow), with the unknown `border` (if any) kept out of the band.
 pub struct InterleavedBand {
+    /// The whole matrix's size.
+    size: usize,
     perm: Vec<usize>,
     border: Option<usize>,
     bb: BorderedBand,
+    /// The factors of the last successful [`DirectSolver::factor`].
+    factors: Option<BorderedFactors<BandFactors>>,
     b: Vec<f64>,
     x: Vec<f64>,
 }
@@ -233,13 +333,26 @@ impl InterleavedBand {
         perm: Vec<usize>,
         border: Option<usize>,
     ) -> Result<Self, LinalgError> {
-        let n = pattern.n() - usize::from(border.is_some());
+        let size = pattern.n();
+        let band = size.saturating_sub(usize::from(border.is_some()));
+        if perm.len() != size
+            || border.is_some_and(|b| b >= size)
+            || !(0..size).all(|i| Some(i) == border || perm[i] < band)
+        {
+            return Err(LinalgError::Structure(format!(
+                "an order of {} unknowns (border {border:?}) for a matrix of size {size}",
+                perm.len()
+            )));
+        }
+        let n = band;
         let (lower, upper) = widths_under(pattern, &perm, border);
         let bb = BorderedBand::new(n, lower, upper, border.is_some())?;
         Ok(InterleavedBand {
+            size: pattern.n(),
             perm,
             border,
             bb,
+            factors: None,
             b: vec![0.0; n + 1],
             x: vec![0.0; n + 1],
         })
@@ -252,6 +365,14 @@ impl InterleavedBand {
 
 impl DirectSolver for InterleavedBand {
     fn factor(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        let old = self.factors.take();
+        if a.n() != self.size {
+            return Err(LinalgError::Length(format!(
+                "a matrix of size {} for a solver made for size {}",
+                a.n(),
+                self.size
+            )));
+        }
         let (perm, border) = (&self.perm, self.border);
         self.bb.fill(|band, col, row, corner| {
             for i in 0..a.n() {
@@ -266,11 +387,21 @@ impl DirectSolver for InterleavedBand {
                 }
             }
         })?;
-        self.bb.factor()
+        self.factors = Some(self.bb.factor_reusing(old)?);
+        Ok(())
     }
 
     fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
+        let factors = self.factors.as_ref().ok_or(LinalgError::NotFactored)?;
         let n = self.bb.band_size();
+        if b.len() != self.size || x.len() != self.size {
+            return Err(LinalgError::Length(format!(
+                "right side {} and solution {} for a matrix of size {}",
+                b.len(),
+                x.len(),
+                self.size
+            )));
+        }
         for (i, &bi) in b.iter().enumerate() {
             let k = if Some(i) == self.border {
                 n
@@ -280,7 +411,7 @@ impl DirectSolver for InterleavedBand {
             self.b[k] = bi;
         }
         let len = self.bb.len();
-        self.bb.solve(&self.b[..len], &mut self.x[..len])?;
+        factors.solve(&self.b[..len], &mut self.x[..len])?;
         for (i, xi) in x.iter_mut().enumerate() {
             *xi = self.x[if Some(i) == self.border {
                 n
@@ -325,7 +456,7 @@ mod tests {
             *corner = 3.0;
         })
         .unwrap();
-        bb.factor().unwrap();
+        let factors = bb.factor().unwrap();
         let full = nalgebra::DMatrix::from_fn(n + 1, n + 1, |i, j| match (i < n, j < n) {
             (true, true) => a(i, j),
             (true, false) => c(i),
@@ -334,7 +465,7 @@ mod tests {
         });
         let b: Vec<f64> = (0..=n).map(|i| (i as f64 * 0.7).cos()).collect();
         let mut x = vec![0.0; n + 1];
-        bb.solve(&b, &mut x).unwrap();
+        factors.solve(&b, &mut x).unwrap();
         let expect = full.lu().solve(&nalgebra::DVector::from_vec(b)).unwrap();
         for i in 0..=n {
             assert!(

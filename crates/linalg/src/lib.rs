@@ -11,7 +11,10 @@
 //!
 //! The factorisations under them: [`BandLu`] (band LU with partial pivoting) and
 //! [`Abd`], the LU of almost-block-diagonal matrices with N×N node blocks ([`AbdLu`],
-//! N = 5; [`AbdLu6`], N = 6, also bordered: [`BorderedAbd`]).
+//! N = 5; [`AbdLu6`], N = 6, also bordered: [`BorderedAbd`]). Each matrix's `factor`
+//! returns its factors ([`BandFactors`], [`AbdFactors`], [`BorderedFactors`]), and only
+//! factors solve: a solve without a factorisation, or with a right side of the wrong
+//! length, is an error ([`LinalgError::Length`]) or cannot be written, never a panic.
 //!
 //! A sparse LU from elsewhere plugs in as a [`DirectSolver`] (eyeshell-sundials adapts
 //! SUNDIALS' KLU so, and hands it to [`SchurSolver`] as [`Reduced::Sparse`]); its errors
@@ -25,9 +28,11 @@ mod csr;
 mod fallback;
 mod schur;
 
-pub use abd::{Abd, AbdLu, AbdLu6, NODE as ABD_NODE};
-pub use band_lu::BandLu;
-pub use bordered::{Bordered, BorderedAbd, BorderedBand, Bordering, InterleavedBand};
+pub use abd::{Abd, AbdFactors, AbdLu, AbdLu6, AbdLu6Factors, AbdLuFactors, NODE as ABD_NODE};
+pub use band_lu::{BandFactors, BandLu};
+pub use bordered::{
+    Bordered, BorderedAbd, BorderedBand, BorderedFactors, Bordering, InterleavedBand, Solve,
+};
 pub use csr::Csr;
 pub use fallback::{Fallback, MakeSolver};
 pub use schur::{MakeSparse, Reduced, SchurSolver};
@@ -52,6 +57,7 @@ pub trait MatrixSink {
 
 /// Why a factorisation or solve failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LinalgError {
     /// A pivot block or the border's Schur complement is (numerically) singular.
     #[error("singular matrix: {0}")]
@@ -62,12 +68,17 @@ pub enum LinalgError {
     /// The assembler wrote entries outside the fixed pattern (a bug in the assembler).
     #[error("{0} entries were assembled outside the matrix's pattern")]
     OutsidePattern(usize),
-    /// A solve with no successful factorisation since the matrix was last written.
+    /// A solve through a [`DirectSolver`] with no successful factorisation since the last
+    /// failed one (the solves of the factors themselves cannot be called unfactored).
     #[error("solve without a successful factorisation")]
     NotFactored,
     /// A matrix too large to store (its size or bandwidths are a mistake).
     #[error("matrix too large: {0}")]
     Size(String),
+    /// A vector, row or matrix of the wrong length or size for the solver given it (a bug
+    /// in the caller).
+    #[error("wrong length: {0}")]
+    Length(String),
     /// A pattern that does not have the structure the solver needs.
     #[error("matrix structure: {0}")]
     Structure(String),

@@ -19,7 +19,10 @@
 //! The elimination order is the blocks' order, so the caller numbers blocks that others
 //! read first; [`SchurSolver::new`] checks the pattern for it.
 
-use super::{AbdLu6, Bordered, BorderedAbd, BorderedBand, Csr, DirectSolver, LinalgError};
+use super::{
+    AbdLu6, AbdLu6Factors, BandFactors, Bordered, BorderedAbd, BorderedBand, BorderedFactors, Csr,
+    DirectSolver, LinalgError,
+};
 
 /// Makes a sparse direct solver for a matrix of the given pattern ([`Reduced::Sparse`]).
 pub type MakeSparse = fn(&Csr) -> Result<Box<dyn DirectSolver>, LinalgError>;
@@ -48,10 +51,16 @@ pub const PIVOT_TOLERANCE: f64 = 1e-3;
 
 /// The factorisation of S.
 enum ReducedSolver {
-    Band(BorderedBand),
-    /// S's almost-block-diagonal part and border, and one row's span of scratch.
+    /// S, and its factors after a successful factorisation.
+    Band {
+        bb: BorderedBand,
+        factors: Option<BorderedFactors<BandFactors>>,
+    },
+    /// S's almost-block-diagonal part and border, its factors after a successful
+    /// factorisation, and one row's span of scratch.
     Block {
         bb: BorderedAbd,
+        factors: Option<BorderedFactors<AbdLu6Factors>>,
         row: Vec<f64>,
     },
     /// S as CSR, and its rows in dense band storage while it is built (row jw holds
@@ -147,11 +156,13 @@ impl SchurSolver {
                 "{n} unknowns are more than this solver indexes"
             )));
         }
+        if !n_p.is_multiple_of(2) || n_p + usize::from(border) > n {
+            return Err(LinalgError::Structure(format!(
+                "a partition of {n} unknowns into {n_p} block unknowns{}",
+                if border { " and a border" } else { "" }
+            )));
+        }
         let n_w = n - n_p - usize::from(border);
-        assert!(
-            n_p.is_multiple_of(2) && n_p + usize::from(border) <= n,
-            "bad partition of {n}: {n_p} block unknowns"
-        );
         let mut blocks: Vec<Block> = Vec::with_capacity(n_p / 2);
         for k in 0..n_p / 2 {
             let (mut lo, mut hi) = (usize::MAX, 0usize);
@@ -213,9 +224,13 @@ impl SchurSolver {
             }
         }
         let reduced = match how {
-            Reduced::Band => ReducedSolver::Band(BorderedBand::new(n_w, lower, upper, border)?),
+            Reduced::Band => ReducedSolver::Band {
+                bb: BorderedBand::new(n_w, lower, upper, border)?,
+                factors: None,
+            },
             Reduced::Block => ReducedSolver::Block {
                 bb: Bordered::around(block_structure(&spans)?, border),
+                factors: None,
                 row: vec![0.0; BLOCK_WIDTH * 2],
             },
             Reduced::Sparse(make) => {
@@ -268,8 +283,14 @@ impl SchurSolver {
     /// x ← S⁻¹ x, x of the reduced length.
     fn reduced_solve(&mut self, x: &mut [f64]) -> Result<(), LinalgError> {
         match &mut self.reduced {
-            ReducedSolver::Band(bb) => bb.solve_in_place(x),
-            ReducedSolver::Block { bb, .. } => bb.solve_in_place(x),
+            ReducedSolver::Band { factors, .. } => factors
+                .as_ref()
+                .ok_or(LinalgError::NotFactored)?
+                .solve_in_place(x),
+            ReducedSolver::Block { factors, .. } => factors
+                .as_ref()
+                .ok_or(LinalgError::NotFactored)?
+                .solve_in_place(x),
             ReducedSolver::Sparse { solver, .. } => {
                 let rhs = &mut self.rhs[..x.len()];
                 rhs.copy_from_slice(x);
@@ -396,35 +417,31 @@ impl SchurSolver {
                 coupling.end.push(coupling.col.len());
             };
         match &mut self.reduced {
-            ReducedSolver::Band(bb) => {
-                bb.fill_rows(|lu, col, row, corner| {
-                    // Without a border, the border column's entries (zero) go to a scratch.
-                    let mut none = 0.0;
-                    for jw in 0..n_w {
-                        let at_d = col.get_mut(jw).unwrap_or(&mut none);
-                        reduce_row(jw, lu.row_mut(jw), at_d, lower, jw);
-                    }
-                    if border {
-                        reduce_row(n_w, row, corner, 0, 0);
-                    }
-                });
+            ReducedSolver::Band { bb, .. } => bb.fill_rows(|lu, col, row, corner| {
+                // Without a border, the border column's entries (zero) go to a scratch.
+                let mut none = 0.0;
+                for jw in 0..n_w {
+                    let at_d = col.get_mut(jw).unwrap_or(&mut none);
+                    reduce_row(jw, lu.row_mut(jw)?, at_d, lower, jw);
+                }
+                if border {
+                    reduce_row(n_w, row, corner, 0, 0);
+                }
                 Ok(())
-            }
-            ReducedSolver::Block { bb, row: acc } => {
-                bb.fill_rows(|lu, col, row, corner| {
-                    let mut none = 0.0;
-                    for jw in 0..n_w {
-                        let (first, len) = lu.row_span(jw);
-                        let at_d = col.get_mut(jw).unwrap_or(&mut none);
-                        reduce_row(jw, &mut acc[..len], at_d, 0, first);
-                        lu.set_row(jw, &acc[..len]);
-                    }
-                    if border {
-                        reduce_row(n_w, row, corner, 0, 0);
-                    }
-                });
+            }),
+            ReducedSolver::Block { bb, row: acc, .. } => bb.fill_rows(|lu, col, row, corner| {
+                let mut none = 0.0;
+                for jw in 0..n_w {
+                    let (first, len) = lu.row_span(jw)?;
+                    let at_d = col.get_mut(jw).unwrap_or(&mut none);
+                    reduce_row(jw, &mut acc[..len], at_d, 0, first);
+                    lu.set_row(jw, &acc[..len])?;
+                }
+                if border {
+                    reduce_row(n_w, row, corner, 0, 0);
+                }
                 Ok(())
-            }
+            }),
             ReducedSolver::Sparse {
                 s,
                 s_rows,
@@ -469,6 +486,7 @@ impl SchurSolver {
     /// w' = −[A a; cᵀ s]⁻¹ [C; cᵀ] p' after [`SchurSolver::factor_algebraic`]; `w` has the
     /// length of W and d together.
     pub fn solve_algebraic(&mut self, p_dot: &[f64], w: &mut [f64]) -> Result<(), LinalgError> {
+        self.check_algebraic(p_dot, w.len(), w.len())?;
         let w = &mut w[..self.reduced_len()];
         w.fill(0.0);
         self.coupling.subtract_from(p_dot, w);
@@ -485,6 +503,7 @@ impl SchurSolver {
         b: &[f64],
         w: &mut [f64],
     ) -> Result<(), LinalgError> {
+        self.check_algebraic(p_dot, b.len(), w.len())?;
         let n = self.reduced_len();
         let w = &mut w[..n];
         for (wi, bi) in w.iter_mut().zip(&b[..n]) {
@@ -492,6 +511,20 @@ impl SchurSolver {
         }
         self.coupling.subtract_from(p_dot, w);
         self.reduced_solve(w)
+    }
+
+    /// The lengths of an algebraic solve's p', right side and solution: at least P's, and
+    /// at least the reduced system's (W and d).
+    fn check_algebraic(&self, p_dot: &[f64], b: usize, w: usize) -> Result<(), LinalgError> {
+        let n = self.reduced_len();
+        if p_dot.len() < self.n_p || b < n || w < n {
+            return Err(LinalgError::Length(format!(
+                "an algebraic solve with p' of length {} (of at least {}), right side {b} and solution {w} (of at least {n})",
+                p_dot.len(),
+                self.n_p
+            )));
+        }
+        Ok(())
     }
 
     /// The largest |entry| of each P column (rows list columns in order, P's first).
@@ -510,6 +543,19 @@ impl SchurSolver {
     }
 
     fn factor_blocks(&mut self, a: &Csr) -> Result<(), LinalgError> {
+        // The last factors are gone whatever happens next: a failure leaves none.
+        let (old_band, old_block) = match &mut self.reduced {
+            ReducedSolver::Band { factors, .. } => (factors.take(), None),
+            ReducedSolver::Block { factors, .. } => (None, factors.take()),
+            ReducedSolver::Sparse { .. } => (None, None),
+        };
+        if a.n() != self.n_p + self.reduced_len() {
+            return Err(LinalgError::Length(format!(
+                "a matrix of size {} for a solver made for size {}",
+                a.n(),
+                self.n_p + self.reduced_len()
+            )));
+        }
         if !self.algebraic_only {
             self.measure_columns(a);
         }
@@ -518,8 +564,14 @@ impl SchurSolver {
         }
         self.reduce(a)?;
         match &mut self.reduced {
-            ReducedSolver::Band(bb) => bb.factor(),
-            ReducedSolver::Block { bb, .. } => bb.factor(),
+            ReducedSolver::Band { bb, factors } => {
+                *factors = Some(bb.factor_reusing(old_band)?);
+                Ok(())
+            }
+            ReducedSolver::Block { bb, factors, .. } => {
+                *factors = Some(bb.factor_reusing(old_block)?);
+                Ok(())
+            }
             ReducedSolver::Sparse { s, solver, .. } => solver.factor(s),
         }
     }
@@ -546,7 +598,7 @@ fn block_structure(spans: &[Option<(usize, usize)>]) -> Result<AbdLu6, LinalgErr
         .min(BLOCK_WIDTH);
     let abd = AbdLu6::new(n / BLOCK_WIDTH, top)?;
     for (jw, span) in spans.iter().enumerate() {
-        let (first, len) = abd.row_span(jw);
+        let (first, len) = abd.row_span(jw)?;
         if let Some((lo, hi)) = *span {
             if lo < first || hi >= first + len {
                 return Err(LinalgError::Structure(format!(
@@ -567,6 +619,14 @@ impl DirectSolver for SchurSolver {
 
     fn solve(&mut self, b: &[f64], x: &mut [f64]) -> Result<(), LinalgError> {
         let (n_p, n_w, len) = (self.n_p, self.n_w, self.reduced_len());
+        if b.len() != n_p + len || x.len() != n_p + len {
+            return Err(LinalgError::Length(format!(
+                "right side {} and solution {} for a matrix of size {}",
+                b.len(),
+                x.len(),
+                n_p + len
+            )));
+        }
         let (z, xw) = x.split_at_mut(n_p);
         let xw = &mut xw[..len];
         // z = D⁻¹ b_P block by block, kept in x_P until x_P is known.

@@ -39,6 +39,7 @@ pub struct RayError {
 }
 
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum OpticsError {
     /// A ray of a field failed: the surface, the field angle and the wavelength are named.
     #[error("the ray at {}° and {} nm fails at '{surface}': {failure}", num(*field_deg), num(*wavelength_nm))]

@@ -50,6 +50,7 @@ use prepare::*;
 
 /// Failure to draw a figure. Display is one line; the caller names the file it was for.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PlotError {
     #[error("no font for the figure's text (looked for {}); install one with `apt-get install fonts-dejavu-core` or name a TTF file in {FONT_ENV}", tried.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "))]
     NoFont { tried: Vec<PathBuf> },

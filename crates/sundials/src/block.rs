@@ -30,7 +30,7 @@ use super::context::Context;
 use super::custom;
 use super::error::SundialsError;
 use super::nvector;
-use eyeshell_linalg::{AbdLu, LinalgError};
+use eyeshell_linalg::{AbdLu, AbdLuFactors, LinalgError};
 
 /// What the token matrix's content points at. `tag` (first, `repr(C)`) lets the solver ops
 /// refuse a matrix that is not one of ours.
@@ -38,6 +38,8 @@ use eyeshell_linalg::{AbdLu, LinalgError};
 struct BlockState {
     tag: u64,
     lu: AbdLu,
+    /// The factors of the last successful setup (None before one, and after a failed one).
+    factors: Option<AbdLuFactors>,
     /// Why the last setup or solve failed (None after a success).
     last_error: Option<String>,
 }
@@ -59,6 +61,7 @@ impl BlockMatrix {
         let state = NonNull::from(Box::leak(Box::new(BlockState {
             tag: TAG,
             lu,
+            factors: None,
             last_error: None,
         })));
         // Its zero op does nothing: the Jacobian trampoline clears the boundary rows before
@@ -133,8 +136,10 @@ unsafe extern "C" fn block_setup(_ls: SUNLinearSolver, a: SUNMatrix) -> c_int {
     let Some(st) = (unsafe { state(a) }) else {
         return SUNLS_PACKAGE_FAIL_UNREC;
     };
-    match catch_unwind(AssertUnwindSafe(|| st.lu.factor())) {
-        Ok(Ok(())) => {
+    let old = st.factors.take();
+    match catch_unwind(AssertUnwindSafe(|| st.lu.factor_reusing(old))) {
+        Ok(Ok(factors)) => {
+            st.factors = Some(factors);
             st.last_error = None;
             SUNLS_SUCCESS as c_int
         }
@@ -175,12 +180,16 @@ unsafe extern "C" fn block_solve(
         }
         out.copy_from_slice(input);
     }
-    if out.len() != st.lu.size() || !st.lu.is_factored() {
-        st.last_error = Some("block LU solve without a factorisation of this size".into());
+    let Some(factors) = &st.factors else {
+        st.last_error = Some("block LU solve without a factorisation".into());
         return SUNLS_PACKAGE_FAIL_UNREC;
-    }
-    match catch_unwind(AssertUnwindSafe(|| st.lu.solve_in_place(out))) {
-        Ok(()) => SUNLS_SUCCESS as c_int,
+    };
+    match catch_unwind(AssertUnwindSafe(|| factors.solve_in_place(out))) {
+        Ok(Ok(())) => SUNLS_SUCCESS as c_int,
+        Ok(Err(e)) => {
+            st.last_error = Some(e.to_string());
+            SUNLS_PACKAGE_FAIL_UNREC
+        }
         Err(_) => {
             st.last_error = Some("block LU solve panicked".into());
             SUNLS_PACKAGE_FAIL_UNREC

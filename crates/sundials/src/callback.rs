@@ -19,6 +19,7 @@ use super::error::{flag_error, FlagFamily, SundialsError};
 
 /// How a user callback failed.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum CallbackError {
     /// SUNDIALS may retry (e.g. KINSOL's line search shortens the step).
     Recoverable(String),

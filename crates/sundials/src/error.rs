@@ -8,6 +8,7 @@
 use std::fmt;
 
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SundialsError {
     /// A SUNDIALS function returned a failure flag.
     #[error("{function} failed with {name} ({flag}){}", Colon(message))]

@@ -144,6 +144,7 @@ impl PointEval {
 
 /// Why the equations cannot be evaluated at a state.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum PointError {
     /// r ≤ 0 or not finite: the shell has passed through the axis.
     #[error("r ≤ 0: the shell has passed through its axis")]

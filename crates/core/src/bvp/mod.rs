@@ -154,6 +154,7 @@ use eyeshell_sundials::SundialsError;
 use settings::SolverSettings;
 
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BvpError {
     #[error(transparent)]
     Model(#[from] crate::model::ModelError),

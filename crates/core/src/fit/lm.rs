@@ -300,6 +300,7 @@ pub trait Problem {
 
 /// Why [`minimise`] gave no outcome.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LmError<E: std::fmt::Display> {
     /// The first evaluation failed.
     #[error("{0}")]

@@ -79,6 +79,7 @@ impl Bounds {
 
 /// Why a growth model could not be evaluated at the observations.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FitError {
     /// The growth run failed.
     #[error(transparent)]

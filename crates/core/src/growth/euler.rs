@@ -52,6 +52,7 @@ pub fn integrate(
 }
 
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum EulerError {
     #[error(transparent)]
     Rhs(RhsError),

@@ -11,6 +11,7 @@
 
 use super::dae::CoupledDae;
 use super::settings::DaeLinear;
+use super::ObserverError;
 use crate::text::decimals6;
 use eyeshell_sundials::{
     CallbackError, CallbackResult, DaeSystem, Ida, IdaLinearSolver, IdaOptions, IdaSensStats,
@@ -128,7 +129,7 @@ pub struct Sensitivities<'a> {
 /// What receives the sensitivities at an output time: `output(dae, t, y, s)`, called before
 /// the state's own output there.
 pub type SensOutput<'a> =
-    dyn FnMut(&mut CoupledDae, f64, &[f64], &[Vec<f64>]) -> Result<(), String> + 'a;
+    dyn FnMut(&mut CoupledDae, f64, &[f64], &[Vec<f64>]) -> Result<(), ObserverError> + 'a;
 
 /// Whether the local error test leaves out the algebraic unknowns (IDASetSuppressAlg): no.
 /// Measured on the const scene's work-precision diagram (BENCHMARKS.md): testing them too
@@ -231,7 +232,7 @@ pub fn integrate(
 }
 
 /// What receives the coupled system's state at an output time.
-pub type DaeOutput<'a> = dyn FnMut(&mut CoupledDae, f64, &[f64]) -> Result<(), String> + 'a;
+pub type DaeOutput<'a> = dyn FnMut(&mut CoupledDae, f64, &[f64]) -> Result<(), ObserverError> + 'a;
 
 /// IDA as [`super::march`] drives it.
 struct IdaStepper<'a, 'b, 'c, 'd> {
@@ -272,9 +273,9 @@ impl super::Stepper for IdaStepper<'_, '_, '_, '_> {
             self.ida
                 .sensitivities_at(t, &mut self.s)
                 .map_err(|e| super::integrator_words(&e, 0.0, self.run))?;
-            sens_output(self.ida.system_mut().dae, t, y, &self.s)?;
+            sens_output(self.ida.system_mut().dae, t, y, &self.s).map_err(|e| e.to_string())?;
         }
-        (self.output)(self.ida.system_mut().dae, t, y)
+        (self.output)(self.ida.system_mut().dae, t, y).map_err(|e| e.to_string())
     }
 }
 

@@ -512,9 +512,9 @@ pub(crate) fn run_plain(
     let Parts { solver, growth, .. } = parts;
     // The stimulus's surfaces, when computed from the eye's optics, are traced once here,
     // before t = 0, and shared by the mesh choice and the run.
-    let growth = &*growth.resolved().map_err(|reason| GrowthError {
+    let growth = &*growth.resolved().map_err(|e| GrowthError {
         t: 0.0,
-        reason,
+        reason: e.to_string(),
         stats: Box::default(),
     })?;
     let parts = Parts { growth, ..parts };
@@ -555,7 +555,7 @@ pub(crate) fn run_on(
         .iter()
         .find_map(|s| s.check(params).err())
     {
-        return Err(fail(0.0, why, GrowthStats::default()));
+        return Err(fail(0.0, why.to_string(), GrowthStats::default()));
     }
     if growth.source == Source::Optics
         && settings.sensitivities.contains(&dae::SensParam::BlueCentre)
@@ -689,17 +689,17 @@ fn run_ida(
             let n_p = dae.differential_len();
             let mut out = |dae: &mut dae::CoupledDae, t: f64, y: &[f64]| {
                 dae.adopt(y);
-                output(&mut dae.sys, t, &y[..n_p]).map_err(|e| e.to_string())
+                output(&mut dae.sys, t, &y[..n_p])
             };
             let mut sens_out = |dae: &mut dae::CoupledDae, t: f64, y: &[f64], s: &[Vec<f64>]| {
                 let rows = sensitivity_rows(dae, t, y, s)?;
-                sens(&rows).map_err(|e| e.to_string())
+                sens(&rows)
             };
             let mut sensitivities = None;
             if !sp0.is_empty() {
                 // The rows at t = 0: zero for η0, Γ, δ; the t = 0 equilibrium's for the rest.
                 if let Err(e) = sens_out(&mut dae, 0.0, &y0, &s0) {
-                    return (dae.sys, Err((0.0, e)));
+                    return (dae.sys, Err((0.0, e.to_string())));
                 }
                 let (p, g) = (dae.sys.elastic.params(), dae.sys.growth_params().clone());
                 sensitivities = Some(ida::Sensitivities {

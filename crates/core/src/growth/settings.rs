@@ -166,15 +166,18 @@ impl GrowthParams {
     }
 
     /// These parameters with their surfaces computed if they must be (once: a resolved copy
-    /// is returned as it is). The error names the optics key to change.
-    pub fn resolved(&self) -> Result<std::borrow::Cow<'_, GrowthParams>, String> {
+    /// is returned as it is).
+    ///
+    /// # Errors
+    /// [`OpticsKeyError`](crate::model::optics::OpticsKeyError), naming the optics key to
+    /// change, if the surfaces cannot be traced.
+    pub fn resolved(
+        &self,
+    ) -> Result<std::borrow::Cow<'_, GrowthParams>, crate::model::optics::OpticsKeyError> {
         if self.is_resolved() {
             return Ok(std::borrow::Cow::Borrowed(self));
         }
-        let computed = self
-            .optics
-            .compute_over(self.blue.z_b, self.t_end)
-            .map_err(|e| e.to_string())?;
+        let computed = self.optics.compute_over(self.blue.z_b, self.t_end)?;
         Ok(std::borrow::Cow::Owned(GrowthParams {
             computed: Some(std::sync::Arc::new(computed)),
             ..self.clone()

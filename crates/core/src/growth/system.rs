@@ -51,6 +51,7 @@ pub struct Work {
 
 /// Why a right-hand side could not be evaluated.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RhsError {
     #[error("the elastic solve failed: {0}")]
     Elastic(BvpError),
@@ -63,7 +64,10 @@ pub enum RhsError {
     OutOfTime(#[from] OutOfTime),
     /// The stimulus's surfaces cannot be computed from the scene's optics keys.
     #[error("{0}")]
-    Optics(String),
+    Optics(crate::model::optics::OpticsKeyError),
+    /// The stimulus's surfaces at a time cannot be blended from the traced ones.
+    #[error(transparent)]
+    Blend(#[from] crate::model::optics::BlendError),
 }
 
 impl From<BvpError> for RhsError {
@@ -200,7 +204,7 @@ impl GrowthSystem {
         if self.now.as_ref().is_some_and(|(at, _, _)| *at == t) {
             return Ok(());
         }
-        let (blue, red) = timed.at(t).map_err(RhsError::Optics)?;
+        let (blue, red) = timed.at(t)?;
         self.now = Some((t, blue, red));
         Ok(())
     }

@@ -16,6 +16,7 @@ pub mod stimulus;
 
 /// A set of parameters for which the model itself has no answer.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum ModelError {
     #[error("pressure.dP = {} is above the cornea's limit: the largest admissible ΔP is {} kPa (4 C_c H_c / R_c · (6/7) · 7^(-1/6))", crate::text::number(*dp), crate::text::decimals6(*max))]
     PressureAboveCorneaLimit { dp: f64, max: f64 },

@@ -667,6 +667,8 @@ impl OpticsSpec {
                     .get(*lens)
                     .map_or_else(|| "(none)".into(), super::eyewear::LensSpec::describe),
             ),
+            // A kind of failure the optics crate adds later: the eye as a whole.
+            _ => ("optics.eye".into(), format!("\"{}\"", self.eye_name())),
         };
         OpticsKeyError {
             key,
@@ -773,6 +775,17 @@ pub struct TimedSurfaces {
 /// The points a blended spline is resampled at (one per degree of the default 40°).
 const BLEND_POINTS: usize = 41;
 
+/// Why the best-focus surfaces at a growth time cannot be blended from the traced ones.
+#[derive(Clone, Debug, thiserror::Error)]
+#[error("the best-focus surface at t = {} cannot be blended from the traced ones: {source}", number(*.t))]
+#[non_exhaustive]
+pub struct BlendError {
+    /// The growth time.
+    pub t: f64,
+    /// Why the blended points make no surface.
+    pub source: OpticsError,
+}
+
 impl TimedSurfaces {
     /// The blue and red surfaces at growth time `t`: at each angle the natural cubic spline
     /// in t through the traced surfaces' radii (the weights of [`eye::spline_weights`]),
@@ -780,9 +793,12 @@ impl TimedSurfaces {
     /// surface continues beyond its own φ_max along its end slope, as the stimulus reads it.
     /// The result is C² in t (the weights are, and so are the angles), so an integrator
     /// meets no kink at a table's time.
-    pub fn at(&self, t: f64) -> Result<(PolarSpline, PolarSpline), String> {
+    ///
+    /// # Errors
+    /// [`BlendError`] if the blended radii make no spline (they do not increase in angle).
+    pub fn at(&self, t: f64) -> Result<(PolarSpline, PolarSpline), BlendError> {
         let w = eye::spline_weights(&self.times, t);
-        let blend = |splines: &[PolarSpline]| -> Result<PolarSpline, String> {
+        let blend = |splines: &[PolarSpline]| -> Result<PolarSpline, BlendError> {
             let top: f64 = w.iter().zip(splines).map(|(w, s)| w * s.phi_max()).sum();
             let z_c = splines[0].z_c;
             let phi: Vec<f64> = (0..BLEND_POINTS)
@@ -797,12 +813,7 @@ impl TimedSurfaces {
                         .sum()
                 })
                 .collect();
-            PolarSpline::from_points(z_c, phi, radius).map_err(|e| {
-                format!(
-                    "the best-focus surface at t = {} cannot be blended from the traced ones: {e}",
-                    number(t)
-                )
-            })
+            PolarSpline::from_points(z_c, phi, radius).map_err(|source| BlendError { t, source })
         };
         Ok((blend(&self.blue)?, blend(&self.red)?))
     }

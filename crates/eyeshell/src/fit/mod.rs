@@ -83,14 +83,18 @@ impl From<FitError> for Error {
     fn from(e: FitError) -> Self {
         match e {
             FitError::Growth(g) => g.into(),
-            e @ FitError::NotRecorded { .. } => Error::failed(e.to_string()),
+            // A run that records nothing, or a failure the fit adds later: not the user's.
+            e => Error::failed(e.to_string()),
         }
     }
 }
 
 impl FitParam {
-    /// The parameter of scene key `key`, with its range; a one-line refusal otherwise.
-    pub fn from_key(key: &str) -> Result<FitParam, String> {
+    /// The parameter of scene key `key`, with its range.
+    ///
+    /// # Errors
+    /// [`keys::SensitivityKeyError`] for a key that is not such a parameter.
+    pub fn from_key(key: &str) -> Result<FitParam, keys::SensitivityKeyError> {
         let param = keys::sensitivity_param(key)?;
         let bounds = keys::find(param.key()).map_or(Bounds::NONE, |k| bounds_of_rule(k.rule));
         Ok(FitParam { param, bounds })
@@ -489,6 +493,7 @@ pub fn fit_watched(
         lm::LmError::Evaluation(e) => e,
         lm::LmError::Unidentifiable(why) => Error::input(why),
         lm::LmError::RankDeficient(why) => Error::failed(why),
+        e => Error::failed(e.to_string()),
     })?;
     let model_seconds = problem.model_seconds;
     let names: Vec<&str> = params.iter().map(|p| p.key()).collect();

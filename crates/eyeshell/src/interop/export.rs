@@ -66,7 +66,7 @@ fn col(table: &Table, name: &str) -> Vec<f64> {
 pub struct ElasticExtras {
     /// The scene solved, or why it cannot be read (then nothing is exported: without it
     /// yp would not be f).
-    pub params: Option<Result<crate::model::params::Params, String>>,
+    pub params: Option<Result<crate::model::params::Params, ExportError>>,
     pub stats: Option<crate::bvp::SolveStats>,
     /// The file the fields come from, named when they cannot be evaluated.
     pub fields_file: Option<PathBuf>,
@@ -79,9 +79,7 @@ impl ElasticExtras {
             Ok(rundir::Summary::Elastic(e)) => Some(e.stats),
             _ => None,
         };
-        let params = crate::rundir::rundata::scene(run_dir)
-            .map(|s| s.params)
-            .map_err(|e| e.message);
+        let params = crate::rundir::rundata::scene(run_dir).map(|s| s.params);
         ElasticExtras {
             params: Some(params),
             stats,
@@ -110,7 +108,7 @@ pub fn bvp4c_form(
         Some(Err(why)) => {
             return Err(bad(format!(
                 "the run's scene cannot be read, and sol.yp = f(x, y) needs its equations: {}",
-                crate::text::excerpt(why, 200)
+                crate::text::excerpt(&why.message, 200)
             )))
         }
         None => {

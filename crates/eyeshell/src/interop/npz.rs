@@ -254,9 +254,31 @@ fn dtype(descr: &str) -> Result<(bool, char, usize), String> {
     }
 }
 
+/// Why bytes are not a .npy array eyeshell reads, or why a .npz archive could not be
+/// assembled: the reason, in the format's terms (a reader adds the file's name).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{reason}")]
+#[non_exhaustive]
+pub struct NpyError {
+    pub reason: String,
+}
+
+impl From<String> for NpyError {
+    fn from(reason: String) -> Self {
+        NpyError { reason }
+    }
+}
+
 /// Parse one .npy file within the default [`ReadLimits`].
-pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
-    parse_npy_in(bytes, &mut Budget::new(&ReadLimits::default(), bytes.len()))
+///
+/// # Errors
+/// [`NpyError`] for bytes that are not such an array, or that decode to more than the
+/// limits allow.
+pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, NpyError> {
+    Ok(parse_npy_in(
+        bytes,
+        &mut Budget::new(&ReadLimits::default(), bytes.len()),
+    )?)
 }
 
 /// Parse one .npy file: any version (1.0, 2.0, 3.0), C or Fortran order (Fortran is
@@ -402,7 +424,15 @@ pub fn has_signature(path: &Path) -> bool {
 
 /// The bytes of a .npz archive of `arrays` (member `NAME.npy` each), with eyeshell's
 /// [`COMMENT`].
-pub fn encode(arrays: &[(String, NpyArray)]) -> Result<Vec<u8>, String> {
+///
+/// # Errors
+/// [`NpyError`] if the archive cannot be assembled (a member's name the zip writer
+/// refuses).
+pub fn encode(arrays: &[(String, NpyArray)]) -> Result<Vec<u8>, NpyError> {
+    Ok(encode_zip(arrays)?)
+}
+
+fn encode_zip(arrays: &[(String, NpyArray)]) -> Result<Vec<u8>, String> {
     let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
     zip.set_comment(COMMENT).map_err(|e| e.to_string())?;
     let options = zip::write::SimpleFileOptions::default()
@@ -421,7 +451,7 @@ pub fn write(path: &Path, arrays: &[(String, NpyArray)]) -> Result<(), NpzError>
         path: path.to_path_buf(),
         reason,
     };
-    let bytes = encode(arrays).map_err(err)?;
+    let bytes = encode(arrays).map_err(|e| err(e.reason))?;
     write_atomic(path, &bytes).map_err(|e| err(e.to_string()))
 }
 
@@ -576,14 +606,15 @@ mod tests {
             ("<U3", "dtype \"<U3\" is not read"),
         ] {
             let h = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': (1,), }}");
-            let e = parse_npy(&npy(&h, &[0; 16])).unwrap_err();
+            let e = parse_npy(&npy(&h, &[0; 16])).unwrap_err().reason;
             assert!(e.starts_with(why), "{e}");
         }
         let e = parse_npy(&npy(
             "{'descr': [('a', '<f8')], 'fortran_order': False, 'shape': (1,), }",
             &[0; 8],
         ))
-        .unwrap_err();
+        .unwrap_err()
+        .reason;
         assert!(e.contains("structured dtypes are not read"), "{e}");
     }
 
@@ -592,17 +623,25 @@ mod tests {
         let h =
             |shape: &str| format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {shape}, }}");
         // The element count overflows; the byte size overflows; a size far beyond the data.
-        let e = parse_npy(&npy(&h("(4611686018427387904, 8)"), &[])).unwrap_err();
+        let e = parse_npy(&npy(&h("(4611686018427387904, 8)"), &[]))
+            .unwrap_err()
+            .reason;
         assert!(e.contains("overflows"), "{e}");
-        let e = parse_npy(&npy(&h("(2305843009213693952,)"), &[0; 8])).unwrap_err();
+        let e = parse_npy(&npy(&h("(2305843009213693952,)"), &[0; 8]))
+            .unwrap_err()
+            .reason;
         assert!(e.starts_with("8 data bytes for shape"), "{e}");
-        let e = parse_npy(&npy(&h("(99999999999999999999,)"), &[])).unwrap_err();
+        let e = parse_npy(&npy(&h("(99999999999999999999,)"), &[]))
+            .unwrap_err()
+            .reason;
         assert!(e.contains("99999999999999999999"), "{e}");
-        let e = parse_npy(&npy(&h("(1000, 1000)"), &[0; 8])).unwrap_err();
+        let e = parse_npy(&npy(&h("(1000, 1000)"), &[0; 8]))
+            .unwrap_err()
+            .reason;
         assert!(e.starts_with("8 data bytes for shape [1000, 1000]"), "{e}");
         // Nesting, junk, truncation.
         let deep = format!("{}{}", "(".repeat(10_000), ")".repeat(10_000));
-        let e = parse_npy(&npy(&h(&deep), &[])).unwrap_err();
+        let e = parse_npy(&npy(&h(&deep), &[])).unwrap_err().reason;
         assert!(e.contains("nests too deep"), "{e}");
         assert!(parse_npy(b"\x93NUMPY\x01\x00\xff\xff{").is_err());
         assert!(parse_npy(b"\x93NUMPY\x02\x00\xff\xff").is_err());

@@ -54,6 +54,7 @@ pub const AT_FILE: &str = "at.csv";
 
 /// Failure to write results. Display is one line naming the path.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum OutputError {
     #[error("{}: {source}", path.display())]
     Io {

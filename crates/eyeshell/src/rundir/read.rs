@@ -32,7 +32,7 @@ pub const GROWTH_VARS: [&str; 14] = [
 
 /// A run directory that cannot be read (or, for the exporters, written): one line naming the file. `bad_input`
 /// for the user's mistakes (exit 2), otherwise a failure to write (exit 1).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct ReadError {
     pub bad_input: bool,
     pub message: String,

@@ -121,96 +121,120 @@ impl Rule {
         }
     }
 
-    /// The reason `x` breaks this rule, as the end of a sentence "KEY = x ...".
-    pub fn check_float(self, x: f64) -> Result<(), String> {
+    /// Whether `x` keeps this rule.
+    ///
+    /// # Errors
+    /// The [`RuleError`] it breaks; its Display ends a sentence "KEY = x ...".
+    pub fn check_float(self, x: f64) -> Result<(), RuleError> {
         if !x.is_finite() {
-            return Err("must be a finite number".into());
+            return Err(RuleError::NotFinite);
         }
         match self {
             // x is finite here, so plain comparisons are exact.
-            Rule::Positive if x <= 0.0 => Err("must be positive".into()),
-            Rule::NonNegative if x < 0.0 => Err("must be non-negative".into()),
-            Rule::AtLeast(n) if x < n as f64 => Err(format!("must be at least {n}")),
+            Rule::Positive if x <= 0.0 => Err(RuleError::NotPositive),
+            Rule::NonNegative if x < 0.0 => Err(RuleError::Negative),
+            Rule::AtLeast(n) if x < n as f64 => Err(RuleError::BelowLeast { least: n }),
             Rule::Count(lo, hi) if x < lo as f64 || x > hi as f64 => {
-                Err(format!("must lie between {lo} and {hi}"))
+                Err(RuleError::OutOfRange { lo, hi })
             }
-            Rule::OpenUnit if x <= 0.0 || x >= 1.0 => {
-                Err("must lie strictly between 0 and 1".into())
-            }
-            Rule::UnitFromZero if !(0.0..1.0).contains(&x) => Err("must lie in [0, 1)".into()),
+            Rule::OpenUnit if x <= 0.0 || x >= 1.0 => Err(RuleError::NotInOpenUnit),
+            Rule::UnitFromZero if !(0.0..1.0).contains(&x) => Err(RuleError::NotInUnitFromZero),
             Rule::OpenHalfTurn if x <= 0.0 || x >= std::f64::consts::PI => {
-                Err("must lie strictly between 0 and π (radians)".into())
+                Err(RuleError::NotInOpenHalfTurn)
             }
-            Rule::PositiveIncreasing(_) if x <= 0.0 => Err("must be positive".into()),
-            Rule::Duration if x < MIN_T_END => Err(format!(
-                "must be at least {}: the integrators multiply times by their steps, and for a shorter run that product underflows",
-                crate::text::number(MIN_T_END)
-            )),
+            Rule::PositiveIncreasing(_) if x <= 0.0 => Err(RuleError::NotPositive),
+            Rule::Duration if x < MIN_T_END => Err(RuleError::TooShort),
             _ => Ok(()),
         }
     }
 
-    /// The reason the list `xs` breaks this rule. Lists are never sorted for the user: an
+    /// Whether the list `xs` keeps this rule. Lists are never sorted for the user: an
     /// unsorted list is an error, since it is more likely a typo than a wish.
-    pub fn check_floats(self, xs: &[f64]) -> Result<(), String> {
+    ///
+    /// # Errors
+    /// The [`RuleError`] it breaks, naming the item (counted from 1).
+    pub fn check_floats(self, xs: &[f64]) -> Result<(), RuleError> {
         if let Rule::List(max) = self {
             if xs.len() > max {
-                return Err(format!(
-                    "lists {} values, more than the {max} allowed",
-                    xs.len()
-                ));
+                return Err(RuleError::TooManyValues { len: xs.len(), max });
             }
         }
         if let Rule::PositiveIncreasing(max) = self {
             if xs.is_empty() {
-                return Err("must list at least one time".into());
+                return Err(RuleError::NoTimes);
             }
             if xs.len() > max {
-                return Err(format!(
-                    "lists {} times, more than the {max} allowed (each time is a snapshot file of every node): for a curve at many times use output.history_points",
-                    xs.len()
-                ));
+                return Err(RuleError::TooManyTimes { len: xs.len(), max });
             }
         }
         for (i, &x) in xs.iter().enumerate() {
             if !x.is_finite() {
-                return Err(format!(
-                    "must hold finite numbers only (item {} is {})",
-                    i + 1,
-                    crate::text::number(x)
-                ));
+                return Err(RuleError::NotFiniteItem { item: i + 1, x });
             }
             if matches!(self, Rule::PositiveIncreasing(_)) {
                 if x <= 0.0 {
-                    return Err(format!(
-                        "must hold positive numbers only (item {} is {})",
-                        i + 1,
-                        crate::text::number(x)
-                    ));
+                    return Err(RuleError::NotPositiveItem { item: i + 1, x });
                 }
                 if i > 0 && x <= xs[i - 1] {
-                    return Err(format!(
-                        "must be strictly increasing (they are not sorted for you): {} follows {}",
-                        crate::text::number(x),
-                        crate::text::number(xs[i - 1])
-                    ));
+                    return Err(RuleError::NotIncreasing {
+                        x,
+                        previous: xs[i - 1],
+                    });
                 }
             }
         }
         Ok(())
     }
 
-    /// The reason the count `n` breaks this rule.
-    pub fn check_count(self, n: usize) -> Result<(), String> {
+    /// Whether the count `n` keeps this rule.
+    ///
+    /// # Errors
+    /// The [`RuleError`] it breaks.
+    pub fn check_count(self, n: usize) -> Result<(), RuleError> {
         match self {
-            Rule::AtLeast(m) if n < m => Err(format!("must be at least {m}")),
-            Rule::Count(lo, hi) if n < lo || n > hi => {
-                Err(format!("must lie between {lo} and {hi}"))
-            }
-            Rule::Positive if n == 0 => Err("must be positive".into()),
+            Rule::AtLeast(m) if n < m => Err(RuleError::BelowLeast { least: m }),
+            Rule::Count(lo, hi) if n < lo || n > hi => Err(RuleError::OutOfRange { lo, hi }),
+            Rule::Positive if n == 0 => Err(RuleError::NotPositive),
             _ => Ok(()),
         }
     }
+}
+
+/// How a value breaks its key's [`Rule`]; Display ends a sentence "KEY = value ...".
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RuleError {
+    #[error("must be a finite number")]
+    NotFinite,
+    #[error("must be positive")]
+    NotPositive,
+    #[error("must be non-negative")]
+    Negative,
+    #[error("must be at least {least}")]
+    BelowLeast { least: usize },
+    #[error("must lie between {lo} and {hi}")]
+    OutOfRange { lo: usize, hi: usize },
+    #[error("must lie strictly between 0 and 1")]
+    NotInOpenUnit,
+    #[error("must lie in [0, 1)")]
+    NotInUnitFromZero,
+    #[error("must lie strictly between 0 and π (radians)")]
+    NotInOpenHalfTurn,
+    /// A growth run shorter than [`MIN_T_END`].
+    #[error("must be at least {}: the integrators multiply times by their steps, and for a shorter run that product underflows", crate::text::number(MIN_T_END))]
+    TooShort,
+    #[error("lists {len} values, more than the {max} allowed")]
+    TooManyValues { len: usize, max: usize },
+    #[error("must list at least one time")]
+    NoTimes,
+    #[error("lists {len} times, more than the {max} allowed (each time is a snapshot file of every node): for a curve at many times use output.history_points")]
+    TooManyTimes { len: usize, max: usize },
+    #[error("must hold finite numbers only (item {item} is {})", crate::text::number(*.x))]
+    NotFiniteItem { item: usize, x: f64 },
+    #[error("must hold positive numbers only (item {item} is {})", crate::text::number(*.x))]
+    NotPositiveItem { item: usize, x: f64 },
+    #[error("must be strictly increasing (they are not sorted for you): {} follows {}", crate::text::number(*.x), crate::text::number(*.previous))]
+    NotIncreasing { x: f64, previous: f64 },
 }
 
 /// One scene key.
@@ -407,10 +431,13 @@ pub fn find(key: &str) -> Option<&'static KeySpec> {
     KEYS.iter().find(|k| k.key == key)
 }
 
-/// The sensitivity parameter of scene key `key`, or why there is none: a one-line reason
-/// naming it. Here, on the scene's side, because the reasons are about keys (the growth
-/// names its parameters' keys, it does not read the key table).
-pub fn sensitivity_param(key: &str) -> Result<SensParam, String> {
+/// The sensitivity parameter of scene key `key`. Here, on the scene's side, because the
+/// reasons are about keys (the growth names its parameters' keys, it does not read the key
+/// table).
+///
+/// # Errors
+/// [`SensitivityKeyError`], naming the key.
+pub fn sensitivity_param(key: &str) -> Result<SensParam, SensitivityKeyError> {
     if let Some(p) = SensParam::ALL
         .into_iter()
         .chain(SensParam::OUTSIDE)
@@ -418,19 +445,36 @@ pub fn sensitivity_param(key: &str) -> Result<SensParam, String> {
     {
         return Ok(p);
     }
-    let supported = format!("supported: {}", SensParam::SUPPORTED);
-    Err(match key {
-        "stimulus.red.offset" => format!(
-            "{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero ({supported})"
-        ),
-        _ => match find(key) {
-            Some(_) => format!("sensitivities to {key} are not available ({supported})"),
-            None => format!(
-                "{key:?} is not a scene key ({supported}; {} lists every key)",
-                crate::text::advice(&crate::text::Advice::ListKeys)
-            ),
+    let key = key.to_string();
+    Err(match key.as_str() {
+        "stimulus.red.offset" => SensitivityKeyError::ClassificationOnly { key },
+        k if find(k).is_some() => SensitivityKeyError::NotAvailable { key },
+        _ => SensitivityKeyError::NotAKey {
+            key,
+            list_keys: crate::text::advice(&crate::text::Advice::ListKeys),
         },
     })
+}
+
+/// Why there is no sensitivity to a key, one line naming it and the keys there are.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SensitivityKeyError {
+    /// A key of the classification alone, to which every sensitivity is zero.
+    #[error("{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero (supported: {})", SensParam::SUPPORTED)]
+    ClassificationOnly { key: String },
+    /// A scene key that is not a parameter sensitivities are taken to.
+    #[error(
+        "sensitivities to {key} are not available (supported: {})",
+        SensParam::SUPPORTED
+    )]
+    NotAvailable { key: String },
+    /// Not a scene key; `list_keys` is what lists them, in the caller's terms.
+    #[error(
+        "{key:?} is not a scene key (supported: {}; {list_keys} lists every key)",
+        SensParam::SUPPORTED
+    )]
+    NotAKey { key: String, list_keys: String },
 }
 
 /// The most Newton iterations one solve may be allowed (each may also spend a bounded

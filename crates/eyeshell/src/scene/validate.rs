@@ -57,7 +57,11 @@ impl Scene {
                 _ => Ok(()),
             };
             if let Err(problem) = check {
-                return Err(invalid(&[spec.key], show(&spec.get(self)), problem));
+                return Err(invalid(
+                    &[spec.key],
+                    show(&spec.get(self)),
+                    problem.to_string(),
+                ));
             }
         }
         // Limits that tie keys together; every key is finite and in its own range by now.
@@ -287,6 +291,12 @@ impl Scene {
                 &["material.bending", "solver.cornea_grading"],
                 number(self.params.e_b),
                 format!("is too small for this shell (ΔP, R0): {e}; raise material.bending or set solver.cornea_grading = false"),
+            ),
+            // A refusal the mesh adds later: the node count is what a scene sets.
+            _ => (
+                &["solver.nodes", "solver.epsilon"],
+                self.solver.nodes.to_string(),
+                format!("makes no mesh: {e}"),
             ),
         };
         Err(SceneError::Invalid {

@@ -56,29 +56,77 @@ pub struct Shard {
     pub n: usize,
 }
 
+/// Why a shard could not be had, one line each: from the command line's `--shard K/N`,
+/// from the numbers, or from a Slurm job array's environment.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ShardError {
+    /// Text that is not `K/N` with whole numbers.
+    #[error("--shard {}: give K/N with 1 <= K <= N, e.g. --shard 2/8 (or --shard slurm in a Slurm job array)", crate::text::one_line(.text))]
+    Syntax { text: String },
+    /// N, the number of shards, out of range.
+    #[error("N must be 1 to {MAX_SHARDS}, not {n}")]
+    Count { n: usize },
+    /// K, the shard, out of 1..=N.
+    #[error("K must be 1 to N = {n}, not {k}")]
+    Index { k: usize, n: usize },
+    /// `--shard K/N` whose numbers are out of range.
+    #[error("--shard {}: {source}", crate::text::one_line(.text))]
+    Given {
+        text: String,
+        source: Box<ShardError>,
+    },
+    /// A variable of the job array's environment that is not set.
+    #[error("--shard slurm: {name} is not set: run it as a task of a Slurm job array (sbatch --array=1-N), or give --shard K/N")]
+    SlurmUnset { name: &'static str },
+    /// A variable of the job array's environment that is not a whole number.
+    #[error("--shard slurm: {name} = {} is not a whole number", crate::text::one_line(.value))]
+    SlurmNotANumber { name: &'static str, value: String },
+    /// The task's id outside the array's range.
+    #[error("--shard slurm: SLURM_ARRAY_TASK_ID = {id} is outside SLURM_ARRAY_TASK_MIN..MAX = {min}..{max}")]
+    SlurmOutside { id: usize, min: usize, max: usize },
+    /// A job array that is not a plain range (a step, or a list).
+    #[error("--shard slurm: the job array has {} tasks between {min} and {max}: it must be a plain range (--array={min}-{max}), one task per shard", crate::text::one_line(.count))]
+    SlurmNotARange {
+        count: String,
+        min: usize,
+        max: usize,
+    },
+    /// A job array of more tasks than shards may be.
+    #[error("--shard slurm: {0}")]
+    Slurm(Box<ShardError>),
+}
+
 impl Shard {
-    /// `K/N`; Err is one line saying what is wrong.
-    pub fn parse(text: &str) -> Result<Shard, String> {
-        let shown = crate::text::one_line(text);
-        let usage =
-            "give K/N with 1 <= K <= N, e.g. --shard 2/8 (or --shard slurm in a Slurm job array)";
-        let (k, n) = text
-            .split_once('/')
-            .ok_or_else(|| format!("--shard {shown}: {usage}"))?;
+    /// `K/N`.
+    ///
+    /// # Errors
+    /// [`ShardError::Syntax`] for text that is not two whole numbers, [`ShardError::Given`]
+    /// for numbers out of range.
+    pub fn parse(text: &str) -> Result<Shard, ShardError> {
+        let syntax = || ShardError::Syntax { text: text.into() };
+        let (k, n) = text.split_once('/').ok_or_else(syntax)?;
         let number = |s: &str| s.trim().parse::<usize>().ok();
         match (number(k), number(n)) {
-            (Some(k), Some(n)) => Shard::new(k, n).map_err(|why| format!("--shard {shown}: {why}")),
-            _ => Err(format!("--shard {shown}: {usage}")),
+            (Some(k), Some(n)) => Shard::new(k, n).map_err(|why| ShardError::Given {
+                text: text.into(),
+                source: Box::new(why),
+            }),
+            _ => Err(syntax()),
         }
     }
 
     /// Shard `k` of `n`, checked.
-    pub fn new(k: usize, n: usize) -> Result<Shard, String> {
+    ///
+    /// # Errors
+    /// [`ShardError::Count`] for n outside 1..=[`MAX_SHARDS`], [`ShardError::Index`] for k
+    /// outside 1..=n.
+    pub fn new(k: usize, n: usize) -> Result<Shard, ShardError> {
         if n == 0 || n > MAX_SHARDS {
-            return Err(format!("N must be 1 to {MAX_SHARDS}, not {n}"));
+            return Err(ShardError::Count { n });
         }
         if k == 0 || k > n {
-            return Err(format!("K must be 1 to N = {n}, not {k}"));
+            return Err(ShardError::Index { k, n });
         }
         Ok(Shard { k, n })
     }
@@ -87,17 +135,16 @@ impl Shard {
     /// `SLURM_ARRAY_TASK_MIN` and `SLURM_ARRAY_TASK_MAX` (K = ID − MIN + 1, N = MAX − MIN + 1;
     /// `SLURM_ARRAY_TASK_COUNT`, when set, must be N: the array must be a plain range
     /// such as `--array=1-8`). `var` reads the environment.
-    pub fn from_slurm(var: impl Fn(&str) -> Option<String>) -> Result<Shard, String> {
-        let get = |name: &str| -> Result<usize, String> {
-            let value = var(name).ok_or_else(|| {
-                format!("--shard slurm: {name} is not set: run it as a task of a Slurm job array (sbatch --array=1-N), or give --shard K/N")
-            })?;
-            value.trim().parse::<usize>().map_err(|_| {
-                format!(
-                    "--shard slurm: {name} = {} is not a whole number",
-                    crate::text::one_line(&value)
-                )
-            })
+    ///
+    /// # Errors
+    /// The `Slurm…` variants of [`ShardError`], naming the variable.
+    pub fn from_slurm(var: impl Fn(&str) -> Option<String>) -> Result<Shard, ShardError> {
+        let get = |name: &'static str| -> Result<usize, ShardError> {
+            let value = var(name).ok_or(ShardError::SlurmUnset { name })?;
+            value
+                .trim()
+                .parse::<usize>()
+                .map_err(|_| ShardError::SlurmNotANumber { name, value })
         };
         let (id, min, max) = (
             get("SLURM_ARRAY_TASK_ID")?,
@@ -105,20 +152,15 @@ impl Shard {
             get("SLURM_ARRAY_TASK_MAX")?,
         );
         if id < min || id > max {
-            return Err(format!(
-                "--shard slurm: SLURM_ARRAY_TASK_ID = {id} is outside SLURM_ARRAY_TASK_MIN..MAX = {min}..{max}"
-            ));
+            return Err(ShardError::SlurmOutside { id, min, max });
         }
         let n = max - min + 1;
         if let Some(count) = var("SLURM_ARRAY_TASK_COUNT") {
             if count.trim().parse::<usize>().ok() != Some(n) {
-                return Err(format!(
-                    "--shard slurm: the job array has {} tasks between {min} and {max}: it must be a plain range (--array={min}-{max}), one task per shard",
-                    crate::text::one_line(&count)
-                ));
+                return Err(ShardError::SlurmNotARange { count, min, max });
             }
         }
-        Shard::new(id - min + 1, n).map_err(|why| format!("--shard slurm: {why}"))
+        Shard::new(id - min + 1, n).map_err(|why| ShardError::Slurm(Box::new(why)))
     }
 
     /// `K.json`.
@@ -584,13 +626,21 @@ mod tests {
         assert_eq!(Shard::parse("2/3"), Ok(Shard { k: 2, n: 3 }));
         assert_eq!(Shard::parse(" 1 / 1 "), Ok(Shard { k: 1, n: 1 }));
         for bad in ["0/3", "4/3", "1/0", "3", "a/b", "-1/3", "1/2/3", ""] {
-            let why = Shard::parse(bad).unwrap_err();
+            let why = Shard::parse(bad).unwrap_err().to_string();
             assert!(why.starts_with("--shard "), "{why}");
             assert!(!why.contains('\n'), "{why}");
         }
         assert!(Shard::parse("1/2000000")
             .unwrap_err()
+            .to_string()
             .contains("N must be 1 to"));
+        assert_eq!(
+            Shard::parse("4/3"),
+            Err(ShardError::Given {
+                text: "4/3".into(),
+                source: Box::new(ShardError::Index { k: 4, n: 3 })
+            })
+        );
     }
 
     #[test]
@@ -617,7 +667,16 @@ mod tests {
         ]);
         assert_eq!(Shard::from_slurm(zero_based), Ok(Shard { k: 1, n: 3 }));
         let unset = Shard::from_slurm(env(&[])).unwrap_err();
-        assert!(unset.contains("SLURM_ARRAY_TASK_ID is not set"), "{unset}");
+        assert_eq!(
+            unset,
+            ShardError::SlurmUnset {
+                name: "SLURM_ARRAY_TASK_ID"
+            }
+        );
+        assert!(
+            unset.to_string().contains("SLURM_ARRAY_TASK_ID is not set"),
+            "{unset}"
+        );
         let stepped = env(&[
             ("SLURM_ARRAY_TASK_ID", "3"),
             ("SLURM_ARRAY_TASK_MIN", "1"),
@@ -626,6 +685,7 @@ mod tests {
         ]);
         assert!(Shard::from_slurm(stepped)
             .unwrap_err()
+            .to_string()
             .contains("plain range"));
     }
 

@@ -122,8 +122,9 @@ fn abd_of<const N: usize, const W: usize>(a: &DMatrix<f64>, top: usize) -> Abd<N
 /// largest relative residual.
 fn check<const N: usize, const W: usize>(a: &DMatrix<f64>, top: usize, what: &str) -> f64 {
     let n = a.nrows();
-    let mut lu = abd_of::<N, W>(a, top);
-    lu.factor().unwrap_or_else(|e| panic!("{what}: {e}"));
+    let lu = abd_of::<N, W>(a, top)
+        .factor()
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
     let dense = a.clone().lu();
     let mut worst = 0.0f64;
     for r in 0..3 {
@@ -228,7 +229,7 @@ fn six_wide_blocks_pivot_across_blocks_and_report_singular() {
     check::<6, 12>(&a, 3, "6-wide, zero first columns");
     let mut a = random_abd::<6>(10, 3, Kind::General { diag: 3.0 }, 1);
     a.column_mut(26).fill(0.0);
-    let mut lu: AbdLu6 = abd_of::<6, 12>(&a, 3);
+    let lu: AbdLu6 = abd_of::<6, 12>(&a, 3);
     match lu.factor() {
         Err(LinalgError::Singular(why)) => assert!(why.contains("column 26"), "{why}"),
         other => panic!("expected singular, got {other:?}"),
@@ -238,7 +239,7 @@ fn six_wide_blocks_pivot_across_blocks_and_report_singular() {
     for j in 0..60 {
         a[(3 + 6 * 2 + 1, j)] = a[(3 + 6 * 2 + 4, j)];
     }
-    let mut lu = abd_of::<6, 12>(&a, 3);
+    let lu = abd_of::<6, 12>(&a, 3);
     assert!(
         matches!(lu.factor(), Err(LinalgError::Singular(_))),
         "two equal rows"
@@ -252,18 +253,91 @@ fn set_row_writes_a_rows_span() {
     let entrywise = abd_of::<6, 12>(&a, 3);
     let mut rowwise = AbdLu6::new(5, 3).unwrap();
     for i in 0..30 {
-        let (first, len) = rowwise.row_span(i);
+        let (first, len) = rowwise.row_span(i).unwrap();
         let row: Vec<f64> = (first..first + len).map(|j| a[(i, j)]).collect();
-        rowwise.set_row(i, &row);
+        rowwise.set_row(i, &row).unwrap();
     }
     for i in 0..30 {
         for j in 0..30 {
             assert_eq!(rowwise.get(i, j), entrywise.get(i, j), "({i}, {j})");
         }
     }
-    assert_eq!(rowwise.row_span(2), (0, 6));
-    assert_eq!(rowwise.row_span(3 + 6 * 2 + 5), (12, 12));
-    assert_eq!(rowwise.row_span(27), (24, 6));
+    assert_eq!(rowwise.row_span(2).unwrap(), (0, 6));
+    assert_eq!(rowwise.row_span(3 + 6 * 2 + 5).unwrap(), (12, 12));
+    assert_eq!(rowwise.row_span(27).unwrap(), (24, 6));
+}
+
+/// A row that is not there, a row of the wrong length and a right side of the wrong
+/// length are errors that leave the matrix and the vector as they were, not panics.
+#[test]
+fn wrong_lengths_are_errors() {
+    let a = random_abd::<5>(4, 3, Kind::General { diag: 3.0 }, 3);
+    let mut lu = abd_of::<5, 10>(&a, 3);
+    let before = lu.clone();
+    assert!(matches!(lu.row_span(20), Err(LinalgError::Length(_))));
+    // A top row (5 columns), an interval's (10) and a bottom row (5), each one short and
+    // one long, and a row past the end.
+    for (i, len) in [(0, 4), (0, 10), (4, 9), (4, 11), (19, 4), (19, 10), (20, 5)] {
+        match lu.set_row(i, &vec![7.0; len]) {
+            Err(LinalgError::Length(why)) => assert!(why.contains(&format!("row {i}")), "{why}"),
+            other => panic!("row {i} of {len} values: {other:?}"),
+        }
+    }
+    for i in 0..20 {
+        for j in 0..20 {
+            assert_eq!(lu.get(i, j), before.get(i, j), "({i}, {j})");
+        }
+    }
+    let f = lu.factor().unwrap();
+    assert_eq!(f.size(), 20);
+    for len in [0, 19, 21] {
+        let mut b = vec![1.0; len];
+        match f.solve_in_place(&mut b) {
+            Err(LinalgError::Length(why)) => assert!(why.contains("size 20"), "{why}"),
+            other => panic!("right side of {len}: {other:?}"),
+        }
+        assert!(b.iter().all(|&v| v == 1.0));
+        let mut x = vec![0.0; 20];
+        assert!(matches!(f.solve(&b, &mut x), Err(LinalgError::Length(_))));
+        let mut x = vec![0.0; len];
+        assert!(matches!(
+            f.solve(&[1.0; 20], &mut x),
+            Err(LinalgError::Length(_))
+        ));
+    }
+}
+
+/// The factors are of the matrix as it was factored: rewriting the matrix leaves them
+/// solving the old one, and factoring again into their storage solves the new one.
+#[test]
+fn factors_outlive_a_rewrite_and_are_reused() {
+    let a = random_abd::<5>(
+        6,
+        3,
+        Kind::Bvp {
+            shuffle: true,
+            zero_first: false,
+        },
+        4,
+    );
+    let mut lu = abd_of::<5, 10>(&a, 3);
+    let f = lu.factor().unwrap();
+    let b: Vec<f64> = (0..30).map(|i| (i as f64 * 0.3).cos()).collect();
+    let mut x = vec![0.0; 30];
+    f.solve(&b, &mut x).unwrap();
+    assert!(relative_residual(&a, &x, &b) <= 1e-13);
+    let a2 = a.map(|v| 2.0 * v);
+    fill_from_dense(&mut lu, &a2);
+    let mut y = vec![0.0; 30];
+    f.solve(&b, &mut y).unwrap();
+    assert_eq!(x, y, "the factors changed with the matrix");
+    let f2 = lu.factor_reusing(Some(f)).unwrap();
+    f2.solve(&b, &mut y).unwrap();
+    assert!(relative_residual(&a2, &y, &b) <= 1e-13);
+    // Factors of another shape are not reused but replaced.
+    let other = abd_of::<5, 10>(&random_abd::<5>(3, 3, Kind::General { diag: 3.0 }, 5), 3);
+    let f3 = other.factor_reusing(Some(f2)).unwrap();
+    assert_eq!(f3.size(), 15);
 }
 
 /// The shell's shape (3 top rows, 2 bottom) at the sizes of the benches' meshes, with
@@ -324,7 +398,7 @@ fn zero_diagonal_blocks_need_pivoting_across_blocks() {
         },
         7,
     );
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     lu.factor().unwrap();
     check::<5, 10>(&a, 3, "zero first column in every left block");
 }
@@ -334,24 +408,18 @@ fn singular_matrices_are_reported_singular() {
     // A zero column at node 4, unknown 2.
     let mut a = random_abd::<5>(10, 3, Kind::General { diag: 3.0 }, 1);
     a.column_mut(22).fill(0.0);
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     match lu.factor() {
         Err(LinalgError::Singular(why)) => assert!(why.contains("column 22"), "{why}"),
         other => panic!("expected singular, got {other:?}"),
     }
-    assert!(!lu.is_factored());
-    let mut x = vec![0.0; 50];
-    assert!(matches!(
-        lu.solve(&vec![1.0; 50], &mut x),
-        Err(LinalgError::NotFactored)
-    ));
     // Two rows of one interval block equal: singular up to rounding, caught by the
     // pivot test (not by an exact zero).
     let mut a = random_abd::<5>(10, 3, Kind::General { diag: 3.0 }, 2);
     for j in 0..50 {
         a[(3 + 5 * 6 + 1, j)] = a[(3 + 5 * 6 + 3, j)];
     }
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     assert!(
         matches!(lu.factor(), Err(LinalgError::Singular(_))),
         "two equal rows"
@@ -361,7 +429,7 @@ fn singular_matrices_are_reported_singular() {
     for j in 5..15 {
         a[(9, j)] = 0.5 * a[(10, j)] + 0.25 * a[(11, j)];
     }
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     assert!(
         matches!(lu.factor(), Err(LinalgError::Singular(_))),
         "a row that is a combination of two others"
@@ -369,14 +437,14 @@ fn singular_matrices_are_reported_singular() {
     // Non-finite entries.
     let mut a = random_abd::<5>(4, 3, Kind::General { diag: 3.0 }, 4);
     a[(10, 9)] = f64::NAN;
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     assert!(matches!(lu.factor(), Err(LinalgError::Singular(_))));
     // The bottom rows alone cannot fix the last node: the last stage is singular.
     let mut a = random_abd::<5>(3, 3, Kind::General { diag: 3.0 }, 5);
     for j in 0..15 {
         a[(14, j)] = a[(13, j)];
     }
-    let mut lu = abd_of::<5, 10>(&a, 3);
+    let lu = abd_of::<5, 10>(&a, 3);
     assert!(matches!(lu.factor(), Err(LinalgError::Singular(_))));
 }
 
@@ -427,11 +495,11 @@ fn poisoned_blocks_catch_an_unwritten_entry() {
     }
     assert!(matches!(lu.factor(), Err(LinalgError::Singular(_))));
     lu.set(12, 14, a[(12, 14)]);
-    lu.factor().unwrap();
+    let f = lu.factor().unwrap();
     assert!(
-        lu.growth() >= 1.0 && lu.growth() < 1e3,
+        f.growth() >= 1.0 && f.growth() < 1e3,
         "growth {}",
-        lu.growth()
+        f.growth()
     );
 }
 
@@ -471,13 +539,9 @@ proptest! {
         prop_assume!(ok);
         let mut x = b.as_slice().to_vec();
         if six {
-            let mut lu = abd_of::<6, 12>(&a, top);
-            lu.factor().unwrap();
-            lu.solve_in_place(&mut x);
+            abd_of::<6, 12>(&a, top).factor().unwrap().solve_in_place(&mut x).unwrap();
         } else {
-            let mut lu = abd_of::<5, 10>(&a, top);
-            lu.factor().unwrap();
-            lu.solve_in_place(&mut x);
+            abd_of::<5, 10>(&a, top).factor().unwrap().solve_in_place(&mut x).unwrap();
         }
         let res = relative_residual(&a, &x, b.as_slice());
         prop_assert!(res <= 1e-13, "residual {:e}", res);

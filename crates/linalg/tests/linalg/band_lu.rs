@@ -5,7 +5,7 @@
 
 use crate::support::{fill_from_dense, relative_residual};
 use eyeshell_linalg::MatrixSink;
-use eyeshell_linalg::{BandLu, BorderedBand, LinalgError};
+use eyeshell_linalg::{BandLu, BorderedBand, Csr, DirectSolver, InterleavedBand, LinalgError};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 
@@ -43,15 +43,14 @@ fn band_lu_of(a: &DMatrix<f64>, kl: usize, ku: usize) -> BandLu {
 /// Factor, solve two right sides with one factorisation, and compare with nalgebra.
 fn check(n: usize, kl: usize, ku: usize, diag: f64, seed: u64) {
     let a = random_band(n, kl, ku, diag, seed);
-    let mut lu = band_lu_of(&a, kl, ku);
-    lu.factor().unwrap();
+    let lu = band_lu_of(&a, kl, ku).factor().unwrap();
     let dense = a.clone().lu();
     for r in 0..2 {
         let b: Vec<f64> = (0..n)
             .map(|i| ((i + 3 * r) as f64 * 0.7 + 1.0).sin())
             .collect();
         let mut x = b.clone();
-        lu.solve_in_place(&mut x);
+        lu.solve_in_place(&mut x).unwrap();
         let res = relative_residual(&a, &x, &b);
         assert!(res <= 1e-13, "n {n} kl {kl} ku {ku}: residual {res:e}");
         let expect = dense.solve(&DVector::from_column_slice(&b)).unwrap();
@@ -102,11 +101,10 @@ fn zero_diagonal_needs_pivoting() {
         (0, 1) | (1, -1) => 1.0 + i as f64,
         _ => 0.0,
     });
-    let mut lu = band_lu_of(&a, 1, 1);
-    lu.factor().unwrap();
+    let lu = band_lu_of(&a, 1, 1).factor().unwrap();
     let b: Vec<f64> = (0..n).map(|i| i as f64 - 2.5).collect();
     let mut x = b.clone();
-    lu.solve_in_place(&mut x);
+    lu.solve_in_place(&mut x).unwrap();
     assert!(relative_residual(&a, &x, &b) <= 1e-15);
 }
 
@@ -116,7 +114,7 @@ fn singular_matrices_are_reported_with_their_column() {
     let n = 8;
     let mut a = random_band(n, 2, 2, 4.0, 1);
     a.column_mut(3).fill(0.0);
-    let mut lu = band_lu_of(&a, 2, 2);
+    let lu = band_lu_of(&a, 2, 2);
     match lu.factor() {
         Err(LinalgError::Singular(why)) => assert!(why.contains("column 3"), "{why}"),
         other => panic!("expected singular, got {other:?}"),
@@ -129,10 +127,10 @@ fn singular_matrices_are_reported_with_their_column() {
     for j in 3..=6 {
         a[(5, j)] = a[(4, j)];
     }
-    let mut lu = band_lu_of(&a, 2, 2);
+    let lu = band_lu_of(&a, 2, 2);
     assert!(matches!(lu.factor(), Err(LinalgError::Singular(_))));
     // All zero.
-    let mut lu = BandLu::new(4, 1, 1).unwrap();
+    let lu = BandLu::new(4, 1, 1).unwrap();
     assert!(matches!(lu.factor(), Err(LinalgError::Singular(_))));
 }
 
@@ -145,7 +143,7 @@ fn rows_written_in_place_and_refactored() {
         // row_mut holds columns i − kl ..= i + ku; entries for columns outside 0..n are
         // ignored, so write garbage there.
         for i in 0..n {
-            for (t, v) in lu.row_mut(i).iter_mut().enumerate() {
+            for (t, v) in lu.row_mut(i).unwrap().iter_mut().enumerate() {
                 let j = (i + t) as isize - kl as isize;
                 *v = if (0..n as isize).contains(&j) {
                     a[(i, j as usize)]
@@ -154,12 +152,45 @@ fn rows_written_in_place_and_refactored() {
                 };
             }
         }
-        lu.factor().unwrap();
+        let f = lu.factor().unwrap();
         let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
         let mut x = b.clone();
-        lu.solve_in_place(&mut x);
+        f.solve_in_place(&mut x).unwrap();
         assert!(relative_residual(&a, &x, &b) <= 1e-13);
     }
+    assert!(matches!(lu.row_mut(n), Err(LinalgError::Length(_))));
+}
+
+/// Right sides of the wrong length are errors that leave them as they were, not panics;
+/// the factors are of the matrix as factored, whatever is written to it after.
+#[test]
+fn wrong_lengths_are_errors_and_factors_are_a_snapshot() {
+    let (n, kl, ku) = (12, 2, 3);
+    let a = random_band(n, kl, ku, 4.0, 11);
+    let mut lu = band_lu_of(&a, kl, ku);
+    let f = lu.factor().unwrap();
+    assert_eq!(f.size(), n);
+    for len in [0, n - 1, n + 1] {
+        let mut b = vec![1.0; len];
+        match f.solve_in_place(&mut b) {
+            Err(LinalgError::Length(why)) => assert!(why.contains("size 12"), "{why}"),
+            other => panic!("right side of {len}: {other:?}"),
+        }
+        assert!(b.iter().all(|&v| v == 1.0));
+    }
+    let b: Vec<f64> = (0..n).map(|i| i as f64).collect();
+    let mut x = b.clone();
+    f.solve_in_place(&mut x).unwrap();
+    lu.zero();
+    let mut y = b.clone();
+    f.solve_in_place(&mut y).unwrap();
+    assert_eq!(x, y);
+    assert!(relative_residual(&a, &x, &b) <= 1e-13);
+    // Refactoring a zeroed matrix into the old storage fails, and takes the old factors.
+    assert!(matches!(
+        lu.factor_reusing(Some(f)),
+        Err(LinalgError::Singular(_))
+    ));
 }
 
 #[test]
@@ -206,7 +237,7 @@ fn bordered_band_with_pivoting_against_dense() {
         *corner = 2.0;
     })
     .unwrap();
-    bb.factor().unwrap();
+    let f = bb.factor().unwrap();
     let full = DMatrix::from_fn(n + 1, n + 1, |i, j| match (i < n, j < n) {
         (true, true) => a[(i, j)],
         (true, false) => c(i),
@@ -215,7 +246,19 @@ fn bordered_band_with_pivoting_against_dense() {
     });
     let b: Vec<f64> = (0..=n).map(|i| (i as f64 * 0.3).sin()).collect();
     let mut x = vec![0.0; n + 1];
-    bb.solve(&b, &mut x).unwrap();
+    f.solve(&b, &mut x).unwrap();
+    assert_eq!(f.len(), n + 1);
+    for len in [n, n + 2] {
+        let mut y = vec![1.0; len];
+        assert!(matches!(
+            f.solve_in_place(&mut y),
+            Err(LinalgError::Length(_))
+        ));
+        assert!(matches!(
+            f.solve(&vec![1.0; len], &mut y),
+            Err(LinalgError::Length(_))
+        ));
+    }
     assert!(relative_residual(&full, &x, &b) <= 1e-13);
 }
 
@@ -233,12 +276,12 @@ proptest! {
         seed in any::<u64>(),
     ) {
         let a = random_band(n, kl, ku, if dominant { 4.0 } else { 0.0 }, seed);
-        let mut lu = band_lu_of(&a, kl, ku);
+        let lu = band_lu_of(&a, kl, ku);
         match lu.factor() {
-            Ok(()) => {
+            Ok(f) => {
                 let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.9).cos()).collect();
                 let mut x = b.clone();
-                lu.solve_in_place(&mut x);
+                f.solve_in_place(&mut x).unwrap();
                 let res = relative_residual(&a, &x, &b);
                 // Random unstructured matrices can be badly conditioned; the backward
                 // error of partial pivoting stays small regardless.
@@ -254,28 +297,54 @@ proptest! {
     }
 }
 
-/// No answer from a matrix that was not factored, or whose factorisation failed.
+/// No answer from a solver that was not factored, or whose last factorisation failed
+/// (the bordered matrix's own factors cannot be had without one).
 #[test]
-fn bordered_band_refuses_to_solve_without_a_factorisation() {
-    let mut bb = BorderedBand::new(3, 1, 1, true).unwrap();
-    let mut x = vec![1.0; 4];
+fn a_solver_refuses_to_solve_without_a_factorisation() {
+    // [I c; cᵀ s] with the border last: nonsingular for s = 4, singular for s = 3.
+    let m = |s: f64| {
+        let mut a = Csr::from_rows(
+            (0..4)
+                .map(|i| if i < 3 { vec![i, 3] } else { vec![0, 1, 2, 3] })
+                .collect(),
+        );
+        for i in 0..3 {
+            a.add(i, i, 1.0);
+            a.add(i, 3, 1.0);
+            a.add(3, i, 1.0);
+        }
+        a.add(3, 3, s);
+        a
+    };
+    let mut solver = InterleavedBand::new(&m(4.0), vec![0, 1, 2, 0], Some(3)).unwrap();
+    let mut x = vec![0.0; 4];
     assert!(matches!(
-        bb.solve(&[1.0; 4], &mut x),
+        solver.solve(&[1.0; 4], &mut x),
         Err(LinalgError::NotFactored)
     ));
-    // A nonsingular band with a singular border: [I c; cᵀ cᵀc].
-    bb.fill(|m, col, row, corner| {
-        for i in 0..3 {
-            m.set(i, i, 1.0);
-            col[i] = 1.0;
-            row[i] = 1.0;
-        }
-        *corner = 3.0;
-    })
-    .unwrap();
-    assert!(matches!(bb.factor(), Err(LinalgError::Singular(_))));
+    solver.factor(&m(4.0)).unwrap();
+    solver.solve(&[1.0; 4], &mut x).unwrap();
+    // x_i + x_3 = 1 and Σ x_i + 4 x_3 = 1: x_3 = −2, x_i = 3.
+    assert_eq!(x, [3.0, 3.0, 3.0, -2.0]);
     assert!(matches!(
-        bb.solve(&[1.0; 4], &mut x),
+        solver.solve(&[1.0; 3], &mut x),
+        Err(LinalgError::Length(_))
+    ));
+    assert!(matches!(
+        solver.factor(&m(3.0)),
+        Err(LinalgError::Singular(_))
+    ));
+    assert!(matches!(
+        solver.solve(&[1.0; 4], &mut x),
         Err(LinalgError::NotFactored)
+    ));
+    // An order that does not fit the pattern is refused when the solver is made.
+    assert!(matches!(
+        InterleavedBand::new(&m(4.0), vec![0, 1, 2], Some(3)),
+        Err(LinalgError::Structure(_))
+    ));
+    assert!(matches!(
+        InterleavedBand::new(&m(4.0), vec![0, 1, 5, 0], Some(3)),
+        Err(LinalgError::Structure(_))
     ));
 }

@@ -34,7 +34,7 @@ mod jacobian;
 mod residual;
 mod sensitivities;
 
-pub use sensitivities::SensParam;
+pub use sensitivities::{SensParam, SensitivityError};
 
 use super::crossing::Crossing;
 use super::points::NP;
@@ -324,6 +324,7 @@ pub struct DaeCounters {
 
 /// Why the coupled system could not be evaluated or solved.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum DaeError {
     #[error(transparent)]
     Rhs(#[from] RhsError),

@@ -41,6 +41,15 @@ pub enum SensParam {
     Radius,
 }
 
+/// Why a sensitivity cannot be taken in a model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SensitivityError {
+    /// The fibres' stiffness in a scene without fibres.
+    #[error("{} = 0: the scene has no fibres, so there is no sensitivity to their stiffness", .param.key())]
+    NoFibres { param: SensParam },
+}
+
 impl SensParam {
     pub const ALL: [SensParam; 8] = [
         SensParam::Eta0,
@@ -98,14 +107,16 @@ impl SensParam {
         }
     }
 
-    /// Why the parameter cannot be taken in a model of `params`, if it cannot: fibres.D in
-    /// a scene without fibres (D = 0 leaves the fibres out of the model, docs/MODEL.md §2).
-    pub fn check(self, params: &Params) -> Result<(), String> {
+    /// Whether the parameter can be taken in a model of `params`.
+    ///
+    /// # Errors
+    /// [`SensitivityError::NoFibres`] for the fibres' stiffness in a scene without fibres
+    /// (D = 0 leaves the fibres out of the model, docs/MODEL.md §2).
+    pub fn check(self, params: &Params) -> Result<(), SensitivityError> {
         match self {
-            SensParam::FibreStiffness if !params.has_fibres() => Err(format!(
-                "{} = 0: the scene has no fibres, so there is no sensitivity to their stiffness",
-                self.key()
-            )),
+            SensParam::FibreStiffness if !params.has_fibres() => {
+                Err(SensitivityError::NoFibres { param: self })
+            }
             _ => Ok(()),
         }
     }

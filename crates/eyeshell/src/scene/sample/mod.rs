@@ -359,6 +359,7 @@ pub fn check_draws(sample: &Sample, draws: &[Vec<f64>], origin: &str) -> Result<
                 }
                 if why.is_empty() {
                     // The rule without its reason (the key's documentation has it).
+                    let e = e.to_string();
                     why = e.split(':').next().unwrap_or(&e).to_string();
                 }
                 total += 1;

@@ -138,11 +138,14 @@ fn sensitivity_parameters_and_their_keys() {
         assert_eq!(param.value(&ours.0, &ours.1), 0.75, "{}", param.key());
         assert!(crate::growth::dae::SensParam::SUPPORTED.contains(param.key()));
     }
-    let why = super::keys::sensitivity_param("stimulus.red.offset").unwrap_err();
+    let why = super::keys::sensitivity_param("stimulus.red.offset")
+        .unwrap_err()
+        .to_string();
     assert!(why.contains("only affects the classification"), "{why}");
     let why = crate::growth::dae::SensParam::FibreStiffness
         .check(&crate::model::params::Params::default())
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(
         why.starts_with("fibres.D = 0: the scene has no fibres"),
         "{why}"
