@@ -162,71 +162,11 @@ pub(crate) fn print_slurm_script(
     out_dir: &Path,
 ) -> Result<(), Error> {
     let runs = plan.len();
-    let costs = eyeshell::sweep::shard::costs_of(plan)?;
-    let largest_share = |n: usize| costs.largest_share(n);
-    let shards = match a.shards {
-        // The default, or as many more as keep every shard within MAX_RUNS.
-        None => {
-            let mut n = runs.min(DEFAULT_SHARDS).max(runs.div_ceil(MAX_RUNS));
-            while largest_share(n) > MAX_RUNS {
-                n = (2 * n).min(runs);
-            }
-            n
-        }
-        Some(n) if n >= 1 && n <= runs => match largest_share(n) {
-            share if share > MAX_RUNS => {
-                return Err(Error::input(format!(
-                    "--shards {n}: a shard would hold {share} of the sweep's {runs} runs, more than the {MAX_RUNS} one process runs: give more shards (at least {})",
-                    runs.div_ceil(MAX_RUNS)
-                )))
-            }
-            _ => n,
-        },
-        Some(n) => {
-            return Err(Error::input(format!(
-                "--shards {n}: give 1 to {runs} (the sweep has {runs} run{})",
-                crate::plural(runs)
-            )))
-        }
-    };
-    let cpus = match a.cpus_per_task {
-        None => 1,
-        Some(c) if (1..=1024).contains(&c) => c,
-        Some(c) => return Err(Error::input(format!("--cpus-per-task {c}: give 1 to 1024"))),
-    };
-    if let Some(time) = &a.time {
-        let plain = !time.is_empty()
-            && time
-                .chars()
-                .all(|c| c.is_ascii_digit() || c == ':' || c == '-');
-        if !plain {
-            return Err(Error::input(format!(
-                "--time {}: give a Slurm time such as 30, 2:00:00 or 1-12:00:00",
-                eyeshell::text::one_line(time)
-            )));
-        }
-    }
+    let shards = shard_count(a.shards, plan)?;
+    let (cpus, time) = task_limits(a)?;
     // Refused now rather than in every task.
     eyeshell::rundir::owner::inspect(&eyeshell::rundir::owner::normalise(out_dir))?;
-    let here = std::env::current_dir().map_err(|source| Error::Io {
-        path: ".".into(),
-        source,
-    })?;
-    // Slurm opens each task's output file (`--output`, relative) in the working directory
-    // and reads `\` and `%` in that path as an escape and a pattern: the task could not
-    // start (slurmd: "Could not open stdout file").
-    if let Some(&c) = here
-        .as_os_str()
-        .as_bytes()
-        .iter()
-        .find(|b| b"\\%".contains(b))
-    {
-        return Err(Error::input(format!(
-            "--slurm-script: the working directory {} holds '{}', which Slurm reads in a task's output file name as an escape or a pattern: make the script from a directory without one (the script runs there)",
-            eyeshell::text::one_line(&here.display().to_string()),
-            c as char
-        )));
-    }
+    let here = working_dir()?;
     let absolute = |p: &Path| {
         if p.is_absolute() {
             p.to_path_buf()
@@ -278,7 +218,7 @@ pub(crate) fn print_slurm_script(
     wrapped.extend(shell::posix_word(&out_abs));
     let wrapped = shell::word(OsStr::from_bytes(&wrapped));
     let out_word = shell::word(&out_abs);
-    let time_line = match &a.time {
+    let time_line = match time {
         Some(t) => format!("#SBATCH --time={t}"),
         None => {
             "##SBATCH --time=1:00:00          # each task's limit: set it (remove one #)".into()
@@ -329,4 +269,87 @@ pub(crate) fn print_slurm_script(
     ));
     out(&script);
     Ok(())
+}
+
+/// `--shards`: the number of shards (array tasks), by default as many as keep every shard
+/// within [`MAX_RUNS`]; given, it must lie in 1 to the plan's runs and keep the largest
+/// shard within [`MAX_RUNS`]. The plan is validated first
+/// ([`eyeshell::sweep::shard::costs_of`]).
+fn shard_count(shards: Option<usize>, plan: &SweepPlan) -> Result<usize, Error> {
+    let runs = plan.len();
+    let costs = eyeshell::sweep::shard::costs_of(plan)?;
+    let largest_share = |n: usize| costs.largest_share(n);
+    Ok(match shards {
+        // The default, or as many more as keep every shard within MAX_RUNS.
+        None => {
+            let mut n = runs.min(DEFAULT_SHARDS).max(runs.div_ceil(MAX_RUNS));
+            while largest_share(n) > MAX_RUNS {
+                n = (2 * n).min(runs);
+            }
+            n
+        }
+        Some(n) if n >= 1 && n <= runs => match largest_share(n) {
+            share if share > MAX_RUNS => {
+                return Err(Error::input(format!(
+                    "--shards {n}: a shard would hold {share} of the sweep's {runs} runs, more than the {MAX_RUNS} one process runs: give more shards (at least {})",
+                    runs.div_ceil(MAX_RUNS)
+                )))
+            }
+            _ => n,
+        },
+        Some(n) => {
+            return Err(Error::input(format!(
+                "--shards {n}: give 1 to {runs} (the sweep has {runs} run{})",
+                crate::plural(runs)
+            )))
+        }
+    })
+}
+
+/// `--cpus-per-task` (1 by default, at most 1024) and `--time` (digits, `:` and `-` only, as
+/// Slurm writes a time), checked.
+fn task_limits(a: &SweepArgs) -> Result<(usize, Option<&str>), Error> {
+    let cpus = match a.cpus_per_task {
+        None => 1,
+        Some(c) if (1..=1024).contains(&c) => c,
+        Some(c) => return Err(Error::input(format!("--cpus-per-task {c}: give 1 to 1024"))),
+    };
+    if let Some(time) = &a.time {
+        let plain = !time.is_empty()
+            && time
+                .chars()
+                .all(|c| c.is_ascii_digit() || c == ':' || c == '-');
+        if !plain {
+            return Err(Error::input(format!(
+                "--time {}: give a Slurm time such as 30, 2:00:00 or 1-12:00:00",
+                eyeshell::text::one_line(time)
+            )));
+        }
+    }
+    Ok((cpus, a.time.as_deref()))
+}
+
+/// The working directory, where the script's tasks run, unless Slurm would misread its
+/// path.
+fn working_dir() -> Result<std::path::PathBuf, Error> {
+    let here = std::env::current_dir().map_err(|source| Error::Io {
+        path: ".".into(),
+        source,
+    })?;
+    // Slurm opens each task's output file (`--output`, relative) in the working directory
+    // and reads `\` and `%` in that path as an escape and a pattern: the task could not
+    // start (slurmd: "Could not open stdout file").
+    if let Some(&c) = here
+        .as_os_str()
+        .as_bytes()
+        .iter()
+        .find(|b| b"\\%".contains(b))
+    {
+        return Err(Error::input(format!(
+            "--slurm-script: the working directory {} holds '{}', which Slurm reads in a task's output file name as an escape or a pattern: make the script from a directory without one (the script runs there)",
+            eyeshell::text::one_line(&here.display().to_string()),
+            c as char
+        )));
+    }
+    Ok(here)
 }

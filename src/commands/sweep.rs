@@ -41,7 +41,7 @@ pub(crate) fn install_interrupt() {
 }
 
 pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
-    use eyeshell::sweep::{run_shard, run_sweep, RunStatus, Shard, SweepOptions};
+    use eyeshell::sweep::{run_shard, run_sweep, SweepOptions};
     if let Some(action) = &a.action {
         return super::shards::cmd_sweep_dir(action);
     }
@@ -50,13 +50,7 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         return Err(Error::input("sweep: give SCENE.toml and --out DIR"));
     };
     check_jobs(a.jobs)?;
-    let shard = match a.shard.as_deref() {
-        None => None,
-        Some("slurm") => {
-            Some(Shard::from_slurm(|name| std::env::var(name).ok()).map_err(Error::from)?)
-        }
-        Some(text) => Some(Shard::parse(text).map_err(Error::from)?),
-    };
+    let shard = shard_of(a.shard.as_deref())?;
     // A shard, or the script of a sharded sweep, plans the runs without building them all
     // (up to MAX_PLANNED_RUNS); a plain sweep builds every run (up to MAX_RUNS).
     let plan = match shard.is_some() || a.slurm_script {
@@ -118,6 +112,33 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
         (None, false) => crate::charts::population_figure(out_dir, &report.records)?,
         _ => None,
     };
+    report_sweep(a, shard, &head, out_dir, &report, figure.as_deref())
+}
+
+/// `--shard`: none, `slurm` (the task's shard from Slurm's variables) or K/N.
+fn shard_of(text: Option<&str>) -> Result<Option<eyeshell::sweep::Shard>, Error> {
+    use eyeshell::sweep::Shard;
+    Ok(match text {
+        None => None,
+        Some("slurm") => {
+            Some(Shard::from_slurm(|name| std::env::var(name).ok()).map_err(Error::from)?)
+        }
+        Some(text) => Some(Shard::parse(text).map_err(Error::from)?),
+    })
+}
+
+/// How a sweep (or a shard of one) ended: an error naming the runs that failed or were
+/// left by an interruption, with where the other results are; else, unless `--quiet`,
+/// the lines naming its table (or the shard's record) and figures.
+fn report_sweep(
+    a: &SweepArgs,
+    shard: Option<eyeshell::sweep::Shard>,
+    head: &eyeshell::sweep::Head<'_>,
+    out_dir: &std::path::Path,
+    report: &eyeshell::sweep::SweepReport,
+    figure: Option<&std::path::Path>,
+) -> Result<(), Error> {
+    use eyeshell::sweep::RunStatus;
     // Where the results are: the table, or the shard's record.
     let (table, shard_text, again) = match shard {
         Some(s) => (
@@ -186,8 +207,8 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
             )),
             None => {
                 text.push_str(&format!("  table           {}\n", crate::shown(&table)));
-                text.push_str(&population_lines(&head, out_dir));
-                if let Some(png) = &figure {
+                text.push_str(&population_lines(head, out_dir));
+                if let Some(png) = figure {
                     text.push_str(&format!("  figure          {}\n", crate::shown(png)));
                 }
             }

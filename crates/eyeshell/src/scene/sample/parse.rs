@@ -41,34 +41,7 @@ pub fn parse(t: &toml::Table, origin: &str) -> Result<Sample, SceneError> {
                     )))
                 }
             },
-            "design" => {
-                let s = match value {
-                    toml::Value::String(s) => s.as_str(),
-                    v => {
-                        return Err(bad(format!(
-                            "design must be one of {}, found {}",
-                            Design::NAMES.join(", "),
-                            describe(v)
-                        )))
-                    }
-                };
-                design = match s {
-                    "random" => Design::Random,
-                    "latin-hypercube" => Design::LatinHypercube,
-                    "sobol" => Design::Sobol,
-                    "saltelli" => Design::Saltelli,
-                    other => {
-                        let hint = closest(other, Design::NAMES.into_iter())
-                            .map(|s| format!(" (did you mean '{s}'?)"))
-                            .unwrap_or_default();
-                        return Err(bad(format!(
-                            "design '{}' is not one of {}{hint}",
-                            one_line(other),
-                            Design::NAMES.join(", ")
-                        )));
-                    }
-                };
-            }
+            "design" => design = design_of(value).map_err(bad)?,
             "keys" => match value {
                 toml::Value::Table(k) => key_dists(k, "", origin, &mut keys)?,
                 v => return Err(bad(format!("keys must be a table, found {}", describe(v)))),
@@ -121,29 +94,7 @@ pub fn parse(t: &toml::Table, origin: &str) -> Result<Sample, SceneError> {
                 .into(),
         ));
     }
-    let dims = match design {
-        Design::Saltelli => 2 * keys.len(),
-        _ => keys.len(),
-    };
-    if design == Design::Saltelli && eyes < MIN_SALTELLI_EYES {
-        return Err(bad(format!(
-            "eyes = {eyes}: the saltelli design needs at least {MIN_SALTELLI_EYES} base points for its Sobol indices to mean anything (with fewer, an index's Monte Carlo error is as large as the index); give eyes = {MIN_SALTELLI_EYES} or more"
-        )));
-    }
-    if matches!(design, Design::Sobol | Design::Saltelli) {
-        if eyes > MAX_SOBOL_POINTS {
-            return Err(bad(format!(
-                "eyes = {eyes}: the {} design draws at most {MAX_SOBOL_POINTS} points of the Sobol sequence",
-                design.name()
-            )));
-        }
-        if dims > MAX_SOBOL_DIMENSIONS {
-            return Err(bad(format!(
-                "{} keys need {dims} dimensions of the Sobol sequence, which has {MAX_SOBOL_DIMENSIONS}",
-                keys.len()
-            )));
-        }
-    }
+    check_design_size(design, eyes, keys.len()).map_err(bad)?;
     let cholesky = match correlation {
         None => None,
         Some(c) => {
@@ -169,6 +120,65 @@ pub fn parse(t: &toml::Table, origin: &str) -> Result<Sample, SceneError> {
         )));
     }
     Ok(sample)
+}
+
+/// `design`: one of [`Design::NAMES`], else the problem (with the closest name).
+fn design_of(value: &toml::Value) -> Result<Design, String> {
+    let s = match value {
+        toml::Value::String(s) => s.as_str(),
+        v => {
+            return Err(format!(
+                "design must be one of {}, found {}",
+                Design::NAMES.join(", "),
+                describe(v)
+            ))
+        }
+    };
+    match s {
+        "random" => Ok(Design::Random),
+        "latin-hypercube" => Ok(Design::LatinHypercube),
+        "sobol" => Ok(Design::Sobol),
+        "saltelli" => Ok(Design::Saltelli),
+        other => {
+            let hint = closest(other, Design::NAMES.into_iter())
+                .map(|s| format!(" (did you mean '{s}'?)"))
+                .unwrap_or_default();
+            Err(format!(
+                "design '{}' is not one of {}{hint}",
+                one_line(other),
+                Design::NAMES.join(", ")
+            ))
+        }
+    }
+}
+
+/// Whether `design` can draw `eyes` points over `keys` keys: Saltelli's indices need
+/// enough base points to mean anything, and the Sobol sequence has only so many points and
+/// dimensions (Saltelli's design takes two dimensions a key).
+fn check_design_size(design: Design, eyes: usize, keys: usize) -> Result<(), String> {
+    let dims = match design {
+        Design::Saltelli => 2 * keys,
+        _ => keys,
+    };
+    if design == Design::Saltelli && eyes < MIN_SALTELLI_EYES {
+        return Err(format!(
+            "eyes = {eyes}: the saltelli design needs at least {MIN_SALTELLI_EYES} base points for its Sobol indices to mean anything (with fewer, an index's Monte Carlo error is as large as the index); give eyes = {MIN_SALTELLI_EYES} or more"
+        ));
+    }
+    if matches!(design, Design::Sobol | Design::Saltelli) {
+        if eyes > MAX_SOBOL_POINTS {
+            return Err(format!(
+                "eyes = {eyes}: the {} design draws at most {MAX_SOBOL_POINTS} points of the Sobol sequence",
+                design.name()
+            ));
+        }
+        if dims > MAX_SOBOL_DIMENSIONS {
+            return Err(format!(
+                "{keys} keys need {dims} dimensions of the Sobol sequence, which has {MAX_SOBOL_DIMENSIONS}"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Each key's distribution (quoted dotted keys, or nested tables of them).
