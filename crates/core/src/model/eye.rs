@@ -323,11 +323,7 @@ impl SurfaceSpec {
 
     /// Each key's own range (tables: times and values), naming the key.
     pub fn check(&self, i: usize, wavelengths: &[f64]) -> Result<(), SurfaceKeyError> {
-        let bad = |name: &str, value: String, problem: String| SurfaceKeyError {
-            key: surface_key(i, name),
-            value,
-            problem,
-        };
+        let bad = |name: &str, value, problem| surface_key_error(i, name, value, problem);
         let (rlo, rhi) = RADIUS_RANGE;
         if let Some(v) = &self.radius {
             check_value(
@@ -561,6 +557,15 @@ impl SurfaceSpec {
     }
 }
 
+/// The error of surface `i`'s key `name`, given as `value`: `problem`.
+fn surface_key_error(i: usize, name: &str, value: String, problem: String) -> SurfaceKeyError {
+    SurfaceKeyError {
+        key: surface_key(i, name),
+        value,
+        problem,
+    }
+}
+
 /// A key's value within its range (`ok`, in words `range`) and, for a table, its times:
 /// 2 to [`MAX_TABLE_TIMES`], as many as its values, finite from 0 on, strictly increasing.
 fn check_value(
@@ -570,11 +575,7 @@ fn check_value(
     ok: &dyn Fn(f64) -> bool,
     range: &str,
 ) -> Result<(), SurfaceKeyError> {
-    let bad = |name: &str, value: String, problem: String| SurfaceKeyError {
-        key: surface_key(i, name),
-        value,
-        problem,
-    };
+    let bad = |name: &str, value, problem| surface_key_error(i, name, value, problem);
     let shown = match v {
         EyeValue::Fixed(x) => number(*x),
         EyeValue::Table { t, value } => {
@@ -635,11 +636,7 @@ fn check_value(
 /// A dispersive medium's coefficients (Cauchy's or Sellmeier's) well formed and giving a
 /// physical index at the scene's wavelengths and at 555 nm.
 fn check_medium(i: usize, m: &MediumSpec, wavelengths: &[f64]) -> Result<(), SurfaceKeyError> {
-    let bad = |name: &str, value: String, problem: String| SurfaceKeyError {
-        key: surface_key(i, name),
-        value,
-        problem,
-    };
+    let bad = |name: &str, value, problem| surface_key_error(i, name, value, problem);
     let (nlo, nhi) = optics::INDEX_RANGE;
     let shown = match m {
         MediumSpec::Cauchy(c) => list_text(c),
