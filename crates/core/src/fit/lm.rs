@@ -313,6 +313,58 @@ pub enum LmError<E: std::fmt::Display> {
     RankDeficient(String),
 }
 
+/// The test that ends the fit before a step: the scaled gradient is below `gtol`, or the
+/// Gauss–Newton step would gain less than `setol` standard errors.
+/// `s2` is the problem's s² at the current χ².
+fn converged_before_step(
+    bounds: &[Bounds],
+    p: &[f64],
+    r: &DVector<f64>,
+    j: &DMatrix<f64>,
+    g: &DVector<f64>,
+    s2: f64,
+    o: &FitOptions,
+) -> Option<Convergence> {
+    let k = bounds.len();
+    // Scaled gradient on the free parameters (a parameter held at a closed bound with
+    // the gradient pushing it out of the range does not count).
+    let rnorm = r.norm();
+    let held = |c: usize, p: &[f64], g: &DVector<f64>| {
+        let b = &bounds[c];
+        let held_low = !b.lower_open && b.lower == Some(p[c]) && g[c] > 0.0;
+        let held_high = !b.upper_open && b.upper == Some(p[c]) && g[c] < 0.0;
+        held_low || held_high
+    };
+    let gradient = (0..k)
+        .filter(|&c| !held(c, p, g))
+        .map(|c| {
+            let cn = j.column(c).norm();
+            if cn > 0.0 && rnorm > 0.0 {
+                g[c].abs() / (cn * rnorm)
+            } else {
+                0.0
+            }
+        })
+        .fold(0.0_f64, f64::max);
+    if gradient <= o.gtol {
+        return Some(Convergence::Gradient);
+    }
+    // The χ² the full Gauss–Newton step would gain, gᵀ(JᵀJ)⁻¹g over the free parameters,
+    // in units of s²: the squared distance to the optimum in standard errors along the
+    // worst direction (the Mahalanobis norm; the marginal standard errors would miss a
+    // step across a narrow valley of correlated parameters).
+    let free: Vec<usize> = (0..k).filter(|&c| !held(c, p, g)).collect();
+    if !free.is_empty() {
+        let j_free = DMatrix::from_fn(j.nrows(), free.len(), |row, c| j[(row, free[c])]);
+        if let Some(gn) = GaussNewton::of(&j_free) {
+            if gn.gain(r) <= o.setol * o.setol * s2 {
+                return Some(Convergence::StandardError);
+            }
+        }
+    }
+    None
+}
+
 /// Minimise ½‖r(p)‖² from `p0` within the parameters' ranges, calling `each` after every
 /// iteration. An evaluation that fails at the start is the error; later ones reject the
 /// step. The identifiability at the start is checked before the first step.
@@ -350,43 +402,9 @@ pub fn minimise<P: Problem>(
         for c in 0..k {
             d[c] = d[c].max(jtj[(c, c)]).max(f64::MIN_POSITIVE);
         }
-        // Scaled gradient on the free parameters (a parameter held at a closed bound with
-        // the gradient pushing it out of the range does not count).
-        let rnorm = r.norm();
-        let held = |c: usize, p: &[f64], g: &DVector<f64>| {
-            let b = &bounds[c];
-            let held_low = !b.lower_open && b.lower == Some(p[c]) && g[c] > 0.0;
-            let held_high = !b.upper_open && b.upper == Some(p[c]) && g[c] < 0.0;
-            held_low || held_high
-        };
-        let gradient = (0..k)
-            .filter(|&c| !held(c, &p, &g))
-            .map(|c| {
-                let cn = j.column(c).norm();
-                if cn > 0.0 && rnorm > 0.0 {
-                    g[c].abs() / (cn * rnorm)
-                } else {
-                    0.0
-                }
-            })
-            .fold(0.0_f64, f64::max);
-        if gradient <= o.gtol {
-            convergence = Convergence::Gradient;
+        if let Some(c) = converged_before_step(&bounds, &p, &r, &j, &g, problem.variance(chi2), o) {
+            convergence = c;
             break;
-        }
-        // The χ² the full Gauss–Newton step would gain, gᵀ(JᵀJ)⁻¹g over the free parameters,
-        // in units of s²: the squared distance to the optimum in standard errors along the
-        // worst direction (the Mahalanobis norm; the marginal standard errors would miss a
-        // step across a narrow valley of correlated parameters).
-        let free: Vec<usize> = (0..k).filter(|&c| !held(c, &p, &g)).collect();
-        if !free.is_empty() {
-            let j_free = DMatrix::from_fn(j.nrows(), free.len(), |row, c| j[(row, free[c])]);
-            if let Some(gn) = GaussNewton::of(&j_free) {
-                if gn.gain(&r) <= o.setol * o.setol * problem.variance(chi2) {
-                    convergence = Convergence::StandardError;
-                    break;
-                }
-            }
         }
         let Some(step) = damped_step(&j, &r, lambda, &d) else {
             return Err(LmError::RankDeficient(format!(

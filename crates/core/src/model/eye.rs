@@ -323,75 +323,11 @@ impl SurfaceSpec {
 
     /// Each key's own range (tables: times and values), naming the key.
     pub fn check(&self, i: usize, wavelengths: &[f64]) -> Result<(), SurfaceKeyError> {
-        let bad = |name: &str, value: String, problem: String| SurfaceKeyError {
-            key: surface_key(i, name),
-            value,
-            problem,
-        };
-        let check_value = |name: &str,
-                           v: &EyeValue,
-                           ok: &dyn Fn(f64) -> bool,
-                           range: &str|
-         -> Result<(), SurfaceKeyError> {
-            let shown = match v {
-                EyeValue::Fixed(x) => number(*x),
-                EyeValue::Table { t, value } => {
-                    format!("{{ t = {}, value = {} }}", list_text(t), list_text(value))
-                }
-            };
-            if let EyeValue::Table { t, value } = v {
-                if t.len() < 2 || t.len() > MAX_TABLE_TIMES {
-                    return Err(bad(
-                        name,
-                        shown,
-                        format!("must list 2 to {MAX_TABLE_TIMES} times"),
-                    ));
-                }
-                if t.len() != value.len() {
-                    return Err(bad(
-                        name,
-                        shown,
-                        format!(
-                            "must list as many values as times ({} times, {} values)",
-                            t.len(),
-                            value.len()
-                        ),
-                    ));
-                }
-                if let Some(x) = t.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
-                    return Err(bad(
-                        name,
-                        shown,
-                        format!(
-                            "must list finite times from 0 on (the growth's time), not {}",
-                            number(*x)
-                        ),
-                    ));
-                }
-                if let Some(w) = t.windows(2).find(|w| w[1] <= w[0]) {
-                    return Err(bad(
-                        name,
-                        shown,
-                        format!(
-                            "must list strictly increasing times (they are not sorted for you): {} follows {}",
-                            number(w[1]),
-                            number(w[0])
-                        ),
-                    ));
-                }
-            }
-            if let Some(x) = v.values().into_iter().find(|x| !ok(*x)) {
-                return Err(bad(
-                    name,
-                    shown,
-                    format!("must be {range} (not {})", number(x)),
-                ));
-            }
-            Ok(())
-        };
+        let bad = |name: &str, value, problem| surface_key_error(i, name, value, problem);
         let (rlo, rhi) = RADIUS_RANGE;
         if let Some(v) = &self.radius {
             check_value(
+                i,
                 "radius",
                 v,
                 &|x| x.is_infinite() || (x.abs() >= rlo && x.abs() <= rhi),
@@ -414,6 +350,7 @@ impl SurfaceSpec {
         }
         if let Some(v) = &self.conic {
             check_value(
+                i,
                 "conic",
                 v,
                 &|x| x.is_finite() && x.abs() <= CONIC_LIMIT,
@@ -422,6 +359,7 @@ impl SurfaceSpec {
         }
         if let Some(v) = &self.thickness {
             check_value(
+                i,
                 "thickness",
                 v,
                 &|x| x > 0.0 && x <= MAX_THICKNESS,
@@ -440,60 +378,13 @@ impl SurfaceSpec {
         let (nlo, nhi) = optics::INDEX_RANGE;
         match &self.medium {
             Some(MediumSpec::Index(v)) => check_value(
+                i,
                 "index",
                 v,
                 &|x| x >= nlo && x <= nhi,
                 &format!("a refractive index between {nlo} and {nhi}"),
             )?,
-            Some(m) => {
-                let shown = match m {
-                    MediumSpec::Cauchy(c) => list_text(c),
-                    MediumSpec::Sellmeier { b, c } => {
-                        format!("{{ b = {}, c = {} }}", list_text(b), list_text(c))
-                    }
-                    MediumSpec::Index(_) => String::new(),
-                };
-                let shape_ok = match m {
-                    MediumSpec::Cauchy(c) => {
-                        !c.is_empty() && c.len() <= 4 && c.iter().all(|x| x.is_finite())
-                    }
-                    MediumSpec::Sellmeier { b, c } => {
-                        !b.is_empty()
-                            && b.len() == c.len()
-                            && b.len() <= 6
-                            && b.iter().chain(c).all(|x| x.is_finite())
-                    }
-                    MediumSpec::Index(_) => true,
-                };
-                if !shape_ok {
-                    return Err(bad(
-                        m.key(),
-                        shown,
-                        match m {
-                            MediumSpec::Cauchy(_) => {
-                                "must list one to four finite numbers: a, b, c, d (λ in µm)".into()
-                            }
-                            _ => "must give as many b as c, one to six of each, all finite".into(),
-                        },
-                    ));
-                }
-                let d = m.dispersion(0.0);
-                // The scene's wavelengths and 555 nm, where every system is checked.
-                for &w in wavelengths.iter().chain(&[555.0]) {
-                    let n = d.index(w);
-                    if !(n >= nlo && n <= nhi) {
-                        return Err(bad(
-                            m.key(),
-                            shown,
-                            format!(
-                                "gives the index {} at {} nm, not a physical one (between {nlo} and {nhi})",
-                                number(n),
-                                number(w)
-                            ),
-                        ));
-                    }
-                }
-            }
+            Some(m) => check_medium(i, m, wavelengths)?,
             None => {}
         }
         Ok(())
@@ -664,6 +555,135 @@ impl SurfaceSpec {
             })
             .collect()
     }
+}
+
+/// The error of surface `i`'s key `name`, given as `value`: `problem`.
+fn surface_key_error(i: usize, name: &str, value: String, problem: String) -> SurfaceKeyError {
+    SurfaceKeyError {
+        key: surface_key(i, name),
+        value,
+        problem,
+    }
+}
+
+/// A key's value within its range (`ok`, in words `range`) and, for a table, its times:
+/// 2 to [`MAX_TABLE_TIMES`], as many as its values, finite from 0 on, strictly increasing.
+fn check_value(
+    i: usize,
+    name: &str,
+    v: &EyeValue,
+    ok: &dyn Fn(f64) -> bool,
+    range: &str,
+) -> Result<(), SurfaceKeyError> {
+    let bad = |name: &str, value, problem| surface_key_error(i, name, value, problem);
+    let shown = match v {
+        EyeValue::Fixed(x) => number(*x),
+        EyeValue::Table { t, value } => {
+            format!("{{ t = {}, value = {} }}", list_text(t), list_text(value))
+        }
+    };
+    if let EyeValue::Table { t, value } = v {
+        if t.len() < 2 || t.len() > MAX_TABLE_TIMES {
+            return Err(bad(
+                name,
+                shown,
+                format!("must list 2 to {MAX_TABLE_TIMES} times"),
+            ));
+        }
+        if t.len() != value.len() {
+            return Err(bad(
+                name,
+                shown,
+                format!(
+                    "must list as many values as times ({} times, {} values)",
+                    t.len(),
+                    value.len()
+                ),
+            ));
+        }
+        if let Some(x) = t.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+            return Err(bad(
+                name,
+                shown,
+                format!(
+                    "must list finite times from 0 on (the growth's time), not {}",
+                    number(*x)
+                ),
+            ));
+        }
+        if let Some(w) = t.windows(2).find(|w| w[1] <= w[0]) {
+            return Err(bad(
+                name,
+                shown,
+                format!(
+                    "must list strictly increasing times (they are not sorted for you): {} follows {}",
+                    number(w[1]),
+                    number(w[0])
+                ),
+            ));
+        }
+    }
+    if let Some(x) = v.values().into_iter().find(|x| !ok(*x)) {
+        return Err(bad(
+            name,
+            shown,
+            format!("must be {range} (not {})", number(x)),
+        ));
+    }
+    Ok(())
+}
+
+/// A dispersive medium's coefficients (Cauchy's or Sellmeier's) well formed and giving a
+/// physical index at the scene's wavelengths and at 555 nm.
+fn check_medium(i: usize, m: &MediumSpec, wavelengths: &[f64]) -> Result<(), SurfaceKeyError> {
+    let bad = |name: &str, value, problem| surface_key_error(i, name, value, problem);
+    let (nlo, nhi) = optics::INDEX_RANGE;
+    let shown = match m {
+        MediumSpec::Cauchy(c) => list_text(c),
+        MediumSpec::Sellmeier { b, c } => {
+            format!("{{ b = {}, c = {} }}", list_text(b), list_text(c))
+        }
+        MediumSpec::Index(_) => String::new(),
+    };
+    let shape_ok = match m {
+        MediumSpec::Cauchy(c) => !c.is_empty() && c.len() <= 4 && c.iter().all(|x| x.is_finite()),
+        MediumSpec::Sellmeier { b, c } => {
+            !b.is_empty()
+                && b.len() == c.len()
+                && b.len() <= 6
+                && b.iter().chain(c).all(|x| x.is_finite())
+        }
+        MediumSpec::Index(_) => true,
+    };
+    if !shape_ok {
+        return Err(bad(
+            m.key(),
+            shown,
+            match m {
+                MediumSpec::Cauchy(_) => {
+                    "must list one to four finite numbers: a, b, c, d (λ in µm)".into()
+                }
+                _ => "must give as many b as c, one to six of each, all finite".into(),
+            },
+        ));
+    }
+    let d = m.dispersion(0.0);
+    // The scene's wavelengths and 555 nm, where every system is checked.
+    for &w in wavelengths.iter().chain(&[555.0]) {
+        let n = d.index(w);
+        if !(n >= nlo && n <= nhi) {
+            return Err(bad(
+                m.key(),
+                shown,
+                format!(
+                    "gives the index {} at {} nm, not a physical one (between {nlo} and {nhi})",
+                    number(n),
+                    number(w)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `x` to 6 significant digits, shortest form: a value the spline reaches between points

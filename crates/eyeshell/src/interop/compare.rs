@@ -373,21 +373,7 @@ fn sample_from(
         let vector = non_unit <= 1 && !r.shape.is_empty() && n > 1;
         let shape = shape_text(&r.shape);
         if name == "time" {
-            match r.data[..] {
-                [t] if t.is_finite() => time = Some(t),
-                [t] => {
-                    return Err(refuse(
-                        &name,
-                        format!("= {}: expected {}", crate::text::number(t), expected(&name)),
-                    ))
-                }
-                _ => {
-                    return Err(refuse(
-                        &name,
-                        format!("is a {shape} array: expected {}", expected(&name)),
-                    ))
-                }
-            }
+            time = Some(time_of(&r, &shape).map_err(|why| refuse(&name, why))?);
         } else if name == "y" {
             if r.shape.len() != 2 || r.shape[0] != Y_ROWS.len() {
                 let hint = if r.shape.len() == 2 && r.shape[1] == Y_ROWS.len() {
@@ -402,30 +388,8 @@ fn sample_from(
             }
             y = Some(r);
         } else if coordinate {
-            if !vector {
-                let what = if r.shape.is_empty() {
-                    "is a 0-d array (one number)".to_string()
-                } else if n == 0 {
-                    "is empty".to_string()
-                } else if n == 1 {
-                    "has a single point".to_string()
-                } else {
-                    format!("is a {shape} array")
-                };
-                return Err(refuse(
-                    &name,
-                    format!("{what}: expected {}", expected(&name)),
-                ));
-            }
-            if let Some(k) = r.data.iter().position(|v| !v.is_finite()) {
-                return Err(refuse(
-                    &name,
-                    format!(
-                        "has {} at point {} of {n}: a material coordinate must be finite",
-                        crate::text::number(r.data[k]),
-                        k + 1
-                    ),
-                ));
+            if let Some(why) = coordinate_problem(&name, &r, n, vector, &shape) {
+                return Err(refuse(&name, why));
             }
             sigma_from_x |= name == "x";
             let name = if name == "x" { "Sigma".into() } else { name };
@@ -470,15 +434,7 @@ fn sample_from(
             ));
         }
         for (i, name) in Y_ROWS.iter().enumerate() {
-            let row: Vec<f64> = (0..cols)
-                .map(|j| {
-                    if y.column_major {
-                        y.data[j * Y_ROWS.len() + i]
-                    } else {
-                        y.data[i * cols + j]
-                    }
-                })
-                .collect();
+            let row = y_row(&y, i);
             if vectors.iter().any(|(n, _)| n == name) {
                 return Err(CompareError(format!(
                     "{file}: both {prefix}y and {prefix}{name}: give {name} once"
@@ -503,6 +459,58 @@ fn sample_from(
         breaks: Vec::new(),
         not_compared,
     })
+}
+
+/// The reference's `time` (one finite number), or why it is not, after the variable's name.
+fn time_of(r: &Raw, shape: &str) -> Result<f64, String> {
+    match r.data[..] {
+        [t] if t.is_finite() => Ok(t),
+        [t] => Err(format!(
+            "= {}: expected {}",
+            crate::text::number(t),
+            expected("time")
+        )),
+        _ => Err(format!("is a {shape} array: expected {}", expected("time"))),
+    }
+}
+
+/// Why the material coordinate `name` (`r`, of `n` numbers; `vector` when one dimension
+/// at most is not 1 and it has two points or more) is not a vector of finite points, after
+/// the variable's name; None when it is one.
+fn coordinate_problem(name: &str, r: &Raw, n: usize, vector: bool, shape: &str) -> Option<String> {
+    if !vector {
+        let what = if r.shape.is_empty() {
+            "is a 0-d array (one number)".to_string()
+        } else if n == 0 {
+            "is empty".to_string()
+        } else if n == 1 {
+            "has a single point".to_string()
+        } else {
+            format!("is a {shape} array")
+        };
+        return Some(format!("{what}: expected {}", expected(name)));
+    }
+    let k = r.data.iter().position(|v| !v.is_finite())?;
+    Some(format!(
+        "has {} at point {} of {n}: a material coordinate must be finite",
+        crate::text::number(r.data[k]),
+        k + 1
+    ))
+}
+
+/// Row `i` of the 5×N array `y` (row `i` is the [`Y_ROWS`] variable `i` over the points),
+/// in either storage order.
+fn y_row(y: &Raw, i: usize) -> Vec<f64> {
+    let cols = y.shape[1];
+    (0..cols)
+        .map(|j| {
+            if y.column_major {
+                y.data[j * Y_ROWS.len() + i]
+            } else {
+                y.data[i * cols + j]
+            }
+        })
+        .collect()
 }
 
 /// What compare expects of a variable it gives a meaning to.
@@ -556,6 +564,51 @@ pub struct PairReport {
 impl PairReport {
     pub fn failed(&self) -> bool {
         self.fields.iter().any(|f| f.failures > 0)
+    }
+}
+
+impl FieldDiff {
+    /// Take in one reference point at `x`: the run's interpolated value `a` against the
+    /// reference's `b`, allowed `tol + rtol·|b|` (two NaNs, or two equal values, agree).
+    fn add_point(&mut self, x: f64, a: f64, b: f64, tol: f64, rtol: f64) {
+        let abs = if (a.is_nan() && b.is_nan()) || a == b {
+            0.0
+        } else {
+            let v = (a - b).abs();
+            if v.is_nan() {
+                f64::INFINITY
+            } else {
+                v
+            }
+        };
+        let rel = if abs == 0.0 {
+            0.0
+        } else if b == 0.0 {
+            f64::INFINITY
+        } else {
+            abs / b.abs()
+        };
+        let allowed = tol + rtol * if b.is_finite() { b.abs() } else { 0.0 };
+        self.allowed = self.allowed.max(allowed);
+        let ratio = if abs == 0.0 {
+            0.0
+        } else if allowed > 0.0 {
+            abs / allowed
+        } else {
+            f64::INFINITY
+        };
+        if abs > self.max_abs {
+            self.max_abs = abs;
+            self.at_abs = x;
+        }
+        if rel > self.max_rel {
+            self.max_rel = rel;
+            self.at_rel = x;
+        }
+        if ratio > 1.0 {
+            self.failures += 1;
+        }
+        self.worst_ratio = self.worst_ratio.max(ratio);
     }
 }
 
@@ -660,44 +713,7 @@ pub fn compare_pair(
             let (a, estimate) = pieces.eval(&ys, x, side);
             d.interpolation = d.interpolation.max(estimate);
             let b = refv[j];
-            let abs = if (a.is_nan() && b.is_nan()) || a == b {
-                0.0
-            } else {
-                let v = (a - b).abs();
-                if v.is_nan() {
-                    f64::INFINITY
-                } else {
-                    v
-                }
-            };
-            let rel = if abs == 0.0 {
-                0.0
-            } else if b == 0.0 {
-                f64::INFINITY
-            } else {
-                abs / b.abs()
-            };
-            let allowed = tol + rtol * if b.is_finite() { b.abs() } else { 0.0 };
-            d.allowed = d.allowed.max(allowed);
-            let ratio = if abs == 0.0 {
-                0.0
-            } else if allowed > 0.0 {
-                abs / allowed
-            } else {
-                f64::INFINITY
-            };
-            if abs > d.max_abs {
-                d.max_abs = abs;
-                d.at_abs = xref[j];
-            }
-            if rel > d.max_rel {
-                d.max_rel = rel;
-                d.at_rel = xref[j];
-            }
-            if ratio > 1.0 {
-                d.failures += 1;
-            }
-            d.worst_ratio = d.worst_ratio.max(ratio);
+            d.add_point(xref[j], a, b, tol, rtol);
         }
         diffs.push(d);
     }

@@ -248,6 +248,114 @@ pub fn parse_lenses(value: &toml::Value) -> Result<Vec<LensSpec>, OpticsKeyError
         .collect()
 }
 
+/// A lens's table of (`a`, `b`) rows under `name` (its zones or its power table): 1 to
+/// [`MAX_POINTS`] tables of two finite numbers; None when the lens does not give it.
+fn lens_pairs(
+    i: usize,
+    t: &toml::Table,
+    name: &str,
+    a: &str,
+    b: &str,
+) -> Result<Option<Vec<(f64, f64)>>, OpticsKeyError> {
+    let at = |name: &str| format!("{LENSES_KEY}[{i}].{name}");
+    let Some(v) = t.get(name) else {
+        return Ok(None);
+    };
+    let toml::Value::Array(rows) = v else {
+        return Err(key_error(
+            at(name),
+            super::describe(v),
+            format!("must be an array of {{ {a} = …, {b} = … }} tables"),
+        ));
+    };
+    if rows.is_empty() || rows.len() > MAX_POINTS {
+        return Err(key_error(
+            at(name),
+            format!("{} entries", rows.len()),
+            format!("must hold 1 to {MAX_POINTS} entries"),
+        ));
+    }
+    let mut out = Vec::new();
+    for (k, row) in rows.iter().enumerate() {
+        let item = |field: &str| format!("{}[{k}].{field}", at(name));
+        let toml::Value::Table(r) = row else {
+            return Err(key_error(
+                format!("{}[{k}]", at(name)),
+                super::describe(row),
+                format!("must be a table {{ {a} = …, {b} = … }}"),
+            ));
+        };
+        if let Some(extra) = r.keys().find(|x| x.as_str() != a && x.as_str() != b) {
+            return Err(key_error(
+                item(extra),
+                "(given)".into(),
+                format!("is not one of {a}, {b}"),
+            ));
+        }
+        let get = |field: &str| match r.get(field) {
+            None => Err(key_error(item(field), "(missing)".into(), "must be given")),
+            Some(v) => match lens_float(v) {
+                Some(x) if x.is_finite() => Ok(x),
+                Some(x) => Err(key_error(item(field), number(x), "must be a finite number")),
+                None => Err(key_error(
+                    item(field),
+                    super::describe(v),
+                    "must be a number",
+                )),
+            },
+        };
+        out.push((get(a)?, get(b)?));
+    }
+    Ok(Some(out))
+}
+
+/// A real lens's profile from its front_radius, back_radius, thickness and index (all
+/// given, in their ranges; a spectacle lens only, `kind` 0).
+fn real_lens(i: usize, kind: usize, real: &[Option<f64>]) -> Result<ProfileSpec, OpticsKeyError> {
+    let at = |name: &str| format!("{LENSES_KEY}[{i}].{name}");
+    let names = ["front_radius", "back_radius", "thickness", "index"];
+    if let Some(k) = real.iter().position(Option::is_none) {
+        return Err(key_error(
+            at(names[k]),
+            "(missing)".into(),
+            "must be given for a real lens",
+        ));
+    }
+    if kind == 1 {
+        return Err(key_error(
+            at("front_radius"),
+            number(real[0].unwrap_or(0.0)),
+            "a contact lens is thin here: give its power, zones or table",
+        ));
+    }
+    let v: Vec<f64> = real.iter().map(|x| x.unwrap_or(0.0)).collect();
+    if !(v[2] > 0.0 && v[2] <= 20.0) {
+        return Err(key_error(
+            at("thickness"),
+            number(v[2]),
+            "must lie in (0, 20] mm",
+        ));
+    }
+    if !(v[3] >= 1.0 && v[3] <= 3.0) {
+        return Err(key_error(at("index"), number(v[3]), "must lie in [1, 3]"));
+    }
+    for (k, r) in v[..2].iter().enumerate() {
+        if r.abs() < 1.0 {
+            return Err(key_error(
+                at(names[k]),
+                number(*r),
+                "must be at least 1 mm in size (a plane is inf)",
+            ));
+        }
+    }
+    Ok(ProfileSpec::Real {
+        front_radius: v[0],
+        back_radius: v[1],
+        thickness: v[2],
+        index: v[3],
+    })
+}
+
 fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> {
     let at = |name: &str| format!("{LENSES_KEY}[{i}].{name}");
     let toml::Value::Table(t) = item else {
@@ -318,60 +426,9 @@ fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> 
         Some(v) => v,
         None => VERTEX_MM,
     };
-    let pairs = |name: &str, a: &str, b: &str| -> Result<Option<Vec<(f64, f64)>>, OpticsKeyError> {
-        let Some(v) = t.get(name) else {
-            return Ok(None);
-        };
-        let toml::Value::Array(rows) = v else {
-            return Err(key_error(
-                at(name),
-                super::describe(v),
-                format!("must be an array of {{ {a} = …, {b} = … }} tables"),
-            ));
-        };
-        if rows.is_empty() || rows.len() > MAX_POINTS {
-            return Err(key_error(
-                at(name),
-                format!("{} entries", rows.len()),
-                format!("must hold 1 to {MAX_POINTS} entries"),
-            ));
-        }
-        let mut out = Vec::new();
-        for (k, row) in rows.iter().enumerate() {
-            let item = |field: &str| format!("{}[{k}].{field}", at(name));
-            let toml::Value::Table(r) = row else {
-                return Err(key_error(
-                    format!("{}[{k}]", at(name)),
-                    super::describe(row),
-                    format!("must be a table {{ {a} = …, {b} = … }}"),
-                ));
-            };
-            if let Some(extra) = r.keys().find(|x| x.as_str() != a && x.as_str() != b) {
-                return Err(key_error(
-                    item(extra),
-                    "(given)".into(),
-                    format!("is not one of {a}, {b}"),
-                ));
-            }
-            let get = |field: &str| match r.get(field) {
-                None => Err(key_error(item(field), "(missing)".into(), "must be given")),
-                Some(v) => match lens_float(v) {
-                    Some(x) if x.is_finite() => Ok(x),
-                    Some(x) => Err(key_error(item(field), number(x), "must be a finite number")),
-                    None => Err(key_error(
-                        item(field),
-                        super::describe(v),
-                        "must be a number",
-                    )),
-                },
-            };
-            out.push((get(a)?, get(b)?));
-        }
-        Ok(Some(out))
-    };
     let power = number_at("power")?;
-    let zones = pairs("zones", "radius", "power")?;
-    let table = pairs("table", "radius", "power")?;
+    let zones = lens_pairs(i, t, "zones", "radius", "power")?;
+    let table = lens_pairs(i, t, "table", "radius", "power")?;
     let real = ["front_radius", "back_radius", "thickness", "index"]
         .iter()
         .map(|n| number_at(n))
@@ -396,47 +453,7 @@ fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> 
     } else if let Some(t) = table {
         ProfileSpec::Table(t)
     } else {
-        let names = ["front_radius", "back_radius", "thickness", "index"];
-        if let Some(k) = real.iter().position(Option::is_none) {
-            return Err(key_error(
-                at(names[k]),
-                "(missing)".into(),
-                "must be given for a real lens",
-            ));
-        }
-        if kind == 1 {
-            return Err(key_error(
-                at("front_radius"),
-                number(real[0].unwrap_or(0.0)),
-                "a contact lens is thin here: give its power, zones or table",
-            ));
-        }
-        let v: Vec<f64> = real.iter().map(|x| x.unwrap_or(0.0)).collect();
-        if !(v[2] > 0.0 && v[2] <= 20.0) {
-            return Err(key_error(
-                at("thickness"),
-                number(v[2]),
-                "must lie in (0, 20] mm",
-            ));
-        }
-        if !(v[3] >= 1.0 && v[3] <= 3.0) {
-            return Err(key_error(at("index"), number(v[3]), "must lie in [1, 3]"));
-        }
-        for (k, r) in v[..2].iter().enumerate() {
-            if r.abs() < 1.0 {
-                return Err(key_error(
-                    at(names[k]),
-                    number(*r),
-                    "must be at least 1 mm in size (a plane is inf)",
-                ));
-            }
-        }
-        ProfileSpec::Real {
-            front_radius: v[0],
-            back_radius: v[1],
-            thickness: v[2],
-            index: v[3],
-        }
+        real_lens(i, kind, &real)?
     };
     let spec = LensSpec {
         kind,
