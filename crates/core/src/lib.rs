@@ -15,5 +15,7 @@ pub mod growth;
 pub mod mesh;
 pub mod model;
 pub mod outputs;
-pub mod problem;
+/// The two problems (in growth/problem.rs, beside the growth settings they hold), at the
+/// path `crate::problem`.
+pub use growth::problem;
 pub mod text;

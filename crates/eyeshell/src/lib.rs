@@ -37,6 +37,7 @@ pub mod fit;
 pub mod hash;
 pub mod interop;
 mod json;
+pub mod number;
 pub mod outputs;
 pub mod plan;
 pub mod problem;

@@ -14,7 +14,11 @@ use serde::{Deserializer, Serialize, Serializer};
 pub use eyeshell_core::outputs::*;
 
 use crate::growth::SeriesRow;
-use crate::rundir::format_value;
+use crate::number::format_value;
+
+/// The column series.csv, history.csv, sensitivities.csv and peripheral.csv end in when the
+/// scene counts in ages (time.unit): the age of the row's t, in that unit.
+pub const AGE_COLUMN: &str = "age";
 
 /// The columns of series.csv and history.csv (before the `age` of a scene with
 /// time.unit).
@@ -290,7 +294,7 @@ pub fn reference() -> String {
          `population.json`, `population.csv`, `sobol.csv`, a run's `result.json`. Keys: \
          `output.times`, `output.history_points`, `time.unit`, `stimulus.classify`, \
          `stimulus.refraction_nm`.\n",
-        crate::rundir::growth::AGE_COLUMN
+        AGE_COLUMN
     ));
     md
 }

@@ -25,7 +25,8 @@ use crate::model::optics::Source;
 use crate::model::stimulus::{EyeMeasure, Refraction};
 pub use settings::{DaeLinear, GrowthParams, GrowthSettings, Integrator};
 
-pub use crate::problem::GrowthProblem;
+pub mod problem;
+pub use problem::GrowthProblem;
 
 /// One row of series.csv: the eye at one output time, at the posterior pole.
 #[derive(Clone, Copy, Debug, PartialEq)]

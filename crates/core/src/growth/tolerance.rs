@@ -577,6 +577,19 @@ fn next(last: &Round, target: f64, max_nodes: usize, order: f64) -> Option<(usiz
     best.map(|(_, n, rtol)| (n, rtol))
 }
 
+/// The elastic settings of each run of a round: its solves as tight as the adaptive elastic
+/// solve's, and like it to precision (a soft shell's residual stalls at round-off above
+/// 1e-2·tol).
+fn run_settings(solver: &SolverSettings, tol: f64) -> SolverSettings {
+    SolverSettings {
+        tol: None,
+        richardson: false,
+        newton_tol: crate::bvp::adapt::newton_tol_for(solver),
+        newton_budget: Some(crate::bvp::solve::NEWTON_SHARE * tol),
+        ..*solver
+    }
+}
+
 /// The growth run under `solver.tol` (module docs): rounds until the estimate is within tol,
 /// then the delivered run's outputs and sensitivities are handed to the callbacks, in the
 /// order of the run. `solver` has its clock started: every run shares `solver.max_seconds`.
@@ -607,15 +620,7 @@ pub(super) fn run(
             "solver.tol in a growth scene needs solver.integrator = \"ida\" or \"cvode\" (Euler's fixed steps have no tolerance to choose)".into(),
         ));
     }
-    // Each run's elastic solves as tight as the adaptive elastic solve's, and like it to
-    // precision: a soft shell's residual stalls at round-off above 1e-2·tol.
-    let base = SolverSettings {
-        tol: None,
-        richardson: false,
-        newton_tol: crate::bvp::adapt::newton_tol_for(solver),
-        newton_budget: Some(crate::bvp::solve::NEWTON_SHARE * tol),
-        ..*solver
-    };
+    let base = run_settings(solver, tol);
     let mut accuracy = Accuracy {
         tol,
         threads: round_threads(solver),

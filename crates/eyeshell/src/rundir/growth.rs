@@ -53,9 +53,7 @@ pub const SENSITIVITY_COLUMNS: [&str; 6] = [
     "d_retina_minus_blue",
     "scaled_axial_length",
 ];
-/// The column series.csv, history.csv, sensitivities.csv and peripheral.csv end in when the
-/// scene counts in ages (time.unit): the age of the row's t, in that unit.
-pub const AGE_COLUMN: &str = "age";
+pub use crate::outputs::AGE_COLUMN;
 /// The peripheral refraction at each output time and field angle
 /// ([`crate::growth::PERIPHERAL_COLUMNS`]).
 pub const PERIPHERAL_FILE: &str = "peripheral.csv";

@@ -24,7 +24,7 @@
 pub mod atomic;
 pub mod growth;
 pub mod lock;
-pub mod number;
+pub use crate::number;
 pub mod owner;
 pub mod read;
 pub mod record;
@@ -39,9 +39,9 @@ use std::path::{Path, PathBuf};
 
 use crate::bvp::{FieldRow, COLUMNS};
 
+pub use crate::number::{format_value, push_value};
 pub use atomic::{write_atomic, write_atomic_unsynced, AtomicDir};
 pub use growth::GrowthWriter;
-pub use number::{format_value, push_value};
 pub use owner::{check_file, check_target, Marker, OutputDir, OwnedDir, MARKER_FILE};
 pub use summary::Summary;
 

@@ -13,9 +13,9 @@
 //! through these builders; an error here names the quantity, and the scene layer names the
 //! key that sets it.
 
+use super::settings::MIN_T_END;
+use super::{GrowthParams, GrowthSettings, Integrator};
 use crate::bvp::settings::SolverSettings;
-use crate::growth::settings::MIN_T_END;
-use crate::growth::{GrowthParams, GrowthSettings, Integrator};
 use crate::mesh::MeshError;
 use crate::model::optics::Source;
 use crate::model::params::Params;
