@@ -212,7 +212,6 @@ mod sweep {
     use super::*;
     use eyeshell::bvp::adapt::extrapolate;
     use eyeshell::mesh::Mesh;
-    use eyeshell::model::cornea;
 
     /// One shell of the sweep: the non-uniform fibre shell with E_b, D and C set (C both
     /// the sclera's and the cornea's, as `eyeshell extremes` pushes it, with ΔP held below
@@ -226,19 +225,7 @@ mod sweep {
 
     impl Shell {
         pub fn params(&self) -> Params {
-            let p = fibre_shell();
-            let cornea = eyeshell::model::params::CorneaParams {
-                c: self.c,
-                ..p.cornea
-            };
-            Params {
-                e_b: self.e_b,
-                d: self.d,
-                c: self.c,
-                cornea,
-                dp: p.dp.min(0.5 * cornea::max_pressure(&cornea)),
-                ..p
-            }
+            pushed(fibre_shell(), self.e_b, self.d, self.c)
         }
     }
 

@@ -98,3 +98,20 @@ pub fn grow(
         .expect("the test's growth is a valid problem");
     eyeshell::growth::grow(&problem, observer)
 }
+
+/// `base` with E_b, D and C set (C both the sclera's and the cornea's, as `eyeshell extremes`
+/// pushes it), ΔP held below half the cornea's limit so that a soft shell stays admissible:
+/// the shells of the parameter sweeps.
+pub fn pushed(base: Params, e_b: f64, d: f64, c: f64) -> Params {
+    let cornea = eyeshell::model::params::CorneaParams { c, ..base.cornea };
+    Params {
+        e_b,
+        d,
+        c,
+        cornea,
+        dp: base
+            .dp
+            .min(0.5 * eyeshell::model::cornea::max_pressure(&cornea)),
+        ..base
+    }
+}

@@ -9,11 +9,10 @@
 //! the run on half those nodes at rtol 1e-9 (the whole difference, not a Richardson share),
 //! asserted below tol/10.
 
-use crate::common::grow;
+use crate::common::{grow, pushed};
 use eyeshell::bvp::settings::SolverSettings;
 use eyeshell::growth::*;
-use eyeshell::model::cornea;
-use eyeshell::model::params::{CorneaParams, Params};
+use eyeshell::model::params::Params;
 
 /// Keeps the (axial length, equatorial radius) of every snapshot.
 #[derive(Default)]
@@ -38,19 +37,7 @@ struct Shell {
 
 impl Shell {
     fn params(&self) -> Params {
-        let p = Params::default();
-        let cornea = CorneaParams {
-            c: self.c,
-            ..p.cornea
-        };
-        Params {
-            e_b: self.e_b,
-            d: self.d,
-            c: self.c,
-            cornea,
-            dp: p.dp.min(0.5 * cornea::max_pressure(&cornea)),
-            ..p
-        }
+        pushed(Params::default(), self.e_b, self.d, self.c)
     }
 }
 
