@@ -90,7 +90,7 @@ pub const TIME: Quantity = Quantity {
 
 /// The measures of the eye at the posterior pole, in their columns' order (docs/MODEL.md
 /// §6).
-pub const EYE: [Quantity; 6] = [
+pub const EYE: [Quantity; 8] = [
     Quantity {
         name: "axial_length",
         unit: "mm",
@@ -145,6 +145,24 @@ pub const EYE: [Quantity; 6] = [
         added_later: true,
         of: |r| Cell::Number(r.refraction_d),
     },
+    Quantity {
+        name: "drive",
+        unit: "mm",
+        description: "growth rule's drive at the pole",
+        computed: "the scene's growth rule (stimulus.rule) at the pole's retina: growth there runs at g_c · [drive]⁺ (docs/MODEL.md §6); for the paper's rule the depth of the blue surface behind the retina (minus retina_minus_blue); NaN for an elastic run",
+        kind: Kind::Number,
+        added_later: true,
+        of: |r| Cell::Number(r.drive),
+    },
+    Quantity {
+        name: "defocus_D",
+        unit: "D",
+        description: "defocus at the pole",
+        computed: "the defocus of the stimulus image at the pole through the lenses worn, as a vergence at the corneal vertex (positive: the image behind the retina); NaN unless the growth rule reads defocus (stimulus.rule = \"defocus\")",
+        kind: Kind::Number,
+        added_later: true,
+        of: |r| Cell::Number(r.defocus_d),
+    },
 ];
 
 /// Entries appended by [`register_for_tests`] (none in a program).
@@ -192,6 +210,8 @@ mod tests {
             retina_minus_red: -0.2,
             class: Refraction::Myopic,
             refraction_d: -1.5,
+            drive: 0.25,
+            defocus_d: 0.75,
         };
         let cells: Vec<Cell> = series_quantities().iter().map(|q| q.value(&row)).collect();
         assert_eq!(
@@ -204,6 +224,8 @@ mod tests {
                 Cell::Number(-0.2),
                 Cell::Text("myopic"),
                 Cell::Number(-1.5),
+                Cell::Number(0.25),
+                Cell::Number(0.75),
             ]
         );
         let names: Vec<&str> = series_quantities().iter().map(|q| q.name).collect();
@@ -216,7 +238,9 @@ mod tests {
                 "retina_minus_blue",
                 "retina_minus_red",
                 "class",
-                "refraction_D"
+                "refraction_D",
+                "drive",
+                "defocus_D"
             ]
         );
         assert_eq!(

@@ -17,6 +17,7 @@ pub mod schedule;
 #[doc(hidden)]
 pub mod system;
 pub mod tolerance;
+pub(crate) mod view;
 
 pub mod settings;
 
@@ -44,6 +45,12 @@ pub struct SeriesRow {
     /// The pole's refraction (D): the spectacle power at 12 mm that brings the naked eye's
     /// best focus onto the retina (NaN where none was computed).
     pub refraction_d: f64,
+    /// The growth rule's drive at the pole (mm; g_v is its positive part), NaN for an
+    /// elastic solve.
+    pub drive: f64,
+    /// The defocus (D) of the stimulus image at the pole through the lenses worn, when the
+    /// rule reads defocus (else NaN).
+    pub defocus_d: f64,
 }
 
 impl SeriesRow {
@@ -57,6 +64,8 @@ impl SeriesRow {
             retina_minus_red: eye.retina_minus_red,
             class: eye.class,
             refraction_d: eye.refraction_d,
+            drive: f64::NAN,
+            defocus_d: f64::NAN,
         }
     }
 }
@@ -70,13 +79,26 @@ pub struct GrowthRow {
     pub g_v: f64,
     pub z_retina: f64,
     pub r_retina: f64,
+    /// The rule's drive at the node's own view (mm; beyond φ_max g_v reads the crossing's).
+    pub drive: f64,
+    /// The defocus there (D), when the rule reads defocus (else NaN).
+    pub defocus_d: f64,
 }
 
 /// Extra columns of a snapshot, after `bvp::COLUMNS`.
-pub const GROWTH_COLUMNS: [&str; 6] = ["rho", "zeta", "eta", "g_v", "z_retina", "r_retina"];
+pub const GROWTH_COLUMNS: [&str; 8] = [
+    "rho",
+    "zeta",
+    "eta",
+    "g_v",
+    "z_retina",
+    "r_retina",
+    "drive",
+    "defocus_D",
+];
 
 impl GrowthRow {
-    pub fn values(&self) -> [f64; 6] {
+    pub fn values(&self) -> [f64; 8] {
         [
             self.rho,
             self.zeta,
@@ -84,6 +106,8 @@ impl GrowthRow {
             self.g_v,
             self.z_retina,
             self.r_retina,
+            self.drive,
+            self.defocus_d,
         ]
     }
 }

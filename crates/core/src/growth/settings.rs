@@ -45,6 +45,8 @@ pub struct GrowthParams {
     pub schedule: super::schedule::Schedule,
     /// time.*: the ages the growth window stands for.
     pub clock: super::schedule::Clock,
+    /// stimulus.rule, stimulus.region: what drives growth (the paper's rule by default).
+    pub stimulus: crate::model::rule::Stimulus,
 }
 
 impl GrowthParams {
@@ -165,6 +167,30 @@ impl GrowthParams {
         }
     }
 
+    /// The dioptre conversion of the stimulus's defocus (docs/MODEL.md §6, "Growth rules"),
+    /// when the rule reads defocus: the paraxial eye of `optics.*` at the stimulus's
+    /// wavelength (`optics.wavelengths[0]`) with `stimulus.source = "optics"`, else the
+    /// default optics' (the Atchison 2006 eye at 400 nm: the published surface is blue).
+    ///
+    /// # Errors
+    /// [`OpticsKeyError`](crate::model::optics::OpticsKeyError) when that eye has no
+    /// paraxial image.
+    pub fn vergence(
+        &self,
+    ) -> Result<Option<crate::model::rule::Vergence>, crate::model::optics::OpticsKeyError> {
+        if !self.stimulus.rule().reads().defocus {
+            return Ok(None);
+        }
+        let spec = match self.source {
+            Source::Optics => self.optics.clone(),
+            Source::Polynomial => OpticsSpec::default(),
+        };
+        let system = spec.system()?;
+        let wavelength = spec.wavelengths.first().copied().unwrap_or(400.0);
+        let p = eyeshell_optics::paraxial(&system, wavelength).map_err(|e| spec.explain(&e))?;
+        Ok(Some(crate::model::rule::Vergence::new(&p)))
+    }
+
     /// These parameters with their surfaces computed if they must be (once: a resolved copy
     /// is returned as it is).
     ///
@@ -201,6 +227,7 @@ impl Default for GrowthParams {
             computed: None,
             schedule: super::schedule::Schedule::default(),
             clock: super::schedule::Clock::default(),
+            stimulus: crate::model::rule::Stimulus::default(),
         }
     }
 }

@@ -20,6 +20,7 @@ use crate::bvp::BvpError;
 use crate::deadline::OutOfTime;
 use crate::model::growth_law;
 use crate::model::params::Params;
+use crate::model::rule::{Drive, Seen, Vergence};
 use crate::model::stimulus::{self, EyeMeasure, Focal};
 use eyeshell_optics::PolarSpline;
 use eyeshell_sundials::{CallbackError, Context, LinearSolver, Matrix, NVector, SundialsError};
@@ -36,6 +37,11 @@ pub struct PointStimulus {
     /// Depth of the blue surface behind the retina (docs/MODEL.md §6).
     pub depth_blue: f64,
     pub angle: f64,
+    /// The defocus (D) there, when the rule reads it (else NaN).
+    pub defocus: f64,
+    /// The rule's drive (mm) at the point's own view; g_v is its positive part, beyond
+    /// φ_max the drive at the crossing's.
+    pub drive: f64,
     pub g_v: f64,
     pub eta: f64,
 }
@@ -68,6 +74,9 @@ pub enum RhsError {
     /// The stimulus's surfaces at a time cannot be blended from the traced ones.
     #[error(transparent)]
     Blend(#[from] crate::model::optics::BlendError),
+    /// A growth rule from outside eyeshell failed.
+    #[error(transparent)]
+    Rule(#[from] crate::model::rule::RuleError),
 }
 
 impl From<BvpError> for RhsError {
@@ -123,6 +132,10 @@ pub struct GrowthSystem {
     /// The blue and red surfaces at the time of the last [`GrowthSystem::set_time`], when the
     /// eye's optics change with time (`None`: the surfaces of t = 0, or fixed optics).
     now: Option<(f64, PolarSpline, PolarSpline)>,
+    /// The dioptre conversion of the rule's defocus (None when the rule reads none).
+    vergence: Option<Vergence>,
+    /// The time of the last [`GrowthSystem::set_time`]: what a rule reads as t.
+    t: f64,
 }
 
 /// The blue (or red) surface the stimulus reads: at the current time when the optics
@@ -169,6 +182,7 @@ impl GrowthSystem {
         // Computed surfaces are traced here at most once (a resolved copy is kept as it is).
         let growth = growth.resolved().map_err(RhsError::Optics)?.into_owned();
         let growth = &growth;
+        let vergence = growth.vergence().map_err(RhsError::Optics)?;
         let params = elastic.params();
         elastic.solve_cold()?;
         // Successive right sides change the shell a little: modified Newton from the last
@@ -191,6 +205,8 @@ impl GrowthSystem {
             work: Work::default(),
             out_of_time: None,
             now: None,
+            vergence,
+            t: 0.0,
         })
     }
 
@@ -198,6 +214,7 @@ impl GrowthSystem {
     /// blended for it when the eye's optics change with time (once per time; nothing to do
     /// for fixed optics, whose right side does not depend on t).
     pub fn set_time(&mut self, t: f64) -> Result<(), RhsError> {
+        self.t = t;
         let Some(timed) = self.growth.computed.as_ref().and_then(|c| c.timed.as_ref()) else {
             return Ok(());
         };
@@ -317,30 +334,44 @@ impl GrowthSystem {
                 );
             }
         }
-        // The retina (inner face) and the depth of the blue surface behind it.
-        let blue = focal(&self.growth, &self.now, true);
-        let mut stim: Vec<PointStimulus> = (0..n_pts)
+        // The retina (inner face), what it sees, and the rule's drive there.
+        let viewer = self.viewer();
+        let t = self.t;
+        let seen: Vec<Seen> = (0..n_pts)
             .map(|k| {
                 let (r, th, z, a) = local[k];
                 let rho = p[NP * k];
                 let h = pts.zeta(k, p) / (a * r / rho);
-                let (zr, rr) = stimulus::retina(z, r, h, th);
-                PointStimulus {
-                    z_retina: zr,
-                    r_retina: rr,
-                    depth_blue: blue.depth(zr, rr),
-                    angle: blue.angle(zr, rr),
-                    ..Default::default()
-                }
+                let retina = stimulus::retina(z, r, h, th);
+                viewer.see(pts.sigma_ref[k], t, retina, false)
             })
             .collect();
-        let phi_max = blue.phi_max();
-        let depth_at_max = depth_at_angle(pts, &stim, phi_max);
+        let mut drives = vec![Drive::default(); n_pts];
+        self.growth
+            .stimulus
+            .rule()
+            .drive(&seen, false, &mut drives)
+            .map_err(RhsError::Rule)?;
+        let mut stim: Vec<PointStimulus> = seen
+            .iter()
+            .zip(&drives)
+            .map(|(s, d)| PointStimulus {
+                z_retina: s.z,
+                r_retina: s.r,
+                depth_blue: s.depth,
+                angle: s.angle,
+                defocus: s.defocus,
+                drive: d.value,
+                ..Default::default()
+            })
+            .collect();
+        let phi_max = viewer.blue.phi_max();
+        let drive_at_max = drive_at_angle(pts, &stim, phi_max);
         for (k, s) in stim.iter_mut().enumerate() {
             let d = if s.angle < phi_max {
-                s.depth_blue
+                s.drive
             } else {
-                depth_at_max.unwrap_or(s.depth_blue)
+                drive_at_max.unwrap_or(s.drive)
             };
             let w = self.growth.kink_width;
             s.g_v = growth_law::positive_smooth(d, w).0;
@@ -451,11 +482,13 @@ impl GrowthSystem {
                     g_v: s.g_v,
                     z_retina: s.z_retina,
                     r_retina: s.r_retina,
+                    drive: s.drive,
+                    defocus_d: s.defocus,
                 }
             })
             .collect();
         let retina: Vec<(f64, f64)> = growth.iter().map(|g| (g.z_retina, g.r_retina)).collect();
-        let series = self.series_row(t, &retina);
+        let series = self.series_row(t, &retina)?;
         let peripheral = self.growth.peripheral(t, &retina);
         Ok(super::Snapshot {
             t,
@@ -477,7 +510,7 @@ impl GrowthSystem {
         let u = std::mem::take(&mut self.elastic.u);
         let retina = self.retina_at_nodes(&u, p);
         self.elastic.u = u;
-        Ok(self.series_row(t, &retina?.0))
+        self.series_row(t, &retina?.0)
     }
 
     /// The series row and the mid-surface (r, z) at every node, of the shell in state `p`
@@ -498,7 +531,7 @@ impl GrowthSystem {
         });
         self.elastic.u = u;
         let (retina, shell) = outline?;
-        Ok((self.series_row(t, &retina), shell))
+        Ok((self.series_row(t, &retina)?, shell))
     }
 
     /// The retina (z, r) at every node of the shell with unknowns `u` in state `p`: what a
@@ -546,14 +579,24 @@ impl GrowthSystem {
     /// The series row from the retina (z, r) at every node: at the posterior pole (node 0),
     /// and the largest retina radius through the nodes
     /// ([`crate::model::stimulus::largest_radius`]).
-    fn series_row(&self, t: f64, retina: &[(f64, f64)]) -> SeriesRow {
+    fn series_row(&self, t: f64, retina: &[(f64, f64)]) -> Result<SeriesRow, RhsError> {
         let eye = EyeMeasure::new(
             retina[0],
             retina.iter().copied(),
             focal(&self.growth, &self.now, true),
             focal(&self.growth, &self.now, false),
         );
-        SeriesRow::new(t, self.growth.measure(t, eye))
+        let mut row = SeriesRow::new(t, self.growth.measure(t, eye));
+        // The rule's drive at the pole, as the rates read it there (the pole is never
+        // beyond φ_max).
+        let seen = [self.viewer().see(0.0, self.t, retina[0], false)];
+        let mut drive = [Drive::default()];
+        self.growth
+            .stimulus
+            .rule()
+            .drive(&seen, false, &mut drive)?;
+        (row.drive, row.defocus_d) = (drive[0].value, seen[0].defocus);
+        Ok(row)
     }
 
     /// Take (p, u) as the current state (the coupled DAE's state at an output time): the
@@ -598,20 +641,31 @@ impl GrowthSystem {
         self.growth.blue.z_b = z_b;
     }
 
+    /// What the rule reads at each retinal point: the surfaces of now and the dioptre
+    /// conversion.
+    pub fn viewer(&self) -> crate::growth::view::Viewer<'_> {
+        crate::growth::view::Viewer {
+            blue: focal(&self.growth, &self.now, true),
+            red: focal(&self.growth, &self.now, false),
+            vergence: self.vergence.as_ref(),
+            reads: self.growth.stimulus.rule().reads(),
+        }
+    }
+
+    /// The growth time of the last [`GrowthSystem::set_time`].
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
     /// The width the growth laws' kinks are rounded over (0: exact).
     pub fn kink_width(&self) -> f64 {
         self.growth.kink_width
     }
 }
 
-/// The blue depth where the retina crosses the polar angle φ_max ([`super::crossing`]);
+/// The rule's drive where the retina crosses the polar angle φ_max ([`super::crossing`]);
 /// None if the retina never reaches φ_max.
-fn depth_at_angle(pts: &GrowthPoints, stim: &[PointStimulus], phi_max: f64) -> Option<f64> {
-    super::crossing::crossing(
-        &pts.by_sigma,
-        |k| stim[k].angle,
-        |k| stim[k].depth_blue,
-        phi_max,
-    )
-    .map(|c| c.value)
+fn drive_at_angle(pts: &GrowthPoints, stim: &[PointStimulus], phi_max: f64) -> Option<f64> {
+    super::crossing::crossing(&pts.by_sigma, |k| stim[k].angle, |k| stim[k].drive, phi_max)
+        .map(|c| c.value)
 }

@@ -12,6 +12,7 @@ pub mod growth_law;
 pub mod optics;
 pub mod params;
 pub mod profiles;
+pub mod rule;
 pub mod stimulus;
 
 /// A set of parameters for which the model itself has no answer.

@@ -419,6 +419,8 @@ mod tests {
                 retina_minus_red: t - 1.155,
                 class,
                 refraction_d: 1.0 - t,
+                drive: 0.5 - t,
+                defocus_d: f64::NAN,
             },
             peripheral: vec![],
         }

@@ -157,25 +157,48 @@ fn json_to_toml(v: &serde_json::Value) -> Option<toml::Value> {
     })
 }
 
-/// series.csv or history.csv: numbers, and the class as text in the last column.
+/// series.csv or history.csv, each column found by its header's name (the table of
+/// outputs): a column that runs written before it existed lack is read as NaN.
 pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
     let records = read_records(path)?;
+    let header = records.header.clone().unwrap_or_default();
+    let column = |name: &str| header.iter().position(|h| h == name);
+    let required = [
+        "t",
+        "axial_length",
+        "equatorial_radius",
+        "retina_minus_blue",
+        "retina_minus_red",
+        "class",
+    ];
+    let at: Vec<Option<usize>> = required.iter().map(|n| column(n)).collect();
+    if let Some(k) = at.iter().position(Option::is_none) {
+        return Err(bad(format!(
+            "{}: no {:?} column in its header",
+            path.display(),
+            required[k]
+        )));
+    }
+    let at: Vec<usize> = at.into_iter().flatten().collect();
+    let later = ["refraction_D", "drive", "defocus_D"].map(column);
     let mut out = Vec::new();
     for r in records.iter() {
         let number = |j: usize| r.cells.get(j).and_then(|v| v.parse::<f64>().ok());
+        let optional = |j: Option<usize>| match j.map(|j| r.cells.get(j)) {
+            None => Some(f64::NAN),
+            Some(v) => v?.parse::<f64>().ok(),
+        };
         let row = (|| {
             Some(SeriesPoint {
-                t: number(0)?,
-                axial_length: number(1)?,
-                equatorial_radius: number(2)?,
-                retina_minus_blue: number(3)?,
-                retina_minus_red: number(4)?,
-                class: Refraction::parse(r.cells.get(5)?)?,
-                // Runs written before the column existed have no refraction.
-                refraction_d: match r.cells.get(6) {
-                    None => f64::NAN,
-                    Some(v) => v.parse::<f64>().ok()?,
-                },
+                t: number(at[0])?,
+                axial_length: number(at[1])?,
+                equatorial_radius: number(at[2])?,
+                retina_minus_blue: number(at[3])?,
+                retina_minus_red: number(at[4])?,
+                class: Refraction::parse(r.cells.get(at[5])?)?,
+                refraction_d: optional(later[0])?,
+                drive: optional(later[1])?,
+                defocus_d: optional(later[2])?,
             })
         })();
         out.push(row.ok_or_else(|| {

@@ -497,6 +497,8 @@ pub const MAX_SCHEDULE_POINTS: usize = 1000;
 const THICKNESS_LAWS: &[&str] = &["none", "mass"];
 const INTEGRATORS: &[&str] = &Integrator::NAMES;
 const SOURCE_NAMES: &[&str] = &SOURCES;
+/// The names `stimulus.rule` takes.
+const RULES: [&str; 3] = crate::model::rule::CATALOGUE;
 const EYE_NAMES: &[&str] = &EYES;
 const FOCI: &[&str] = &FOCUS_NAMES;
 
@@ -1038,6 +1040,41 @@ pub static KEYS: &[KeySpec] = &[
         access: Access::Float { get: |s| s.optics().refraction_wavelength, set: |s, v| s.set_optics(|o| o.refraction_wavelength = v) },
         rule: Rule::Positive,
         doc: "wavelength (nm) of refraction_D, the spectacle power at 12 mm that brings the naked eye's on-axis best focus onto the retina (with stimulus.source = \"polynomial\" the refraction is the default optics' at 555 nm)",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.rule",
+        access: Access::Choice { names: &RULES, get: |s| growth(s).stimulus.keys.rule, set: |s, v| s.growth_mut().stimulus.set_keys(|k| k.rule = v) },
+        rule: Rule::Any,
+        doc: "what drives growth, g_v = [drive]⁺ (docs/MODEL.md §6, docs/guide/hypotheses.md): blue-surface (the paper's: the depth of the blue surface behind the retina, mm), defocus (stimulus.baseline + stimulus.hyperopic_gain·D⁺ − stimulus.myopic_gain·D⁻, D the defocus in dioptres at the stimulus wavelength through the lenses worn, positive when the image lies behind the retina) or chromatic (stimulus.chromatic_gain in front of the blue surface, none behind the red one, in proportion between)",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.baseline",
+        access: Access::Float { get: |s| growth(s).stimulus.keys.baseline, set: |s, v| s.growth_mut().stimulus.set_keys(|k| k.baseline = v) },
+        rule: Rule::Any,
+        doc: "stimulus.rule = \"defocus\": the drive (mm) at zero defocus, what keeps an eye growing when its image is in focus (near work, little time outdoors); 0 by default",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.hyperopic_gain",
+        access: Access::Float { get: |s| growth(s).stimulus.keys.hyperopic_gain, set: |s, v| s.growth_mut().stimulus.set_keys(|k| k.hyperopic_gain = v) },
+        rule: Rule::NonNegative,
+        doc: "stimulus.rule = \"defocus\": the drive (mm per dioptre) of hyperopic defocus (the image behind the retina); 0.37, the reciprocal of the Atchison 2006 eye's 2.7 D/mm, drives a hyperopic eye as the paper's rule does",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.myopic_gain",
+        access: Access::Float { get: |s| growth(s).stimulus.keys.myopic_gain, set: |s, v| s.growth_mut().stimulus.set_keys(|k| k.myopic_gain = v) },
+        rule: Rule::NonNegative,
+        doc: "stimulus.rule = \"defocus\": how strongly myopic defocus (the image in front of the retina) slows growth (mm per dioptre); 0.37 by default",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.chromatic_gain",
+        access: Access::Float { get: |s| growth(s).stimulus.keys.chromatic_gain, set: |s, v| s.growth_mut().stimulus.set_keys(|k| k.chromatic_gain = v) },
+        rule: Rule::NonNegative,
+        doc: "stimulus.rule = \"chromatic\": the drive (mm) while the retina lies in front of the blue surface; 0.655 by default, the default red surface's distance behind the blue one",
         growth: true,
     },
     KeySpec {

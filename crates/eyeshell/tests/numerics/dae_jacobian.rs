@@ -167,3 +167,45 @@ fn newton_matrix_matches_differences_with_computed_surfaces() {
         check(Params::default(), s, g.clone(), 40);
     }
 }
+
+/// Every built-in growth rule's drive enters the Newton matrix through its exact partials
+/// (docs/MODEL.md §6, "Growth rules"): the defocus rule through the dioptre conversion and
+/// both of its gains, the chromatic one through both surfaces. The blue surface is moved
+/// forward so that the retina lies between blue and red (the chromatic rule's proportional
+/// band) and sees defocus of both signs across the meridian.
+#[test]
+fn newton_matrix_matches_differences_for_every_rule() {
+    use eyeshell::model::rule::CATALOGUE;
+    use eyeshell::model::stimulus::{Surface, RED_OFFSET};
+    let blue = Surface {
+        z_b: Surface::blue().z_b - 3.5,
+        ..Surface::blue()
+    };
+    let red = Surface {
+        offset: RED_OFFSET,
+        ..blue
+    };
+    for (rule, name) in CATALOGUE.iter().enumerate() {
+        let mut g = GrowthParams {
+            blue,
+            red,
+            ..GrowthParams::default()
+        };
+        g.stimulus.set_keys(|k| {
+            k.rule = rule;
+            k.baseline = 0.1;
+            k.hyperopic_gain = 0.3;
+            k.myopic_gain = 0.6;
+            k.chromatic_gain = 0.8;
+        });
+        assert_eq!(g.stimulus.rule().name(), *name);
+        for scheme in [Scheme::HermiteSimpson, Scheme::Trapezoid] {
+            let s = SolverSettings {
+                nodes: 21,
+                scheme,
+                ..SolverSettings::default()
+            };
+            check(Params::default(), s, g.clone(), 60 + rule as u64);
+        }
+    }
+}

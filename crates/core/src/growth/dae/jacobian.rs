@@ -36,9 +36,10 @@ impl CoupledDae {
         self.assemble_z_rows(&mut grads);
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(y, &mut s.local);
-        let crossing = self.point_rates(y, &s.local, Some(&mut s.rd), &mut s.rates);
-        let finite = self.check_finite(&s.rates, Some(&s.rd));
-        if finite.is_ok() {
+        let finite = self
+            .point_rates(y, &mut s, true)
+            .and_then(|c| self.check_finite(&s.rates, Some(&s.rd)).map(|_| c));
+        if let Ok(crossing) = finite {
             self.assemble_growth_rows(c, &grads, &s.rd, &s.rates);
             self.assemble_border(&grads, &s.rd, crossing);
         }
@@ -252,7 +253,7 @@ impl CoupledDae {
         }
     }
 
-    /// The border row: d − D*(y), D* the depth interpolated at φ_max.
+    /// The border row: d − D*(y), D* the drive interpolated at φ_max.
     pub(super) fn assemble_border(
         &mut self,
         grads: &[[Grad; 4]],
@@ -273,10 +274,10 @@ impl CoupledDae {
             };
             let gk = self.point_grads(k, grads);
             for q in 0..4 {
-                g.axpy(-wgt * (rd[k].depth[q] - slope * rd[k].angle[q]), &gk[q]);
+                g.axpy(-wgt * (rd[k].drive[q] - slope * rd[k].angle[q]), &gk[q]);
             }
             for (s, q) in [(0usize, 4usize), (1, 5)] {
-                g.p[own][s] -= wgt * (rd[k].depth[q] - slope * rd[k].angle[q]);
+                g.p[own][s] -= wgt * (rd[k].drive[q] - slope * rd[k].angle[q]);
             }
             let i = self.sites[k].interval();
             self.add_grad(d, i, &g, None);

@@ -230,7 +230,8 @@ fn data_deriv(law: ThicknessLaw, mp: &MaterialPoint, y: &Vec5, e: &PointEval) ->
 struct PointRates {
     rho: f64,
     gamma: f64,
-    depth: f64,
+    /// The rule's drive at the point's own view (mm).
+    drive: f64,
     angle: f64,
     g_v: f64,
     eta: f64,
@@ -239,12 +240,12 @@ struct PointRates {
     per_capacity: [f64; 2],
 }
 
-/// Derivatives of (rate_ρ, rate_γ, depth, angle) in (r, θ, z, α_s, ρ, γ_s) and d.
+/// Derivatives of (rate_ρ, rate_γ, drive, angle) in (r, θ, z, α_s, ρ, γ_s) and d.
 #[derive(Clone, Copy, Debug, Default)]
 struct RateDeriv {
     rate: [[f64; 6]; 2],
     rate_d: [f64; 2],
-    depth: [f64; 6],
+    drive: [f64; 6],
     angle: [f64; 6],
 }
 
@@ -266,6 +267,10 @@ struct PointScratch {
     local: Vec<Local>,
     rates: Vec<PointRates>,
     rd: Vec<RateDeriv>,
+    /// What each point sees, the rule's drive there, and ∂(z_ret, r_ret)/∂(local state).
+    seen: Vec<crate::model::rule::Seen>,
+    drives: Vec<crate::model::rule::Drive>,
+    retina_d: Vec<[[f64; 6]; 2]>,
 }
 
 /// The layout of y and the fixed data of the coupled system.
@@ -569,8 +574,9 @@ impl CoupledDae {
         self.load(&y, Part::Values)?;
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(&y, &mut s.local);
-        let crossing = self.point_rates(&y, &s.local, None, &mut s.rates);
+        let crossing = self.point_rates(&y, &mut s, false);
         self.scratch = s;
+        let crossing = crossing?;
         let d = self.d();
         y[d] = crossing.map_or(0.0, |c| c.value);
         Ok(y)
@@ -704,7 +710,13 @@ impl CoupledDae {
         self.load(y, Part::Values)?;
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(y, &mut s.local);
-        let crossing = self.point_rates(y, &s.local, None, &mut s.rates);
+        let crossing = match self.point_rates(y, &mut s, false) {
+            Ok(c) => c,
+            Err(e) => {
+                self.scratch = s;
+                return Err(e);
+            }
+        };
         let d = y[self.d()];
         let on = s
             .rates
@@ -712,8 +724,8 @@ impl CoupledDae {
             .zip(&s.local)
             .enumerate()
             .map(|(k, (pr, l))| {
-                let depth = if pr.beyond { d } else { pr.depth };
-                [depth > 0.0, l.r - y[NP * k] > 0.0, l.alpha_s > 1.0]
+                let drive = if pr.beyond { d } else { pr.drive };
+                [drive > 0.0, l.r - y[NP * k] > 0.0, l.alpha_s > 1.0]
             })
             .collect();
         self.scratch = s;

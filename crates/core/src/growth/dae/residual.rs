@@ -4,6 +4,11 @@
 #[allow(unused_imports)]
 use super::*;
 
+/// The rule a growth system runs.
+fn viewer_rule(sys: &GrowthSystem) -> &dyn crate::model::rule::GrowthRule {
+    sys.growth_params().stimulus.rule().as_ref()
+}
+
 impl CoupledDae {
     /// The local state (r, θ, z, α_s) of every point. Their derivatives in the windows come
     /// from [`CoupledDae::node_grads`] (nodes) and [`CoupledDae::assemble_z_rows`]
@@ -163,45 +168,41 @@ impl CoupledDae {
         out[3].p[M] = self.derivs[self.sys.points.mid[i]].alpha_s;
     }
 
-    /// The retina, the stimulus and the rates at every point, and the crossing of φ_max
-    /// they read beyond it; with `deriv`, their derivatives in each point's
-    /// (r, θ, z, α_s, ρ, γ_s) and d.
+    /// The retina, what it sees, the rule's drive and the rates at every point, and the
+    /// crossing of φ_max whose drive they read beyond it; with `deriv`, their derivatives in
+    /// each point's (r, θ, z, α_s, ρ, γ_s) and d.
     pub(super) fn point_rates(
         &self,
         y: &[f64],
-        local: &[Local],
-        mut deriv: Option<&mut Vec<RateDeriv>>,
-        out: &mut Vec<PointRates>,
-    ) -> Option<Crossing> {
+        s: &mut PointScratch,
+        deriv: bool,
+    ) -> Result<Option<Crossing>, RhsError> {
         let pts = &self.sys.points;
         let law = self.sys.points_law();
-        let blue = self.sys.blue();
+        let viewer = self.sys.viewer();
+        let t = self.sys.time();
         let w = self.sys.kink_width();
         let d_unknown = y[self.d()];
-        out.clear();
-        if let Some(dv) = deriv.as_deref_mut() {
-            dv.clear();
-        }
-        for (k, s) in local.iter().enumerate() {
+        s.rates.clear();
+        s.rd.clear();
+        s.seen.clear();
+        s.retina_d.clear();
+        for (k, l) in s.local.iter().enumerate() {
             let (rho, gam) = (y[NP * k], y[NP * k + 1]);
             let zeta = pts.zeta(k, &y[..self.n_p]);
-            let ht = zeta * rho / (s.alpha_s * s.r);
-            let (sn, cs) = (s.sin_theta, s.cos_theta);
-            let (zr, rr) = (s.z - 0.5 * ht * cs, s.r - 0.5 * ht * sn);
-            let g = blue.depth_gradient(zr, rr);
-            out.push(PointRates {
-                depth: g.depth,
-                angle: g.angle,
-                ..Default::default()
-            });
-            if let Some(dv) = deriv.as_deref_mut() {
+            let ht = zeta * rho / (l.alpha_s * l.r);
+            let (sn, cs) = (l.sin_theta, l.cos_theta);
+            let (zr, rr) = (l.z - 0.5 * ht * cs, l.r - 0.5 * ht * sn);
+            s.seen
+                .push(viewer.see(pts.sigma_ref[k], t, (zr, rr), deriv));
+            if deriv {
                 // h_t = ζ ρ / (α_s r), ζ = ζ(ρ, γ_s): ∂h_t/∂(r, θ, z, α_s, ρ, γ_s).
                 let [z_rho, z_gam] = zeta_partials(law, rho, zeta, gam);
                 let dht = [
-                    -ht / s.r,
+                    -ht / l.r,
                     0.0,
                     0.0,
-                    -ht / s.alpha_s,
+                    -ht / l.alpha_s,
                     ht / rho + ht / zeta * z_rho,
                     ht / zeta * z_gam,
                 ];
@@ -211,25 +212,43 @@ impl CoupledDae {
                 dz_ret[1] += 0.5 * ht * sn;
                 dr_ret[0] += 1.0;
                 dr_ret[1] -= 0.5 * ht * cs;
-                let mut rd = RateDeriv::default();
-                for q in 0..6 {
-                    rd.depth[q] = g.depth_z * dz_ret[q] + g.depth_r * dr_ret[q];
-                    rd.angle[q] = g.angle_z * dz_ret[q] + g.angle_r * dr_ret[q];
-                }
-                dv.push(rd);
+                s.retina_d.push([dz_ret, dr_ret]);
             }
         }
-        // Beyond φ_max the depth is the unknown d (docs/MODEL.md §6).
-        let crossing = self.crossing_depth(out);
+        s.drives.clear();
+        s.drives
+            .resize(s.seen.len(), crate::model::rule::Drive::default());
+        viewer_rule(&self.sys)
+            .drive(&s.seen, deriv, &mut s.drives)
+            .map_err(RhsError::Rule)?;
+        for (k, (seen, drive)) in s.seen.iter().zip(&s.drives).enumerate() {
+            s.rates.push(PointRates {
+                drive: drive.value,
+                angle: seen.angle,
+                ..Default::default()
+            });
+            if deriv {
+                let [dz_ret, dr_ret] = s.retina_d[k];
+                let [gz, gr] = drive.gradient(seen);
+                let mut rd = RateDeriv::default();
+                for q in 0..6 {
+                    rd.drive[q] = gz * dz_ret[q] + gr * dr_ret[q];
+                    rd.angle[q] = seen.angle_grad[0] * dz_ret[q] + seen.angle_grad[1] * dr_ret[q];
+                }
+                s.rd.push(rd);
+            }
+        }
+        // Beyond φ_max the drive is the unknown d (docs/MODEL.md §6).
+        let crossing = self.crossing_drive(&s.rates);
         let has_crossing = crossing.is_some();
-        for (k, pr) in out.iter_mut().enumerate() {
-            let s = &local[k];
+        for (k, pr) in s.rates.iter_mut().enumerate() {
+            let l = &s.local[k];
             let (rho, gam) = (y[NP * k], y[NP * k + 1]);
-            pr.beyond = has_crossing && pr.angle >= blue.phi_max();
-            let depth = if pr.beyond { d_unknown } else { pr.depth };
-            let (dr, da) = (s.r - rho, s.alpha_s - 1.0);
+            pr.beyond = has_crossing && pr.angle >= viewer.blue.phi_max();
+            let drive = if pr.beyond { d_unknown } else { pr.drive };
+            let (dr, da) = (l.r - rho, l.alpha_s - 1.0);
             let ((gv, gv_slope), (pr_, pr_slope), (pa, pa_slope)) = (
-                positive_smooth(depth, w),
+                positive_smooth(drive, w),
                 positive_smooth(dr, w),
                 positive_smooth(da, w),
             );
@@ -239,13 +258,13 @@ impl CoupledDae {
             pr.rho = pr.eta * pr_;
             pr.gamma = pr.eta * gam * pa;
             pr.per_capacity = [pr.g_v * pr_, pr.g_v * gam * pa];
-            if let Some(dv) = deriv.as_deref_mut() {
-                let rd = &mut dv[k];
+            if deriv {
+                let rd = &mut s.rd[k];
                 // ∂g_v/∂(local) and ∂g_v/∂d: the slope of the branch the value took.
                 let gv_local: [f64; 6] = if pr.beyond {
                     [0.0; 6]
                 } else {
-                    rd.depth.map(|v| gv_slope * v)
+                    rd.drive.map(|v| gv_slope * v)
                 };
                 let gv_d = if pr.beyond { gv_slope } else { 0.0 };
                 for q in 0..6 {
@@ -259,7 +278,7 @@ impl CoupledDae {
                 rd.rate_d = [cap * gv_d * pr_, cap * gv_d * gam * pa];
             }
         }
-        crossing
+        Ok(crossing)
     }
 
     /// Rates (and, with `deriv`, their derivatives) that are not finite fail the evaluation
@@ -273,12 +292,12 @@ impl CoupledDae {
         // No allocation and no branch per value: this runs at every residual and assembly.
         let bad = |k: usize| {
             let pr = &rates[k];
-            let own = all_finite(&[pr.rho, pr.gamma, pr.depth]);
+            let own = all_finite(&[pr.rho, pr.gamma, pr.drive]);
             let derivatives = deriv.is_none_or(|rd| {
                 let d = &rd[k];
                 all_finite(d.rate.as_flattened())
                     & all_finite(&d.rate_d)
-                    & all_finite(&d.depth)
+                    & all_finite(&d.drive)
                     & all_finite(&d.angle)
             });
             !(own && derivatives)
@@ -299,13 +318,13 @@ impl CoupledDae {
         }
     }
 
-    /// The depth of the blue surface where the retina crosses φ_max ([`crate::growth::crossing`]);
-    /// None if no point reaches it.
-    pub(super) fn crossing_depth(&self, rates: &[PointRates]) -> Option<Crossing> {
+    /// The rule's drive where the retina crosses φ_max ([`crate::growth::crossing`]); None
+    /// if no point reaches it.
+    pub(super) fn crossing_drive(&self, rates: &[PointRates]) -> Option<Crossing> {
         crate::growth::crossing::crossing(
             &self.sys.points.by_sigma,
             |k| rates[k].angle,
-            |k| rates[k].depth,
+            |k| rates[k].drive,
             self.sys.blue().phi_max(),
         )
     }
@@ -317,7 +336,14 @@ impl CoupledDae {
         self.load(y, Part::Values)?;
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(y, &mut s.local);
-        let crossing = self.point_rates(y, &s.local, None, &mut s.rates);
+        let crossing = self.point_rates(y, &mut s, false);
+        let crossing = match crossing {
+            Ok(c) => c,
+            Err(e) => {
+                self.scratch = s;
+                return Err(e);
+            }
+        };
         let finite = self.check_finite(&s.rates, None);
         for (k, pr) in s.rates.iter().enumerate() {
             r[NP * k] = yp[NP * k] - pr.rho;

@@ -240,7 +240,13 @@ impl CoupledDae {
         let mut s = std::mem::take(&mut self.scratch);
         self.locals(y, &mut s.local);
         let model = params.iter().any(|p| !p.is_growth());
-        let crossing = self.point_rates(y, &s.local, model.then_some(&mut s.rd), &mut s.rates);
+        let crossing = match self.point_rates(y, &mut s, model) {
+            Ok(c) => c,
+            Err(e) => {
+                self.scratch = s;
+                return Err(e);
+            }
+        };
         let finite = self.check_finite(&s.rates, model.then_some(s.rd.as_slice()));
         if finite.is_ok() {
             let g = self.sys.growth_params();
@@ -368,7 +374,7 @@ impl CoupledDae {
         if let Some(cr) = crossing {
             for &(k, wgt, slope) in cr.points() {
                 out[d] -=
-                    wgt * (dot(&rd[k].depth, &dlocal[k]) - slope * dot(&rd[k].angle, &dlocal[k]));
+                    wgt * (dot(&rd[k].drive, &dlocal[k]) - slope * dot(&rd[k].angle, &dlocal[k]));
             }
         }
     }
