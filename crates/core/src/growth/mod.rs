@@ -12,6 +12,8 @@ pub mod crossing;
 pub mod dae;
 pub(crate) mod euler;
 pub(crate) mod ida;
+#[doc(hidden)]
+pub mod integral;
 pub(crate) mod points;
 pub mod schedule;
 #[doc(hidden)]
@@ -588,6 +590,20 @@ pub(crate) fn run_on(
         return Err(fail(
             0.0,
             "the sensitivity to stimulus.blue.z_B needs stimulus.source = \"polynomial\" (a computed surface is traced about its centre once)".into(),
+            GrowthStats::default(),
+        ));
+    }
+    if growth.stimulus.rule().reads().defocus
+        && settings.sensitivities.contains(&dae::SensParam::BlueCentre)
+    {
+        // Moving z_B moves the surfaces and not the cornea the dioptres are measured from:
+        // the shift is no longer the retina's moving the other way.
+        return Err(fail(
+            0.0,
+            format!(
+                "the sensitivity to the blue surface's centre z_B needs a growth rule that reads the surfaces alone (the {} rule reads defocus in dioptres from the cornea)",
+                growth.stimulus.rule().name()
+            ),
             GrowthStats::default(),
         ));
     }

@@ -74,6 +74,9 @@ pub enum RhsError {
     /// The stimulus's surfaces at a time cannot be blended from the traced ones.
     #[error(transparent)]
     Blend(#[from] crate::model::optics::BlendError),
+    /// The integrated region reaches beyond where the stimulus surface is defined.
+    #[error("the integrated stimulus's region reaches {}° from the pole, beyond where the stimulus surface is defined (φ_max = {}°): make it at most that", crate::text::decimals6(.max_angle.to_degrees()), crate::text::decimals6(.phi_max.to_degrees()))]
+    RegionBeyondSurface { max_angle: f64, phi_max: f64 },
     /// A growth rule from outside eyeshell failed.
     #[error(transparent)]
     Rule(#[from] crate::model::rule::RuleError),
@@ -183,6 +186,16 @@ impl GrowthSystem {
         let growth = growth.resolved().map_err(RhsError::Optics)?.into_owned();
         let growth = &growth;
         let vergence = growth.vergence().map_err(RhsError::Optics)?;
+        let stimulus = &growth.stimulus;
+        let phi_max = growth.blue_focal().phi_max();
+        if stimulus.region == crate::model::rule::Region::Integrated
+            && !(stimulus.max_angle() > 0.0 && stimulus.max_angle() <= phi_max)
+        {
+            return Err(RhsError::RegionBeyondSurface {
+                max_angle: stimulus.max_angle(),
+                phi_max,
+            });
+        }
         let params = elastic.params();
         elastic.solve_cold()?;
         // Successive right sides change the shell a little: modified Newton from the last
@@ -366,9 +379,12 @@ impl GrowthSystem {
             })
             .collect();
         let phi_max = viewer.blue.phi_max();
+        let integrated = integrated_drive(&self.growth.stimulus, pts, &stim);
         let drive_at_max = drive_at_angle(pts, &stim, phi_max);
         for (k, s) in stim.iter_mut().enumerate() {
-            let d = if s.angle < phi_max {
+            let d = if let Some(total) = integrated {
+                total
+            } else if s.angle < phi_max {
                 s.drive
             } else {
                 drive_at_max.unwrap_or(s.drive)
@@ -588,13 +604,38 @@ impl GrowthSystem {
         );
         let mut row = SeriesRow::new(t, self.growth.measure(t, eye));
         // The rule's drive at the pole, as the rates read it there (the pole is never
-        // beyond φ_max).
-        let seen = [self.viewer().see(0.0, self.t, retina[0], false)];
+        // beyond φ_max); over an integrated region, the average over the nodes' retina.
+        let viewer = self.viewer();
+        let stimulus = &self.growth.stimulus;
+        let rule = stimulus.rule();
+        if stimulus.region == crate::model::rule::Region::Integrated {
+            let nodes = &self.elastic.discretisation().mesh.nodes;
+            let seen: Vec<Seen> = retina
+                .iter()
+                .zip(nodes)
+                .map(|(&p, &sigma)| viewer.see(sigma, self.t, p, false))
+                .collect();
+            let mut drives = vec![Drive::default(); seen.len()];
+            rule.drive(&seen, false, &mut drives)?;
+            let points: Vec<super::integral::RetinaPoint> = seen
+                .iter()
+                .zip(&drives)
+                .map(|(v, d)| super::integral::RetinaPoint {
+                    z: v.z,
+                    r: v.r,
+                    angle: v.angle,
+                    drive: d.value,
+                })
+                .collect();
+            let order: Vec<usize> = (0..points.len()).collect();
+            row.drive = super::integral::integrate(&order, &points, stimulus.max_angle(), false)
+                .map_or(f64::NAN, |i| i.value);
+            row.defocus_d = seen[0].defocus;
+            return Ok(row);
+        }
+        let seen = [viewer.see(0.0, self.t, retina[0], false)];
         let mut drive = [Drive::default()];
-        self.growth
-            .stimulus
-            .rule()
-            .drive(&seen, false, &mut drive)?;
+        rule.drive(&seen, false, &mut drive)?;
         (row.drive, row.defocus_d) = (drive[0].value, seen[0].defocus);
         Ok(row)
     }
@@ -661,6 +702,32 @@ impl GrowthSystem {
     pub fn kink_width(&self) -> f64 {
         self.growth.kink_width
     }
+}
+
+/// With `stimulus.region = "integrated"`, the drive averaged over the retina out to the
+/// region's edge ([`super::integral`]; NaN when no area lies inside, which fails the
+/// evaluation); None for a local rule.
+fn integrated_drive(
+    stimulus: &crate::model::rule::Stimulus,
+    pts: &GrowthPoints,
+    stim: &[PointStimulus],
+) -> Option<f64> {
+    if stimulus.region != crate::model::rule::Region::Integrated {
+        return None;
+    }
+    let points: Vec<super::integral::RetinaPoint> = stim
+        .iter()
+        .map(|s| super::integral::RetinaPoint {
+            z: s.z_retina,
+            r: s.r_retina,
+            angle: s.angle,
+            drive: s.drive,
+        })
+        .collect();
+    Some(
+        super::integral::integrate(&pts.by_sigma, &points, stimulus.max_angle(), false)
+            .map_or(f64::NAN, |i| i.value),
+    )
 }
 
 /// The rule's drive where the retina crosses the polar angle φ_max ([`super::crossing`]);

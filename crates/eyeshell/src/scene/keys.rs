@@ -1078,6 +1078,20 @@ pub static KEYS: &[KeySpec] = &[
         growth: true,
     },
     KeySpec {
+        key: "stimulus.region",
+        access: Access::Choice { names: &crate::model::rule::Region::NAMES, get: |s| growth(s).stimulus.region as usize, set: |s, v| s.growth_mut().stimulus.region = if v == 1 { crate::model::rule::Region::Integrated } else { crate::model::rule::Region::Local } },
+        rule: Rule::Any,
+        doc: "where the rule acts: local (each retinal point's own drive, the paper's) or integrated (the drive averaged over the retina's area from the pole to stimulus.max_field drives every point: the periphery acts on the pole; docs/MODEL.md §6)",
+        growth: true,
+    },
+    KeySpec {
+        key: "stimulus.max_field",
+        access: Access::Float { get: |s| growth(s).stimulus.max_field, set: |s, v| s.growth_mut().stimulus.max_field = v },
+        rule: Rule::Positive,
+        doc: "stimulus.region = \"integrated\": the region's edge, the polar angle (degrees) about the stimulus surface's centre, at most where the surface is defined (33.6° for the published one, about 26° for a surface computed to a 40° field); 25 by default",
+        growth: true,
+    },
+    KeySpec {
         key: "stimulus.classify",
         access: Access::Choice { names: &CLASSIFY, get: |s| s.optics().classify, set: |s, v| s.set_optics(|o| o.classify = v) },
         rule: Rule::Any,

@@ -172,10 +172,11 @@ fn newton_matrix_matches_differences_with_computed_surfaces() {
 /// (docs/MODEL.md §6, "Growth rules"): the defocus rule through the dioptre conversion and
 /// both of its gains, the chromatic one through both surfaces. The blue surface is moved
 /// forward so that the retina lies between blue and red (the chromatic rule's proportional
-/// band) and sees defocus of both signs across the meridian.
+/// band) and sees defocus of both signs across the meridian. Over an integrated region the
+/// border row is the average's partials in every point inside it.
 #[test]
 fn newton_matrix_matches_differences_for_every_rule() {
-    use eyeshell::model::rule::CATALOGUE;
+    use eyeshell::model::rule::{Region, CATALOGUE};
     use eyeshell::model::stimulus::{Surface, RED_OFFSET};
     let blue = Surface {
         z_b: Surface::blue().z_b - 3.5,
@@ -199,13 +200,16 @@ fn newton_matrix_matches_differences_for_every_rule() {
             k.chromatic_gain = 0.8;
         });
         assert_eq!(g.stimulus.rule().name(), *name);
-        for scheme in [Scheme::HermiteSimpson, Scheme::Trapezoid] {
-            let s = SolverSettings {
-                nodes: 21,
-                scheme,
-                ..SolverSettings::default()
-            };
-            check(Params::default(), s, g.clone(), 60 + rule as u64);
+        for region in [Region::Local, Region::Integrated] {
+            g.stimulus.region = region;
+            for scheme in [Scheme::HermiteSimpson, Scheme::Trapezoid] {
+                let s = SolverSettings {
+                    nodes: 21,
+                    scheme,
+                    ..SolverSettings::default()
+                };
+                check(Params::default(), s, g.clone(), 60 + rule as u64);
+            }
         }
     }
 }

@@ -39,12 +39,12 @@ impl CoupledDae {
         let finite = self
             .point_rates(y, &mut s, true)
             .and_then(|c| self.check_finite(&s.rates, Some(&s.rd)).map(|_| c));
-        if let Ok(crossing) = finite {
+        if let Ok(crossing) = &finite {
             self.assemble_growth_rows(c, &grads, &s.rd, &s.rates);
-            self.assemble_border(&grads, &s.rd, crossing);
+            self.assemble_border(&grads, &s.rd, crossing.as_ref());
         }
         (self.grads, self.scratch) = (grads, s);
-        finite?;
+        finite.map(|_| ())?;
         match self.jac.take_outside() {
             0 => Ok(()),
             k => Err(DaeError::Linear(LinalgError::OutsidePattern(k))),
@@ -253,19 +253,20 @@ impl CoupledDae {
         }
     }
 
-    /// The border row: d − D*(y), D* the drive interpolated at φ_max.
+    /// The border row: d − D*(y), D* the drive interpolated at φ_max or averaged over the
+    /// integrated region ([`Border::terms`]).
     pub(super) fn assemble_border(
         &mut self,
         grads: &[[Grad; 4]],
         rd: &[RateDeriv],
-        crossing: Option<Crossing>,
+        border: Option<&Border>,
     ) {
-        let Some(cr) = crossing else {
+        let Some(border) = border else {
             return;
         };
         let d = self.d();
-        // ∂D* = Σ_i L_i (∂d_i − p'(φ_i) ∂φ_i) over the interpolant's points.
-        for &(k, wgt, slope) in cr.points() {
+        for (k, c) in border.terms() {
+            let v = rd[k].border_row(&c);
             let mut g = Grad::default();
             let own = match self.sites[k] {
                 Site::Left(_) => L,
@@ -274,10 +275,10 @@ impl CoupledDae {
             };
             let gk = self.point_grads(k, grads);
             for q in 0..4 {
-                g.axpy(-wgt * (rd[k].drive[q] - slope * rd[k].angle[q]), &gk[q]);
+                g.axpy(-v[q], &gk[q]);
             }
             for (s, q) in [(0usize, 4usize), (1, 5)] {
-                g.p[own][s] -= wgt * (rd[k].drive[q] - slope * rd[k].angle[q]);
+                g.p[own][s] -= v[q];
             }
             let i = self.sites[k].interval();
             self.add_grad(d, i, &g, None);

@@ -3,6 +3,8 @@
 
 #[allow(unused_imports)]
 use super::*;
+use crate::growth::integral::{integrate, Integral, RetinaPoint};
+use crate::model::rule::Region;
 
 /// The rule a growth system runs.
 fn viewer_rule(sys: &GrowthSystem) -> &dyn crate::model::rule::GrowthRule {
@@ -176,7 +178,7 @@ impl CoupledDae {
         y: &[f64],
         s: &mut PointScratch,
         deriv: bool,
-    ) -> Result<Option<Crossing>, RhsError> {
+    ) -> Result<Option<Border>, RhsError> {
         let pts = &self.sys.points;
         let law = self.sys.points_law();
         let viewer = self.sys.viewer();
@@ -230,7 +232,10 @@ impl CoupledDae {
             if deriv {
                 let [dz_ret, dr_ret] = s.retina_d[k];
                 let [gz, gr] = drive.gradient(seen);
-                let mut rd = RateDeriv::default();
+                let mut rd = RateDeriv {
+                    retina: [dz_ret, dr_ret],
+                    ..RateDeriv::default()
+                };
                 for q in 0..6 {
                     rd.drive[q] = gz * dz_ret[q] + gr * dr_ret[q];
                     rd.angle[q] = seen.angle_grad[0] * dz_ret[q] + seen.angle_grad[1] * dr_ret[q];
@@ -238,13 +243,35 @@ impl CoupledDae {
                 s.rd.push(rd);
             }
         }
-        // Beyond φ_max the drive is the unknown d (docs/MODEL.md §6).
-        let crossing = self.crossing_drive(&s.rates);
-        let has_crossing = crossing.is_some();
+        // Beyond φ_max the drive is the unknown d (docs/MODEL.md §6); over an integrated
+        // region d is the average, and every point reads it.
+        let integrated = self.sys.growth_params().stimulus.region == Region::Integrated;
+        let border = if integrated {
+            let points: Vec<RetinaPoint> = s
+                .seen
+                .iter()
+                .zip(&s.rates)
+                .map(|(v, pr)| RetinaPoint {
+                    z: v.z,
+                    r: v.r,
+                    angle: v.angle,
+                    drive: pr.drive,
+                })
+                .collect();
+            let max_angle = self.sys.growth_params().stimulus.max_angle();
+            let integral = integrate(&self.sys.points.by_sigma, &points, max_angle, deriv);
+            Some(Border::Integral(integral.unwrap_or(Integral {
+                value: f64::NAN,
+                ..Integral::default()
+            })))
+        } else {
+            self.crossing_drive(&s.rates).map(Border::Crossing)
+        };
+        let has_crossing = border.is_some();
         for (k, pr) in s.rates.iter_mut().enumerate() {
             let l = &s.local[k];
             let (rho, gam) = (y[NP * k], y[NP * k + 1]);
-            pr.beyond = has_crossing && pr.angle >= viewer.blue.phi_max();
+            pr.beyond = integrated || (has_crossing && pr.angle >= viewer.blue.phi_max());
             let drive = if pr.beyond { d_unknown } else { pr.drive };
             let (dr, da) = (l.r - rho, l.alpha_s - 1.0);
             let ((gv, gv_slope), (pr_, pr_slope), (pa, pa_slope)) = (
@@ -278,7 +305,7 @@ impl CoupledDae {
                 rd.rate_d = [cap * gv_d * pr_, cap * gv_d * gam * pa];
             }
         }
-        Ok(crossing)
+        Ok(border)
     }
 
     /// Rates (and, with `deriv`, their derivatives) that are not finite fail the evaluation
@@ -373,7 +400,7 @@ impl CoupledDae {
         r[d - 3] = f[nf - 2];
         r[d - 2] = f[nf - 1];
         r[d - 1] = y[self.wcol(m - 1, Z)] - z_star;
-        r[d] = y[d] - crossing.map_or(0.0, |c| c.value);
+        r[d] = y[d] - crossing.as_ref().map_or(0.0, |c| c.value());
         (self.f, self.dz) = (f, dz);
         self.counters.residual_seconds += start.elapsed().as_secs_f64();
         Ok(())

@@ -253,7 +253,7 @@ impl CoupledDae {
             for (&param, out) in params.iter().zip(out.iter_mut()) {
                 out.fill(0.0);
                 if !param.is_growth() {
-                    self.model_parameter_residual(param, &s.rd, crossing, out);
+                    self.model_parameter_residual(param, &s.rd, crossing.as_ref(), out);
                     continue;
                 }
                 for (k, pr) in s.rates.iter().enumerate() {
@@ -301,7 +301,7 @@ impl CoupledDae {
         &self,
         param: SensParam,
         rd: &[RateDeriv],
-        crossing: Option<Crossing>,
+        crossing: Option<&Border>,
         out: &mut [f64],
     ) {
         let disc = self.sys.elastic.discretisation();
@@ -370,11 +370,10 @@ impl CoupledDae {
             out[NP * k] = -dot(&rd[k].rate[0], dl);
             out[NP * k + 1] = -dot(&rd[k].rate[1], dl);
         }
-        // The border d − D*: ∂D* = Σ L_k (∂depth_k − p'(φ_k) ∂φ_k), as in the Jacobian.
-        if let Some(cr) = crossing {
-            for &(k, wgt, slope) in cr.points() {
-                out[d] -=
-                    wgt * (dot(&rd[k].drive, &dlocal[k]) - slope * dot(&rd[k].angle, &dlocal[k]));
+        // The border d − D*, as in the Jacobian.
+        if let Some(border) = crossing {
+            for (k, c) in border.terms() {
+                out[d] -= dot(&rd[k].border_row(&c), &dlocal[k]);
             }
         }
     }

@@ -136,14 +136,23 @@ pub trait GrowthRule: Send + Sync + fmt::Debug {
 pub const CATALOGUE: [&str; 3] = [BlueSurface::NAME, Defocus::NAME, Chromatic::NAME];
 
 /// Where the rule's drive acts.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Region {
     /// Each point's own drive (the paper's).
     Local,
     /// The drive averaged over the retina's area from the pole out to the polar angle
-    /// `max_angle` (rad) drives every point.
-    Integrated { max_angle: f64 },
+    /// [`Stimulus::max_angle`] drives every point.
+    Integrated,
 }
+
+impl Region {
+    /// The names `stimulus.region` takes.
+    pub const NAMES: [&'static str; 2] = ["local", "integrated"];
+}
+
+/// The default edge of the integrated region (degrees of polar angle): inside both the
+/// published surface's φ_max (33.6°) and a computed surface's at a 40° field (about 26°).
+pub const DEFAULT_MAX_FIELD: f64 = 25.0;
 
 /// The defocus rule's default gains (mm per dioptre): the reciprocal of the Atchison 2006
 /// eye's 2.7 D per mm of axial length near 23.5 mm at 400 nm ([`Vergence`]), so that with no
@@ -202,6 +211,9 @@ pub struct Stimulus {
     builtin: bool,
     pub keys: RuleKeys,
     pub region: Region,
+    /// The integrated region's edge: the polar angle about the stimulus surface's centre
+    /// (degrees, as the scene gives it; [`Stimulus::max_angle`] in radians).
+    pub max_field: f64,
 }
 
 impl Default for Stimulus {
@@ -211,6 +223,7 @@ impl Default for Stimulus {
             builtin: true,
             keys: RuleKeys::default(),
             region: Region::Local,
+            max_field: DEFAULT_MAX_FIELD,
         }
     }
 }
@@ -223,7 +236,7 @@ impl PartialEq for Stimulus {
             (false, false) => Arc::ptr_eq(&self.rule, &other.rule),
             _ => false,
         };
-        same_rule && self.region == other.region
+        same_rule && self.region == other.region && self.max_field == other.max_field
     }
 }
 
@@ -245,6 +258,11 @@ impl Stimulus {
     pub fn set_rule(&mut self, rule: Arc<dyn GrowthRule>) {
         self.rule = rule;
         self.builtin = false;
+    }
+
+    /// The integrated region's edge in radians.
+    pub fn max_angle(&self) -> f64 {
+        self.max_field.to_radians()
     }
 
     /// Whether the rule in effect is a built-in one (chosen by its keys).
