@@ -51,7 +51,10 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     let computed = spec
         .compute_eye_at(t, z_c)
         .map_err(|e| key_error(&scene, e))?;
-    let system = eyeshell::model::eyewear::worn_at(&spec, t).map_err(|e| key_error(&scene, e))?;
+    // The figures' rays go through the image the surfaces are (a multifocal lens at that
+    // image's power).
+    let system = eyeshell::model::eyewear::worn_at(&computed.main_spec(), t)
+        .map_err(|e| key_error(&scene, e))?;
     let paraxials: Vec<Paraxial> = spec
         .wavelengths
         .iter()

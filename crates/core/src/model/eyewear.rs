@@ -187,23 +187,41 @@ impl LensSpec {
     }
 
     /// The share of the light crossing the lens at height `h` (mm from its axis) that goes
-    /// through `power`: 1 or 0 in a zone, the fill (or its complement) in a lenslet ring.
-    /// Beyond the lens's edge, the last zone's.
-    pub fn share_at(&self, h: f64, power: f64) -> f64 {
+    /// through `power`, of a zone whose own power is `carrier`: 0 outside such zones, else 1
+    /// or 0 in a plain zone, the fill (or its complement) in a lenslet ring. Beyond the lens's
+    /// edge, the last zone's. Lenslets (each centred on itself) add no prism on average, so
+    /// the light through them reaches the pupil as through their zone's own power.
+    pub fn share_at(&self, h: f64, carrier: f64, power: f64) -> f64 {
         let ProfileSpec::Zones(z) = &self.profile else {
             return 1.0;
         };
         let k = z.iter().position(|&(r, _)| h <= r).unwrap_or(z.len() - 1);
+        if z[k].1 != carrier {
+            return 0.0;
+        }
         let l = self.lenslets.iter().find(|l| l.zone == k);
         let fill = l.map_or(0.0, |l| l.fill);
         let mut share = 0.0;
-        if z[k].1 == power {
+        if carrier == power {
             share += 1.0 - fill;
         }
         if l.is_some_and(|l| l.power == power) {
             share += fill;
         }
         share
+    }
+
+    /// The zones' own powers (D), once each: what the light reaching the pupil is bent by.
+    pub fn carrier_powers(&self) -> Vec<f64> {
+        let mut powers: Vec<f64> = Vec::new();
+        if let ProfileSpec::Zones(z) = &self.profile {
+            for &(_, p) in z {
+                if !powers.contains(&p) {
+                    powers.push(p);
+                }
+            }
+        }
+        powers
     }
 
     /// The radii where the share of light changes (every zone's outer radius).
@@ -403,6 +421,7 @@ pub fn lens_reach(spec: &OpticsSpec) -> Result<Vec<f64>, OpticsKeyError> {
     for l in &mut open.lenses {
         if matches!(l.profile, ProfileSpec::Zones(_) | ProfileSpec::Table(_)) {
             l.profile = ProfileSpec::Power(0.0);
+            l.lenslets.clear();
         }
     }
     let system = worn(&open)?;

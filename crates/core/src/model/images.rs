@@ -31,35 +31,49 @@ pub(crate) fn trace_images(
 ) -> Result<Traced, OpticsKeyError> {
     let lens = &spec.lenses[i];
     let mut traced = Vec::new();
-    let mut areas = Vec::new();
-    let edges = lens.zone_edges();
     for &power in powers {
         let mut one = spec.clone();
         one.lenses[i] = lens.with_power(power);
         let blame = |e: OpticsKeyError| image_error(lens, i, power, &e);
         let (surfaces, blue, red) = one.compute_single(t, z_c).map_err(blame)?;
+        traced.push((power, surfaces, blue, red));
+    }
+    // The light through each zone reaches the pupil as through a uniform lens of the zone's
+    // own power (its carrier): each image's area sums its parts over the carriers.
+    let fields: Vec<f64> = (traced[0].1.surfaces[0].points.iter())
+        .map(|f| f.field_deg)
+        .collect();
+    let edges = lens.zone_edges();
+    let mut areas = vec![vec![0.0; fields.len()]; powers.len()];
+    for carrier in lens.carrier_powers() {
+        let mut one = spec.clone();
+        one.lenses[i] = lens.with_power(carrier);
+        let blame = |e: OpticsKeyError| image_error(lens, i, carrier, &e);
         let system = super::eyewear::worn_at(&one, t).map_err(blame)?;
         let naked = one.system_at(t).map_err(blame)?;
         let surface = lens_surface(&one.lenses, i, system.elements.len() - naked.elements.len());
         let pupil = one.pupil_stop(&system);
-        let probes: Vec<optics::Probe> = (surfaces.surfaces[0].points.iter())
-            .map(|f| optics::Probe {
+        let probes: Vec<optics::Probe> = (fields.iter())
+            .map(|&field_deg| optics::Probe {
                 system: &system,
                 pupil,
                 wavelength_nm: spec.wavelengths[0],
-                field_deg: f.field_deg,
+                field_deg,
             })
             .collect();
-        let weight = |h: f64| lens.share_at(h, power);
-        let region = optics::Region {
-            surface,
-            edges: &edges,
-            weight: &weight,
-        };
-        let area = optics::entrance_areas(&probes, &region, super::optics::run_grin())
-            .map_err(|e| blame(one.explain_worn(&e)))?;
-        areas.push(area);
-        traced.push((power, surfaces, blue, red));
+        for (k, &power) in powers.iter().enumerate() {
+            let weight = |h: f64| lens.share_at(h, carrier, power);
+            let region = optics::Region {
+                surface,
+                edges: &edges,
+                weight: &weight,
+            };
+            let area = optics::entrance_areas(&probes, &region, super::optics::run_grin())
+                .map_err(|e| blame(one.explain_worn(&e)))?;
+            for (total, a) in areas[k].iter_mut().zip(area) {
+                *total += a;
+            }
+        }
     }
     let shares = shares_from_areas(&areas).ok_or_else(|| OpticsKeyError {
         key: format!("{LENSES_KEY}[{i}]"),
@@ -94,7 +108,10 @@ pub(crate) fn trace_images(
 
 /// An image's failure as a problem with the lens item that gives its power, in one line.
 fn image_error(lens: &LensSpec, i: usize, power: f64, e: &OpticsKeyError) -> OpticsKeyError {
-    let mut problem = format!("gives an image that cannot be traced: {}", e.problem);
+    let mut problem = match e.problem.strip_prefix("form ") {
+        Some(rest) => format!("forms {rest}"),
+        None => format!("gives an image that cannot be traced: {}", e.problem),
+    };
     if problem.chars().count() > 200 {
         problem = problem.chars().take(199).collect::<String>() + "…";
     }
@@ -307,7 +324,11 @@ mod tests {
         one.lenses[0] = spec.lenses[0].with_power(power);
         let system: OpticalSystem = super::super::eyewear::worn(&one).unwrap();
         let pupil = one.pupil_stop(&system);
-        let tracer = Tracer::new(&system, spec.wavelengths[0], optics::GrinSettings::default());
+        let tracer = Tracer::new(
+            &system,
+            spec.wavelengths[0],
+            optics::GrinSettings::default(),
+        );
         let th = field_deg.to_radians();
         let d = Vec3::new(0.0, th.sin(), th.cos());
         let e2 = Vec3::new(0.0, th.cos(), -th.sin());
@@ -336,8 +357,12 @@ mod tests {
                 let u = (i as f64 + 0.5) * cell;
                 let v = centre - half + (j as f64 + 0.5) * cell;
                 if passes(u, v) {
-                    let h = tracer.trace_surfaces(ray(u, v), 1, None).unwrap().position.rho();
-                    area += spec.lenses[0].share_at(h, power) * cell * cell;
+                    let h = tracer
+                        .trace_surfaces(ray(u, v), 1, None)
+                        .unwrap()
+                        .position
+                        .rho();
+                    area += spec.lenses[0].share_at(h, power, power) * cell * cell;
                 }
             }
         }
@@ -390,11 +415,15 @@ mod tests {
                     c.images[k].surfaces.surfaces[w].points[0].z,
                     s.surfaces.surfaces[w].points[0].z,
                 );
-                assert!((a - b).abs() < 0.01, "image {k}, wavelength {w}: {a} against {b}");
+                assert!(
+                    (a - b).abs() < 0.01,
+                    "image {k}, wavelength {w}: {a} against {b}"
+                );
             }
         }
         // The two images' axial foci differ as the two powers do (about 0.68 mm for 2 D).
-        let dz = c.images[0].surfaces.surfaces[0].points[0].z - c.images[1].surfaces.surfaces[0].points[0].z;
+        let dz = c.images[0].surfaces.surfaces[0].points[0].z
+            - c.images[1].surfaces.surfaces[0].points[0].z;
         assert!((0.5..0.9).contains(&dz), "{dz}");
     }
 

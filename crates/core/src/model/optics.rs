@@ -903,6 +903,22 @@ impl PartialEq for ComputedOptics {
 }
 
 impl ComputedOptics {
+    /// The optics of the image that carries the most light on the axis (whose surfaces are
+    /// `blue`, `red` and `surfaces`): the spec itself, or with its multifocal lens at that
+    /// image's power everywhere (what the ray fans and paraxial figures of `eyeshell optics`
+    /// are traced through).
+    pub fn main_spec(&self) -> OpticsSpec {
+        let mut spec = self.spec.clone();
+        let main = self.images.iter().find(|im| im.blue == self.blue);
+        if let (Some(power), Some(i)) = (
+            main.and_then(|im| im.power),
+            (spec.lenses.iter()).position(|l| l.image_powers().len() > 1),
+        ) {
+            spec.lenses[i] = spec.lenses[i].with_power(power);
+        }
+        spec
+    }
+
     /// True when these are the surfaces of `spec` about `z_c`.
     pub fn is_for(&self, spec: &OpticsSpec, z_c: f64) -> bool {
         self.spec == *spec && self.z_c == z_c
