@@ -51,7 +51,10 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     let computed = spec
         .compute_eye_at(t, z_c)
         .map_err(|e| key_error(&scene, e))?;
-    let system = eyeshell::model::eyewear::worn_at(&spec, t).map_err(|e| key_error(&scene, e))?;
+    // The figures' rays go through the image the surfaces are (a multifocal lens at that
+    // image's power).
+    let system = eyeshell::model::eyewear::worn_at(&computed.main_spec(), t)
+        .map_err(|e| key_error(&scene, e))?;
     let paraxials: Vec<Paraxial> = spec
         .wavelengths
         .iter()
@@ -83,16 +86,22 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     };
     let write = |name: &str, bytes: &[u8]| dir.write_file(name, bytes).map_err(Error::from);
     let v = rundir::format_value;
-    let rows = computed.surfaces.surfaces.iter().flat_map(|s| {
-        s.points.iter().map(|p| {
-            [
-                v(p.wavelength_nm),
-                v(p.field_deg),
-                v(p.z),
-                v(p.r),
-                p.criterion.name().to_string(),
-                v(p.strehl),
-            ]
+    // One block of rows per image (one for a lens of one smooth profile), each focus with
+    // the share of the light its image carries at that field.
+    let rows = computed.images.iter().enumerate().flat_map(|(k, image)| {
+        image.surfaces.surfaces.iter().flat_map(move |s| {
+            s.points.iter().enumerate().map(move |(j, p)| {
+                [
+                    v(p.wavelength_nm),
+                    v(p.field_deg),
+                    v(p.z),
+                    v(p.r),
+                    p.criterion.name().to_string(),
+                    v(p.strehl),
+                    k.to_string(),
+                    v(image.share.traced(j)),
+                ]
+            })
         })
     });
     let table = rundir::table::csv_bytes(
@@ -103,6 +112,8 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
             "r",
             "criterion",
             "strehl",
+            "image",
+            "share",
         ],
         rows,
         rundir::table::QuoteStyle::Necessary,
@@ -229,7 +240,7 @@ fn optics_json(
     let par: Vec<_> = paraxials
         .iter()
         .map(|p| {
-            json!({
+            serde_json::json!({
                 "wavelength_nm": p.wavelength_nm,
                 "power_dioptres": p.power,
                 "back_focal_distance_mm": p.back_focal_distance,
@@ -249,7 +260,7 @@ fn optics_json(
                     "rms_residual_mm": f.rms_residual, "max_residual_mm": f.max_residual,
                 })
             });
-            json!({
+            serde_json::json!({
                 "wavelength_nm": s.wavelength_nm,
                 "fields": s.points.len(),
                 "axial_focus_mm": s.points.first().map(|p| p.z),
@@ -271,6 +282,7 @@ fn optics_json(
             "focus_difference_mm": b.focus - a.focus,
         },
         "surfaces": surfaces,
+        "images": images_json(c),
         "rays_traced": c.surfaces.rays_traced,
         "wall_seconds": wall_seconds,
     });
@@ -306,4 +318,23 @@ fn optics_json(
     let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
     text.push('\n');
     text
+}
+
+/// Each image's power (null for the one image of a lens of one smooth profile), its share of
+/// the light on the axis and its axial focus at each wavelength.
+fn images_json(c: &eyeshell::model::optics::ComputedOptics) -> serde_json::Value {
+    let images: Vec<_> = (c.images.iter().enumerate())
+        .map(|(k, image)| {
+            let foci: Vec<_> = (image.surfaces.surfaces.iter())
+                .map(|s| serde_json::json!({ "wavelength_nm": s.wavelength_nm, "axial_focus_mm": s.points.first().map(|p| p.z) }))
+                .collect();
+            serde_json::json!({
+                "image": k,
+                "power_dioptres": image.power,
+                "share_on_axis": image.share.traced(0),
+                "foci": foci,
+            })
+        })
+        .collect();
+    serde_json::json!(images)
 }

@@ -342,3 +342,137 @@ fn two_contact_lenses_are_refused_in_words() {
     );
     assert!(!dir.path().join("out").exists());
 }
+
+/// Bad lenslet and zone input, in `eyeshell optics`: one line of at most 300 characters
+/// naming the lens and its key, exit 2, nothing written.
+#[test]
+fn bad_multifocal_lenses_are_refused_in_one_short_line() {
+    let scene = "stimulus.source = \"optics\"\n[optics]\nmax_field = 20\n";
+    let lens = |zones: &str| format!("{scene}[[optics.lenses]]\nzones = [{zones}]\n");
+    let cases = [
+        (
+            "{ radius = 4.7, power = -2 }, { radius = 16.5, power = -2, lenslets = { power = 1.5, fill = 1.5 } }",
+            "optics.lenses[0].zones[1].lenslets.fill = 1.5 must lie in [0, 1]",
+        ),
+        (
+            "{ radius = 4.7, power = -2 }, { radius = 16.5, power = -2, lenslets = { power = 1.5, fill = -0.1 } }",
+            "optics.lenses[0].zones[1].lenslets.fill = -0.1 must lie in [0, 1]",
+        ),
+        // +90 D segments focus the light 11 mm behind the lens, in front of the eye.
+        (
+            "{ radius = 4.7, power = -2 }, { radius = 25, power = -2, lenslets = { power = 90, fill = 0.5 } }",
+            "optics.lenses[0].zones[1].lenslets.power = 90 forms no image in the atchison-2006 eye",
+        ),
+        // Overlapping (the second zone ends inside the first) and unordered zones.
+        (
+            "{ radius = 4.7, power = -2 }, { radius = 4.7, power = 0 }, { radius = 25, power = -2 }",
+            "optics.lenses[0].zones[1].radius = 4.7 must be larger than the previous zone's radius (4.7 mm)",
+        ),
+        (
+            "{ radius = 8, power = -2 }, { radius = 3, power = 0 }, { radius = 25, power = -2 }",
+            "optics.lenses[0].zones[1].radius = 3 must be larger than the previous zone's radius (8 mm)",
+        ),
+        (
+            "{ radius = 4.7, power = -2, lenslets = { power = 1.5 } }, { radius = 25, power = -2 }",
+            "optics.lenses[0].zones[0].lenslets.fill = (missing) must be given",
+        ),
+    ];
+    for (zones, needle) in cases {
+        let text = lens(zones);
+        fails("optics", &text, &[], needle, "scene.toml");
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("scene.toml"), &text).unwrap();
+        let run = eyeshell_in(dir.path(), &["optics", "scene.toml", "--out", "out"]);
+        assert!(run.stderr.chars().count() <= 300, "{}", run.stderr);
+    }
+}
+
+/// The foci (z, r) and shares of each image at 400 nm from `eyeshell optics`'s surfaces.csv:
+/// `[image][field]`.
+fn images_at_400(out: &std::path::Path) -> Vec<Vec<(f64, f64, f64)>> {
+    let (header, rows) = csv_cells(&out.join("surfaces.csv"));
+    assert_eq!(&header[6..], ["image", "share"]);
+    let mut images: Vec<Vec<(f64, f64, f64)>> = Vec::new();
+    for r in rows.iter().filter(|r| r[0] == "400.0") {
+        let k: usize = r[6].parse().unwrap();
+        if images.len() <= k {
+            images.push(Vec::new());
+        }
+        let n = |i: usize| r[i].parse::<f64>().unwrap();
+        images[k].push((n(2), n(3), n(7)));
+    }
+    images
+}
+
+/// The lenslet spectacle (scenes/eyewear/lenslets.toml) and a 20-ring design that steps back
+/// to the base power, out to 30 mm, each form two images, and no image's surface jumps from
+/// one field to the next by more than the naked eye's surface does plus the two powers' own
+/// foci's difference (the one-wavefront trace of such lenses spiked at a zone's edge, or
+/// found no chief ray). Inside the lenslet ring the segments carry exactly their fill.
+#[test]
+fn lenslet_and_ring_designs_form_two_smooth_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let rings: Vec<String> = (0..20)
+        .map(|k| {
+            let power = if k % 2 == 0 { -2.0 } else { 0.0 };
+            format!("{{ radius = {}, power = {power:?} }}", 1.5 * (k + 1) as f64)
+        })
+        .collect();
+    let ring_lens = format!(
+        "optics.lenses=[{{ kind = \"spectacle\", vertex = 12, zones = [{}] }}]",
+        rings.join(", ")
+    );
+    let none = dir.path().join("none");
+    ok(&[
+        "optics",
+        "scenes/eyewear/none.toml",
+        "--out",
+        s(&none),
+        "--quiet",
+    ]);
+    let naked = &images_at_400(&none)[0];
+    for (name, sets) in [
+        ("lenslets", vec![]),
+        ("rings", vec!["--set", ring_lens.as_str()]),
+    ] {
+        let out = dir.path().join(name);
+        let scene = if name == "lenslets" {
+            "scenes/eyewear/lenslets.toml"
+        } else {
+            "scenes/eyewear/single-vision.toml"
+        };
+        let mut args = vec!["optics", scene, "--out", s(&out), "--quiet"];
+        args.extend(sets);
+        ok(&args);
+        let images = images_at_400(&out);
+        assert_eq!(images.len(), 2, "{name}");
+        for j in 0..naked.len() {
+            let sum: f64 = images.iter().map(|im| im[j].2).sum();
+            assert!((sum - 1.0).abs() < 1e-12, "{name} at {j}°: {sum}");
+            if j > 0 {
+                let gap = (images[0][j].0 - images[1][j].0).abs();
+                let step = |p: &[(f64, f64, f64)]| (p[j].0 - p[j - 1].0).hypot(p[j].1 - p[j - 1].1);
+                for (k, im) in images.iter().enumerate() {
+                    assert!(
+                        step(im) <= step(naked) + gap,
+                        "{name}: image {k} jumps {} mm at {j}° (naked {}, gap {gap})",
+                        step(im),
+                        step(naked)
+                    );
+                }
+            }
+        }
+        if name == "lenslets" {
+            // On the axis the pencil is inside the 9.4 mm centre; from 25° it is inside the
+            // ring, where half the light goes through the segments.
+            assert_eq!(images[0][0].2, 1.0);
+            for j in 25..=40 {
+                assert!(
+                    (images[1][j].2 - 0.5).abs() < 1e-9,
+                    "{j}°: {}",
+                    images[1][j].2
+                );
+            }
+        }
+    }
+}

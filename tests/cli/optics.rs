@@ -60,10 +60,14 @@ fn optics_writes_surfaces_json_and_a_figure() {
             "z",
             "r",
             "criterion",
-            "strehl"
+            "strehl",
+            "image",
+            "share"
         ]
     );
     assert_eq!(rows.len(), 82);
+    // No lens: one image carrying all the light.
+    assert!(rows.iter().all(|r| r[6] == "0" && r[7] == "1.0"));
     assert!(rows.iter().all(|r| r[4] == "sagittal"));
     let num = |r: &Vec<String>, i: usize| r[i].parse::<f64>().unwrap();
     // On the axis at 400 nm, 1 mm pupil: 23.038 mm (docs/optics.md), 0.09 mm in front of

@@ -289,7 +289,7 @@ impl<'a> Beam<'a> {
         }
     }
 
-    fn at_stop(&self, u: f64, v: f64) -> Result<(f64, f64), OpticsError> {
+    pub(crate) fn at_stop(&self, u: f64, v: f64) -> Result<(f64, f64), OpticsError> {
         let r = self
             .tracer
             .trace_to_plane(self.ray(u, v), self.stop_z, STOP)

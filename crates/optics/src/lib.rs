@@ -10,6 +10,7 @@
 mod error;
 pub mod eyes;
 mod focus;
+mod images;
 pub mod lens;
 mod linalg;
 mod medium;
@@ -26,6 +27,7 @@ pub use focus::{
     best_focus, best_focus_with, coddington, ray_fan, rays_for, Criterion, Focus, FocusSettings,
     Probe, Pupil, MAX_FIELD_DEG, RAYS_TRIED,
 };
+pub use images::{entrance_area, entrance_areas, Region, SPOKES};
 pub use medium::{Dispersion, Grin, GrinDispersion, Medium, MediumKind};
 pub use paraxial::{paraxial, paraxial_grin_error, Paraxial};
 pub use shell::{FocusSurface, PolarFit, PolarSpline, SurfaceSettings, Surfaces};

@@ -38,6 +38,18 @@ pub struct LensSpec {
     /// mm from the corneal apex to the lens's back vertex (spectacles).
     pub vertex: f64,
     pub profile: ProfileSpec,
+    /// Lenslet rings: zones whose light goes partly through an add power.
+    pub lenslets: Vec<Lenslets>,
+}
+
+/// A ring of lenslets (docs/guide/eyewear.md, "Simultaneous images"): a share `fill` of the
+/// light crossing zone `zone` goes through segments of power `power` (D), the rest through
+/// the zone's own power.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lenslets {
+    pub zone: usize,
+    pub power: f64,
+    pub fill: f64,
 }
 
 /// A lens's power, as given.
@@ -78,6 +90,7 @@ fn profile_error(i: usize, e: ProfileError) -> OpticsKeyError {
 impl LensSpec {
     /// The optics crate's lens (lens `i` of the scene, for messages).
     pub fn lens(&self, i: usize) -> Result<Lens, OpticsKeyError> {
+        self.check_lenslets(i)?;
         let body = match &self.profile {
             ProfileSpec::Power(p) => {
                 LensBody::Thin(PowerProfile::uniform(*p).map_err(|e| profile_error(i, e))?)
@@ -119,6 +132,137 @@ impl LensSpec {
         Ok(Lens { mount, body })
     }
 
+    /// Each lenslet ring's fill in [0, 1], its power in range and its zone one of the lens's.
+    fn check_lenslets(&self, i: usize) -> Result<(), OpticsKeyError> {
+        let zones = match &self.profile {
+            ProfileSpec::Zones(z) => z.len(),
+            _ => 0,
+        };
+        for l in &self.lenslets {
+            let at = |name: &str| format!("{LENSES_KEY}[{i}].zones[{}].lenslets.{name}", l.zone);
+            if l.zone >= zones {
+                return Err(key_error(
+                    at("power"),
+                    number(l.power),
+                    "belongs to no zone of this lens",
+                ));
+            }
+            if !(0.0..=1.0).contains(&l.fill) {
+                return Err(key_error(
+                    at("fill"),
+                    number(l.fill),
+                    "must lie in [0, 1]: the share of the zone's light that goes through the lenslets",
+                ));
+            }
+            if !(l.power.is_finite() && l.power.abs() <= optics::lens::MAX_POWER_D) {
+                return Err(key_error(
+                    at("power"),
+                    number(l.power),
+                    format!("must lie in [-{0}, {0}] D", optics::lens::MAX_POWER_D),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The powers (D) of the images the lens forms, from its axis outwards: each zone's
+    /// power and each lenslet ring's, once each, those that carry light (a fill of 1 leaves
+    /// its zone's own power none). Empty for a lens of one smooth profile (one power, a
+    /// table, a real lens): it forms one image, traced as it is.
+    pub fn image_powers(&self) -> Vec<f64> {
+        let ProfileSpec::Zones(z) = &self.profile else {
+            return vec![];
+        };
+        let mut powers: Vec<f64> = Vec::new();
+        for (k, &(_, p)) in z.iter().enumerate() {
+            let l = self.lenslets.iter().find(|l| l.zone == k);
+            let fill = l.map_or(0.0, |l| l.fill);
+            for (q, carries) in [(p, fill < 1.0), (l.map_or(p, |l| l.power), fill > 0.0)] {
+                if carries && !powers.contains(&q) {
+                    powers.push(q);
+                }
+            }
+        }
+        powers
+    }
+
+    /// The share of the light crossing the lens at height `h` (mm from its axis) that goes
+    /// through `power`, of a zone whose own power is `carrier`: 0 outside such zones, else 1
+    /// or 0 in a plain zone, the fill (or its complement) in a lenslet ring. Beyond the lens's
+    /// edge, the last zone's. Lenslets (each centred on itself) add no prism on average, so
+    /// the light through them reaches the pupil as through their zone's own power.
+    pub fn share_at(&self, h: f64, carrier: f64, power: f64) -> f64 {
+        let ProfileSpec::Zones(z) = &self.profile else {
+            return 1.0;
+        };
+        let k = z.iter().position(|&(r, _)| h <= r).unwrap_or(z.len() - 1);
+        if z[k].1 != carrier {
+            return 0.0;
+        }
+        let l = self.lenslets.iter().find(|l| l.zone == k);
+        let fill = l.map_or(0.0, |l| l.fill);
+        let mut share = 0.0;
+        if carrier == power {
+            share += 1.0 - fill;
+        }
+        if l.is_some_and(|l| l.power == power) {
+            share += fill;
+        }
+        share
+    }
+
+    /// The zones' own powers (D), once each: what the light reaching the pupil is bent by.
+    pub fn carrier_powers(&self) -> Vec<f64> {
+        let mut powers: Vec<f64> = Vec::new();
+        if let ProfileSpec::Zones(z) = &self.profile {
+            for &(_, p) in z {
+                if !powers.contains(&p) {
+                    powers.push(p);
+                }
+            }
+        }
+        powers
+    }
+
+    /// The radii where the share of light changes (every zone's outer radius).
+    pub fn zone_edges(&self) -> Vec<f64> {
+        match &self.profile {
+            ProfileSpec::Zones(z) => z.iter().map(|&(r, _)| r).collect(),
+            _ => vec![],
+        }
+    }
+
+    /// The item of the lens (`zones[2].power`, `zones[1].lenslets.power`) that first gives
+    /// `power`.
+    pub fn power_item(&self, power: f64) -> String {
+        if let ProfileSpec::Zones(z) = &self.profile {
+            for (k, &(_, p)) in z.iter().enumerate() {
+                if p == power {
+                    return format!("zones[{k}].power");
+                }
+                if let Some(l) = self
+                    .lenslets
+                    .iter()
+                    .find(|l| l.zone == k && l.power == power)
+                {
+                    return format!("zones[{}].lenslets.power", l.zone);
+                }
+            }
+        }
+        "power".into()
+    }
+
+    /// The same lens (kind, vertex) of one power everywhere: what the light of one of its
+    /// images goes through.
+    pub fn with_power(&self, power: f64) -> LensSpec {
+        LensSpec {
+            kind: self.kind,
+            vertex: self.vertex,
+            profile: ProfileSpec::Power(power),
+            lenslets: vec![],
+        }
+    }
+
     /// The radii where the lens's zones begin after the first, with their items: the
     /// zones the pupil's rays may or may not cross (a table's points are one smooth profile,
     /// not zones).
@@ -149,6 +293,9 @@ impl LensSpec {
     pub fn describe(&self) -> String {
         let body = match &self.profile {
             ProfileSpec::Power(p) => format!("{} D", number(*p)),
+            ProfileSpec::Zones(z) if !self.lenslets.is_empty() => {
+                format!("{} zones, {} of lenslets", z.len(), self.lenslets.len())
+            }
             ProfileSpec::Zones(z) => format!("{} zones", z.len()),
             ProfileSpec::Table(t) => format!("a table of {} points", t.len()),
             ProfileSpec::Real { .. } => "a real lens".into(),
@@ -174,7 +321,25 @@ impl LensSpec {
         };
         match &self.profile {
             ProfileSpec::Power(p) => parts.push(format!("power = {}", f(*p))),
-            ProfileSpec::Zones(z) => parts.push(format!("zones = [{}]", rows(z))),
+            ProfileSpec::Zones(z) => {
+                let rows: Vec<String> = z
+                    .iter()
+                    .enumerate()
+                    .map(
+                        |(k, (r, p))| match self.lenslets.iter().find(|l| l.zone == k) {
+                            Some(l) => format!(
+                            "{{ radius = {}, power = {}, lenslets = {{ power = {}, fill = {} }} }}",
+                            f(*r),
+                            f(*p),
+                            f(l.power),
+                            f(l.fill)
+                        ),
+                            None => format!("{{ radius = {}, power = {} }}", f(*r), f(*p)),
+                        },
+                    )
+                    .collect();
+                parts.push(format!("zones = [{}]", rows.join(", ")))
+            }
             ProfileSpec::Table(t) => parts.push(format!("table = [{}]", rows(t))),
             ProfileSpec::Real {
                 front_radius,
@@ -256,6 +421,7 @@ pub fn lens_reach(spec: &OpticsSpec) -> Result<Vec<f64>, OpticsKeyError> {
     for l in &mut open.lenses {
         if matches!(l.profile, ProfileSpec::Zones(_) | ProfileSpec::Table(_)) {
             l.profile = ProfileSpec::Power(0.0);
+            l.lenslets.clear();
         }
     }
     let system = worn(&open)?;

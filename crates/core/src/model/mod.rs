@@ -9,6 +9,7 @@ mod default_tables;
 pub mod eye;
 pub mod eyewear;
 pub mod growth_law;
+pub mod images;
 pub mod optics;
 pub mod params;
 pub mod profiles;

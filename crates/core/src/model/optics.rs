@@ -13,6 +13,7 @@ use eyeshell_optics as optics;
 use eyeshell_optics::{Criterion, OpticalSystem, OpticsError, PolarSpline, Pupil, Surfaces};
 
 use super::eye::{self, SurfaceKeyError, SurfaceSpec};
+pub use super::images::{ComputedImage, ShareCurve};
 use crate::text::number;
 
 /// The names `stimulus.source` takes, in the order of [`Source`]'s variants.
@@ -53,7 +54,7 @@ pub const RAYS_TOLERANCE_MM: f64 = 1e-5;
 /// The gradient-index lens's integration in a run's traces: a local error of 1e-6 mm a step
 /// moves a best focus by at most about 1e-6 mm (docs/optics.md's convergence table: 1.0e-6 mm
 /// at 40°), a tenth of [`RAYS_TOLERANCE_MM`], in 40 % of the steps of the default 1e-8 mm.
-fn run_grin() -> optics::GrinSettings {
+pub(crate) fn run_grin() -> optics::GrinSettings {
     optics::GrinSettings {
         tolerance: 1e-6,
         ..Default::default()
@@ -431,35 +432,31 @@ impl OpticsSpec {
         self.check()?;
         let start = std::time::Instant::now();
         super::eyewear::check_coverage(self)?;
-        let mut first = self.compute_at(0.0, z_c)?;
+        let (mut surfaces, blue, red, images) = self.compute_at(0.0, z_c)?;
+        let mut timed = None;
         if times.len() > 1 {
-            let mut blue = vec![first.1.clone()];
-            let mut red = vec![first.2.clone()];
+            let mut blues = vec![blue.clone()];
+            let mut reds = vec![red.clone()];
             for &t in &times[1..] {
-                let (surfaces, b, r) = self.compute_at(t, z_c)?;
-                first.0.rays_traced += surfaces.rays_traced;
-                blue.push(b);
-                red.push(r);
+                let (more, b, r, _) = self.compute_at(t, z_c)?;
+                surfaces.rays_traced += more.rays_traced;
+                blues.push(b);
+                reds.push(r);
             }
-            let (surfaces, b, r) = first;
-            return Ok(ComputedOptics {
-                spec: self.clone(),
-                z_c,
-                blue: b,
-                red: r,
-                surfaces,
-                timed: Some(TimedSurfaces { times, blue, red }),
-                wall_seconds: start.elapsed().as_secs_f64(),
+            timed = Some(TimedSurfaces {
+                times,
+                blue: blues,
+                red: reds,
             });
         }
-        let (surfaces, blue, red) = first;
         Ok(ComputedOptics {
             spec: self.clone(),
             z_c,
             blue,
             red,
             surfaces,
-            timed: None,
+            images,
+            timed,
             wall_seconds: start.elapsed().as_secs_f64(),
         })
     }
@@ -470,13 +467,14 @@ impl OpticsSpec {
         self.check()?;
         let start = std::time::Instant::now();
         super::eyewear::check_coverage(self)?;
-        let (surfaces, blue, red) = self.compute_at(t, z_c)?;
+        let (surfaces, blue, red, images) = self.compute_at(t, z_c)?;
         Ok(ComputedOptics {
             spec: self.clone(),
             z_c,
             blue,
             red,
             surfaces,
+            images,
             timed: None,
             wall_seconds: start.elapsed().as_secs_f64(),
         })
@@ -553,8 +551,62 @@ impl OpticsSpec {
         optics::rays_for(&probes, self.criterion(), grin, RAYS_TOLERANCE_MM)
     }
 
-    /// The surfaces of the eye at growth time `t` and their blue and red splines about `z_c`.
-    fn compute_at(
+    /// The surfaces of the eye at growth time `t`, their blue and red splines about `z_c`
+    /// and its images: one for a lens of one smooth profile (the surfaces themselves), one
+    /// per power for a zoned or lenslet lens, whose blue and red are then the image that
+    /// carries the most light on the axis (docs/optics.md, "Simultaneous images").
+    fn compute_at(&self, t: f64, z_c: f64) -> Result<Traced, OpticsKeyError> {
+        if let Some((i, powers)) = self.multifocal()? {
+            return super::images::trace_images(self, t, z_c, i, &powers);
+        }
+        let (surfaces, blue, red) = self.compute_single(t, z_c)?;
+        let image = ComputedImage {
+            blue: blue.clone(),
+            red: red.clone(),
+            share: ShareCurve::constant(1.0),
+            power: None,
+            surfaces: surfaces.clone(),
+        };
+        Ok((surfaces, blue, red, vec![image]))
+    }
+
+    /// The lens that forms several images and their powers (`None` when every lens forms
+    /// one). One such lens at a time, and not with optics that change with age (their
+    /// blend is of one surface per wavelength).
+    fn multifocal(&self) -> Result<Option<(usize, Vec<f64>)>, OpticsKeyError> {
+        let several: Vec<(usize, Vec<f64>)> = (self.lenses.iter().enumerate())
+            .map(|(i, l)| (i, l.image_powers()))
+            .filter(|(_, p)| p.len() > 1)
+            .collect();
+        let Some((i, powers)) = several.first().cloned() else {
+            return Ok(None);
+        };
+        let key = format!("{}[{i}]", super::eyewear::LENSES_KEY);
+        let value = self.lenses[i].describe();
+        if let Some((j, _)) = several.get(1) {
+            return Err(OpticsKeyError {
+                key: format!("{}[{j}]", super::eyewear::LENSES_KEY),
+                value: self.lenses[*j].describe(),
+                problem: format!("forms several images, and so does {key}: one lens at a time may"),
+            });
+        }
+        if !self.times().is_empty() {
+            return Err(OpticsKeyError {
+                key,
+                value,
+                problem: format!(
+                    "forms {} images, but the eye changes with age (a surface table over t): \
+                     such optics are traced as one image; give the eye fixed numbers or the lens one power",
+                    powers.len()
+                ),
+            });
+        }
+        Ok(Some((i, powers)))
+    }
+
+    /// The surfaces of the eye at growth time `t` as one wavefront through each field's
+    /// pupil, and their blue and red splines about `z_c`.
+    pub(crate) fn compute_single(
         &self,
         t: f64,
         z_c: f64,
@@ -745,10 +797,19 @@ pub struct ComputedOptics {
     pub blue: PolarSpline,
     pub red: PolarSpline,
     pub surfaces: Surfaces,
+    /// The images on the retina (docs/optics.md, "Simultaneous images"): one for no lens or
+    /// a lens of one smooth profile (then its splines are `blue` and `red`), else one per
+    /// power of the lens, in the lens's order from its axis outwards; their shares sum to 1
+    /// at every φ. `blue`, `red` and `surfaces` are the image that carries the most light on
+    /// the axis.
+    pub images: Vec<ComputedImage>,
     /// With tables over time: the splines at every traced time, blended between them.
     pub timed: Option<TimedSurfaces>,
     pub wall_seconds: f64,
 }
+
+/// An eye's traced surfaces, their blue and red splines and its images.
+pub(crate) type Traced = (Surfaces, PolarSpline, PolarSpline, Vec<ComputedImage>);
 
 /// `x` to 6 significant digits, shortest form: a growth time in a message.
 fn significant(x: f64) -> String {
@@ -842,6 +903,22 @@ impl PartialEq for ComputedOptics {
 }
 
 impl ComputedOptics {
+    /// The optics of the image that carries the most light on the axis (whose surfaces are
+    /// `blue`, `red` and `surfaces`): the spec itself, or with its multifocal lens at that
+    /// image's power everywhere (what the ray fans and paraxial figures of `eyeshell optics`
+    /// are traced through).
+    pub fn main_spec(&self) -> OpticsSpec {
+        let mut spec = self.spec.clone();
+        let main = self.images.iter().find(|im| im.blue == self.blue);
+        if let (Some(power), Some(i)) = (
+            main.and_then(|im| im.power),
+            (spec.lenses.iter()).position(|l| l.image_powers().len() > 1),
+        ) {
+            spec.lenses[i] = spec.lenses[i].with_power(power);
+        }
+        spec
+    }
+
     /// True when these are the surfaces of `spec` about `z_c`.
     pub fn is_for(&self, spec: &OpticsSpec, z_c: f64) -> bool {
         self.spec == *spec && self.z_c == z_c

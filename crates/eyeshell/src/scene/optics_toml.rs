@@ -9,7 +9,9 @@ use eyeshell_optics::refraction::VERTEX_MM;
 use crate::model::eye::{
     surface_key, EyeValue, MediumSpec, SurfaceKeyError, SurfaceSpec, SURFACE_KEYS,
 };
-use crate::model::eyewear::{LensSpec, ProfileSpec, KINDS, LENSES_KEY, MAX_LENSES, MAX_POINTS};
+use crate::model::eyewear::{
+    LensSpec, Lenslets, ProfileSpec, KINDS, LENSES_KEY, MAX_LENSES, MAX_POINTS,
+};
 use crate::model::optics::OpticsKeyError;
 use crate::text::number;
 
@@ -248,6 +250,63 @@ pub fn parse_lenses(value: &toml::Value) -> Result<Vec<LensSpec>, OpticsKeyError
         .collect()
 }
 
+/// The lenslet rings of a lens's zones (`zones[k].lenslets = { power, fill }`), and the
+/// lens's table without them (so that each zone row is its radius and power again).
+fn lenslet_rings(
+    i: usize,
+    t: &toml::Table,
+) -> Result<(toml::Table, Vec<Lenslets>), OpticsKeyError> {
+    let mut t = t.clone();
+    let mut rings = Vec::new();
+    let Some(toml::Value::Array(rows)) = t.get_mut("zones") else {
+        return Ok((t, rings));
+    };
+    for (k, row) in rows.iter_mut().enumerate() {
+        let toml::Value::Table(r) = row else { continue };
+        let Some(v) = r.remove("lenslets") else {
+            continue;
+        };
+        let at = |name: &str| format!("{LENSES_KEY}[{i}].zones[{k}].lenslets{name}");
+        let toml::Value::Table(l) = &v else {
+            return Err(key_error(
+                at(""),
+                super::describe(&v),
+                "must be a table { power = …, fill = … }",
+            ));
+        };
+        if let Some(extra) = l
+            .keys()
+            .find(|x| x.as_str() != "power" && x.as_str() != "fill")
+        {
+            return Err(key_error(
+                at(&format!(".{extra}")),
+                "(given)".into(),
+                "is not one of power, fill",
+            ));
+        }
+        let get = |name: &str| match l.get(name) {
+            None => Err(key_error(
+                at(&format!(".{name}")),
+                "(missing)".into(),
+                "must be given",
+            )),
+            Some(v) => lens_float(v).filter(|x| x.is_finite()).ok_or_else(|| {
+                key_error(
+                    at(&format!(".{name}")),
+                    super::describe(v),
+                    "must be a finite number",
+                )
+            }),
+        };
+        rings.push(Lenslets {
+            zone: k,
+            power: get("power")?,
+            fill: get("fill")?,
+        });
+    }
+    Ok((t, rings))
+}
+
 /// A lens's table of (`a`, `b`) rows under `name` (its zones or its power table): 1 to
 /// [`MAX_POINTS`] tables of two finite numbers; None when the lens does not give it.
 fn lens_pairs(
@@ -427,6 +486,7 @@ fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> 
         None => VERTEX_MM,
     };
     let power = number_at("power")?;
+    let (t, lenslets) = &lenslet_rings(i, t)?;
     let zones = lens_pairs(i, t, "zones", "radius", "power")?;
     let table = lens_pairs(i, t, "table", "radius", "power")?;
     let real = ["front_radius", "back_radius", "thickness", "index"]
@@ -459,6 +519,7 @@ fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> 
         kind,
         vertex,
         profile,
+        lenslets: lenslets.clone(),
     };
     spec.lens(i)?;
     Ok(spec)
