@@ -20,7 +20,7 @@ use crate::bvp::BvpError;
 use crate::deadline::OutOfTime;
 use crate::model::growth_law;
 use crate::model::params::Params;
-use crate::model::rule::{Drive, Seen, Vergence};
+use crate::model::rule::Vergence;
 use crate::model::stimulus::{self, EyeMeasure, Focal};
 use eyeshell_optics::PolarSpline;
 use eyeshell_sundials::{CallbackError, Context, LinearSolver, Matrix, NVector, SundialsError};
@@ -350,20 +350,24 @@ impl GrowthSystem {
         // The retina (inner face), what it sees, and the rule's drive there.
         let viewer = self.viewer();
         let t = self.t;
-        let seen: Vec<Seen> = (0..n_pts)
+        let places: Vec<(f64, (f64, f64))> = (0..n_pts)
             .map(|k| {
                 let (r, th, z, a) = local[k];
                 let rho = p[NP * k];
                 let h = pts.zeta(k, p) / (a * r / rho);
-                let retina = stimulus::retina(z, r, h, th);
-                viewer.see(pts.sigma_ref[k], t, retina, false)
+                (pts.sigma_ref[k], stimulus::retina(z, r, h, th))
             })
             .collect();
-        let mut drives = vec![Drive::default(); n_pts];
-        self.growth
-            .stimulus
-            .rule()
-            .drive(&seen, false, &mut drives)
+        let (mut seen, mut drives) = (Vec::new(), Vec::new());
+        viewer
+            .drives(
+                self.growth.stimulus.rule().as_ref(),
+                places.into_iter(),
+                t,
+                false,
+                &mut seen,
+                &mut drives,
+            )
             .map_err(RhsError::Rule)?;
         let mut stim: Vec<PointStimulus> = seen
             .iter()
@@ -610,13 +614,9 @@ impl GrowthSystem {
         let rule = stimulus.rule();
         if stimulus.region == crate::model::rule::Region::Integrated {
             let nodes = &self.elastic.discretisation().mesh.nodes;
-            let seen: Vec<Seen> = retina
-                .iter()
-                .zip(nodes)
-                .map(|(&p, &sigma)| viewer.see(sigma, self.t, p, false))
-                .collect();
-            let mut drives = vec![Drive::default(); seen.len()];
-            rule.drive(&seen, false, &mut drives)?;
+            let (mut seen, mut drives) = (Vec::new(), Vec::new());
+            let places = retina.iter().zip(nodes).map(|(&p, &sigma)| (sigma, p));
+            viewer.drives(rule.as_ref(), places, self.t, false, &mut seen, &mut drives)?;
             let points: Vec<super::integral::RetinaPoint> = seen
                 .iter()
                 .zip(&drives)
@@ -633,9 +633,9 @@ impl GrowthSystem {
             row.defocus_d = seen[0].defocus;
             return Ok(row);
         }
-        let seen = [viewer.see(0.0, self.t, retina[0], false)];
-        let mut drive = [Drive::default()];
-        rule.drive(&seen, false, &mut drive)?;
+        let (mut seen, mut drive) = (Vec::new(), Vec::new());
+        let pole = std::iter::once((0.0, retina[0]));
+        viewer.drives(rule.as_ref(), pole, self.t, false, &mut seen, &mut drive)?;
         (row.drive, row.defocus_d) = (drive[0].value, seen[0].defocus);
         Ok(row)
     }
@@ -690,6 +690,20 @@ impl GrowthSystem {
             red: focal(&self.growth, &self.now, false),
             vergence: self.vergence.as_ref(),
             reads: self.growth.stimulus.rule().reads(),
+            images: self.images(),
+        }
+    }
+
+    /// The lens's simultaneous images the rule reads: none unless the lens forms several
+    /// and the rule reads every image.
+    fn images(&self) -> &[crate::model::optics::ComputedImage] {
+        match (&self.growth.source, &self.growth.computed) {
+            (crate::model::optics::Source::Optics, Some(c))
+                if c.images.len() > 1 && self.growth.stimulus.rule().reads_every_image() =>
+            {
+                &c.images
+            }
+            _ => &[],
         }
     }
 

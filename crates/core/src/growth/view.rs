@@ -3,7 +3,8 @@
 //! dioptres, each with its gradient in the retina's (z, r). The one place the integrators
 //! turn a retina into a rule's [`Seen`]; a scene pays only for what its rule reads.
 
-use crate::model::rule::{Reads, Seen, Vergence};
+use crate::model::optics::ComputedImage;
+use crate::model::rule::{Drive, GrowthRule, Reads, RuleError, Seen, Vergence};
 use crate::model::stimulus::Focal;
 
 /// The surfaces and the dioptre conversion a growth run's rule reads.
@@ -13,9 +14,80 @@ pub struct Viewer<'a> {
     pub red: Focal<'a>,
     pub vergence: Option<&'a Vergence>,
     pub reads: Reads,
+    /// A lens's simultaneous images (docs/optics.md, "Simultaneous images"), when it forms
+    /// more than one: each point's drive is then the light-weighted mean of the drives of
+    /// its view through each image. Empty for one image (`blue` and `red` are it).
+    pub images: &'a [ComputedImage],
 }
 
 impl Viewer<'_> {
+    /// The view of every retina point (`points`: Σ and (z, r)) at time `t` and the rule's
+    /// drive there (with `gradients`, each view's gradients and the drive's partials, which
+    /// [`Drive::gradient`] turns into the drive's gradient in (z, r)).
+    ///
+    /// With several images the drive is Σ_i s_i(φ) drive_i, s_i the image's share of the
+    /// light at the point's polar angle φ and drive_i the rule at the view through image i;
+    /// the view returned is the brightest image's on the axis (`blue`), and the drive's
+    /// gradient is carried whole in its `d_z`, `d_r` (the other partials zero).
+    ///
+    /// # Errors
+    /// [`RuleError`] when a rule from outside eyeshell fails.
+    pub fn drives(
+        &self,
+        rule: &dyn GrowthRule,
+        points: impl ExactSizeIterator<Item = (f64, (f64, f64))> + Clone,
+        t: f64,
+        gradients: bool,
+        seen: &mut Vec<Seen>,
+        drives: &mut Vec<Drive>,
+    ) -> Result<(), RuleError> {
+        let n = points.len();
+        seen.clear();
+        seen.extend(
+            points
+                .clone()
+                .map(|(sigma, p)| self.see(sigma, t, p, gradients)),
+        );
+        drives.clear();
+        drives.resize(n, Drive::default());
+        if self.images.len() < 2 {
+            return rule.drive(seen, gradients, drives);
+        }
+        // Every (point, image) view in one call: image i's views at [i n, (i + 1) n).
+        let mut all = Vec::with_capacity(n * self.images.len());
+        for im in self.images {
+            let through = Viewer {
+                blue: Focal::Computed(&im.blue),
+                red: Focal::Computed(&im.red),
+                images: &[],
+                ..*self
+            };
+            all.extend(
+                points
+                    .clone()
+                    .map(|(sigma, p)| through.see(sigma, t, p, gradients)),
+            );
+        }
+        let mut each = vec![Drive::default(); all.len()];
+        rule.drive(&all, gradients, &mut each)?;
+        for (k, out) in drives.iter_mut().enumerate() {
+            let phi = seen[k].angle;
+            let mut d = Drive::default();
+            for (i, im) in self.images.iter().enumerate() {
+                let (v, e) = (&all[i * n + k], &each[i * n + k]);
+                let (share, slope) = im.share.share_and_slope(phi);
+                d.value += share * e.value;
+                if gradients {
+                    let g = e.gradient(v);
+                    d.d_z += share * g[0] + e.value * slope * v.angle_grad[0];
+                    d.d_r += share * g[1] + e.value * slope * v.angle_grad[1];
+                }
+            }
+            *out = d;
+        }
+        Ok(())
+    }
+
     /// The view from the retina point (z, r) of material point Σ = `sigma` at time `t`;
     /// with `gradients`, each quantity's gradient in (z, r) too.
     pub fn see(&self, sigma: f64, t: f64, (z, r): (f64, f64), gradients: bool) -> Seen {
@@ -82,6 +154,7 @@ mod tests {
                 red: true,
                 defocus: true,
             },
+            images: &[],
         };
         for p in [(22.8, 0.4), (19.0, 8.5), (12.0, 11.2)] {
             let s = viewer.see(1.0, 0.0, p, true);

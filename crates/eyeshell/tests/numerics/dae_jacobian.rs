@@ -213,3 +213,39 @@ fn newton_matrix_matches_differences_for_every_rule() {
         }
     }
 }
+
+/// Through a dual-focus contact lens the defocus rule reads both images, each with its
+/// share of the light: the Newton matrix carries the shares' slopes in φ too.
+#[test]
+fn newton_matrix_matches_differences_through_two_images() {
+    use eyeshell::model::eyewear::{LensSpec, ProfileSpec};
+    use eyeshell::model::optics::{OpticsSpec, Source};
+    let mut g = GrowthParams {
+        source: Source::Optics,
+        optics: OpticsSpec {
+            focus: 2,
+            max_field: 20.0,
+            lenses: vec![LensSpec {
+                kind: 1,
+                vertex: 0.0,
+                profile: ProfileSpec::Zones(vec![(1.0, -2.0), (1.6, 0.0), (2.3, -2.0), (7.0, 0.0)]),
+                lenslets: vec![],
+            }],
+            ..OpticsSpec::default()
+        },
+        ..GrowthParams::default()
+    };
+    g.stimulus.set_keys(|k| {
+        k.rule = 1;
+        k.baseline = 0.1;
+        k.myopic_gain = 0.6;
+    });
+    let g = g.resolved().unwrap().into_owned();
+    let images = &g.computed.as_ref().unwrap().images;
+    assert_eq!(images.len(), 2);
+    let s = SolverSettings {
+        nodes: 21,
+        ..SolverSettings::default()
+    };
+    check(Params::default(), s, g.clone(), 70);
+}

@@ -320,6 +320,8 @@ struct PointScratch {
     rd: Vec<RateDeriv>,
     /// What each point sees, the rule's drive there, and ∂(z_ret, r_ret)/∂(local state).
     seen: Vec<crate::model::rule::Seen>,
+    /// Each point's Σ and retina (z, r).
+    places: Vec<(f64, (f64, f64))>,
     drives: Vec<crate::model::rule::Drive>,
     retina_d: Vec<[[f64; 6]; 2]>,
 }

@@ -187,7 +187,7 @@ impl CoupledDae {
         let d_unknown = y[self.d()];
         s.rates.clear();
         s.rd.clear();
-        s.seen.clear();
+        s.places.clear();
         s.retina_d.clear();
         for (k, l) in s.local.iter().enumerate() {
             let (rho, gam) = (y[NP * k], y[NP * k + 1]);
@@ -195,8 +195,7 @@ impl CoupledDae {
             let ht = zeta * rho / (l.alpha_s * l.r);
             let (sn, cs) = (l.sin_theta, l.cos_theta);
             let (zr, rr) = (l.z - 0.5 * ht * cs, l.r - 0.5 * ht * sn);
-            s.seen
-                .push(viewer.see(pts.sigma_ref[k], t, (zr, rr), deriv));
+            s.places.push((pts.sigma_ref[k], (zr, rr)));
             if deriv {
                 // h_t = ζ ρ / (α_s r), ζ = ζ(ρ, γ_s): ∂h_t/∂(r, θ, z, α_s, ρ, γ_s).
                 let [z_rho, z_gam] = zeta_partials(law, rho, zeta, gam);
@@ -217,11 +216,15 @@ impl CoupledDae {
                 s.retina_d.push([dz_ret, dr_ret]);
             }
         }
-        s.drives.clear();
-        s.drives
-            .resize(s.seen.len(), crate::model::rule::Drive::default());
-        viewer_rule(&self.sys)
-            .drive(&s.seen, deriv, &mut s.drives)
+        viewer
+            .drives(
+                viewer_rule(&self.sys),
+                s.places.iter().copied(),
+                t,
+                deriv,
+                &mut s.seen,
+                &mut s.drives,
+            )
             .map_err(RhsError::Rule)?;
         for (k, (seen, drive)) in s.seen.iter().zip(&s.drives).enumerate() {
             s.rates.push(PointRates {

@@ -21,6 +21,11 @@ impl GrowthRule for BlueSurface {
         Reads::default()
     }
 
+    /// The paper's surface is one image's: through a lens of several, the brightest.
+    fn reads_every_image(&self) -> bool {
+        false
+    }
+
     fn drive(&self, seen: &[Seen], _partials: bool, out: &mut [Drive]) -> Result<(), RuleError> {
         for (o, s) in out.iter_mut().zip(seen) {
             *o = Drive {

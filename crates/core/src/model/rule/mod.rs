@@ -125,6 +125,13 @@ pub trait GrowthRule: Send + Sync + fmt::Debug {
     /// [`RuleError`] when a rule from outside eyeshell fails; the built-in rules never do.
     fn drive(&self, seen: &[Seen], partials: bool, out: &mut [Drive]) -> Result<(), RuleError>;
 
+    /// Whether, through a lens that forms several images at once, the rule reads every
+    /// image, each with its share of the light (its drive the light-weighted mean), or only
+    /// the image that carries the most light on the axis.
+    fn reads_every_image(&self) -> bool {
+        true
+    }
+
     /// Its parameters, (name, value), as its key table names them after `stimulus.`:
     /// summaries and equality read them.
     fn parameters(&self) -> Vec<(&'static str, f64)> {
