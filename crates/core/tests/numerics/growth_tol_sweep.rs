@@ -10,9 +10,9 @@
 //! asserted below tol/10.
 
 use crate::common::{grow, pushed};
-use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::growth::*;
-use eyeshell::model::params::Params;
+use eyeshell_core::bvp::settings::SolverSettings;
+use eyeshell_core::growth::*;
+use eyeshell_core::model::params::Params;
 
 /// Keeps the (axial length, equatorial radius) of every snapshot.
 #[derive(Default)]
