@@ -1,6 +1,6 @@
 //! `solver.tol` in a growth run over the parameter space (docs/MODEL.md §5, "Growth to a
 //! tolerance"): the paper's const scene with E_b, D and C pushed to the ends of the ranges
-//! the elastic sweep covers (tests/numerics/adapt.rs), one key at a time. In every case the
+//! the elastic sweep covers (crates/core/tests/numerics/adapt.rs), one key at a time. In every case the
 //! delivered axial length and equatorial radius lie within tol of an independent reference
 //! at every output time, and the estimate's ratio to that true error is printed.
 //!
@@ -10,9 +10,9 @@
 //! asserted below tol/10.
 
 use crate::common::{grow, pushed};
-use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::growth::*;
-use eyeshell::model::params::Params;
+use eyeshell_core::bvp::settings::SolverSettings;
+use eyeshell_core::growth::*;
+use eyeshell_core::model::params::Params;
 
 /// Keeps the (axial length, equatorial radius) of every snapshot.
 #[derive(Default)]

@@ -1,24 +1,16 @@
-//! The numerics: exact solutions, observed orders, analytic against finite-difference Jacobians, the first integral, growth by every integrator.
+//! The numerics that need the files crate: scenes read from their files or text, the facade
+//! (`Scene`, `Solution`, `fit`) never panicking, and the optics of the shipped scenes. The
+//! numerics that need none of it are eyeshell-core's (crates/core/tests/numerics), but for
+//! the growth solver.tol sweep (`growth_tol_sweep`, about 280 s of CPU), kept here so that
+//! `cargo test -p eyeshell-core` stays quick; it shares core's helpers (common.rs).
 //!
 //! One test binary for the group: one link instead of one per module.
 
+#[path = "../../../core/tests/numerics/common.rs"]
 mod common;
 
-mod adapt;
 mod api_never_panics;
-mod block_solver;
-mod convergence;
 mod custom_eye;
-mod dae_jacobian;
-mod default_tables;
-mod exact_solution;
-mod growth;
-mod growth_ida;
 mod growth_tol_sweep;
-mod jacobian;
-mod max_seconds;
-mod property_jacobian;
-mod property_residual;
 mod run_rays;
-mod sensitivities;
-mod solve_features;
+mod shipped_scenes;

@@ -2,11 +2,11 @@
 //! differences of its residual, at grown, off-equilibrium states: both schemes,
 //! with and without fibres, both thickness laws.
 
-use eyeshell::bvp::settings::{Scheme, SolverSettings};
-use eyeshell::growth::dae::CoupledDae;
-use eyeshell::growth::system::GrowthSystem;
-use eyeshell::growth::{GrowthParams, ThicknessLaw};
-use eyeshell::model::params::{Params, Thickness};
+use eyeshell_core::bvp::settings::{Scheme, SolverSettings};
+use eyeshell_core::growth::dae::CoupledDae;
+use eyeshell_core::growth::system::GrowthSystem;
+use eyeshell_core::growth::{GrowthParams, ThicknessLaw};
+use eyeshell_core::model::params::{Params, Thickness};
 
 /// A state of the coupled system away from equilibrium and from the kinks: the consistent
 /// start, grown a little (ρ, γ_s up by a smooth profile) and its elastic unknowns shifted.
@@ -144,7 +144,7 @@ fn newton_matrix_matches_differences() {
 /// both sides of the computed surface's φ_max (the crossing rule beyond it).
 #[test]
 fn newton_matrix_matches_differences_with_computed_surfaces() {
-    use eyeshell::model::optics::{OpticsSpec, Source};
+    use eyeshell_core::model::optics::{OpticsSpec, Source};
     let g = GrowthParams {
         source: Source::Optics,
         optics: OpticsSpec {

@@ -26,10 +26,10 @@
 //! difference of two near-unit moves: 7e-5 absolute, as in the other columns).
 
 use crate::common::grow;
-use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::growth::dae::SensParam;
-use eyeshell::growth::*;
-use eyeshell::model::params::{Params, Thickness};
+use eyeshell_core::bvp::settings::SolverSettings;
+use eyeshell_core::growth::dae::SensParam;
+use eyeshell_core::growth::*;
+use eyeshell_core::model::params::{Params, Thickness};
 
 /// Keeps the snapshots' series rows and the sensitivity rows.
 #[derive(Default)]
@@ -432,7 +432,7 @@ fn solver_tol_bounds_the_sensitivities() {
         &mut Keep::default(),
     )
     .unwrap();
-    let nodes = |s: &eyeshell::growth::GrowthStats| s.accuracy.as_ref().map(|a| a.nodes);
+    let nodes = |s: &eyeshell_core::growth::GrowthStats| s.accuracy.as_ref().map(|a| a.nodes);
     assert!(
         nodes(&stats) > nodes(&lengths_only),
         "{:?} nodes for the sensitivities, {:?} for the lengths",

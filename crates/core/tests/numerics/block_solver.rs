@@ -7,11 +7,11 @@
 //! `EYESHELL_TEST_LINEAR=block`, see common.rs.)
 
 use crate::common::*;
-use eyeshell::bvp;
-use eyeshell::bvp::discretisation::{DenseSink, NY, POLE_ROWS};
-use eyeshell::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
-use eyeshell::bvp::solve::{discretise, sphere_guess};
-use eyeshell::model::params::{Params, Thickness};
+use eyeshell_core::bvp;
+use eyeshell_core::bvp::discretisation::{DenseSink, NY, POLE_ROWS};
+use eyeshell_core::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
+use eyeshell_core::bvp::solve::{discretise, sphere_guess};
+use eyeshell_core::model::params::{Params, Thickness};
 use eyeshell_linalg::AbdLu;
 use nalgebra::{DMatrix, DVector};
 

@@ -3,8 +3,8 @@
 //! and 4 (Hermite–Simpson), including the nodes next to the pole (docs/MODEL.md §3, trap).
 
 use crate::common::*;
-use eyeshell::bvp::settings::Scheme;
-use eyeshell::bvp::Solution;
+use eyeshell_core::bvp::settings::Scheme;
+use eyeshell_core::bvp::Solution;
 
 const LADDER: [usize; 6] = [101, 201, 401, 801, 1601, 3201];
 

@@ -4,11 +4,11 @@
 //! states at the default parameters; the comparison (steps and the round-off-aware
 //! tolerance) is the same.
 
-use eyeshell::bvp::discretisation::DenseSink;
-use eyeshell::bvp::settings::{Scheme, SolverSettings};
-use eyeshell::bvp::solve::{discretise, sphere_guess};
-use eyeshell::model::cornea;
-use eyeshell::model::params::{CorneaParams, Params, Thickness};
+use eyeshell_core::bvp::discretisation::DenseSink;
+use eyeshell_core::bvp::settings::{Scheme, SolverSettings};
+use eyeshell_core::bvp::solve::{discretise, sphere_guess};
+use eyeshell_core::model::cornea;
+use eyeshell_core::model::params::{CorneaParams, Params, Thickness};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 

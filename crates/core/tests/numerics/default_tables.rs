@@ -2,13 +2,12 @@
 //! instead of being traced by every run (docs/MODEL.md §10, "Refraction"): this checks them
 //! against a fresh trace, and `EYESHELL_BLESS=1` rewrites them from one.
 
-use eyeshell::model::eyewear::{default_tables, trace_peripheral_table, trace_refraction_table};
-use eyeshell::model::optics::OpticsSpec;
+use eyeshell_core::model::eyewear::{
+    default_tables, trace_peripheral_table, trace_refraction_table,
+};
+use eyeshell_core::model::optics::OpticsSpec;
 
-const FILE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../core/src/model/default_tables.rs"
-);
+const FILE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/src/model/default_tables.rs");
 
 /// A Rust literal that reads back as `x` exactly (Debug is the shortest round trip).
 fn literal(x: f64) -> String {
@@ -33,8 +32,8 @@ fn default_refraction_tables_are_a_fresh_trace() {
         let mut out = String::from(
             "//! The refraction tables of the default optics (the Atchison 2006 eye, a 3 mm pupil, the\n\
              //! mean sphere, 555 nm; fields every 5° to 40°), as traced by\n\
-             //! `eyeshell::model::eyewear::trace_refraction_table` and `trace_peripheral_table`.\n\
-             //! Generated: `EYESHELL_BLESS=1 cargo test --release -p eyeshell --test numerics\n\
+             //! `eyeshell_core::model::eyewear::trace_refraction_table` and `trace_peripheral_table`.\n\
+             //! Generated: `EYESHELL_BLESS=1 cargo test --release -p eyeshell-core --test numerics\n\
              //! default_tables`, which without EYESHELL_BLESS checks them against a fresh trace.\n\n",
         );
         out += &format!(
@@ -68,7 +67,7 @@ fn default_refraction_tables_are_a_fresh_trace() {
         return;
     }
     let (kept_pole, kept_peripheral) = default_tables();
-    let hint = "rewrite them with EYESHELL_BLESS=1 cargo test --release -p eyeshell --test numerics default_tables";
+    let hint = "rewrite them with EYESHELL_BLESS=1 cargo test --release -p eyeshell-core --test numerics default_tables";
     assert_eq!(kept_pole.powers, pole.powers);
     assert_eq!(kept_pole.wavelength_nm, pole.wavelength_nm);
     assert_eq!(kept_pole.vertex, pole.vertex);
@@ -104,8 +103,8 @@ fn default_refraction_tables_are_a_fresh_trace() {
 #[test]
 fn the_default_optics_read_the_kept_tables() {
     let spec = OpticsSpec::default();
-    let kept = eyeshell::model::eyewear::refraction_table(&spec).unwrap();
-    let kept_peripheral = eyeshell::model::eyewear::peripheral_table_at(&spec, 0.0).unwrap();
+    let kept = eyeshell_core::model::eyewear::refraction_table(&spec).unwrap();
+    let kept_peripheral = eyeshell_core::model::eyewear::peripheral_table_at(&spec, 0.0).unwrap();
     assert!(std::sync::Arc::ptr_eq(&kept, &default_tables().0));
     assert!(std::sync::Arc::ptr_eq(
         &kept_peripheral,
@@ -116,7 +115,7 @@ fn the_default_optics_read_the_kept_tables() {
         pupil: 4.0,
         ..OpticsSpec::default()
     };
-    let traced_other = eyeshell::model::eyewear::refraction_table(&other).unwrap();
+    let traced_other = eyeshell_core::model::eyewear::refraction_table(&other).unwrap();
     assert!(!std::sync::Arc::ptr_eq(&traced_other, &default_tables().0));
     assert_ne!(traced_other.foci, kept.foci);
     let traced = trace_refraction_table(&spec, 0.0).unwrap();

@@ -2,17 +2,17 @@
 //! survives the growth extremes of TESTING.md, and every linear solver gives the same run.
 
 use crate::common::grow;
-use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::growth::DaeLinear;
-use eyeshell::growth::*;
-use eyeshell::model::params::{Params, Thickness};
+use eyeshell_core::bvp::settings::SolverSettings;
+use eyeshell_core::growth::DaeLinear;
+use eyeshell_core::growth::*;
+use eyeshell_core::model::params::{Params, Thickness};
 
 /// Keeps every snapshot's series row.
 #[derive(Default)]
 struct Keep(Vec<SeriesRow>);
 
 impl Observer for Keep {
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::growth::ObserverError> {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell_core::growth::ObserverError> {
         self.0.push(s.series);
         Ok(())
     }
@@ -326,13 +326,12 @@ struct FailAt {
 }
 
 impl Observer for FailAt {
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::growth::ObserverError> {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell_core::growth::ObserverError> {
         if self.kept.len() == self.fail_at {
-            let full = std::io::Error::other("the disk is full");
-            return Err(Box::new(eyeshell::Error::Io {
-                path: "snapshots".into(),
-                source: full,
-            }));
+            // An output's error as the files crate words one (its path, then the cause).
+            return Err(Box::new(std::io::Error::other(
+                "snapshots: the disk is full",
+            )));
         }
         self.kept.push(s.t);
         Ok(())
@@ -408,7 +407,7 @@ fn overflowing_rates_fail_cleanly() {
 /// Euler: IDA and CVODE agree, and the surfaces are the computed ones, not the polynomial.
 #[test]
 fn the_optics_source_grows_with_every_integrator() {
-    use eyeshell::model::optics::{OpticsSpec, Source};
+    use eyeshell_core::model::optics::{OpticsSpec, Source};
     let p = Params::default();
     let optics = GrowthParams {
         source: Source::Optics,

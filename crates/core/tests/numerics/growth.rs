@@ -2,17 +2,17 @@
 //! the published explicit Euler, monotone growth, and what a failed run keeps.
 
 use crate::common::grow;
-use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::growth::system::GrowthSystem;
-use eyeshell::growth::*;
-use eyeshell::model::params::Params;
+use eyeshell_core::bvp::settings::SolverSettings;
+use eyeshell_core::growth::system::GrowthSystem;
+use eyeshell_core::growth::*;
+use eyeshell_core::model::params::Params;
 
 /// Keeps every snapshot it is handed.
 #[derive(Default)]
 struct Keep(Vec<Snapshot>);
 
 impl Observer for Keep {
-    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell::growth::ObserverError> {
+    fn snapshot(&mut self, s: &Snapshot) -> Result<(), eyeshell_core::growth::ObserverError> {
         self.0.push(s.clone());
         Ok(())
     }

@@ -5,11 +5,11 @@
 //! clear error.
 
 use crate::common::*;
-use eyeshell::bvp::adapt::UnreachedWhy;
-use eyeshell::bvp::settings::{Scheme, SolverSettings};
-use eyeshell::bvp::solve::solve_on_mesh;
-use eyeshell::bvp::{self, BvpError, Solution};
-use eyeshell::model::params::{Params, Thickness};
+use eyeshell_core::bvp::adapt::UnreachedWhy;
+use eyeshell_core::bvp::settings::{Scheme, SolverSettings};
+use eyeshell_core::bvp::solve::solve_on_mesh;
+use eyeshell_core::bvp::{self, BvpError, Solution};
+use eyeshell_core::model::params::{Params, Thickness};
 
 fn tol_settings(tol: f64, scheme: Scheme) -> SolverSettings {
     SolverSettings {
@@ -210,8 +210,8 @@ fn a_tolerance_below_round_off_stops_with_one_clear_error() {
 /// the truth reported.
 mod sweep {
     use super::*;
-    use eyeshell::bvp::adapt::extrapolate;
-    use eyeshell::mesh::Mesh;
+    use eyeshell_core::bvp::adapt::extrapolate;
+    use eyeshell_core::mesh::Mesh;
 
     /// One shell of the sweep: the non-uniform fibre shell with E_b, D and C set (C both
     /// the sclera's and the cornea's, as `eyeshell extremes` pushes it, with ΔP held below

@@ -2,10 +2,10 @@
 //! states, for fibres on/off × thickness uniform/non-uniform and both schemes.
 
 use crate::common::*;
-use eyeshell::bvp::discretisation::DenseSink;
-use eyeshell::bvp::settings::Scheme;
-use eyeshell::bvp::solve::{discretise, sphere_guess};
-use eyeshell::model::params::{Params, Thickness};
+use eyeshell_core::bvp::discretisation::DenseSink;
+use eyeshell_core::bvp::settings::Scheme;
+use eyeshell_core::bvp::solve::{discretise, sphere_guess};
+use eyeshell_core::model::params::{Params, Thickness};
 use proptest::prelude::*;
 
 fn check(p: &Params, scheme: Scheme, noise: &[f64]) -> Result<(), TestCaseError> {

@@ -9,10 +9,10 @@
 use std::time::Duration;
 
 use crate::common::grow;
-use eyeshell::bvp::settings::SolverSettings;
-use eyeshell::bvp::{self, BvpError};
-use eyeshell::growth::*;
-use eyeshell::model::params::Params;
+use eyeshell_core::bvp::settings::SolverSettings;
+use eyeshell_core::bvp::{self, BvpError};
+use eyeshell_core::growth::*;
+use eyeshell_core::model::params::Params;
 
 fn bounded(nodes: usize, max_seconds: Option<f64>) -> SolverSettings {
     SolverSettings {

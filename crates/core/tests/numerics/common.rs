@@ -2,9 +2,9 @@
 //! scenes, as diffsol keeps its test models.
 #![allow(dead_code)]
 
-use eyeshell::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
-use eyeshell::bvp::{self, Solution};
-use eyeshell::model::params::{Params, Thickness};
+use eyeshell_core::bvp::settings::{LinearSolverKind, Scheme, SolverSettings};
+use eyeshell_core::bvp::{self, Solution};
+use eyeshell_core::model::params::{Params, Thickness};
 
 /// docs/MODEL.md §7: uniform H0, D = 0, cornea of the sclera's material and radius.
 pub fn exact_sphere() -> Params {
@@ -22,7 +22,7 @@ pub fn fibre_shell() -> Params {
 
 /// The tests' settings. `EYESHELL_TEST_LINEAR=band|klu|block` picks the linear solver of
 /// every test that uses them (default: the scene default), so that the whole elastic suite
-/// runs with each: `EYESHELL_TEST_LINEAR=block cargo test --release -p eyeshell --test numerics`.
+/// runs with each: `EYESHELL_TEST_LINEAR=block cargo test --release -p eyeshell-core --test numerics`.
 pub fn settings(nodes: usize, scheme: Scheme) -> SolverSettings {
     SolverSettings {
         nodes,
@@ -50,7 +50,7 @@ pub fn solve(p: &Params, nodes: usize, scheme: Scheme) -> Solution {
 }
 
 /// The five fields of bvp4c's state at a node: κ, α_s, r, θ, Q.
-pub fn five(row: &eyeshell::bvp::FieldRow) -> [f64; 5] {
+pub fn five(row: &eyeshell_core::bvp::FieldRow) -> [f64; 5] {
     [row.kappa, row.alpha_s, row.r, row.theta, row.q]
 }
 
@@ -77,33 +77,33 @@ pub fn exact_sphere_fields(p: &Params, a: f64, x: f64) -> [f64; 5] {
     ]
 }
 
-/// [`eyeshell::growth::grow`] of the problem these parts make, checked by its builder (a
+/// [`eyeshell_core::growth::grow`] of the problem these parts make, checked by its builder (a
 /// part the builder refuses is a mistake in the test).
 pub fn grow(
     params: &Params,
     solver: &SolverSettings,
-    growth: &eyeshell::growth::GrowthParams,
-    settings: &eyeshell::growth::GrowthSettings,
-    observer: &mut dyn eyeshell::growth::Observer,
-) -> Result<eyeshell::growth::GrowthStats, eyeshell::growth::GrowthError> {
-    let elastic = eyeshell::problem::ElasticProblem::builder()
+    growth: &eyeshell_core::growth::GrowthParams,
+    settings: &eyeshell_core::growth::GrowthSettings,
+    observer: &mut dyn eyeshell_core::growth::Observer,
+) -> Result<eyeshell_core::growth::GrowthStats, eyeshell_core::growth::GrowthError> {
+    let elastic = eyeshell_core::problem::ElasticProblem::builder()
         .params(*params)
         .solver(*solver)
         .build()
         .expect("the test's shell is a valid problem");
-    let problem = eyeshell::problem::GrowthProblem::builder(elastic)
+    let problem = eyeshell_core::problem::GrowthProblem::builder(elastic)
         .growth(growth.clone())
         .settings(settings.clone())
         .build()
         .expect("the test's growth is a valid problem");
-    eyeshell::growth::grow(&problem, observer)
+    eyeshell_core::growth::grow(&problem, observer)
 }
 
 /// `base` with E_b, D and C set (C both the sclera's and the cornea's, as `eyeshell extremes`
 /// pushes it), ΔP held below half the cornea's limit so that a soft shell stays admissible:
 /// the shells of the parameter sweeps.
 pub fn pushed(base: Params, e_b: f64, d: f64, c: f64) -> Params {
-    let cornea = eyeshell::model::params::CorneaParams { c, ..base.cornea };
+    let cornea = eyeshell_core::model::params::CorneaParams { c, ..base.cornea };
     Params {
         e_b,
         d,
@@ -111,7 +111,7 @@ pub fn pushed(base: Params, e_b: f64, d: f64, c: f64) -> Params {
         cornea,
         dp: base
             .dp
-            .min(0.5 * eyeshell::model::cornea::max_pressure(&cornea)),
+            .min(0.5 * eyeshell_core::model::cornea::max_pressure(&cornea)),
         ..base
     }
 }

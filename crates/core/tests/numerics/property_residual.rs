@@ -7,11 +7,11 @@
 //! default parameters; this file checks the residual (local error, order p + 1) without
 //! solving, over random ΔP, C, H0, E_b, R0, fraction.
 
-use eyeshell::bvp::discretisation::{Discretisation, NY};
-use eyeshell::bvp::settings::{Scheme, SolverSettings};
-use eyeshell::bvp::solve::discretise;
-use eyeshell::model::cornea;
-use eyeshell::model::params::Params;
+use eyeshell_core::bvp::discretisation::{Discretisation, NY};
+use eyeshell_core::bvp::settings::{Scheme, SolverSettings};
+use eyeshell_core::bvp::solve::discretise;
+use eyeshell_core::model::cornea;
+use eyeshell_core::model::params::Params;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 

@@ -2,7 +2,7 @@
 //! discrete solutions must converge to it at the schemes' orders, down to round-off.
 
 use crate::common::*;
-use eyeshell::bvp::settings::Scheme;
+use eyeshell_core::bvp::settings::Scheme;
 
 /// Largest absolute error over all nodes and the five fields (κ, α_s, r, θ, Q). (t_s at the
 /// pole carries the O(ε²) truncation of the pole conditions, 2e-7 at ε = 1e-3: see
