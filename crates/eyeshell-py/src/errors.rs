@@ -66,8 +66,8 @@ pub(super) fn py_err(e: Error) -> PyErr {
     with_attributes(err, [e.key(), e.value(), e.origin(), stage])
 }
 
-/// Bad input found by the binding itself: the message, and the key (or argument) and the
-/// value it is about.
+/// Bad input found by the binding itself about no one argument (its key, value and origin
+/// None).
 pub(super) fn input_err(message: impl Into<String>) -> PyErr {
     InputError::new_err(message.into())
 }

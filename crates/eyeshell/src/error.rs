@@ -112,12 +112,14 @@ pub enum Origin {
     Argument,
     /// A data file or other input file (observations, a run directory, a shard's list).
     File(PathBuf),
+    /// An environment variable, by its name.
+    Environment(String),
 }
 
 impl std::fmt::Display for Origin {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Origin::Scene(s) | Origin::Override(s) => f.write_str(s),
+            Origin::Scene(s) | Origin::Override(s) | Origin::Environment(s) => f.write_str(s),
             Origin::Argument => f.write_str("argument"),
             Origin::File(p) => write!(f, "{}", p.display()),
         }

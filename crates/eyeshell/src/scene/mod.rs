@@ -391,7 +391,7 @@ pub fn jobs_from_env() -> Result<Option<usize>, crate::Error> {
             ),
         )
         .with_value(text)
-        .with_origin(crate::Origin::Argument)),
+        .with_origin(crate::Origin::Environment(JOBS_ENV.into()))),
     }
 }
 
