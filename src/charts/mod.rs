@@ -72,7 +72,7 @@ impl From<FigureError> for eyeshell::Error {
     fn from(e: FigureError) -> Self {
         match e {
             FigureError::Read(e) => e.into(),
-            FigureError::Plot(e) => eyeshell::Error::failed(e.to_string()),
+            FigureError::Plot(e) => eyeshell::Error::failed_by(eyeshell::Stage::Plot, e),
         }
     }
 }

@@ -20,8 +20,10 @@ pub fn population_figure(dir: &Path, records: &[RunRecord]) -> Result<Option<Pat
     let Ok(text) = std::fs::read_to_string(dir.join(POPULATION_FILE)) else {
         return Ok(None);
     };
-    let population: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| Error::failed(format!("{}: {e}", dir.join(POPULATION_FILE).display())))?;
+    let population: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        let path = dir.join(POPULATION_FILE);
+        Error::failed(eyeshell::Stage::File, format!("{}: {e}", path.display())).with_source(e)
+    })?;
     let eyes: Vec<&RunRecord> = records
         .iter()
         .filter(|r| matches!(r.status, RunStatus::Ok | RunStatus::Reused))
@@ -60,7 +62,7 @@ pub fn population_figure(dir: &Path, records: &[RunRecord]) -> Result<Option<Pat
         480,
         &dir.join(POPULATION_FIGURE),
     )
-    .map_err(|e| Error::failed(e.to_string()))?;
+    .map_err(|e| Error::failed_by(eyeshell::Stage::Plot, e))?;
     Ok(Some(png))
 }
 

@@ -20,13 +20,16 @@ pub(crate) fn cmd_export(a: &ExportArgs) -> Result<(), Error> {
         jobs.push((p, Format::Npz));
     }
     if a.mat.is_some() && a.mat == a.npz {
-        return Err(Error::input(format!(
-            "--mat and --npz are both {}: give two different outputs",
-            a.mat
-                .as_deref()
-                .unwrap_or_else(|| std::path::Path::new(""))
-                .display()
-        )));
+        return Err(Error::input(
+            eyeshell::Subject::Argument("--npz".into()),
+            format!(
+                "--mat and --npz are both {}: give two different outputs",
+                a.mat
+                    .as_deref()
+                    .unwrap_or_else(|| std::path::Path::new(""))
+                    .display()
+            ),
+        ));
     }
     // Every target is checked before anything is written.
     for (path, format) in &jobs {
@@ -60,10 +63,15 @@ pub(crate) fn cmd_compare(a: &CompareArgs) -> Result<(), Error> {
     use eyeshell::interop::compare::{compare_paths, format_reports};
     for (name, v) in [("--tol", a.tol), ("--rtol", a.rtol)] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(Error::input(format!(
-                "{name} = {}: must be a finite number ≥ 0",
-                eyeshell::text::number(v)
-            )));
+            return Err(Error::input(
+                eyeshell::Subject::Argument(name.into()),
+                format!(
+                    "{name} = {}: must be a finite number ≥ 0",
+                    eyeshell::text::number(v)
+                ),
+            )
+            .with_value(eyeshell::text::number(v))
+            .with_origin(eyeshell::Origin::Argument));
         }
     }
     let reports = compare_paths(&a.run, &a.references, a.tol, a.rtol, a.field.as_ref())?;
@@ -83,7 +91,7 @@ pub(crate) fn cmd_compare(a: &CompareArgs) -> Result<(), Error> {
         .iter()
         .max_by(|x, y| x.1.worst_ratio.total_cmp(&y.1.worst_ratio))
     {
-        return Err(Error::failed(format!(
+        return Err(Error::failed(eyeshell::Stage::File, format!(
             "{} field comparison{} beyond |Δ| ≤ {} + {}·|ref|; worst: {} in {} (max |Δ| {:.3e} at {} = {})",
             failed.len(),
             plural(failed.len()),

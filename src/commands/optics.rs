@@ -183,11 +183,16 @@ fn growth_time(scene: &Scene, at: Option<f64>) -> Result<f64, Error> {
     };
     let end = scene.growth.as_ref().map_or(1.0, |g| g.t_end);
     if !(t >= 0.0 && t <= end) {
-        return Err(Error::input(format!(
-            "--at {}: the eye's growth time must lie in [0, {}] (growth.t_end)",
-            eyeshell::text::number(t),
-            eyeshell::text::number(end)
-        )));
+        return Err(Error::input(
+            eyeshell::Subject::Argument("--at".into()),
+            format!(
+                "--at {}: the eye's growth time must lie in [0, {}] (growth.t_end)",
+                eyeshell::text::number(t),
+                eyeshell::text::number(end)
+            ),
+        )
+        .with_value(eyeshell::text::number(t))
+        .with_origin(eyeshell::Origin::Argument));
     }
     Ok(t)
 }

@@ -17,15 +17,24 @@ pub(crate) fn parse_at(values: &[String], scene: &Scene) -> Result<Vec<f64>, Err
         .map(|v| {
             let t = v.trim();
             let x: f64 = t.parse().map_err(|_| {
-                Error::input(format!("--at: {:?} is not a number (expected material points Σ separated by commas)", t))
+                Error::input(eyeshell::Subject::Argument("--at".into()), format!("--at: {:?} is not a number (expected material points Σ separated by commas)", t))
+                    .with_value(t)
+                    .with_origin(eyeshell::Origin::Argument)
             })?;
             if !x.is_finite() {
-                return Err(Error::input(format!("--at: Σ = {t} must be a finite number")));
+                return Err(Error::input(
+                    eyeshell::Subject::Argument("--at".into()),
+                    format!("--at: Σ = {t} must be a finite number"),
+                )
+                .with_value(t)
+                .with_origin(eyeshell::Origin::Argument));
             }
             if x < lo || x > hi {
-                return Err(Error::input(format!(
+                return Err(Error::input(eyeshell::Subject::Argument("--at".into()), format!(
                     "--at: Σ = {t} is outside the shell [ε, L] = [{lo}, {hi}] (solver.epsilon, π·geometry.fraction·geometry.R0)"
-                )));
+                ))
+                .with_value(t)
+                .with_origin(eyeshell::Origin::Argument));
             }
             Ok(x)
         })
@@ -86,10 +95,11 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
 pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
     let mut scene = a.scene.load()?;
     if scene.growth.is_none() {
-        return Err(Error::input(format!(
+        return Err(Error::input(eyeshell::Subject::Key("growth".into()), format!(
             "{}: scene has no [growth] section: use `eyeshell solve`, or add growth keys (e.g. --set growth.eta0=70)",
             scene.origin
-        )));
+        ))
+        .with_origin(eyeshell::Origin::Scene(scene.origin.clone())));
     }
     set_sensitivities(&mut scene, &a.sensitivities, a.sensitivity_error_control)?;
     scene.solver.threads = match a.jobs {
@@ -116,10 +126,13 @@ pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
                     a.out.join(rundir::SUMMARY_FILE).display()
                 ),
             };
-            return Err(Error::failed(format!("{failure} ({kept})")));
+            return Err(Error::failed(
+                eyeshell::Stage::Growth,
+                format!("{failure} ({kept})"),
+            ));
         }
         Err(GrowthFailure::Unwritten { error, .. }) => return Err(error.into()),
-        Err(failure) => return Err(Error::failed(failure.to_string())),
+        Err(failure) => return Err(Error::failed(eyeshell::Stage::Growth, failure.to_string())),
     };
     if !a.quiet {
         let end = match run.last {
@@ -193,7 +206,10 @@ fn set_sensitivities(scene: &mut Scene, keys: &[String], error_control: bool) ->
     scene
         .set_sensitivities(keys, error_control)
         .map_err(|e| match e {
-            Error::Input(why) => Error::input(format!("--{why}")),
+            Error::Input(why) => {
+                let message = format!("--{why}");
+                Error::Input(Box::new(why.reworded(message)))
+            }
             e => e,
         })
 }

@@ -94,7 +94,7 @@ pub(crate) fn cmd_sweep_dir(action: &SweepAction) -> Result<(), Error> {
     if complete {
         return Ok(());
     }
-    Err(Error::failed(format!(
+    Err(Error::failed(eyeshell::Stage::Sweep, format!(
         "{} of {total} runs of the sweep in {} are not done ({} failed, {} missing): run them with the --resume command above",
         failed.len() + missing.len(),
         crate::shown(dir),
@@ -290,18 +290,25 @@ fn shard_count(shards: Option<usize>, plan: &SweepPlan) -> Result<usize, Error> 
         }
         Some(n) if n >= 1 && n <= runs => match largest_share(n) {
             share if share > MAX_RUNS => {
-                return Err(Error::input(format!(
+                return Err(Error::input(eyeshell::Subject::Argument("--shards".into()), format!(
                     "--shards {n}: a shard would hold {share} of the sweep's {runs} runs, more than the {MAX_RUNS} one process runs: give more shards (at least {})",
                     runs.div_ceil(MAX_RUNS)
-                )))
+                ))
+                .with_value(n)
+                .with_origin(eyeshell::Origin::Argument))
             }
             _ => n,
         },
         Some(n) => {
-            return Err(Error::input(format!(
-                "--shards {n}: give 1 to {runs} (the sweep has {runs} run{})",
-                crate::plural(runs)
-            )))
+            return Err(Error::input(
+                eyeshell::Subject::Argument("--shards".into()),
+                format!(
+                    "--shards {n}: give 1 to {runs} (the sweep has {runs} run{})",
+                    crate::plural(runs)
+                ),
+            )
+            .with_value(n)
+            .with_origin(eyeshell::Origin::Argument))
         }
     })
 }
@@ -312,7 +319,14 @@ fn task_limits(a: &SweepArgs) -> Result<(usize, Option<&str>), Error> {
     let cpus = match a.cpus_per_task {
         None => 1,
         Some(c) if (1..=1024).contains(&c) => c,
-        Some(c) => return Err(Error::input(format!("--cpus-per-task {c}: give 1 to 1024"))),
+        Some(c) => {
+            return Err(Error::input(
+                eyeshell::Subject::Argument("--cpus-per-task".into()),
+                format!("--cpus-per-task {c}: give 1 to 1024"),
+            )
+            .with_value(c)
+            .with_origin(eyeshell::Origin::Argument))
+        }
     };
     if let Some(time) = &a.time {
         let plain = !time.is_empty()
@@ -320,10 +334,15 @@ fn task_limits(a: &SweepArgs) -> Result<(usize, Option<&str>), Error> {
                 .chars()
                 .all(|c| c.is_ascii_digit() || c == ':' || c == '-');
         if !plain {
-            return Err(Error::input(format!(
-                "--time {}: give a Slurm time such as 30, 2:00:00 or 1-12:00:00",
-                eyeshell::text::one_line(time)
-            )));
+            return Err(Error::input(
+                eyeshell::Subject::Argument("--time".into()),
+                format!(
+                    "--time {}: give a Slurm time such as 30, 2:00:00 or 1-12:00:00",
+                    eyeshell::text::one_line(time)
+                ),
+            )
+            .with_value(time)
+            .with_origin(eyeshell::Origin::Argument));
         }
     }
     Ok((cpus, a.time.as_deref()))
@@ -345,7 +364,7 @@ fn working_dir() -> Result<std::path::PathBuf, Error> {
         .iter()
         .find(|b| b"\\%".contains(b))
     {
-        return Err(Error::input(format!(
+        return Err(Error::input(eyeshell::Subject::File(here.clone()), format!(
             "--slurm-script: the working directory {} holds '{}', which Slurm reads in a task's output file name as an escape or a pattern: make the script from a directory without one (the script runs there)",
             eyeshell::text::one_line(&here.display().to_string()),
             c as char

@@ -22,8 +22,9 @@ pub(crate) fn cmd_extremes(a: &ExtremesArgs) -> Result<(), Error> {
     rundir::check_file(&a.out, a.force, ours)?;
     let previous = std::fs::read_to_string(&a.out).ok();
     let text = extremes::document(&extremes::table(&results), previous.as_deref());
-    rundir::write_atomic(&a.out, text.as_bytes())
-        .map_err(|e| Error::failed(format!("{}: {e}", a.out.display())))?;
+    rundir::write_atomic(&a.out, text.as_bytes()).map_err(|e| {
+        Error::failed(eyeshell::Stage::File, format!("{}: {e}", a.out.display())).with_source(e)
+    })?;
     out(&format!(
         "eyeshell: {} cases written to {}\n",
         results.len(),
@@ -36,20 +37,27 @@ pub(crate) fn cmd_converge(a: &ConvergeArgs) -> Result<(), Error> {
     let scene = a.scene.load()?;
     let max = eyeshell::mesh::MAX_NODES;
     if a.nodes.len() < 2 || a.nodes.iter().any(|&n| !(5..=max).contains(&n)) {
-        return Err(Error::input(format!(
-            "--nodes {}: give at least two counts, each from 5 to {max}",
-            a.nodes
-                .iter()
-                .map(|n| n.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        )));
+        return Err(Error::input(
+            eyeshell::Subject::Argument("--nodes".into()),
+            format!(
+                "--nodes {}: give at least two counts, each from 5 to {max}",
+                a.nodes
+                    .iter()
+                    .map(|n| n.to_string())
+                    .collect::<Vec<_>>()
+                    .join(",")
+            ),
+        ));
     }
     if a.growth && scene.growth.is_none() {
-        return Err(Error::input(format!(
-            "{}: --growth needs a scene with a [growth] section",
-            scene.origin
-        )));
+        return Err(Error::input(
+            eyeshell::Subject::Argument("--growth".into()),
+            format!(
+                "{}: --growth needs a scene with a [growth] section",
+                scene.origin
+            ),
+        )
+        .with_origin(eyeshell::Origin::Scene(scene.origin.clone())));
     }
     cmd_study(&a.out, "converge", &[a.scene.scene.as_path()], |dir| {
         crate::study::report::converge(&scene, &a.nodes, a.growth, dir)
@@ -71,7 +79,7 @@ pub(crate) fn cmd_study(
         report: text.clone(),
     })
     .write_to(&dir.file(rundir::SUMMARY_FILE))
-    .map_err(|e| Error::failed(e.to_string()))?;
+    .map_err(|e| Error::failed_by(eyeshell::Stage::File, e))?;
     let target = dir.commit()?;
     out(&format!(
         "eyeshell: {name} written to {}\n{text}",

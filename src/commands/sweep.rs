@@ -16,9 +16,12 @@ const MAX_JOBS: usize = 1024;
 /// `--jobs`: absent (one per core) or 1 to [`MAX_JOBS`].
 fn check_jobs(jobs: Option<usize>) -> Result<(), Error> {
     match jobs {
-        Some(n) if n == 0 || n > MAX_JOBS => Err(Error::input(format!(
-            "--jobs {n}: give 1 to {MAX_JOBS} (or leave it out: one per core)"
-        ))),
+        Some(n) if n == 0 || n > MAX_JOBS => Err(Error::input(
+            eyeshell::Subject::Argument("--jobs".into()),
+            format!("--jobs {n}: give 1 to {MAX_JOBS} (or leave it out: one per core)"),
+        )
+        .with_value(n)
+        .with_origin(eyeshell::Origin::Argument)),
         _ => Ok(()),
     }
 }
@@ -47,7 +50,10 @@ pub(crate) fn cmd_sweep(a: &SweepArgs) -> Result<(), Error> {
     }
     // clap requires both without a subcommand.
     let (Some(scene), Some(out_dir)) = (&a.scene, &a.out) else {
-        return Err(Error::input("sweep: give SCENE.toml and --out DIR"));
+        return Err(Error::input(
+            eyeshell::Subject::Argument("--out".into()),
+            "sweep: give SCENE.toml and --out DIR",
+        ));
     };
     check_jobs(a.jobs)?;
     let shard = shard_of(a.shard.as_deref())?;
@@ -168,19 +174,22 @@ fn report_sweep(
         .count();
     let total = report.records.len();
     if report.interrupted {
-        return Err(Error::failed(format!(
+        return Err(Error::failed(eyeshell::Stage::Sweep, format!(
             "sweep{shard_text} interrupted: {finished} of {total} runs finished ({}: {}); run again with --resume{again} to do the rest",
             if shard.is_some() { "record" } else { "table" },
             table.display()
         )));
     }
     if !failed.is_empty() {
-        return Err(Error::failed(format!(
-            "{} of {total} runs{shard_text} failed: {} (the other results are in {})",
-            failed.len(),
-            first_few(&failed),
-            table.display()
-        )));
+        return Err(Error::failed(
+            eyeshell::Stage::Sweep,
+            format!(
+                "{} of {total} runs{shard_text} failed: {} (the other results are in {})",
+                failed.len(),
+                first_few(&failed),
+                table.display()
+            ),
+        ));
     }
     if !a.quiet {
         let reused = report
@@ -304,10 +313,13 @@ pub(crate) fn cmd_plot(a: &PlotArgs) -> Result<(), Error> {
         (Some(out), _) => out.clone(),
         (None, [dir]) => dir.join("plots"),
         (None, _) => {
-            return Err(Error::input(format!(
-                "plot: {} runs are drawn together into one directory: give it with --out OUT",
-                a.dirs.len()
-            )))
+            return Err(Error::input(
+                eyeshell::Subject::Argument("--out".into()),
+                format!(
+                    "plot: {} runs are drawn together into one directory: give it with --out OUT",
+                    a.dirs.len()
+                ),
+            ))
         }
     };
     // Drawn into a temporary directory and moved into place whole, with its marker: only an

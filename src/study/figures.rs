@@ -58,9 +58,9 @@ pub struct FiguresError {
 impl From<FiguresError> for eyeshell::Error {
     fn from(e: FiguresError) -> Self {
         if e.bad_input {
-            eyeshell::Error::input(e.message)
+            eyeshell::Error::input_about_nothing(e.message)
         } else {
-            eyeshell::Error::failed(e.message)
+            eyeshell::Error::failed(eyeshell::Stage::Study, e.message)
         }
     }
 }

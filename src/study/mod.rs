@@ -53,8 +53,8 @@ impl From<StudyError> for eyeshell::Error {
     /// An invalid study set-up is the user's; a solve or a write that failed is not.
     fn from(e: StudyError) -> Self {
         match e {
-            StudyError::Invalid(m) => eyeshell::Error::input(m),
-            other => eyeshell::Error::failed(other.to_string()),
+            StudyError::Invalid(m) => eyeshell::Error::input_about_nothing(m),
+            other => eyeshell::Error::failed_by(eyeshell::Stage::Study, other),
         }
     }
 }

@@ -25,9 +25,11 @@ impl Workers {
     /// Workers that run the runs of a sweep into `out`, started from this executable.
     pub(crate) fn new(out: &Path) -> Result<Workers, Error> {
         let exe = std::env::current_exe().map_err(|e| {
-            Error::failed(format!(
-                "cannot find the eyeshell executable to run the sweep's runs: {e}"
-            ))
+            Error::failed(
+                eyeshell::Stage::Sweep,
+                format!("cannot find the eyeshell executable to run the sweep's runs: {e}"),
+            )
+            .with_source(e)
         })?;
         Ok(Workers {
             exe,

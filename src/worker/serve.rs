@@ -19,10 +19,14 @@ pub(crate) fn serve(out: &Path) -> Result<(), Error> {
     let mut stdout = std::io::stdout().lock();
     for line in requests {
         let reply = answer(out, &line, abort_on.as_deref());
-        let json = serde_json::to_string(&reply).map_err(|e| Error::failed(e.to_string()))?;
+        let json = serde_json::to_string(&reply)
+            .map_err(|e| Error::failed_by(eyeshell::Stage::Sweep, e))?;
         writeln!(stdout, "{REPLY_TAG}{json}")
             .and_then(|()| stdout.flush())
-            .map_err(|e| Error::failed(format!("sweep worker: stdout: {e}")))?;
+            .map_err(|e| {
+                Error::failed(eyeshell::Stage::Sweep, format!("sweep worker: stdout: {e}"))
+                    .with_source(e)
+            })?;
     }
     Ok(())
 }

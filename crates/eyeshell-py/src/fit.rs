@@ -2,7 +2,7 @@
 
 use pyo3::prelude::*;
 
-use super::errors::{input_err, py_err};
+use super::errors::{argument_err, py_err};
 use super::grow::Watch;
 use super::scene::PyScene;
 
@@ -27,9 +27,11 @@ pub(super) fn fit(
 ) -> PyResult<(String, String, Vec<String>, PyScene)> {
     use eyeshell::fit::{FitOptions, Observations};
     if !(1..=1000).contains(&max_iterations) {
-        return Err(input_err(format!(
-            "max_iterations = {max_iterations}: must lie between 1 and 1000"
-        )));
+        return Err(argument_err(
+            format!("max_iterations = {max_iterations}: must lie between 1 and 1000"),
+            "max_iterations",
+            Some(max_iterations.to_string()),
+        ));
     }
     let scene = scene.inner;
     let data = match (path, t, age, axial_length) {
@@ -41,8 +43,10 @@ pub(super) fn fit(
             Observations::from_age_columns(&a, &l, sigma.as_deref(), "data").map_err(py_err)?
         }
         _ => {
-            return Err(input_err(
+            return Err(argument_err(
                 "data: give a CSV file's path, or the columns t (or age) and axial_length (and sigma), not both t and age",
+                "data",
+                None,
             ))
         }
     };

@@ -5,7 +5,7 @@ use eyeshell::growth::GROWTH_COLUMNS;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use super::errors::{input_err, py_err};
+use super::errors::{argument_err, input_err, py_err};
 
 /// A table of a growth run from Python: its stem, its columns and each row's cells.
 type TableCells = (String, Vec<String>, Vec<Vec<String>>);
@@ -44,11 +44,15 @@ pub(super) fn export_growth(
         .collect::<PyResult<Vec<_>>>()?;
     if let Some(ages) = &ages {
         if ages.len() != snapshots.len() {
-            return Err(input_err(format!(
-                "to_mat: {} ages for {} snapshots",
-                ages.len(),
-                snapshots.len()
-            )));
+            return Err(argument_err(
+                format!(
+                    "to_mat: {} ages for {} snapshots",
+                    ages.len(),
+                    snapshots.len()
+                ),
+                "ages",
+                Some(format!("{} ages", ages.len())),
+            ));
         }
     }
     use eyeshell::interop::export::{export_growth, Format, RunSnapshot, Table};
@@ -115,15 +119,17 @@ pub(super) fn compare<'py>(
     use eyeshell::interop::compare::{compare_paths, format_reports, FieldSpec};
     for (name, v) in [("tol", tol), ("rtol", rtol)] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(input_err(format!(
-                "{name} = {v}: must be a finite number ≥ 0"
-            )));
+            return Err(argument_err(
+                format!("{name} = {v}: must be a finite number ≥ 0"),
+                name,
+                Some(v.to_string()),
+            ));
         }
     }
     let field = field
         .map(|f| {
             f.parse::<FieldSpec>()
-                .map_err(|e| input_err(format!("field: {e}")))
+                .map_err(|e| argument_err(format!("field: {e}"), "field", Some(f.to_string())))
         })
         .transpose()?;
     let reports = py

@@ -45,6 +45,7 @@ fn _eyeshell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     // Only the first wording counts; a second import in this process finds it set.
     eyeshell::text::set_wording(python_wording);
+    errors::register_defaults(py)?;
     m.add("EyeshellError", py.get_type::<EyeshellError>())?;
     m.add("InputError", py.get_type::<InputError>())?;
     m.add("SolverError", py.get_type::<SolverError>())?;

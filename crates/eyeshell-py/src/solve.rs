@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::convert::{array1, fields_dict};
-use super::errors::{input_err, py_err, SolverError};
+use super::errors::{argument_err, py_err, SolverError};
 use super::scene::PyScene;
 
 /// A solved shell: the library's [`Solution`] and the scene it solves.
@@ -80,9 +80,11 @@ impl Solved {
             .iter()
             .map(|&x| {
                 if !(x >= lo && x <= hi) {
-                    return Err(input_err(format!(
-                        "at: Σ = {x} is outside the shell [ε, L] = [{lo}, {hi}] (solver.epsilon, π·geometry.fraction·geometry.R0)"
-                    )));
+                    return Err(argument_err(
+                        format!("at: Σ = {x} is outside the shell [ε, L] = [{lo}, {hi}] (solver.epsilon, π·geometry.fraction·geometry.R0)"),
+                        "at",
+                        Some(x.to_string()),
+                    ));
                 }
                 self.solution.at(x).map_err(|e| py_err(e.into()))
             })

@@ -247,3 +247,81 @@ def test_compare_takes_what_its_docstring_lists_and_refuses_csv(cli, tmp_path):
     assert eyeshell.compare(tmp_path / "r.npz", run).passed  # an export as the run
     with pytest.raises(eyeshell.InputError, match="fields.csv"):
         eyeshell.compare(run, run / "fields.csv")
+
+
+# Every exception carries what it is about: the key (or argument, column, file), the value
+# as it was given and where it came from, None where the error names none; a SolverError
+# its stage.
+
+
+def attributes(e):
+    return (e.value.key, e.value.value, e.value.origin, e.value.stage)
+
+
+def test_a_bad_key_through_the_scene_names_it_and_its_keyword():
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.Scene(fibres__Dx=1)
+    assert attributes(e) == ("fibres.Dx", None, "set fibres.Dx=1", None)
+    assert str(e.value) == "set fibres.Dx=1: unknown key 'fibres.Dx' (did you mean 'fibres.D'?)"
+    s = eyeshell.Scene()
+    with pytest.raises(eyeshell.InputError) as e:
+        s.set("fibres.D", -1)
+    assert attributes(e) == ("fibres.D", "-1", "set fibres.D=-1", None)
+    assert s["fibres.D"] == 0.0
+
+
+def test_a_bad_value_in_a_scene_file_has_the_file_as_its_origin(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("[fibres]\nD = -3\n")
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.Scene.from_file(path)
+    assert attributes(e) == ("fibres.D", "-3", str(path), None)
+    assert str(e.value) == f"{path}: fibres.D = -3 must be non-negative"
+    # The keyword given on that file is the origin of its own value, the file of the rest.
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.solve(SCENES / "default.toml", pressure__dP=1e3)
+    assert attributes(e)[:3] == ("pressure.dP", "1000", "set pressure.dP=1000.0")
+
+
+def test_a_long_value_is_shortened():
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.Scene(solver__scheme="x" * 500)
+    assert e.value.key == "solver.scheme"
+    # As the scene's message shows it: quoted as TOML writes it, cut at 60 characters.
+    assert e.value.value == '"' + "x" * 60 + '…"'
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.sweep(eyeshell.Scene(), grid={"fibres.D": "9" * 500})
+    assert attributes(e) == ("fibres.D", "9" * 80 + "…", "argument", None)
+
+
+def test_a_bad_keyword_argument_names_the_argument():
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.sweep(SCENES / "grow.toml", jobs=0)
+    assert attributes(e) == ("jobs", "0", "argument", None)
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.compare(SCENES, SCENES, tol=-1)
+    assert attributes(e) == ("tol", "-1", "argument", None)
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.sweep(eyeshell.Scene(), grid={"fibres.D": 5})
+    assert attributes(e) == ("fibres.D", "5", "argument", None)
+
+
+def test_a_bad_value_in_a_data_file_names_its_column_and_the_file(tmp_path):
+    path = tmp_path / "data.csv"
+    path.write_text("t,axial_length\n0.5,-2\n")
+    with pytest.raises(eyeshell.InputError) as e:
+        eyeshell.fit(SCENES / "const.toml", path, fit=["growth.Gamma"])
+    assert attributes(e) == ("axial_length", "-2", str(path), None)
+
+
+def test_a_failed_solve_names_its_stage_and_no_key():
+    with pytest.raises(eyeshell.SolverError) as e:
+        eyeshell.solve(SCENES / "fibres-nonuniform.toml", solver__max_newton=1, fibres__D=400)
+    assert attributes(e) == (None, None, None, "solve")
+    assert str(e.value).startswith("Newton did not converge")
+
+
+def test_an_error_raised_without_attributes_has_them_as_none():
+    e = eyeshell.InputError("x")
+    assert (e.key, e.value, e.origin, e.stage) == (None, None, None, None)
+    assert eyeshell.SolverError.key is None and eyeshell.EyeshellError.origin is None

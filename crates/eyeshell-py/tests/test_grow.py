@@ -140,3 +140,4 @@ def test_growth_to_a_tolerance_reads_its_thread_count_from_the_environment(monke
     with pytest.raises(eyeshell.InputError, match="EYESHELL_JOBS") as e:
         eyeshell.grow(SCENES / "const.toml", solver__tol=1e-3)
     assert "\n" not in str(e.value)
+    assert (e.value.key, e.value.value, e.value.origin) == ("EYESHELL_JOBS", "0", "EYESHELL_JOBS")

@@ -25,11 +25,18 @@ use crate::rundir::summary::{ElasticSummary, GrowthSummary, RunStatus, SnapshotE
 use crate::scene::sweep::Sweep;
 use crate::scene::{Scene, SceneError};
 use crate::sweep::{run_sweep, RunRecord, SweepOptions, SweepReport};
-use crate::Error;
+use crate::{Error, Origin, Subject};
 
 impl Scene {
     /// Read, validate and return the scene in the TOML file `path` (the keys are listed by
     /// `eyeshell keys` and in [`crate::scene::KEYS`]).
+    ///
+    /// # Errors
+    /// [`SceneError::Read`] for a file that cannot be read, [`SceneError::Syntax`] for one
+    /// that is not TOML, and the other [`SceneError`] variants for a key that is not a
+    /// scene key, of the wrong type or out of range ([`SceneError::key`],
+    /// [`SceneError::value`] and [`SceneError::origin`] say which, as written, where);
+    /// [`SceneError::IsSweep`] for a file with a `[sweep]` table.
     ///
     /// ```
     /// let scene = eyeshell::Scene::from_path(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/const.toml"))?;
@@ -43,6 +50,11 @@ impl Scene {
     /// Set `key` to `value` as `--set key=value` would (the value is read as TOML, else
     /// taken as a string: `scene.set("solver.scheme", "trapezoid")`), then validate. On an
     /// error the scene is left as it was.
+    ///
+    /// # Errors
+    /// A [`SceneError`] for a key that is not a scene key ([`SceneError::UnknownKey`]), a
+    /// value of the wrong type ([`SceneError::WrongType`]) or out of range
+    /// ([`SceneError::Invalid`]), its origin the override (`--set key=value`).
     ///
     /// ```
     /// let mut scene = eyeshell::Scene::default_scene();
@@ -62,6 +74,9 @@ impl Scene {
     /// Set every `(key, value)` of `assignments` as [`Scene::set`] sets one, in order, then
     /// validate once: keys that are only valid together (`growth.t_end` and
     /// `output.times`) are set together. On an error the scene is left as it was.
+    ///
+    /// # Errors
+    /// As [`Scene::set`], for the first assignment that does not apply or validate.
     ///
     /// ```
     /// let mut scene = eyeshell::Scene::default_scene();
@@ -94,12 +109,24 @@ impl Scene {
     /// The [`Solution`] holds every field at every node ([`Solution::rows`],
     /// [`Solution::column`]), the continuous interpolant ([`Solution::at`]) and the
     /// diagnostics ([`Solution::stats`]: Newton iterations, residual, first integral).
+    ///
+    /// # Errors
+    /// [`Error::Scene`] or [`Error::Model`] (the user's: [`Error::is_user_error`]) for a
+    /// scene whose problem cannot be built, e.g. ΔP above the cornea's limit;
+    /// [`Error::Bvp`] or [`Error::Sundials`] when the solve fails (Newton does not
+    /// converge, `solver.max_seconds` runs out), [`Error::stage`] `Solve`.
     pub fn solve(&self) -> Result<Solution, Error> {
         Ok(self.elastic_problem()?.solve()?)
     }
 
     /// Grow the eye of the scene from t = 0 to `growth.t_end`, handing every snapshot to
     /// `observer` as it comes (`&mut ()` for none), and return the run.
+    ///
+    /// # Errors
+    /// [`Error::Input`] about the key `growth` for a scene without a `[growth]` section,
+    /// [`Error::Scene`] or [`Error::Model`] for a problem that cannot be built;
+    /// [`Error::Growth`] when the run stops (an integrator's failure, the observer's
+    /// error, `solver.max_seconds`), with the time and the work done.
     ///
     /// ```
     /// use eyeshell::Scene;
@@ -115,10 +142,14 @@ impl Scene {
     /// ```
     pub fn grow(&self, observer: &mut dyn Observer) -> Result<Growth, Error> {
         let Some(problem) = self.growth_problem()? else {
-            return Err(Error::input(format!(
-                "{}: the scene has no [growth] section (set a growth key, e.g. growth.eta0)",
-                self.origin
-            )));
+            return Err(Error::input(
+                Subject::Key("growth".into()),
+                format!(
+                    "{}: the scene has no [growth] section (set a growth key, e.g. growth.eta0)",
+                    self.origin
+                ),
+            )
+            .with_origin(Origin::Scene(self.origin.clone())));
         };
         let mut record = Record {
             inner: observer,
@@ -146,6 +177,10 @@ impl Scene {
     /// would be silently without effect; the command line's `--sensitivity-error-control`
     /// requires `--sensitivities` for the same reason).
     ///
+    /// # Errors
+    /// [`Error::Input`] naming the key (or the argument `error_control`) for each refusal
+    /// above, with the scene's origin where the scene is at fault.
+    ///
     /// ```
     /// let mut scene = eyeshell::Scene::from_path(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/const.toml"))?;
     /// scene.set("solver.nodes", 101)?;
@@ -163,8 +198,11 @@ impl Scene {
     ) -> Result<(), Error> {
         if keys.is_empty() && error_control {
             return Err(Error::input(
+                Subject::Argument("error_control".into()),
                 "sensitivity error control needs sensitivities: name the scene keys to differentiate (e.g. growth.eta0)",
-            ));
+            )
+            .with_value(true)
+            .with_origin(Origin::Argument));
         }
         if keys.is_empty() {
             self.growth_settings.sensitivities = vec![];
@@ -181,6 +219,12 @@ impl Scene {
     /// Fit the parameters `keys` of this growth scene to the observations `data` (start
     /// values: the scene's) by Levenberg–Marquardt on the weighted residuals, the Jacobian
     /// being the run's forward sensitivities, as `eyeshell fit` does ([`crate::fit`]).
+    ///
+    /// # Errors
+    /// [`Error::Input`] for a key that cannot be fitted, a scene that cannot grow or has no
+    /// IDA integrator, too few observations or observations outside the run (naming the
+    /// key, the data file and the value); [`Error::Growth`] when a run of the fit fails,
+    /// [`Error::Failed`] (stage `Fit`) when the iterations end without a result.
     pub fn fit(
         &self,
         data: &crate::fit::Observations,
@@ -192,6 +236,9 @@ impl Scene {
 
     /// [`Scene::fit`], calling `observer.progress(t, t_end)` after every step of every
     /// growth run of the fit: an error from it stops the fit there (a caller's Ctrl-C).
+    ///
+    /// # Errors
+    /// As [`Scene::fit`]; the observer's error stops the run as an [`Error::Growth`].
     pub fn fit_observed(
         &self,
         data: &crate::fit::Observations,
@@ -299,6 +346,11 @@ impl Sweep {
     /// is called after each run. A failed run is recorded and the others go on. The runs
     /// are threads of this process ([`InProcess`](crate::sweep::InProcess)), so a run that
     /// aborts ends it; `run_sweep` takes another [`Runner`](crate::sweep::Runner).
+    ///
+    /// # Errors
+    /// [`Error::Output`] or [`Error::Input`] (about the file) for an `out` that holds
+    /// something other than this sweep's runs, [`Error::Io`] when it cannot be written.
+    /// A run that fails is not an error: its record says why.
     pub fn run(
         &self,
         out: impl AsRef<Path>,

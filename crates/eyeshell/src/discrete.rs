@@ -15,7 +15,7 @@
 use crate::bvp::discretisation::Discretisation;
 use crate::bvp::solve::discretise;
 use crate::text::number;
-use crate::{Error, Scene};
+use crate::{Error, Origin, Scene, Subject};
 
 /// The unknowns at a node, in order.
 pub const UNKNOWNS: [&str; 5] = ["κ", "r", "θ", "q_s", "t_s"];
@@ -66,10 +66,14 @@ impl Scene {
             } else {
                 "solver.richardson"
             };
-            return Err(Error::Input(format!(
-                "the scene sets {key}, whose mesh is adapted during the solve; the discrete \
-                 equations are those of the mesh of solver.nodes (unset {key})"
-            )));
+            return Err(Error::input(
+                Subject::Key(key.into()),
+                format!(
+                    "the scene sets {key}, whose mesh is adapted during the solve; the discrete \
+                     equations are those of the mesh of solver.nodes (unset {key})"
+                ),
+            )
+            .with_origin(Origin::Scene(self.origin.clone())));
         }
         let disc = discretise(&self.params, &self.solver)?;
         let (_, f_scale) = disc.scales(self.params.r0);
@@ -80,7 +84,11 @@ impl Scene {
 /// The equations cannot be evaluated at the state given: the caller's (r ≤ 0 at a node, a
 /// stretch the membrane law cannot reach).
 fn not_evaluable(e: crate::bvp::discretisation::EvalFailure) -> Error {
-    Error::Input(crate::bvp::BvpError::Evaluation(e).to_string())
+    Error::input(
+        Subject::Argument("state".into()),
+        crate::bvp::BvpError::Evaluation(e).to_string(),
+    )
+    .with_origin(Origin::Argument)
 }
 
 impl DiscreteProblem {
@@ -108,19 +116,29 @@ impl DiscreteProblem {
     fn check(&self, state: &[f64]) -> Result<(), Error> {
         let (n, m) = (self.len(), self.disc.mesh.len());
         if state.len() != n {
-            return Err(Error::Input(format!(
-                "the state has {} values; the scene's mesh has {m} nodes × 5 unknowns \
-                 (κ, r, θ, q_s, t_s by node, as Solution.state) = {n}",
-                state.len()
-            )));
+            return Err(Error::input(
+                Subject::Argument("state".into()),
+                format!(
+                    "the state has {} values; the scene's mesh has {m} nodes × 5 unknowns \
+                     (κ, r, θ, q_s, t_s by node, as Solution.state) = {n}",
+                    state.len()
+                ),
+            )
+            .with_value(format!("{} values", state.len()))
+            .with_origin(Origin::Argument));
         }
         if let Some(k) = state.iter().position(|v| !v.is_finite()) {
-            return Err(Error::Input(format!(
-                "the state's value {k} ({} at node {}) is {}",
-                UNKNOWNS[k % 5],
-                k / 5,
-                number(state[k])
-            )));
+            return Err(Error::input(
+                Subject::Argument("state".into()),
+                format!(
+                    "the state's value {k} ({} at node {}) is {}",
+                    UNKNOWNS[k % 5],
+                    k / 5,
+                    number(state[k])
+                ),
+            )
+            .with_value(number(state[k]))
+            .with_origin(Origin::Argument));
         }
         Ok(())
     }

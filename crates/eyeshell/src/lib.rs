@@ -53,7 +53,7 @@ pub use eyeshell_core::{bvp, deadline, growth, mesh, model};
 
 pub use api::Growth;
 pub use bvp::Solution;
-pub use error::Error;
+pub use error::{BadInput, Error, Failure, Origin, Stage, Subject};
 pub use scene::sweep::Sweep;
 pub use scene::Scene;
 

@@ -19,7 +19,9 @@ best-focus surfaces of a schematic eye, as arrays), :func:`fit` (a
 ``SweepResults.to_frame()`` tabulates a whole sweep), :func:`compare` (a
 :class:`Comparison`). Errors are
 :class:`InputError` (bad input: the command line exits 2) and :class:`SolverError` (a failed
-computation: exit 1), both :class:`EyeshellError`.
+computation: exit 1), both :class:`EyeshellError`, each with the attributes ``key``,
+``value`` and ``origin`` (what the error is about, as given, and where it came from) and
+``stage`` (what failed), None where not applicable.
 """
 
 from __future__ import annotations

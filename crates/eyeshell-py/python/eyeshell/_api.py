@@ -393,8 +393,9 @@ def solve(scene: SceneLike = None, /, **overrides: Any) -> Solution:
 def _state_list(state: Any) -> list[float]:
     a = np.asarray(state, dtype=float)
     if a.ndim != 1:
-        raise InputError(
-            f"state must be a 1-D array (5 values per node, as Solution.state), not of shape {a.shape}"
+        raise _input_error(
+            f"state must be a 1-D array (5 values per node, as Solution.state), not of shape {a.shape}",
+            "state", f"shape {a.shape}", "argument",
         )
     return a.tolist()
 
@@ -859,7 +860,8 @@ def fit(
 
         t, age, length = col("t"), col("age"), col("axial_length")
         if (t is None) == (age is None) or length is None:
-            raise InputError("data: the columns t (or age, not both) and axial_length are required")
+            raise _input_error("data: the columns t (or age, not both) and axial_length are required",
+                               "data", None, "argument")
         done = _eyeshell.fit(
             s._s, list(fit), t=t, axial_length=length, sigma=col("sigma"),
             max_iterations=max_iterations, age=age,
@@ -894,9 +896,10 @@ def _check_data_columns(data: Any) -> None:
         elif first.strip().lower() in ("sd", "se", "std", "error", "sigma_mm"):
             hint = " (the standard deviation is the column 'sigma')"
     more = f" and {len(unknown) - 1} more" if len(unknown) > 1 else ""
-    raise InputError(
+    raise _input_error(
         f"data: column {shown}{hint}{more} is not one the fit reads: give t (or age), "
-        "axial_length and optionally sigma, and nothing else"
+        "axial_length and optionally sigma, and nothing else",
+        str(first), None, "argument",
     )
 
 
@@ -985,7 +988,8 @@ def _toml_value(v: Any) -> str:
 def _values(key: str, v: Any) -> list[Any]:
     """The values of a grid's key: a list, a tuple, an array, any iterable but a string."""
     if isinstance(v, (str, bytes, Mapping)) or not hasattr(v, "__iter__") or getattr(v, "ndim", 1) == 0:
-        raise InputError(f"grid: {key}: give a list of values, not {type(v).__name__} {v!r}")
+        raise _input_error(f"grid: {key}: give a list of values, not {type(v).__name__} {v!r}",
+                           key, v, "argument")
     return list(v)
 
 
@@ -1002,7 +1006,8 @@ def _sweep_text(
                 with open(path, encoding="utf-8") as f:
                     return f.read(), path
             except OSError as e:
-                raise InputError(f"{path}: cannot read the sweep: {e.strerror}") from None
+                raise _input_error(f"{path}: cannot read the sweep: {e.strerror}",
+                                   str(path), None, str(path)) from None
         base = Scene.from_file(path, sweep=False)
     else:
         base = _as_scene(scene, {})
@@ -1075,6 +1080,19 @@ def iter_sweep(
 _MAX_JOBS = 1024
 
 
+def _input_error(message: str, key: str | None = None, value: Any = None,
+                 origin: str | None = None) -> InputError:
+    """An :class:`InputError` raised by this layer, with its ``key``, ``value`` (shortened
+    as the library shortens one) and ``origin`` as the library's own errors carry them."""
+    e = InputError(message)
+    e.key = key
+    if value is not None:
+        text = value if isinstance(value, str) else repr(value)
+        e.value = text if len(text) <= 80 else text[:80] + "…"
+    e.origin = origin
+    return e
+
+
 def _whole(value: Any, name: str, least: int, most: int) -> int:
     """`value` as an int in [least, most]: any integral number (int, NumPy integer, ...),
     not a bool or a float."""
@@ -1083,7 +1101,8 @@ def _whole(value: Any, name: str, least: int, most: int) -> int:
     except TypeError:
         n = None
     if n is None or isinstance(value, (bool, np.bool_)) or not least <= n <= most:
-        raise InputError(f"{name} = {value!r}: must be a whole number from {least} to {most:,}")
+        raise _input_error(f"{name} = {value!r}: must be a whole number from {least} to {most:,}",
+                           name, value, "argument")
     return n
 
 

@@ -7,7 +7,12 @@ import numpy as np
 __version__: str
 MAX_HISTORY_POINTS: int
 
-class EyeshellError(Exception): ...
+class EyeshellError(Exception):
+    key: str | None
+    value: str | None
+    origin: str | None
+    stage: str | None
+
 class InputError(EyeshellError): ...
 class SolverError(EyeshellError): ...
 

@@ -13,7 +13,7 @@ use std::path::Path;
 
 use crate::rundir::read::read_text;
 use crate::text::{excerpt, number};
-use crate::Error;
+use crate::{Error, Origin, Subject};
 
 /// The most bytes a data file may have (16 MiB: about half a million rows).
 pub const MAX_DATA_BYTES: u64 = 1 << 24;
@@ -55,7 +55,11 @@ impl Observations {
 
     /// Parse and check CSV text (`origin` names it in messages).
     pub fn parse(text: &str, origin: &str) -> Result<Observations, Error> {
-        let fail = |line: u64, what: String| Error::input(format!("{origin}: line {line}: {what}"));
+        let from = || Origin::File(origin.into());
+        let file = || Subject::File(origin.into());
+        let fail = |subject: Subject, line: u64, what: String| {
+            Error::input(subject, format!("{origin}: line {line}: {what}")).with_origin(from())
+        };
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)
@@ -72,7 +76,7 @@ impl Observations {
                 Ok(true) => {}
                 Err(e) => {
                     let line = e.position().map_or(0, |p| p.line());
-                    return Err(fail(line, excerpt(&e.to_string(), 80)));
+                    return Err(fail(file(), line, excerpt(&e.to_string(), 80)));
                 }
             }
             if record.len() == 1 && record[0].is_empty() {
@@ -89,12 +93,14 @@ impl Observations {
                 }
                 if named != DATA_COLUMNS[..2] && named != DATA_COLUMNS {
                     return Err(fail(
+                        Subject::Column(header.first().unwrap_or(&"").to_string()),
                         line,
                         format!(
                             "the header must be \"t,axial_length\" or \"t,axial_length,sigma\" (or age in place of t), not {:?}",
                             excerpt(&header.join(","), 80)
                         ),
-                    ));
+                    )
+                    .with_value(header.join(",")));
                 }
                 ages = is_age;
                 columns = Some(header.len());
@@ -102,6 +108,7 @@ impl Observations {
             };
             if record.len() != n {
                 return Err(fail(
+                    file(),
                     line,
                     format!(
                         "{} values for {n} columns ({})",
@@ -112,6 +119,7 @@ impl Observations {
             }
             if rows.len() == MAX_OBSERVATIONS {
                 return Err(fail(
+                    file(),
                     line,
                     format!("more than {MAX_OBSERVATIONS} observations, more than a fit takes"),
                 ));
@@ -126,9 +134,11 @@ impl Observations {
                 let column = format!("column {} ({name})", j + 1);
                 let x: f64 = cell.parse().map_err(|_| {
                     fail(
+                        Subject::Column(name.into()),
                         line,
                         format!("{column}: {:?} is not a number", excerpt(cell, 80)),
                     )
+                    .with_value(cell)
                 })?;
                 let why = if !x.is_finite() {
                     Some("must be a finite number")
@@ -144,7 +154,12 @@ impl Observations {
                     None
                 };
                 if let Some(why) = why {
-                    return Err(fail(line, format!("{column} = {cell} {why}")));
+                    return Err(fail(
+                        Subject::Column(name.into()),
+                        line,
+                        format!("{column} = {cell} {why}"),
+                    )
+                    .with_value(cell));
                 }
                 values[j] = x;
             }
@@ -156,14 +171,16 @@ impl Observations {
             });
         }
         if columns.is_none() {
-            return Err(Error::input(format!(
+            return Err(Error::input(file(), format!(
                 "{origin}: empty file (expected the header \"t,axial_length[,sigma]\", then one observation per line)"
-            )));
+            )).with_origin(from()));
         }
         if rows.is_empty() {
-            return Err(Error::input(format!(
-                "{origin}: no observations after the header"
-            )));
+            return Err(Error::input(
+                file(),
+                format!("{origin}: no observations after the header"),
+            )
+            .with_origin(from()));
         }
         Ok(Observations {
             origin: origin.to_string(),
@@ -205,11 +222,16 @@ impl Observations {
     ) -> Result<Observations, Error> {
         let n = t.len();
         if axial_length.len() != n || sigma.is_some_and(|s| s.len() != n) {
-            return Err(Error::input(format!(
+            return Err(Error::input(
+                Subject::Column("axial_length".into()),
+                format!(
                 "{origin}: {first}, axial_length and sigma must have the same length ({n}, {}, {})",
                 axial_length.len(),
                 sigma.map_or("none".to_string(), |s| s.len().to_string())
-            )));
+            ),
+            )
+            .with_value(format!("{} values", axial_length.len()))
+            .with_origin(Origin::File(origin.into())));
         }
         let mut text = format!(
             "{first},axial_length{}\n",
@@ -243,24 +265,27 @@ impl Observations {
         }
         let clock = &g.clock;
         let (true, Some(a0), Some(a1)) = (clock.has_ages(), clock.start, clock.end) else {
-            return Err(Error::input(format!(
+            return Err(Error::input(Subject::Key("time.unit".into()), format!(
                 "{}: the data give ages (an age column), but the scene counts no ages: set time.unit (\"years\" or \"days\"), time.start and time.end, or give the model's t",
                 self.origin
-            )));
+            ))
+            .with_origin(Origin::File(self.origin.clone().into())));
         };
         let unit = clock.unit.name();
         let mut out = self.clone();
         for (i, r) in out.rows.iter_mut().enumerate() {
             let a = r.age.unwrap_or(r.t);
             if a < a0 || a > a1 {
-                return Err(Error::input(format!(
+                return Err(Error::input(Subject::Column("age".into()), format!(
                     "{}: observation {} (age {} {unit}) lies outside the scene's ages [time.start, time.end] = [{}, {}] {unit}; widen them to cover the data",
                     self.origin,
                     i + 1,
                     number(a),
                     number(a0),
                     number(a1)
-                )));
+                ))
+                .with_value(number(a))
+                .with_origin(Origin::File(self.origin.clone().into())));
             }
             r.t = clock.t_of(a, g.t_end).clamp(0.0, g.t_end);
         }
@@ -270,12 +295,14 @@ impl Observations {
     /// Refuse times outside the run [0, `t_end`] (the model has no value there).
     pub fn check_times(&self, t_end: f64) -> Result<(), Error> {
         if let Some((i, r)) = self.rows.iter().enumerate().find(|(_, r)| r.t > t_end) {
-            return Err(Error::input(format!(
+            return Err(Error::input(Subject::Column("t".into()), format!(
                 "{}: observation {} (t = {}) is after the scene's run ends (growth.t_end = {t_end}); set growth.t_end to cover the data",
                 self.origin,
                 i + 1,
                 r.t
-            )));
+            ))
+            .with_value(r.t)
+            .with_origin(Origin::File(self.origin.clone().into())));
         }
         Ok(())
     }

@@ -32,7 +32,7 @@ use crate::growth::{self, GrowthParams};
 use crate::scene::keys::{self, KeyValue, Rule};
 use crate::scene::Scene;
 use crate::text::number;
-use crate::Error;
+use crate::{Error, Origin, Stage, Subject};
 
 pub use data::{Observation, Observations};
 pub use lm::{Convergence, FitOptions, IterationRecord};
@@ -84,7 +84,7 @@ impl From<FitError> for Error {
         match e {
             FitError::Growth(g) => g.into(),
             // A run that records nothing, or a failure the fit adds later: not the user's.
-            e => Error::failed(e.to_string()),
+            e => Error::failed_by(Stage::Fit, e),
         }
     }
 }
@@ -131,7 +131,15 @@ pub fn check_params(scene: &Scene, params: &[FitParam], what: &str) -> Result<()
         .iter()
         .find_map(|p| p.param.check(&scene.params).err())
     {
-        return Err(Error::input(format!("{what}: {why} ({})", scene.origin)));
+        let key = params
+            .iter()
+            .find(|p| p.param.check(&scene.params).is_err())
+            .map_or("", |p| p.key());
+        return Err(Error::input(
+            Subject::Key(key.into()),
+            format!("{what}: {why} ({})", scene.origin),
+        )
+        .with_origin(Origin::Scene(scene.origin.clone())));
     }
     // A schedule's parameter is a parameter of its form alone: with another form the run
     // has no such parameter to differentiate by.
@@ -142,22 +150,29 @@ pub fn check_params(scene: &Scene, params: &[FitParam], what: &str) -> Result<()
     if let Some(sp) = params.iter().find_map(|p| p.param.schedule_param()) {
         if sp.form() != form {
             use growth::schedule::Form;
-            return Err(Error::input(format!(
+            return Err(Error::input(Subject::Key("growth.schedule".into()), format!(
                 "{what}: {} needs growth.schedule = \"{}\" ({} has \"{}\"): the schedule has no such parameter",
                 sp.key(),
                 Form::NAMES[sp.form() as usize],
                 scene.origin_of_key("growth.schedule"),
                 Form::NAMES[form as usize]
-            )));
+            ))
+            .with_value(Form::NAMES[form as usize])
+            .with_origin(Origin::Scene(scene.origin_of_key("growth.schedule"))));
         }
     }
     let integrator = scene.growth_settings.integrator;
     if integrator != growth::Integrator::Ida {
-        return Err(Error::input(format!(
-            "{what} need solver.integrator = \"ida\" ({} has \"{}\")",
-            scene.origin,
-            integrator.name()
-        )));
+        return Err(Error::input(
+            Subject::Key("solver.integrator".into()),
+            format!(
+                "{what} need solver.integrator = \"ida\" ({} has \"{}\")",
+                scene.origin,
+                integrator.name()
+            ),
+        )
+        .with_value(integrator.name())
+        .with_origin(Origin::Scene(scene.origin.clone())));
     }
     Ok(())
 }
@@ -166,14 +181,23 @@ pub fn check_params(scene: &Scene, params: &[FitParam], what: &str) -> Result<()
 /// `what` names the option in messages (`--fit`).
 pub fn parse_keys(keys: &[impl AsRef<str>], what: &str) -> Result<Vec<FitParam>, Error> {
     if keys.is_empty() {
-        return Err(Error::input(format!("{what}: no parameter given")));
+        return Err(Error::input(
+            Subject::Argument(what.into()),
+            format!("{what}: no parameter given"),
+        )
+        .with_origin(Origin::Argument));
     }
     let mut params: Vec<FitParam> = Vec::with_capacity(keys.len());
     for key in keys {
         let key = key.as_ref().trim();
-        let p = FitParam::from_key(key).map_err(|why| Error::input(format!("{what}: {why}")))?;
+        let refuse = |message: String| {
+            Error::input(Subject::Key(key.into()), message)
+                .with_value(key)
+                .with_origin(Origin::Argument)
+        };
+        let p = FitParam::from_key(key).map_err(|why| refuse(format!("{what}: {why}")))?;
         if params.iter().any(|q| q.param == p.param) {
-            return Err(Error::input(format!("{what}: {key} is listed twice")));
+            return Err(refuse(format!("{what}: {key} is listed twice")));
         }
         params.push(p);
     }
@@ -196,10 +220,13 @@ pub fn with_values(scene: &Scene, params: &[FitParam], values: &[f64]) -> Result
         match keys::find(p.key()).map(|k| k.access) {
             Some(keys::Access::Float { set, .. }) => set(&mut s, x),
             _ => {
-                return Err(Error::input(format!(
-                    "{} is not a real-valued scene key: it cannot be fitted",
-                    p.key()
-                )))
+                return Err(Error::input(
+                    Subject::Key(p.key().into()),
+                    format!(
+                        "{} is not a real-valued scene key: it cannot be fitted",
+                        p.key()
+                    ),
+                ))
             }
         }
     }
@@ -226,10 +253,14 @@ pub fn evaluate_watched(
     step: &mut growth::ProgressFn<'_>,
 ) -> Result<ModelValues, Error> {
     let Some(problem) = scene.growth_problem()? else {
-        return Err(Error::input(format!(
-            "{}: the scene has no [growth] section (a fit needs a growth run)",
-            scene.origin
-        )));
+        return Err(Error::input(
+            Subject::Key("growth".into()),
+            format!(
+                "{}: the scene has no [growth] section (a fit needs a growth run)",
+                scene.origin
+            ),
+        )
+        .with_origin(Origin::Scene(scene.origin.clone())));
     };
     let times: Vec<f64> = data.rows.iter().map(|o| o.t).collect();
     let fitted: Vec<SensParam> = params.iter().map(|p| p.param).collect();
@@ -426,7 +457,10 @@ impl lm::Problem for SceneProblem<'_, '_> {
         self.model_seconds += m.seconds;
         let (r, j) = weighted(&m, self.data);
         if let Some(why) = overflow(&r, &j, self.data) {
-            return Err(Error::input(why));
+            return Err(
+                Error::input(Subject::File(self.data.origin.clone().into()), why)
+                    .with_origin(Origin::File(self.data.origin.clone().into())),
+            );
         }
         Ok((r, j, m.axial_length))
     }
@@ -491,25 +525,28 @@ pub fn fit_watched(
     };
     let outcome = lm::minimise(&mut problem, &p0, options, each).map_err(|e| match e {
         lm::LmError::Evaluation(e) => e,
-        lm::LmError::Unidentifiable(why) => Error::input(why),
-        lm::LmError::RankDeficient(why) => Error::failed(why),
-        e => Error::failed(e.to_string()),
+        lm::LmError::Unidentifiable(why) => Error::input_about_nothing(why),
+        lm::LmError::RankDeficient(why) => Error::failed(Stage::Fit, why),
+        e => Error::failed(Stage::Fit, e.to_string()),
     })?;
     let model_seconds = problem.model_seconds;
     let names: Vec<&str> = params.iter().map(|p| p.key()).collect();
     if let Some(why) = identifiability(&outcome.jacobian, params, &outcome.values) {
-        return Err(Error::input(format!(
+        return Err(Error::input_about_nothing(format!(
             "at the estimate ({}): {why}",
             lm::show(&names, &outcome.values)
         )));
     }
     let chi2 = outcome.residuals.norm_squared();
     if !chi2.is_finite() || outcome.values.iter().any(|v| !v.is_finite()) {
-        return Err(Error::failed(format!(
-            "the fit ended at χ² = {} ({}): not a result",
-            number(chi2),
-            lm::show(&names, &outcome.values)
-        )));
+        return Err(Error::failed(
+            Stage::Fit,
+            format!(
+                "the fit ended at χ² = {} ({}): not a result",
+                number(chi2),
+                lm::show(&names, &outcome.values)
+            ),
+        ));
     }
     let (scaling, s2) = (
         if has_sigma {
@@ -592,20 +629,26 @@ pub fn fit_watched(
 /// no parameter, a parameter the scene cannot fit. The scene's growth model otherwise.
 fn fit_refusals<'s>(scene: &'s Scene, params: &[FitParam]) -> Result<&'s GrowthParams, Error> {
     let Some(g) = &scene.growth else {
-        return Err(Error::input(format!(
+        return Err(Error::input(Subject::Key("growth".into()), format!(
             "{}: the scene has no [growth] section: a fit needs a growth run (set a growth key, e.g. growth.eta0)",
             scene.origin
-        )));
+        ))
+        .with_origin(Origin::Scene(scene.origin.clone())));
     };
     if scene.growth_settings.integrator != growth::Integrator::Ida {
-        return Err(Error::input(format!(
+        return Err(Error::input(Subject::Key("solver.integrator".into()), format!(
             "a fit needs solver.integrator = \"ida\" (its Jacobian is IDAS's forward sensitivities; {} has \"{}\")",
             scene.origin,
             scene.growth_settings.integrator.name()
-        )));
+        ))
+        .with_value(scene.growth_settings.integrator.name())
+        .with_origin(Origin::Scene(scene.origin.clone())));
     }
     if params.is_empty() {
-        return Err(Error::input("no parameter to fit"));
+        return Err(Error::input(
+            Subject::Argument("fit".into()),
+            "no parameter to fit",
+        ));
     }
     check_params(scene, params, "fit")?;
     Ok(g)
@@ -616,18 +659,23 @@ fn fit_refusals<'s>(scene: &'s Scene, params: &[FitParam]) -> Result<&'s GrowthP
 fn check_counts(data: &Observations, n: usize, k: usize) -> Result<(), Error> {
     let has_sigma = data.has_sigma();
     if n < k || (!has_sigma && n == k) {
-        return Err(Error::input(format!(
-            "{}: {n} observation{} for {k} parameter{}: a fit needs at least {}{}",
-            data.origin,
-            if n == 1 { "" } else { "s" },
-            if k == 1 { "" } else { "s" },
-            if has_sigma { k } else { k + 1 },
-            if has_sigma {
-                ""
-            } else {
-                " (without σ one more, for the residual variance)"
-            },
-        )));
+        return Err(Error::input(
+            Subject::File(data.origin.clone().into()),
+            format!(
+                "{}: {n} observation{} for {k} parameter{}: a fit needs at least {}{}",
+                data.origin,
+                if n == 1 { "" } else { "s" },
+                if k == 1 { "" } else { "s" },
+                if has_sigma { k } else { k + 1 },
+                if has_sigma {
+                    ""
+                } else {
+                    " (without σ one more, for the residual variance)"
+                },
+            ),
+        )
+        .with_value(format!("{n} observations"))
+        .with_origin(Origin::File(data.origin.clone().into())));
     }
     Ok(())
 }
@@ -651,7 +699,7 @@ impl Spread {
         let inverse = lm::GaussNewton::of(&outcome.jacobian)
             .and_then(|gn| gn.inverse_information())
             .ok_or_else(|| {
-                Error::input(format!(
+                Error::input_about_nothing(format!(
                     "the information matrix JᵀWJ at the estimate cannot be inverted ({})",
                     lm::show(names, &outcome.values)
                 ))
@@ -659,7 +707,7 @@ impl Spread {
         let cov = inverse * s2;
         let se: Vec<f64> = (0..k).map(|a| cov[(a, a)].max(0.0).sqrt()).collect();
         if let Some(a) = (0..k).find(|&a| !se[a].is_finite()) {
-            return Err(Error::failed(format!(
+            return Err(Error::failed(Stage::Fit, format!(
                 "the standard error of {} at the estimate is {} ({}): the information matrix JᵀWJ is too close to singular to invert",
                 params[a].key(),
                 number(se[a]),
@@ -719,17 +767,24 @@ pub fn report_json(report: &FitReport) -> String {
 /// curve of the plot): one growth run without sensitivities.
 pub fn curve(scene: &Scene, points: usize) -> Result<Vec<(f64, f64)>, Error> {
     let Some(problem) = scene.growth_problem()? else {
-        return Err(Error::input(format!(
-            "{}: the scene has no [growth] section",
-            scene.origin
-        )));
+        return Err(Error::input(
+            Subject::Key("growth".into()),
+            format!("{}: the scene has no [growth] section", scene.origin),
+        )
+        .with_origin(Origin::Scene(scene.origin.clone())));
     };
     let mut settings = problem.settings().clone();
     settings.output_times = vec![];
     settings.history_points = points.max(1);
     settings.sensitivities = vec![];
-    let problem = (problem.to_builder().settings(settings).build())
-        .map_err(|e| Error::input(format!("{}: {e}", scene.origin)))?;
+    let problem = (problem.to_builder().settings(settings).build()).map_err(|e| {
+        Error::input(
+            Subject::Argument("points".into()),
+            format!("{}: {e}", scene.origin),
+        )
+        .with_value(points)
+        .with_origin(Origin::Scene(scene.origin.clone()))
+    })?;
     let mut out = Vec::with_capacity(points + 1);
     growth::run(
         &problem,

@@ -46,7 +46,7 @@ impl From<CompareError> for crate::Error {
     /// A comparison that cannot be made is about the files the user named (a result
     /// beyond tolerance is not an error of this kind: the command reports it itself).
     fn from(e: CompareError) -> Self {
-        crate::Error::input(e.0)
+        crate::Error::input_about_nothing(e.0)
     }
 }
 

@@ -164,6 +164,30 @@ impl SceneError {
             _ => None,
         }
     }
+
+    /// The value at fault as it was written, when one is.
+    pub fn value(&self) -> Option<&str> {
+        match self {
+            SceneError::Invalid { value, .. } => Some(value),
+            _ => None,
+        }
+    }
+
+    /// Where the scene or value came from: the file's path, the override (`--set
+    /// key=value`, a Python keyword), the text's name.
+    pub fn origin(&self) -> &str {
+        match self {
+            SceneError::Read { path, .. } => path,
+            SceneError::Syntax { origin, .. }
+            | SceneError::UnknownKey { origin, .. }
+            | SceneError::UnknownSection { origin, .. }
+            | SceneError::WrongType { origin, .. }
+            | SceneError::Invalid { origin, .. }
+            | SceneError::BadOverride { origin, .. }
+            | SceneError::IsSweep { origin }
+            | SceneError::BadSweep { origin, .. } => origin,
+        }
+    }
 }
 
 /// The most characters of an origin (a path, a `--set` text) and of a value an error shows:
@@ -359,10 +383,15 @@ pub fn jobs_from_env() -> Result<Option<usize>, crate::Error> {
     }
     match text.parse::<usize>() {
         Ok(n) if (1..=1024).contains(&n) => Ok(Some(n)),
-        _ => Err(crate::Error::Input(format!(
-            "{JOBS_ENV} = {:?} is not a thread count (an integer from 1 to 1024)",
-            crate::text::excerpt(text, 40)
-        ))),
+        _ => Err(crate::Error::input(
+            crate::Subject::Argument(JOBS_ENV.into()),
+            format!(
+                "{JOBS_ENV} = {:?} is not a thread count (an integer from 1 to 1024)",
+                crate::text::excerpt(text, 40)
+            ),
+        )
+        .with_value(text)
+        .with_origin(crate::Origin::Environment(JOBS_ENV.into()))),
     }
 }
 

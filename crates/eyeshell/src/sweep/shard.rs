@@ -39,7 +39,7 @@ use crate::rundir::summary::SweepRunEntry;
 use crate::rundir::{write_atomic, OutputError};
 use crate::scene::sweep::{Sweep, SweepPlan, MAX_RUNS};
 use crate::scene::Scene;
-use crate::Error;
+use crate::{Error, Origin, Subject};
 
 use super::{resume, RunRecord, RunStatus, SweepReport, RUNS_DIR};
 
@@ -267,10 +267,12 @@ pub fn costs_of(plan: &SweepPlan) -> Result<Costs, Error> {
     // A shard's runs are directories that `merge` reads; a cohort kept as a table is
     // computed and checkpointed by one process (super::compact).
     if plan.sample.as_ref().map(|s| s.per_run) == Some(crate::scene::sample::PerRun::Table) {
-        return Err(Error::input(format!(
+        return Err(Error::input(Subject::Key("sweep.sample.per_run".into()), format!(
             "{}: per_run = \"table\" in [sweep.sample] runs the cohort in one process, which shards cannot share: set per_run = \"directory\" to run it in shards",
             plan.origin
-        )));
+        ))
+        .with_value("\"table\"")
+        .with_origin(Origin::Scene(plan.origin.clone())));
     }
     let runs = plan.len();
     if runs > MAX_RUNS {
@@ -320,13 +322,15 @@ pub fn costs_of(plan: &SweepPlan) -> Result<Costs, Error> {
 pub fn runs_of(plan: &SweepPlan, shard: Shard) -> Result<Vec<usize>, Error> {
     let mine = costs_of(plan)?.runs_of(shard);
     if mine.len() > MAX_RUNS {
-        return Err(Error::input(format!(
+        return Err(Error::input(Subject::Argument("--shard".into()), format!(
             "{}: shard {shard} would hold {} of the sweep's {} runs, more than the {MAX_RUNS} one process runs: split it into more shards (N of at least {})",
             plan.origin,
             mine.len(),
             plan.len(),
             plan.len().div_ceil(MAX_RUNS)
-        )));
+        ))
+        .with_value(shard)
+        .with_origin(Origin::Argument));
     }
     Ok(mine)
 }
@@ -416,7 +420,7 @@ pub fn read_records(out: &Path) -> Result<Vec<(PathBuf, ShardRecord)>, Error> {
     let listed = match fs::read_dir(&dir) {
         Ok(d) => d,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Err(Error::input(format!(
+            return Err(Error::input(Subject::File(out.to_path_buf()), format!(
                 "{}: no shard has run here (no {SHARDS_DIR}/ directory): merge assembles the runs of `eyeshell sweep SCENE --out {} --shard K/N`",
                 out.display(),
                 out.display()
@@ -438,7 +442,12 @@ pub fn read_records(out: &Path) -> Result<Vec<(PathBuf, ShardRecord)>, Error> {
             continue; // locks, temporaries, Slurm's logs
         };
         let path = entry.path();
-        let bad = |why: String| Error::input(format!("{}: {why}", path.display()));
+        let bad = |why: String| {
+            Error::input(
+                Subject::File(path.to_path_buf()),
+                format!("{}: {why}", path.display()),
+            )
+        };
         let meta = fs::symlink_metadata(&path).map_err(|e| bad(e.to_string()))?;
         if !meta.is_file() || meta.len() > MAX_RECORD_BYTES {
             return Err(bad(
@@ -463,7 +472,7 @@ pub fn read_records(out: &Path) -> Result<Vec<(PathBuf, ShardRecord)>, Error> {
         records.push((path, record));
     }
     if records.is_empty() {
-        return Err(Error::input(format!(
+        return Err(Error::input(Subject::File(dir.to_path_buf()), format!(
             "{}: no shard has run here (no K.json): merge assembles the runs of `eyeshell sweep SCENE --out {} --shard K/N`",
             dir.display(),
             out.display()
@@ -529,7 +538,7 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
     let (first_path, first) = &found[0];
     for (path, r) in &found[1..] {
         if r.scene_path != first.scene_path || r.overrides != first.overrides {
-            return Err(Error::input(format!(
+            return Err(Error::input(Subject::File(path.to_path_buf()), format!(
                 "{}: was run from another scene ({}{}) than {} ({}{}): the shards of one --out must run the same sweep",
                 path.display(),
                 r.scene,
@@ -541,10 +550,13 @@ pub fn merge(out: &Path, write: bool) -> Result<Merged, Error> {
         }
     }
     let (_, text) = crate::scene::read_scene_file(Path::new(&first.scene_path)).map_err(|e| {
-        Error::input(format!(
-            "{}: the scene the shards ran cannot be read: {e}",
-            first_path.display()
-        ))
+        Error::input(
+            Subject::File(first_path.to_path_buf()),
+            format!(
+                "{}: the scene the shards ran cannot be read: {e}",
+                first_path.display()
+            ),
+        )
     })?;
     let plan = SweepPlan::from_toml_str(&text, &first.scene, &first.overrides)?;
     // The same checks of the directory for both: status says done only where merge

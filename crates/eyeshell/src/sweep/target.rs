@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use crate::rundir::lock::DirLock;
 use crate::rundir::owner::Marker;
 use crate::rundir::{self, OutputError, Summary, SUMMARY_FILE};
-use crate::Error;
+use crate::{Error, Subject};
 
 use super::shard::{Shard, SHARDS_DIR};
 use super::{RESULT_FILE, RUNS_DIR, SCENE_FILE, TABLE_FILE};
@@ -99,10 +99,13 @@ pub fn prepare_shard(
         match fs::create_dir(&path) {
             Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => return Err(io(&path, e)),
             _ if !path.is_dir() => {
-                return Err(Error::input(format!(
-                    "{}: is not a directory, so this is not a sweep's output; {SHARD_INSTEAD}",
-                    path.display()
-                )))
+                return Err(Error::input(
+                    Subject::File(path.to_path_buf()),
+                    format!(
+                        "{}: is not a directory, so this is not a sweep's output; {SHARD_INSTEAD}",
+                        path.display()
+                    ),
+                ))
             }
             _ => {}
         }
@@ -110,10 +113,13 @@ pub fn prepare_shard(
     let record = out.join(SHARDS_DIR).join(shard.file_name());
     no_link(&record)?;
     if record.exists() && !record.is_file() {
-        return Err(Error::input(format!(
-            "{}: is not a shard's record (not a file); {SHARD_INSTEAD}",
-            record.display()
-        )));
+        return Err(Error::input(
+            Subject::File(record.to_path_buf()),
+            format!(
+                "{}: is not a shard's record (not a file); {SHARD_INSTEAD}",
+                record.display()
+            ),
+        ));
     }
     let lock = DirLock::acquire(&record)?;
     Ok((record, lock))
@@ -135,7 +141,7 @@ pub fn refuse_running_shards(out: &Path) -> Result<(), Error> {
         }
         if let Err(OutputError::Busy { pid, .. }) = DirLock::acquire(&path) {
             let by = pid.map(|p| format!(" (pid {p})")).unwrap_or_default();
-            return Err(Error::input(format!(
+            return Err(Error::input(Subject::File(out.to_path_buf()), format!(
                 "{}: shard {} is running here{by}: a plain sweep would replace or rerun its runs; wait for the shards and run `eyeshell sweep merge {}`, or give another --out",
                 out.display(),
                 name.trim_end_matches(".json"),
@@ -214,7 +220,7 @@ fn check_and_mark(is_run: &dyn Fn(&str) -> bool, out: &PathBuf) -> Result<(), Er
 /// Refuse `path` if it is a symbolic link (a missing path is fine).
 pub(crate) fn no_link(path: &Path) -> Result<(), Error> {
     match fs::symlink_metadata(path) {
-        Ok(m) if m.file_type().is_symlink() => Err(Error::input(format!(
+        Ok(m) if m.file_type().is_symlink() => Err(Error::input(Subject::File(path.to_path_buf()), format!(
             "{}: is a symbolic link; a sweep never follows links inside its directory (remove it, or give another --out)",
             path.display()
         ))),
@@ -242,10 +248,13 @@ fn run_entries(out: &Path) -> Result<Vec<std::path::PathBuf>, Error> {
     let listed = match fs::symlink_metadata(&runs) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
         Ok(m) if !m.is_dir() => {
-            return Err(Error::input(format!(
-                "{}: is not a directory, so this is not a sweep's output; {INSTEAD}",
-                runs.display()
-            )))
+            return Err(Error::input(
+                Subject::File(runs.to_path_buf()),
+                format!(
+                    "{}: is not a directory, so this is not a sweep's output; {INSTEAD}",
+                    runs.display()
+                ),
+            ))
         }
         _ => fs::read_dir(&runs).and_then(|d| d.map(|e| e.map(|e| e.path())).collect()),
     };
@@ -263,15 +272,19 @@ fn refuse_other_outputs(out: &Path, instead: &str) -> Result<(), Error> {
         Ok(Summary::Study(s)) => format!("the output of a study ({})", s.study),
         Ok(Summary::Figures(_)) => "figures".to_string(),
         Err(e) => {
-            return Err(Error::input(format!(
-                "{e} (--resume continues a sweep only: {instead})"
-            )))
+            return Err(Error::input(
+                Subject::File(out.to_path_buf()),
+                format!("{e} (--resume continues a sweep only: {instead})"),
+            ))
         }
     };
-    Err(Error::input(format!(
-        "{}: holds {held}, not a sweep; --resume continues a sweep only: {instead}",
-        out.display()
-    )))
+    Err(Error::input(
+        Subject::File(out.to_path_buf()),
+        format!(
+            "{}: holds {held}, not a sweep; --resume continues a sweep only: {instead}",
+            out.display()
+        ),
+    ))
 }
 
 fn refuse_other_runs(
@@ -299,7 +312,7 @@ fn refuse_other_runs(
     if count > 3 {
         shown.push(format!("and {} more", count - 3));
     }
-    Err(Error::input(format!(
+    Err(Error::input(Subject::File(out.join(RUNS_DIR).to_path_buf()), format!(
         "{}: holds {count} run{} that {} not in this sweep ({}); --resume only continues the same sweep or adds runs to it: {instead}",
         out.join(RUNS_DIR).display(),
         if count == 1 { "" } else { "s" },
