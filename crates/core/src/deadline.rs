@@ -78,7 +78,7 @@ impl Deadline {
 
 /// A solve or growth run stopped by `solver.max_seconds`.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("solver.max_seconds = {} s reached {place}", number(*seconds))]
+#[error("{} = {} s reached {place}", crate::names::Quantity::MaxSeconds, number(*seconds))]
 pub struct OutOfTime {
     pub seconds: f64,
     /// Where it was reached: which solve, stage, time or iteration.
@@ -102,7 +102,7 @@ mod tests {
         let e = d.check(|| "in the elastic solve".into()).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "solver.max_seconds = 1e-9 s reached in the elastic solve"
+            "max_seconds = 1e-9 s reached in the elastic solve"
         );
         assert!(Deadline::after(Some(60.0)).check(|| unreachable!()).is_ok());
     }

@@ -14,6 +14,7 @@ pub mod fit;
 pub mod growth;
 pub mod mesh;
 pub mod model;
+pub mod names;
 pub mod outputs;
 /// The two problems (in growth/problem.rs, beside the growth settings they hold), at the
 /// path `crate::problem`.

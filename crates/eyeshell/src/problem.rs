@@ -11,43 +11,8 @@ pub use eyeshell_core::problem::{
 
 use crate::scene::{Scene, SceneError};
 
-/// The scene key that sets `quantity`.
-pub fn key_of(quantity: Quantity) -> &'static str {
-    use Quantity as Q;
-    match quantity {
-        Q::Pressure => "pressure.dP",
-        Q::Modulus => "material.C",
-        Q::Bending => "material.bending",
-        Q::Thickness => "material.H0",
-        Q::FibreStiffness => "fibres.D",
-        Q::CorneaModulus => "cornea.C",
-        Q::CorneaThickness => "cornea.H",
-        Q::CorneaRadius => "cornea.R0",
-        Q::Radius => "geometry.R0",
-        Q::Fraction => "geometry.fraction",
-        Q::PoleTruncation => "solver.epsilon",
-        Q::NewtonTolerance => "solver.newton_tol",
-        Q::Nodes => "solver.nodes",
-        Q::MaxSeconds => "solver.max_seconds",
-        Q::Tolerance => "solver.tol",
-        Q::Richardson => "solver.richardson",
-        Q::GrowthRate => "growth.eta0",
-        Q::CapacityFall => "growth.Gamma",
-        Q::CapacityWidth => "growth.delta",
-        Q::KinkWidth => "growth.kink_width",
-        Q::EndTime => "growth.t_end",
-        Q::RelativeTolerance => "solver.rtol",
-        Q::AbsoluteTolerance => "solver.atol",
-        Q::Steps => "solver.steps",
-        Q::OutputTimes => "output.times",
-        Q::Sensitivities => "solver.integrator",
-        Q::Schedule => "growth.schedule",
-        Q::Optics => "optics.eye",
-        Q::Lenses => "optics.lenses",
-        // The core may name quantities this table does not know yet.
-        _ => "(scene)",
-    }
-}
+/// The scene key that sets `quantity` (the scene layer's table, scene/names.rs).
+pub use crate::scene::names::key_of;
 
 /// A problem's refusal as the scene's: origin, key, value, what is wrong.
 fn scene_error(scene: &Scene, e: ProblemError) -> SceneError {

@@ -66,6 +66,7 @@ use crate::bvp::settings::{Scheme, SolverSettings};
 use crate::deadline::Deadline;
 use crate::mesh::{Mesh, POLE_RATIO};
 use crate::model::params::Params;
+use crate::names::Quantity;
 use crate::text::number;
 use std::time::Instant;
 
@@ -110,7 +111,8 @@ impl std::fmt::Display for Unreached {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "solver.tol = {} cannot be reached: the best estimated error was {:.2e} with {} nodes; ",
+            "{} = {} cannot be reached: the best estimated error was {:.2e} with {} nodes; ",
+            Quantity::Tolerance,
             number(self.tol),
             self.best_error,
             self.best_nodes
@@ -126,7 +128,8 @@ impl std::fmt::Display for Unreached {
             ),
             UnreachedWhy::NodeCap { max_nodes } => write!(
                 f,
-                "the next mesh would need more than solver.max_nodes = {max_nodes} nodes"
+                "the next mesh would need more than {} = {max_nodes} nodes",
+                Quantity::MaxNodes
             ),
             UnreachedWhy::Passes => write!(f, "{MAX_PASSES} refinements did not reach it"),
             UnreachedWhy::Newton { residual } => write!(
@@ -683,7 +686,8 @@ impl Work {
         let deadline = self.deadline;
         let out_of_time = || {
             BvpError::OutOfTime(deadline.reached(format!(
-                "in the solve on {nodes} nodes of solver.tol's adaptation"
+                "in the solve on {nodes} nodes of {}'s adaptation",
+                Quantity::Tolerance
             )))
         };
         if deadline.passed() {

@@ -176,7 +176,7 @@ pub enum BvpError {
     },
     #[error("the equations cannot be evaluated at node {} (Σ = {}): {}", .0.node, decimals6(.0.sigma_ref), .0.why)]
     Evaluation(EvalFailure),
-    #[error("Newton stalled at a scaled residual of {residual:.2e} on {nodes} nodes, its Newton correction only {step:.1e} (scaled): the residual's round-off; solver.newton_tol = {} is below what double precision reaches on this mesh: ask for solver.newton_tol = {} or more", number(*newton_tol), number(precision_reached(*residual)))]
+    #[error("Newton stalled at a scaled residual of {residual:.2e} on {nodes} nodes, its Newton correction only {step:.1e} (scaled): the residual's round-off; {newton} = {} is below what double precision reaches on this mesh: ask for {newton} = {} or more", number(*newton_tol), number(precision_reached(*residual)), newton = crate::names::Quantity::NewtonTolerance)]
     PrecisionLimit {
         newton_tol: f64,
         residual: f64,

@@ -88,7 +88,10 @@ impl NonlinearSystem for ElasticSystem {
         if self.deadline.passed() {
             // Fatal: KINSOL stops at once (a recoverable error would only shorten the step).
             self.out_of_time = true;
-            return Err(CallbackError::Fatal("solver.max_seconds reached".into()));
+            return Err(CallbackError::Fatal(format!(
+                "{} reached",
+                crate::names::Quantity::MaxSeconds
+            )));
         }
         self.evaluations += 1;
         if self.evaluations > self.max_evaluations {

@@ -26,6 +26,7 @@ pub mod settings;
 pub use crate::model::growth_law::ThicknessLaw;
 use crate::model::optics::Source;
 use crate::model::stimulus::{EyeMeasure, Refraction};
+use crate::names::Quantity;
 pub use settings::{DaeLinear, GrowthParams, GrowthSettings, Integrator};
 
 pub mod problem;
@@ -276,12 +277,15 @@ fn check_rates(
         return Ok(());
     }
     Err(format!(
-        "the growth rates at t = 0 are too fast for the integrators: |∂p/∂t| / (solver.rtol·|p| + solver.atol) reaches {} per unit time, above {} (their error norms square it); the rates grow with growth.eta0 = {} (solver.rtol = {}, solver.atol = {})",
+        "the growth rates at t = 0 are too fast for the integrators: |∂p/∂t| / ({rtol}·|p| + {atol}) reaches {} per unit time, above {} (their error norms square it); the rates grow with {} = {} ({rtol} = {}, {atol} = {})",
         crate::text::decimals6(weighted),
         crate::text::number(MAX_WEIGHTED_RATE),
+        Quantity::GrowthRate,
         crate::text::number(growth.eta0),
         crate::text::number(settings.rtol),
         crate::text::number(settings.atol),
+        rtol = Quantity::RelativeTolerance,
+        atol = Quantity::AbsoluteTolerance,
     ))
 }
 
@@ -304,7 +308,7 @@ impl RunTerms {
 }
 
 /// A SUNDIALS failure of a growth run in eyeshell's words: what the integrator could not
-/// do, with the step it had come down to and the scene keys that set its tolerances,
+/// do, with the step it had come down to and the quantities that set its tolerances,
 /// numbers short; the call and flag follow in parentheses. Every SUNDIALS error of a
 /// growth run (IDA's and CVODE's) is reported through this one translation. `h` is the
 /// last step tried (0 before any).
@@ -336,8 +340,10 @@ pub(crate) fn integrator_words(
         .unwrap_or_default();
     let kind = name.trim_start_matches("IDA_").trim_start_matches("CV_");
     let tolerances = format!(
-        "solver.rtol = {}, solver.atol = {}",
+        "{} = {}, {} = {}",
+        Quantity::RelativeTolerance,
         number(run.rtol),
+        Quantity::AbsoluteTolerance,
         number(run.atol)
     );
     let step = if h != 0.0 {
@@ -347,7 +353,8 @@ pub(crate) fn integrator_words(
     };
     let what = match kind {
         "TOO_MUCH_WORK" => format!(
-            "the integrator took the most steps it may without reaching growth.t_end = {}{step}: the growth is too stiff for its steps at {tolerances}",
+            "the integrator took the most steps it may without reaching {} = {}{step}: the growth is too stiff for its steps at {tolerances}",
+            Quantity::EndTime,
             number(run.t_end)
         ),
         "TOO_MUCH_ACC" => format!(
@@ -367,7 +374,8 @@ pub(crate) fn integrator_words(
             format!("the equations could not be evaluated{step}{ours}")
         }
         "ILL_INPUT" | "TOO_CLOSE" | "BAD_T" => format!(
-            "the integrator cannot step from here{step}: the times or the rates of the run lie beyond what double precision resolves (growth.t_end = {}, {tolerances})",
+            "the integrator cannot step from here{step}: the times or the rates of the run lie beyond what double precision resolves ({} = {}, {tolerances})",
+            Quantity::EndTime,
             number(run.t_end)
         ),
         "MEM_FAIL" => "out of memory".into(),
@@ -589,7 +597,11 @@ pub(crate) fn run_on(
     {
         return Err(fail(
             0.0,
-            "the sensitivity to stimulus.blue.z_B needs stimulus.source = \"polynomial\" (a computed surface is traced about its centre once)".into(),
+            format!(
+                "the sensitivity to {} needs {} = \"polynomial\" (a computed surface is traced about its centre once)",
+                Quantity::BlueCentre,
+                Quantity::StimulusSource
+            ),
             GrowthStats::default(),
         ));
     }
@@ -611,7 +623,8 @@ pub(crate) fn run_on(
         return Err(fail(
             0.0,
             format!(
-                "sensitivities need solver.integrator = \"ida\" (the scene has \"{}\")",
+                "sensitivities need {} = \"ida\" (the scene has \"{}\")",
+                Quantity::Integrator,
                 settings.integrator.name()
             ),
             GrowthStats::default(),
@@ -915,8 +928,8 @@ mod tests {
         }
     }
 
-    /// SUNDIALS' failures in eyeshell's words: what could not be done, the step, the keys
-    /// that set the tolerances, short numbers, our callbacks' own reason; the call and the
+    /// SUNDIALS' failures in eyeshell's words: what could not be done, the step, the
+    /// tolerances by name (core's own: no front end gave its words in this binary), short numbers, our callbacks' own reason; the call and the
     /// flag only in parentheses at the end, SUNDIALS' own text not at all.
     #[test]
     fn integrator_failures_speak_the_scenes_terms() {
@@ -930,8 +943,8 @@ mod tests {
         assert_eq!(
             words,
             "the error test failed repeatedly (last step 3.500000e-13): the solution changes \
-             faster than the integrator can follow at solver.rtol = 1e-10, solver.atol = 1e-250 \
-             (IDASolve (one step): IDA_ERR_FAIL)"
+             faster than the integrator can follow at rtol = 1e-10, atol = 1e-250 (IDASolve \
+             (one step): IDA_ERR_FAIL)"
         );
         let with_ours = format!("{sundials}{RECOVERABLE_NOTE}the elastic solve failed at node 3");
         let words = integrator_words(&flag("IDA_CONV_FAIL", &with_ours), 0.0, run);

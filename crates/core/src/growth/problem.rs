@@ -21,63 +21,9 @@ use crate::model::optics::Source;
 use crate::model::params::Params;
 use crate::text::{decimals6, number};
 
-/// The quantity of a problem that a [`ProblemError`] is about, named after the mathematics
-/// (docs/MODEL.md §1–5); the scene layer maps each to the key that sets it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum Quantity {
-    /// ΔP, the pressure difference.
-    Pressure,
-    /// C, the sclera's neo-Hookean modulus.
-    Modulus,
-    /// E_b, the bending stiffness.
-    Bending,
-    /// H0, the uniform thickness.
-    Thickness,
-    /// D, the fibre stiffness.
-    FibreStiffness,
-    /// C_c, H_c, R_c: the cornea's modulus, thickness and radius.
-    CorneaModulus,
-    CorneaThickness,
-    CorneaRadius,
-    /// R0, the reference sphere's radius.
-    Radius,
-    /// f, with L = π f R0.
-    Fraction,
-    /// ε, the pole's truncation.
-    PoleTruncation,
-    /// The Newton tolerance of the elastic solve.
-    NewtonTolerance,
-    /// The number of uniform nodes.
-    Nodes,
-    /// The wall-clock bound of a solve.
-    MaxSeconds,
-    /// The global error asked of the elastic solve.
-    Tolerance,
-    /// Richardson's extrapolation (elastic solves only).
-    Richardson,
-    /// η0, Γ, δ, the kink width: the growth law's numbers.
-    GrowthRate,
-    CapacityFall,
-    CapacityWidth,
-    KinkWidth,
-    /// t_end, the end of the growth run.
-    EndTime,
-    /// The integrators' relative and absolute tolerances.
-    RelativeTolerance,
-    AbsoluteTolerance,
-    /// Euler's number of steps.
-    Steps,
-    /// The snapshot times.
-    OutputTimes,
-    /// The forward sensitivities asked for.
-    Sensitivities,
-    /// The growth schedule and the clock of ages.
-    Schedule,
-    /// The optics the stimulus is computed from, and the lenses in front of the eye.
-    Optics,
-    Lenses,
-}
+/// The quantity of a problem that a [`ProblemError`] is about (crate::names, where every
+/// message of core finds it).
+pub use crate::names::Quantity;
 
 /// Why a problem cannot be built: the quantity and what is wrong with it, in the model's
 /// terms (the scene layer adds the key and the origin).

@@ -17,6 +17,7 @@
 //! constant-rate growth depends on η0 and τ only through η0 τ), so it needs only the η0
 //! sensitivity the run integrates anyway, and ∂S/∂θ in closed form.
 
+use crate::names::Quantity;
 use crate::text::number;
 
 /// time.unit: what the ages of the scene, its data and its outputs are in.
@@ -84,35 +85,45 @@ impl Clock {
     /// Why the clock cannot be used, as (key, problem): a unit without its start or end, an
     /// end not after the start, ages so far apart or so large that their differences are
     /// not resolved.
-    pub fn check(&self) -> Result<(), (&'static str, String)> {
+    pub fn check(&self) -> Result<(), (Quantity, String)> {
         match (self.unit, self.start, self.end) {
             (TimeUnit::None, None, None) => Ok(()),
             (TimeUnit::None, _, _) => Err((
-                "time.unit",
-                "is \"none\" (dimensionless t), but time.start or time.end is given: set time.unit = \"years\" or \"days\" to count in ages".into(),
+                Quantity::TimeUnit,
+                format!(
+                    "is \"none\" (dimensionless t), but {} or {} is given: set {} = \"years\" or \"days\" to count in ages",
+                    Quantity::TimeStart,
+                    Quantity::TimeEnd,
+                    Quantity::TimeUnit
+                ),
             )),
             (u, None, _) | (u, _, None) => Err((
-                "time.unit",
+                Quantity::TimeUnit,
                 format!(
-                    "is \"{}\", but time.start and time.end must both be given: the ages mapped onto the growth window [0, growth.t_end]",
-                    u.name()
+                    "is \"{}\", but {} and {} must both be given: the ages mapped onto the growth window [0, {}]",
+                    u.name(),
+                    Quantity::TimeStart,
+                    Quantity::TimeEnd,
+                    Quantity::EndTime
                 ),
             )),
             (_, Some(a0), Some(a1)) => {
                 if a1 <= a0 {
                     return Err((
-                        "time.end",
+                        Quantity::TimeEnd,
                         format!(
-                            "must come after time.start = {} (the ages are out of order)",
+                            "must come after {} = {} (the ages are out of order)",
+                            Quantity::TimeStart,
                             number(a0)
                         ),
                     ));
                 }
                 if !(a1 - a0).is_finite() || a1 - a0 <= 1e-9 * a0.abs().max(a1.abs()) {
                     return Err((
-                        "time.end",
+                        Quantity::TimeEnd,
                         format!(
-                            "is too close to time.start = {} or too far from it: their difference must be finite and resolved in double precision",
+                            "is too close to {} = {} or too far from it: their difference must be finite and resolved in double precision",
+                            Quantity::TimeStart,
                             number(a0)
                         ),
                     ));
@@ -127,19 +138,22 @@ impl Clock {
     /// Why the clock cannot be used over a growth window of length `t_end`, as (key,
     /// problem): ages whose rate k = (time.end − time.start)/t_end is not a finite positive
     /// number (the age of every output time would be NaN or infinite).
-    pub fn check_window(&self, t_end: f64) -> Result<(), (&'static str, String)> {
+    pub fn check_window(&self, t_end: f64) -> Result<(), (Quantity, String)> {
         if !self.has_ages() {
             return Ok(());
         }
         let (a0, k) = self.affine(t_end);
         if !(k.is_finite() && k > 0.0 && (a0 + k * t_end).is_finite()) {
             return Err((
-                "time.end",
+                Quantity::TimeEnd,
                 format!(
-                    "maps onto growth.t_end = {} at {} {} per unit of t, which is not a finite positive rate: bring time.start and time.end closer or growth.t_end nearer 1",
+                    "maps onto {t_end_name} = {} at {} {} per unit of t, which is not a finite positive rate: bring {} and {} closer or {t_end_name} nearer 1",
                     number(t_end),
                     number(k),
-                    self.unit.name()
+                    self.unit.name(),
+                    Quantity::TimeStart,
+                    Quantity::TimeEnd,
+                    t_end_name = Quantity::EndTime
                 ),
             ));
         }
@@ -209,11 +223,12 @@ pub enum ScheduleParam {
 }
 
 impl ScheduleParam {
-    pub fn key(self) -> &'static str {
+    /// The quantity it is, for messages.
+    pub fn quantity(self) -> Quantity {
         match self {
-            ScheduleParam::Tau => "growth.schedule_tau",
-            ScheduleParam::Centre => "growth.schedule_centre",
-            ScheduleParam::Width => "growth.schedule_width",
+            ScheduleParam::Tau => Quantity::ScheduleTau,
+            ScheduleParam::Centre => Quantity::ScheduleCentre,
+            ScheduleParam::Width => Quantity::ScheduleWidth,
         }
     }
 
@@ -234,25 +249,27 @@ impl Schedule {
 
     /// Why the schedule cannot be used, as (key, problem): a table whose times are out of
     /// order or whose factors are negative or not finite, lists of different lengths.
-    pub fn check(&self) -> Result<(), (&'static str, String)> {
+    pub fn check(&self) -> Result<(), (Quantity, String)> {
         if self.form != Form::Table {
             return Ok(());
         }
         let (xs, fs) = (&self.times, &self.factors);
         if xs.is_empty() || xs.len() != fs.len() {
             return Err((
-                "growth.schedule_factors",
+                Quantity::ScheduleFactors,
                 format!(
-                    "holds {} factors for {} times in growth.schedule_times: growth.schedule = \"table\" needs one factor at each time (at least one)",
+                    "holds {} factors for {} times in {}: {} = \"table\" needs one factor at each time (at least one)",
                     fs.len(),
-                    xs.len()
+                    xs.len(),
+                    Quantity::ScheduleTimes,
+                    Quantity::Schedule
                 ),
             ));
         }
         for (i, w) in xs.windows(2).enumerate() {
             if w[1] <= w[0] {
                 return Err((
-                    "growth.schedule_times",
+                    Quantity::ScheduleTimes,
                     format!(
                         "must be strictly increasing (the ages are out of order): {} (item {}) follows {}",
                         number(w[1]),
@@ -268,11 +285,12 @@ impl Schedule {
             .find(|(_, f)| !f.is_finite() || **f < 0.0 || **f > MAX_FACTOR)
         {
             return Err((
-                "growth.schedule_factors",
+                Quantity::ScheduleFactors,
                 format!(
-                    "item {} is {}: a factor on growth.eta0 must be finite, at least 0 and at most {} (the schedule multiplies the growth rate, which never goes negative)",
+                    "item {} is {}: a factor on {} must be finite, at least 0 and at most {} (the schedule multiplies the growth rate, which never goes negative)",
                     i + 1,
                     number(*f),
+                    Quantity::GrowthRate,
                     number(MAX_FACTOR)
                 ),
             ));
@@ -285,7 +303,7 @@ impl Schedule {
     /// Why the schedule cannot run over a growth window of length `t_end` on `clock`, as
     /// (key, problem): its clock S(t_end) = ∫₀^t_end s dt must be finite and at least
     /// [`super::settings::MIN_T_END`], or the run would grow nothing it can integrate.
-    pub fn check_window(&self, clock: &Clock, t_end: f64) -> Result<(), (&'static str, String)> {
+    pub fn check_window(&self, clock: &Clock, t_end: f64) -> Result<(), (Quantity, String)> {
         if self.is_constant() {
             return Ok(());
         }
@@ -293,16 +311,17 @@ impl Schedule {
         let min = super::settings::MIN_T_END;
         if !(tau_end.is_finite() && tau_end >= min) {
             let key = match self.form {
-                Form::Exponential => "growth.schedule_tau",
-                Form::Logistic => "growth.schedule_centre",
-                Form::Table => "growth.schedule_factors",
-                Form::Constant => "growth.schedule",
+                Form::Exponential => Quantity::ScheduleTau,
+                Form::Logistic => Quantity::ScheduleCentre,
+                Form::Table => Quantity::ScheduleFactors,
+                Form::Constant => Quantity::Schedule,
             };
             return Err((
                 key,
                 format!(
-                    "makes the schedule grow nothing that can be integrated: ∫ s dt over the growth window is {} (growth.schedule = \"{}\"); it must be finite and at least {}",
+                    "makes the schedule grow nothing that can be integrated: ∫ s dt over the growth window is {} ({} = \"{}\"); it must be finite and at least {}",
                     number(tau_end),
+                    Quantity::Schedule,
                     Form::NAMES[self.form as usize],
                     number(min)
                 ),
@@ -637,8 +656,9 @@ fn check_schedule_sensitivities(
             if growth.schedule.form != sp.form() {
                 let want = Form::NAMES[sp.form() as usize];
                 return Err(format!(
-                    "the sensitivity to {} needs growth.schedule = \"{want}\" (the scene has \"{}\")",
-                    sp.key(),
+                    "the sensitivity to {} needs {} = \"{want}\" (the scene has \"{}\")",
+                    sp.quantity(),
+                    Quantity::Schedule,
                     Form::NAMES[growth.schedule.form as usize]
                 ));
             }
@@ -673,8 +693,9 @@ impl OnClock {
         let min = super::settings::MIN_T_END;
         if !(tau_end.is_finite() && tau_end >= min) {
             return Err(format!(
-                "the schedule grows nothing that can be integrated: ∫ s dt over the growth window is {} (growth.schedule = \"{}\"); it must be finite and at least {}",
+                "the schedule grows nothing that can be integrated: ∫ s dt over the growth window is {} ({} = \"{}\"); it must be finite and at least {}",
                 number(tau_end),
+                Quantity::Schedule,
                 Form::NAMES[growth.schedule.form as usize],
                 number(min)
             ));
@@ -764,9 +785,10 @@ fn radius_runs(
         .map_err(|e| super::GrowthError {
             t: clocked.warp.time_at(e.t, clocked.t_end),
             reason: format!(
-                "the run at geometry.R0 = {} for the sensitivity to geometry.R0: {}",
+                "the run at {radius} = {} for the sensitivity to {radius}: {}",
                 number(r0),
-                e.reason
+                e.reason,
+                radius = Quantity::Radius
             ),
             stats: e.stats,
         })?;
@@ -828,7 +850,8 @@ impl RowsAt<'_> {
                 };
                 let (Some(up), Some(down)) = (at(&sides[0]), at(&sides[1])) else {
                     return Err(format!(
-                        "the runs at geometry.R0 ± {} recorded nothing at t = {}",
+                        "the runs at {} ± {} recorded nothing at t = {}",
+                        Quantity::Radius,
                         number(*h),
                         number(t)
                     )
@@ -979,7 +1002,7 @@ mod tests {
             start: Some(0.0),
             end: None,
         };
-        assert_eq!(c.check().unwrap_err().0, "time.unit");
+        assert_eq!(c.check().unwrap_err().0, Quantity::TimeUnit);
         let c = Clock {
             start: Some(0.0),
             end: Some(0.0),

@@ -46,6 +46,7 @@
 use crate::bvp::settings::SolverSettings;
 use crate::mesh::Mesh;
 use crate::model::params::Params;
+use crate::names::Quantity;
 
 use super::system::GrowthSystem;
 use super::{
@@ -609,7 +610,9 @@ pub(super) fn run(
         progress,
     } = hooks;
     let start = std::time::Instant::now();
-    let tol = solver.tol.expect("growth to a tolerance is for solver.tol");
+    let tol = solver
+        .tol
+        .expect("growth to a tolerance is for a global error tolerance");
     let refuse = |reason: String| GrowthError {
         t: 0.0,
         reason,
@@ -617,7 +620,11 @@ pub(super) fn run(
     };
     if settings.integrator == Integrator::Euler {
         return Err(refuse(
-            "solver.tol in a growth scene needs solver.integrator = \"ida\" or \"cvode\" (Euler's fixed steps have no tolerance to choose)".into(),
+            format!(
+                "{} in a growth scene needs {} = \"ida\" or \"cvode\" (Euler's fixed steps have no tolerance to choose)",
+                Quantity::Tolerance,
+                Quantity::Integrator
+            ),
         ));
     }
     let base = run_settings(solver, tol);
@@ -708,7 +715,8 @@ pub(super) fn run(
             .or_else(|| next(&round, tol, max_nodes, order));
         if accuracy.rounds.len() >= MAX_ROUNDS || choice.is_none_or(|c| c == (nodes, rtol)) {
             let mut e = refuse(format!(
-                "solver.tol = {} cannot be reached in growth: the estimated error was {} mm{} (space {}, time {}) on {} nodes at solver.rtol = {}{}",
+                "{} = {} cannot be reached in growth: the estimated error was {} mm{} (space {}, time {}) on {} nodes at {} = {}{}",
+                Quantity::Tolerance,
                 crate::text::number(tol),
                 crate::text::number(worst.total),
                 if order == SENSITIVITY_MODEL_ORDER {
@@ -719,12 +727,14 @@ pub(super) fn run(
                 crate::text::number(worst.space),
                 crate::text::number(worst.time),
                 fine_mesh.len(),
+                Quantity::RelativeTolerance,
                 crate::text::number(rtol),
                 if accuracy.rounds.len() >= MAX_ROUNDS {
                     format!(" after {MAX_ROUNDS} rounds")
                 } else {
                     format!(
-                        " and neither more nodes (solver.max_nodes = {}) nor a tighter rtol (down to {}) is predicted to reach it",
+                        " and neither more nodes ({} = {}) nor a tighter rtol (down to {}) is predicted to reach it",
+                        Quantity::MaxNodes,
                         solver.max_nodes,
                         crate::text::number(RTOL_RANGE.0)
                     )

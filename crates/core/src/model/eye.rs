@@ -15,6 +15,7 @@
 use eyeshell_optics as optics;
 use eyeshell_optics::{Dispersion, Medium, MediumKind, OpticalSystem, Surface};
 
+use crate::names::Quantity;
 use crate::text::number;
 
 /// The most surfaces a custom eye may have (a schematic eye has four to six).
@@ -302,7 +303,7 @@ impl std::fmt::Display for SurfaceKeyError {
 
 /// `optics.surfaces[i].name`.
 pub fn surface_key(i: usize, name: &str) -> String {
-    format!("optics.surfaces[{i}].{name}")
+    format!("{}[{i}].{name}", Quantity::Surfaces)
 }
 
 impl SurfaceSpec {
@@ -716,12 +717,13 @@ pub fn assemble(
         Some(eye) => {
             if surfaces.len() > eye.elements.len() {
                 return Err(SurfaceKeyError {
-                    key: format!("optics.surfaces[{}]", eye.elements.len()),
+                    key: format!("{}[{}]", Quantity::Surfaces, eye.elements.len()),
                     value: format!("({} surface tables)", surfaces.len()),
                     problem: format!(
-                        "is beyond the {} eye's {} surfaces (surfaces are counted from 0; give \"custom\" as optics.eye to describe an eye of your own)",
+                        "is beyond the {} eye's {} surfaces (surfaces are counted from 0; give \"custom\" as {} to describe an eye of your own)",
                         eye.name,
-                        eye.elements.len()
+                        eye.elements.len(),
+                        Quantity::Optics
                     ),
                 });
             }
@@ -760,10 +762,12 @@ pub fn assemble(
         None => {
             if surfaces.len() < 2 {
                 return Err(SurfaceKeyError {
-                    key: "optics.surfaces".into(),
+                    key: Quantity::Surfaces.to_string(),
                     value: format!("({} surface tables)", surfaces.len()),
                     problem: format!(
-                        "must describe 2 to {MAX_SURFACES} surfaces for optics.eye = \"custom\" (one [[optics.surfaces]] table each)"
+                        "must describe 2 to {MAX_SURFACES} surfaces for {} = \"custom\" (one [[{}]] table each)",
+                        Quantity::Optics,
+                        Quantity::Surfaces
                     ),
                 });
             }

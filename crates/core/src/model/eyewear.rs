@@ -17,10 +17,9 @@ use eyeshell_optics::refraction::{
 use eyeshell_optics::FocusSettings;
 
 use super::optics::{OpticsKeyError, OpticsSpec};
+use crate::names::Quantity;
 use crate::text::number;
 
-/// The key of the lenses.
-pub const LENSES_KEY: &str = "optics.lenses";
 /// The names `kind` takes.
 pub const KINDS: [&str; 2] = ["spectacle", "contact"];
 /// The names `stimulus.classify` takes.
@@ -81,7 +80,7 @@ fn profile_error(i: usize, e: ProfileError) -> OpticsKeyError {
         "power".to_string()
     };
     key_error(
-        format!("{LENSES_KEY}[{i}].{item}"),
+        format!("{}[{i}].{item}", Quantity::Lenses),
         number(e.value),
         e.problem,
     )
@@ -401,7 +400,7 @@ pub fn worn_at(spec: &OpticsSpec, t: f64) -> Result<optics::OpticalSystem, Optic
         .collect::<Result<Vec<_>, _>>()?;
     optics::lens::wear(&eye, &lenses).map_err(|e| {
         key_error(
-            LENSES_KEY.into(),
+            Quantity::Lenses.to_string(),
             lenses_text(&spec.lenses),
             format!("cannot be worn: {}", crate::text::one_line(&e.to_string())),
         )
@@ -458,11 +457,12 @@ pub fn check_coverage(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
         if let Some((item, edge)) = lens.edge() {
             if edge < reach {
                 return Err(key_error(
-                    format!("{LENSES_KEY}[{i}].{item}"),
+                    format!("{}[{i}].{item}", Quantity::Lenses),
                     number(edge),
                     format!(
-                        "is the lens's edge, but the pupil's rays cross the lens up to {} mm from its axis at optics.max_field = {}°: make it at least that",
+                        "is the lens's edge, but the pupil's rays cross the lens up to {} mm from its axis at {} = {}°: make it at least that",
                         number((reach * 100.0).ceil() / 100.0),
+                        Quantity::MaxField,
                         number(spec.max_field)
                     ),
                 ));
@@ -597,7 +597,7 @@ fn trace_pole(
     let (lo, hi) = super::optics::WAVELENGTH_RANGE;
     if !(spec.refraction_wavelength >= lo && spec.refraction_wavelength <= hi) {
         return Err(key_error(
-            "optics.refraction_wavelength".into(),
+            Quantity::RefractionWavelength.to_string(),
             number(spec.refraction_wavelength),
             format!("must lie between {lo} and {hi} nm"),
         ));
@@ -613,7 +613,7 @@ fn trace_pole(
     )
     .map_err(|e| {
         key_error(
-            "optics.refraction_wavelength".into(),
+            Quantity::RefractionWavelength.to_string(),
             number(spec.refraction_wavelength),
             format!(
                 "gives no refraction in the {} eye: {}",

@@ -20,8 +20,8 @@ pub mod stimulus;
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum ModelError {
-    #[error("pressure.dP = {} is above the cornea's limit: the largest admissible ΔP is {} kPa (4 C_c H_c / R_c · (6/7) · 7^(-1/6))", crate::text::number(*dp), crate::text::decimals6(*max))]
+    #[error("{} = {} is above the cornea's limit: the largest admissible ΔP is {} kPa (4 C_c H_c / R_c · (6/7) · 7^(-1/6))", crate::names::Quantity::Pressure, crate::text::number(*dp), crate::text::decimals6(*max))]
     PressureAboveCorneaLimit { dp: f64, max: f64 },
-    #[error("pressure.dP = {} must be non-negative", crate::text::number(*dp))]
+    #[error("{} = {} must be non-negative", crate::names::Quantity::Pressure, crate::text::number(*dp))]
     NegativePressure { dp: f64 },
 }

@@ -14,6 +14,7 @@ use eyeshell_optics::{Criterion, OpticalSystem, OpticsError, PolarSpline, Pupil,
 
 use super::eye::{self, SurfaceKeyError, SurfaceSpec};
 pub use super::images::{ComputedImage, ShareCurve};
+use crate::names::Quantity;
 use crate::text::number;
 
 /// The names `stimulus.source` takes, in the order of [`Source`]'s variants.
@@ -175,9 +176,9 @@ impl OpticsSpec {
             },
             (None, None) => {
                 return Err(OpticsKeyError {
-                    key: "optics.pupil_position".into(),
+                    key: Quantity::PupilPosition.to_string(),
                     value: "(none)".into(),
-                    problem: "must be given for optics.eye = \"custom\" (mm from the corneal apex to the pupil's centre)".into(),
+                    problem: format!("must be given for {} = \"custom\" (mm from the corneal apex to the pupil's centre)", Quantity::Optics),
                 })
             }
         };
@@ -191,7 +192,7 @@ impl OpticsSpec {
         system
             .check_pupil_position(position)
             .map_err(|e| OpticsKeyError {
-                key: "optics.pupil_position".into(),
+                key: Quantity::PupilPosition.to_string(),
                 value: number(position),
                 problem: match e {
                     OpticsError::InvalidInput { reason, .. } => reason,
@@ -310,14 +311,14 @@ impl OpticsSpec {
         };
         if !(self.pupil > 0.0 && self.pupil <= MAX_PUPIL) {
             return Err(err(
-                "optics.pupil",
+                Quantity::Pupil.name(),
                 number(self.pupil),
                 format!("must lie in (0, {MAX_PUPIL}] mm (a pupil's diameter)"),
             ));
         }
         if self.wavelengths.len() < 2 {
             return Err(err(
-                "optics.wavelengths",
+                Quantity::Wavelengths.name(),
                 self.wavelengths_text(),
                 "must list at least two wavelengths (nm): blue, then red".into(),
             ));
@@ -325,7 +326,7 @@ impl OpticsSpec {
         let (lo, hi, why) = self.wavelength_range();
         if let Some(w) = self.wavelengths.iter().find(|w| !(**w >= lo && **w <= hi)) {
             return Err(err(
-                "optics.wavelengths",
+                Quantity::Wavelengths.name(),
                 self.wavelengths_text(),
                 format!(
                     "must lie between {lo} and {hi} nm {why} ({} does not)",
@@ -336,7 +337,7 @@ impl OpticsSpec {
         let (blue, red) = (self.wavelengths[0], self.wavelengths[1]);
         if !(blue < red) {
             return Err(err(
-                "optics.wavelengths",
+                Quantity::Wavelengths.name(),
                 self.wavelengths_text(),
                 format!(
                     "must list the blue wavelength first, then a longer red one ({} nm is not shorter than {} nm): the blue surface is the stimulus, the red one classifies the eye",
@@ -351,16 +352,17 @@ impl OpticsSpec {
             .collect();
         if let [first, second, ..] = contacts[..] {
             return Err(err(
-                &format!("{}[{second}].kind", super::eyewear::LENSES_KEY),
+                &format!("{}[{second}].kind", Quantity::Lenses),
                 "\"contact\"".into(),
                 format!(
-                    "is a second contact lens (optics.lenses[{first}] is one): two contact lenses cannot be worn at once, the cornea holds one"
+                    "is a second contact lens ({}[{first}] is one): two contact lenses cannot be worn at once, the cornea holds one",
+                    Quantity::Lenses
                 ),
             ));
         }
         if !(self.max_field >= 5.0 && self.max_field <= optics::MAX_FIELD_DEG) {
             return Err(err(
-                "optics.max_field",
+                Quantity::MaxField.name(),
                 number(self.max_field),
                 format!(
                     "must lie in [5, {}] degrees (field angles in air)",
@@ -370,7 +372,7 @@ impl OpticsSpec {
         }
         if self.surfaces.len() > eye::MAX_SURFACES {
             return Err(err(
-                "optics.surfaces",
+                Quantity::Surfaces.name(),
                 format!("({} surface tables)", self.surfaces.len()),
                 format!("must describe at most {} surfaces", eye::MAX_SURFACES),
             ));
@@ -381,7 +383,7 @@ impl OpticsSpec {
         if let Some(z) = self.pupil_position {
             if !(z.is_finite() && z > 0.0) {
                 return Err(err(
-                    "optics.pupil_position",
+                    Quantity::PupilPosition.name(),
                     number(z),
                     "must be a positive distance (mm from the corneal apex)".into(),
                 ));
@@ -658,7 +660,7 @@ impl OpticsSpec {
             );
             if naked.is_ok() {
                 return OpticsKeyError {
-                    key: super::eyewear::LENSES_KEY.into(),
+                    key: Quantity::Lenses.to_string(),
                     value: super::eyewear::lenses_text(&self.lenses),
                     problem: format!(
                         "form no image in the {} eye: {}",
@@ -690,37 +692,42 @@ impl OpticsSpec {
                 ..
             } => match self.surface_to_blame(*field_deg, *wavelength_nm) {
                 Some(blame) => blame,
-                None if *field_deg > 0.0 => ("optics.max_field".into(), number(self.max_field)),
-                None => ("optics.pupil".into(), number(self.pupil)),
+                None if *field_deg > 0.0 => {
+                    (Quantity::MaxField.to_string(), number(self.max_field))
+                }
+                None => (Quantity::Pupil.to_string(), number(self.pupil)),
             },
             OpticsError::InvalidInput { what, .. } if what.contains("wavelength") => {
-                ("optics.wavelengths".into(), self.wavelengths_text())
+                (Quantity::Wavelengths.to_string(), self.wavelengths_text())
             }
             // A surface's own number (the tables' ranges are checked first, so this is a
             // combination of them: an ellipsoid that ends before the next surface, ...).
             OpticsError::InvalidSystem { what, .. } if what.starts_with("surface '") => (
-                "optics.surfaces".into(),
+                Quantity::Surfaces.to_string(),
                 format!("({} surface tables)", self.surfaces.len()),
             ),
             OpticsError::InvalidSystem { .. } => {
-                ("optics.wavelengths".into(), self.wavelengths_text())
+                (Quantity::Wavelengths.to_string(), self.wavelengths_text())
             }
             OpticsError::InvalidInput { what, .. } if what.contains("field") => {
-                ("optics.max_field".into(), number(self.max_field))
+                (Quantity::MaxField.to_string(), number(self.max_field))
             }
-            OpticsError::InvalidInput { .. } => ("optics.pupil".into(), number(self.pupil)),
+            OpticsError::InvalidInput { .. } => (Quantity::Pupil.to_string(), number(self.pupil)),
             OpticsError::Fit(_) => (
-                "optics.focus".into(),
+                Quantity::Focus.to_string(),
                 format!("\"{}\"", FOCUS_NAMES[self.focus]),
             ),
             OpticsError::Eyewear { lens, .. } => (
-                format!("{}[{lens}]", super::eyewear::LENSES_KEY),
+                format!("{}[{lens}]", Quantity::Lenses),
                 self.lenses
                     .get(*lens)
                     .map_or_else(|| "(none)".into(), super::eyewear::LensSpec::describe),
             ),
             // A kind of failure the optics crate adds later: the eye as a whole.
-            _ => ("optics.eye".into(), format!("\"{}\"", self.eye_name())),
+            _ => (
+                Quantity::Optics.to_string(),
+                format!("\"{}\"", self.eye_name()),
+            ),
         };
         OpticsKeyError {
             key,
@@ -781,7 +788,7 @@ impl OpticsSpec {
             }
         }
         Some((
-            "optics.surfaces".into(),
+            Quantity::Surfaces.to_string(),
             format!("({} surface tables)", self.surfaces.len()),
         ))
     }

@@ -186,6 +186,8 @@ fn richardson_meets_the_tolerance_with_its_own_estimate() {
 
 #[test]
 fn a_tolerance_below_round_off_stops_with_one_clear_error() {
+    // The messages named below are the scene's words: give core the keys first.
+    eyeshell::scene::names::speak_in_keys();
     for (name, p) in [
         ("exact sphere", exact_sphere()),
         ("fibre shell", fibre_shell()),

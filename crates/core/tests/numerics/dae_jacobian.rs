@@ -176,8 +176,8 @@ fn newton_matrix_matches_differences_with_computed_surfaces() {
 /// border row is the average's partials in every point inside it.
 #[test]
 fn newton_matrix_matches_differences_for_every_rule() {
-    use eyeshell::model::rule::{Region, CATALOGUE};
-    use eyeshell::model::stimulus::{Surface, RED_OFFSET};
+    use eyeshell_core::model::rule::{Region, CATALOGUE};
+    use eyeshell_core::model::stimulus::{Surface, RED_OFFSET};
     let blue = Surface {
         z_b: Surface::blue().z_b - 3.5,
         ..Surface::blue()
@@ -218,8 +218,8 @@ fn newton_matrix_matches_differences_for_every_rule() {
 /// share of the light: the Newton matrix carries the shares' slopes in φ too.
 #[test]
 fn newton_matrix_matches_differences_through_two_images() {
-    use eyeshell::model::eyewear::{LensSpec, ProfileSpec};
-    use eyeshell::model::optics::{OpticsSpec, Source};
+    use eyeshell_core::model::eyewear::{LensSpec, ProfileSpec};
+    use eyeshell_core::model::optics::{OpticsSpec, Source};
     let mut g = GrowthParams {
         source: Source::Optics,
         optics: OpticsSpec {

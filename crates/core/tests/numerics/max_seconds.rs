@@ -59,6 +59,8 @@ fn grow_with(
 
 #[test]
 fn every_integrator_stops_in_its_own_callback() {
+    // The messages named below are the scene's words: give core the keys first.
+    eyeshell::scene::names::speak_in_keys();
     let cases = [
         (Integrator::Ida, "in IDA's residual at t = "),
         (Integrator::Cvode, "in CVODE's right-hand side at t = "),
@@ -89,6 +91,8 @@ fn every_integrator_stops_in_its_own_callback() {
 
 #[test]
 fn an_elastic_solve_stops_at_its_first_residual() {
+    // The messages named below are the scene's words: give core the keys first.
+    eyeshell::scene::names::speak_in_keys();
     // Laying 20,001 nodes and making KINSOL take far longer than a microsecond.
     let e = bvp::solve(&Params::default(), &bounded(20_001, Some(1e-6)), None).unwrap_err();
     assert!(matches!(e, BvpError::OutOfTime(_)), "{e:?}");
@@ -175,6 +179,8 @@ impl Observer for SleepUntil {
 /// clock is the job's (`a_bound_counted_from_an_earlier_start_stops_the_first_stage` does).
 #[test]
 fn with_tol_the_runs_of_the_choice_share_one_bound() {
+    // The messages named below are the scene's words: give core the keys first.
+    eyeshell::scene::names::speak_in_keys();
     // At tol 1e-4 the first two runs take a few hundredths of a second.
     let solver = SolverSettings {
         tol: Some(1e-4),
@@ -210,6 +216,8 @@ fn with_tol_the_runs_of_the_choice_share_one_bound() {
 /// bound as given, and hands nothing on.
 #[test]
 fn a_bound_counted_from_an_earlier_start_stops_the_first_stage() {
+    // The messages named below are the scene's words: give core the keys first.
+    eyeshell::scene::names::speak_in_keys();
     let solver = SolverSettings {
         tol: Some(1e-4),
         max_seconds: Some(1.0),

@@ -96,12 +96,13 @@ impl FitParam {
     /// [`keys::SensitivityKeyError`] for a key that is not such a parameter.
     pub fn from_key(key: &str) -> Result<FitParam, keys::SensitivityKeyError> {
         let param = keys::sensitivity_param(key)?;
-        let bounds = keys::find(param.key()).map_or(Bounds::NONE, |k| bounds_of_rule(k.rule));
+        let bounds = keys::find(crate::scene::names::sensitivity_key(param))
+            .map_or(Bounds::NONE, |k| bounds_of_rule(k.rule));
         Ok(FitParam { param, bounds })
     }
 
     pub fn key(&self) -> &'static str {
-        self.param.key()
+        crate::scene::names::sensitivity_key(self.param)
     }
 
     /// The parameter's range in `scene`: its key's range narrowed by the limits that tie
@@ -152,7 +153,7 @@ pub fn check_params(scene: &Scene, params: &[FitParam], what: &str) -> Result<()
             use growth::schedule::Form;
             return Err(Error::input(Subject::Key("growth.schedule".into()), format!(
                 "{what}: {} needs growth.schedule = \"{}\" ({} has \"{}\"): the schedule has no such parameter",
-                sp.key(),
+                crate::scene::names::key_of(sp.quantity()),
                 Form::NAMES[sp.form() as usize],
                 scene.origin_of_key("growth.schedule"),
                 Form::NAMES[form as usize]

@@ -441,7 +441,7 @@ pub fn sensitivity_param(key: &str) -> Result<SensParam, SensitivityKeyError> {
     if let Some(p) = SensParam::ALL
         .into_iter()
         .chain(SensParam::OUTSIDE)
-        .find(|p| p.key() == key)
+        .find(|p| super::names::sensitivity_key(*p) == key)
     {
         return Ok(p);
     }
@@ -461,18 +461,18 @@ pub fn sensitivity_param(key: &str) -> Result<SensParam, SensitivityKeyError> {
 #[non_exhaustive]
 pub enum SensitivityKeyError {
     /// A key of the classification alone, to which every sensitivity is zero.
-    #[error("{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero (supported: {})", SensParam::SUPPORTED)]
+    #[error("{key} only affects the classification (myopic or hyperopic), not the growth: every sensitivity to it is zero (supported: {})", super::names::supported_sensitivities())]
     ClassificationOnly { key: String },
     /// A scene key that is not a parameter sensitivities are taken to.
     #[error(
         "sensitivities to {key} are not available (supported: {})",
-        SensParam::SUPPORTED
+        super::names::supported_sensitivities()
     )]
     NotAvailable { key: String },
     /// Not a scene key; `list_keys` is what lists them, in the caller's terms.
     #[error(
         "{key:?} is not a scene key (supported: {}; {list_keys} lists every key)",
-        SensParam::SUPPORTED
+        super::names::supported_sensitivities()
     )]
     NotAKey { key: String, list_keys: String },
 }

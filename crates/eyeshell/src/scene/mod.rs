@@ -16,6 +16,7 @@
 //! output.times, stimulus.*) are kept but not used, shown or summarised.
 
 pub mod keys;
+pub mod names;
 pub mod optics_toml;
 pub mod sample;
 pub mod sweep;
@@ -93,6 +94,8 @@ impl Default for Stimulus {
 
 impl Default for Scene {
     fn default() -> Self {
+        // Every scene starts here: from the first on, core's messages name keys.
+        names::speak_in_keys();
         Scene {
             params: Params::default(),
             solver: SolverSettings::default(),

@@ -6,12 +6,9 @@
 
 use eyeshell_optics::refraction::VERTEX_MM;
 
-use crate::model::eye::{
-    surface_key, EyeValue, MediumSpec, SurfaceKeyError, SurfaceSpec, SURFACE_KEYS,
-};
-use crate::model::eyewear::{
-    LensSpec, Lenslets, ProfileSpec, KINDS, LENSES_KEY, MAX_LENSES, MAX_POINTS,
-};
+use super::parse::{LENSES_KEY, SURFACES_KEY};
+use crate::model::eye::{EyeValue, MediumSpec, SurfaceKeyError, SurfaceSpec, SURFACE_KEYS};
+use crate::model::eyewear::{LensSpec, Lenslets, ProfileSpec, KINDS, MAX_LENSES, MAX_POINTS};
 use crate::model::optics::OpticsKeyError;
 use crate::text::number;
 
@@ -25,6 +22,11 @@ pub trait SurfaceToml: Sized {
     fn from_toml(i: usize, v: &toml::Value) -> Result<Self, SurfaceKeyError>;
     /// The surface as a TOML table (its keys in the table's own, alphabetical, order).
     fn to_toml(&self) -> toml::Value;
+}
+
+/// `optics.surfaces[i].name`.
+fn surface_key(i: usize, name: &str) -> String {
+    format!("{SURFACES_KEY}[{i}].{name}")
 }
 
 fn key_error(key: String, value: String, problem: impl Into<String>) -> OpticsKeyError {

@@ -156,6 +156,7 @@ impl Scene {
                 .and_then(|()| g.schedule.check_window(&g.clock, g.t_end))
                 .err()
             {
+                let key = super::names::key_of(key);
                 let value =
                     crate::scene::keys::find(key).map_or_else(String::new, |k| show(&k.get(self)));
                 return Err(invalid(&[key], value, problem));

@@ -3,6 +3,7 @@
 
 #[allow(unused_imports)]
 use super::*;
+use crate::names::Quantity;
 
 /// A parameter the growth run's forward sensitivities are taken with respect to (docs/MODEL.md §10).
 /// η0, Γ, δ enter only the growth rates, through the capacity g_c(Σ) = η0/2 (1 + tanh((Γ −
@@ -46,7 +47,7 @@ pub enum SensParam {
 #[non_exhaustive]
 pub enum SensitivityError {
     /// The fibres' stiffness in a scene without fibres.
-    #[error("{} = 0: the scene has no fibres, so there is no sensitivity to their stiffness", .param.key())]
+    #[error("{} = 0: the scene has no fibres, so there is no sensitivity to their stiffness", .param.quantity())]
     NoFibres { param: SensParam },
 }
 
@@ -70,9 +71,6 @@ impl SensParam {
         SensParam::Radius,
     ];
 
-    /// The scene keys sensitivities can be taken to, for messages and help.
-    pub const SUPPORTED: &'static str = "growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B, growth.schedule_tau, growth.schedule_centre, growth.schedule_width, geometry.R0";
-
     /// The schedule's parameter this is, if it is one.
     pub fn schedule_param(self) -> Option<crate::growth::schedule::ScheduleParam> {
         use crate::growth::schedule::ScheduleParam;
@@ -89,22 +87,29 @@ impl SensParam {
         !Self::OUTSIDE.contains(&self)
     }
 
-    /// The scene key.
-    pub fn key(self) -> &'static str {
+    /// The quantity it is: what messages and sensitivity rows name it by
+    /// ([`crate::names`]; the scene layer maps it to its key).
+    pub fn quantity(self) -> Quantity {
         match self {
-            SensParam::Eta0 => "growth.eta0",
-            SensParam::Gamma => "growth.Gamma",
-            SensParam::Delta => "growth.delta",
-            SensParam::FibreStiffness => "fibres.D",
-            SensParam::Modulus => "material.C",
-            SensParam::Bending => "material.bending",
-            SensParam::Pressure => "pressure.dP",
-            SensParam::BlueCentre => "stimulus.blue.z_B",
-            SensParam::ScheduleTau => "growth.schedule_tau",
-            SensParam::ScheduleCentre => "growth.schedule_centre",
-            SensParam::ScheduleWidth => "growth.schedule_width",
-            SensParam::Radius => "geometry.R0",
+            SensParam::Eta0 => Quantity::GrowthRate,
+            SensParam::Gamma => Quantity::CapacityFall,
+            SensParam::Delta => Quantity::CapacityWidth,
+            SensParam::FibreStiffness => Quantity::FibreStiffness,
+            SensParam::Modulus => Quantity::Modulus,
+            SensParam::Bending => Quantity::Bending,
+            SensParam::Pressure => Quantity::Pressure,
+            SensParam::BlueCentre => Quantity::BlueCentre,
+            SensParam::ScheduleTau => Quantity::ScheduleTau,
+            SensParam::ScheduleCentre => Quantity::ScheduleCentre,
+            SensParam::ScheduleWidth => Quantity::ScheduleWidth,
+            SensParam::Radius => Quantity::Radius,
         }
+    }
+
+    /// Its name in messages and in the rows' `parameter`: the front end's word for its
+    /// quantity (the scene key under the `eyeshell` crate), else the model's symbol.
+    pub fn key(self) -> &'static str {
+        self.quantity().name()
     }
 
     /// Whether the parameter can be taken in a model of `params`.

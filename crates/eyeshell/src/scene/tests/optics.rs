@@ -126,7 +126,8 @@ fn bad_optics_keys_are_refused_naming_the_key() {
 #[test]
 fn sensitivity_parameters_and_their_keys() {
     for param in crate::growth::dae::SensParam::ALL {
-        assert_eq!(super::keys::sensitivity_param(param.key()), Ok(param));
+        let key = super::names::sensitivity_key(param);
+        assert_eq!(super::keys::sensitivity_param(key), Ok(param));
         let mut scene = Scene::default_scene();
         scene.params.d = 200.0;
         let mut g = crate::growth::GrowthParams::default();
@@ -136,7 +137,7 @@ fn sensitivity_parameters_and_their_keys() {
         scene.set(param.key(), 0.75).unwrap();
         let ours = (scene.params, scene.growth.clone().unwrap());
         assert_eq!(param.value(&ours.0, &ours.1), 0.75, "{}", param.key());
-        assert!(crate::growth::dae::SensParam::SUPPORTED.contains(param.key()));
+        assert!(super::names::supported_sensitivities().contains(param.key()));
     }
     let why = super::keys::sensitivity_param("stimulus.red.offset")
         .unwrap_err()
