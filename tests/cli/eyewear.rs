@@ -476,3 +476,19 @@ fn lenslet_and_ring_designs_form_two_smooth_images() {
         }
     }
 }
+
+/// A lens of two images on an eye that changes with age is refused naming the lens: the
+/// blend over t is of one surface per wavelength.
+#[test]
+fn a_multifocal_lens_on_an_eye_that_changes_with_age_is_refused() {
+    let age = std::fs::read_to_string(repo().join("scenes/optics-age.toml")).unwrap();
+    fails(
+        "optics",
+        &format!(
+            "{age}\n[[optics.lenses]]\nzones = [{{ radius = 4.7, power = -2 }}, {{ radius = 25, power = 0.5 }}]\n"
+        ),
+        &[],
+        "optics.lenses[0] = (spectacle lens at 12 mm, 2 zones) forms 2 images, but the eye changes with age",
+        "scene.toml",
+    );
+}
