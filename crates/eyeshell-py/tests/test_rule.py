@@ -23,8 +23,8 @@ def papers(s):
 
 def test_the_papers_rule_in_python_reproduces_the_built_in_run():
     # The const scene as published (501 nodes) at rtol 1e-8. The differences of a rule that
-    # is linear on either side of its kink are exact (±h over 2h), so the run is the
-    # built-in one's arithmetic: bit for bit here, 1e-5 mm promised.
+    # is linear on either side of its kink are exact (±h over 2h) but within a step of the
+    # kink, so the run is the built-in one's arithmetic: bit for bit here, 1e-5 mm promised.
     builtin = eyeshell.grow(CONST, frames=False, solver__rtol=1e-8)
     python = eyeshell.grow(CONST, frames=False, solver__rtol=1e-8, stimulus=papers)
     a, b = builtin.series["axial_length"], python.series["axial_length"]
