@@ -61,6 +61,24 @@ def test_a_python_rule_has_the_built_in_sensitivities():
     np.testing.assert_allclose(clipped.sensitivities["d_axial_length"], b, rtol=0, atol=1e-3 * np.max(np.abs(b)))
 
 
+def test_a_python_rule_runs_on_several_threads_under_a_tolerance(monkeypatch):
+    # solver.tol runs several growths at once on EYESHELL_JOBS threads: the rule is called
+    # from threads other than Python's own, each taking the GIL, and gives the built-in run.
+    import threading
+
+    monkeypatch.setenv("EYESHELL_JOBS", "2")
+    threads = set()
+
+    def rule(s):
+        threads.add(threading.get_ident())
+        return s.depth_mm
+
+    builtin = eyeshell.grow(CONST, frames=False, tol=1e-3)
+    python = eyeshell.grow(CONST, frames=False, tol=1e-3, stimulus=rule)
+    assert np.array_equal(builtin.series["axial_length"], python.series["axial_length"])
+    assert len(threads) == 2, threads
+
+
 def test_the_view_is_what_the_docs_say():
     seen = []
 
