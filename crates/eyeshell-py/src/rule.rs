@@ -41,7 +41,8 @@ pub(super) struct PyRule {
 struct State {
     /// The exception that stopped the rule.
     failure: Option<PyErr>,
-    /// Calls of the function (values and differences) and the time spent in them.
+    /// Evaluations (one call of the function, and two more per quantity differenced when
+    /// the partials are asked for) and the time spent in them.
     calls: u64,
     spent: Duration,
 }
@@ -94,7 +95,7 @@ impl PyRule {
         self.state.lock().ok().and_then(|mut s| s.failure.take())
     }
 
-    /// Calls made and seconds spent in the function.
+    /// Evaluations made and the seconds spent in them.
     pub(super) fn cost(&self) -> (u64, f64) {
         self.state
             .lock()

@@ -141,8 +141,10 @@ impl Scene {
 
     /// Grow with `rule`, a growth rule given in code (a [`GrowthRule`] trait object: Rust's,
     /// or Python's), instead of the one `stimulus.rule` chooses (docs/MODEL.md §6, "Growth
-    /// rules"). The rule is the scene's until a `stimulus.rule` key is set again. Refused
-    /// (bad input) for a scene that does not grow.
+    /// rules"). The rule is the scene's until a key of the built-in rules (`stimulus.rule`,
+    /// `stimulus.baseline`, the gains) is set, which chooses a built-in rule again; other
+    /// keys leave it. Refused (bad input) for a scene that does not grow. The scene's TOML
+    /// and summary name the keys, not this rule.
     ///
     /// ```
     /// use std::sync::Arc;
@@ -152,9 +154,13 @@ impl Scene {
     /// scene.set("solver.nodes", 51)?;
     /// let builtin = scene.grow(&mut ())?;
     /// scene.set_rule(Arc::new(BlueSurface))?; // the paper's rule, as a value
+    /// scene.set("growth.Gamma", 8)?; // keeps the rule given
+    /// assert!(!scene.growth.as_ref().unwrap().stimulus.is_builtin());
     /// let given = scene.grow(&mut ())?;
     /// let axial = |g: &eyeshell::Growth| g.series.iter().map(|r| r.axial_length).collect::<Vec<_>>();
     /// assert_eq!(axial(&builtin), axial(&given)); // the same arithmetic: bit for bit
+    /// scene.set("stimulus.rule", "blue-surface")?; // a built-in rule again
+    /// assert!(scene.growth.as_ref().unwrap().stimulus.is_builtin());
     /// assert!(eyeshell::Scene::default_scene().set_rule(Arc::new(BlueSurface)).is_err());
     /// # Ok::<(), eyeshell::Error>(())
     /// ```
