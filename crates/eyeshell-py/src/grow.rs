@@ -9,8 +9,13 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 
+use std::sync::Arc;
+
+use eyeshell::model::rule::GrowthRule;
+
 use super::convert::{column, fields_dict};
 use super::errors::py_err;
+use super::rule::PyRule;
 use super::scene::PyScene;
 
 /// Why a run stopped early on the caller's behalf.
@@ -155,22 +160,33 @@ fn sensitivities_dict<'py>(
 }
 
 /// Grow the eye of `scene` with the GIL released, calling `progress(t, t_end)` after each
-/// step; returns a dict: series, history, snapshots (a list of (t, fields)), sensitivities
-/// (with `sensitivities`: the keys, as `eyeshell grow --sensitivities`), summary_text.
+/// step, with `stimulus(view)` as the growth rule if given (rule.rs); returns a dict:
+/// series, history, snapshots (a list of (t, fields)), sensitivities (with
+/// `sensitivities`: the keys, as `eyeshell grow --sensitivities`), summary_text, and with
+/// a rule its name and cost (rule_name, rule_calls, rule_seconds).
 #[pyfunction]
-#[pyo3(signature = (scene, progress = None, sensitivities = Vec::new(), sensitivity_error_control = false))]
+#[pyo3(signature = (scene, progress = None, sensitivities = Vec::new(), sensitivity_error_control = false, stimulus = None))]
 pub(super) fn grow<'py>(
     py: Python<'py>,
     scene: PyScene,
     progress: Option<Py<PyAny>>,
     sensitivities: Vec<String>,
     sensitivity_error_control: bool,
+    stimulus: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut scene = scene.inner;
     scene
         .set_sensitivities(&sensitivities, sensitivity_error_control)
         .map_err(py_err)?;
     scene.solver.threads = eyeshell::scene::jobs_from_env().map_err(py_err)?;
+    let rule = match stimulus {
+        Some(f) => {
+            let rule = Arc::new(PyRule::new(py, f, scene.solver.max_seconds)?);
+            scene.set_rule(rule.clone()).map_err(py_err)?;
+            Some(rule)
+        }
+        None => None,
+    };
     let (result, raised) = py.detach(|| {
         let mut watch = Watch {
             progress: progress.as_ref(),
@@ -179,11 +195,18 @@ pub(super) fn grow<'py>(
         let result = scene.grow(&mut watch);
         (result, watch.raised)
     });
-    if let Some(e) = raised {
+    // The rule's own exception first: the run's error only says that it failed.
+    if let Some(e) = rule.as_ref().and_then(|r| r.take_failure()).or(raised) {
         return Err(e);
     }
     let growth = result.map_err(py_err)?;
     let d = PyDict::new(py);
+    if let Some(rule) = &rule {
+        let (calls, seconds) = rule.cost();
+        d.set_item("rule_name", rule.name())?;
+        d.set_item("rule_calls", calls)?;
+        d.set_item("rule_seconds", seconds)?;
+    }
     let g = scene.growth.as_ref();
     d.set_item("series", series_dict(py, &growth.series, g)?)?;
     d.set_item("history", series_dict(py, &growth.history, g)?)?;

@@ -21,6 +21,7 @@ mod grow;
 mod interop;
 mod optics;
 mod outputs;
+mod rule;
 mod scene;
 mod solve;
 mod sweep;

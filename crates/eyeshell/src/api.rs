@@ -15,11 +15,13 @@
 //! ```
 
 use std::path::Path;
+use std::sync::Arc;
 
 use crate::bvp::Solution;
 use crate::growth::{
     self, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
 };
+use crate::model::rule::GrowthRule;
 use crate::rundir::growth::{snapshot_name_at, SNAPSHOT_DIR};
 use crate::rundir::summary::{ElasticSummary, GrowthSummary, RunStatus, SnapshotEntry, Summary};
 use crate::scene::sweep::Sweep;
@@ -166,6 +168,42 @@ impl Scene {
             history: record.history,
             sensitivities: record.sensitivities,
         })
+    }
+
+    /// Grow with `rule`, a growth rule given in code (a [`GrowthRule`] trait object: Rust's,
+    /// or Python's), instead of the one `stimulus.rule` chooses (docs/MODEL.md §6, "Growth
+    /// rules"). The rule is the scene's until a key of the built-in rules (`stimulus.rule`,
+    /// `stimulus.baseline`, the gains) is set, which chooses a built-in rule again; other
+    /// keys leave it. Refused (bad input) for a scene that does not grow. The scene's TOML
+    /// and summary name the keys, not this rule.
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use eyeshell::model::rule::BlueSurface;
+    ///
+    /// let mut scene = eyeshell::Scene::from_path(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/const.toml"))?;
+    /// scene.set("solver.nodes", 51)?;
+    /// let builtin = scene.grow(&mut ())?;
+    /// scene.set_rule(Arc::new(BlueSurface))?; // the paper's rule, as a value
+    /// scene.set("growth.Gamma", 8)?; // keeps the rule given
+    /// assert!(!scene.growth.as_ref().unwrap().stimulus.is_builtin());
+    /// let given = scene.grow(&mut ())?;
+    /// let axial = |g: &eyeshell::Growth| g.series.iter().map(|r| r.axial_length).collect::<Vec<_>>();
+    /// assert_eq!(axial(&builtin), axial(&given)); // the same arithmetic: bit for bit
+    /// scene.set("stimulus.rule", "blue-surface")?; // a built-in rule again
+    /// assert!(scene.growth.as_ref().unwrap().stimulus.is_builtin());
+    /// assert!(eyeshell::Scene::default_scene().set_rule(Arc::new(BlueSurface)).is_err());
+    /// # Ok::<(), eyeshell::Error>(())
+    /// ```
+    pub fn set_rule(&mut self, rule: Arc<dyn GrowthRule>) -> Result<(), Error> {
+        let Some(growth) = self.growth.as_mut() else {
+            return Err(Error::input(format!(
+                "{}: a growth rule needs a growing scene (set a growth key, e.g. growth.eta0)",
+                self.origin
+            )));
+        };
+        growth.stimulus.set_rule(rule);
+        Ok(())
     }
 
     /// Ask the growth run for its forward sensitivities to the scene keys `keys` (each once;

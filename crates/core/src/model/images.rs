@@ -14,7 +14,8 @@
 use eyeshell_optics as optics;
 use eyeshell_optics::{PolarSpline, Surfaces};
 
-use super::eyewear::{LensSpec, LENSES_KEY};
+use super::eyewear::LensSpec;
+use crate::names::Quantity;
 use super::optics::{OpticsKeyError, OpticsSpec, Traced};
 use crate::text::number;
 
@@ -76,7 +77,7 @@ pub(crate) fn trace_images(
         }
     }
     let shares = shares_from_areas(&areas).ok_or_else(|| OpticsKeyError {
-        key: format!("{LENSES_KEY}[{i}]"),
+        key: format!("{}[{i}]", Quantity::Lenses),
         value: lens.describe(),
         problem: "lets no ray of some field through the pupil".into(),
     })?;
@@ -116,7 +117,7 @@ fn image_error(lens: &LensSpec, i: usize, power: f64, e: &OpticsKeyError) -> Opt
         problem = problem.chars().take(199).collect::<String>() + "…";
     }
     OpticsKeyError {
-        key: format!("{LENSES_KEY}[{i}].{}", lens.power_item(power)),
+        key: format!("{}[{i}].{}", Quantity::Lenses, lens.power_item(power)),
         value: number(power),
         problem,
     }

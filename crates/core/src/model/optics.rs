@@ -583,11 +583,11 @@ impl OpticsSpec {
         let Some((i, powers)) = several.first().cloned() else {
             return Ok(None);
         };
-        let key = format!("{}[{i}]", super::eyewear::LENSES_KEY);
+        let key = format!("{}[{i}]", Quantity::Lenses);
         let value = self.lenses[i].describe();
         if let Some((j, _)) = several.get(1) {
             return Err(OpticsKeyError {
-                key: format!("{}[{j}]", super::eyewear::LENSES_KEY),
+                key: format!("{}[{j}]", Quantity::Lenses),
                 value: self.lenses[*j].describe(),
                 problem: format!("forms several images, and so does {key}: one lens at a time may"),
             });

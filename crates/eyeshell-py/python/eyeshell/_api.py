@@ -495,7 +495,10 @@ class Growth:
     - ``summary``: summary.json's content;
     - ``error_estimate``: with ``grow(tol=...)`` (``solver.tol``), summary.json's
       ``error_estimate``: each length's estimated error (mm) as {total, space, time}, the
-      largest over the output times, and ``per_time`` the same at each; else None.
+      largest over the output times, and ``per_time`` the same at each; else None;
+    - ``rule``: with ``grow(..., stimulus=f)``, the rule's name (``python:`` and f's
+      qualified name), its calls (evaluations over all points, differences included) and
+      the seconds spent in them, as {name, calls, seconds}; else None.
 
     ``series``, ``history``, ``peripheral`` and ``sensitivities`` are pandas DataFrames when pandas is
     installed (or ``frames=True``), else dicts of arrays (``frames=False``); the same in
@@ -515,6 +518,11 @@ class Growth:
         self._shape(frames)
         self.snapshots: dict[float, dict[str, np.ndarray]] = dict(raw["snapshots"])
         self.summary: dict[str, Any] = json.loads(raw["summary_text"])
+        self.rule: dict[str, Any] | None = (
+            {"name": raw["rule_name"], "calls": raw["rule_calls"], "seconds": raw["rule_seconds"]}
+            if "rule_name" in raw
+            else None
+        )
 
     @property
     def error_estimate(self) -> dict[str, Any] | None:
@@ -667,6 +675,7 @@ def grow(
     sensitivities: Sequence[str] = (),
     sensitivity_error_control: bool = False,
     tol: float | None = None,
+    stimulus: Callable[[Any], Any] | None = None,
     **overrides: Any,
 ) -> Growth:
     """Grow the eye of ``scene`` (as :func:`solve` takes it; the scene must grow: set a
@@ -691,6 +700,22 @@ def grow(
     at every output time, and reports its estimate in :attr:`Growth.error_estimate` and
     what it chose in ``summary["accuracy"]``; ``solver.nodes``, ``solver.rtol`` and
     ``solver.atol`` are then ignored, as with ``solver.tol`` in a scene file.
+
+    ``stimulus=f``: ``f`` is the growth rule instead of ``stimulus.rule``'s (docs/guide/python.md,
+    "Rules in Python"). ``f(s)`` receives what every retinal point sees, NumPy arrays
+    ``s.sigma``, ``s.z``, ``s.r``, ``s.angle``, ``s.depth_mm`` (positive when the retina
+    lies in front of the stimulus surface, the paper's quantity), ``s.depth_red_mm``,
+    ``s.defocus_D`` and the time ``s.t`` (a float), and returns g_v (mm), one value per
+    point or a scalar; the engine takes its positive part. The Jacobian's partials are
+    central differences of ``f`` in the quantities it read, unless it returns them,
+    ``(g, {"depth_mm": dg, ...})``. A rule that raises, returns a value that is not a
+    finite number per point, or outlasts ``solver.max_seconds`` stops the run with an
+    :class:`InputError` (:class:`SolverError` for the time) naming it; Ctrl-C stops it.
+
+    >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, solver__nodes=51,
+    ...                   stimulus=lambda s: np.maximum(s.depth_mm, 0))
+    >>> g.rule["name"], g.rule["calls"] > 0
+    ('python:<lambda>', True)
 
     >>> g = eyeshell.grow(SCENES + "/const.toml", frames=False, tol=1e-3)
     >>> bool(g.error_estimate["axial_length"]["total"] <= 1e-3), g.summary["accuracy"]["tol"]
@@ -719,7 +744,11 @@ def grow(
             f"sensitivity_error_control must be True or False, not {type(sensitivity_error_control).__name__}"
         )
     raw = _eyeshell.grow(
-        s._s, _progress_callable(progress), list(sensitivities), bool(sensitivity_error_control)
+        s._s,
+        _progress_callable(progress),
+        list(sensitivities),
+        bool(sensitivity_error_control),
+        stimulus,
     )
     return Growth(raw, s.to_toml(), frames)
 

@@ -56,6 +56,7 @@ def grow(
     progress: Callable[[float, float], Any] | None = None,
     sensitivities: list[str] = ...,
     sensitivity_error_control: bool = False,
+    stimulus: Callable[[Any], Any] | None = None,
 ) -> dict[str, Any]: ...
 def fit(
     scene: _Scene,
