@@ -90,6 +90,8 @@ mod tests {
             retina_minus_red: -0.5,
             class: Refraction::Emmetropic,
             refraction_d: 0.1,
+            drive: -0.1,
+            defocus_d: f64::NAN,
         };
         let snap = Snapshot {
             t: 0.5,

@@ -37,7 +37,7 @@ fn parse(text: &str, overrides: &[String]) -> Result<(), TestCaseError> {
     match r {
         Err(e) => one_line(&what, &e.to_string())?,
         Ok(scene) => {
-            let v = std::panic::catch_unwind(|| scene.validate());
+            let v = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| scene.validate()));
             match v.map_err(|_| TestCaseError::fail(format!("{what}: validate panicked")))? {
                 Ok(()) => {}
                 Err(e) => one_line(&what, &e.to_string())?,

@@ -237,7 +237,7 @@ fn grow_const_end_to_end() {
     let (h, series) = csv_cells(&out.join("series.csv"));
     assert_eq!(
         h.join(","),
-        "t,axial_length,equatorial_radius,retina_minus_blue,retina_minus_red,class,refraction_D"
+        "t,axial_length,equatorial_radius,retina_minus_blue,retina_minus_red,class,refraction_D,drive,defocus_D"
     );
     let times: Vec<f64> = series.iter().map(|r| r[0].parse().unwrap()).collect();
     assert_eq!(times, vec![0.0, 0.1, 0.2, 0.4, 1.0]);

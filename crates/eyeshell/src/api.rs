@@ -197,10 +197,13 @@ impl Scene {
     /// ```
     pub fn set_rule(&mut self, rule: Arc<dyn GrowthRule>) -> Result<(), Error> {
         let Some(growth) = self.growth.as_mut() else {
-            return Err(Error::input(format!(
-                "{}: a growth rule needs a growing scene (set a growth key, e.g. growth.eta0)",
-                self.origin
-            )));
+            return Err(Error::input(
+                crate::error::Subject::Key("stimulus.rule".into()),
+                format!(
+                    "{}: a growth rule needs a growing scene (set a growth key, e.g. growth.eta0)",
+                    self.origin
+                ),
+            ));
         };
         growth.stimulus.set_rule(rule);
         Ok(())

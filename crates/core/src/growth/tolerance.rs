@@ -714,32 +714,18 @@ pub(super) fn run(
         let choice = next(&round, AIM * tol, max_nodes, order)
             .or_else(|| next(&round, tol, max_nodes, order));
         if accuracy.rounds.len() >= MAX_ROUNDS || choice.is_none_or(|c| c == (nodes, rtol)) {
-            let mut e = refuse(format!(
-                "{} = {} cannot be reached in growth: the estimated error was {} mm{} (space {}, time {}) on {} nodes at {} = {}{}",
-                Quantity::Tolerance,
-                crate::text::number(tol),
-                crate::text::number(worst.total),
-                if order == SENSITIVITY_MODEL_ORDER {
-                    " in the sensitivities (p·∂y/∂p)"
-                } else {
-                    ""
-                },
-                crate::text::number(worst.space),
-                crate::text::number(worst.time),
+            let in_sensitivities = order == SENSITIVITY_MODEL_ORDER;
+            let out_of_rounds = accuracy.rounds.len() >= MAX_ROUNDS;
+            let why = out_of_reach(
+                tol,
+                &worst,
+                in_sensitivities,
                 fine_mesh.len(),
-                Quantity::RelativeTolerance,
-                crate::text::number(rtol),
-                if accuracy.rounds.len() >= MAX_ROUNDS {
-                    format!(" after {MAX_ROUNDS} rounds")
-                } else {
-                    format!(
-                        " and neither more nodes ({} = {}) nor a tighter rtol (down to {}) is predicted to reach it",
-                        Quantity::MaxNodes,
-                        solver.max_nodes,
-                        crate::text::number(RTOL_RANGE.0)
-                    )
-                }
-            ));
+                rtol,
+                out_of_rounds,
+                solver.max_nodes,
+            );
+            let mut e = refuse(why);
             e.stats = Box::new(fine.stats);
             return Err(with_rounds(e, &accuracy));
         }
@@ -747,6 +733,46 @@ pub(super) fn run(
             (nodes, rtol) = c;
         }
     }
+}
+
+/// Why `tol` cannot be reached: the estimate of the last round (on `nodes` at `rtol`), in the
+/// sensitivities or the lengths, and whether the rounds ran out or no mesh and rtol within
+/// the bounds is predicted to reach it.
+fn out_of_reach(
+    tol: f64,
+    worst: &Split,
+    in_sensitivities: bool,
+    nodes: usize,
+    rtol: f64,
+    out_of_rounds: bool,
+    max_nodes: usize,
+) -> String {
+    format!(
+        "{} = {} cannot be reached in growth: the estimated error was {} mm{} (space {}, time {}) on {} nodes at {} = {}{}",
+        Quantity::Tolerance,
+        crate::text::number(tol),
+        crate::text::number(worst.total),
+        if in_sensitivities {
+            " in the sensitivities (p·∂y/∂p)"
+        } else {
+            ""
+        },
+        crate::text::number(worst.space),
+        crate::text::number(worst.time),
+        nodes,
+        Quantity::RelativeTolerance,
+        crate::text::number(rtol),
+        if out_of_rounds {
+            format!(" after {MAX_ROUNDS} rounds")
+        } else {
+            format!(
+                " and neither more nodes ({} = {}) nor a tighter rtol (down to {}) is predicted to reach it",
+                Quantity::MaxNodes,
+                max_nodes,
+                crate::text::number(RTOL_RANGE.0)
+            )
+        }
+    )
 }
 
 /// Hand the delivered run's outputs and sensitivity rows to the caller, in the order of the

@@ -138,7 +138,13 @@ impl LensSpec {
             _ => 0,
         };
         for l in &self.lenslets {
-            let at = |name: &str| format!("{}[{i}].zones[{}].lenslets.{name}", Quantity::Lenses, l.zone);
+            let at = |name: &str| {
+                format!(
+                    "{}[{i}].zones[{}].lenslets.{name}",
+                    Quantity::Lenses,
+                    l.zone
+                )
+            };
             if l.zone >= zones {
                 return Err(key_error(
                     at("power"),

@@ -15,8 +15,8 @@ use eyeshell_optics as optics;
 use eyeshell_optics::{PolarSpline, Surfaces};
 
 use super::eyewear::LensSpec;
-use crate::names::Quantity;
 use super::optics::{OpticsKeyError, OpticsSpec, Traced};
+use crate::names::Quantity;
 use crate::text::number;
 
 /// The images of `spec`'s eye at growth time `t` through lens `i`, which forms one per power

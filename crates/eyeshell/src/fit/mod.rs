@@ -93,9 +93,9 @@ impl FitParam {
     /// The parameter of scene key `key`, with its range.
     ///
     /// # Errors
-    /// [`keys::SensitivityKeyError`] for a key that is not such a parameter.
-    pub fn from_key(key: &str) -> Result<FitParam, keys::SensitivityKeyError> {
-        let param = keys::sensitivity_param(key)?;
+    /// [`crate::scene::sensitivity::SensitivityKeyError`] for a key that is not such a parameter.
+    pub fn from_key(key: &str) -> Result<FitParam, crate::scene::sensitivity::SensitivityKeyError> {
+        let param = crate::scene::sensitivity::sensitivity_param(key)?;
         let bounds = keys::find(crate::scene::names::sensitivity_key(param))
             .map_or(Bounds::NONE, |k| bounds_of_rule(k.rule));
         Ok(FitParam { param, bounds })

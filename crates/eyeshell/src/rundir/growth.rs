@@ -400,6 +400,8 @@ mod tests {
                 g_v: t,
                 z_retina: -(i as f64),
                 r_retina: i as f64 * 0.5,
+                drive: t - 0.5,
+                defocus_d: f64::NAN,
             })
             .collect();
         let class = if t < 0.5 {

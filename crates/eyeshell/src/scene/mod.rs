@@ -19,6 +19,7 @@ pub mod keys;
 pub mod names;
 pub mod optics_toml;
 pub mod sample;
+pub mod sensitivity;
 pub mod sweep;
 
 mod parse;

@@ -37,55 +37,9 @@ mod sensitivities;
 pub use sensitivities::{SensParam, SensitivityError};
 
 use super::crossing::Crossing;
-use super::integral::Integral;
+mod border;
+use border::{Border, Term};
 
-/// What the border unknown d stands for: the drive where the retina crosses φ_max (a local
-/// rule), or the drive averaged over the integrated region (every point reads it).
-pub(super) enum Border {
-    Crossing(Crossing),
-    Integral(Integral),
-}
-
-impl Border {
-    fn value(&self) -> f64 {
-        match self {
-            Border::Crossing(c) => c.value,
-            Border::Integral(i) => i.value,
-        }
-    }
-
-    /// Each point the border reads, with the border's partials in that point's (drive,
-    /// angle, z_ret, r_ret): ∂D* = Σ_i L_i (∂drive_i − p'(φ_i) ∂φ_i) for the crossing, the
-    /// integral's own partials for the region.
-    fn terms(&self) -> Vec<(usize, [f64; 4])> {
-        match self {
-            Border::Crossing(c) => c
-                .points()
-                .iter()
-                .map(|&(k, wgt, slope)| (k, [wgt, -wgt * slope, 0.0, 0.0]))
-                .collect(),
-            Border::Integral(i) => i
-                .partials
-                .iter()
-                .enumerate()
-                .filter(|(_, p)| **p != Default::default())
-                .map(|(k, p)| (k, [p.drive, p.angle, p.z, p.r]))
-                .collect(),
-        }
-    }
-}
-
-impl RateDeriv {
-    /// ∂(border's quantity)/∂(local state) of this point for the term's partials `c`.
-    fn border_row(&self, c: &[f64; 4]) -> [f64; 6] {
-        std::array::from_fn(|q| {
-            c[0] * self.drive[q]
-                + c[1] * self.angle[q]
-                + c[2] * self.retina[0][q]
-                + c[3] * self.retina[1][q]
-        })
-    }
-}
 use super::points::NP;
 use super::settings::DaeLinear;
 use super::system::{GrowthSystem, RhsError};

@@ -377,8 +377,15 @@ impl CoupledDae {
         }
         // The border d − D*, as in the Jacobian.
         if let Some(border) = crossing {
-            for (k, c) in border.terms() {
-                out[d] -= dot(&rd[k].border_row(&c), &dlocal[k]);
+            for (k, term) in border.terms() {
+                out[d] -= match term {
+                    Term::Crossing { weight, slope } => {
+                        weight
+                            * (dot(&rd[k].drive, &dlocal[k])
+                                - slope * dot(&rd[k].angle, &dlocal[k]))
+                    }
+                    Term::Integral(_) => dot(&rd[k].border_row(&term), &dlocal[k]),
+                };
             }
         }
     }

@@ -127,7 +127,7 @@ fn bad_optics_keys_are_refused_naming_the_key() {
 fn sensitivity_parameters_and_their_keys() {
     for param in crate::growth::dae::SensParam::ALL {
         let key = super::names::sensitivity_key(param);
-        assert_eq!(super::keys::sensitivity_param(key), Ok(param));
+        assert_eq!(super::sensitivity::sensitivity_param(key), Ok(param));
         let mut scene = Scene::default_scene();
         scene.params.d = 200.0;
         let mut g = crate::growth::GrowthParams::default();
@@ -139,7 +139,7 @@ fn sensitivity_parameters_and_their_keys() {
         assert_eq!(param.value(&ours.0, &ours.1), 0.75, "{}", param.key());
         assert!(super::names::supported_sensitivities().contains(param.key()));
     }
-    let why = super::keys::sensitivity_param("stimulus.red.offset")
+    let why = super::sensitivity::sensitivity_param("stimulus.red.offset")
         .unwrap_err()
         .to_string();
     assert!(why.contains("only affects the classification"), "{why}");
