@@ -318,7 +318,7 @@ fn sensitivities_on_cpu(c: &mut Criterion) {
         let params: Vec<SensParam> = list
             .split(',')
             .map(|key| {
-                eyeshell::scene::keys::sensitivity_param(key.trim())
+                eyeshell::scene::sensitivity::sensitivity_param(key.trim())
                     .unwrap_or_else(|why| panic!("{why}"))
             })
             .collect();

@@ -35,6 +35,7 @@ mod plan;
 mod readers;
 mod rerun;
 mod rooms;
+mod rules;
 mod sensitivities;
 mod shards;
 mod signatures;

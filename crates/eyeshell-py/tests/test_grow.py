@@ -80,7 +80,8 @@ def test_series_are_data_frames_with_pandas():
     g = eyeshell.grow(SCENES / "const.toml", solver__nodes=101)
     assert isinstance(g.series, pandas.DataFrame)
     assert list(g.series.columns) == ["t", "axial_length", "equatorial_radius",
-                                      "retina_minus_blue", "retina_minus_red", "class", "refraction_D"]
+                                      "retina_minus_blue", "retina_minus_red", "class", "refraction_D",
+                                      "drive", "defocus_D"]
     assert g.series["class"].iloc[-1] == g.summary["final"]["class"]
     plain = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=101)
     assert np.array_equal(g.series["axial_length"].to_numpy(), plain.series["axial_length"])

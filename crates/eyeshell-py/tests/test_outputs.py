@@ -19,7 +19,7 @@ CHECK = textwrap.dedent(
     assert "axial_length_um" not in names, names
     _eyeshell._register_output_for_tests()
     names = [q["name"] for q in _eyeshell.output_quantities()]
-    assert names[-2:] == ["refraction_D", "axial_length_um"], names
+    assert names[-2:] == ["defocus_D", "axial_length_um"], names
 
     scene = eyeshell.Scene(solver__nodes=41, growth__eta0=70, growth__t_end=0.2,
                            output__times=[0.1, 0.2], output__history_points=2)
@@ -39,7 +39,7 @@ CHECK = textwrap.dedent(
     runs.append(eyeshell.RunResult("elastic", {}, "ok", e, None, 0.0, 2))
     df = eyeshell.SweepResults(runs).to_frame(frames=False)
     columns = list(df)
-    assert columns.index("axial_length_um") == columns.index("refraction_D") + 1, columns
+    assert columns.index("axial_length_um") == columns.index("defocus_D") + 1, columns
     for length, um in zip(df["axial_length"], df["axial_length_um"]):
         assert um == length * 1000.0, (length, um)
     assert len(df["t"]) == 2 * 3 + 1
@@ -59,5 +59,5 @@ def test_a_column_added_to_the_table_reaches_the_frames():
 def test_the_frames_columns_are_the_tables():
     names = [q["name"] for q in eyeshell._eyeshell.output_quantities()]
     assert names == ["axial_length", "equatorial_radius", "retina_minus_blue", "retina_minus_red", "class",
-                     "refraction_D"]
+                     "refraction_D", "drive", "defocus_D"]
     assert {q["kind"] for q in eyeshell._eyeshell.output_quantities()} == {"number", "class"}

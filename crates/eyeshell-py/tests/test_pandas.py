@@ -62,7 +62,7 @@ def test_to_frame_has_a_row_per_run_and_output_time_with_the_swept_keys():
     assert isinstance(df, pandas.DataFrame)
     assert list(df.columns) == ["run", "status", "growth.delta", "growth.Gamma", "t", "axial_length",
                                 "equatorial_radius", "retina_minus_blue", "retina_minus_red", "class",
-                                "refraction_D", "error"]
+                                "refraction_D", "drive", "defocus_D", "error"]
     times = len(runs[0].result.series)
     assert times == 5 and len(df) == 4 * times
     for r in runs:

@@ -59,8 +59,6 @@ fn grow_with(
 
 #[test]
 fn every_integrator_stops_in_its_own_callback() {
-    // The messages named below are the scene's words: give core the keys first.
-    eyeshell::scene::names::speak_in_keys();
     let cases = [
         (Integrator::Ida, "in IDA's residual at t = "),
         (Integrator::Cvode, "in CVODE's right-hand side at t = "),
@@ -78,7 +76,7 @@ fn every_integrator_stops_in_its_own_callback() {
             Duration::from_millis(400),
         );
         let e = r.expect_err("stopped");
-        let expected = format!("solver.max_seconds = 0.3 s reached {place}");
+        let expected = format!("max_seconds = 0.3 s reached {place}");
         assert!(e.reason.starts_with(&expected), "{integrator:?}: {e}");
         assert_eq!(
             kept.len(),
@@ -91,14 +89,12 @@ fn every_integrator_stops_in_its_own_callback() {
 
 #[test]
 fn an_elastic_solve_stops_at_its_first_residual() {
-    // The messages named below are the scene's words: give core the keys first.
-    eyeshell::scene::names::speak_in_keys();
     // Laying 20,001 nodes and making KINSOL take far longer than a microsecond.
     let e = bvp::solve(&Params::default(), &bounded(20_001, Some(1e-6)), None).unwrap_err();
     assert!(matches!(e, BvpError::OutOfTime(_)), "{e:?}");
     assert_eq!(
         e.to_string(),
-        "solver.max_seconds = 1e-6 s reached in the elastic solve, after 0 Newton iterations"
+        "max_seconds = 1e-6 s reached in the elastic solve, after 0 Newton iterations"
     );
     // The same in a growth run, at t = 0: nothing is handed on.
     let (kept, r) = grow_with(
@@ -109,7 +105,7 @@ fn an_elastic_solve_stops_at_its_first_residual() {
     let e = r.unwrap_err();
     assert_eq!(
         e.to_string(),
-        "growth failed at t = 0.000000: solver.max_seconds = 1e-6 s reached in the elastic \
+        "growth failed at t = 0.000000: max_seconds = 1e-6 s reached in the elastic \
          solve, after 0 Newton iterations"
     );
     assert!(kept.is_empty());
@@ -142,7 +138,11 @@ fn a_bound_not_reached_changes_nothing() {
         assert_eq!(a.len(), b.len());
         for (x, y) in a.iter().zip(&b) {
             assert_eq!(x.fields, y.fields, "{integrator:?} at t = {}", x.t);
-            assert_eq!(x.growth, y.growth, "{integrator:?} at t = {}", x.t);
+            // Bit for bit (defocus_D is NaN where the rule reads none, and NaN ≠ NaN).
+            let bits = |s: &eyeshell_core::growth::Snapshot| -> Vec<u64> {
+                s.growth.iter().flat_map(|g| g.values().map(f64::to_bits)).collect()
+            };
+            assert_eq!(bits(x), bits(y), "{integrator:?} at t = {}", x.t);
         }
     }
 }
@@ -179,8 +179,6 @@ impl Observer for SleepUntil {
 /// clock is the job's (`a_bound_counted_from_an_earlier_start_stops_the_first_stage` does).
 #[test]
 fn with_tol_the_runs_of_the_choice_share_one_bound() {
-    // The messages named below are the scene's words: give core the keys first.
-    eyeshell::scene::names::speak_in_keys();
     // At tol 1e-4 the first two runs take a few hundredths of a second.
     let solver = SolverSettings {
         tol: Some(1e-4),
@@ -204,7 +202,7 @@ fn with_tol_the_runs_of_the_choice_share_one_bound() {
     let e = r.expect_err("the bound has passed");
     assert!(
         e.reason
-            .starts_with("solver.max_seconds = 2 s reached in IDA's residual at t = "),
+            .starts_with("max_seconds = 2 s reached in IDA's residual at t = "),
         "{e} (the first progress report came after {first:.3} s)"
     );
     let accuracy = e.stats.accuracy.expect("the choice is recorded");
@@ -216,8 +214,6 @@ fn with_tol_the_runs_of_the_choice_share_one_bound() {
 /// bound as given, and hands nothing on.
 #[test]
 fn a_bound_counted_from_an_earlier_start_stops_the_first_stage() {
-    // The messages named below are the scene's words: give core the keys first.
-    eyeshell::scene::names::speak_in_keys();
     let solver = SolverSettings {
         tol: Some(1e-4),
         max_seconds: Some(1.0),
@@ -228,7 +224,7 @@ fn a_bound_counted_from_an_earlier_start_stops_the_first_stage() {
     let e = r.expect_err("the bound had passed");
     assert_eq!(
         e.reason,
-        "solver.max_seconds = 1 s reached in the elastic solve, after 0 Newton iterations"
+        "max_seconds = 1 s reached in the elastic solve, after 0 Newton iterations"
     );
     assert_eq!(e.t, 0.0);
     assert!(kept.is_empty());
