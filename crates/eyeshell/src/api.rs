@@ -490,7 +490,11 @@ mod tests {
         let times: Vec<f64> = growth.snapshots.iter().map(|s| s.t).collect();
         assert_eq!(times, [0.0, 0.1, 0.2, 0.4, 1.0]);
         assert_eq!(growth.series.len(), 5);
-        assert_eq!(growth.series[4], growth.snapshots[4].series);
+        // Field for field, NaN included (defocus_D is NaN where the rule reads none).
+        assert_eq!(
+            format!("{:?}", growth.series[4]),
+            format!("{:?}", growth.snapshots[4].series)
+        );
         // The history: t = 0, then t_end·k/10 (the snapshot times among them, once each).
         let history: Vec<f64> = growth.history.iter().map(|r| r.t).collect();
         let expected: Vec<f64> = (0..=10).map(|k| k as f64 / 10.0).collect();
