@@ -18,10 +18,16 @@ fn every_rule_is_in_the_key_table_and_the_model() {
     let model = std::fs::read_to_string(repo().join("docs/MODEL.md")).unwrap();
     let guide = std::fs::read_to_string(repo().join("docs/guide/hypotheses.md")).unwrap();
     for rule in eyeshell::model::rule::CATALOGUE {
-        assert!(rule_line.contains(&format!("\"{rule}\"")), "{rule} not a choice: {rule_line}");
+        assert!(
+            rule_line.contains(&format!("\"{rule}\"")),
+            "{rule} not a choice: {rule_line}"
+        );
         let row = format!("| `{rule}`");
         assert!(model.contains(&row), "docs/MODEL.md has no row {row}");
-        assert!(guide.contains(&row), "docs/guide/hypotheses.md has no row {row}");
+        assert!(
+            guide.contains(&row),
+            "docs/guide/hypotheses.md has no row {row}"
+        );
     }
     assert_eq!(eyeshell::model::rule::CATALOGUE.len(), 3);
 }
@@ -42,7 +48,12 @@ fn bad_rule_keys_are_refused_in_one_line() {
         let out = dir.path().join("out");
         let run = eyeshell(&["grow", "scenes/const.toml", "--set", set, "--out", s(&out)]);
         assert_eq!(run.code, Some(2), "{set}: {}", run.stderr);
-        assert_eq!(run.stderr.trim().lines().count(), 1, "{set}: {}", run.stderr);
+        assert_eq!(
+            run.stderr.trim().lines().count(),
+            1,
+            "{set}: {}",
+            run.stderr
+        );
         assert!(run.stderr.contains(says), "{set}: {}", run.stderr);
         assert!(!out.exists(), "{set}: wrote {}", out.display());
     }
@@ -86,13 +97,22 @@ fn the_corrected_myope_progresses_and_the_lenses_slow_it() {
     assert_eq!(sv.len(), 4);
     let per_year = (sv[3] - sv[0]) / 3.0;
     assert!((0.2..0.6).contains(&per_year), "{sv:?}");
-    assert!((sv[3] - sv[0] - 0.62).abs() < 0.02, "the fit to 0.62 mm: {sv:?}");
-    let paper = lengths("scenes/myopia/single-vision.toml", &["stimulus.rule=\"blue-surface\""]);
+    assert!(
+        (sv[3] - sv[0] - 0.62).abs() < 0.02,
+        "the fit to 0.62 mm: {sv:?}"
+    );
+    let paper = lengths(
+        "scenes/myopia/single-vision.toml",
+        &["stimulus.rule=\"blue-surface\""],
+    );
     for w in paper.windows(2) {
         assert!((0.0..0.05).contains(&(w[1] - w[0])), "{paper:?}");
     }
     for lens in ["dual-focus", "lenslets"] {
         let l = lengths(&format!("scenes/myopia/{lens}.toml"), &[]);
-        assert!(l[3] - l[0] < sv[3] - sv[0] - 0.03, "{lens}: {l:?} against {sv:?}");
+        assert!(
+            l[3] - l[0] < sv[3] - sv[0] - 0.03,
+            "{lens}: {l:?} against {sv:?}"
+        );
     }
 }

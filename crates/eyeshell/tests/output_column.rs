@@ -70,7 +70,7 @@ fn a_column_added_to_the_table_reaches_every_file() {
     // After the production measures, before the run's work.
     assert_eq!(
         column(&table_header, "axial_length_um"),
-        column(&table_header, "refraction_D") + 1
+        column(&table_header, "defocus_D") + 1
     );
     for (record, row) in report.records.iter().zip(&table) {
         assert_eq!(record.status, RunStatus::Ok, "{}", record.name);
@@ -81,7 +81,7 @@ fn a_column_added_to_the_table_reaches_every_file() {
                 column(&header, "axial_length"),
                 column(&header, "axial_length_um"),
             );
-            assert_eq!(um, column(&header, "refraction_D") + 1, "{file}");
+            assert_eq!(um, column(&header, "defocus_D") + 1, "{file}");
             assert!(rows.len() >= 3, "{file}: {rows:?}");
             for r in &rows {
                 let length: f64 = r[l].parse().unwrap();

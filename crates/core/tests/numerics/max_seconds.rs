@@ -140,7 +140,10 @@ fn a_bound_not_reached_changes_nothing() {
             assert_eq!(x.fields, y.fields, "{integrator:?} at t = {}", x.t);
             // Bit for bit (defocus_D is NaN where the rule reads none, and NaN ≠ NaN).
             let bits = |s: &eyeshell_core::growth::Snapshot| -> Vec<u64> {
-                s.growth.iter().flat_map(|g| g.values().map(f64::to_bits)).collect()
+                s.growth
+                    .iter()
+                    .flat_map(|g| g.values().map(f64::to_bits))
+                    .collect()
             };
             assert_eq!(bits(x), bits(y), "{integrator:?} at t = {}", x.t);
         }

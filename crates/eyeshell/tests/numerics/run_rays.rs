@@ -28,8 +28,21 @@ fn scene(name: &str) -> (OpticsSpec, f64) {
 /// The largest distance (mm) between the run's best foci at growth time `t` and those of the
 /// default sampling.
 fn surfaces_moved(spec: &OpticsSpec, z_c: f64, t: f64) -> f64 {
-    let run = spec.compute_eye_at(t, z_c).unwrap().surfaces;
-    let system = worn_at(spec, t).unwrap();
+    let computed = spec.compute_eye_at(t, z_c).unwrap();
+    // Through a lens of several images the run's surfaces are its brightest image's, traced
+    // through that image's power alone (docs/optics.md, "Simultaneous images"): the reference
+    // is traced through the same lens.
+    let main = computed
+        .images
+        .iter()
+        .find(|im| im.blue == computed.blue)
+        .and_then(|im| im.power);
+    let mut traced = spec.clone();
+    if let (Some(power), true) = (main, computed.images.len() > 1) {
+        traced.lenses[0] = traced.lenses[0].with_power(power);
+    }
+    let run = computed.surfaces;
+    let system = worn_at(&traced, t).unwrap();
     let settings = SurfaceSettings {
         max_field_deg: spec.max_field,
         fields: (spec.max_field.ceil() as usize + 1).max(4),
