@@ -253,7 +253,6 @@ fn optics_json(
             })
         })
         .collect();
-    let (a, b) = (&paraxials[0], &paraxials[1]);
     let surfaces: Vec<_> = c
         .surfaces
         .surfaces
@@ -281,11 +280,7 @@ fn optics_json(
         "max_field_deg": spec.max_field,
         "wavelengths_nm": spec.wavelengths,
         "paraxial": par,
-        "chromatic_aberration": {
-            "wavelengths_nm": [a.wavelength_nm, b.wavelength_nm],
-            "power_difference_dioptres": a.power - b.power,
-            "focus_difference_mm": b.focus - a.focus,
-        },
+        "chromatic_aberration": chromatic_json(paraxials, system),
         "surfaces": surfaces,
         "images": images_json(c),
         "rays_traced": c.surfaces.rays_traced,
@@ -323,6 +318,29 @@ fn optics_json(
     let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
     text.push('\n');
     text
+}
+
+/// The longitudinal chromatic aberration between the first two wavelengths (null with one):
+/// the difference of equivalent power, of the paraxial foci, and the chromatic difference of
+/// refraction Rx(second) − Rx(first), the ocular refraction at the first vertex (the corneal
+/// apex, or the spectacle lens worn) of an eye whose retina lies at the eye's axial length:
+/// the quantity of Thibos et al. 1992's Indiana chromatic eye (docs/optics.md, "The eyes'
+/// paraxial figures and chromatic aberration").
+fn chromatic_json(
+    paraxials: &[Paraxial],
+    system: &eyeshell_optics::OpticalSystem,
+) -> serde_json::Value {
+    let [a, b, ..] = paraxials else {
+        return serde_json::Value::Null;
+    };
+    let retina = system.axial_length();
+    serde_json::json!({
+        "wavelengths_nm": [a.wavelength_nm, b.wavelength_nm],
+        "power_difference_dioptres": a.power - b.power,
+        "focus_difference_mm": b.focus - a.focus,
+        "refraction_difference_dioptres": b.ocular_refraction(retina) - a.ocular_refraction(retina),
+        "refraction_retina_mm": retina,
+    })
 }
 
 /// Each image's power (null for the one image of a lens of one smooth profile), its share of

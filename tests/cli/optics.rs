@@ -303,3 +303,60 @@ fn a_trace_failure_names_the_surface_key_that_caused_it() {
         "scene.toml",
     );
 }
+
+/// One wavelength: `eyeshell optics` writes that wavelength's surface (41 fields, no
+/// chromatic aberration); growth, which reads a red surface too, refuses it naming growth.
+/// With two, optics.json's chromatic difference of refraction of the Atchison eye, 400–600 nm,
+/// at the corneal apex for the eye's own retina: 1.767 D, the Indiana chromatic eye's
+/// Rx(600) − Rx(400) = 1.766 D (Thibos et al. 1992, docs/optics.md), distinct from the
+/// 2.370 D difference of equivalent power.
+#[test]
+fn one_wavelength_draws_its_surface_and_two_give_the_chromatic_difference_of_refraction() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = dir.path().join("one");
+    ok(&[
+        "optics",
+        "scenes/const.toml",
+        "--set",
+        "optics.wavelengths=[450]",
+        "--out",
+        s(&one),
+        "--quiet",
+    ]);
+    let (_, rows) = csv_cells(&one.join("surfaces.csv"));
+    assert_eq!(rows.len(), 41);
+    assert!(rows.iter().all(|r| r[0] == "450.0"), "{:?}", rows[0]);
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(one.join("optics.json")).unwrap()).unwrap();
+    assert_eq!(j["wavelengths_nm"], serde_json::json!([450.0]));
+    assert!(j["chromatic_aberration"].is_null());
+    fails(
+        "grow",
+        "growth.eta0 = 70\nstimulus.source = \"optics\"\n",
+        &["optics.wavelengths=[400]"],
+        "optics.wavelengths = [400] must list at least two wavelengths (nm) for growth: blue (the stimulus), then red (it classifies the eye)",
+        "--set optics.wavelengths=[400]",
+    );
+    let two = dir.path().join("two");
+    ok(&[
+        "optics",
+        "scenes/const.toml",
+        "--set",
+        "optics.eye=atchison-2006",
+        "--set",
+        "optics.wavelengths=[400, 600]",
+        "--out",
+        s(&two),
+        "--quiet",
+    ]);
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(two.join("optics.json")).unwrap()).unwrap();
+    let lca = &j["chromatic_aberration"];
+    let rx = lca["refraction_difference_dioptres"].as_f64().unwrap();
+    assert!((1.6..=1.9).contains(&rx), "{rx}");
+    // The Indiana eye: Rx(λ) = 1.68524 − 0.63346/(λ − 0.21410), λ in µm.
+    let indiana = |l: f64| 1.68524 - 0.63346 / (l - 0.21410);
+    assert!((rx - (indiana(0.6) - indiana(0.4))).abs() < 0.01, "{rx}");
+    assert!((lca["power_difference_dioptres"].as_f64().unwrap() - 2.370).abs() < 1e-3);
+    assert!((lca["refraction_retina_mm"].as_f64().unwrap() - 23.58).abs() < 1e-9);
+}

@@ -348,6 +348,7 @@ impl GrowthProblemBuilder {
         if g.source == Source::Optics {
             g.optics
                 .check_over(g.t_end)
+                .and_then(|()| g.optics.check_growth_wavelengths())
                 .map_err(|e| e.to_string())
                 .map_err(inadmissible(Q::Optics))?;
         } else if !g.optics.lenses.is_empty() {

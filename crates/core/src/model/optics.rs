@@ -316,11 +316,11 @@ impl OpticsSpec {
                 format!("must lie in (0, {MAX_PUPIL}] mm (a pupil's diameter)"),
             ));
         }
-        if self.wavelengths.len() < 2 {
+        if self.wavelengths.is_empty() {
             return Err(err(
                 Quantity::Wavelengths.name(),
                 self.wavelengths_text(),
-                "must list at least two wavelengths (nm): blue, then red".into(),
+                "must list at least one wavelength (nm)".into(),
             ));
         }
         let (lo, hi, why) = self.wavelength_range();
@@ -334,7 +334,10 @@ impl OpticsSpec {
                 ),
             ));
         }
-        let (blue, red) = (self.wavelengths[0], self.wavelengths[1]);
+        let (blue, red) = match self.wavelengths[..] {
+            [blue, red, ..] => (blue, red),
+            _ => (f64::NEG_INFINITY, f64::INFINITY),
+        };
         if !(blue < red) {
             return Err(err(
                 Quantity::Wavelengths.name(),
@@ -401,6 +404,19 @@ impl OpticsSpec {
         Ok(())
     }
 
+    /// The wavelengths a growth run reads: two at least, the blue surface's (the stimulus) and
+    /// the red one's (it classifies the eye); `eyeshell optics` draws the surfaces of one.
+    pub fn check_growth_wavelengths(&self) -> Result<(), OpticsKeyError> {
+        if self.wavelengths.len() < 2 {
+            return Err(OpticsKeyError {
+                key: Quantity::Wavelengths.name().to_string(),
+                value: self.wavelengths_text(),
+                problem: "must list at least two wavelengths (nm) for growth: blue (the stimulus), then red (it classifies the eye)".into(),
+            });
+        }
+        Ok(())
+    }
+
     /// Trace the surfaces and make the stimulus's splines about `z_c`: once for an eye that
     /// does not change, else at each of [`OpticsSpec::times`] (the surfaces at time 0 are
     /// those of `surfaces`, `blue` and `red`).
@@ -414,6 +430,7 @@ impl OpticsSpec {
     /// eye changing along its end slope, which the traced surfaces' continuation does not
     /// follow: a blend carried far beyond its last time can fold the surface).
     pub fn compute_over(&self, z_c: f64, t_end: f64) -> Result<ComputedOptics, OpticsKeyError> {
+        self.check_growth_wavelengths()?;
         self.trace(z_c, self.times_until(t_end))
     }
 
@@ -643,7 +660,13 @@ impl OpticsSpec {
                 .interpolant(z_c)
                 .map_err(|e| at_time(self.explain(&e)))
         };
-        let (blue, red) = (spline(0)?, spline(1)?);
+        // One wavelength (`eyeshell optics`; growth refuses it) has no red surface: its slot
+        // holds the one surface.
+        let blue = spline(0)?;
+        let red = match surfaces.surfaces.len() {
+            1 => blue.clone(),
+            _ => spline(1)?,
+        };
         Ok((surfaces, blue, red))
     }
 
@@ -802,6 +825,7 @@ pub struct ComputedOptics {
     /// The splines' polar centre.
     pub z_c: f64,
     pub blue: PolarSpline,
+    /// The second wavelength's spline; with one wavelength (growth refuses it) the first's.
     pub red: PolarSpline,
     pub surfaces: Surfaces,
     /// The images on the retina (docs/optics.md, "Simultaneous images"): one for no lens or

@@ -950,7 +950,7 @@ pub static KEYS: &[KeySpec] = &[
         key: "optics.wavelengths",
         access: Access::Floats { get: |s| s.optics().wavelengths.clone(), set: |s, v| s.set_optics(|o| o.wavelengths = v) },
         rule: Rule::Any,
-        doc: "wavelengths (nm, within the eye's dispersion: 380 to 1100 for atchison-2006, 380 to 750 for the others, 300 to 1200 for custom): the first is the stimulus's (blue), the second, longer, the classification's (red); `eyeshell optics` computes any further ones too",
+        doc: "wavelengths (nm, within the eye's dispersion: 380 to 1100 for atchison-2006, 380 to 750 for the others, 300 to 1200 for custom): the first is the stimulus's (blue), the second, longer, the classification's (red): growth needs both; `eyeshell optics` takes one or more (optics.json's chromatic aberration is between the first two)",
         growth: true,
     },
     KeySpec {

@@ -100,7 +100,15 @@ impl Scene {
         if self.stimulus_source() == Source::Optics {
             // The whole run: growth.t_end, or the [0, 1] an elastic scene's eye is drawn over.
             let t_end = self.growth.as_ref().map_or(1.0, |g| g.t_end);
-            if let Err(e) = self.optics().check_over(t_end) {
+            let growth_reads = || match self.growth {
+                Some(_) => self.optics().check_growth_wavelengths(),
+                None => Ok(()),
+            };
+            if let Err(e) = self
+                .optics()
+                .check_over(t_end)
+                .and_then(|()| growth_reads())
+            {
                 return Err(SceneError::Invalid {
                     origin: self.origin_of(sources, &[source_key(&e.key)]),
                     key: e.key,
