@@ -617,19 +617,12 @@ impl GrowthSystem {
             let (mut seen, mut drives) = (Vec::new(), Vec::new());
             let places = retina.iter().zip(nodes).map(|(&p, &sigma)| (sigma, p));
             viewer.drives(rule.as_ref(), places, self.t, false, &mut seen, &mut drives)?;
-            let points: Vec<super::integral::RetinaPoint> = seen
+            let order: Vec<usize> = (0..seen.len()).collect();
+            let points = seen
                 .iter()
                 .zip(&drives)
-                .map(|(v, d)| super::integral::RetinaPoint {
-                    z: v.z,
-                    r: v.r,
-                    angle: v.angle,
-                    drive: d.value,
-                })
-                .collect();
-            let order: Vec<usize> = (0..points.len()).collect();
-            row.drive = super::integral::integrate(&order, &points, stimulus.max_angle(), false)
-                .map_or(f64::NAN, |i| i.value);
+                .map(|(v, d)| (v.z, v.r, v.angle, d.value));
+            row.drive = retina_average(stimulus, &order, points);
             row.defocus_d = seen[0].defocus;
             return Ok(row);
         }
@@ -691,6 +684,7 @@ impl GrowthSystem {
             vergence: self.vergence.as_ref(),
             reads: self.growth.stimulus.rule().reads(),
             images: self.images(),
+            main: self.growth.computed.as_ref().map_or(0, |c| c.main_image()),
         }
     }
 
@@ -719,8 +713,7 @@ impl GrowthSystem {
 }
 
 /// With `stimulus.region = "integrated"`, the drive averaged over the retina out to the
-/// region's edge ([`super::integral`]; NaN when no area lies inside, which fails the
-/// evaluation); None for a local rule.
+/// region's edge ([`retina_average`]); None for a local rule.
 fn integrated_drive(
     stimulus: &crate::model::rule::Stimulus,
     pts: &GrowthPoints,
@@ -729,19 +722,26 @@ fn integrated_drive(
     if stimulus.region != crate::model::rule::Region::Integrated {
         return None;
     }
-    let points: Vec<super::integral::RetinaPoint> = stim
+    let points = stim
         .iter()
-        .map(|s| super::integral::RetinaPoint {
-            z: s.z_retina,
-            r: s.r_retina,
-            angle: s.angle,
-            drive: s.drive,
-        })
+        .map(|s| (s.z_retina, s.r_retina, s.angle, s.drive));
+    Some(retina_average(stimulus, &pts.by_sigma, points))
+}
+
+/// The drive averaged over the retina points `points` ((z, r, φ, drive), taken in the
+/// order `order`, pole first) out to the integrated region's edge ([`super::integral`]):
+/// what the right side feeds every node and series.csv reports. NaN when no area lies
+/// inside, which fails the evaluation.
+fn retina_average(
+    stimulus: &crate::model::rule::Stimulus,
+    order: &[usize],
+    points: impl Iterator<Item = (f64, f64, f64, f64)>,
+) -> f64 {
+    let points: Vec<super::integral::RetinaPoint> = points
+        .map(|(z, r, angle, drive)| super::integral::RetinaPoint { z, r, angle, drive })
         .collect();
-    Some(
-        super::integral::integrate(&pts.by_sigma, &points, stimulus.max_angle(), false)
-            .map_or(f64::NAN, |i| i.value),
-    )
+    super::integral::integrate(order, &points, stimulus.max_angle(), false)
+        .map_or(f64::NAN, |i| i.value)
 }
 
 /// The rule's drive where the retina crosses the polar angle φ_max ([`super::crossing`]);

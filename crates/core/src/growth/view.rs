@@ -18,6 +18,9 @@ pub struct Viewer<'a> {
     /// more than one: each point's drive is then the light-weighted mean of the drives of
     /// its view through each image. Empty for one image (`blue` and `red` are it).
     pub images: &'a [ComputedImage],
+    /// The index in `images` of the image whose surfaces `blue` and `red` are (unused for
+    /// one image).
+    pub main: usize,
 }
 
 impl Viewer<'_> {
@@ -43,17 +46,18 @@ impl Viewer<'_> {
     ) -> Result<(), RuleError> {
         let n = points.len();
         seen.clear();
-        seen.extend(
-            points
-                .clone()
-                .map(|(sigma, p)| self.see(sigma, t, p, gradients)),
-        );
         drives.clear();
         drives.resize(n, Drive::default());
         if self.images.len() < 2 {
+            seen.extend(
+                points
+                    .clone()
+                    .map(|(sigma, p)| self.see(sigma, t, p, gradients)),
+            );
             return rule.drive(seen, gradients, drives);
         }
-        // Every (point, image) view in one call: image i's views at [i n, (i + 1) n).
+        // Every (point, image) view in one call: image i's views at [i n, (i + 1) n); the
+        // main image's are the views returned.
         let mut all = Vec::with_capacity(n * self.images.len());
         for im in self.images {
             let through = Viewer {
@@ -68,6 +72,7 @@ impl Viewer<'_> {
                     .map(|(sigma, p)| through.see(sigma, t, p, gradients)),
             );
         }
+        seen.extend_from_slice(&all[self.main * n..(self.main + 1) * n]);
         let mut each = vec![Drive::default(); all.len()];
         rule.drive(&all, gradients, &mut each)?;
         for (k, out) in drives.iter_mut().enumerate() {
@@ -155,6 +160,7 @@ mod tests {
                 defocus: true,
             },
             images: &[],
+            main: 0,
         };
         for p in [(22.8, 0.4), (19.0, 8.5), (12.0, 11.2)] {
             let s = viewer.see(1.0, 0.0, p, true);

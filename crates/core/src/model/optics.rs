@@ -940,7 +940,7 @@ impl ComputedOptics {
     /// are traced through).
     pub fn main_spec(&self) -> OpticsSpec {
         let mut spec = self.spec.clone();
-        let main = self.images.iter().find(|im| im.blue == self.blue);
+        let main = self.images.get(self.main_image());
         if let (Some(power), Some(i)) = (
             main.and_then(|im| im.power),
             (spec.lenses.iter()).position(|l| l.image_powers().len() > 1),
@@ -948,6 +948,14 @@ impl ComputedOptics {
             spec.lenses[i] = spec.lenses[i].with_power(power);
         }
         spec
+    }
+
+    /// The index in `images` of the image whose surfaces are `blue`, `red` and `surfaces`
+    /// (the one that carries the most light on the axis; 0 with one image).
+    pub fn main_image(&self) -> usize {
+        (self.images.iter())
+            .position(|im| im.blue == self.blue)
+            .unwrap_or(0)
     }
 
     /// True when these are the surfaces of `spec` about `z_c`.

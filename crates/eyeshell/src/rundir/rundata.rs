@@ -157,48 +157,50 @@ fn json_to_toml(v: &serde_json::Value) -> Option<toml::Value> {
     })
 }
 
-/// series.csv or history.csv, each column found by its header's name (the table of
-/// outputs): a column that runs written before it existed lack is read as NaN.
+/// series.csv or history.csv, each column found by its header's name as the table of
+/// outputs ([`crate::outputs::series_quantities`]) names it: a column the table marks as
+/// added later, which runs written before it existed lack, is read as NaN; any other is
+/// required.
 pub fn read_series(path: &Path) -> Result<Vec<SeriesPoint>, ExportError> {
     let records = read_records(path)?;
     let header = records.header.clone().unwrap_or_default();
-    let column = |name: &str| header.iter().position(|h| h == name);
-    let required = [
-        "t",
-        "axial_length",
-        "equatorial_radius",
-        "retina_minus_blue",
-        "retina_minus_red",
-        "class",
-    ];
-    let at: Vec<Option<usize>> = required.iter().map(|n| column(n)).collect();
-    if let Some(k) = at.iter().position(Option::is_none) {
-        return Err(bad(format!(
-            "{}: no {:?} column in its header",
-            path.display(),
-            required[k]
-        )));
+    let table = crate::outputs::series_quantities();
+    let mut at = std::collections::HashMap::new();
+    for q in &table {
+        match header.iter().position(|h| h == q.name) {
+            Some(j) => {
+                at.insert(q.name, j);
+            }
+            None if q.added_later => {}
+            None => {
+                return Err(bad(format!(
+                    "{}: no {:?} column in its header",
+                    path.display(),
+                    q.name
+                )))
+            }
+        }
     }
-    let at: Vec<usize> = at.into_iter().flatten().collect();
-    let later = ["refraction_D", "drive", "defocus_D"].map(column);
     let mut out = Vec::new();
     for r in records.iter() {
-        let number = |j: usize| r.cells.get(j).and_then(|v| v.parse::<f64>().ok());
-        let optional = |j: Option<usize>| match j.map(|j| r.cells.get(j)) {
+        // A column's cell; None (NaN) for a later column the file lacks.
+        let cell = |name: &str| at.get(name).map(|&j| r.cells.get(j));
+        let number = |name: &str| cell(name)??.parse::<f64>().ok();
+        let optional = |name: &str| match cell(name) {
             None => Some(f64::NAN),
             Some(v) => v?.parse::<f64>().ok(),
         };
         let row = (|| {
             Some(SeriesPoint {
-                t: number(at[0])?,
-                axial_length: number(at[1])?,
-                equatorial_radius: number(at[2])?,
-                retina_minus_blue: number(at[3])?,
-                retina_minus_red: number(at[4])?,
-                class: Refraction::parse(r.cells.get(at[5])?)?,
-                refraction_d: optional(later[0])?,
-                drive: optional(later[1])?,
-                defocus_d: optional(later[2])?,
+                t: number("t")?,
+                axial_length: number("axial_length")?,
+                equatorial_radius: number("equatorial_radius")?,
+                retina_minus_blue: number("retina_minus_blue")?,
+                retina_minus_red: number("retina_minus_red")?,
+                class: Refraction::parse(cell("class")??)?,
+                refraction_d: optional("refraction_D")?,
+                drive: optional("drive")?,
+                defocus_d: optional("defocus_D")?,
             })
         })();
         out.push(row.ok_or_else(|| {
@@ -218,4 +220,47 @@ pub fn column(s: &RunSnapshot, name: &str) -> Result<Vec<f64>, ExportError> {
     s.table
         .column(name)
         .ok_or_else(|| bad(format!("{}: no column {name:?}", s.file.display())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row written in the table's columns reads back whole, and a file without a column
+    /// the table requires is refused naming it: the columns read are the table's.
+    #[test]
+    fn a_series_row_reads_back_through_the_table_s_columns() {
+        let row = SeriesPoint {
+            t: 0.5,
+            axial_length: 22.125,
+            equatorial_radius: 12.25,
+            retina_minus_blue: -0.375,
+            retina_minus_red: 0.0625,
+            class: Refraction::Myopic,
+            refraction_d: -1.5,
+            drive: 0.75,
+            defocus_d: 0.875,
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("series.csv");
+        let columns = crate::outputs::series_columns();
+        let text = format!(
+            "{}\n{}\n",
+            columns.join(","),
+            crate::outputs::series_cells(&row).join(",")
+        );
+        std::fs::write(&path, &text).unwrap();
+        assert_eq!(read_series(&path).unwrap(), vec![row]);
+        // Without the required axial_length column.
+        let k = columns.iter().position(|c| *c == "axial_length").unwrap();
+        let drop = |line: &str| {
+            let mut cells: Vec<&str> = line.split(',').collect();
+            cells.remove(k);
+            cells.join(",")
+        };
+        let lines: Vec<String> = text.lines().map(drop).collect();
+        std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+        let e = read_series(&path).unwrap_err().to_string();
+        assert!(e.contains("no \"axial_length\" column"), "{e}");
+    }
 }

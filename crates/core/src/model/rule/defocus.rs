@@ -38,20 +38,6 @@ impl Defocus {
             self.hyperopic_gain * plus_slope - self.myopic_gain * minus_slope,
         )
     }
-
-    /// The defocus (D) at which the drive vanishes: where growth stops, −b/k_m (myopic) for
-    /// a positive baseline; None when no defocus stops it.
-    pub fn equilibrium(&self) -> Option<f64> {
-        match self.baseline {
-            b if b > 0.0 && self.myopic_gain > 0.0 => Some(-b / self.myopic_gain),
-            b if b <= 0.0 => Some(if self.hyperopic_gain > 0.0 {
-                -b / self.hyperopic_gain
-            } else {
-                0.0
-            }),
-            _ => None,
-        }
-    }
 }
 
 impl GrowthRule for Defocus {
@@ -98,7 +84,6 @@ mod tests {
         assert_eq!(r.at(0.0), (0.2, 0.4));
         assert!((r.at(2.0).0 - 0.4).abs() < 1e-15);
         assert!((r.at(-0.5).0 - 0.0).abs() < 1e-15);
-        assert_eq!(r.equilibrium(), Some(-0.5));
         assert!(r.at(-1.0).0 < 0.0);
     }
 }
