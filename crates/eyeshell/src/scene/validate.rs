@@ -97,26 +97,7 @@ impl Scene {
         }
         self.validate_mesh(sources)?;
         self.validate_sizes(sources)?;
-        if self.stimulus_source() == Source::Optics {
-            // The whole run: growth.t_end, or the [0, 1] an elastic scene's eye is drawn over.
-            let t_end = self.growth.as_ref().map_or(1.0, |g| g.t_end);
-            let growth_reads = || match self.growth {
-                Some(_) => self.optics().check_growth_wavelengths(),
-                None => Ok(()),
-            };
-            if let Err(e) = self
-                .optics()
-                .check_over(t_end)
-                .and_then(|()| growth_reads())
-            {
-                return Err(SceneError::Invalid {
-                    origin: self.origin_of(sources, &[source_key(&e.key)]),
-                    key: e.key,
-                    value: e.value,
-                    problem: e.problem,
-                });
-            }
-        }
+        self.validate_traced_optics(sources)?;
         if self.growth.is_some() {
             let o = self.optics();
             if !o.lenses.is_empty() && self.stimulus_source() != Source::Optics {
@@ -272,6 +253,31 @@ impl Scene {
                         gb(MAX_RUN_BYTES)
                     ),
                 ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The traced optics over the whole run, and the two wavelengths a growth run reads.
+    fn validate_traced_optics(&self, sources: &Sources) -> Result<(), SceneError> {
+        if self.stimulus_source() == Source::Optics {
+            // The whole run: growth.t_end, or the [0, 1] an elastic scene's eye is drawn over.
+            let t_end = self.growth.as_ref().map_or(1.0, |g| g.t_end);
+            let growth_reads = || match self.growth {
+                Some(_) => self.optics().check_growth_wavelengths(),
+                None => Ok(()),
+            };
+            if let Err(e) = self
+                .optics()
+                .check_over(t_end)
+                .and_then(|()| growth_reads())
+            {
+                return Err(SceneError::Invalid {
+                    origin: self.origin_of(sources, &[source_key(&e.key)]),
+                    key: e.key,
+                    value: e.value,
+                    problem: e.problem,
+                });
             }
         }
         Ok(())
