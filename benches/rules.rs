@@ -36,11 +36,23 @@ fn read(sets: &[&str]) -> Scene {
     Scene::from_file(&path, &all).expect("scenes/myopia/single-vision.toml")
 }
 
+/// Every rule under IDA (its own steps), then under fixed-step Euler: 200 steps whatever the
+/// rule grows, so the second group's ratios are the rule's cost at equal work.
 fn rules(c: &mut Criterion) {
-    let mut group = c.benchmark_group("rules_single_vision_8_to_11");
+    timed(c, "rules_single_vision_8_to_11", &[]);
+    timed(
+        c,
+        "rules_equal_work_euler_200",
+        &["solver.integrator=euler", "solver.steps=200"],
+    );
+}
+
+fn timed(c: &mut Criterion, group_name: &str, integrator: &[&str]) {
+    let mut group = c.benchmark_group(group_name);
     group.sample_size(10);
     for (name, sets) in RULES {
-        let scene = read(sets);
+        let all: Vec<&str> = sets.iter().chain(integrator).copied().collect();
+        let scene = read(&all);
         let run = scene
             .grow(&mut ())
             .expect("the scene grows under every rule");
