@@ -6,7 +6,7 @@
 //! Before timing, each run's work (IDA steps, residual evaluations, Newton iterations) is
 //! printed: a rule that grows a different eye takes a different number of steps, so a
 //! run's ratio to the paper's is (cost per residual) × (residuals per run), and the counts
-//! say which part is which. The bound (issue 46): a local rule at most 1.2× the paper's per
+//! say which part is which. The bound: a local rule at most 1.2× the paper's per
 //! run, an integrated one at most 2×.
 
 use criterion::{criterion_group, criterion_main, Criterion};

@@ -423,7 +423,7 @@ mod tests {
     /// A field whose strongest lens forms no focus (its entry NaN) still gives the
     /// refraction of a retina in the interval next to it, from the four points on the other
     /// side: against the exact inverse of a Gaussian-optics focus z(F) = 17 + 1336/(60 + F),
-    /// to 0.01 D (with the centred cubic it was NaN).
+    /// to 0.01 D; the centred four alone would include the NaN.
     #[test]
     fn a_nan_neighbour_leaves_the_refraction_to_the_other_side() {
         let powers = power_grid(PERIPHERAL_POWERS);
