@@ -17,6 +17,7 @@ mod medium;
 mod paraxial;
 pub mod refraction;
 mod shell;
+mod strehl;
 mod surface;
 mod system;
 mod trace;
@@ -24,8 +25,8 @@ mod vec3;
 
 pub use error::{OpticsError, RayError, RayFailure};
 pub use focus::{
-    best_focus, best_focus_with, coddington, ray_fan, rays_for, Criterion, Focus, FocusSettings,
-    Probe, Pupil, MAX_FIELD_DEG, RAYS_TRIED,
+    best_focus, best_focus_with, coddington, ray_fan, rays_for, traced_strehl, Criterion, Focus,
+    FocusSettings, Probe, Pupil, MAX_FIELD_DEG, RAYS_TRIED,
 };
 pub use images::{entrance_area, entrance_areas, Region, SPOKES};
 pub use medium::{Dispersion, Grin, GrinDispersion, Medium, MediumKind};

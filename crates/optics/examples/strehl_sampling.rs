@@ -1,0 +1,117 @@
+//! Prints docs/optics.md's table of the Strehl focus against the through-focus Strehl of 128
+//! traced rays across the pupil: the Atchison 2006 eye at 400 nm, 3 and 4 mm pupils, fields
+//! 0–40° by 5°, and the focus at 40° against the pupil.
+//!
+//! cargo run --release -p eyeshell-optics --example strehl_sampling
+
+use eyeshell_optics::{
+    best_focus_with, eyes, traced_strehl, Criterion, FocusSettings, OpticalSystem, Pupil,
+};
+
+/// The maximum of the traced rays' through-focus Strehl between the astigmatic foci and
+/// 0.3 mm beyond, on a 1 µm grid.
+fn traced_maximum(eye: &OpticalSystem, field: f64, pupil: &Pupil, rays: usize) -> (f64, f64) {
+    let settings = FocusSettings {
+        rays_across: rays,
+        ..FocusSettings::default()
+    };
+    let f = best_focus_with(eye, 400.0, field, pupil, Criterion::MeanSphere, &settings).unwrap();
+    let (lo, hi) = (
+        f.tangential.min(f.sagittal) - 0.3,
+        f.tangential.max(f.sagittal) + 0.3,
+    );
+    let count = ((hi - lo) / 0.001) as usize + 1;
+    let scan = traced_strehl(eye, 400.0, field, pupil, &settings, (lo, hi, count)).unwrap();
+    let (i, s) =
+        scan.iter().enumerate().fold(
+            (0, f64::NEG_INFINITY),
+            |b, (i, &v)| if v > b.1 { (i, v) } else { b },
+        );
+    // The parabola through the largest value and its neighbours.
+    let h = (hi - lo) / (count - 1) as f64;
+    let (a, c) = (scan[i.max(1) - 1], scan[(i + 1).min(count - 1)]);
+    let shift = if 0 < i && i + 1 < count && a + c < 2.0 * s {
+        0.5 * (a - c) / (a - 2.0 * s + c)
+    } else {
+        0.0
+    };
+    (lo + (i as f64 + shift) * h, s)
+}
+
+fn main() {
+    let eye = eyes::atchison_2006();
+    let position = eye.pupil_position.unwrap();
+    let traced_16 = std::env::args().any(|a| a == "--traced-16");
+    for diameter in [3.0, 4.0] {
+        let pupil = Pupil { diameter, position };
+        println!("\n{diameter} mm pupil\n");
+        println!("| field ° | tangential | sagittal | Strehl focus | S | sum rays | 128 traced | S | 16 traced | S |");
+        println!("|---|---|---|---|---|---|---|---|---|---|");
+        for field in (0..=8).map(|i| 5.0 * i as f64) {
+            let t = std::time::Instant::now();
+            let f = best_focus(&eye, field, &pupil);
+            let secs = t.elapsed().as_secs_f64();
+            let (d, s) = traced_maximum(&eye, field, &pupil, 128);
+            let (d16, s16) = if traced_16 {
+                traced_maximum(&eye, field, &pupil, 16)
+            } else {
+                (f64::NAN, f64::NAN)
+            };
+            println!(
+                "| {field:.0} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {d:.4} | {s:.4} | {d16:.4} | {s16:.4} | ({:+.4}, {secs:.3} s)",
+                f.tangential, f.sagittal, f.distance, f.strehl, f.strehl_rays, f.distance - d
+            );
+        }
+    }
+    println!("\n40°, focus against the pupil\n");
+    println!("| pupil mm | tangential | sagittal | Strehl focus | S | sum rays | 128 traced | S |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for diameter in [1.0, 2.0, 3.0, 4.0] {
+        let pupil = Pupil { diameter, position };
+        let f = best_focus(&eye, 40.0, &pupil);
+        let (d, s) = traced_maximum(&eye, 40.0, &pupil, 128);
+        println!(
+            "| {diameter:.0} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {d:.4} | {s:.4} |",
+            f.tangential, f.sagittal, f.distance, f.strehl, f.strehl_rays
+        );
+    }
+    if std::env::args().any(|a| a == "--counts") {
+        for diameter in [1.0, 3.0, 4.0] {
+            let pupil = Pupil { diameter, position };
+            for field in [0.0, 20.0, 30.0, 40.0] {
+                let row: Vec<String> = [4, 6, 8, 12, 16, 32]
+                    .iter()
+                    .map(|&n| {
+                        let s = FocusSettings {
+                            rays_across: n,
+                            ..FocusSettings::default()
+                        };
+                        let f = best_focus_with(&eye, 400.0, field, &pupil, Criterion::Strehl, &s)
+                            .unwrap();
+                        format!("{n}: {:.5} {:.4} ({})", f.distance, f.strehl, f.strehl_rays)
+                    })
+                    .collect();
+                println!("{diameter} mm {field}°: {}", row.join(" | "));
+            }
+        }
+    }
+    if std::env::args().any(|a| a == "--256") {
+        for diameter in [3.0, 4.0] {
+            let pupil = Pupil { diameter, position };
+            let (d, s) = traced_maximum(&eye, 40.0, &pupil, 256);
+            println!("256 traced, {diameter} mm, 40°: {d:.4} {s:.4}");
+        }
+    }
+}
+
+fn best_focus(eye: &OpticalSystem, field: f64, pupil: &Pupil) -> eyeshell_optics::Focus {
+    best_focus_with(
+        eye,
+        400.0,
+        field,
+        pupil,
+        Criterion::Strehl,
+        &FocusSettings::default(),
+    )
+    .unwrap()
+}
