@@ -95,6 +95,27 @@ fn main() {
             }
         }
     }
+    if std::env::args().any(|a| a == "--pupils") {
+        let d: Vec<f64> = (0..=12)
+            .map(|i| {
+                let pupil = Pupil {
+                    diameter: 1.0 + 0.25 * i as f64,
+                    position,
+                };
+                let f = best_focus(&eye, 40.0, &pupil);
+                println!(
+                    "{:.2} mm: {:.5} ({:.5} {:.5}) S {:.4} rays {}",
+                    pupil.diameter, f.distance, f.tangential, f.sagittal, f.strehl, f.strehl_rays
+                );
+                f.distance
+            })
+            .collect();
+        let second: Vec<String> = d
+            .windows(3)
+            .map(|w| format!("{:+.4}", w[0] - 2.0 * w[1] + w[2]))
+            .collect();
+        println!("second differences: {}", second.join(" "));
+    }
     if std::env::args().any(|a| a == "--256") {
         for diameter in [3.0, 4.0] {
             let pupil = Pupil { diameter, position };
