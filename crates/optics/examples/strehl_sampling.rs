@@ -116,6 +116,20 @@ fn main() {
             .collect();
         println!("second differences: {}", second.join(" "));
     }
+    if std::env::args().any(|a| a == "--surface") {
+        // The focus's place between the lines, u = (s − s_t)/(s_s − s_t), field by field.
+        for diameter in [1.0, 3.0] {
+            let pupil = Pupil { diameter, position };
+            let row: Vec<String> = (0..=40)
+                .map(|field| {
+                    let f = best_focus(&eye, field as f64, &pupil);
+                    let u = (f.distance - f.tangential) / (f.sagittal - f.tangential);
+                    format!("{field}: {u:.3} ({:.4})", f.strehl)
+                })
+                .collect();
+            println!("{diameter} mm, u: {}", row.join(" "));
+        }
+    }
     if std::env::args().any(|a| a == "--256") {
         for diameter in [3.0, 4.0] {
             let pupil = Pupil { diameter, position };

@@ -376,6 +376,121 @@ impl Zernike {
 mod tests {
     use super::*;
 
+    const LAMBDA_NM: f64 = 400.0;
+
+    /// A pencil sampled as `sampling`, each ray's α proportional to its stop point, its phase
+    /// and ψ given functions of the stop point.
+    fn pencil(
+        sampling: Sampling,
+        phase: impl Fn(f64, f64) -> f64,
+        psi: impl Fn(f64, f64) -> f64,
+    ) -> Vec<PupilRay> {
+        crate::focus::pupil_samples(sampling.radius, sampling.rays_across)
+            .into_iter()
+            .map(|(x, y, weight)| PupilRay {
+                stop: (x, y),
+                alpha: (0.05 * x, 0.05 * y),
+                phase: phase(x, y),
+                psi: psi(x, y),
+                weight,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_tilt_is_fitted_with_the_pupils_area_weights() {
+        let sampling = Sampling {
+            radius: 1.5,
+            rays_across: 16,
+        };
+        // Coma, whose tilt-free part depends on how the rays are weighted.
+        let rays = pencil(sampling, |x, y| 1e-3 * y * (x * x + y * y), |_, _| 0.0);
+        let (r0, _) = tilt_residuals(&rays).unwrap();
+        let moment = |f: &dyn Fn(&PupilRay) -> f64, weighted: bool| -> f64 {
+            rays.iter()
+                .zip(&r0)
+                .map(|(r, v)| if weighted { r.weight } else { 1.0 } * f(r) * v)
+                .sum()
+        };
+        let scale: f64 = rays.iter().map(|r| r.weight * r.phase.abs()).sum();
+        for f in [&|_: &PupilRay| 1.0, &|r: &PupilRay| r.alpha.1] as [&dyn Fn(&PupilRay) -> f64; 2]
+        {
+            assert!(moment(f, true).abs() < 1e-12 * scale);
+        }
+        // Unweighted, the residual is not orthogonal to the tilt: the weights matter here.
+        let unweighted = moment(&|r| r.alpha.1, false) / rays.len() as f64;
+        assert!(unweighted.abs() > 1e-3 * scale, "{unweighted} {scale}");
+    }
+
+    /// A pencil of 16 rays across with 30 waves of astigmatism, 2 of coma and ±10 of defocus
+    /// over the distances: the Zernike resampling gives the Strehl ratio of the exact
+    /// wavefront summed on 512 rays across, where the 16 traced rays' own sum aliases.
+    #[test]
+    fn the_resampled_sum_is_the_exact_wavefronts() {
+        let lambda = LAMBDA_NM * 1e-6;
+        let a: f64 = 1.5;
+        let astig = 30.0 * lambda / (2.0 * a * a);
+        let coma = 2.0 * lambda / (2.0 * a.powi(3));
+        let n = 1.336;
+        let (lo, hi) = (-0.2, 0.2);
+        let defocus = 10.0 * lambda / (n * hi * 0.5 * a * a);
+        let phase = |x: f64, y: f64| astig * (y * y - x * x) + coma * y * (x * x + y * y);
+        let psi = |x: f64, y: f64| -0.5 * defocus * (x * x + y * y);
+        let coarse = Sampling {
+            radius: a,
+            rays_across: 16,
+        };
+        let fine = Sampling {
+            radius: a,
+            rays_across: 512,
+        };
+        let resampled = StrehlModel::new(
+            &pencil(coarse, phase, psi),
+            coarse,
+            true,
+            LAMBDA_NM,
+            n,
+            (lo, hi),
+        )
+        .unwrap();
+        let traced = StrehlModel::new(
+            &pencil(coarse, phase, psi),
+            coarse,
+            false,
+            LAMBDA_NM,
+            n,
+            (lo, hi),
+        )
+        .unwrap();
+        let exact = StrehlModel::new(
+            &pencil(fine, phase, psi),
+            fine,
+            false,
+            LAMBDA_NM,
+            n,
+            (lo, hi),
+        )
+        .unwrap();
+        assert!(
+            (100..512).contains(&resampled.rays_across),
+            "{}",
+            resampled.rays_across
+        );
+        assert_eq!(traced.rays_across, 16);
+        let mut worst_traced: f64 = 0.0;
+        for i in 0..=20 {
+            let s = lo + (hi - lo) * i as f64 / 20.0;
+            let e = exact.at(s);
+            assert!(
+                (resampled.at(s) - e).abs() < 1e-6,
+                "{s}: {} {e}",
+                resampled.at(s)
+            );
+            worst_traced = worst_traced.max((traced.at(s) - e).abs());
+        }
+        assert!(worst_traced > 0.01, "{worst_traced}");
+    }
+
     #[test]
     fn zernike_radial_polynomials_are_the_tabulated_ones() {
         let rho: f64 = 0.7;
