@@ -110,6 +110,23 @@ fn main() {
                 f.distance
             })
             .collect();
+        for diameter in [1.0, 3.0, 4.0] {
+            let pupil = Pupil { diameter, position };
+            let f = best_focus(&eye, 40.0, &pupil);
+            let settings = FocusSettings {
+                rays_across: 128,
+                ..FocusSettings::default()
+            };
+            let at = |s: f64| {
+                traced_strehl(&eye, 400.0, 40.0, &pupil, &settings, (s, s + 1e-6, 2)).unwrap()[0]
+            };
+            println!(
+                "{diameter} mm, 40°, 128 traced: S on the tangential line {:.4}, on the sagittal line {:.4}, at the Strehl focus {:.4}",
+                at(f.tangential),
+                at(f.sagittal),
+                at(f.distance)
+            );
+        }
         let second: Vec<String> = d
             .windows(3)
             .map(|w| format!("{:+.4}", w[0] - 2.0 * w[1] + w[2]))

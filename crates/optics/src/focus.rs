@@ -10,7 +10,7 @@
 //!
 //! * `Strehl`: the Strehl ratio |⟨exp(i k W)⟩|² over the pupil samples, W the aberration at s with
 //!   its least-squares piston and tilt removed (the peak of the test plane perpendicular to the
-//!   chief ray at s), maximised in s (a scan, then golden-section search).
+//!   chief ray at s), maximised in s (a scan, then Newton's method on S′ = 0, or golden-section search).
 //! * `MeanSphere`: Φᵢ(Q) and ψᵢ = dᵢ·d꜀ (the exact phase change per unit s) fitted by least
 //!   squares with 1, αₓ, α_y, αₓ², α_y², αₓα_y (the span of the Zernike terms up to defocus and
 //!   astigmatism); the sagittal and tangential foci are the s where the αₓ² and α_y²
@@ -639,46 +639,6 @@ impl Wavefront {
     }
 }
 
-/// Maximises `f` on [lo, hi] given its values `scan` at evenly spaced points: golden-section
-/// search around the best of them.
-fn maximise(f: impl Fn(f64) -> f64, lo: f64, hi: f64, scan: &[f64]) -> (f64, f64) {
-    let h = (hi - lo) / (scan.len() - 1) as f64;
-    let (mut best, mut fbest) = (lo, f64::NEG_INFINITY);
-    for (i, &v) in scan.iter().enumerate() {
-        if v > fbest {
-            best = lo + i as f64 * h;
-            fbest = v;
-        }
-    }
-    let (mut a, mut b) = (best - h, best + h);
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    let mut c = b - g * (b - a);
-    let mut d = a + g * (b - a);
-    let (mut fc, mut fd) = (f(c), f(d));
-    while (b - a).abs() > 1e-8 {
-        if fc > fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - g * (b - a);
-            fc = f(c);
-        } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + g * (b - a);
-            fd = f(d);
-        }
-    }
-    let x = (a + b) / 2.0;
-    let fx = f(x);
-    if fx >= fbest {
-        (x, fx)
-    } else {
-        (best, fbest)
-    }
-}
-
 /// [`best_focus`] with explicit numerical settings.
 pub fn best_focus_with(
     system: &OpticalSystem,
@@ -731,8 +691,7 @@ pub fn best_focus_with(
             let lo = (ss.min(st) - margin).max(1e-3);
             let hi = ss.max(st) + margin;
             let model = model((lo, hi))?;
-            let scan = model.scan(lo, hi, 161);
-            let (s, v) = maximise(|s| model.at(s), lo, hi, &scan);
+            let (s, v) = model.maximum(lo, hi, 161);
             (s, v, model.rays_across)
         }
     };

@@ -206,6 +206,99 @@ impl StrehlModel {
             })
             .collect()
     }
+    /// The largest S on [lo, hi]: the best of `count` evenly spaced distances, refined by
+    /// Newton's method on S′ = 0 within a scan step of it (S, S′ and S″ from one pass over
+    /// the rays, a few passes where golden-section search takes some 35), or by golden-section
+    /// search where S is not concave there.
+    pub(crate) fn maximum(&self, lo: f64, hi: f64, count: usize) -> (f64, f64) {
+        let scan = self.scan(lo, hi, count);
+        let h = (hi - lo) / (count - 1) as f64;
+        let (mut best, mut fbest) = (lo, f64::NEG_INFINITY);
+        for (i, &v) in scan.iter().enumerate() {
+            if v > fbest {
+                best = lo + i as f64 * h;
+                fbest = v;
+            }
+        }
+        let mut s = best;
+        for _ in 0..30 {
+            let (_, d1, d2) = self.derivatives(s);
+            if !(d2 < 0.0) {
+                break;
+            }
+            let step = -d1 / d2;
+            s += step;
+            if !((s - best).abs() <= h) {
+                break;
+            }
+            if step.abs() < 1e-10 {
+                let v = self.at(s);
+                return if v >= fbest { (s, v) } else { (best, fbest) };
+            }
+        }
+        golden_section(|s| self.at(s), lo, hi, &scan)
+    }
+
+    /// S(s), S′(s) and S″(s): with φᵢ = k Wᵢ(s), gᵢ = k n′ r₁ᵢ and F = Σ wᵢ exp(i φᵢ),
+    /// F′ = Σ wᵢ i gᵢ exp(i φᵢ), F″ = −Σ wᵢ gᵢ² exp(i φᵢ): S = |F|², S′ = 2 Re(F̄ F′),
+    /// S″ = 2 (|F′|² + Re(F̄ F″)).
+    fn derivatives(&self, s: f64) -> (f64, f64, f64) {
+        let (mut f, mut f1, mut f2) = ((0.0, 0.0), (0.0, 0.0), (0.0, 0.0));
+        for ((a, b), w) in self.r0.iter().zip(&self.r1).zip(&self.w) {
+            let (sn, cs) = (self.k * (a + s * self.n * b)).sin_cos();
+            let g = self.k * self.n * b;
+            f.0 += w * cs;
+            f.1 += w * sn;
+            f1.0 -= w * g * sn;
+            f1.1 += w * g * cs;
+            f2.0 -= w * g * g * cs;
+            f2.1 -= w * g * g * sn;
+        }
+        let value = f.0 * f.0 + f.1 * f.1;
+        let d1 = 2.0 * (f.0 * f1.0 + f.1 * f1.1);
+        let d2 = 2.0 * (f1.0 * f1.0 + f1.1 * f1.1 + f.0 * f2.0 + f.1 * f2.1);
+        (value, d1, d2)
+    }
+}
+
+/// Maximises `f` on [lo, hi] given its values `scan` at evenly spaced points: golden-section
+/// search around the best of them.
+fn golden_section(f: impl Fn(f64) -> f64, lo: f64, hi: f64, scan: &[f64]) -> (f64, f64) {
+    let h = (hi - lo) / (scan.len() - 1) as f64;
+    let (mut best, mut fbest) = (lo, f64::NEG_INFINITY);
+    for (i, &v) in scan.iter().enumerate() {
+        if v > fbest {
+            best = lo + i as f64 * h;
+            fbest = v;
+        }
+    }
+    let (mut a, mut b) = (best - h, best + h);
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    while (b - a).abs() > 1e-8 {
+        if fc > fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = f(d);
+        }
+    }
+    let x = (a + b) / 2.0;
+    let fx = f(x);
+    if fx >= fbest {
+        (x, fx)
+    } else {
+        (best, fbest)
+    }
 }
 
 /// Rays across the pupil that resolve a phase of `waves` peak-to-valley (module comment),
