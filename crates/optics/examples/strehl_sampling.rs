@@ -147,6 +147,46 @@ fn main() {
             println!("{diameter} mm, u: {}", row.join(" "));
         }
     }
+    if std::env::args().any(|a| a == "--time") {
+        // The surfaces bench's work (400 and 600 nm × 41 fields, 16 rays across), timed in
+        // this process's CPU seconds (/proc/self/stat: utime + stime, in 1/100 s).
+        let cpu = || -> f64 {
+            let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+            let after = stat.rsplit(')').next().unwrap_or("");
+            // Fields 14 and 15 of the line; the first after the name is field 3.
+            let f: Vec<&str> = after.split_whitespace().collect();
+            let tick = |i: usize| f.get(i).and_then(|x| x.parse::<f64>().ok());
+            match (tick(11), tick(12)) {
+                (Some(u), Some(s)) => (u + s) / 100.0,
+                _ => f64::NAN,
+            }
+        };
+        for (criterion, diameter) in [
+            (Criterion::Strehl, 3.0),
+            (Criterion::Strehl, 4.0),
+            (Criterion::MeanSphere, 3.0),
+        ] {
+            let pupil = Pupil { diameter, position };
+            let repeats = 10;
+            let (c0, t0) = (cpu(), std::time::Instant::now());
+            for _ in 0..repeats {
+                eyeshell_optics::Surfaces::compute(
+                    &eye,
+                    &[400.0, 600.0],
+                    &pupil,
+                    criterion,
+                    &eyeshell_optics::SurfaceSettings::default(),
+                )
+                .unwrap();
+            }
+            println!(
+                "{} {diameter} mm: {:.0} ms CPU, {:.0} ms wall per computation",
+                criterion.name(),
+                (cpu() - c0) / repeats as f64 * 1e3,
+                t0.elapsed().as_secs_f64() / repeats as f64 * 1e3
+            );
+        }
+    }
     if std::env::args().any(|a| a == "--256") {
         for diameter in [3.0, 4.0] {
             let pupil = Pupil { diameter, position };
