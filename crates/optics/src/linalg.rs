@@ -60,10 +60,13 @@ pub(crate) fn least_squares<const N: usize>(rows: &[[f64; N]], rhs: &[f64]) -> O
     Some(std::array::from_fn(|j| x[j] / scale[j]))
 }
 
-/// [`least_squares`] with as many unknowns as each row has: the Zernike fits of the Strehl
-/// sum, whose terms the pupil's rings and spokes make (near) orthogonal, so the normal
-/// equations are well conditioned.
-pub(crate) fn least_squares_dyn(rows: &[Vec<f64>], rhs: &[f64]) -> Option<Vec<f64>> {
+/// [`least_squares`] with as many unknowns as each row has, for `K` right-hand sides at
+/// once: the Zernike fits of the Strehl sum, whose terms the pupil's rings and spokes make
+/// (near) orthogonal, so the normal equations are well conditioned.
+pub(crate) fn least_squares_dyn<const K: usize>(
+    rows: &[Vec<f64>],
+    rhs: [&[f64]; K],
+) -> Option<[Vec<f64>; K]> {
     let n = rows.first()?.len();
     let mut scale = vec![0.0_f64; n];
     for r in rows {
@@ -75,18 +78,29 @@ pub(crate) fn least_squares_dyn(rows: &[Vec<f64>], rhs: &[f64]) -> Option<Vec<f6
         return None;
     }
     let mut m = vec![vec![0.0; n]; n];
-    let mut v = vec![0.0; n];
-    for (r, &b) in rows.iter().zip(rhs) {
+    let mut v: [Vec<f64>; K] = std::array::from_fn(|_| vec![0.0; n]);
+    for (k, r) in rows.iter().enumerate() {
         let s: Vec<f64> = r.iter().zip(&scale).map(|(a, c)| a / c).collect();
         for i in 0..n {
-            v[i] += s[i] * b;
-            for j in 0..n {
+            for (vk, b) in v.iter_mut().zip(&rhs) {
+                vk[i] += s[i] * b[k];
+            }
+            for j in i..n {
                 m[i][j] += s[i] * s[j];
             }
         }
     }
-    let x = solve_dyn(m, v)?;
-    Some(x.iter().zip(&scale).map(|(a, c)| a / c).collect())
+    for i in 0..n {
+        for j in 0..i {
+            m[i][j] = m[j][i];
+        }
+    }
+    let mut out: [Vec<f64>; K] = std::array::from_fn(|_| Vec::new());
+    for (o, vk) in out.iter_mut().zip(v) {
+        let x = solve_dyn(m.clone(), vk)?;
+        *o = x.iter().zip(&scale).map(|(a, c)| a / c).collect();
+    }
+    Some(out)
 }
 
 /// [`solve`] for a square system of any size.

@@ -148,8 +148,7 @@ impl StrehlModel {
             rays_across: needed,
         };
         let basis = Zernike::new(sampling.degree());
-        let c0 = basis.fit(rays, &r0, sampling.radius)?;
-        let c1 = basis.fit(rays, &r1, sampling.radius)?;
+        let (c0, c1) = basis.fit(rays, (&r0, &r1), sampling.radius)?;
         let (r0, r1, w) = basis.resample(&c0, &c1, fine);
         Some(Self {
             k,
@@ -353,57 +352,101 @@ fn tilt_residuals(rays: &[PupilRay]) -> Option<(Vec<f64>, Vec<f64>)> {
 /// Zernike polynomials R_n^m(ρ) cos(m θ) to degree `degree`, θ measured from the tangential
 /// (y) axis: the terms even in the sagittal x, the span of a pencil of a centred system.
 struct Zernike {
+    degree: usize,
     /// (n, m) of each term.
     terms: Vec<(usize, usize)>,
+    /// Each term's R_n^m as (power of ρ, coefficient) pairs.
+    radial: Vec<Vec<(usize, f64)>>,
 }
 
 impl Zernike {
     fn new(degree: usize) -> Self {
-        let terms = (0..=degree)
+        let terms: Vec<(usize, usize)> = (0..=degree)
             .flat_map(|n| (n % 2..=n).step_by(2).map(move |m| (n, m)))
             .collect();
-        Self { terms }
+        let radial = terms
+            .iter()
+            .map(|&(n, m)| Self::coefficients(n, m))
+            .collect();
+        Self {
+            degree,
+            terms,
+            radial,
+        }
     }
 
     /// R_n^m(ρ) = Σₖ (−1)ᵏ (n − k)! / (k! ((n + m)/2 − k)! ((n − m)/2 − k)!) ρ^(n − 2k).
-    fn radial(n: usize, m: usize, rho: f64) -> f64 {
+    fn coefficients(n: usize, m: usize) -> Vec<(usize, f64)> {
         let fact = |j: usize| (1..=j).map(|i| i as f64).product::<f64>();
         (0..=(n - m) / 2)
             .map(|k| {
                 let c = fact(n - k) / (fact(k) * fact((n + m) / 2 - k) * fact((n - m) / 2 - k));
                 let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-                sign * c * rho.powi((n - 2 * k) as i32)
+                (n - 2 * k, sign * c)
             })
-            .sum()
-    }
-
-    fn values(&self, x: f64, y: f64, radius: f64) -> Vec<f64> {
-        let rho = x.hypot(y) / radius;
-        let theta = x.atan2(y);
-        self.terms
-            .iter()
-            .map(|&(n, m)| Self::radial(n, m, rho) * (m as f64 * theta).cos())
             .collect()
     }
 
-    /// The coefficients of `values` at the rays by least squares weighted by their shares.
-    fn fit(&self, rays: &[PupilRay], values: &[f64], radius: f64) -> Option<Vec<f64>> {
-        let rows: Vec<Vec<f64>> = rays
+    /// Every term's R_n^m(ρ).
+    fn radial_at(&self, rho: f64) -> Vec<f64> {
+        let mut powers = vec![1.0; self.degree + 1];
+        for p in 1..=self.degree {
+            powers[p] = powers[p - 1] * rho;
+        }
+        self.radial
             .iter()
-            .map(|r| {
-                let w = r.weight.sqrt();
+            .map(|c| c.iter().map(|&(p, a)| a * powers[p]).sum())
+            .collect()
+    }
+
+    /// Every term's cos(m θ) at the angle θ from the y axis with cos θ = `c`: Chebyshev's
+    /// T_m(c) by its recurrence.
+    fn angular_at(&self, c: f64) -> Vec<f64> {
+        let mut t = vec![1.0; self.degree + 1];
+        if self.degree > 0 {
+            t[1] = c;
+        }
+        for m in 2..=self.degree {
+            t[m] = 2.0 * c * t[m - 1] - t[m - 2];
+        }
+        self.terms.iter().map(|&(_, m)| t[m]).collect()
+    }
+
+    fn values(&self, x: f64, y: f64, radius: f64) -> Vec<f64> {
+        let r = x.hypot(y);
+        let cos = if r > 0.0 { y / r } else { 1.0 };
+        self.radial_at(r / radius)
+            .into_iter()
+            .zip(self.angular_at(cos))
+            .map(|(a, b)| a * b)
+            .collect()
+    }
+
+    /// The coefficients of r₀ and of r₁ at the rays by least squares weighted by their
+    /// shares, on the half x > 0: the other half mirrors it, with the same values of these
+    /// terms and of W, so it adds the same normal equations again.
+    fn fit(
+        &self,
+        rays: &[PupilRay],
+        (r0, r1): (&[f64], &[f64]),
+        radius: f64,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let half: Vec<usize> = (0..rays.len()).filter(|&i| rays[i].stop.0 > 0.0).collect();
+        let rows: Vec<Vec<f64>> = half
+            .iter()
+            .map(|&i| {
+                let (r, w) = (&rays[i], rays[i].weight.sqrt());
                 self.values(r.stop.0, r.stop.1, radius)
                     .into_iter()
                     .map(|z| w * z)
                     .collect()
             })
             .collect();
-        let rhs: Vec<f64> = rays
-            .iter()
-            .zip(values)
-            .map(|(r, v)| r.weight.sqrt() * v)
-            .collect();
-        linalg::least_squares_dyn(&rows, &rhs)
+        let rhs = |v: &[f64]| -> Vec<f64> {
+            half.iter().map(|&i| rays[i].weight.sqrt() * v[i]).collect()
+        };
+        let [c0, c1] = linalg::least_squares_dyn(&rows, [&rhs(r0), &rhs(r1)])?;
+        Some((c0, c1))
     }
 
     /// The fitted r₀ and r₁ on the half pupil x > 0 of `sampling`, with the weights of both
@@ -421,17 +464,8 @@ impl Zernike {
             .into_iter()
             .filter(|th| th.cos() > 0.0)
             .collect();
-        let angular: Vec<Vec<f64>> = spokes
-            .iter()
-            .map(|th| {
-                // The angle from the tangential y axis of the point (cos θ, sin θ).
-                let from_y = th.cos().atan2(th.sin());
-                self.terms
-                    .iter()
-                    .map(|&(_, m)| (m as f64 * from_y).cos())
-                    .collect()
-            })
-            .collect();
+        // cos of the angle from the tangential y axis of the spoke's point (cos θ, sin θ).
+        let angular: Vec<Vec<f64>> = spokes.iter().map(|th| self.angular_at(th.sin())).collect();
         let total: f64 = rings.iter().map(|r| r.1).sum::<f64>() * spokes.len() as f64;
         let count = rings.len() * spokes.len();
         let (mut r0, mut r1, mut w) = (
@@ -442,13 +476,10 @@ impl Zernike {
         for &(r, weight) in &rings {
             let rho = r / sampling.radius;
             let radial: Vec<(f64, f64)> = self
-                .terms
-                .iter()
+                .radial_at(rho)
+                .into_iter()
                 .zip(c0.iter().zip(c1))
-                .map(|(&(n, m), (a, b))| {
-                    let z = Self::radial(n, m, rho);
-                    (a * z, b * z)
-                })
+                .map(|(z, (a, b))| (a * z, b * z))
                 .collect();
             for ang in &angular {
                 let (mut v0, mut v1) = (0.0, 0.0);
@@ -587,16 +618,23 @@ mod tests {
     #[test]
     fn zernike_radial_polynomials_are_the_tabulated_ones() {
         let rho: f64 = 0.7;
-        let r = |n, m| Zernike::radial(n, m, rho);
+        let basis = Zernike::new(6);
+        let r = |n: usize, m: usize| {
+            let i = basis.terms.iter().position(|&t| t == (n, m)).unwrap();
+            basis.radial_at(rho)[i]
+        };
         assert!((r(2, 0) - (2.0 * rho * rho - 1.0)).abs() < 1e-15);
         assert!((r(3, 1) - (3.0 * rho.powi(3) - 2.0 * rho)).abs() < 1e-15);
         let r40 = 6.0 * rho.powi(4) - 6.0 * rho * rho + 1.0;
         assert!((r(4, 0) - r40).abs() < 1e-15);
         let r62 = 15.0 * rho.powi(6) - 20.0 * rho.powi(4) + 6.0 * rho * rho;
         assert!((r(6, 2) - r62).abs() < 1e-14);
-        // R_n^m(1) = 1 for every term.
-        for (n, m) in Zernike::new(10).terms {
-            assert!((Zernike::radial(n, m, 1.0) - 1.0).abs() < 1e-9, "{n} {m}");
+        // R_n^m(1) = 1 for every term; cos(m θ) by the recurrence.
+        let basis = Zernike::new(10);
+        assert!(basis.radial_at(1.0).iter().all(|r| (r - 1.0).abs() < 1e-9));
+        let th: f64 = 0.3;
+        for (&(_, m), t) in basis.terms.iter().zip(basis.angular_at(th.cos())) {
+            assert!((t - (m as f64 * th).cos()).abs() < 1e-13, "{m}");
         }
     }
 }
