@@ -27,7 +27,7 @@ use crate::linalg;
 const RAYS_PER_WAVE: f64 = 4.0;
 const RAYS_MARGIN: f64 = 8.0;
 /// The finest sampling the Strehl sum is taken on (rays across).
-pub(crate) const MAX_SUM_RAYS: usize = 1024;
+const MAX_SUM_RAYS: usize = 1024;
 /// The highest Zernike degree fitted to the traced rays: the rings of 16 rays across
 /// integrate the products of terms to degree 15 exactly, and a degree of 10 leaves the
 /// wavefront's content up to degree 20 out of the fitted coefficients (no aliasing).
@@ -36,7 +36,7 @@ const MAX_DEGREE: usize = 10;
 /// The lowest Zernike degree a resampling is fitted with: a fit of degree 3 (4 rays across)
 /// leaves out the eye's spherical aberration (the Atchison eye's Strehl ratio on the axis
 /// with a 3 mm pupil reads 1.0000 for 0.9556), one of degree 5 (6 rays across) puts the
-/// Strehl focus within 7e-4 mm of 128 traced rays at 0–40° with 3 and 4 mm pupils. Fewer
+/// Strehl focus within 7e-4 mm of the converged one at 0–40° with 3 and 4 mm pupils. Fewer
 /// rays are summed as traced.
 const MIN_DEGREE: usize = 5;
 
