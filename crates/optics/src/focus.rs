@@ -8,9 +8,10 @@
 //! components of dᵢ across the chief ray (sagittal x, tangential y), the wave aberration at
 //! distance s is Φᵢ(s) with piston and tilt removed.
 //!
-//! * `Strehl`: the Strehl ratio |⟨exp(i k W)⟩|² over the pupil samples, W the aberration at s with
-//!   its least-squares piston and tilt removed (the peak of the test plane perpendicular to the
-//!   chief ray at s), maximised in s (a scan, then Newton's method on S′ = 0, or golden-section search).
+//! * `Strehl`: the Strehl ratio |⟨exp(i k W)⟩|² over the pupil, W the aberration at s with its
+//!   weighted least-squares piston and tilt removed (the peak of the test plane perpendicular to
+//!   the chief ray at s), summed on as many rays as W's waves need (`strehl.rs`) and maximised
+//!   in s (a scan, then Newton's method on S′ = 0, or golden-section search).
 //! * `MeanSphere`: Φᵢ(Q) and ψᵢ = dᵢ·d꜀ (the exact phase change per unit s) fitted by least
 //!   squares with 1, αₓ, α_y, αₓ², α_y², αₓα_y (the span of the Zernike terms up to defocus and
 //!   astigmatism); the sagittal and tangential foci are the s where the αₓ² and α_y²
@@ -21,7 +22,8 @@
 use crate::error::{OpticsError, RayError, RayFailure};
 use crate::linalg;
 use crate::medium::Resolved;
-use crate::strehl::{PupilRay, Sampling, StrehlModel};
+use crate::sampling::{pupil_samples, Sampling};
+use crate::strehl::{PupilRay, StrehlModel};
 use crate::system::OpticalSystem;
 use crate::trace::{GrinSettings, Ray, Tracer};
 use crate::vec3::Vec3;
@@ -442,54 +444,6 @@ impl<'a> Beam<'a> {
             })
             .collect())
     }
-}
-
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton's method on Pₙ from Chebyshev
-/// guesses).
-pub(crate) fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 1.0;
-            for _ in 0..100 {
-                // P_n(x) and its derivative by the three-term recurrence.
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                let pn = if n == 0 { 1.0 } else { p1 };
-                let pm = if n == 0 { 0.0 } else { p0 };
-                dp = n as f64 * (x * pn - pm) / (x * x - 1.0);
-                let dx = pn / dp;
-                x -= dx;
-                if dx.abs() < 1e-15 {
-                    break;
-                }
-            }
-            (x, 2.0 / ((1.0 - x * x) * dp * dp))
-        })
-        .collect()
-}
-
-/// Sample points of the pupil disc of radius `a` with their area weights: Gauss–Legendre rings
-/// in r² (the area measure) times evenly spaced spokes, offset by half a spoke so that the set
-/// is symmetric under x → −x with no point on x = 0. Integrals of smooth functions over the
-/// disc converge far faster than on a square grid, whose staircase rim costs O(1/n).
-pub(crate) fn pupil_samples(a: f64, rays_across: usize) -> Vec<(f64, f64, f64)> {
-    let sampling = Sampling {
-        radius: a,
-        rays_across,
-    };
-    let spokes = sampling.spokes();
-    let mut pts = Vec::with_capacity(sampling.rings().len() * spokes.len());
-    for (r, w) in sampling.rings() {
-        for &th in &spokes {
-            pts.push((r * th.cos(), r * th.sin(), w / spokes.len() as f64));
-        }
-    }
-    pts
 }
 
 /// The traced beam of one field: chief ray and pupil rays in the image space.

@@ -16,6 +16,7 @@ mod linalg;
 mod medium;
 mod paraxial;
 pub mod refraction;
+mod sampling;
 mod shell;
 mod strehl;
 mod surface;

@@ -21,6 +21,7 @@
 //! edges, which no polynomial follows: it is summed on the traced rays alone.
 
 use crate::linalg;
+use crate::sampling::Sampling;
 
 /// Rays across the pupil per wave of peak-to-valley aberration, and a floor added: πP with a
 /// quarter's margin, and 8 for the Bessel tail's m^(1/3) width at small P.
@@ -55,48 +56,13 @@ pub(crate) struct PupilRay {
     pub(crate) weight: f64,
 }
 
-/// How the pupil was sampled: rings × spokes, the layout of [`crate::focus::pupil_samples`].
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Sampling {
-    pub(crate) radius: f64,
-    pub(crate) rays_across: usize,
-}
-
-impl Sampling {
-    /// The rings: the radius and weight of each, Gauss–Legendre nodes and weights in r² (the
-    /// area measure) on [−1, 1], so the weights sum to 2.
-    pub(crate) fn rings(&self) -> Vec<(f64, f64)> {
-        crate::focus::gauss_legendre(self.ring_count())
-            .into_iter()
-            .map(|(x, w)| (self.radius * ((x + 1.0) / 2.0).sqrt(), w))
-            .collect()
-    }
-
-    /// The spokes' angles from the sagittal x axis, evenly spaced and offset by half a spoke,
-    /// so that the set is symmetric under x → −x with no point on x = 0.
-    pub(crate) fn spokes(&self) -> Vec<f64> {
-        let count = self.spoke_count();
-        (0..count)
-            .map(|j| 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / count as f64)
-            .collect()
-    }
-
-    fn ring_count(&self) -> usize {
-        (self.rays_across / 2).max(1)
-    }
-
-    fn spoke_count(&self) -> usize {
-        (2 * self.rays_across).div_ceil(4).max(1) * 4
-    }
-
-    /// The highest Zernike degree whose terms' products these rings and spokes integrate
-    /// exactly (Gauss–Legendre in r² to degree 2·rings − 1, spokes to mode spokes − 1),
-    /// at most [`MAX_DEGREE`].
-    fn degree(&self) -> usize {
-        (2 * self.ring_count() - 1)
-            .min(self.spoke_count() / 2 - 1)
-            .min(MAX_DEGREE)
-    }
+/// The highest Zernike degree whose terms' products the rings and spokes of `sampling`
+/// integrate exactly (Gauss–Legendre in r² to degree 2·rings − 1, spokes to mode
+/// spokes − 1), at most [`MAX_DEGREE`].
+fn degree(sampling: &Sampling) -> usize {
+    (2 * sampling.ring_count() - 1)
+        .min(sampling.spoke_count() / 2 - 1)
+        .min(MAX_DEGREE)
 }
 
 /// The Strehl ratio along the chief ray: S(s) = |Σ wᵢ exp(i k (r₀ᵢ + s n′ r₁ᵢ))|², the
@@ -133,7 +99,7 @@ impl StrehlModel {
         }
         let waves = peak_to_valley(&r0, &r1, n, lo).max(peak_to_valley(&r0, &r1, n, hi)) / lambda;
         let needed = rays_for_waves(waves);
-        if needed <= sampling.rays_across || !resample || sampling.degree() < MIN_DEGREE {
+        if needed <= sampling.rays_across || !resample || degree(&sampling) < MIN_DEGREE {
             return Some(Self {
                 k,
                 n,
@@ -147,7 +113,7 @@ impl StrehlModel {
             radius: sampling.radius,
             rays_across: needed,
         };
-        let basis = Zernike::new(sampling.degree());
+        let basis = Zernike::new(degree(&sampling));
         let (c0, c1) = basis.fit(rays, (&r0, &r1), sampling.radius)?;
         let (r0, r1, w) = basis.resample(&c0, &c1, fine);
         Some(Self {
@@ -509,7 +475,7 @@ mod tests {
         phase: impl Fn(f64, f64) -> f64,
         psi: impl Fn(f64, f64) -> f64,
     ) -> Vec<PupilRay> {
-        crate::focus::pupil_samples(sampling.radius, sampling.rays_across)
+        crate::sampling::pupil_samples(sampling.radius, sampling.rays_across)
             .into_iter()
             .map(|(x, y, weight)| PupilRay {
                 stop: (x, y),
