@@ -77,7 +77,7 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
             ),
         };
         out(&format!(
-            "eyeshell: solved {} ({})\n  nodes           {}\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
+            "eyeshell: solved {} ({})\n  nodes           {}\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  refraction_D    {}\n  time            {:.3} s\n  output          {}\n",
             scene.origin,
             one_line(&scene.display_name()),
             nodes,
@@ -85,11 +85,22 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
             if s.newton_iterations == 1 { "" } else { "s" },
             s.residual_norm,
             s.first_integral_max,
+            refraction_text(&scene, &solution),
             s.wall_seconds,
             crate::shown(&target),
         ));
     }
     Ok(())
+}
+
+/// The solve's refraction at the pole, naked eye (summary.json's `refraction_D`), in words:
+/// the dioptres, or why there are none.
+fn refraction_text(scene: &Scene, solution: &eyeshell::bvp::Solution) -> String {
+    match scene.refraction_of(&solution.rows) {
+        Some(d) if d.is_finite() => format!("{d:+.3} D (at the pole, naked eye)"),
+        Some(_) => "none: beyond the ±25 D the optics are traced over".into(),
+        None => format!("none: {}", scene.no_refraction_optics()),
+    }
 }
 
 pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {
