@@ -840,6 +840,27 @@ fn trial_through(
     })
 }
 
+/// A real spectacle lens that spans the spectacle plane leaves the trial lens of a refraction
+/// through the lenses nowhere to be held: refused, naming its vertex.
+fn check_trial_plane(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
+    for (i, l) in spec.lenses.iter().enumerate() {
+        if let (0, ProfileSpec::Real { thickness, .. }) = (l.kind, &l.profile) {
+            if l.vertex <= VERTEX_MM && VERTEX_MM <= l.vertex + thickness {
+                return Err(key_error(
+                    format!("{}[{i}].vertex", Quantity::Lenses),
+                    number(l.vertex),
+                    format!(
+                        "puts a real lens across the spectacle plane ({VERTEX_MM} mm), where the trial lens of the refraction through the lenses is held: give it a vertex beyond {} mm, or below {} mm",
+                        number(VERTEX_MM),
+                        number(VERTEX_MM - thickness)
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// A refraction through the lenses that cannot be traced, as the lenses' error.
 fn through_error(spec: &OpticsSpec, e: &optics::OpticsError) -> OpticsKeyError {
     key_error(
@@ -865,6 +886,7 @@ pub fn refraction_table_through(
 ) -> Result<RefractionTable, OpticsKeyError> {
     // The naked eye's table checks the wavelength and the eye, and names the key that fails.
     refraction_table_at(spec, t)?;
+    check_trial_plane(spec)?;
     let trial = trial_through(spec, t)?;
     let eye = spec.system_at(t)?;
     RefractionTable::compute_sampled_through(
