@@ -146,21 +146,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         t,
         start.elapsed().as_secs_f64(),
     );
-    let shares = |image: Option<f64>, field: f64| image_share(&computed, image, field);
-    doc["refraction"] = match &refraction {
-        Some((retina, at)) => {
-            write(
-                REFRACTION_FILE,
-                &refraction_csv(retina, at, &shares).map_err(|e| io(REFRACTION_FILE, e))?,
-            )?;
-            write(
-                PERIPHERAL_FILE,
-                &peripheral_csv(at, &shares).map_err(|e| io(PERIPHERAL_FILE, e))?,
-            )?;
-            refraction_json(&scene, retina, at, &shares)
-        }
-        None => serde_json::json!({ "none": scene.no_refraction_optics() }),
-    };
+    doc["refraction"] = write_refraction(&dir, &scene, &computed, refraction.as_ref())?;
     let mut json = serde_json::to_string_pretty(&doc).unwrap_or_default();
     json.push('\n');
     write(OPTICS_FILE, json.as_bytes())?;
@@ -208,6 +194,32 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         ));
     }
     Ok(())
+}
+
+/// refraction.csv and peripheral.csv of `refraction` (the ungrown retina and its refraction
+/// at each time) into `dir`, and optics.json's `refraction` (saying why there is none for a
+/// scene with no optics to compute it with).
+fn write_refraction(
+    dir: &OutputDir,
+    scene: &Scene,
+    computed: &eyeshell::model::optics::ComputedOptics,
+    refraction: Option<&(Vec<(f64, f64)>, Vec<RefractionAt>)>,
+) -> Result<serde_json::Value, Error> {
+    let Some((retina, at)) = refraction else {
+        return Ok(serde_json::json!({ "none": scene.no_refraction_optics() }));
+    };
+    let shares = |image: Option<f64>, field: f64| image_share(computed, image, field);
+    let io = |name: &str, source: std::io::Error| {
+        Error::from(OutputError::Io {
+            path: dir.file(name),
+            source,
+        })
+    };
+    let table = refraction_csv(retina, at, &shares).map_err(|e| io(REFRACTION_FILE, e))?;
+    dir.write_file(REFRACTION_FILE, &table)?;
+    let table = peripheral_csv(at, &shares).map_err(|e| io(PERIPHERAL_FILE, e))?;
+    dir.write_file(PERIPHERAL_FILE, &table)?;
+    Ok(refraction_json(scene, retina, at, &shares))
 }
 
 /// The growth time of `--at`: 0 by default; else a finite time within [0, growth.t_end]
@@ -516,6 +528,10 @@ fn refraction_line(scene: &Scene, at: Option<&[RefractionAt]>) -> String {
         false => "none (beyond ±25 D)".into(),
     };
     let mut line = format!("refraction at the pole at t = 0: {} naked", d(first.pole_d));
+    if scene.stimulus_source() == eyeshell::model::optics::Source::Polynomial {
+        // The optics keys above are not the ones a growth run refracts through.
+        line += " (the default optics: stimulus.source is \"polynomial\")";
+    }
     for (k, l) in first.through.iter().enumerate() {
         match l.image_power {
             Some(p) => line += &format!(", {} through image {k} ({p:+} D)", d(l.pole_d)),
