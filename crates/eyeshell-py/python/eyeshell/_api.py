@@ -246,6 +246,7 @@ class Solution:
         self.summary: dict[str, Any] = json.loads(native.summary_text())
         # Measured here, where the native solution is: an unpickled one would solve again.
         self._eye: dict[str, Any] = dict(native.eye())
+        self._refraction_D: float | None = native.refraction_d()
         self._state: np.ndarray = native.state()
         self._bvp4c: dict[str, Any] | None = None
 
@@ -327,13 +328,31 @@ class Solution:
     def eye(self) -> dict[str, Any]:
         """The loaded, ungrown eye as a sweep's table measures it (docs/MODEL.md §6):
         ``axial_length``, ``equatorial_radius``, ``retina_minus_blue``,
-        ``retina_minus_red`` (mm) and ``class``.
+        ``retina_minus_red`` (mm) and ``class``, and ``refraction_D`` (:attr:`refraction_D`)
+        for a scene with optics to compute it with.
 
         >>> e = eyeshell.solve(solver__nodes=101).eye
         >>> sorted(e)
         ['axial_length', 'class', 'equatorial_radius', 'retina_minus_blue', 'retina_minus_red']
         """
         return dict(self._eye)
+
+    @property
+    def refraction_D(self) -> float | None:
+        """The refraction (D) at the pole of the loaded, ungrown eye through the naked eye:
+        the spectacle power at 12 mm that brings its on-axis best focus onto the retina, a
+        growth run's first ``refraction_D`` (summary.json's ``refraction_D``). The optics are
+        those a growth run of the scene refracts through (its own with
+        ``stimulus.source = "optics"``, else the default optics); ``None`` for a scene that
+        neither grows nor computes its optics (no eye to refract through), NaN beyond the
+        ±25 D the optics are traced over.
+
+        >>> round(eyeshell.solve(SCENES + "/const.toml", solver__nodes=101).refraction_D, 2)
+        10.46
+        >>> eyeshell.solve(solver__nodes=101).refraction_D is None
+        True
+        """
+        return self._refraction_D
 
     def to_mat(self, path: PathLike, /, force: bool = False) -> str:
         """Write the solution to the .mat file ``path`` as ``eyeshell export --mat`` writes
