@@ -119,8 +119,8 @@ def test_solve_reports_a_growth_runs_first_refraction(cli, tmp_path):
     scene = SCENES / "eyewear" / "single-vision.toml"
     sets = {"solver.nodes": 101}
     sol = eyeshell.solve(scene, **sets)
-    g = eyeshell.grow(scene, frames=False, **sets, **{"growth.t_end": 1e-6, "output.times": [1e-6],
-                                        "output.history_points": 0})
+    barely = {"growth.t_end": 1e-6, "output.times": [1e-6], "output.history_points": 0}
+    g = eyeshell.grow(scene, frames=False, **sets, **barely)
     first = float(g.series["refraction_D"][0])
     assert abs(sol.refraction_D - first) < 1e-6
     assert abs(first - 10.4623) < 1e-3
