@@ -89,7 +89,10 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         Some(_) => {
             let solution = scene.solve()?;
             let at = scene.refraction(&solution)?;
-            Some((Scene::retina_of(&solution.rows), at))
+            Some(Ungrown {
+                retina: Scene::retina_of(&solution.rows),
+                at,
+            })
         }
         None => None,
     };
@@ -189,7 +192,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
             computed.surfaces.surfaces.len(),
             blue.points.len(),
             computed.surfaces.rays_traced,
-            refraction_line(&scene, refraction.as_ref().map(|r| r.1.as_slice())),
+            refraction_line(&scene, refraction.as_ref().map(|r| r.at.as_slice())),
             crate::shown(&target)
         ));
     }
@@ -203,9 +206,9 @@ fn write_refraction(
     dir: &OutputDir,
     scene: &Scene,
     computed: &eyeshell::model::optics::ComputedOptics,
-    refraction: Option<&(Vec<(f64, f64)>, Vec<RefractionAt>)>,
+    refraction: Option<&Ungrown>,
 ) -> Result<serde_json::Value, Error> {
-    let Some((retina, at)) = refraction else {
+    let Some(Ungrown { retina, at }) = refraction else {
         return Ok(serde_json::json!({ "none": scene.no_refraction_optics() }));
     };
     let shares = |image: Option<f64>, field: f64| image_share(computed, image, field);
@@ -380,15 +383,36 @@ fn image_share(c: &eyeshell::model::optics::ComputedOptics, image: Option<f64>, 
         .map_or(f64::NAN, |j| im.share.traced(j))
 }
 
-/// The eyes the refraction is given through at one time: the naked eye, then each image the
-/// lenses form (its power: None for the one image of lenses of one smooth profile), each
-/// with its peripheral rows and its pole's refraction.
-fn eyes(at: &RefractionAt) -> Vec<(Option<Option<f64>>, &[PeripheralRow], f64)> {
-    std::iter::once((None, at.peripheral.as_slice(), at.pole_d))
-        .chain(
-            (at.through.iter()).map(|l| (Some(l.image_power), l.peripheral.as_slice(), l.pole_d)),
-        )
-        .collect()
+/// The retina a growth run starts from (the loaded, ungrown shell, pole first) and its
+/// refraction at each time.
+struct Ungrown {
+    retina: Vec<(f64, f64)>,
+    at: Vec<RefractionAt>,
+}
+
+/// One eye the refraction is given through at one time: the naked eye, or an image of the
+/// lenses worn, with its peripheral rows and its pole's refraction.
+struct Eye<'a> {
+    /// None: the naked eye; else the image's power (None for the one image of lenses of one
+    /// smooth profile).
+    image: Option<Option<f64>>,
+    peripheral: &'a [PeripheralRow],
+    pole_d: f64,
+}
+
+/// The eyes of `at`: the naked eye, then each image the lenses form.
+fn eyes(at: &RefractionAt) -> Vec<Eye<'_>> {
+    let naked = Eye {
+        image: None,
+        peripheral: &at.peripheral,
+        pole_d: at.pole_d,
+    };
+    let through = at.through.iter().map(|l| Eye {
+        image: Some(l.image_power),
+        peripheral: &l.peripheral,
+        pole_d: l.pole_d,
+    });
+    std::iter::once(naked).chain(through).collect()
 }
 
 /// The trailing cells of eye number `e` (of [`eyes`]) at `field`: `through` (`naked` or
@@ -396,12 +420,12 @@ fn eyes(at: &RefractionAt) -> Vec<(Option<Option<f64>>, &[PeripheralRow], f64)> 
 /// a lens that forms several) and `share` (of the light, at that field: 1 for the naked eye).
 fn eye_cells(
     e: usize,
-    image: Option<Option<f64>>,
+    eye: &Eye<'_>,
     shares: &dyn Fn(Option<f64>, f64) -> f64,
     field: f64,
 ) -> [String; 4] {
     let v = rundir::format_value;
-    match image {
+    match eye.image {
         None => ["naked".into(), "0".into(), String::new(), v(1.0)],
         Some(power) => [
             "lenses".into(),
@@ -423,10 +447,10 @@ fn refraction_csv(
     let axial = retina.first().map_or(f64::NAN, |p| p.0);
     let mut rows: Vec<Vec<String>> = Vec::new();
     for a in at {
-        for (e, (image, _, pole)) in eyes(a).into_iter().enumerate() {
-            let cells = eye_cells(e, image, shares, 0.0);
+        for (e, eye) in eyes(a).iter().enumerate() {
+            let cells = eye_cells(e, eye, shares, 0.0);
             rows.push(
-                [v(a.t), v(axial), v(pole)]
+                [v(a.t), v(axial), v(eye.pole_d)]
                     .into_iter()
                     .chain(cells)
                     .collect(),
@@ -449,9 +473,9 @@ fn peripheral_csv(
     let v = rundir::format_value;
     let mut rows: Vec<Vec<String>> = Vec::new();
     for a in at {
-        for (e, (image, peripheral, _)) in eyes(a).into_iter().enumerate() {
-            for p in peripheral {
-                let cells = eye_cells(e, image, shares, p.field_deg);
+        for (e, eye) in eyes(a).iter().enumerate() {
+            for p in eye.peripheral {
+                let cells = eye_cells(e, eye, shares, p.field_deg);
                 let values = [v(a.t), v(p.field_deg), v(p.refraction_d), v(p.relative_d)];
                 rows.push(values.into_iter().chain(cells).collect());
             }
