@@ -83,19 +83,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
             .map_err(|e| key_error(&scene, spec.explain(&e)))?;
         fans.push((field, fan));
     }
-    // The refraction of the retina a growth run starts from (the loaded, ungrown shell),
-    // for a scene with optics to compute it with.
-    let refraction = match scene.refraction_optics() {
-        Some(_) => {
-            let solution = scene.solve()?;
-            let at = scene.refraction(&solution)?;
-            Some(Ungrown {
-                retina: Scene::retina_of(&solution.rows),
-                at,
-            })
-        }
-        None => None,
-    };
+    let refraction = ungrown(&scene)?;
     // Everything traced before the directory is made: a refusal leaves nothing behind.
     let dir = OutputDir::create(&a.out, "optics", &[a.scene.scene.as_path()])?;
     let io = |name: &str, source: std::io::Error| {
@@ -388,6 +376,19 @@ fn image_share(c: &eyeshell::model::optics::ComputedOptics, image: Option<f64>, 
 struct Ungrown {
     retina: Vec<(f64, f64)>,
     at: Vec<RefractionAt>,
+}
+
+/// The refraction of the retina a growth run starts from (the loaded, ungrown shell: the
+/// scene solved), for a scene with optics to compute it with.
+fn ungrown(scene: &Scene) -> Result<Option<Ungrown>, Error> {
+    if scene.refraction_optics().is_none() {
+        return Ok(None);
+    }
+    let solution = scene.solve()?;
+    Ok(Some(Ungrown {
+        at: scene.refraction(&solution)?,
+        retina: Scene::retina_of(&solution.rows),
+    }))
 }
 
 /// One eye the refraction is given through at one time: the naked eye, or an image of the
