@@ -313,7 +313,10 @@ impl Scene {
     /// let at = scene.refraction(&scene.solve()?)?;
     /// assert_eq!(at[0].t, 0.0);
     /// assert!((at[0].pole_d - 10.46).abs() < 0.01); // the const scene's start
-    /// assert!(eyeshell::Scene::default_scene().refraction(&scene.solve()?).is_err());
+    /// // The shell alone has no eye to refract through: one line naming stimulus.source.
+    /// let e = eyeshell::Scene::default_scene().refraction(&scene.solve()?).unwrap_err();
+    /// assert!(e.is_user_error() && e.key().as_deref() == Some("stimulus.source"));
+    /// assert!(!e.to_string().contains('\n') && e.to_string().contains("no optics"), "{e}");
     /// # Ok::<(), eyeshell::Error>(())
     /// ```
     pub fn refraction(
