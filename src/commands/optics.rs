@@ -7,7 +7,7 @@
 //! are tables over t is drawn as it is at `--at T` (default 0).
 
 use eyeshell::growth::refraction::RefractionAt;
-use eyeshell::growth::PeripheralRow;
+use eyeshell::growth::{GrowthParams, PeripheralRow};
 use eyeshell::model::optics::{OpticsKeyError, OpticsSpec};
 use eyeshell::rundir::{self, OutputDir, OutputError};
 use eyeshell::scene::{Scene, SceneError};
@@ -206,9 +206,10 @@ fn write_refraction(
             source,
         })
     };
-    let table = refraction_csv(retina, at, &shares).map_err(|e| io(REFRACTION_FILE, e))?;
+    let growth = scene.growth.as_ref();
+    let table = refraction_csv(retina, at, &shares, growth).map_err(|e| io(REFRACTION_FILE, e))?;
     dir.write_file(REFRACTION_FILE, &table)?;
-    let table = peripheral_csv(at, &shares).map_err(|e| io(PERIPHERAL_FILE, e))?;
+    let table = peripheral_csv(at, &shares, growth).map_err(|e| io(PERIPHERAL_FILE, e))?;
     dir.write_file(PERIPHERAL_FILE, &table)?;
     Ok(refraction_json(scene, retina, at, &shares))
 }
@@ -438,11 +439,12 @@ fn eye_cells(
 }
 
 /// refraction.csv: `t,axial_length,refraction_D,through,image,image_power_D,share`, a row per
-/// time and eye.
+/// time and eye (and `age` last in a scene that counts in ages).
 fn refraction_csv(
     retina: &[(f64, f64)],
     at: &[RefractionAt],
     shares: &dyn Fn(Option<f64>, f64) -> f64,
+    growth: Option<&GrowthParams>,
 ) -> std::io::Result<Vec<u8>> {
     let v = rundir::format_value;
     let axial = retina.first().map_or(f64::NAN, |p| p.0);
@@ -450,26 +452,40 @@ fn refraction_csv(
     for a in at {
         for (e, eye) in eyes(a).iter().enumerate() {
             let cells = eye_cells(e, eye, shares, 0.0);
+            let values = [v(a.t), v(axial), v(eye.pole_d)];
             rows.push(
-                [v(a.t), v(axial), v(eye.pole_d)]
+                values
                     .into_iter()
                     .chain(cells)
+                    .chain(age(growth, a.t))
                     .collect(),
             );
         }
     }
-    rundir::table::csv_bytes(
-        REFRACTION_COLUMNS,
-        rows,
-        rundir::table::QuoteStyle::Necessary,
-    )
+    let columns = REFRACTION_COLUMNS.into_iter().chain(age_column(growth));
+    rundir::table::csv_bytes(columns, rows, rundir::table::QuoteStyle::Necessary)
+}
+
+/// The age of growth time `t` as the last cell of a row, in a scene that counts in ages
+/// (`time.unit`), as a growth run's files end in it; nothing otherwise.
+fn age(growth: Option<&GrowthParams>, t: f64) -> Option<String> {
+    growth.and_then(|g| g.age_of(t)).map(rundir::format_value)
+}
+
+/// The `age` column's header where [`age`] gives the cell.
+fn age_column(growth: Option<&GrowthParams>) -> Option<&'static str> {
+    growth
+        .and_then(|g| g.age_unit())
+        .map(|_| eyeshell::rundir::growth::AGE_COLUMN)
 }
 
 /// peripheral.csv: a growth run's columns (`t,field_deg,refraction_D,relative_D`), then
-/// `through,image,image_power_D,share`, a row per time, eye and field angle.
+/// `through,image,image_power_D,share`, a row per time, eye and field angle (and `age` last in
+/// a scene that counts in ages).
 fn peripheral_csv(
     at: &[RefractionAt],
     shares: &dyn Fn(Option<f64>, f64) -> f64,
+    growth: Option<&GrowthParams>,
 ) -> std::io::Result<Vec<u8>> {
     let v = rundir::format_value;
     let mut rows: Vec<Vec<String>> = Vec::new();
@@ -478,13 +494,20 @@ fn peripheral_csv(
             for p in eye.peripheral {
                 let cells = eye_cells(e, eye, shares, p.field_deg);
                 let values = [v(a.t), v(p.field_deg), v(p.refraction_d), v(p.relative_d)];
-                rows.push(values.into_iter().chain(cells).collect());
+                rows.push(
+                    values
+                        .into_iter()
+                        .chain(cells)
+                        .chain(age(growth, a.t))
+                        .collect(),
+                );
             }
         }
     }
     let columns = eyeshell::growth::PERIPHERAL_COLUMNS
         .into_iter()
-        .chain(REFRACTION_COLUMNS[3..].iter().copied());
+        .chain(REFRACTION_COLUMNS[3..].iter().copied())
+        .chain(age_column(growth));
     rundir::table::csv_bytes(columns, rows, rundir::table::QuoteStyle::Necessary)
 }
 

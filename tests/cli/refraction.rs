@@ -266,3 +266,21 @@ fn a_lens_across_the_spectacle_plane_is_refused_naming_its_vertex() {
         "--set optics.lenses=",
     );
 }
+
+/// A scene that counts in years ends each row in the age, as a growth run's files do: the
+/// corrected myope of scenes/myopia/single-vision.toml at 8 years, −2 D naked and corrected
+/// through its −2 D spectacle lens (the naked eye's + 2 D, to the tables' 1e-5 D).
+#[test]
+fn a_scene_in_years_ends_its_rows_in_the_age() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, _) = optics(dir.path(), "years", "scenes/myopia/single-vision.toml", &[]);
+    for file in ["refraction.csv", "peripheral.csv"] {
+        let (header, rows) = csv_cells(&out.join(file));
+        assert_eq!(header.last().unwrap(), "age", "{file}");
+        assert!(rows.iter().all(|r| r.last().unwrap() == "8.0"), "{file}");
+    }
+    let naked = rows_of(&out.join("refraction.csv"), "naked", 0)[0][2];
+    let through = rows_of(&out.join("refraction.csv"), "lenses", 0)[0][2];
+    assert!((naked + 1.98).abs() < 0.01, "{naked}");
+    assert!((through - naked - 2.0).abs() < 1e-5, "{through} {naked}");
+}
