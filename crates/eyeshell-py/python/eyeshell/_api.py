@@ -471,12 +471,26 @@ def optics(scene: SceneLike = None, /, **overrides: Any) -> dict[str, Any]:
     ``eye``, ``pupil``, ``z_B``, ``phi_max`` (blue, red: where each surface ends about
     ``z_B``), ``rays_traced`` and ``wall_seconds``. The GIL is released while it traces.
 
+    ``refraction`` is the refraction without growing, as ``eyeshell optics`` writes it to
+    refraction.csv and peripheral.csv (docs/guide/optics.md, "Refraction without growing"):
+    of the loaded, ungrown retina, a list with one dict per time (t = 0, then each table
+    time of optics that change with age) holding ``t``, ``refraction_D`` (the pole's, naked
+    eye: a growth run's first), ``peripheral`` (``field_deg``, ``refraction_D``,
+    ``relative_D`` arrays) and ``through_lenses`` (one dict per image of the lenses worn:
+    ``image_power_D``, None for lenses that form one image, ``refraction_D`` and
+    ``peripheral``); None for a scene that neither grows nor computes its optics.
+
     Raises :class:`InputError` for an optics key that cannot be traced (naming the key,
     the surface, the field angle and the wavelength).
 
     >>> o = eyeshell.optics(None, **{"optics.focus": "sagittal", "optics.max_field": 20})
     >>> o["z"].shape == (42,) and float(o["field_deg"][20]) == 20.0
     True
+    >>> o["refraction"] is None  # the shell alone: no eye to refract through
+    True
+    >>> r = eyeshell.optics(SCENES + "/const.toml", solver__nodes=101)["refraction"]
+    >>> round(r[0]["refraction_D"], 2), r[0]["through_lenses"]
+    (10.46, [])
     """
     s = _as_scene(scene, overrides)
     return dict(_eyeshell.optics(s._s))
