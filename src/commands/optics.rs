@@ -6,6 +6,8 @@
 //! or not at all: surfaces.csv, optics.json, optics.png and optics.svg. An eye whose keys
 //! are tables over t is drawn as it is at `--at T` (default 0).
 
+use eyeshell::growth::refraction::RefractionAt;
+use eyeshell::growth::{GrowthParams, PeripheralRow};
 use eyeshell::model::optics::{OpticsKeyError, OpticsSpec};
 use eyeshell::rundir::{self, OutputDir, OutputError};
 use eyeshell::scene::{Scene, SceneError};
@@ -25,6 +27,11 @@ const FIGURE: &str = "optics";
 pub const PUBLISHED_FILE: &str = "published.csv";
 /// Its figure's stem (published.png, published.svg).
 const PUBLISHED_FIGURE: &str = "published";
+/// The refraction at the pole of the loaded, ungrown eye: naked and through the lenses, at
+/// t = 0 and at each table time of an eye that changes with age.
+pub const REFRACTION_FILE: &str = "refraction.csv";
+/// The same at each field angle: a growth run's peripheral.csv columns, then which eye.
+pub const PERIPHERAL_FILE: &str = "peripheral.csv";
 /// The field angles of the figure's ray fans (degrees), those within `optics.max_field`.
 const FAN_FIELDS: [f64; 3] = [0.0, 20.0, 40.0];
 
@@ -76,6 +83,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
             .map_err(|e| key_error(&scene, spec.explain(&e)))?;
         fans.push((field, fan));
     }
+    let refraction = ungrown(&scene)?;
     // Everything traced before the directory is made: a refusal leaves nothing behind.
     let dir = OutputDir::create(&a.out, "optics", &[a.scene.scene.as_path()])?;
     let io = |name: &str, source: std::io::Error| {
@@ -120,7 +128,7 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
     )
     .map_err(|e| io(SURFACES_FILE, e))?;
     write(SURFACES_FILE, &table)?;
-    let json = optics_json(
+    let mut doc = optics_json(
         &spec,
         &computed,
         &paraxials,
@@ -129,6 +137,9 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
         t,
         start.elapsed().as_secs_f64(),
     );
+    doc["refraction"] = write_refraction(&dir, &scene, &computed, refraction.as_ref())?;
+    let mut json = serde_json::to_string_pretty(&doc).unwrap_or_default();
+    json.push('\n');
     write(OPTICS_FILE, json.as_bytes())?;
     crate::charts::optics_figure(&system, &computed, &fans, &dir.file(FIGURE))?;
     let rows = against_polynomial(&computed, &scene.blue());
@@ -162,17 +173,45 @@ pub(crate) fn cmd_optics(a: &OpticsArgs) -> Result<(), Error> {
             format!(" at t = {}", eyeshell::text::number(t))
         };
         out(&format!(
-            "{} eye{when}, {} mm pupil, {}: {} surfaces of {} fields, {} rays traced\n  written to {}\n",
+            "{} eye{when}, {} mm pupil, {}: {} surfaces of {} fields, {} rays traced\n  {}\n  written to {}\n",
             spec.eye_name(),
             eyeshell::text::number(spec.pupil),
             spec.criterion().name(),
             computed.surfaces.surfaces.len(),
             blue.points.len(),
             computed.surfaces.rays_traced,
+            refraction_line(&scene, refraction.as_ref().map(|r| r.at.as_slice())),
             crate::shown(&target)
         ));
     }
     Ok(())
+}
+
+/// refraction.csv and peripheral.csv of `refraction` (the ungrown retina and its refraction
+/// at each time) into `dir`, and optics.json's `refraction` (saying why there is none for a
+/// scene with no optics to compute it with).
+fn write_refraction(
+    dir: &OutputDir,
+    scene: &Scene,
+    computed: &eyeshell::model::optics::ComputedOptics,
+    refraction: Option<&Ungrown>,
+) -> Result<serde_json::Value, Error> {
+    let Some(Ungrown { retina, at }) = refraction else {
+        return Ok(serde_json::json!({ "none": scene.no_refraction_optics() }));
+    };
+    let shares = |image: Option<f64>, field: f64| image_share(computed, image, field);
+    let io = |name: &str, source: std::io::Error| {
+        Error::from(OutputError::Io {
+            path: dir.file(name),
+            source,
+        })
+    };
+    let growth = scene.growth.as_ref();
+    let table = refraction_csv(retina, at, &shares, growth).map_err(|e| io(REFRACTION_FILE, e))?;
+    dir.write_file(REFRACTION_FILE, &table)?;
+    let table = peripheral_csv(at, &shares, growth).map_err(|e| io(PERIPHERAL_FILE, e))?;
+    dir.write_file(PERIPHERAL_FILE, &table)?;
+    Ok(refraction_json(scene, retina, at, &shares))
 }
 
 /// The growth time of `--at`: 0 by default; else a finite time within [0, growth.t_end]
@@ -240,7 +279,7 @@ fn optics_json(
     z_b: f64,
     t: f64,
     wall_seconds: f64,
-) -> String {
+) -> serde_json::Value {
     use serde_json::json;
     let par: Vec<_> = paraxials
         .iter()
@@ -315,9 +354,243 @@ fn optics_json(
     if !spec.times().is_empty() {
         doc["t"] = json!(t);
     }
-    let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
-    text.push('\n');
-    text
+    doc
+}
+
+/// The share of the light the image of power `image` carries at `field` (degrees), as
+/// surfaces.csv gives it at the first wavelength (1 for the one image of a lens of one
+/// smooth profile, or no lens; NaN at a field the surfaces were not traced at).
+fn image_share(c: &eyeshell::model::optics::ComputedOptics, image: Option<f64>, field: f64) -> f64 {
+    let Some(power) = image else {
+        return 1.0;
+    };
+    let Some(im) = c.images.iter().find(|im| im.power == Some(power)) else {
+        return f64::NAN;
+    };
+    (im.surfaces.surfaces.first())
+        .and_then(|s| s.points.iter().position(|p| p.field_deg == field))
+        .map_or(f64::NAN, |j| im.share.traced(j))
+}
+
+/// The retina a growth run starts from (the loaded, ungrown shell, pole first) and its
+/// refraction at each time.
+struct Ungrown {
+    retina: Vec<(f64, f64)>,
+    at: Vec<RefractionAt>,
+}
+
+/// The refraction of the retina a growth run starts from (the loaded, ungrown shell: the
+/// scene solved), for a scene with optics to compute it with.
+fn ungrown(scene: &Scene) -> Result<Option<Ungrown>, Error> {
+    if scene.refraction_optics().is_none() {
+        return Ok(None);
+    }
+    let solution = scene.solve()?;
+    Ok(Some(Ungrown {
+        at: scene.refraction(&solution)?,
+        retina: Scene::retina_of(&solution.rows),
+    }))
+}
+
+/// One eye the refraction is given through at one time: the naked eye, or an image of the
+/// lenses worn, with its peripheral rows and its pole's refraction.
+struct Eye<'a> {
+    /// None: the naked eye; else the image's power (None for the one image of lenses of one
+    /// smooth profile).
+    image: Option<Option<f64>>,
+    peripheral: &'a [PeripheralRow],
+    pole_d: f64,
+}
+
+/// The eyes of `at`: the naked eye, then each image the lenses form.
+fn eyes(at: &RefractionAt) -> Vec<Eye<'_>> {
+    let naked = Eye {
+        image: None,
+        peripheral: &at.peripheral,
+        pole_d: at.pole_d,
+    };
+    let through = at.through.iter().map(|l| Eye {
+        image: Some(l.image_power),
+        peripheral: &l.peripheral,
+        pole_d: l.pole_d,
+    });
+    std::iter::once(naked).chain(through).collect()
+}
+
+/// The trailing cells of eye number `e` (of [`eyes`]) at `field`: `through` (`naked` or
+/// `lenses`), `image` (its index among the lenses' images), `image_power_D` (empty but for
+/// a lens that forms several) and `share` (of the light, at that field: 1 for the naked eye).
+fn eye_cells(
+    e: usize,
+    eye: &Eye<'_>,
+    shares: &dyn Fn(Option<f64>, f64) -> f64,
+    field: f64,
+) -> [String; 4] {
+    let v = rundir::format_value;
+    match eye.image {
+        None => ["naked".into(), "0".into(), String::new(), v(1.0)],
+        Some(power) => [
+            "lenses".into(),
+            (e - 1).to_string(),
+            power.map(v).unwrap_or_default(),
+            v(shares(power, field)),
+        ],
+    }
+}
+
+/// refraction.csv: `t,axial_length,refraction_D,through,image,image_power_D,share`, a row per
+/// time and eye (and `age` last in a scene that counts in ages).
+fn refraction_csv(
+    retina: &[(f64, f64)],
+    at: &[RefractionAt],
+    shares: &dyn Fn(Option<f64>, f64) -> f64,
+    growth: Option<&GrowthParams>,
+) -> std::io::Result<Vec<u8>> {
+    let v = rundir::format_value;
+    let axial = retina.first().map_or(f64::NAN, |p| p.0);
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    for a in at {
+        for (e, eye) in eyes(a).iter().enumerate() {
+            let cells = eye_cells(e, eye, shares, 0.0);
+            let values = [v(a.t), v(axial), v(eye.pole_d)];
+            rows.push(
+                values
+                    .into_iter()
+                    .chain(cells)
+                    .chain(age(growth, a.t))
+                    .collect(),
+            );
+        }
+    }
+    let columns = REFRACTION_COLUMNS.into_iter().chain(age_column(growth));
+    rundir::table::csv_bytes(columns, rows, rundir::table::QuoteStyle::Necessary)
+}
+
+/// The age of growth time `t` as the last cell of a row, in a scene that counts in ages
+/// (`time.unit`), as a growth run's files end in it; nothing otherwise.
+fn age(growth: Option<&GrowthParams>, t: f64) -> Option<String> {
+    growth.and_then(|g| g.age_of(t)).map(rundir::format_value)
+}
+
+/// The `age` column's header where [`age`] gives the cell.
+fn age_column(growth: Option<&GrowthParams>) -> Option<&'static str> {
+    growth
+        .and_then(|g| g.age_unit())
+        .map(|_| eyeshell::rundir::growth::AGE_COLUMN)
+}
+
+/// peripheral.csv: a growth run's columns (`t,field_deg,refraction_D,relative_D`), then
+/// `through,image,image_power_D,share`, a row per time, eye and field angle (and `age` last in
+/// a scene that counts in ages).
+fn peripheral_csv(
+    at: &[RefractionAt],
+    shares: &dyn Fn(Option<f64>, f64) -> f64,
+    growth: Option<&GrowthParams>,
+) -> std::io::Result<Vec<u8>> {
+    let v = rundir::format_value;
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    for a in at {
+        for (e, eye) in eyes(a).iter().enumerate() {
+            for p in eye.peripheral {
+                let cells = eye_cells(e, eye, shares, p.field_deg);
+                let values = [v(a.t), v(p.field_deg), v(p.refraction_d), v(p.relative_d)];
+                rows.push(
+                    values
+                        .into_iter()
+                        .chain(cells)
+                        .chain(age(growth, a.t))
+                        .collect(),
+                );
+            }
+        }
+    }
+    let columns = eyeshell::growth::PERIPHERAL_COLUMNS
+        .into_iter()
+        .chain(REFRACTION_COLUMNS[3..].iter().copied())
+        .chain(age_column(growth));
+    rundir::table::csv_bytes(columns, rows, rundir::table::QuoteStyle::Necessary)
+}
+
+/// The columns of refraction.csv.
+const REFRACTION_COLUMNS: [&str; 7] = [
+    "t",
+    "axial_length",
+    "refraction_D",
+    "through",
+    "image",
+    "image_power_D",
+    "share",
+];
+
+/// optics.json's `refraction`: the optics and retina it is of, and at each time the pole's
+/// refraction, naked and through each image of the lenses.
+fn refraction_json(
+    scene: &Scene,
+    retina: &[(f64, f64)],
+    at: &[RefractionAt],
+    shares: &dyn Fn(Option<f64>, f64) -> f64,
+) -> serde_json::Value {
+    let entries: Vec<_> = at
+        .iter()
+        .map(|a| {
+            let through: Vec<_> = (a.through.iter().enumerate())
+                .map(|(k, l)| {
+                    serde_json::json!({
+                        "image": k,
+                        "image_power_dioptres": l.image_power,
+                        "share_on_axis": shares(l.image_power, 0.0),
+                        "refraction_D": l.pole_d,
+                    })
+                })
+                .collect();
+            serde_json::json!({ "t": a.t, "refraction_D": a.pole_d, "through_lenses": through })
+        })
+        .collect();
+    serde_json::json!({
+        "optics": optics_phrase(scene),
+        "retina": "the loaded, ungrown shell: a growth run's retina at t = 0",
+        "axial_length_mm": retina.first().map(|p| p.0),
+        "vertex_mm": eyeshell_optics::refraction::VERTEX_MM,
+        "wavelength_nm": scene.refraction_optics().map(|s| s.refraction_wavelength),
+        "at": entries,
+    })
+}
+
+/// Which optics the refraction is of, in a phrase.
+fn optics_phrase(scene: &Scene) -> &'static str {
+    match scene.stimulus_source() {
+        eyeshell::model::optics::Source::Optics => "the scene's (stimulus.source = \"optics\")",
+        eyeshell::model::optics::Source::Polynomial => {
+            "the default optics (stimulus.source = \"polynomial\": a growth run's refraction_D reads them)"
+        }
+    }
+}
+
+/// The summary's line of the refraction at the pole at t = 0: naked and through the lenses.
+fn refraction_line(scene: &Scene, at: Option<&[RefractionAt]>) -> String {
+    let Some(first) = at.and_then(|a| a.first()) else {
+        return format!("no refraction: {}", scene.no_refraction_optics());
+    };
+    let d = |x: f64| match x.is_finite() {
+        true => format!("{x:+.3} D"),
+        false => "none (beyond ±25 D)".into(),
+    };
+    let mut line = format!("refraction at the pole at t = 0: {} naked", d(first.pole_d));
+    if scene.stimulus_source() == eyeshell::model::optics::Source::Polynomial {
+        // The optics keys above are not the ones a growth run refracts through.
+        line += " (the default optics: stimulus.source is \"polynomial\")";
+    }
+    for (k, l) in first.through.iter().enumerate() {
+        match l.image_power {
+            Some(p) => line += &format!(", {} through image {k} ({p:+} D)", d(l.pole_d)),
+            None => line += &format!(", {} through the lenses", d(l.pole_d)),
+        }
+    }
+    let more = at.map_or(0, |a| a.len()) - 1;
+    if more > 0 {
+        line += &format!(" (and at {more} more table time{})", crate::plural(more));
+    }
+    line
 }
 
 /// The longitudinal chromatic aberration between the first two wavelengths (null with one):

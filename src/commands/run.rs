@@ -77,7 +77,7 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
             ),
         };
         out(&format!(
-            "eyeshell: solved {} ({})\n  nodes           {}\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n  time            {:.3} s\n  output          {}\n",
+            "eyeshell: solved {} ({})\n  nodes           {}\n  Newton          {} iteration{}, residual {:.3e}\n  first integral  {:.3e} (max |Q cos θ + r t_s sin θ − r² ΔP/2|)\n{}  time            {:.3} s\n  output          {}\n",
             scene.origin,
             one_line(&scene.display_name()),
             nodes,
@@ -85,11 +85,26 @@ pub(crate) fn cmd_solve(a: &SolveArgs) -> Result<(), Error> {
             if s.newton_iterations == 1 { "" } else { "s" },
             s.residual_norm,
             s.first_integral_max,
+            refraction_text(&scene, &solution),
             s.wall_seconds,
             crate::shown(&target),
         ));
     }
     Ok(())
+}
+
+/// The summary's line of the solve's refraction at the pole, naked eye (summary.json's
+/// `refraction_D`): the dioptres, or why the optics give none; no line for a scene with no
+/// optics to compute it with (an elastic scene of the shell alone), as summary.json has no
+/// `refraction_D` then.
+fn refraction_text(scene: &Scene, solution: &eyeshell::bvp::Solution) -> String {
+    match scene.refraction_of(&solution.rows) {
+        Some(d) if d.is_finite() => {
+            format!("  refraction_D    {d:+.3} D (at the pole, naked eye)\n")
+        }
+        Some(_) => "  refraction_D    none: beyond the ±25 D the optics are traced over\n".into(),
+        None => String::new(),
+    }
 }
 
 pub(crate) fn cmd_grow(a: &GrowArgs) -> Result<(), Error> {

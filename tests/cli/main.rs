@@ -33,6 +33,7 @@ mod ownership;
 mod peer;
 mod plan;
 mod readers;
+mod refraction;
 mod rerun;
 mod rooms;
 mod rules;

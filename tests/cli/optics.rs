@@ -35,9 +35,11 @@ fn optics_writes_surfaces_json_and_a_figure() {
             "optics.json",
             "optics.png",
             "optics.svg",
+            "peripheral.csv",
             "published.csv",
             "published.png",
             "published.svg",
+            "refraction.csv",
             "surfaces.csv"
         ]
     );

@@ -47,5 +47,61 @@ pub(super) fn optics<'py>(py: Python<'py>, scene: PyScene) -> PyResult<Bound<'py
     d.set_item("phi_max", (computed.blue.phi_max(), computed.red.phi_max()))?;
     d.set_item("rays_traced", computed.surfaces.rays_traced)?;
     d.set_item("wall_seconds", computed.wall_seconds)?;
+    d.set_item("refraction", refraction(py, &scene)?)?;
     Ok(d)
+}
+
+/// The refraction without growing, as `eyeshell optics` writes it (refraction.csv,
+/// peripheral.csv): of the loaded, ungrown retina, at t = 0 and each table time, naked and
+/// through each image of the lenses; None for a scene with no optics to compute it with.
+fn refraction<'py>(
+    py: Python<'py>,
+    scene: &eyeshell::Scene,
+) -> PyResult<Option<Vec<Bound<'py, PyDict>>>> {
+    if scene.refraction_optics().is_none() {
+        return Ok(None);
+    }
+    let at = py
+        .detach(|| {
+            scene
+                .solve()
+                .and_then(|solution| scene.refraction(&solution))
+        })
+        .map_err(py_err)?;
+    let peripheral = |rows: &[eyeshell::growth::PeripheralRow]| -> PyResult<Bound<'py, PyDict>> {
+        let p = PyDict::new(py);
+        p.set_item(
+            "field_deg",
+            array1(py, rows.iter().map(|r| r.field_deg).collect()),
+        )?;
+        p.set_item(
+            "refraction_D",
+            array1(py, rows.iter().map(|r| r.refraction_d).collect()),
+        )?;
+        p.set_item(
+            "relative_D",
+            array1(py, rows.iter().map(|r| r.relative_d).collect()),
+        )?;
+        Ok(p)
+    };
+    at.iter()
+        .map(|a| {
+            let d = PyDict::new(py);
+            d.set_item("t", a.t)?;
+            d.set_item("refraction_D", a.pole_d)?;
+            d.set_item("peripheral", peripheral(&a.peripheral)?)?;
+            let through = (a.through.iter())
+                .map(|l| {
+                    let e = PyDict::new(py);
+                    e.set_item("image_power_D", l.image_power)?;
+                    e.set_item("refraction_D", l.pole_d)?;
+                    e.set_item("peripheral", peripheral(&l.peripheral)?)?;
+                    Ok(e)
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            d.set_item("through_lenses", through)?;
+            Ok(d)
+        })
+        .collect::<PyResult<Vec<_>>>()
+        .map(Some)
 }

@@ -109,8 +109,8 @@ impl Solved {
 
     /// The eye of the loaded, ungrown shell as a sweep's table measures it: the measures of
     /// the table of outputs that an elastic solve computes (axial_length,
-    /// equatorial_radius, retina_minus_blue, retina_minus_red, class; not refraction_D,
-    /// which needs growth's optics, NaN here).
+    /// equatorial_radius, retina_minus_blue, retina_minus_red, class, and refraction_D for a
+    /// scene with optics to compute it with; a NaN is left out).
     fn eye<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         use eyeshell::outputs::{Measures, Value};
         let eye = eyeshell::sweep::run::unloaded_eye(&self.scene, &self.solution.rows);
@@ -123,6 +123,13 @@ impl Solved {
             }
         }
         Ok(d)
+    }
+
+    /// The refraction (D) at the pole of the loaded, ungrown shell through the naked eye, as
+    /// summary.json's `refraction_D`: None for a scene with no optics to compute it with,
+    /// NaN beyond the ±25 D the optics are traced over.
+    fn refraction_d(&self) -> Option<f64> {
+        self.scene.refraction_of(&self.solution.rows)
     }
 
     /// Write the .mat file `eyeshell export --mat` writes of the run to `path` (over a file

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import eyeshell
+from conftest import SCENES, read_csv
 
 
 def test_optics_returns_the_surfaces_as_arrays():
@@ -25,3 +26,23 @@ def test_bad_optics_keys_are_input_errors_naming_the_key():
         eyeshell.optics(None, **{"optics.pupil": 12})
     with pytest.raises(eyeshell.InputError, match="optics.max_field = 80 cannot be traced"):
         eyeshell.optics(None, **{"optics.pupil": 8, "optics.max_field": 80})
+
+
+def test_optics_gives_the_refraction_without_growing(cli, tmp_path):
+    """eyeshell.optics(...)["refraction"] is what `eyeshell optics` writes: the naked eye's
+    and, through the −2 D spectacle lens, the over-refraction, at the pole and every field,
+    bit for bit; the naked eye's pole is Solution.refraction_D."""
+    scene = SCENES / "eyewear" / "single-vision.toml"
+    r = eyeshell.optics(scene, solver__nodes=101)["refraction"]
+    assert len(r) == 1 and r[0]["t"] == 0.0
+    assert r[0]["refraction_D"] == eyeshell.solve(scene, solver__nodes=101).refraction_D
+    (through,) = r[0]["through_lenses"]
+    assert through["image_power_D"] is None
+    assert abs(through["refraction_D"] - r[0]["refraction_D"] - 2.0) < 1e-5
+    cli("optics", scene, "--set", "solver.nodes=101", "--out", tmp_path / "o", "--quiet")
+    rows = read_csv(tmp_path / "o" / "peripheral.csv")
+    naked = [float(x) for x, t in zip(rows["refraction_D"], rows["through"]) if t == "naked"]
+    worn = [float(x) for x, t in zip(rows["refraction_D"], rows["through"]) if t == "lenses"]
+    assert naked == r[0]["peripheral"]["refraction_D"].tolist()
+    assert worn == through["peripheral"]["refraction_D"].tolist()
+    assert r[0]["peripheral"]["field_deg"].tolist() == [5.0 * k for k in range(9)]

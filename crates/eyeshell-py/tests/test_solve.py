@@ -110,3 +110,30 @@ def test_solutions_pickle_and_solve_again_when_asked():
     back = pickle.loads(pickle.dumps(sol))
     assert np.array_equal(back.r, sol.r) and back.summary == sol.summary
     assert back.at(3.0) == sol.at(3.0)
+
+
+def test_solve_reports_a_growth_runs_first_refraction(cli, tmp_path):
+    """Solution.refraction_D is a growth run's first refraction_D (the same loaded, ungrown
+    retina and optics) to 1e-6 D, and summary.json's and the command line's; through the
+    Solution's eye too. A scene that neither grows nor computes its optics has none."""
+    scene = SCENES / "eyewear" / "single-vision.toml"
+    sets = {"solver.nodes": 101}
+    sol = eyeshell.solve(scene, **sets)
+    barely = {"growth.t_end": 1e-6, "output.times": [1e-6], "output.history_points": 0}
+    g = eyeshell.grow(scene, frames=False, **sets, **barely)
+    first = float(g.series["refraction_D"][0])
+    assert abs(sol.refraction_D - first) < 1e-6
+    assert abs(first - 10.4623) < 1e-3
+    assert sol.eye["refraction_D"] == sol.refraction_D
+    assert sol.summary["refraction_D"] == sol.refraction_D
+    cli("solve", scene, "--set", "solver.nodes=101", "--out", tmp_path / "run", "--quiet")
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["refraction_D"] == sol.refraction_D
+    # The shell alone: no eye to refract through, said by None and no key.
+    bare = eyeshell.solve(SCENES / "default.toml", **sets)
+    assert bare.refraction_D is None
+    assert "refraction_D" not in bare.summary and "refraction_D" not in bare.eye
+    # A scene that does not grow refracts through its own optics when it computes them: the
+    # four-surface eye (24 mm long) before the 19.96 mm shell is strongly hyperopic.
+    own = eyeshell.solve(SCENES / "four-surfaces.toml", **sets, **{"stimulus.source": "optics"})
+    assert 5.0 < own.refraction_D < 25.0

@@ -294,10 +294,62 @@ impl Scene {
         })
     }
 
+    /// The refraction without growing: of the retina of `solution`, a solve of this scene
+    /// (the loaded, ungrown shell: a growth run's retina at t = 0), through the naked eye and
+    /// through the lenses worn, at the pole and at each field angle
+    /// ([`crate::growth::refraction::of_retina`]): at t = 0, and for optics that change with
+    /// age at each table time. The optics are [`Scene::refraction_optics`]'s, so the naked
+    /// eye's values at t = 0 are a growth run's first `refraction_D` and peripheral rows.
+    ///
+    /// # Errors
+    /// Bad input about `stimulus.source` for a scene with no optics to compute it with (it
+    /// neither grows nor computes its optics), and the optics key to change when the
+    /// refraction cannot be traced (a wavelength out of range, a lens a trial lens cannot
+    /// be held against).
+    ///
+    /// ```
+    /// let mut scene = eyeshell::Scene::from_path(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/const.toml"))?;
+    /// scene.set("solver.nodes", 101)?;
+    /// let at = scene.refraction(&scene.solve()?)?;
+    /// assert_eq!(at[0].t, 0.0);
+    /// assert!((at[0].pole_d - 10.46).abs() < 0.01); // the const scene's start
+    /// // The shell alone has no eye to refract through: one line naming stimulus.source.
+    /// let e = eyeshell::Scene::default_scene().refraction(&scene.solve()?).unwrap_err();
+    /// assert!(e.is_user_error() && e.key().as_deref() == Some("stimulus.source"));
+    /// assert!(!e.to_string().contains('\n') && e.to_string().contains("no optics"), "{e}");
+    /// # Ok::<(), eyeshell::Error>(())
+    /// ```
+    pub fn refraction(
+        &self,
+        solution: &Solution,
+    ) -> Result<Vec<crate::growth::refraction::RefractionAt>, Error> {
+        let Some(spec) = self.refraction_optics() else {
+            return Err(Error::input(
+                Subject::Key("stimulus.source".into()),
+                format!("{}: {}", self.origin, self.no_refraction_optics()),
+            )
+            .with_value("polynomial")
+            .with_origin(Origin::Scene(self.origin.clone())));
+        };
+        let mut times = spec.times();
+        if times.is_empty() {
+            times.push(0.0);
+        }
+        let retina = Scene::retina_of(&solution.rows);
+        crate::growth::refraction::of_retina(&spec, self.blue().z_b, &retina, &times).map_err(|e| {
+            Error::from(SceneError::Invalid {
+                origin: self.origin_of_key(&e.key),
+                key: e.key.to_string(),
+                value: e.value,
+                problem: e.problem,
+            })
+        })
+    }
+
     /// The text of the summary.json `eyeshell solve` writes for `solution`, a solve of this
     /// scene (a library caller gets the same record without a run directory).
     pub fn solve_summary(&self, solution: &Solution) -> String {
-        Summary::Elastic(ElasticSummary::new(self, &solution.stats)).to_text()
+        Summary::Elastic(ElasticSummary::of_solution(self, solution)).to_text()
     }
 
     /// The text of the summary.json `eyeshell grow` writes for `growth`, a finished growth

@@ -92,6 +92,11 @@ fn moebius_through(p: [(f64, f64); 3]) -> Option<(f64, f64, f64)> {
     (a.is_finite() && b.is_finite() && c.is_finite()).then_some((a, b, c))
 }
 
+/// The system a refraction table traces for a trial lens of power `f` (D): the eye with a
+/// thin spectacle lens of that power at the table's vertex distance, and whatever else it
+/// wears.
+pub type Trial<'a> = dyn Fn(f64) -> Result<OpticalSystem, OpticsError> + Sync + 'a;
+
 /// The spectacle powers (D) of a table's grid `(lowest, highest, count)`, evenly spaced.
 pub fn power_grid((lo, hi, n): (f64, f64, usize)) -> Vec<f64> {
     (0..n)
@@ -154,8 +159,51 @@ impl RefractionTable {
         )
     }
 
+    /// [`RefractionTable::compute_sampled`] through the systems `trial` gives: the eye as
+    /// worn with a thin trial lens of each power at `vertex` (with lenses on, the eye
+    /// through them: the over-refraction).
+    pub fn compute_sampled_through(
+        trial: &Trial<'_>,
+        wavelength_nm: f64,
+        pupil: &Pupil,
+        criterion: Criterion,
+        settings: &FocusSettings,
+        vertex: f64,
+    ) -> Result<Self, OpticsError> {
+        Self::compute_through(
+            trial,
+            wavelength_nm,
+            pupil,
+            criterion,
+            settings,
+            vertex,
+            SAMPLED_POWERS,
+        )
+    }
+
     fn compute_from(
         eye: &OpticalSystem,
+        wavelength_nm: f64,
+        pupil: &Pupil,
+        criterion: Criterion,
+        settings: &FocusSettings,
+        vertex: f64,
+        traced: (f64, f64, usize),
+    ) -> Result<Self, OpticsError> {
+        let trial = |f: f64| wear(eye, &[Lens::spectacle(f, vertex)]);
+        Self::compute_through(
+            &trial,
+            wavelength_nm,
+            pupil,
+            criterion,
+            settings,
+            vertex,
+            traced,
+        )
+    }
+
+    fn compute_through(
+        trial: &Trial<'_>,
         wavelength_nm: f64,
         pupil: &Pupil,
         criterion: Criterion,
@@ -168,7 +216,7 @@ impl RefractionTable {
         let at_samples = sampled
             .par_iter()
             .map(|&f| {
-                let system = wear(eye, &[Lens::spectacle(f, vertex)])?;
+                let system = trial(f)?;
                 best_focus_with(&system, wavelength_nm, 0.0, pupil, criterion, settings)
                     .map(|focus| focus.z)
             })
@@ -303,12 +351,26 @@ impl PeripheralTable {
         settings: &FocusSettings,
         at: FieldsAt<'_>,
     ) -> Result<Self, OpticsError> {
+        let trial = |f: f64| wear(eye, &[Lens::spectacle(f, at.vertex)]);
+        Self::compute_through(&trial, wavelength_nm, pupil, criterion, settings, at)
+    }
+
+    /// [`PeripheralTable::compute`] through the systems `trial` gives: the eye as worn with
+    /// a thin trial lens of each power at `at.vertex` (with lenses on, the eye through them).
+    pub fn compute_through(
+        trial: &Trial<'_>,
+        wavelength_nm: f64,
+        pupil: &Pupil,
+        criterion: Criterion,
+        settings: &FocusSettings,
+        at: FieldsAt<'_>,
+    ) -> Result<Self, OpticsError> {
         let FieldsAt { vertex, fields } = at;
         let powers = power_grid(PERIPHERAL_POWERS);
         let n = powers.len();
         let systems = powers
             .iter()
-            .map(|&f| wear(eye, &[Lens::spectacle(f, vertex)]))
+            .map(|&f| trial(f))
             .collect::<Result<Vec<_>, _>>()?;
         let jobs: Vec<(usize, usize)> = (0..fields.len())
             .flat_map(|i| (0..n).map(move |k| (i, k)))

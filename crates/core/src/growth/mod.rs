@@ -15,6 +15,7 @@ pub(crate) mod ida;
 #[doc(hidden)]
 pub mod integral;
 pub(crate) mod points;
+pub mod refraction;
 pub mod schedule;
 #[doc(hidden)]
 pub mod system;

@@ -101,13 +101,7 @@ impl GrowthParams {
     /// table traced once; for optics that change with age, once per table time, and the
     /// refractions there blended in t as the surfaces are ([`blend_over_ages`]).
     pub fn refraction(&self, t: f64, retina_z: f64) -> f64 {
-        let spec = self.refraction_optics();
-        blend_over_ages(&spec, t, |at| {
-            crate::model::eyewear::refraction_table_at(&spec, at)
-                .ok()
-                .and_then(|table| table.refraction(retina_z))
-                .map_or(vec![f64::NAN], |d| vec![d])
-        })[0]
+        super::refraction::pole(&self.refraction_optics(), t, retina_z)
     }
 
     /// The peripheral refraction at growth time `t` of the retina through `retina` (its
@@ -117,28 +111,7 @@ impl GrowthParams {
     /// times only, from a table traced once (once per table time for optics that change
     /// with age, blended as [`blend_over_ages`] says).
     pub fn peripheral(&self, t: f64, retina: &[(f64, f64)]) -> Vec<super::PeripheralRow> {
-        let spec = self.refraction_optics();
-        let fields = crate::model::eyewear::peripheral_fields(spec.max_field);
-        let values = blend_over_ages(
-            &spec,
-            t,
-            |at| match crate::model::eyewear::peripheral_table_at(&spec, at) {
-                Ok(table) => {
-                    crate::model::eyewear::peripheral_refraction(&table, self.blue.z_b, retina)
-                }
-                Err(_) => vec![f64::NAN; fields.len()],
-            },
-        );
-        let pole = values.first().copied().unwrap_or(f64::NAN);
-        fields
-            .iter()
-            .zip(&values)
-            .map(|(&field_deg, &d)| super::PeripheralRow {
-                field_deg,
-                refraction_d: d,
-                relative_d: d - pole,
-            })
-            .collect()
+        super::refraction::peripheral(&self.refraction_optics(), self.blue.z_b, t, retina)
     }
 
     /// `eye` at growth time `t` with its refraction, classified as `stimulus.classify` says.

@@ -268,6 +268,30 @@ impl LensSpec {
         }
     }
 
+    /// This lens with `f` (D) added to its power everywhere (its lenslets' too): a thin lens
+    /// of power f in contact with it, as a trial lens held against a spectacle lens at its
+    /// own plane. None for a real lens, which has a thickness to hold it against.
+    pub fn plus(&self, f: f64) -> Option<LensSpec> {
+        let shift = |v: &[(f64, f64)]| v.iter().map(|&(r, p)| (r, p + f)).collect();
+        let profile = match &self.profile {
+            ProfileSpec::Power(p) => ProfileSpec::Power(p + f),
+            ProfileSpec::Zones(z) => ProfileSpec::Zones(shift(z)),
+            ProfileSpec::Table(t) => ProfileSpec::Table(shift(t)),
+            ProfileSpec::Real { .. } => return None,
+        };
+        let lenslets = (self.lenslets.iter())
+            .map(|l| Lenslets {
+                power: l.power + f,
+                ..*l
+            })
+            .collect();
+        Some(LensSpec {
+            profile,
+            lenslets,
+            ..self.clone()
+        })
+    }
+
     /// The radii where the lens's zones begin after the first, with their items: the
     /// zones the pupil's rays may or may not cross (a table's points are one smooth profile,
     /// not zones).
@@ -767,6 +791,137 @@ pub fn peripheral_refraction(table: &PeripheralTable, z_c: f64, retina: &[(f64, 
     (0..table.fields.len())
         .map(|i| table.refraction(i, behind).unwrap_or(f64::NAN))
         .collect()
+}
+
+/// `lenses` with a thin trial lens of power `f` (D) at the spectacle plane ([`VERTEX_MM`]):
+/// a lens of its own there, or, where a thin spectacle lens is worn at that plane, added to
+/// that lens's power (two thin lenses in contact; [`LensSpec::plus`]). None when a real lens
+/// sits at that plane.
+fn with_trial(lenses: &[LensSpec], f: f64) -> Option<Vec<LensSpec>> {
+    let mut out = lenses.to_vec();
+    match (out.iter()).position(|l| l.kind == 0 && l.vertex == VERTEX_MM) {
+        Some(i) => out[i] = out[i].plus(f)?,
+        None => out.push(LensSpec {
+            kind: 0,
+            vertex: VERTEX_MM,
+            profile: ProfileSpec::Power(f),
+            lenslets: vec![],
+        }),
+    }
+    Some(out)
+}
+
+/// The eye of `spec` at growth time `t` through its lenses with a trial lens of each power
+/// ([`with_trial`]): what the tables through the lenses are traced through. A trial that
+/// cannot be worn is the lenses' error, naming the lens.
+fn trial_through(
+    spec: &OpticsSpec,
+    t: f64,
+) -> Result<impl Fn(f64) -> Result<optics::OpticalSystem, optics::OpticsError> + Sync, OpticsKeyError>
+{
+    let eye = spec.system_at(t)?;
+    let lenses = spec.lenses.clone();
+    Ok(move |f: f64| {
+        let trial = with_trial(&lenses, f).ok_or_else(|| optics::OpticsError::Eyewear {
+            lens: lenses.iter().position(|l| l.vertex == VERTEX_MM).unwrap_or(0),
+            reason: format!(
+                "is a real lens at {VERTEX_MM} mm, where the trial lens of a refraction through the lenses is held"
+            ),
+        })?;
+        let worn = (trial.iter().enumerate())
+            .map(|(i, l)| {
+                l.lens(i).map_err(|e| optics::OpticsError::Eyewear {
+                    lens: i,
+                    reason: format!("{} = {} {}", e.key, e.value, e.problem),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        optics::lens::wear(&eye, &worn)
+    })
+}
+
+/// A real spectacle lens that spans the spectacle plane leaves the trial lens of a refraction
+/// through the lenses nowhere to be held: refused, naming its vertex.
+fn check_trial_plane(spec: &OpticsSpec) -> Result<(), OpticsKeyError> {
+    for (i, l) in spec.lenses.iter().enumerate() {
+        if let (0, ProfileSpec::Real { thickness, .. }) = (l.kind, &l.profile) {
+            if l.vertex <= VERTEX_MM && VERTEX_MM <= l.vertex + thickness {
+                return Err(key_error(
+                    format!("{}[{i}].vertex", Quantity::Lenses),
+                    number(l.vertex),
+                    format!(
+                        "puts a real lens across the spectacle plane ({VERTEX_MM} mm), where the trial lens of the refraction through the lenses is held: give it a vertex beyond {} mm, or below {} mm",
+                        number(VERTEX_MM),
+                        number(VERTEX_MM - thickness)
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A refraction through the lenses that cannot be traced, as the lenses' error.
+fn through_error(spec: &OpticsSpec, e: &optics::OpticsError) -> OpticsKeyError {
+    key_error(
+        Quantity::Lenses.to_string(),
+        lenses_text(&spec.lenses),
+        format!(
+            "give no refraction through them in the {} eye: {}",
+            spec.eye_name(),
+            crate::text::one_line(&e.to_string())
+        ),
+    )
+}
+
+/// The refraction table of `spec`'s eye at growth time `t` through the lenses it wears, as
+/// [`refraction_table_at`] traces the naked eye's (the same powers, rays and vertex): the
+/// over-refraction, the trial lens held at the spectacle plane in front of the lenses
+/// ([`with_trial`]). A lens that forms several images is traced at one power: give `spec`
+/// with that lens at the image's power ([`LensSpec::with_power`]). Traced each call (no
+/// cache: `eyeshell optics` asks once).
+pub fn refraction_table_through(
+    spec: &OpticsSpec,
+    t: f64,
+) -> Result<RefractionTable, OpticsKeyError> {
+    // The naked eye's table checks the wavelength and the eye, and names the key that fails.
+    refraction_table_at(spec, t)?;
+    check_trial_plane(spec)?;
+    let trial = trial_through(spec, t)?;
+    let eye = spec.system_at(t)?;
+    RefractionTable::compute_sampled_through(
+        &trial,
+        spec.refraction_wavelength,
+        &spec.pupil_stop(&eye),
+        spec.criterion(),
+        &spec.focus_settings(),
+        VERTEX_MM,
+    )
+    .map_err(|e| through_error(spec, &e))
+}
+
+/// The peripheral refraction table of `spec`'s eye at growth time `t` through the lenses it
+/// wears, as [`peripheral_table_at`] traces the naked eye's and as
+/// [`refraction_table_through`] holds the trial lens.
+pub fn peripheral_table_through(
+    spec: &OpticsSpec,
+    t: f64,
+) -> Result<PeripheralTable, OpticsKeyError> {
+    peripheral_table_at(spec, t)?;
+    let trial = trial_through(spec, t)?;
+    let eye = spec.system_at(t)?;
+    PeripheralTable::compute_through(
+        &trial,
+        spec.refraction_wavelength,
+        &spec.pupil_stop(&eye),
+        spec.criterion(),
+        &spec.focus_settings(),
+        FieldsAt {
+            vertex: VERTEX_MM,
+            fields: &peripheral_fields(spec.max_field),
+        },
+    )
+    .map_err(|e| through_error(spec, &e))
 }
 
 /// The optics whose refraction a growth scene reports: its own with `stimulus.source =

@@ -246,6 +246,7 @@ class Solution:
         self.summary: dict[str, Any] = json.loads(native.summary_text())
         # Measured here, where the native solution is: an unpickled one would solve again.
         self._eye: dict[str, Any] = dict(native.eye())
+        self._refraction_D: float | None = native.refraction_d()
         self._state: np.ndarray = native.state()
         self._bvp4c: dict[str, Any] | None = None
 
@@ -327,13 +328,31 @@ class Solution:
     def eye(self) -> dict[str, Any]:
         """The loaded, ungrown eye as a sweep's table measures it (docs/MODEL.md §6):
         ``axial_length``, ``equatorial_radius``, ``retina_minus_blue``,
-        ``retina_minus_red`` (mm) and ``class``.
+        ``retina_minus_red`` (mm) and ``class``, and ``refraction_D`` (:attr:`refraction_D`)
+        for a scene with optics to compute it with.
 
         >>> e = eyeshell.solve(solver__nodes=101).eye
         >>> sorted(e)
         ['axial_length', 'class', 'equatorial_radius', 'retina_minus_blue', 'retina_minus_red']
         """
         return dict(self._eye)
+
+    @property
+    def refraction_D(self) -> float | None:
+        """The refraction (D) at the pole of the loaded, ungrown eye through the naked eye:
+        the spectacle power at 12 mm that brings its on-axis best focus onto the retina, a
+        growth run's first ``refraction_D`` (summary.json's ``refraction_D``). The optics are
+        those a growth run of the scene refracts through (its own with
+        ``stimulus.source = "optics"``, else the default optics); ``None`` for a scene that
+        neither grows nor computes its optics (no eye to refract through), NaN beyond the
+        ±25 D the optics are traced over.
+
+        >>> round(eyeshell.solve(SCENES + "/const.toml", solver__nodes=101).refraction_D, 2)
+        10.46
+        >>> eyeshell.solve(solver__nodes=101).refraction_D is None
+        True
+        """
+        return self._refraction_D
 
     def to_mat(self, path: PathLike, /, force: bool = False) -> str:
         """Write the solution to the .mat file ``path`` as ``eyeshell export --mat`` writes
@@ -452,12 +471,26 @@ def optics(scene: SceneLike = None, /, **overrides: Any) -> dict[str, Any]:
     ``eye``, ``pupil``, ``z_B``, ``phi_max`` (blue, red: where each surface ends about
     ``z_B``), ``rays_traced`` and ``wall_seconds``. The GIL is released while it traces.
 
+    ``refraction`` is the refraction without growing, as ``eyeshell optics`` writes it to
+    refraction.csv and peripheral.csv (docs/guide/optics.md, "Refraction without growing"):
+    of the loaded, ungrown retina, a list with one dict per time (t = 0, then each table
+    time of optics that change with age) holding ``t``, ``refraction_D`` (the pole's, naked
+    eye: a growth run's first), ``peripheral`` (``field_deg``, ``refraction_D``,
+    ``relative_D`` arrays) and ``through_lenses`` (one dict per image of the lenses worn:
+    ``image_power_D``, None for lenses that form one image, ``refraction_D`` and
+    ``peripheral``); None for a scene that neither grows nor computes its optics.
+
     Raises :class:`InputError` for an optics key that cannot be traced (naming the key,
     the surface, the field angle and the wavelength).
 
     >>> o = eyeshell.optics(None, **{"optics.focus": "sagittal", "optics.max_field": 20})
     >>> o["z"].shape == (42,) and float(o["field_deg"][20]) == 20.0
     True
+    >>> o["refraction"] is None  # the shell alone: no eye to refract through
+    True
+    >>> r = eyeshell.optics(SCENES + "/const.toml", solver__nodes=101)["refraction"]
+    >>> round(r[0]["refraction_D"], 2), r[0]["through_lenses"]
+    (10.46, [])
     """
     s = _as_scene(scene, overrides)
     return dict(_eyeshell.optics(s._s))

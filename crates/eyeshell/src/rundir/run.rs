@@ -47,7 +47,7 @@ pub fn solve_into(
     if !at.is_empty() {
         super::write_fields_csv(&dir.file(AT_FILE), &at_rows)?;
     }
-    Summary::Elastic(ElasticSummary::new(scene, &solution.stats))
+    Summary::Elastic(ElasticSummary::of_solution(scene, &solution))
         .write_to(&dir.file(SUMMARY_FILE))?;
     let dir = dir.commit()?;
     Ok(SolvedRun {

@@ -112,6 +112,15 @@ pub struct ElasticSummary {
     pub run: RunInfo,
     #[serde(flatten, with = "super::record::solve_stats")]
     pub stats: SolveStats,
+    /// The refraction (D) at the pole of the loaded, ungrown eye through the naked eye, as a
+    /// growth run's first `refraction_D` ([`Scene::refraction_of`]): absent for a scene with
+    /// no optics to compute it with, null where it is NaN (beyond ±25 D).
+    #[serde(
+        rename = "refraction_D",
+        default,
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub refraction_d: Option<f64>,
 }
 
 /// How far a growth run is.
@@ -363,6 +372,16 @@ impl ElasticSummary {
         ElasticSummary {
             run: RunInfo::of(scene),
             stats: stats.clone(),
+            refraction_d: None,
+        }
+    }
+
+    /// The summary of `solution`, a solve of `scene`: its statistics and, for a scene with
+    /// optics to compute it with, the refraction at the pole.
+    pub fn of_solution(scene: &Scene, solution: &crate::bvp::Solution) -> ElasticSummary {
+        ElasticSummary {
+            refraction_d: scene.refraction_of(&solution.rows),
+            ..ElasticSummary::new(scene, &solution.stats)
         }
     }
 }

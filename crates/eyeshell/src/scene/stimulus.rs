@@ -56,6 +56,46 @@ impl Scene {
             .map_or(&self.stimulus.optics, |g| &g.optics)
     }
 
+    /// The optics the scene's refraction in dioptres is computed with (docs/guide/eyewear.md,
+    /// "Refraction in dioptres"): a growing scene's are those its growth run reports
+    /// `refraction_D` with (its own with `stimulus.source = "optics"`, else the default
+    /// optics); a scene that does not grow has optics of its own only with
+    /// `stimulus.source = "optics"`. None for a scene that neither grows nor computes its
+    /// optics: it has no eye to refract through.
+    pub fn refraction_optics(&self) -> Option<OpticsSpec> {
+        match &self.growth {
+            Some(g) => Some(g.refraction_optics()),
+            None if self.stimulus.source == Source::Optics => Some(self.stimulus.optics.clone()),
+            None => None,
+        }
+    }
+
+    /// Why [`Scene::refraction_optics`] is None, in a phrase: the scene's keys that would give
+    /// it optics.
+    pub fn no_refraction_optics(&self) -> String {
+        "the scene has no optics to compute a refraction with: it does not grow and its stimulus.source is \"polynomial\" (set stimulus.source = \"optics\", or a growth key)".into()
+    }
+
+    /// The retina of a loaded, ungrown shell whose fields are `rows` (pole first), as a
+    /// growth run measures it at t = 0 (docs/MODEL.md §6).
+    pub fn retina_of(rows: &[crate::bvp::FieldRow]) -> Vec<(f64, f64)> {
+        rows.iter()
+            .map(|f| crate::model::stimulus::retina(f.z, f.r, f.h, f.theta))
+            .collect()
+    }
+
+    /// The refraction (D) at the pole of the loaded, ungrown shell whose fields are `rows`,
+    /// through the naked eye at t = 0: a growth run's first `refraction_D`. None when the
+    /// scene has no optics to compute it with ([`Scene::refraction_optics`]); NaN beyond
+    /// ±25 D.
+    pub fn refraction_of(&self, rows: &[crate::bvp::FieldRow]) -> Option<f64> {
+        let spec = self.refraction_optics()?;
+        let z = rows.first().map_or(f64::NAN, |f| {
+            crate::model::stimulus::retina(f.z, f.r, f.h, f.theta).0
+        });
+        Some(crate::growth::refraction::pole(&spec, 0.0, z))
+    }
+
     /// Change the stimulus's source.
     pub fn set_stimulus_source(&mut self, source: Source) {
         self.edit_stimulus(|st| st.source = source);

@@ -153,11 +153,15 @@ pub fn unloaded_eye(scene: &Scene, rows: &[FieldRow]) -> EyeMeasure {
             0.0,
             EyeMeasure::new(pole, radii, g.blue_focal(), g.red_focal()),
         ),
-        _ => EyeMeasure::new(
-            pole,
-            radii,
-            stimulus::Focal::Polynomial(&blue),
-            stimulus::Focal::Polynomial(&red),
-        ),
+        _ => EyeMeasure {
+            // A scene that does not grow but computes its optics refracts through them.
+            refraction_d: scene.refraction_of(rows).unwrap_or(f64::NAN),
+            ..EyeMeasure::new(
+                pole,
+                radii,
+                stimulus::Focal::Polynomial(&blue),
+                stimulus::Focal::Polynomial(&red),
+            )
+        },
     }
 }
