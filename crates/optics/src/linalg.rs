@@ -3,34 +3,49 @@
 /// Solves the square system `a x = b` by Gaussian elimination with partial pivoting; `None`
 /// when it is singular to working precision.
 pub(crate) fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
+    let mut x = [0.0; N];
+    eliminate(&mut a, &mut b, &mut x).then_some(x)
+}
+
+/// Gaussian elimination with partial pivoting of the square system `a x = b`, in place, its
+/// solution in `x`: false when the system is singular to working precision. One body for
+/// the fixed-size systems and the larger ones whose size the data set.
+fn eliminate<R: AsRef<[f64]> + AsMut<[f64]>>(a: &mut [R], b: &mut [f64], x: &mut [f64]) -> bool {
+    let n = b.len();
     let scale = a
         .iter()
-        .flat_map(|r| r.iter())
+        .flat_map(|r| r.as_ref().iter())
         .fold(0.0_f64, |m, v| m.max(v.abs()));
     if !(scale > 0.0) || !scale.is_finite() {
-        return None;
+        return false;
     }
-    for k in 0..N {
-        let p = (k..N).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if !(a[p][k].abs() > 1e-14 * scale) {
-            return None;
+    for k in 0..n {
+        let column = |i: usize| a[i].as_ref()[k].abs();
+        let Some(p) = (k..n).max_by(|&i, &j| column(i).total_cmp(&column(j))) else {
+            return false;
+        };
+        if !(column(p) > 1e-14 * scale) {
+            return false;
         }
         a.swap(k, p);
         b.swap(k, p);
-        for i in k + 1..N {
-            let f = a[i][k] / a[k][k];
-            for j in k..N {
-                a[i][j] -= f * a[k][j];
+        let (top, rest) = a.split_at_mut(k + 1);
+        let pivot = top[k].as_ref();
+        for (i, row) in (k + 1..n).zip(rest.iter_mut()) {
+            let row = row.as_mut();
+            let f = row[k] / pivot[k];
+            for j in k..n {
+                row[j] -= f * pivot[j];
             }
             b[i] -= f * b[k];
         }
     }
-    let mut x = [0.0; N];
-    for k in (0..N).rev() {
-        let s: f64 = (k + 1..N).map(|j| a[k][j] * x[j]).sum();
-        x[k] = (b[k] - s) / a[k][k];
+    for k in (0..n).rev() {
+        let r = a[k].as_ref();
+        let s: f64 = (k + 1..n).map(|j| r[j] * x[j]).sum();
+        x[k] = (b[k] - s) / r[k];
     }
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    x.iter().all(|v| v.is_finite())
 }
 
 /// Least squares `min |A x − b|` through the normal equations of the column-scaled matrix
@@ -105,33 +120,6 @@ pub(crate) fn least_squares_dyn<const K: usize>(
 
 /// [`solve`] for a square system of any size.
 fn solve_dyn(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    let scale = a
-        .iter()
-        .flat_map(|r| r.iter())
-        .fold(0.0_f64, |m, v| m.max(v.abs()));
-    if !(scale > 0.0) || !scale.is_finite() {
-        return None;
-    }
-    for k in 0..n {
-        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if !(a[p][k].abs() > 1e-14 * scale) {
-            return None;
-        }
-        a.swap(k, p);
-        b.swap(k, p);
-        for i in k + 1..n {
-            let f = a[i][k] / a[k][k];
-            for j in k..n {
-                a[i][j] -= f * a[k][j];
-            }
-            b[i] -= f * b[k];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for k in (0..n).rev() {
-        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
-        x[k] = (b[k] - s) / a[k][k];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    let mut x = vec![0.0; b.len()];
+    eliminate(&mut a, &mut b, &mut x).then_some(x)
 }
