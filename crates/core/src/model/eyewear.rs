@@ -39,6 +39,10 @@ pub struct LensSpec {
     pub profile: ProfileSpec,
     /// Lenslet rings: zones whose light goes partly through an add power.
     pub lenslets: Vec<Lenslets>,
+    /// `power = "prescribe"`: the lens's power is the eye's own correction
+    /// ([`prescribe`]), plus this offset (`over`, D). Its profile then holds the power the
+    /// prescription gave (or the offset alone, before the eye is known).
+    pub prescribe: Option<f64>,
 }
 
 /// A ring of lenslets (docs/guide/eyewear.md, "Simultaneous images"): a share `fill` of the
@@ -265,6 +269,7 @@ impl LensSpec {
             vertex: self.vertex,
             profile: ProfileSpec::Power(power),
             lenslets: vec![],
+            prescribe: None,
         }
     }
 
@@ -293,10 +298,25 @@ impl LensSpec {
         }
     }
 
+    /// The power (D) of this lens that corrects an eye of refraction `refraction` (D, as
+    /// refraction_D gives it: the thin spectacle power at [`VERTEX_MM`] that brings the
+    /// naked eye's on-axis best focus onto the retina), plus the prescription's offset
+    /// `over`. A lens elsewhere must image the same far point: at d mm in front of the
+    /// corneal apex (0 for a contact lens) its power is R / (1 + R·(d − 12)/1000), the
+    /// vertex-distance conversion of thin lenses, exact for the ideal thin lenses the
+    /// optics trace (each turns the plane wave into the same spherical wave at the cornea).
+    pub fn correcting_power(&self, refraction: f64) -> f64 {
+        let at = if self.kind == 1 { 0.0 } else { self.vertex };
+        refraction / (1.0 + refraction * (at - VERTEX_MM) * 1e-3) + self.prescribe.unwrap_or(0.0)
+    }
+
     /// The lens in a few words, for messages (never its whole profile):
     /// `spectacle lens at 12 mm, 20 zones`.
     pub fn describe(&self) -> String {
         let body = match &self.profile {
+            ProfileSpec::Power(p) if self.prescribe.is_some() => {
+                format!("{} D prescribed", number(*p))
+            }
             ProfileSpec::Power(p) => format!("{} D", number(*p)),
             ProfileSpec::Zones(z) if !self.lenslets.is_empty() => {
                 format!("{} zones, {} of lenslets", z.len(), self.lenslets.len())
@@ -325,6 +345,15 @@ impl LensSpec {
                 .join(", ")
         };
         match &self.profile {
+            // The prescription, not the power it gave: read back, the lens is prescribed
+            // again for the eye it is worn by.
+            ProfileSpec::Power(_) if self.prescribe.is_some() => {
+                parts.push("power = \"prescribe\"".into());
+                match self.prescribe {
+                    Some(over) if over != 0.0 => parts.push(format!("over = {}", f(over))),
+                    _ => {}
+                }
+            }
             ProfileSpec::Power(p) => parts.push(format!("power = {}", f(*p))),
             ProfileSpec::Zones(z) => {
                 let rows: Vec<String> = z
@@ -767,6 +796,47 @@ pub fn peripheral_refraction(table: &PeripheralTable, z_c: f64, retina: &[(f64, 
     (0..table.fields.len())
         .map(|i| table.refraction(i, behind).unwrap_or(f64::NAN))
         .collect()
+}
+
+/// `spec` with the power of each prescribed lens (`power = "prescribe"`) its eye's own
+/// correction ([`LensSpec::correcting_power`]) from the refraction of the naked eye at growth
+/// time 0 of a retina whose pole lies `retina_z` mm behind the corneal apex: the
+/// refraction_D a growth run of these optics reports at t = 0. That table is traced with
+/// the rays the eye needs as it wears its lenses ([`OpticsSpec::focus_settings`]), which a
+/// lens's power can change, so the power is found again until it no longer changes (the
+/// ray count changes in steps: twice, or three times when a step is crossed). `spec` as it
+/// is when no lens is prescribed.
+///
+/// # Errors
+/// The prescribed lens's power key when the refraction lies beyond the table (±25 D) or the
+/// optics cannot be traced.
+pub fn prescribe(spec: &OpticsSpec, retina_z: f64) -> Result<OpticsSpec, OpticsKeyError> {
+    let Some(first) = spec.lenses.iter().position(|l| l.prescribe.is_some()) else {
+        return Ok(spec.clone());
+    };
+    let mut now = spec.clone();
+    for _ in 0..4 {
+        let table = refraction_table(&now)?;
+        let Some(refraction) = table.refraction(retina_z) else {
+            return Err(key_error(
+                format!("{}[{first}].power", Quantity::Lenses),
+                "\"prescribe\"".into(),
+                format!(
+                    "cannot be prescribed: the naked eye's refraction at t = 0 (its retina's pole at {} mm) lies beyond the ±25 D the refraction is traced over",
+                    number(retina_z)
+                ),
+            ));
+        };
+        let mut next = now.clone();
+        for lens in next.lenses.iter_mut().filter(|l| l.prescribe.is_some()) {
+            lens.profile = ProfileSpec::Power(lens.correcting_power(refraction));
+        }
+        if next == now {
+            break;
+        }
+        now = next;
+    }
+    Ok(now)
 }
 
 /// The optics whose refraction a growth scene reports: its own with `stimulus.source =
