@@ -453,6 +453,11 @@ pub fn set_lens_key(
         },
         None => toml::Table::new(),
     };
+    // A lens made a contact lens sits on the cornea: the vertex it had as a spectacle lens
+    // goes (a contact lens takes none).
+    if name == "kind" && value.as_str() == Some(KINDS[1]) {
+        table.remove("vertex");
+    }
     table.insert(name.to_string(), value.clone());
     parse_lens(i, &toml::Value::Table(table))
 }

@@ -198,7 +198,7 @@ fn key_dists(
             let item = item.map_err(|problem| SceneError::Invalid {
                 origin: format!("{origin}: [sweep.sample.keys]"),
                 key: crate::text::excerpt(&one_line(&key), 80),
-                value: describe(value),
+                value: crate::text::excerpt(&one_line(&value.to_string()), 40),
                 problem,
             })?;
             if !item.is_real() {

@@ -252,13 +252,14 @@ impl SweepPlan {
             let key = text
                 .split_once('=')
                 .map_or(text.as_str(), |(k, _)| k.trim());
-            if list
+            let swept = list
                 .iter()
-                .any(|e| e.values.iter().any(|(k, _)| overlap(k, key)))
-                || grid.iter().any(|(k, _)| overlap(k, key))
-            {
+                .flat_map(|e| e.values.iter().map(|(k, _)| k))
+                .chain(grid.iter().map(|(k, _)| k))
+                .find(|k| overlap(k, key));
+            if let Some(swept) = swept {
                 return Err(bad(format!(
-                    "sweeps {key}: {} (the sweep's values would be ambiguous)",
+                    "sweeps {swept}: {} (the sweep's values would be ambiguous)",
                     crate::text::advice(&crate::text::Advice::RemoveOverride { text })
                 )));
             }

@@ -160,7 +160,7 @@ fn leaves(
                 return Err(SceneError::Invalid {
                     origin: format!("{origin}: [sweep]"),
                     key: crate::text::excerpt(&one_line(&key), 80),
-                    value: describe(value),
+                    value: crate::text::excerpt(&one_line(&value.to_string()), 40),
                     problem,
                 });
             }
