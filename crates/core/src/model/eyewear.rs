@@ -939,6 +939,77 @@ mod tests {
         );
     }
 
+    /// A prescribed lens for a retina at 24.2 mm (a myope of about −1.5 D in the default
+    /// eye): the spectacle lens at 12 mm is the refraction table's own refraction there; a
+    /// spectacle lens at 15 mm and a contact lens take their vertex conversions, and each,
+    /// worn and traced directly (not from a table), puts the on-axis best focus on that
+    /// retina to 0.004 mm (0.01 D); `over` adds to the power.
+    #[test]
+    fn a_prescribed_lens_puts_the_focus_on_its_retina() {
+        let retina = 24.2;
+        let lens = |kind: usize, vertex: f64, over: f64| LensSpec {
+            kind,
+            vertex,
+            profile: ProfileSpec::Power(over),
+            lenslets: vec![],
+            prescribe: Some(over),
+        };
+        let refraction = refraction_table(&OpticsSpec::default())
+            .unwrap()
+            .refraction(retina)
+            .unwrap();
+        assert!(refraction < -1.0 && refraction > -2.0, "{refraction}");
+        for (kind, vertex, expected) in [
+            (0, 12.0, refraction),
+            (0, 15.0, refraction / (1.0 + refraction * 0.003)),
+            (1, 12.0, refraction / (1.0 - refraction * 0.012)),
+        ] {
+            let spec = OpticsSpec {
+                lenses: vec![lens(kind, vertex, 0.0)],
+                ..OpticsSpec::default()
+            };
+            let prescribed = prescribe(&spec, retina).unwrap();
+            let ProfileSpec::Power(p) = prescribed.lenses[0].profile else {
+                panic!("{:?}", prescribed.lenses[0]);
+            };
+            assert!(
+                (p - expected).abs() < 1e-12,
+                "{kind} at {vertex}: {p} vs {expected}"
+            );
+            let worn = worn(&prescribed).unwrap();
+            let f = best_focus_with(
+                &worn,
+                spec.refraction_wavelength,
+                0.0,
+                &spec.pupil_stop(&spec.system().unwrap()),
+                spec.criterion(),
+                &FocusSettings::default(),
+            )
+            .unwrap();
+            assert!(
+                (f.z - retina).abs() < 0.004,
+                "{kind} at {vertex}: focus {}",
+                f.z
+            );
+            let over = OpticsSpec {
+                lenses: vec![lens(kind, vertex, -0.25)],
+                ..OpticsSpec::default()
+            };
+            let ProfileSpec::Power(q) = prescribe(&over, retina).unwrap().lenses[0].profile else {
+                panic!("not a power");
+            };
+            assert!((q - (p - 0.25)).abs() < 1e-12, "{q} vs {p}");
+        }
+        // No refraction within ±25 D: the prescribed lens's key says why.
+        let far = OpticsSpec {
+            lenses: vec![lens(0, 12.0, 0.0)],
+            ..OpticsSpec::default()
+        };
+        let e = prescribe(&far, 40.0).unwrap_err();
+        assert_eq!(e.key, format!("{}[0].power", Quantity::Lenses));
+        assert!(e.problem.contains("beyond the ±25 D"), "{}", e.problem);
+    }
+
     #[test]
     fn the_fields_run_every_5_degrees_to_the_largest() {
         assert_eq!(peripheral_fields(12.0), vec![0.0, 5.0, 10.0, 12.0]);
