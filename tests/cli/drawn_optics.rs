@@ -78,7 +78,7 @@ fn worn_focus(out: &Path, radius: f64, lens: &str) -> f64 {
         "--set",
         "optics.max_field=5",
         "--out",
-        s(&out),
+        s(out),
         "--quiet",
     ]);
     let (header, rows) = csv_cells(&out.join("surfaces.csv"));
