@@ -443,6 +443,8 @@ pub fn set_lens_key(
     name: &str,
     value: &toml::Value,
 ) -> Result<LensSpec, OpticsKeyError> {
+    // A lens's TOML always reads back (a test of its own); were it not to, the lens's
+    // other keys would be missing and the lens refused naming them, never half-set.
     let mut table = match lenses.get(i) {
         Some(lens) => match format!("v = {}", lens.to_toml()).parse::<toml::Table>() {
             Ok(mut t) => match t.remove("v") {

@@ -64,9 +64,8 @@ impl Scene {
             sources.insert(SURFACES_KEY, (seq, origin.to_string()));
             return Ok(());
         }
-        if let Some(item) =
-            indexed(key).filter(|k| k.as_ref().map_or(true, |k| k.array == LENSES_KEY))
-        {
+        // The surfaces' items are set above: an item here is a lens's.
+        if let Some(item) = indexed(key) {
             self.set_one_lens_key(key, item, value, origin)?;
             let seq = sources.values().map(|(n, _)| *n).max().unwrap_or(0) + 1;
             sources.insert(LENSES_KEY, (seq, origin.to_string()));
@@ -323,6 +322,13 @@ pub(crate) fn indexed(key: &str) -> Option<Result<Indexed<'_>, String>> {
     } else {
         "lens"
     };
+    let problem = || {
+        format!(
+            "is not a {item}'s key: write {array}[i].key with i from 0 to {} and key one of {}",
+            most - 1,
+            names.join(", ")
+        )
+    };
     let rest = &key[array.len() + 1..];
     let parsed = rest
         .split_once("].")
@@ -331,13 +337,7 @@ pub(crate) fn indexed(key: &str) -> Option<Result<Indexed<'_>, String>> {
     Some(
         parsed
             .map(|(index, name)| Indexed { array, index, name })
-            .ok_or_else(|| {
-                format!(
-            "is not a {item}'s key: write {array}[i].key with i from 0 to {} and key one of {}",
-            most - 1,
-            names.join(", ")
-        )
-            }),
+            .ok_or_else(problem),
     )
 }
 
