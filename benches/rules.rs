@@ -10,9 +10,11 @@
 //! run, an integrated one at most 2×.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use eyeshell::model::rule::{BlueSurface, Drive, GrowthRule, Reads, RuleError, RuleKeys, Seen};
 use eyeshell::scene::Scene;
 use std::hint::black_box;
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Duration;
 
 #[global_allocator]
@@ -37,7 +39,8 @@ fn read(sets: &[&str]) -> Scene {
 }
 
 /// Every rule under IDA (its own steps), then under fixed-step Euler: 200 steps whatever the
-/// rule grows, so the second group's ratios are the rule's cost at equal work.
+/// rule grows (equal steps; each step's elastic Newton iterations still follow how far the
+/// eye grew), then each local rule evaluated along the paper's own run (equal work).
 fn rules(c: &mut Criterion) {
     timed(c, "rules_single_vision_8_to_11", &[]);
     timed(
@@ -45,6 +48,79 @@ fn rules(c: &mut Criterion) {
         "rules_equal_work_euler_200",
         &["solver.integrator=euler", "solver.steps=200"],
     );
+    along_the_papers_run(c);
+}
+
+/// A rule evaluated but not obeyed: at every call it computes `timed`'s drive (and the view
+/// it reads: the red surface, the defocus) and then returns the paper's, so the run is the
+/// paper's run, step for step, plus the rule's own cost. A rule that grows a different eye
+/// takes different steps and different elastic iterations; this separates what the rule
+/// costs from what the eye it grows costs.
+#[derive(Debug)]
+struct Shadow {
+    timed: Arc<dyn GrowthRule>,
+    scratch: std::sync::Mutex<Vec<Drive>>,
+}
+
+impl GrowthRule for Shadow {
+    fn name(&self) -> &str {
+        "shadow"
+    }
+
+    fn reads(&self) -> Reads {
+        self.timed.reads()
+    }
+
+    fn drive(&self, seen: &[Seen], partials: bool, out: &mut [Drive]) -> Result<(), RuleError> {
+        let mut scratch = self.scratch.lock().expect("one growth run at a time");
+        scratch.resize(out.len(), Drive::default());
+        self.timed.drive(seen, partials, &mut scratch)?;
+        black_box(&*scratch);
+        BlueSurface.drive(seen, partials, out)
+    }
+}
+
+/// The local rules' own cost per run: each rule (with the scene's keys) shadowing the paper's
+/// rule over the paper's run of the scene (IDA, its own 46 steps), against that run itself.
+fn along_the_papers_run(c: &mut Criterion) {
+    let keys = |rule: usize| RuleKeys {
+        rule,
+        baseline: 0.05,
+        hyperopic_gain: 0.37,
+        myopic_gain: 0.01,
+        ..RuleKeys::default()
+    };
+    let papers = read(&["stimulus.rule=blue-surface"]);
+    let reference = papers.grow(&mut ()).expect("the paper's run");
+    let mut group = c.benchmark_group("rules_along_the_papers_run");
+    group.sample_size(10);
+    group.bench_function("blue_surface", |b| {
+        b.iter(|| black_box(papers.grow(&mut ()).unwrap().series.len()))
+    });
+    for (name, rule) in [("defocus", 1), ("chromatic", 2)] {
+        let mut scene = papers.clone();
+        let shadow = Shadow {
+            timed: keys(rule).build(),
+            scratch: Default::default(),
+        };
+        scene.set_rule(Arc::new(shadow)).expect("a growing scene");
+        let run = scene.grow(&mut ()).expect("the shadowed run");
+        // The same run: the same steps and the same eye, so the time is the rule's alone.
+        assert_eq!(run.stats.steps, reference.stats.steps, "{name}");
+        assert_eq!(
+            run.series.last().map(|r| r.axial_length),
+            reference.series.last().map(|r| r.axial_length),
+            "{name}"
+        );
+        eprintln!(
+            "{name} along the paper's run: {} steps, {} residual evaluations",
+            run.stats.steps, run.stats.residual_evaluations
+        );
+        group.bench_function(name, |b| {
+            b.iter(|| black_box(scene.grow(&mut ()).unwrap().series.len()))
+        });
+    }
+    group.finish();
 }
 
 fn timed(c: &mut Criterion, group_name: &str, integrator: &[&str]) {

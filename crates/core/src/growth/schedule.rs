@@ -756,7 +756,7 @@ fn radius_runs(
     let h = RADIUS_STEP * params.r0;
     let mut sides = vec![];
     for r0 in [params.r0 + h, params.r0 - h] {
-        let shifted = crate::model::params::Params { r0, ..*params };
+        let shifted = params.with_radius(r0);
         let plain = super::GrowthSettings {
             sensitivities: vec![],
             ..clocked.settings.clone()

@@ -39,10 +39,17 @@ pub struct Params {
     pub d: f64,
     /// cornea.*
     pub cornea: CorneaParams,
-    /// geometry.R0: radius of the reference sphere (mm).
+    /// geometry.R0: radius of the reference sphere (mm), the eye's size as a whole: it sets
+    /// the shell's length π f R0 and, while [`Params::cornea_follows_radius`], the cornea's
+    /// radius R_c too ([`Params::set_radius`]).
     pub r0: f64,
     /// geometry.fraction: f, with L = π f R0.
     pub fraction: f64,
+    /// True until cornea.R0 is given: R_c is then R0, so that a larger eye has a larger
+    /// cornea. The shell meets the cornea at Σ = L, where the cornea's edge (r*, z*) ∝ R_c
+    /// (docs/MODEL.md §3); a larger shell on the same cornea is pulled into a longer, flatter
+    /// front and an eye that is shorter, not longer.
+    pub cornea_follows_radius: bool,
 }
 
 impl Default for Params {
@@ -61,11 +68,27 @@ impl Default for Params {
             },
             r0: 10.0,
             fraction: 0.8,
+            cornea_follows_radius: true,
         }
     }
 }
 
 impl Params {
+    /// Set R0 (geometry.R0), and with it the cornea's radius while it follows R0.
+    pub fn set_radius(&mut self, r0: f64) {
+        self.r0 = r0;
+        if self.cornea_follows_radius {
+            self.cornea.r0 = r0;
+        }
+    }
+
+    /// These parameters with R0 = `r0` ([`Params::set_radius`]).
+    pub fn with_radius(&self, r0: f64) -> Params {
+        let mut p = *self;
+        p.set_radius(r0);
+        p
+    }
+
     /// Material length of the shell, L = π f R0.
     pub fn length(&self) -> f64 {
         std::f64::consts::PI * self.fraction * self.r0

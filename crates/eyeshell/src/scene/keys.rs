@@ -543,16 +543,22 @@ pub static KEYS: &[KeySpec] = &[
     },
     KeySpec {
         key: "cornea.R0",
-        access: Access::Float { get: |s| s.params.cornea.r0, set: |s, v| s.params.cornea.r0 = v },
+        access: Access::Float {
+            get: |s| s.params.cornea.r0,
+            set: |s, v| {
+                s.params.cornea.r0 = v;
+                s.params.cornea_follows_radius = false;
+            },
+        },
         rule: Rule::Positive,
-        doc: "cornea's radius R_c (mm) (docs/MODEL.md §3)",
+        doc: "cornea's radius R_c (mm), geometry.R0 unless given (docs/MODEL.md §3)",
         growth: false,
     },
     KeySpec {
         key: "geometry.R0",
-        access: Access::Float { get: |s| s.params.r0, set: |s, v| s.params.r0 = v },
+        access: Access::Float { get: |s| s.params.r0, set: |s, v| s.params.set_radius(v) },
         rule: Rule::Positive,
-        doc: "radius R0 of the initial sphere (mm) (docs/MODEL.md §1)",
+        doc: "radius R0 of the unloaded shell (mm): the eye's size, the shell's length π·fraction·R0 and the cornea's radius unless cornea.R0 is given (docs/MODEL.md §1)",
         growth: false,
     },
     KeySpec {

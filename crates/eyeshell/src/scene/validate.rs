@@ -42,14 +42,31 @@ impl Scene {
             .unwrap_or_else(|| self.origin.clone())
     }
 
-    pub(super) fn validate_from(&self, sources: &Sources) -> Result<(), SceneError> {
-        let invalid = |keys: &[&str], value: String, problem: String| SceneError::Invalid {
+    /// The error of `keys[0]` (blamed on whichever of `keys` was set last) at `value`.
+    fn invalid(
+        &self,
+        sources: &Sources,
+        keys: &[&str],
+        value: String,
+        problem: String,
+    ) -> SceneError {
+        SceneError::Invalid {
             origin: self.origin_of(sources, keys),
             key: keys[0].to_string(),
             value,
             problem,
+        }
+    }
+
+    pub(super) fn validate_from(&self, sources: &Sources) -> Result<(), SceneError> {
+        let invalid = |keys: &[&str], value: String, problem: String| {
+            self.invalid(sources, keys, value, problem)
         };
         for spec in KEYS {
+            // A cornea that follows geometry.R0 has its value: that key's check is its own.
+            if spec.key == "cornea.R0" && self.params.cornea_follows_radius {
+                continue;
+            }
             let check = match spec.get(self) {
                 KeyValue::Float(x) => spec.rule.check_float(x),
                 KeyValue::Count(n) => spec.rule.check_count(n),
@@ -66,21 +83,6 @@ impl Scene {
         }
         // Limits that tie keys together; every key is finite and in its own range by now.
         let p = &self.params;
-        let p_max = crate::model::cornea::max_pressure(&p.cornea);
-        if p.dp > p_max {
-            return Err(invalid(
-                &["pressure.dP", "cornea.C", "cornea.H", "cornea.R0"],
-                show(&KeyValue::Float(p.dp)),
-                format!(
-                    "is above the cornea's limit: the largest admissible ΔP is {} kPa \
-                     (4 C_c H_c / R_c · (6/7) · 7^(-1/6) with cornea.C = {}, cornea.H = {}, cornea.R0 = {})",
-                    decimals6(p_max),
-                    number(p.cornea.c),
-                    number(p.cornea.h),
-                    number(p.cornea.r0)
-                ),
-            ));
-        }
         let length = p.length();
         if self.solver.epsilon >= length {
             return Err(invalid(
@@ -97,6 +99,7 @@ impl Scene {
         }
         self.validate_mesh(sources)?;
         self.validate_sizes(sources)?;
+        self.validate_cornea(sources)?;
         self.validate_traced_optics(sources)?;
         if self.growth.is_some() {
             let o = self.optics();
@@ -188,11 +191,8 @@ impl Scene {
     /// [`crate::plan::MAX_RUN_BYTES`]. The mesh itself is valid by now.
     fn validate_sizes(&self, sources: &Sources) -> Result<(), SceneError> {
         use crate::mesh::{BYTES_PER_NODE, MAX_NODES};
-        let invalid = |keys: &[&str], value: String, problem: String| SceneError::Invalid {
-            origin: self.origin_of(sources, keys),
-            key: keys[0].to_string(),
-            value,
-            problem,
+        let invalid = |keys: &[&str], value: String, problem: String| {
+            self.invalid(sources, keys, value, problem)
         };
         let gb = |bytes: u64| format!("{:.1} GB", bytes as f64 / 1e9);
         // The nodes of the mesh solver.nodes lays (breakpoints at most 3 more).
@@ -254,6 +254,37 @@ impl Scene {
                     ),
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// The cornea's pressure limit (docs/MODEL.md §3), after the sizes: a cornea that follows
+    /// an absurd geometry.R0 is that key's error, said as such first.
+    fn validate_cornea(&self, sources: &Sources) -> Result<(), SceneError> {
+        let invalid = |keys: &[&str], value: String, problem: String| {
+            self.invalid(sources, keys, value, problem)
+        };
+        let p = &self.params;
+        let p_max = crate::model::cornea::max_pressure(&p.cornea);
+        if p.dp > p_max {
+            let radius = if p.cornea_follows_radius {
+                "geometry.R0"
+            } else {
+                "cornea.R0"
+            };
+            return Err(invalid(
+                &["pressure.dP", "cornea.C", "cornea.H", radius],
+                show(&KeyValue::Float(p.dp)),
+                format!(
+                    "is above the cornea's limit: the largest admissible ΔP is {} kPa \
+                     (4 C_c H_c / R_c · (6/7) · 7^(-1/6) with cornea.C = {}, cornea.H = {}, cornea.R0 = {}{})",
+                    decimals6(p_max),
+                    number(p.cornea.c),
+                    number(p.cornea.h),
+                    number(p.cornea.r0),
+                    if p.cornea_follows_radius { ", following geometry.R0" } else { "" }
+                ),
+            ));
         }
         Ok(())
     }

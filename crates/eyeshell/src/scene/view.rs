@@ -105,11 +105,13 @@ impl Scene {
         for k in KEYS.iter().filter(written) {
             // A red surface that follows the blue one is derived, not given: written as a
             // key it would be given (and stop following) when the text is read back, so it
-            // is shown as a comment.
+            // is shown as a comment; so is a cornea whose radius follows geometry.R0.
             let derived = self.stimulus.red_follows_blue && k.key.starts_with("stimulus.red.");
+            let sized = self.params.cornea_follows_radius && k.key == "cornea.R0";
             match k.get(self) {
                 KeyValue::Text(None) | KeyValue::Unset => {}
                 v if derived => out.push_str(&format!("# {} = {v}  (follows blue)\n", k.key)),
+                v if sized => out.push_str(&format!("# {} = {v}  (follows geometry.R0)\n", k.key)),
                 v => out.push_str(&format!("{} = {}\n", k.key, v)),
             }
         }

@@ -189,7 +189,7 @@ impl SensParam {
             SensParam::ScheduleTau => g.schedule.tau = v,
             SensParam::ScheduleCentre => g.schedule.centre = v,
             SensParam::ScheduleWidth => g.schedule.width = v,
-            SensParam::Radius => params.r0 = v,
+            SensParam::Radius => params.set_radius(v),
         }
     }
 

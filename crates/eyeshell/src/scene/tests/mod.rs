@@ -6,6 +6,7 @@ use crate::model::params::Thickness;
 
 mod growth;
 mod optics;
+mod size;
 mod surfaces;
 
 use super::suggest::levenshtein;
@@ -459,7 +460,12 @@ fn shipped_scenes_are_valid() {
         &[],
     )
     .unwrap();
-    assert_eq!(d.params, Params::default());
+    // default.toml gives cornea.R0, which then no longer follows geometry.R0.
+    let given = Params {
+        cornea_follows_radius: false,
+        ..Params::default()
+    };
+    assert_eq!(d.params, given);
     assert_eq!(d.solver, SolverSettings::default());
     let f = Scene::from_toml_str(
         include_str!("../../../../../scenes/fibres-nonuniform.toml"),
