@@ -48,7 +48,7 @@ pub fn population_figure(dir: &Path, records: &[RunRecord]) -> Result<Option<Pat
     }
     let times = population["times"].as_array().cloned().unwrap_or_default();
     if times.len() >= 2 {
-        panels.push(cohort_bands(&times));
+        panels.push(cohort_bands(&times, population["age_unit"].as_str()));
     }
     if panels.is_empty() {
         return Ok(None);
@@ -138,21 +138,28 @@ fn histogram(values: &[f64], title: &str, label: &str) -> Figure {
     ))
 }
 
-/// The axial length of the cohort against t: the median, the quartiles and the 5 % and
-/// 95 % quantiles of population.json's `times`.
-fn cohort_bands(times: &[serde_json::Value]) -> Figure {
+/// The axial length of the cohort against t, or against age when the cohort counts in ages
+/// (`age_unit`, every time with its age): the median, the quartiles and the 5 % and 95 %
+/// quantiles of population.json's `times`.
+fn cohort_bands(times: &[serde_json::Value], age_unit: Option<&str>) -> Figure {
+    let by_age = age_unit.is_some() && times.iter().all(|t| t["age"].as_f64().is_some());
+    let x = if by_age { "age" } else { "t" };
     let band = |q: &str| -> Vec<(f64, f64)> {
         times
             .iter()
             .filter_map(|t| {
                 Some((
-                    t["t"].as_f64()?,
+                    t[x].as_f64()?,
                     t["outputs"]["axial_length"]["quantiles"][q].as_f64()?,
                 ))
             })
             .collect()
     };
-    Figure::new("Axial length of the cohort", "t", "axial length (mm)")
+    let label = match (by_age, age_unit) {
+        (true, Some(unit)) => format!("age ({unit})"),
+        _ => "t".to_string(),
+    };
+    Figure::new("Axial length of the cohort", label, "axial length (mm)")
         .with(
             Series::new("median", band("0.5"), SeriesStyle::LineAndMarkers).color(plot::PALETTE[0]),
         )

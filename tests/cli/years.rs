@@ -375,3 +375,74 @@ fn residuals_by_age_are_short_with_a_tiny_sigma() {
         assert!(line.chars().count() <= 130, "{line}");
     }
 }
+
+/// A sampled cohort in years carries the age beside t in every table it writes, in either
+/// form: sweep.csv and population.csv (after t), population.json (each time's and the
+/// final age, and the unit), the table cohort's series.csv (last), and population.png is
+/// drawn against age.
+#[test]
+fn a_cohort_in_years_has_ages_in_every_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for per_run in ["directory", "table"] {
+        // Ages 2 to 12 years over t in [0, 1]: age = 2 + 10 t.
+        std::fs::write(
+            d.join(format!("{per_run}.toml")),
+            format!(
+                "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\ntimes = [0.1, 0.5, 1.0]\nhistory_points = 0\n[solver]\nnodes = 21\n[sweep.sample]\neyes = 3\nseed = 2\nper_run = \"{per_run}\"\n[sweep.sample.keys]\n\"growth.eta0\" = {{ dist = \"uniform\", low = 60, high = 80 }}\n"
+            ),
+        )
+        .unwrap();
+        let out = d.join(per_run);
+        succeeded(
+            &eyeshell_in(
+                d,
+                &["sweep", &format!("{per_run}.toml"), "--out", per_run, "-q"],
+            ),
+            per_run,
+        );
+        let sweep = out.join("sweep.csv");
+        let (h, _) = csv_cells(&sweep);
+        let t_at = h.iter().position(|c| c == "t").unwrap();
+        assert_eq!(h[t_at + 1], "age", "{per_run} sweep.csv: {h:?}");
+        assert_eq!(numbers(&sweep, "age"), vec![12.0; 3], "{per_run}");
+        let population = out.join("population.csv");
+        let (h, rows) = csv_cells(&population);
+        assert_eq!(&h[..3], ["t", "age", "output"], "{per_run}: {h:?}");
+        for r in &rows {
+            let age: f64 = r[1].parse().unwrap();
+            let expected = match r[0].as_str() {
+                "final" => 12.0,
+                t => 2.0 + 10.0 * t.parse::<f64>().unwrap(),
+            };
+            assert!((age - expected).abs() <= 1e-12, "{per_run}: {r:?}");
+        }
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("population.json")).unwrap())
+                .unwrap();
+        assert_eq!(json["age_unit"], "years", "{per_run}");
+        assert_eq!(json["final_age"].as_f64(), Some(12.0), "{per_run}");
+        let ages: Vec<f64> = json["times"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t["age"].as_f64().unwrap())
+            .collect();
+        assert_eq!(ages.len(), 4, "{per_run}: {ages:?}");
+        assert!((ages[2] - 7.0).abs() <= 1e-12, "{per_run}: {ages:?}");
+        let svg = std::fs::read_to_string(out.join("population.svg")).unwrap();
+        assert!(
+            svg.contains("age (years)"),
+            "{per_run}: population.svg has no age axis"
+        );
+    }
+    let series = d.join("table/series.csv");
+    let (h, _) = csv_cells(&series);
+    assert_eq!(h.last().map(String::as_str), Some("age"), "{h:?}");
+    for (t, a) in numbers(&series, "t").iter().zip(numbers(&series, "age")) {
+        assert!(
+            (a - (2.0 + 10.0 * t)).abs() <= 1e-12,
+            "series.csv: t {t}, age {a}"
+        );
+    }
+}

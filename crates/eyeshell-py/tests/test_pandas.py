@@ -80,6 +80,22 @@ def test_to_frame_has_a_row_per_run_and_output_time_with_the_swept_keys():
     assert columns["axial_length"] == list(df["axial_length"])
 
 
+def test_to_frame_of_a_sweep_in_years_has_the_age_after_t():
+    # Ages 2 to 12 years over t in [0, 1]: age = 2 + 10 t; an elastic run beside has none.
+    years = small(time__unit="years", time__start=2.0, time__end=12.0, output__times=[0.5, 1.0])
+    runs = eyeshell.sweep(years, grid=GAMMA, frames=False)
+    elastic = eyeshell.RunResult("elastic", {}, "ok", eyeshell.solve(solver__nodes=41), None, 0.0, 2)
+    columns = eyeshell.SweepResults([*runs, elastic]).to_frame(frames=False)
+    names = list(columns)
+    assert names[names.index("t") + 1] == "age", names
+    assert len(columns["t"]) == 2 * 3 + 1
+    for t, age in zip(columns["t"][:-1], columns["age"][:-1]):
+        assert age == pytest.approx(2.0 + 10.0 * t, abs=1e-12), (t, age)
+    assert math.isnan(columns["age"][-1])
+    # A sweep without ages has no age column.
+    assert "age" not in eyeshell.SweepResults(eyeshell.sweep(small(), grid=GAMMA)).to_frame(frames=False)
+
+
 def test_to_frame_is_generic_over_the_runs_keys_and_keeps_failed_runs(monkeypatch):
     optional("pandas")
     monkeypatch.setenv("EYESHELL_TEST_ABORT_RUN", "thin")

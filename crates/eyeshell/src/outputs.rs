@@ -281,7 +281,11 @@ pub fn reference() -> String {
     }
     md.push_str(&format!(
         "\nWith `time.unit` set, `series.csv`, `history.csv`, `sensitivities.csv` and \
-         `peripheral.csv` end in an `{}` column: the age of the row's `t`, in that unit.\n\n\
+         `peripheral.csv` end in an `{}` column: the age of the row's `t`, in that unit; so \
+         does a table cohort's one `series.csv`. A sweep's `sweep.csv` and a cohort's \
+         `population.csv` give it after `t`, `population.json` at each time (`age`), at the \
+         final time (`final_age`) with its unit (`age_unit`), a run's `result.json` as `age`, \
+         and `population.png` is drawn against it.\n\n\
          ## Numbers in the CSV files\n\n\
          Each number is the shortest decimal that reads back to the same double, written as \
          Python's `repr` writes it: `22.63564555774848`, `8.0`, `400.0`, `0.0001`; in exponent \

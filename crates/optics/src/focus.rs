@@ -8,9 +8,10 @@
 //! components of dᵢ across the chief ray (sagittal x, tangential y), the wave aberration at
 //! distance s is Φᵢ(s) with piston and tilt removed.
 //!
-//! * `Strehl`: the Strehl ratio |⟨exp(i k W)⟩|² over the pupil samples, W the aberration at s with
-//!   its least-squares piston and tilt removed (the peak of the test plane perpendicular to the
-//!   chief ray at s), maximised in s (a scan, then golden-section search).
+//! * `Strehl`: the Strehl ratio |⟨exp(i k W)⟩|² over the pupil, W the aberration at s with its
+//!   weighted least-squares piston and tilt removed (the peak of the test plane perpendicular to
+//!   the chief ray at s), summed on as many rays as W's waves need (`strehl.rs`) and maximised
+//!   in s (a scan, then Newton's method on S′ = 0, or golden-section search).
 //! * `MeanSphere`: Φᵢ(Q) and ψᵢ = dᵢ·d꜀ (the exact phase change per unit s) fitted by least
 //!   squares with 1, αₓ, α_y, αₓ², α_y², αₓα_y (the span of the Zernike terms up to defocus and
 //!   astigmatism); the sagittal and tangential foci are the s where the αₓ² and α_y²
@@ -21,6 +22,8 @@
 use crate::error::{OpticsError, RayError, RayFailure};
 use crate::linalg;
 use crate::medium::Resolved;
+use crate::sampling::{pupil_samples, Sampling};
+use crate::strehl::{PupilRay, StrehlModel};
 use crate::system::OpticalSystem;
 use crate::trace::{GrinSettings, Ray, Tracer};
 use crate::vec3::Vec3;
@@ -164,8 +167,12 @@ pub struct Focus {
     /// The sagittal and tangential foci (distances along the chief ray, mm).
     pub sagittal: f64,
     pub tangential: f64,
-    /// The Strehl ratio at the best focus (with either criterion).
+    /// The Strehl ratio at the best focus (with any criterion).
     pub strehl: f64,
+    /// Rays across the pupil the Strehl ratio was summed on: the traced rays, or, where they
+    /// are too few for the wavefront's aberration in waves, a finer sampling of its fit
+    /// (docs/optics.md, "Best focus").
+    pub strehl_rays: usize,
     /// Where the chief ray leaves the last surface (z, y) and its direction there (dz, dy).
     pub chief_exit: (f64, f64),
     pub chief_direction: (f64, f64),
@@ -439,60 +446,16 @@ impl<'a> Beam<'a> {
     }
 }
 
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton's method on Pₙ from Chebyshev
-/// guesses).
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 1.0;
-            for _ in 0..100 {
-                // P_n(x) and its derivative by the three-term recurrence.
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                let pn = if n == 0 { 1.0 } else { p1 };
-                let pm = if n == 0 { 0.0 } else { p0 };
-                dp = n as f64 * (x * pn - pm) / (x * x - 1.0);
-                let dx = pn / dp;
-                x -= dx;
-                if dx.abs() < 1e-15 {
-                    break;
-                }
-            }
-            (x, 2.0 / ((1.0 - x * x) * dp * dp))
-        })
-        .collect()
-}
-
-/// Sample points of the pupil disc of radius `a` with their area weights: Gauss–Legendre rings
-/// in r² (the area measure) times evenly spaced spokes, offset by half a spoke so that the set
-/// is symmetric under x → −x with no point on x = 0. Integrals of smooth functions over the
-/// disc converge far faster than on a square grid, whose staircase rim costs O(1/n).
-pub(crate) fn pupil_samples(a: f64, rays_across: usize) -> Vec<(f64, f64, f64)> {
-    let rings = (rays_across / 2).max(1);
-    let spokes = (2 * rays_across).div_ceil(4).max(1) * 4;
-    let mut pts = Vec::with_capacity(rings * spokes);
-    for (x, w) in gauss_legendre(rings) {
-        let r = a * ((x + 1.0) / 2.0).sqrt();
-        for j in 0..spokes {
-            let th = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / spokes as f64;
-            pts.push((r * th.cos(), r * th.sin(), w / spokes as f64));
-        }
-    }
-    pts
-}
-
 /// The traced beam of one field: chief ray and pupil rays in the image space.
 pub(crate) struct Wavefront {
     pub(crate) n_image: f64,
     pub(crate) chief: Ray,
-    /// Per pupil ray: αₓ, α_y (direction across the chief ray), Φ(Q), dᵢ·d꜀, and its share of
-    /// the pupil's area.
-    pub(crate) samples: Vec<[f64; 5]>,
+    /// The pupil rays, both halves (the half x < 0 mirrored from the traced half).
+    pub(crate) samples: Vec<PupilRay>,
+    /// How the pupil was sampled.
+    pub(crate) sampling: Sampling,
+    /// No thin lens whose power changes across its face: the wavefront is smooth.
+    pub(crate) smooth: bool,
     pub(crate) rays: usize,
 }
 
@@ -558,18 +521,36 @@ pub(crate) fn wavefront(
     let et = dc.cross(es);
     let q = chief.position;
     let mut samples = Vec::with_capacity(2 * launches.len());
-    for (&(u, v), &(_, _, w)) in launches.iter().zip(&pupil_points) {
+    for (&(u, v), &(x, y, w)) in launches.iter().zip(&pupil_points) {
         let r = beam.tracer.trace(beam.ray(u, v)).map_err(|e| beam.err(e))?;
         let d = r.direction;
-        let phi = r.opl + n_image * d.dot(q - r.position) - chief.opl;
-        let sample = [d.dot(es), d.dot(et), phi, d.dot(dc), w];
-        samples.push(sample);
-        samples.push([-sample[0], sample[1], sample[2], sample[3], w]);
+        let ray = PupilRay {
+            stop: (x, y),
+            alpha: (d.dot(es), d.dot(et)),
+            phase: r.opl + n_image * d.dot(q - r.position) - chief.opl,
+            psi: d.dot(dc),
+            weight: w,
+        };
+        samples.push(ray);
+        samples.push(PupilRay {
+            stop: (-x, y),
+            alpha: (-ray.alpha.0, ray.alpha.1),
+            ..ray
+        });
     }
+    let smooth = !system
+        .elements
+        .iter()
+        .any(|e| e.surface.phase.as_ref().is_some_and(|f| f.edge().is_some()));
     Ok(Wavefront {
         n_image,
         chief,
         samples,
+        sampling: Sampling {
+            radius: pupil.diameter / 2.0,
+            rays_across: settings.rays_across,
+        },
+        smooth,
         rays: launches.len() + 1,
     })
 }
@@ -578,7 +559,7 @@ impl Wavefront {
     fn alpha_scale(&self) -> f64 {
         self.samples
             .iter()
-            .map(|s| s[0].hypot(s[1]))
+            .map(|s| s.alpha.0.hypot(s.alpha.1))
             .fold(0.0, f64::max)
             .max(1e-300)
     }
@@ -594,137 +575,21 @@ impl Wavefront {
             .samples
             .iter()
             .map(|s| {
-                let (x, y, w) = (s[0] / a, s[1] / a, s[4].sqrt());
+                let (x, y, w) = (s.alpha.0 / a, s.alpha.1 / a, s.weight.sqrt());
                 [w, w * x, w * y, w * x * x, w * y * y, w * x * y]
             })
             .collect();
-        let fit = |col: usize| {
-            let rhs: Vec<f64> = self.samples.iter().map(|s| s[4].sqrt() * s[col]).collect();
+        let fit = |value: &dyn Fn(&PupilRay) -> f64| {
+            let rhs: Vec<f64> = self
+                .samples
+                .iter()
+                .map(|s| s.weight.sqrt() * value(s))
+                .collect();
             linalg::least_squares::<6>(&rows, &rhs)
         };
-        let (phi, psi) = (fit(2)?, fit(3)?);
+        let (phi, psi) = (fit(&|s| s.phase)?, fit(&|s| s.psi)?);
         let n = self.n_image;
         Some((-phi[3] / (n * psi[3]), -phi[4] / (n * psi[4])))
-    }
-
-    /// The Strehl ratio as a function of the distance s along the chief ray: residuals of Φ(Q)
-    /// and of dᵢ·d꜀ after their least-squares piston and tilt, so that W(s) = r₀ + s n′ r₁.
-    fn strehl_model(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        let a = self.alpha_scale();
-        let rows: Vec<[f64; 3]> = self
-            .samples
-            .iter()
-            .map(|s| [1.0, s[0] / a, s[1] / a])
-            .collect();
-        let resid = |col: usize| -> Option<Vec<f64>> {
-            let rhs: Vec<f64> = self.samples.iter().map(|s| s[col]).collect();
-            let c = linalg::least_squares::<3>(&rows, &rhs)?;
-            Some(
-                rows.iter()
-                    .zip(&rhs)
-                    .map(|(r, b)| b - (c[0] + c[1] * r[1] + c[2] * r[2]))
-                    .collect(),
-            )
-        };
-        Some((resid(2)?, resid(3)?))
-    }
-}
-
-/// The Strehl ratio along the chief ray: with r₀, r₁ the residuals of Φ(Q) and dᵢ·d꜀ after
-/// piston and tilt, W(s) = r₀ + s n′ r₁ and S(s) = |Σ wᵢ exp(i k Wᵢ(s))|² (weights summing to 1).
-struct StrehlModel {
-    k: f64,
-    n: f64,
-    r0: Vec<f64>,
-    r1: Vec<f64>,
-    w: Vec<f64>,
-}
-
-impl StrehlModel {
-    fn at(&self, s: f64) -> f64 {
-        let (mut re, mut im) = (0.0, 0.0);
-        for ((a, b), w) in self.r0.iter().zip(&self.r1).zip(&self.w) {
-            let (sn, cs) = (self.k * (a + s * self.n * b)).sin_cos();
-            re += w * cs;
-            im += w * sn;
-        }
-        re * re + im * im
-    }
-
-    /// S at `count` evenly spaced distances from `lo` to `hi`: each ray's phasor is advanced by
-    /// a fixed rotation per step, so the scan costs one complex product per ray and point
-    /// instead of a sine and cosine.
-    fn scan(&self, lo: f64, hi: f64, count: usize) -> Vec<f64> {
-        let h = (hi - lo) / (count - 1) as f64;
-        let (k, n) = (self.k, self.n);
-        let mut z: Vec<(f64, f64)> = self
-            .r0
-            .iter()
-            .zip(&self.r1)
-            .map(|(a, b)| {
-                let (s, c) = (k * (a + lo * n * b)).sin_cos();
-                (c, s)
-            })
-            .collect();
-        let rot: Vec<(f64, f64)> = self
-            .r1
-            .iter()
-            .map(|b| {
-                let (s, c) = (k * h * n * b).sin_cos();
-                (c, s)
-            })
-            .collect();
-        (0..count)
-            .map(|_| {
-                let (mut re, mut im) = (0.0, 0.0);
-                for ((zi, ri), a) in z.iter_mut().zip(&rot).zip(&self.w) {
-                    re += a * zi.0;
-                    im += a * zi.1;
-                    *zi = (zi.0 * ri.0 - zi.1 * ri.1, zi.0 * ri.1 + zi.1 * ri.0);
-                }
-                re * re + im * im
-            })
-            .collect()
-    }
-}
-
-/// Maximises `f` on [lo, hi] given its values `scan` at evenly spaced points: golden-section
-/// search around the best of them.
-fn maximise(f: impl Fn(f64) -> f64, lo: f64, hi: f64, scan: &[f64]) -> (f64, f64) {
-    let h = (hi - lo) / (scan.len() - 1) as f64;
-    let (mut best, mut fbest) = (lo, f64::NEG_INFINITY);
-    for (i, &v) in scan.iter().enumerate() {
-        if v > fbest {
-            best = lo + i as f64 * h;
-            fbest = v;
-        }
-    }
-    let (mut a, mut b) = (best - h, best + h);
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    let mut c = b - g * (b - a);
-    let mut d = a + g * (b - a);
-    let (mut fc, mut fd) = (f(c), f(d));
-    while (b - a).abs() > 1e-8 {
-        if fc > fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - g * (b - a);
-            fc = f(c);
-        } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + g * (b - a);
-            fd = f(d);
-        }
-    }
-    let x = (a + b) / 2.0;
-    let fx = f(x);
-    if fx >= fbest {
-        (x, fx)
-    } else {
-        (best, fbest)
     }
 }
 
@@ -757,38 +622,31 @@ pub fn best_focus_with(
         ));
     }
     let mean = 2.0 / (1.0 / ss + 1.0 / st);
-    let k = 2.0 * std::f64::consts::PI / (wavelength_nm * 1e-6);
     let n = w.n_image;
-    let (r0, r1) = w
-        .strehl_model()
-        .ok_or_else(|| no_focus("the wavefront's tilt cannot be fitted"))?;
-    let total: f64 = w.samples.iter().map(|s| s[4]).sum();
-    let model = StrehlModel {
-        k,
-        n,
-        r0,
-        r1,
-        w: w.samples.iter().map(|s| s[4] / total).collect(),
+    let model = |range: (f64, f64)| {
+        StrehlModel::new(&w.samples, w.sampling, w.smooth, wavelength_nm, n, range)
+            .ok_or_else(|| no_focus("the wavefront's tilt cannot be fitted"))
     };
-    let strehl = |s: f64| model.at(s);
-    let (distance, strehl_best) = match criterion {
-        Criterion::MeanSphere => (mean, strehl(mean)),
-        Criterion::Sagittal => (ss, strehl(ss)),
-        Criterion::Tangential => (st, strehl(st)),
+    let at_one = |s: f64| model((s, s)).map(|m| (s, m.at(s), m.rays_across));
+    let (distance, strehl_best, strehl_rays) = match criterion {
+        Criterion::MeanSphere => at_one(mean)?,
+        Criterion::Sagittal => at_one(ss)?,
+        Criterion::Tangential => at_one(st)?,
         Criterion::Strehl => {
             // The scan spans both astigmatic foci, two depths of focus λ/(n′ α²) and 1 % of the
             // distance around them.
             let a2 = w
                 .samples
                 .iter()
-                .map(|s| s[0] * s[0] + s[1] * s[1])
+                .map(|s| s.alpha.0 * s.alpha.0 + s.alpha.1 * s.alpha.1)
                 .fold(0.0, f64::max);
             let dof = (wavelength_nm * 1e-6 / (n * a2.max(1e-12))).min(5.0);
             let margin = 2.0 * dof + 0.5 * (ss - st).abs() + 0.01 * mean;
             let lo = (ss.min(st) - margin).max(1e-3);
             let hi = ss.max(st) + margin;
-            let scan = model.scan(lo, hi, 161);
-            maximise(strehl, lo, hi, &scan)
+            let model = model((lo, hi))?;
+            let (s, v) = model.maximum(lo, hi, 161);
+            (s, v, model.rays_across)
         }
     };
     let p = w.chief.position + w.chief.direction * distance;
@@ -805,10 +663,59 @@ pub fn best_focus_with(
         sagittal: ss,
         tangential: st,
         strehl: strehl_best,
+        strehl_rays,
         chief_exit: (w.chief.position.z, w.chief.position.y),
         chief_direction: (w.chief.direction.z, w.chief.direction.y),
         rays: w.rays,
     })
+}
+
+/// The Strehl ratio at `count` evenly spaced distances from `lo` to `hi` along the chief ray
+/// (mm from where it leaves the last surface), summed on the traced rays themselves, with
+/// the tilt fitted as for the best focus: the through-focus Strehl of `settings.rays_across`
+/// rays across the pupil, with no resampling, that a best focus's finer sum is checked
+/// against.
+///
+/// # Errors
+/// As [`best_focus_with`]; also a range that is not finite and increasing, or fewer than 2
+/// or more than 100 000 distances.
+pub fn traced_strehl(
+    system: &OpticalSystem,
+    wavelength_nm: f64,
+    field_deg: f64,
+    pupil: &Pupil,
+    settings: &FocusSettings,
+    (lo, hi, count): (f64, f64, usize),
+) -> Result<Vec<f64>, OpticsError> {
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(OpticsError::input(
+            "the through-focus range's end (mm)",
+            hi,
+            format!("must be finite and beyond its start {lo}"),
+        ));
+    }
+    if !(2..=100_000).contains(&count) {
+        return Err(OpticsError::input(
+            "the through-focus distances",
+            count as f64,
+            "must be between 2 and 100000",
+        ));
+    }
+    let w = wavefront(system, wavelength_nm, field_deg, pupil, settings)?;
+    let model = StrehlModel::new(
+        &w.samples,
+        w.sampling,
+        false,
+        wavelength_nm,
+        w.n_image,
+        (lo, hi),
+    )
+    .ok_or_else(|| OpticsError::NoFocus {
+        field_deg,
+        wavelength_nm,
+        reason: "the wavefront's tilt cannot be fitted".into(),
+    })?;
+    Ok(model.scan(lo, hi, count))
 }
 
 /// Coddington's sagittal and tangential foci by differential ray tracing along the chief ray

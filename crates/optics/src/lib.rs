@@ -16,7 +16,9 @@ mod linalg;
 mod medium;
 mod paraxial;
 pub mod refraction;
+mod sampling;
 mod shell;
+mod strehl;
 mod surface;
 mod system;
 mod trace;
@@ -24,8 +26,8 @@ mod vec3;
 
 pub use error::{OpticsError, RayError, RayFailure};
 pub use focus::{
-    best_focus, best_focus_with, coddington, ray_fan, rays_for, Criterion, Focus, FocusSettings,
-    Probe, Pupil, MAX_FIELD_DEG, RAYS_TRIED,
+    best_focus, best_focus_with, coddington, ray_fan, rays_for, traced_strehl, Criterion, Focus,
+    FocusSettings, Probe, Pupil, MAX_FIELD_DEG, RAYS_TRIED,
 };
 pub use images::{entrance_area, entrance_areas, Region, SPOKES};
 pub use medium::{Dispersion, Grin, GrinDispersion, Medium, MediumKind};

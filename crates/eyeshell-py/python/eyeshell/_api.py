@@ -1240,10 +1240,11 @@ def sweep(
     return SweepResults(results)
 
 
-def _frame_columns() -> list[str]:
-    """The columns of SweepResults.to_frame() after run, status and the swept keys: t and
-    sweep.csv's measures of the eye (the table of outputs), at each output time."""
-    return ["t", *(q["name"] for q in _eyeshell.output_quantities())]
+def _frame_columns(ages: bool = False) -> list[str]:
+    """The columns of SweepResults.to_frame() after run, status and the swept keys: t, the
+    age when the runs count in ages (``ages``: a scene with time.unit), and sweep.csv's
+    measures of the eye (the table of outputs), at each output time."""
+    return ["t", *(["age"] if ages else []), *(q["name"] for q in _eyeshell.output_quantities())]
 
 
 class SweepResults(list):
@@ -1258,7 +1259,8 @@ class SweepResults(list):
         set, in the sweep's order: a grid's, a list's, a sampled sweep's; NaN, or None
         for a non-number, where a run does not set it), ``t``, ``axial_length``,
         ``equatorial_radius``, ``retina_minus_blue``, ``retina_minus_red``, ``class``,
-        ``refraction_D`` (NaN for an elastic run) and ``error`` (a failed run: one row, its measures NaN). A pandas DataFrame when pandas
+        ``refraction_D`` (NaN for an elastic run) and ``error`` (a failed run: one row, its measures NaN);
+        ``age`` follows ``t`` when a run counts in ages (time.unit; NaN for a run that does not). A pandas DataFrame when pandas
         imports (or ``frames=True``), else a dict of lists (``frames=False``).
 
         >>> rs = eyeshell.sweep(SCENES + "/const.toml", grid={"growth.Gamma": [4, 8]},
@@ -1272,7 +1274,8 @@ class SweepResults(list):
         keys: list[str] = []
         for r in self:
             keys += [k for k in r.values if k not in keys]
-        measured = _frame_columns()
+        ages = any(isinstance(r.result, Growth) and "age" in r.result._columns["series"] for r in self)
+        measured = _frame_columns(ages)
         columns: dict[str, list[Any]] = {c: [] for c in ["run", "status", *keys, *measured, "error"]}
         for r in self:
             measures = _measures(r, measured)
@@ -1293,7 +1296,11 @@ def _measures(r: RunResult, columns: list[str]) -> dict[str, list[Any]]:
     failed run."""
     if isinstance(r.result, Growth):
         series = r.result._columns["series"]
-        return {c: [x.item() if hasattr(x, "item") else x for x in series[c]] for c in columns}
+        rows = len(series["t"])
+        return {
+            c: [x.item() if hasattr(x, "item") else x for x in series[c]] if c in series else [math.nan] * rows
+            for c in columns
+        }
     if isinstance(r.result, Solution):
         # An elastic run does not grow: what needs growth (refraction_D) is NaN.
         eye = r.result.eye

@@ -214,6 +214,9 @@ pub struct RunResult {
     /// The time reached (growth), 0 for an elastic solve.
     #[serde(deserialize_with = "f64_or_nan")]
     pub t: f64,
+    /// The age of `t` when the scene counts in ages (time.unit), in that unit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub age: Option<f64>,
     /// The measures of the eye at `t` (the table of outputs': docs/MODEL.md §6). One
     /// [`crate::outputs::Quantity::added_later`] reads as NaN from the result.json of a run
     /// by an earlier eyeshell, which did not record it; any other missing is an error.

@@ -963,7 +963,7 @@ pub static KEYS: &[KeySpec] = &[
         key: "optics.focus",
         access: Access::Choice { names: FOCI, get: |s| s.optics().focus, set: |s, v| s.set_optics(|o| o.focus = v) },
         rule: Rule::Any,
-        doc: "best-focus criterion: mean-sphere (the mean of the sagittal and tangential vergences, what peripheral refraction measures), strehl (the paper's stated criterion: the largest Strehl ratio, which jumps between the focal lines for pupils above about 1 mm), sagittal (the sagittal focal line: the one the paper's published blue surface follows) or tangential",
+        doc: "best-focus criterion: mean-sphere (the mean of the sagittal and tangential vergences, what peripheral refraction measures), strehl (the paper's stated criterion: the largest Strehl ratio, midway between the focal lines while the astigmatism is below about a wave over the pupil, on the sagittal line beyond: from 10° with a 3 mm pupil, 33° with 1 mm, docs/optics.md), sagittal (the sagittal focal line: the one the paper's published blue surface follows) or tangential",
         growth: true,
     },
     KeySpec {

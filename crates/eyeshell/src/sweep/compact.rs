@@ -29,7 +29,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::growth::{Observer, ObserverError, SeriesRow, Snapshot};
-use crate::rundir::growth::{series_header, series_record};
+use crate::number::format_value;
+use crate::outputs::series_columns;
+use crate::rundir::growth::{series_record, with_age_column};
 use crate::rundir::{write_atomic, OutputError};
 use crate::scene::sweep::Sweep;
 use crate::scene::Scene;
@@ -63,9 +65,22 @@ pub struct Entry {
 /// seconds cost a quarter of a cohort's time.
 pub const TABLE_INTERVAL: std::time::Duration = std::time::Duration::from_secs(30);
 
-/// The hash a checkpoint line records of `scene`.
+/// The hash a checkpoint line records of `scene`: its effective TOML and the columns its
+/// series rows hold, so that a line whose rows have other columns is not reused.
 pub fn scene_hash(scene: &Scene) -> String {
-    format!("{:016x}", crate::hash::fnv1a64(scene.to_toml().as_bytes()))
+    let mut text = scene.to_toml();
+    if counts_ages(scene) {
+        text.push_str("\n# series.csv ends in an age column\n");
+    }
+    format!("{:016x}", crate::hash::fnv1a64(text.as_bytes()))
+}
+
+/// Whether `scene`'s series rows end in an age (a growth scene with time.unit).
+pub fn counts_ages(scene: &Scene) -> bool {
+    scene
+        .growth
+        .as_ref()
+        .is_some_and(|g| g.age_unit().is_some())
 }
 
 /// Eyes per checkpointed batch: a hundredth of the cohort (at least 1), so that a cohort
@@ -89,11 +104,18 @@ impl Observer for Rows {
 /// A panic inside is a failed eye, as [`super::run_scene`] makes it a failed run.
 pub fn compute(scene: &Scene) -> (RunStatus, Option<RunResult>, Vec<String>) {
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| compute_eye(scene)));
+    let age = |t: f64| scene.growth.as_ref().and_then(|g| g.age_of(t));
     match outcome {
         Ok((status, result, rows)) => (
             status,
             result,
-            rows.iter().map(|r| series_record(r).join(",")).collect(),
+            rows.iter()
+                .map(|r| {
+                    let cells = series_record(r).into_iter();
+                    let cells: Vec<String> = cells.chain(age(r.t).map(format_value)).collect();
+                    cells.join(",")
+                })
+                .collect(),
         ),
         Err(panic) => {
             let what = panic
@@ -132,7 +154,7 @@ fn compute_eye(scene: &Scene) -> (RunStatus, Option<RunResult>, Vec<SeriesRow>) 
     match (outcome, last) {
         (Ok(stats), Some(last)) => (
             RunStatus::Ok,
-            Some(super::run::growth_result(&last, &stats)),
+            Some(super::run::growth_result(scene, &last, &stats)),
             rows.0,
         ),
         (Ok(_), None) => (
@@ -142,7 +164,7 @@ fn compute_eye(scene: &Scene) -> (RunStatus, Option<RunResult>, Vec<SeriesRow>) 
         ),
         (Err(e), last) => (
             RunStatus::Failed(e.to_string()),
-            last.map(|r| super::run::growth_result(&r, &e.stats)),
+            last.map(|r| super::run::growth_result(scene, &r, &e.stats)),
             rows.0,
         ),
     }
@@ -174,9 +196,19 @@ fn line(entry: &Entry) -> Vec<u8> {
     text
 }
 
-/// The sweep's series.csv: `run`, then the series columns; every eye's rows in run order.
-pub fn series_table(report: &SweepReport, series: &HashMap<String, Vec<String>>) -> Vec<u8> {
-    let mut text = format!("run,{}\n", series_header());
+/// The series columns of a run directory's series.csv, with the age when `ages`.
+fn header(ages: bool) -> String {
+    with_age_column(&series_columns(), ages).join(",")
+}
+
+/// The sweep's series.csv: `run`, then the series columns (the age last when `ages`);
+/// every eye's rows in run order.
+pub fn series_table(
+    report: &SweepReport,
+    series: &HashMap<String, Vec<String>>,
+    ages: bool,
+) -> Vec<u8> {
+    let mut text = format!("run,{}\n", header(ages));
     for r in &report.records {
         for row in series.get(&r.name).into_iter().flatten() {
             text.push_str(&r.name);
@@ -188,9 +220,10 @@ pub fn series_table(report: &SweepReport, series: &HashMap<String, Vec<String>>)
     text.into_bytes()
 }
 
-/// An eye's series as the text of a run directory's series.csv (header first).
-pub fn series_text(rows: &[String]) -> String {
-    let mut text = series_header();
+/// An eye's series as the text of a run directory's series.csv (header first; the age
+/// last when `ages`).
+pub fn series_text(rows: &[String], ages: bool) -> String {
+    let mut text = header(ages);
     for r in rows {
         text.push('\n');
         text.push_str(r);
@@ -234,6 +267,9 @@ pub(super) fn run(
     options: &SweepOptions<'_>,
     done: &(dyn Fn(&RunRecord, usize, usize) + Sync),
 ) -> Result<(SweepReport, HashMap<String, Vec<String>>), Error> {
+    // One table holds every eye's rows, so one set of columns: the eyes of a sample share
+    // their scene's time.unit (a sample draws numbers, never a unit).
+    let ages = sweep.runs.first().is_some_and(|r| counts_ages(&r.scene));
     let checkpoint_path = owned.claim(CHECKPOINT_FILE)?;
     owned.claim(SERIES_TABLE)?;
     // What an earlier sweep finished with the same scene; the checkpoint is rewritten
@@ -362,7 +398,7 @@ pub(super) fn run(
         return Err(e.into());
     }
     let path = out.join(SERIES_TABLE);
-    write_atomic(&path, &series_table(&report, &series)).map_err(|e| io(&path, e))?;
+    write_atomic(&path, &series_table(&report, &series, ages)).map_err(|e| io(&path, e))?;
     super::write_tables(head, &report)?;
     Ok((report, series))
 }

@@ -212,7 +212,15 @@ pub fn run_sweep(
     let mut owned = target::prepare(&|n| names.contains(n), out, options.resume, options.inputs)?;
     if sweep.sample.as_ref().map(|s| s.per_run) == Some(PerRun::Table) {
         let (report, series) = compact::run(sweep, out, &mut owned, options, done)?;
-        let text = |r: &RunRecord| series.get(&r.name).map(|rows| compact::series_text(rows));
+        let ages = sweep
+            .runs
+            .first()
+            .is_some_and(|r| compact::counts_ages(&r.scene));
+        let text = |r: &RunRecord| {
+            series
+                .get(&r.name)
+                .map(|rows| compact::series_text(rows, ages))
+        };
         write_population_with(sweep.into(), &report, &text)?;
         return Ok(report);
     }
@@ -264,7 +272,11 @@ fn write_population_with(
     {
         return Ok(None);
     }
-    population::write(&report.dir, head.name, sample, &report.records, series).map(Some)
+    let names = population::Names {
+        sweep: head.name,
+        age_unit: head.age_unit,
+    };
+    population::write(&report.dir, names, sample, &report.records, series).map(Some)
 }
 
 /// Run the runs of `shard` ([`shard::runs_of`]) into `out`, as [`run_sweep`] runs them,
@@ -426,6 +438,9 @@ pub struct Head<'a> {
     pub keys: &'a [String],
     /// The cohort of a sampled sweep.
     pub sample: Option<&'a crate::scene::sample::Sample>,
+    /// time.unit of the sweep's scene when it counts in ages: the unit of the population's
+    /// ages.
+    pub age_unit: Option<&'static str>,
 }
 
 impl<'a> From<&'a Sweep> for Head<'a> {
@@ -435,6 +450,10 @@ impl<'a> From<&'a Sweep> for Head<'a> {
             origin: &s.origin,
             keys: &s.keys,
             sample: s.sample.as_deref(),
+            age_unit: s
+                .runs
+                .first()
+                .and_then(|r| r.scene.growth.as_ref()?.age_unit()),
         }
     }
 }
@@ -446,6 +465,7 @@ impl<'a> From<&'a SweepPlan> for Head<'a> {
             origin: &s.origin,
             keys: &s.keys,
             sample: s.sample.as_deref(),
+            age_unit: s.age_unit(),
         }
     }
 }
@@ -460,16 +480,31 @@ fn write_tables(sweep: Head<'_>, report: &SweepReport) -> Result<(), OutputError
 }
 
 /// The text of sweep.csv: a cell is quoted when it holds a comma, a quote or a line break.
+/// An `age` column follows `t` once a run that counts in ages has finished (a scene with
+/// time.unit): empty for a run that has no result yet.
 pub fn table_csv(sweep: Head<'_>, report: &SweepReport) -> std::io::Result<Vec<u8>> {
+    let ages = report
+        .records
+        .iter()
+        .any(|r| r.result.as_ref().is_some_and(|x| x.age.is_some()));
+    let mut columns = result_columns();
+    if ages {
+        columns.insert(2, crate::rundir::growth::AGE_COLUMN);
+    }
     let header = ["run", "status"]
         .iter()
         .map(|s| s.to_string())
         .chain(sweep.keys.iter().cloned())
-        .chain(result_columns().into_iter().map(str::to_string));
+        .chain(columns.into_iter().map(str::to_string));
     let rows = report.records.iter().map(|r| {
         let mut fields = vec![r.name.clone(), r.status.as_str().to_string()];
         fields.extend(r.values.iter().cloned());
-        fields.extend(result_fields(r));
+        let mut result = result_fields(r);
+        if ages {
+            let age = r.result.as_ref().and_then(|x| x.age);
+            result.insert(2, age.map(format_value).unwrap_or_default());
+        }
+        fields.extend(result);
         fields
     });
     csv_bytes(header, rows, QuoteStyle::Necessary)

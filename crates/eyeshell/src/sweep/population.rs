@@ -189,6 +189,8 @@ struct Eye {
     final_class: String,
     /// (t, [(output, value)], class) per row of series.csv.
     series: Vec<Row>,
+    /// The age of each row (series.csv's `age` column), when the scene counts in ages.
+    ages: Option<Vec<f64>>,
 }
 
 /// The finished eye of `record`, read from its result and the text of its series.csv
@@ -210,16 +212,24 @@ fn eye(record: &RunRecord, series: &dyn Fn(&RunRecord) -> Option<String>) -> Opt
         final_values.retain(|(_, x)| !x.is_nan());
     }
     let mut series = Vec::new();
+    let mut ages = Vec::new();
     if let Some(text) = text {
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
         let t_at = header.iter().position(|h| *h == "t");
         let class_at = header.iter().position(|h| *h == "class");
+        let age_at = header
+            .iter()
+            .position(|h| *h == crate::rundir::growth::AGE_COLUMN);
         for line in lines {
             let cells: Vec<&str> = line.split(',').collect();
             let Some(t) = t_at.and_then(|i| cells.get(i)?.parse::<f64>().ok()) else {
                 continue;
             };
+            if let Some(i) = age_at {
+                let age = cells.get(i).and_then(|c| c.parse::<f64>().ok());
+                ages.push(age.unwrap_or(f64::NAN));
+            }
             let values: Vec<(String, f64)> = header
                 .iter()
                 .zip(&cells)
@@ -244,10 +254,12 @@ fn eye(record: &RunRecord, series: &dyn Fn(&RunRecord) -> Option<String>) -> Opt
             }
         }
     }
+    let ages = (!ages.is_empty() && ages.len() == series.len()).then_some(ages);
     Some(Eye {
         final_values,
         final_class: r.eye.class().to_string(),
         series,
+        ages,
     })
 }
 
@@ -375,6 +387,9 @@ struct Population {
     final_shares: Shares,
     /// The same at each output time every member eye reached.
     per_time: Vec<AtTime>,
+    /// When the eyes count in ages: the age of the final time and of each of `per_time`'s
+    /// (NaN where the eyes' ages differ: a cohort whose clocks were drawn).
+    ages: Option<(f64, Vec<f64>)>,
     /// Saltelli designs: the indices.
     sobol: Option<Sobol>,
     /// Eyes that finished, and all of them (Saltelli: the A and B rows).
@@ -383,18 +398,25 @@ struct Population {
     notes: Vec<String>,
 }
 
+/// What population.json names: the sweep, and the unit of its ages (time.unit) if any.
+#[derive(Clone, Copy, Debug)]
+pub struct Names<'a> {
+    pub sweep: &'a str,
+    pub age_unit: Option<&'a str>,
+}
+
 /// Write population.json, population.csv and (Saltelli) sobol.csv into `out` from the
 /// finished runs of `records` (in the sweep's run order, as the sample names them), each
 /// eye's series.csv text given by `series` (from its run directory, or the sweep's table).
 pub fn write(
     out: &Path,
-    name: &str,
+    names: Names<'_>,
     sample: &Sample,
     records: &[RunRecord],
     series: &dyn Fn(&RunRecord) -> Option<String>,
 ) -> Result<Written, OutputError> {
     let pop = Population::of(sample, records, series);
-    let text = population_json(&pop, name, sample);
+    let text = population_json(&pop, names, sample);
     // Every file the population adds to the sweep's directory is claimed in its marker
     // before it is written: an entry the marker does not list is somebody else's, and a
     // rerun, `--resume`, a second merge or `sweep status` would refuse the directory.
@@ -471,16 +493,48 @@ impl Population {
         if let Some(sobol) = &sobol {
             notes.extend(sobol_note(sobol));
         }
+        let ages = ages_of(&members, &per_time);
         Population {
             final_stats,
             final_shares,
             per_time,
+            ages,
             sobol,
             finished: members.len(),
             total,
             notes,
         }
     }
+}
+
+/// The age at the final time and at each time of `per_time`, when every member counts in
+/// ages: the one age all members have there, else NaN.
+fn ages_of(members: &[&Eye], per_time: &[AtTime]) -> Option<(f64, Vec<f64>)> {
+    if members.is_empty() || members.iter().any(|e| e.ages.is_none()) {
+        return None;
+    }
+    let common = |at: &dyn Fn(&Eye) -> Option<f64>| {
+        let first = at(members[0]).unwrap_or(f64::NAN);
+        let same = members
+            .iter()
+            .all(|e| at(e).is_some_and(|a| a.to_bits() == first.to_bits()));
+        if same {
+            first
+        } else {
+            f64::NAN
+        }
+    };
+    let last = common(&|e: &Eye| e.ages.as_ref()?.last().copied());
+    let each = per_time
+        .iter()
+        .map(|(t, _, _)| {
+            common(&|e: &Eye| {
+                let k = e.series.iter().position(|(s, _, _)| s == t)?;
+                e.ages.as_ref()?.get(k).copied()
+            })
+        })
+        .collect();
+    Some((last, each))
 }
 
 /// The statistics at each output time every member eye reached (exactly the same t), and
@@ -531,12 +585,12 @@ fn per_time(members: &[&Eye]) -> (Vec<AtTime>, Vec<String>) {
 }
 
 /// The text of population.json.
-fn population_json(pop: &Population, name: &str, sample: &Sample) -> String {
+fn population_json(pop: &Population, names: Names<'_>, sample: &Sample) -> String {
     let object = |s: &[(String, Stats)]| -> Value {
         Value::Object(s.iter().map(|(k, v)| (k.clone(), stats_json(v))).collect())
     };
     let mut doc = Map::new();
-    doc.insert("sweep".into(), json!(name));
+    doc.insert("sweep".into(), json!(names.sweep));
     doc.insert("design".into(), json!(sample.design.name()));
     doc.insert("seed".into(), json!(sample.seed));
     doc.insert(
@@ -551,6 +605,12 @@ fn population_json(pop: &Population, name: &str, sample: &Sample) -> String {
     doc.insert("eyes_finished".into(), json!(pop.finished));
     doc.insert("eyes_failed".into(), json!(pop.total - pop.finished));
     doc.insert("final".into(), object(&pop.final_stats));
+    if let Some((age, _)) = &pop.ages {
+        doc.insert("final_age".into(), num(*age));
+        if let Some(unit) = names.age_unit {
+            doc.insert("age_unit".into(), json!(unit));
+        }
+    }
     // Only where there is something to say: a cohort every eye of which has every output
     // writes the bytes it always wrote.
     if !pop.notes.is_empty() {
@@ -562,7 +622,15 @@ fn population_json(pop: &Population, name: &str, sample: &Sample) -> String {
         Value::Array(
             pop.per_time
                 .iter()
-                .map(|(t, s, c)| json!({ "t": num(*t), "outputs": object(s), "classes": shares_json(c) }))
+                .enumerate()
+                .map(|(k, (t, s, c))| {
+                    let mut at =
+                        json!({ "t": num(*t), "outputs": object(s), "classes": shares_json(c) });
+                    if let Some((_, ages)) = &pop.ages {
+                        at["age"] = num(ages[k]);
+                    }
+                    at
+                })
                 .collect(),
         ),
     );
@@ -598,10 +666,15 @@ fn sobol_json(sobol: &Sobol) -> Value {
     )
 }
 
-/// The text of population.csv: t ("final" for the final time), output, then the
-/// statistics; class shares as rows `class=myopic` with the share as the mean.
+/// The text of population.csv: t ("final" for the final time), its age when the eyes count
+/// in ages, output, then the statistics; class shares as rows `class=myopic` with the share
+/// as the mean.
 fn population_csv(pop: &Population) -> String {
-    let mut csv = String::from("t,output,n,mean,sd");
+    let mut csv = String::from(if pop.ages.is_some() {
+        "t,age,output,n,mean,sd"
+    } else {
+        "t,output,n,mean,sd"
+    });
     for p in QUANTILES {
         csv.push_str(&format!(",q{p}"));
     }
@@ -639,15 +712,21 @@ fn population_csv(pop: &Population) -> String {
             ));
         }
     };
+    let when = |t: String, age: Option<f64>| match age {
+        Some(a) => format!("{t},{}", format_value(a)),
+        None => t,
+    };
+    let ages = pop.ages.as_ref();
     rows(
         &mut csv,
-        "final",
+        &when("final".into(), ages.map(|(a, _)| *a)),
         &pop.final_stats,
         &pop.final_shares,
         pop.finished,
     );
-    for (t, s, c) in &pop.per_time {
-        rows(&mut csv, &format_value(*t), s, c, pop.finished);
+    for (k, (t, s, c)) in pop.per_time.iter().enumerate() {
+        let age = ages.map(|(_, each)| each[k]);
+        rows(&mut csv, &when(format_value(*t), age), s, c, pop.finished);
     }
     csv
 }

@@ -90,21 +90,23 @@ fn execute_growth(scene: &Scene, dir: &Path) -> Result<RunResult, RunFailure> {
             let last = run
                 .last
                 .ok_or_else(|| ("no snapshot was written".to_string(), None))?;
-            Ok(growth_result(&last, &stats))
+            Ok(growth_result(scene, &last, &stats))
         }
         Err(failure) => {
             let partial = run
                 .last
-                .map(|r| Box::new(growth_result(&r, failure.stats())));
+                .map(|r| Box::new(growth_result(scene, &r, failure.stats())));
             Err((failure.to_string(), partial))
         }
     }
 }
 
-pub(super) fn growth_result(row: &SeriesRow, stats: &GrowthStats) -> RunResult {
+/// What a sweep's table says of a growth run of `scene` that reached `row`.
+pub(super) fn growth_result(scene: &Scene, row: &SeriesRow, stats: &GrowthStats) -> RunResult {
     RunResult {
         kind: "grow".into(),
         t: row.t,
+        age: scene.growth.as_ref().and_then(|g| g.age_of(row.t)),
         eye: crate::outputs::Measures::of(row),
         newton_iterations: stats.newton_iterations,
         bvp_solves: stats.bvp_solves,
@@ -127,6 +129,7 @@ pub(super) fn elastic_result(scene: &Scene, solution: &crate::bvp::Solution) -> 
     RunResult {
         kind: "solve".into(),
         t: 0.0,
+        age: None,
         eye: crate::outputs::Measures::of(&SeriesRow::new(0.0, eye)),
         newton_iterations: s.newton_iterations,
         bvp_solves: 1,

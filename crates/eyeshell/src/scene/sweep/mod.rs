@@ -199,6 +199,16 @@ pub struct SweepPlan {
 }
 
 impl SweepPlan {
+    /// time.unit of the plan's scene file when it counts in ages ("years", "days"): what
+    /// the file gives, before any run's keys (a sweep of time.unit itself is not read here).
+    pub fn age_unit(&self) -> Option<&'static str> {
+        let given = self.table.get("time")?.get("unit")?.as_str()?;
+        crate::growth::schedule::TimeUnit::NAMES[1..]
+            .iter()
+            .find(|&&n| n == given)
+            .copied()
+    }
+
     /// Read the sweep in `path`, with `overrides` applied to every run.
     pub fn from_file(
         path: &std::path::Path,
