@@ -300,5 +300,67 @@ fn a_strongly_correlated_pair_is_pointed_out() {
         "{note}"
     );
     assert!(!note.contains("growth.delta"), "{note}");
-    assert!(note.contains("fix one with --set"), "{note}");
+    assert!(
+        note.contains("leave growth.Gamma, say, out of the fit and give its value with --set"),
+        "{note}"
+    );
+}
+
+/// What the scene's own surfaces and rule cannot differentiate is an input error naming the
+/// key before anything runs, in a fit and in `grow --sensitivities`: the blue surface's
+/// centre z_B of surfaces computed from the optics, and under a rule that reads dioptres.
+#[test]
+fn a_key_the_scenes_stimulus_cannot_use_is_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("data.csv"),
+        "age,axial_length,sigma\n9,24.4,0.05\n10,24.6,0.05\n11,24.8,0.05\n",
+    )
+    .unwrap();
+    let scene = repo().join("scenes/myopia/single-vision.toml");
+    let scene = s(&scene);
+    let fit = |sets: &[&str]| {
+        let mut args = vec![
+            "fit",
+            scene,
+            "--data",
+            "data.csv",
+            "--fit",
+            "stimulus.blue.z_B",
+            "--out",
+            "out",
+        ];
+        for set in sets {
+            args.extend(["--set", set]);
+        }
+        eyeshell_in(d, &args)
+    };
+    assert_bad(
+        &fit(&[]),
+        "fit: the sensitivity to stimulus.blue.z_B needs stimulus.source = \"polynomial\"",
+        "z_B of computed surfaces",
+    );
+    assert_bad(
+        &fit(&["stimulus.source=polynomial", "optics.lenses=[]"]),
+        "needs a growth rule that reads the surfaces alone (the defocus rule",
+        "z_B under the defocus rule",
+    );
+    let grow = eyeshell_in(
+        d,
+        &[
+            "grow",
+            scene,
+            "--sensitivities",
+            "stimulus.blue.z_B",
+            "--out",
+            "out",
+        ],
+    );
+    assert_bad(
+        &grow,
+        "--sensitivities: the sensitivity to stimulus.blue.z_B",
+        "grow",
+    );
+    assert_only_entry(d, "data.csv", "nothing written");
 }

@@ -42,7 +42,7 @@ pub(super) fn python_wording(a: &Advice<'_>) -> String {
             format!("split it into eyeshell.sweep() calls of at most {max} runs each")
         }
         Advice::Force => "force=True".into(),
-        Advice::SetKey => "a keyword override (growth__Gamma=8)".into(),
+        Advice::SetKey => "a keyword override (section__key=value)".into(),
         Advice::ListKeys => "eyeshell.keys()".into(),
         Advice::Field { name: None } => "field=\"NAME\"".into(),
         Advice::Field { name: Some(name) } => format!("field={:?}", one_line(name)),

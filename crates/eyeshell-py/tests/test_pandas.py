@@ -343,7 +343,8 @@ def test_a_fit_carries_the_reports_notes_and_table(cli, tmp_path):
     r = eyeshell.fit(SCENES / "const.toml", DATA, fit=keys, solver__nodes=101, **start)
     assert len(r.notes) == 1
     assert r.notes[0].startswith("strongly correlated (|ρ| ≥ 0.99): growth.eta0 and growth.Gamma at -0.99")
-    assert "fix one with a keyword override" in r.notes[0] and "--set" not in r.notes[0]
+    assert "give its value with a keyword override (section__key=value)" in r.notes[0], r.notes[0]
+    assert "--set" not in r.notes[0] and "growth__" not in r.notes[0], r.notes[0]
     assert str(r) == r.text and f"  note             {r.notes[0]}\n" in r.text
     # The command line's table, but for its note's advice and the output line.
     sets = [a for k, v in start.items() for a in ("--set", f"{k}={v}")]

@@ -592,32 +592,12 @@ pub(crate) fn run_on(
     {
         return Err(fail(0.0, why.to_string(), GrowthStats::default()));
     }
-    if growth.source == Source::Optics
-        && settings.sensitivities.contains(&dae::SensParam::BlueCentre)
+    if let Some(why) = settings
+        .sensitivities
+        .iter()
+        .find_map(|&p| sensitivity_unavailable(p, growth))
     {
-        return Err(fail(
-            0.0,
-            format!(
-                "the sensitivity to {} needs {} = \"polynomial\" (a computed surface is traced about its centre once)",
-                Quantity::BlueCentre,
-                Quantity::StimulusSource
-            ),
-            GrowthStats::default(),
-        ));
-    }
-    if growth.stimulus.rule().reads().defocus
-        && settings.sensitivities.contains(&dae::SensParam::BlueCentre)
-    {
-        // Moving z_B moves the surfaces and not the cornea the dioptres are measured from:
-        // the shift is no longer the retina's moving the other way.
-        return Err(fail(
-            0.0,
-            format!(
-                "the sensitivity to the blue surface's centre z_B needs a growth rule that reads the surfaces alone (the {} rule reads defocus in dioptres from the cornea)",
-                growth.stimulus.rule().name()
-            ),
-            GrowthStats::default(),
-        ));
+        return Err(fail(0.0, why, GrowthStats::default()));
     }
     if !settings.sensitivities.is_empty() && settings.integrator != Integrator::Ida {
         return Err(fail(
@@ -912,6 +892,33 @@ fn march(
         }
     }
     Ok(())
+}
+
+/// Why a run of `growth` cannot take the sensitivity to `param`, in the model's words:
+/// the blue surface's centre z_B of a surface computed from the optics (traced about its
+/// centre once), or under a rule that reads defocus in dioptres from the cornea, which
+/// moving z_B does not move. Callers check it before a run (the fit's keys, `grow
+/// --sensitivities`); a run checks it again at t = 0.
+pub fn sensitivity_unavailable(param: dae::SensParam, growth: &GrowthParams) -> Option<String> {
+    if param != dae::SensParam::BlueCentre {
+        return None;
+    }
+    if growth.source == Source::Optics {
+        return Some(format!(
+            "the sensitivity to {} needs {} = \"polynomial\" (a computed surface is traced about its centre once)",
+            Quantity::BlueCentre,
+            Quantity::StimulusSource
+        ));
+    }
+    if growth.stimulus.rule().reads().defocus {
+        // Moving z_B moves the surfaces and not the cornea the dioptres are measured from:
+        // the shift is no longer the retina's moving the other way.
+        return Some(format!(
+            "the sensitivity to the blue surface's centre z_B needs a growth rule that reads the surfaces alone (the {} rule reads defocus in dioptres from the cornea)",
+            growth.stimulus.rule().name()
+        ));
+    }
+    None
 }
 
 #[cfg(test)]

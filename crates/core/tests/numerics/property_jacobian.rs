@@ -59,6 +59,7 @@ fn case() -> impl Strategy<Value = Case> {
                 cornea,
                 r0,
                 fraction,
+                cornea_follows_radius: true,
             };
             Case {
                 p,

@@ -142,6 +142,21 @@ pub fn check_params(scene: &Scene, params: &[FitParam], what: &str) -> Result<()
         )
         .with_origin(Origin::Scene(scene.origin.clone())));
     }
+    // What the growth's own surfaces and rule cannot differentiate (z_B of a computed
+    // surface, or under a rule of dioptres): an input error now, not a failed run at t = 0.
+    if let Some(g) = &scene.growth {
+        if let Some((p, why)) = params
+            .iter()
+            .find_map(|p| Some((p, growth::sensitivity_unavailable(p.param, g)?)))
+        {
+            let origin = scene.origin_of_key("stimulus.source");
+            return Err(Error::input(
+                Subject::Key(p.key().into()),
+                format!("{what}: {why} ({origin})"),
+            )
+            .with_origin(Origin::Scene(origin)));
+        }
+    }
     // A schedule's parameter is a parameter of its form alone: with another form the run
     // has no such parameter to differentiate by.
     let form = scene

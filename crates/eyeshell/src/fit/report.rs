@@ -44,10 +44,12 @@ pub fn notes(r: &FitReport) -> Vec<String> {
         .iter()
         .map(|(a, b, c)| format!("{a} and {b} at {c:.4}"))
         .collect();
+    // The advice names a key of the pair, never one that was not fitted.
+    let (_, example, _) = &pairs[0];
     vec![format!(
         "strongly correlated (|ρ| ≥ {STRONG_CORRELATION}): {}; the data determine a combination \
-         of such a pair far better than either (fix one with {}, or add observations that \
-         separate them)",
+         of such a pair far better than either (fix one: leave {example}, say, out of the fit \
+         and give its value with {}; or add observations that separate them)",
         list.join(", "),
         advice(&Advice::SetKey)
     )]
