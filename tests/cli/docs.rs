@@ -341,6 +341,7 @@ fn workdir() -> tempfile::TempDir {
     for sub in [
         "scenes",
         "scenes/eyewear",
+        "scenes/myopia",
         "examples/fit",
         "examples/cohort",
     ] {

@@ -9,6 +9,7 @@ mod bad_input;
 mod cohorts;
 mod destinations;
 mod docs;
+mod drawn_optics;
 mod export_bvp4c;
 mod export_compare;
 mod export_roundtrip;

@@ -39,6 +39,10 @@ pub struct LensSpec {
     pub profile: ProfileSpec,
     /// Lenslet rings: zones whose light goes partly through an add power.
     pub lenslets: Vec<Lenslets>,
+    /// `power = "prescribe"`: the lens's power is the eye's own correction
+    /// ([`prescribe`]), plus this offset (`over`, D). Its profile then holds the power the
+    /// prescription gave (or the offset alone, before the eye is known).
+    pub prescribe: Option<f64>,
 }
 
 /// A ring of lenslets (docs/guide/eyewear.md, "Simultaneous images"): a share `fill` of the
@@ -265,6 +269,7 @@ impl LensSpec {
             vertex: self.vertex,
             profile: ProfileSpec::Power(power),
             lenslets: vec![],
+            prescribe: None,
         }
     }
 
@@ -317,10 +322,25 @@ impl LensSpec {
         }
     }
 
+    /// The power (D) of this lens that corrects an eye of refraction `refraction` (D, as
+    /// refraction_D gives it: the thin spectacle power at [`VERTEX_MM`] that brings the
+    /// naked eye's on-axis best focus onto the retina), plus the prescription's offset
+    /// `over`. A lens elsewhere must image the same far point: at d mm in front of the
+    /// corneal apex (0 for a contact lens) its power is R / (1 + R·(d − 12)/1000), the
+    /// vertex-distance conversion of thin lenses, exact for the ideal thin lenses the
+    /// optics trace (each turns the plane wave into the same spherical wave at the cornea).
+    pub fn correcting_power(&self, refraction: f64) -> f64 {
+        let at = if self.kind == 1 { 0.0 } else { self.vertex };
+        refraction / (1.0 + refraction * (at - VERTEX_MM) * 1e-3) + self.prescribe.unwrap_or(0.0)
+    }
+
     /// The lens in a few words, for messages (never its whole profile):
     /// `spectacle lens at 12 mm, 20 zones`.
     pub fn describe(&self) -> String {
         let body = match &self.profile {
+            ProfileSpec::Power(p) if self.prescribe.is_some() => {
+                format!("{} D prescribed", number(*p))
+            }
             ProfileSpec::Power(p) => format!("{} D", number(*p)),
             ProfileSpec::Zones(z) if !self.lenslets.is_empty() => {
                 format!("{} zones, {} of lenslets", z.len(), self.lenslets.len())
@@ -349,6 +369,15 @@ impl LensSpec {
                 .join(", ")
         };
         match &self.profile {
+            // The prescription, not the power it gave: read back, the lens is prescribed
+            // again for the eye it is worn by.
+            ProfileSpec::Power(_) if self.prescribe.is_some() => {
+                parts.push("power = \"prescribe\"".into());
+                match self.prescribe {
+                    Some(over) if over != 0.0 => parts.push(format!("over = {}", f(over))),
+                    _ => {}
+                }
+            }
             ProfileSpec::Power(p) => parts.push(format!("power = {}", f(*p))),
             ProfileSpec::Zones(z) => {
                 let rows: Vec<String> = z
@@ -806,6 +835,7 @@ fn with_trial(lenses: &[LensSpec], f: f64) -> Option<Vec<LensSpec>> {
             vertex: VERTEX_MM,
             profile: ProfileSpec::Power(f),
             lenslets: vec![],
+            prescribe: None,
         }),
     }
     Some(out)
@@ -924,6 +954,47 @@ pub fn peripheral_table_through(
     .map_err(|e| through_error(spec, &e))
 }
 
+/// `spec` with the power of each prescribed lens (`power = "prescribe"`) its eye's own
+/// correction ([`LensSpec::correcting_power`]) from the refraction of the naked eye at growth
+/// time 0 of a retina whose pole lies `retina_z` mm behind the corneal apex: the
+/// refraction_D a growth run of these optics reports at t = 0. That table is traced with
+/// the rays the eye needs as it wears its lenses ([`OpticsSpec::focus_settings`]), which a
+/// lens's power can change, so the power is found again until it no longer changes (the
+/// ray count changes in steps: twice, or three times when a step is crossed). `spec` as it
+/// is when no lens is prescribed.
+///
+/// # Errors
+/// The prescribed lens's power key when the refraction lies beyond the table (±25 D) or the
+/// optics cannot be traced.
+pub fn prescribe(spec: &OpticsSpec, retina_z: f64) -> Result<OpticsSpec, OpticsKeyError> {
+    let Some(first) = spec.lenses.iter().position(|l| l.prescribe.is_some()) else {
+        return Ok(spec.clone());
+    };
+    let mut now = spec.clone();
+    for _ in 0..4 {
+        let table = refraction_table(&now)?;
+        let Some(refraction) = table.refraction(retina_z) else {
+            return Err(key_error(
+                format!("{}[{first}].power", Quantity::Lenses),
+                "\"prescribe\"".into(),
+                format!(
+                    "cannot be prescribed: the naked eye's refraction at t = 0 (its retina's pole at {} mm) lies beyond the ±25 D the refraction is traced over",
+                    number(retina_z)
+                ),
+            ));
+        };
+        let mut next = now.clone();
+        for lens in next.lenses.iter_mut().filter(|l| l.prescribe.is_some()) {
+            lens.profile = ProfileSpec::Power(lens.correcting_power(refraction));
+        }
+        if next == now {
+            break;
+        }
+        now = next;
+    }
+    Ok(now)
+}
+
 /// The optics whose refraction a growth scene reports: its own with `stimulus.source =
 /// "optics"`, else the defaults.
 pub fn refraction_optics(spec: &OpticsSpec, computed: bool) -> OpticsSpec {
@@ -1022,6 +1093,77 @@ mod tests {
             blend(0.0),
             blend(1.0)
         );
+    }
+
+    /// A prescribed lens for a retina at 24.2 mm (a myope of about −1.5 D in the default
+    /// eye): the spectacle lens at 12 mm is the refraction table's own refraction there; a
+    /// spectacle lens at 15 mm and a contact lens take their vertex conversions, and each,
+    /// worn and traced directly (not from a table), puts the on-axis best focus on that
+    /// retina to 0.004 mm (0.01 D); `over` adds to the power.
+    #[test]
+    fn a_prescribed_lens_puts_the_focus_on_its_retina() {
+        let retina = 24.2;
+        let lens = |kind: usize, vertex: f64, over: f64| LensSpec {
+            kind,
+            vertex,
+            profile: ProfileSpec::Power(over),
+            lenslets: vec![],
+            prescribe: Some(over),
+        };
+        let refraction = refraction_table(&OpticsSpec::default())
+            .unwrap()
+            .refraction(retina)
+            .unwrap();
+        assert!(refraction < -1.0 && refraction > -2.0, "{refraction}");
+        for (kind, vertex, expected) in [
+            (0, 12.0, refraction),
+            (0, 15.0, refraction / (1.0 + refraction * 0.003)),
+            (1, 12.0, refraction / (1.0 - refraction * 0.012)),
+        ] {
+            let spec = OpticsSpec {
+                lenses: vec![lens(kind, vertex, 0.0)],
+                ..OpticsSpec::default()
+            };
+            let prescribed = prescribe(&spec, retina).unwrap();
+            let ProfileSpec::Power(p) = prescribed.lenses[0].profile else {
+                panic!("{:?}", prescribed.lenses[0]);
+            };
+            assert!(
+                (p - expected).abs() < 1e-12,
+                "{kind} at {vertex}: {p} vs {expected}"
+            );
+            let worn = worn(&prescribed).unwrap();
+            let f = best_focus_with(
+                &worn,
+                spec.refraction_wavelength,
+                0.0,
+                &spec.pupil_stop(&spec.system().unwrap()),
+                spec.criterion(),
+                &FocusSettings::default(),
+            )
+            .unwrap();
+            assert!(
+                (f.z - retina).abs() < 0.004,
+                "{kind} at {vertex}: focus {}",
+                f.z
+            );
+            let over = OpticsSpec {
+                lenses: vec![lens(kind, vertex, -0.25)],
+                ..OpticsSpec::default()
+            };
+            let ProfileSpec::Power(q) = prescribe(&over, retina).unwrap().lenses[0].profile else {
+                panic!("not a power");
+            };
+            assert!((q - (p - 0.25)).abs() < 1e-12, "{q} vs {p}");
+        }
+        // No refraction within ±25 D: the prescribed lens's key says why.
+        let far = OpticsSpec {
+            lenses: vec![lens(0, 12.0, 0.0)],
+            ..OpticsSpec::default()
+        };
+        let e = prescribe(&far, 40.0).unwrap_err();
+        assert_eq!(e.key, format!("{}[0].power", Quantity::Lenses));
+        assert!(e.problem.contains("beyond the ±25 D"), "{}", e.problem);
     }
 
     #[test]

@@ -312,6 +312,7 @@ mod tests {
                 vertex: 12.0,
                 profile: ProfileSpec::Zones(zones.to_vec()),
                 lenslets: vec![],
+                prescribe: None,
             }],
             ..OpticsSpec::default()
         }

@@ -230,6 +230,7 @@ fn newton_matrix_matches_differences_through_two_images() {
                 vertex: 0.0,
                 profile: ProfileSpec::Zones(vec![(1.0, -2.0), (1.6, 0.0), (2.3, -2.0), (7.0, 0.0)]),
                 lenslets: vec![],
+                prescribe: None,
             }],
             ..OpticsSpec::default()
         },

@@ -991,7 +991,7 @@ pub static KEYS: &[KeySpec] = &[
         key: "optics.lenses",
         access: Access::Lenses { get: |s| s.optics().lenses.clone(), set: |s, v| s.set_optics(|o| o.lenses = v) },
         rule: Rule::Any,
-        doc: "eyewear, [[optics.lenses]] tables (at most 4, counted from 0 in messages): kind = \"spectacle\" (vertex mm in front of the corneal apex, default 12) or \"contact\" (on the cornea), and one of power (D), zones = [{ radius, power }, ...] (rings out to each radius, mm; a zone may hold lenslets = { power, fill }: a share fill of its light through segments of that power), table = [{ radius, power }, ...] (smooth), or a real spectacle lens front_radius, back_radius, thickness, index; needs stimulus.source = \"optics\" (docs/guide/eyewear.md)",
+        doc: "eyewear, [[optics.lenses]] tables (at most 4, counted from 0 in messages): kind = \"spectacle\" (vertex mm in front of the corneal apex, default 12) or \"contact\" (on the cornea), and one of power (D; or power = \"prescribe\": the eye's own correction, the naked eye's refraction_D at t = 0 converted to the lens's place, plus over = D if given), zones = [{ radius, power }, ...] (rings out to each radius, mm; a zone may hold lenslets = { power, fill }: a share fill of its light through segments of that power), table = [{ radius, power }, ...] (smooth), or a real spectacle lens front_radius, back_radius, thickness, index; needs stimulus.source = \"optics\". One key alone: optics.lenses[i].key (i from 0; i = the count adds a lens) (docs/guide/eyewear.md)",
         growth: true,
     },
     KeySpec {

@@ -417,6 +417,53 @@ fn real_lens(i: usize, kind: usize, real: &[Option<f64>]) -> Result<ProfileSpec,
     })
 }
 
+/// The keys of one lens table, each also set alone as `optics.lenses[i].key`.
+pub const LENS_KEYS: [&str; 10] = [
+    "kind",
+    "vertex",
+    "power",
+    "over",
+    "zones",
+    "table",
+    "front_radius",
+    "back_radius",
+    "thickness",
+    "index",
+];
+
+/// The value of `power` that makes a lens the eye's own correction
+/// ([`crate::model::eyewear::prescribe`]).
+pub const PRESCRIBE: &str = "prescribe";
+
+/// Lens `i`'s table with its key `name` set to `value`: `lenses[i]`'s own keys, or a new
+/// lens's (a spectacle lens at the default vertex) for `i` = `lenses.len()`.
+pub fn set_lens_key(
+    lenses: &[LensSpec],
+    i: usize,
+    name: &str,
+    value: &toml::Value,
+) -> Result<LensSpec, OpticsKeyError> {
+    // A lens's TOML always reads back (a test of its own); were it not to, the lens's
+    // other keys would be missing and the lens refused naming them, never half-set.
+    let mut table = match lenses.get(i) {
+        Some(lens) => match format!("v = {}", lens.to_toml()).parse::<toml::Table>() {
+            Ok(mut t) => match t.remove("v") {
+                Some(toml::Value::Table(t)) => t,
+                _ => toml::Table::new(),
+            },
+            Err(_) => toml::Table::new(),
+        },
+        None => toml::Table::new(),
+    };
+    // A lens made a contact lens sits on the cornea: the vertex it had as a spectacle lens
+    // goes (a contact lens takes none).
+    if name == "kind" && value.as_str() == Some(KINDS[1]) {
+        table.remove("vertex");
+    }
+    table.insert(name.to_string(), value.clone());
+    parse_lens(i, &toml::Value::Table(table))
+}
+
 fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> {
     let at = |name: &str| format!("{LENSES_KEY}[{i}].{name}");
     let toml::Value::Table(t) = item else {
@@ -426,22 +473,11 @@ fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> 
             "must be a table (kind, vertex, power | zones | table | front_radius, back_radius, thickness, index)",
         ));
     };
-    const NAMES: [&str; 9] = [
-        "kind",
-        "vertex",
-        "power",
-        "zones",
-        "table",
-        "front_radius",
-        "back_radius",
-        "thickness",
-        "index",
-    ];
-    if let Some(k) = t.keys().find(|k| !NAMES.contains(&k.as_str())) {
+    if let Some(k) = t.keys().find(|k| !LENS_KEYS.contains(&k.as_str())) {
         return Err(key_error(
             at(k),
             "(given)".into(),
-            format!("is not a lens key (one of {})", NAMES.join(", ")),
+            format!("is not a lens key (one of {})", LENS_KEYS.join(", ")),
         ));
     }
     let number_at = |name: &str| -> Result<Option<f64>, OpticsKeyError> {
@@ -487,7 +523,29 @@ fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> 
         Some(v) => v,
         None => VERTEX_MM,
     };
-    let power = number_at("power")?;
+    let prescribe = match t.get("power") {
+        Some(toml::Value::String(s)) if s == PRESCRIBE => Some(number_at("over")?.unwrap_or(0.0)),
+        Some(toml::Value::String(s)) => {
+            return Err(key_error(
+                at("power"),
+                super::view::describe_string(s),
+                format!("must be a number (D) or \"{PRESCRIBE}\" (the eye's own correction)"),
+            ))
+        }
+        _ => None,
+    };
+    if prescribe.is_none() && t.contains_key("over") {
+        return Err(key_error(
+            at("over"),
+            show_toml(&t["over"]),
+            format!("is the offset of a prescribed lens: give it with power = \"{PRESCRIBE}\""),
+        ));
+    }
+    // A prescribed lens holds its offset until the eye it corrects is known.
+    let power = match prescribe {
+        Some(over) => Some(over),
+        None => number_at("power")?,
+    };
     let (t, lenslets) = &lenslet_rings(i, t)?;
     let zones = lens_pairs(i, t, "zones", "radius", "power")?;
     let table = lens_pairs(i, t, "table", "radius", "power")?;
@@ -522,6 +580,7 @@ fn parse_lens(i: usize, item: &toml::Value) -> Result<LensSpec, OpticsKeyError> 
         vertex,
         profile,
         lenslets: lenslets.clone(),
+        prescribe,
     };
     spec.lens(i)?;
     Ok(spec)

@@ -64,6 +64,13 @@ impl Scene {
             sources.insert(SURFACES_KEY, (seq, origin.to_string()));
             return Ok(());
         }
+        // The surfaces' items are set above: an item here is a lens's.
+        if let Some(item) = indexed(key) {
+            self.set_one_lens_key(key, item, value, origin)?;
+            let seq = sources.values().map(|(n, _)| *n).max().unwrap_or(0) + 1;
+            sources.insert(LENSES_KEY, (seq, origin.to_string()));
+            return Ok(());
+        }
         let Some(spec) = find_key(key) else {
             return Err(unknown_key(origin, key));
         };
@@ -222,6 +229,116 @@ impl Scene {
         self.set_optics(|o| o.surfaces = surfaces);
         Ok(())
     }
+
+    /// `optics.lenses[i].name = value`: one key of one lens (its other keys kept), or the
+    /// first key of a lens added after the scene's last.
+    fn set_one_lens_key(
+        &mut self,
+        key: &str,
+        item: Result<Indexed<'_>, String>,
+        value: &toml::Value,
+        origin: &str,
+    ) -> Result<(), SceneError> {
+        let invalid = |key: String, value: String, problem: String| SceneError::Invalid {
+            origin: origin.to_string(),
+            key,
+            value,
+            problem,
+        };
+        let shown = || crate::text::excerpt(&one_line(key), 80);
+        let item = item.map_err(|problem| invalid(shown(), describe(value), problem))?;
+        let mut lenses = self.optics().lenses.clone();
+        if item.index > lenses.len() {
+            return Err(invalid(
+                shown(),
+                describe(value),
+                format!(
+                    "is not a lens of the scene: it wears {} (optics.lenses[0] to [{}]), and a lens added comes next, as optics.lenses[{}]",
+                    match lenses.len() { 1 => "1 lens".to_string(), n => format!("{n} lenses") },
+                    lenses.len().saturating_sub(1),
+                    lenses.len()
+                ),
+            ));
+        }
+        let lens = super::optics_toml::set_lens_key(&lenses, item.index, item.name, value)
+            .map_err(|e| invalid(e.key, e.value, e.problem))?;
+        match lenses.get_mut(item.index) {
+            Some(l) => *l = lens,
+            None => lenses.push(lens),
+        }
+        self.set_optics(|o| o.lenses = lenses);
+        Ok(())
+    }
+}
+
+/// One key of one item of an optics array, `optics.surfaces[i].name` or
+/// `optics.lenses[i].name`: the array's key, i and the item's key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Indexed<'a> {
+    pub array: &'static str,
+    pub index: usize,
+    pub name: &'a str,
+}
+
+impl Indexed<'_> {
+    /// Whether the item's key takes a real number (what a sample draws).
+    pub fn is_real(&self) -> bool {
+        let real: &[&str] = if self.array == SURFACES_KEY {
+            &["radius", "conic", "thickness", "index"]
+        } else {
+            &[
+                "vertex",
+                "power",
+                "over",
+                "front_radius",
+                "back_radius",
+                "thickness",
+                "index",
+            ]
+        };
+        real.contains(&self.name)
+    }
+}
+
+/// `key` read as an [`Indexed`] key: None when it names no item of an optics array (it
+/// does not begin `optics.surfaces[` or `optics.lenses[`); else the item, or the problem
+/// with it (no index, an index beyond the array's most, a name that is not an item's key)
+/// as the line `--set` would give.
+pub(crate) fn indexed(key: &str) -> Option<Result<Indexed<'_>, String>> {
+    let (array, names, most): (&'static str, &[&str], usize) =
+        if key.starts_with(&format!("{SURFACES_KEY}[")) {
+            (SURFACES_KEY, &crate::model::eye::SURFACE_KEYS, MAX_SURFACES)
+        } else if key.starts_with(&format!("{LENSES_KEY}[")) {
+            (
+                LENSES_KEY,
+                &super::optics_toml::LENS_KEYS,
+                crate::model::eyewear::MAX_LENSES,
+            )
+        } else {
+            return None;
+        };
+    let item = if array == SURFACES_KEY {
+        "surface"
+    } else {
+        "lens"
+    };
+    let problem = || {
+        format!(
+            "is not a {item}'s key: write {array}[i].key with i from 0 to {} and key one of {}",
+            most - 1,
+            names.join(", ")
+        )
+    };
+    let rest = &key[array.len() + 1..];
+    let parsed = rest
+        .split_once("].")
+        .and_then(|(i, name)| Some((i.trim().parse::<usize>().ok()?, name.trim())))
+        .filter(|(i, name)| *i < most && names.contains(name));
+    Some(
+        parsed
+            .map(|(index, name)| Indexed { array, index, name })
+            .ok_or_else(problem),
+    )
 }
 
 /// The key of the eye's surfaces.

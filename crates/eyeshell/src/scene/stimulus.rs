@@ -137,6 +137,7 @@ impl Scene {
     }
 
     pub(super) fn trace_optics(&mut self) -> Result<(), crate::model::optics::OpticsKeyError> {
+        self.prescribe_lenses()?;
         let Some(g) = &mut self.growth else {
             return Ok(());
         };
@@ -146,6 +147,36 @@ impl Scene {
             ));
         }
         crate::model::eyewear::refraction_table(&g.refraction_optics())?;
+        Ok(())
+    }
+
+    /// Each prescribed lens's power (`power = "prescribe"`, docs/guide/eyewear.md): the
+    /// correction of this scene's eye at t = 0, its loaded shell solved as a growth run
+    /// solves it first, its retina's pole measured as refraction_D measures it
+    /// (docs/MODEL.md §6), and the naked eye's refraction there
+    /// ([`crate::model::eyewear::prescribe`]). Found again every time the optics are
+    /// traced: any key (a cornea's radius, ΔP, the shell's size) changes the eye it corrects.
+    fn prescribe_lenses(&mut self) -> Result<(), crate::model::optics::OpticsKeyError> {
+        let optics = self.optics();
+        let Some(first) = optics.lenses.iter().position(|l| l.prescribe.is_some()) else {
+            return Ok(());
+        };
+        let cannot = |why: String| crate::model::optics::OpticsKeyError {
+            key: format!("{}[{first}].power", super::parse::LENSES_KEY),
+            value: "\"prescribe\"".into(),
+            problem: format!("cannot be prescribed: {}", crate::text::one_line(&why)),
+        };
+        let problem = self.elastic_problem().map_err(|e| cannot(e.to_string()))?;
+        let solution = problem
+            .solve()
+            .map_err(|e| cannot(format!("the eye at t = 0 does not solve: {e}")))?;
+        let pole = solution
+            .rows
+            .first()
+            .map(|f| crate::model::stimulus::retina(f.z, f.r, f.h, f.theta).0)
+            .ok_or_else(|| cannot("the eye at t = 0 has no nodes".into()))?;
+        let prescribed = crate::model::eyewear::prescribe(self.optics(), pole)?;
+        self.set_optics(|o| o.lenses = prescribed.lenses);
         Ok(())
     }
 }

@@ -42,7 +42,11 @@ impl Scene {
     /// words naming the key that would turn it on. A sweep refuses to sweep a key that no
     /// run reads: its runs would all be the same eye under different labels.
     pub fn not_in_effect(&self, key: &str) -> Option<String> {
-        let spec = keys::find(key)?;
+        // One item's key (optics.lenses[0].power) is read as its array is.
+        let spec = keys::find(key).or_else(|| {
+            let item = super::parse::indexed(key)?.ok()?;
+            keys::find(item.array)
+        })?;
         if spec.applies_to(self) && !self.idle(key) {
             return None;
         }

@@ -194,6 +194,31 @@ fn key_dists(
         } else {
             format!("{prefix}.{name}")
         };
+        if let Some(item) = crate::scene::parse::indexed(&key) {
+            let item = item.map_err(|problem| SceneError::Invalid {
+                origin: format!("{origin}: [sweep.sample.keys]"),
+                key: crate::text::excerpt(&one_line(&key), 80),
+                value: crate::text::excerpt(&one_line(&value.to_string()), 40),
+                problem,
+            })?;
+            if !item.is_real() {
+                return Err(SceneError::BadSweep {
+                    origin: origin.to_string(),
+                    problem: format!(
+                        "sample: {key} is not a real-valued key: only real numbers are drawn"
+                    ),
+                });
+            }
+            let toml::Value::Table(d) = value else {
+                return Err(not_a_distribution(origin, &key, value));
+            };
+            let dist = dist(d).map_err(|p| SceneError::BadSweep {
+                origin: origin.to_string(),
+                problem: format!("sample: keys.{key}: {p}"),
+            })?;
+            out.push((key, dist));
+            continue;
+        }
         match (keys::find(&key), value) {
             (Some(spec), toml::Value::Table(d)) => {
                 if !matches!(
@@ -214,15 +239,7 @@ fn key_dists(
                 })?;
                 out.push((key, dist));
             }
-            (Some(_), v) => {
-                return Err(SceneError::BadSweep {
-                    origin: origin.to_string(),
-                    problem: format!(
-                        "sample: keys.{key} must be a table such as {{ dist = \"normal\", mean = 70.0, sd = 5.0 }}, found {}",
-                        describe(v)
-                    ),
-                })
-            }
+            (Some(_), v) => return Err(not_a_distribution(origin, &key, v)),
             (None, toml::Value::Table(sub)) => key_dists(sub, &key, origin, out)?,
             (None, _) => {
                 return Err(crate::scene::unknown_key(
@@ -233,6 +250,17 @@ fn key_dists(
         }
     }
     Ok(())
+}
+
+/// The error of a sampled key given something other than a distribution's table.
+fn not_a_distribution(origin: &str, key: &str, v: &toml::Value) -> SceneError {
+    SceneError::BadSweep {
+        origin: origin.to_string(),
+        problem: format!(
+            "sample: keys.{key} must be a table such as {{ dist = \"normal\", mean = 70.0, sd = 5.0 }}, found {}",
+            describe(v)
+        ),
+    }
 }
 
 /// One key's `{ dist = ..., ... }`.

@@ -153,6 +153,16 @@ pub fn refuse_keys_not_in_effect<'a>(
     Ok(())
 }
 
+/// Whether keys `a` and `b` set the same value: the same key, or an array
+/// (`optics.lenses`) and one of its items' keys (`optics.lenses[0].power`).
+fn overlap(a: &str, b: &str) -> bool {
+    let item_of = |item: &str, array: &str| {
+        item.strip_prefix(array)
+            .is_some_and(|rest| rest.starts_with('['))
+    };
+    a == b || item_of(a, b) || item_of(b, a)
+}
+
 /// The most runs one sweep may plan (a typo such as a grid of many long lists is caught
 /// early). A plan holds no run's scene; it holds each run's name (about 50 bytes a run)
 /// only when names must be made unique in sweep order, and only once they are asked for.
@@ -252,11 +262,14 @@ impl SweepPlan {
             let key = text
                 .split_once('=')
                 .map_or(text.as_str(), |(k, _)| k.trim());
-            if list.iter().any(|e| e.values.iter().any(|(k, _)| k == key))
-                || grid.iter().any(|(k, _)| k == key)
-            {
+            let swept = list
+                .iter()
+                .flat_map(|e| e.values.iter().map(|(k, _)| k))
+                .chain(grid.iter().map(|(k, _)| k))
+                .find(|k| overlap(k, key));
+            if let Some(swept) = swept {
                 return Err(bad(format!(
-                    "sweeps {key}: {} (the sweep's values would be ambiguous)",
+                    "sweeps {swept}: {} (the sweep's values would be ambiguous)",
                     crate::text::advice(&crate::text::Advice::RemoveOverride { text })
                 )));
             }
@@ -288,6 +301,16 @@ impl SweepPlan {
         {
             if !keys.contains(k) {
                 keys.push(k.clone());
+            }
+        }
+        // A prescribed lens's power is each run's own (its eye's correction): a column of
+        // the sweep's tables beside the swept keys ([`SweepPlan::run`] gives its value).
+        if base.not_in_effect(super::parse::LENSES_KEY).is_none() {
+            for (i, lens) in base.optics().lenses.iter().enumerate() {
+                let key = format!("{}[{i}].power", super::parse::LENSES_KEY);
+                if lens.prescribe.is_some() && !keys.contains(&key) {
+                    keys.push(key);
+                }
             }
         }
         let mut plan = SweepPlan {
@@ -477,12 +500,36 @@ impl SweepPlan {
         let mut scene = Scene::from_table(&self.table, &run_origin, &assignments, &self.overrides)?;
         scene.origin = self.origin.clone();
         scene.name = Some(format!("{}/{run_name}", self.name));
+        values.extend(self.prescribed_powers(&scene, &values));
         values.sort_by_key(|(k, _)| self.keys.iter().position(|s| s == k));
         Ok(SweepRun {
             name: run_name,
             values,
             scene,
         })
+    }
+
+    /// The powers of `scene`'s prescribed lenses that are columns of the plan (its keys)
+    /// but not among the run's `values`: each as the prescription gave it.
+    fn prescribed_powers(&self, scene: &Scene, values: &[Assignment]) -> Vec<Assignment> {
+        let lenses = &scene.optics().lenses;
+        self.keys
+            .iter()
+            .filter(|k| !values.iter().any(|(v, _)| v == *k))
+            .filter_map(|k| {
+                let item = super::parse::indexed(k)?.ok()?;
+                let lens = lenses.get(item.index)?;
+                let prescribed = item.array == super::parse::LENSES_KEY
+                    && item.name == "power"
+                    && lens.prescribe.is_some();
+                match (&lens.profile, prescribed) {
+                    (crate::model::eyewear::ProfileSpec::Power(p), true) => {
+                        Some((k.clone(), toml::Value::Float(*p)))
+                    }
+                    _ => None,
+                }
+            })
+            .collect()
     }
 
     /// The runs that stand for the whole plan when it is too large to validate run by run:

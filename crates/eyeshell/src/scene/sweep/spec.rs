@@ -153,6 +153,18 @@ fn leaves(
         };
         if keys::find(&key).is_some() || key == "name" {
             out.push((key, value.clone()));
+        } else if let Some(item) = crate::scene::parse::indexed(&key) {
+            // One item of an optics array, as `--set optics.lenses[0].power=…` sets it;
+            // whether the item exists is the run's to say, once its scene is built.
+            if let Err(problem) = item {
+                return Err(SceneError::Invalid {
+                    origin: format!("{origin}: [sweep]"),
+                    key: crate::text::excerpt(&one_line(&key), 80),
+                    value: crate::text::excerpt(&one_line(&value.to_string()), 40),
+                    problem,
+                });
+            }
+            out.push((key, value.clone()));
         } else if let toml::Value::Table(sub) = value {
             out.extend(leaves(sub, &key, origin)?);
         } else {

@@ -1,6 +1,7 @@
 //! Unit tests of the stimulus computed from the eye's optics.
 
 use super::*;
+use crate::model::eyewear::ProfileSpec;
 use crate::model::optics::Source;
 
 /// The default source is the published polynomial: no optics key is in effect or
@@ -199,4 +200,81 @@ fn every_registered_eye_is_selectable_from_a_scene() {
             );
         }
     }
+}
+
+/// One key of one lens (`optics.lenses[i].key`): the lens's other keys kept, a lens added
+/// after the last, a contact lens made from a spectacle lens without its vertex; a
+/// prescribed lens (`power = "prescribe"`, `over`) written back as prescribed and read to
+/// the same scene, its power its eye's refraction at t = 0 (the prescription itself is
+/// tested in the core and by tests/cli/drawn_optics.rs).
+#[test]
+fn one_lens_key_is_set_alone_and_a_prescription_reads_back() {
+    // The shell of scenes/myopia/ (about −2 D at t = 0).
+    let base = "geometry.R0 = 12.07\ncornea.R0 = 12.07\ngrowth.eta0 = 70\nstimulus.source = \"optics\"\n[[optics.lenses]]\nvertex = 14.0\npower = -2.0\n";
+    let s = parse_set(base, &["optics.lenses[0].power=-3"]).unwrap();
+    let lens = &s.optics().lenses[0];
+    assert_eq!(
+        (lens.vertex, &lens.profile),
+        (14.0, &ProfileSpec::Power(-3.0))
+    );
+    let s = parse_set(
+        base,
+        &[
+            "optics.lenses[1].kind=contact",
+            "optics.lenses[1].power=1.5",
+        ],
+    );
+    // A lens added with its kind alone has no power yet: the first key is refused.
+    let e = s.unwrap_err().to_string();
+    assert!(
+        e.contains("optics.lenses[1]") && e.contains("must give exactly one of power"),
+        "{e}"
+    );
+    let s = parse_set(
+        base,
+        &[
+            "optics.lenses[1].power=1.5",
+            "optics.lenses[1].kind=contact",
+        ],
+    )
+    .unwrap();
+    let added = &s.optics().lenses[1];
+    assert_eq!((added.kind, &added.profile), (1, &ProfileSpec::Power(1.5)));
+    let s = parse_set(base, &["optics.lenses[0].kind=contact"]).unwrap();
+    assert_eq!(s.optics().lenses[0].kind, 1);
+    let e = err(
+        parse_set(base, &["optics.lenses[2].power=1"]),
+        "--set optics.lenses[2].power=1",
+        "optics.lenses[2].power",
+    );
+    assert!(e.contains("it wears 1 lens"), "{e}");
+
+    let prescribed = parse_set(
+        base,
+        &[
+            "optics.lenses[0].power=prescribe",
+            "optics.lenses[0].over=-0.25",
+        ],
+    )
+    .unwrap();
+    let lens = &prescribed.optics().lenses[0];
+    assert_eq!(lens.prescribe, Some(-0.25));
+    let ProfileSpec::Power(p) = lens.profile else {
+        panic!("{lens:?}")
+    };
+    let text = prescribed.to_toml();
+    assert!(
+        text.contains("power = \"prescribe\", over = -0.25"),
+        "{text}"
+    );
+    let back = parse(&text).unwrap();
+    assert_eq!(back.optics(), prescribed.optics());
+    // The eye is about −2 D at t = 0: its correction at 14 mm, 0.25 D more minus.
+    assert!(p > -2.6 && p < -1.9, "{p}");
+    let e = err(
+        parse_set(base, &["optics.lenses[0].over=1"]),
+        "--set optics.lenses[0].over=1",
+        "optics.lenses[0].over",
+    );
+    assert!(e.contains("is the offset of a prescribed lens"), "{e}");
 }
