@@ -182,6 +182,7 @@ mod tests {
                 vertex: 12.0,
                 profile: ProfileSpec::Power(power),
                 lenslets: vec![],
+                prescribe: None,
             }],
             ..OpticsSpec::default()
         }
