@@ -48,7 +48,11 @@ fn first_row(dir: &Path, scene: &str) -> (Vec<String>, Vec<f64>, Vec<Vec<f64>>) 
         .iter()
         .map(|v| v.parse().unwrap_or(f64::NAN))
         .collect();
-    let (_, peripheral) = csv(&out.join("peripheral.csv"));
+    // A scene with lenses adds the rows through them: the naked eye's are `naked`.
+    let peripheral = match csv_cells(&out.join("peripheral.csv")).0.len() {
+        4 => csv(&out.join("peripheral.csv")).1,
+        _ => rows_of(&out.join("peripheral.csv"), "naked", 0),
+    };
     let at0 = peripheral.into_iter().filter(|r| r[0] == 0.0).collect();
     (header, first, at0)
 }
