@@ -675,6 +675,7 @@ pub fn default_tables() -> (Arc<RefractionTable>, Arc<PeripheralTable>) {
             fields: kept::FIELDS.to_vec(),
             powers: power_grid(PERIPHERAL_POWERS),
             foci: kept::PERIPHERAL_FOCI.iter().map(|f| f.to_vec()).collect(),
+            between: vec![],
         };
         (Arc::new(pole), Arc::new(peripheral))
     })
