@@ -180,7 +180,7 @@ fn exact_refraction(
 }
 
 /// The Navarro eye's growth run through a −2 D spectacle lens (few nodes, three output
-/// times), in a temporary directory: its output directory, the scene, and that scene's file.
+/// times) into `dir`: its output directory and the scene.
 fn navarro_run(dir: &Path) -> (PathBuf, eyeshell::Scene) {
     let text = std::fs::read_to_string("scenes/eyewear/single-vision.toml")
         .unwrap()
@@ -216,9 +216,9 @@ fn the_navarro_eyes_peripheral_refraction_has_no_nan() {
 /// output time and every field to 40°, naked and through the lens, within 0.01 D of a
 /// direct trace of the same eye onto that time's retina (the trial lens held in contact with
 /// the spectacle lens: one thin lens of their summed power). The worst row is 9.0e-4 D (40°
-/// at t = 0.25, naked); to 25° every row agrees to 1.1e-3 D of it without the table's halved
-/// intervals, which are what bring the wide fields in (where the focus runs steeply forward
-/// with plus power, the cubic through powers 2.5 D apart missed by 0.17 D at 40°).
+/// at t = 0.25, naked). What holds the wide fields is the table's halved intervals: on its
+/// 2.5 D grid alone, where the focus runs steeply forward with plus power, the cubic misses
+/// by 0.17 D at 40°.
 #[test]
 fn the_navarro_eyes_peripheral_refraction_is_a_direct_traces_to_a_hundredth_dioptre() {
     let dir = tempfile::tempdir().unwrap();

@@ -658,7 +658,9 @@ fn trace_pole(
 /// 555 nm, fields every 5° to 40°), kept in default_tables.rs rather than traced: every
 /// scene without optics of its own reports its refraction with them, and tracing them
 /// (about 0.2 s of CPU) cost a 10 ms growth run twenty times over. The numerics test
-/// `default_refraction_tables_are_a_fresh_trace` checks them against a new trace.
+/// `default_refraction_tables_are_a_fresh_trace` checks them against a new trace at the
+/// grid's powers. The kept peripheral table holds the grid alone: a fresh trace also halves
+/// the intervals the cubic misses ([`PeripheralTable::between`]), which the kept one lacks.
 pub fn default_tables() -> (Arc<RefractionTable>, Arc<PeripheralTable>) {
     static KEPT: OnceLock<(Arc<RefractionTable>, Arc<PeripheralTable>)> = OnceLock::new();
     KEPT.get_or_init(|| {

@@ -7,6 +7,10 @@
 //!   never half-written;
 //! - `history.csv` (with `output.history_points` > 0): the same columns at every recorded
 //!   time, the history times and the snapshot times, appended and flushed at once;
+//! - `peripheral.csv`: the peripheral refraction at every output time, a row per field
+//!   angle, naked; when the eye whose refraction the run reports wears lenses, the rows of
+//!   `eyeshell optics`'s layout instead, naked and through each image of the lenses with its
+//!   share ([`peripheral_records`]);
 //! - `sensitivities.csv` (with `GrowthSettings::sensitivities`): one row per recorded time
 //!   and parameter, [`SENSITIVITY_COLUMNS`], appended and flushed at once;
 //! - with `time.unit` set, series.csv, history.csv, sensitivities.csv and peripheral.csv
