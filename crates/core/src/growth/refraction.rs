@@ -110,6 +110,12 @@ fn images(spec: &OpticsSpec) -> Vec<(Option<f64>, OpticsSpec)> {
     }
 }
 
+/// How many images `spec`'s lenses form, each a block of rows of peripheral.csv through the
+/// lenses (0 without lenses).
+pub fn image_count(spec: &OpticsSpec) -> usize {
+    images(spec).len()
+}
+
 /// The tables of one image's refraction through the lenses at one time: the pole's and the
 /// peripheral one.
 type ThroughTables = (RefractionTable, PeripheralTable);
