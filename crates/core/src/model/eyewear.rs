@@ -659,8 +659,8 @@ fn trace_pole(
 /// scene without optics of its own reports its refraction with them, and tracing them
 /// (about 0.2 s of CPU) cost a 10 ms growth run twenty times over. The numerics test
 /// `default_refraction_tables_are_a_fresh_trace` checks them against a new trace at the
-/// grid's powers. The kept peripheral table holds the grid alone: a fresh trace also halves
-/// the intervals the cubic misses ([`PeripheralTable::between`]), which the kept one lacks.
+/// grid's powers and at those traced between them where the cubic misses
+/// ([`PeripheralTable::between`]).
 pub fn default_tables() -> (Arc<RefractionTable>, Arc<PeripheralTable>) {
     static KEPT: OnceLock<(Arc<RefractionTable>, Arc<PeripheralTable>)> = OnceLock::new();
     KEPT.get_or_init(|| {
@@ -677,7 +677,10 @@ pub fn default_tables() -> (Arc<RefractionTable>, Arc<PeripheralTable>) {
             fields: kept::FIELDS.to_vec(),
             powers: power_grid(PERIPHERAL_POWERS),
             foci: kept::PERIPHERAL_FOCI.iter().map(|f| f.to_vec()).collect(),
-            between: vec![],
+            between: kept::PERIPHERAL_BETWEEN
+                .iter()
+                .map(|b| b.to_vec())
+                .collect(),
         };
         (Arc::new(pole), Arc::new(peripheral))
     })
