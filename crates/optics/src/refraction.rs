@@ -588,6 +588,50 @@ impl PeripheralTable {
 mod tests {
     use super::*;
 
+    /// Where the focus runs steeply forward with plus power towards the power at which it
+    /// forms none (here z(F) = 17 + 1336/(60 + F) − 3/(9.5 − F), none from 9.5 D), the cubic
+    /// through the grid's powers misses a retina's refraction by more than 0.01 D; with the
+    /// intervals halved where it missed their middle ([`refine`]), every retina from 0 to 7.5 D
+    /// (the last traced power before none) is found to 1e-3 D of the exact inverse.
+    #[test]
+    fn halving_the_intervals_the_cubic_misses_finds_a_steep_focus() {
+        let powers = power_grid(PERIPHERAL_POWERS);
+        let z_of = |f: f64| match f < 9.5 {
+            true => (17.0 + 1336.0 / (60.0 + f) - 3.0 / (9.5 - f), 0.0),
+            false => (f64::NAN, f64::NAN),
+        };
+        let column: Vec<(f64, f64)> = powers.iter().map(|&f| z_of(f)).collect();
+        let mut table = PeripheralTable {
+            wavelength_nm: 555.0,
+            vertex: VERTEX_MM,
+            fields: vec![40.0],
+            powers: powers.clone(),
+            foci: vec![column.clone()],
+            between: vec![],
+        };
+        let worst = |t: &PeripheralTable| {
+            (0..=30)
+                .map(|k| {
+                    let exact = 0.25 * k as f64;
+                    let retina = z_of(exact).0;
+                    let d = t.refraction(0, |z, _| Some(z - retina));
+                    d.map_or(f64::INFINITY, |d| (d - exact).abs())
+                })
+                .fold(0.0, f64::max)
+        };
+        let grid_alone = worst(&table);
+        let nodes: Nodes = powers.iter().copied().zip(column).collect();
+        table.between = vec![refine(&nodes, &z_of)];
+        let halved = worst(&table);
+        eprintln!(
+            "grid alone: {grid_alone} D; halved: {halved} D, {} powers",
+            table.between[0].len()
+        );
+        assert!(grid_alone > 0.01, "{grid_alone}");
+        assert!(halved < 1e-3, "{halved}");
+        assert!(table.between[0].len() < 40, "{:?}", table.between);
+    }
+
     /// A field whose strongest lens forms no focus (its entry NaN) still gives the
     /// refraction of a retina in the interval next to it, from the four points on the other
     /// side: against the exact inverse of a Gaussian-optics focus z(F) = 17 + 1336/(60 + F),
