@@ -99,6 +99,7 @@ mod tests {
             growth: vec![],
             series: row,
             peripheral: vec![],
+            through: vec![],
         };
         let mut bar = GrowthProgress::new(false, Some("choosing the mesh"));
         assert_eq!(bar.bar.message(), "choosing the mesh");

@@ -163,23 +163,43 @@ fn plot_one(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, FigureError> {
 /// A line of a figure: (t, value) points.
 type Curve = Vec<(f64, f64)>;
 
-/// A growth run's peripheral.csv as curves of relative_D against the field angle, one per
-/// output time (in time order); None for a run without the file.
+/// A growth run's peripheral.csv as curves of the naked eye's relative_D against the field
+/// angle, one per output time (in time order); None for a run without the file. A run of an
+/// eye that wears lenses also holds the rows through them (`through` other than `naked`),
+/// which these curves leave out.
 fn peripheral_curves(dir: &Path) -> Result<Option<Vec<(f64, Curve)>>, ExportError> {
     use eyeshell::rundir::growth::PERIPHERAL_FILE;
     let path = dir.join(PERIPHERAL_FILE);
     if !path.exists() {
         return Ok(None);
     }
-    let table = eyeshell::interop::export::read_csv(&path)?;
+    let records = eyeshell::rundir::table::read_records(&path)?;
+    let header = records.header.clone().unwrap_or_default();
     let col = |n: &str| {
-        table
-            .column(n)
+        (header.iter())
+            .position(|c| c == n)
             .ok_or_else(|| bad(format!("{}: no column {n:?}", path.display())))
     };
     let (t, field, relative) = (col("t")?, col("field_deg")?, col("relative_D")?);
+    let through = header.iter().position(|c| c == "through");
     let mut curves: Vec<(f64, Curve)> = vec![];
-    for ((t, f), d) in t.into_iter().zip(field).zip(relative) {
+    for r in records.iter() {
+        if through.is_some_and(|k| r.cells.get(k) != Some("naked")) {
+            continue;
+        }
+        let value = |j: usize| -> Result<f64, ExportError> {
+            let cell = r.cells.get(j).unwrap_or_default();
+            cell.parse::<f64>().map_err(|_| {
+                bad(format!(
+                    "{}: line {}: {:?} ({}) is not a number",
+                    path.display(),
+                    r.line,
+                    cell,
+                    header[j]
+                ))
+            })
+        };
+        let (t, f, d) = (value(t)?, value(field)?, value(relative)?);
         match curves.last_mut() {
             Some((at, c)) if *at == t => c.push((f, d)),
             _ => curves.push((t, vec![(f, d)])),

@@ -7,7 +7,7 @@
 //! are tables over t is drawn as it is at `--at T` (default 0).
 
 use eyeshell::growth::refraction::RefractionAt;
-use eyeshell::growth::{GrowthParams, PeripheralRow};
+use eyeshell::growth::GrowthParams;
 use eyeshell::model::optics::{OpticsKeyError, OpticsSpec};
 use eyeshell::rundir::{self, OutputDir, OutputError};
 use eyeshell::scene::{Scene, SceneError};
@@ -209,7 +209,7 @@ fn write_refraction(
     let growth = scene.growth.as_ref();
     let table = refraction_csv(retina, at, &shares, growth).map_err(|e| io(REFRACTION_FILE, e))?;
     dir.write_file(REFRACTION_FILE, &table)?;
-    let table = peripheral_csv(at, &shares, growth).map_err(|e| io(PERIPHERAL_FILE, e))?;
+    let table = peripheral_csv(at, computed, growth).map_err(|e| io(PERIPHERAL_FILE, e))?;
     dir.write_file(PERIPHERAL_FILE, &table)?;
     Ok(refraction_json(scene, retina, at, &shares))
 }
@@ -358,18 +358,10 @@ fn optics_json(
 }
 
 /// The share of the light the image of power `image` carries at `field` (degrees), as
-/// surfaces.csv gives it at the first wavelength (1 for the one image of a lens of one
-/// smooth profile, or no lens; NaN at a field the surfaces were not traced at).
+/// surfaces.csv gives it at the first wavelength
+/// ([`eyeshell::model::optics::ComputedOptics::image_share`]).
 fn image_share(c: &eyeshell::model::optics::ComputedOptics, image: Option<f64>, field: f64) -> f64 {
-    let Some(power) = image else {
-        return 1.0;
-    };
-    let Some(im) = c.images.iter().find(|im| im.power == Some(power)) else {
-        return f64::NAN;
-    };
-    (im.surfaces.surfaces.first())
-        .and_then(|s| s.points.iter().position(|p| p.field_deg == field))
-        .map_or(f64::NAN, |j| im.share.traced(j))
+    c.image_share(image, field)
 }
 
 /// The retina a growth run starts from (the loaded, ungrown shell, pole first) and its
@@ -393,25 +385,22 @@ fn ungrown(scene: &Scene) -> Result<Option<Ungrown>, Error> {
 }
 
 /// One eye the refraction is given through at one time: the naked eye, or an image of the
-/// lenses worn, with its peripheral rows and its pole's refraction.
-struct Eye<'a> {
+/// lenses worn, with its pole's refraction.
+struct Eye {
     /// None: the naked eye; else the image's power (None for the one image of lenses of one
     /// smooth profile).
     image: Option<Option<f64>>,
-    peripheral: &'a [PeripheralRow],
     pole_d: f64,
 }
 
 /// The eyes of `at`: the naked eye, then each image the lenses form.
-fn eyes(at: &RefractionAt) -> Vec<Eye<'_>> {
+fn eyes(at: &RefractionAt) -> Vec<Eye> {
     let naked = Eye {
         image: None,
-        peripheral: &at.peripheral,
         pole_d: at.pole_d,
     };
     let through = at.through.iter().map(|l| Eye {
         image: Some(l.image_power),
-        peripheral: &l.peripheral,
         pole_d: l.pole_d,
     });
     std::iter::once(naked).chain(through).collect()
@@ -422,7 +411,7 @@ fn eyes(at: &RefractionAt) -> Vec<Eye<'_>> {
 /// a lens that forms several) and `share` (of the light, at that field: 1 for the naked eye).
 fn eye_cells(
     e: usize,
-    eye: &Eye<'_>,
+    eye: &Eye,
     shares: &dyn Fn(Option<f64>, f64) -> f64,
     field: f64,
 ) -> [String; 4] {
@@ -481,32 +470,29 @@ fn age_column(growth: Option<&GrowthParams>) -> Option<&'static str> {
 
 /// peripheral.csv: a growth run's columns (`t,field_deg,refraction_D,relative_D`), then
 /// `through,image,image_power_D,share`, a row per time, eye and field angle (and `age` last in
-/// a scene that counts in ages).
+/// a scene that counts in ages): the rows a growth run of a scene with lenses writes
+/// ([`eyeshell::rundir::growth::peripheral_records`]), each image's share from `computed`.
 fn peripheral_csv(
     at: &[RefractionAt],
-    shares: &dyn Fn(Option<f64>, f64) -> f64,
+    computed: &eyeshell::model::optics::ComputedOptics,
     growth: Option<&GrowthParams>,
 ) -> std::io::Result<Vec<u8>> {
-    let v = rundir::format_value;
     let mut rows: Vec<Vec<String>> = Vec::new();
     for a in at {
-        for (e, eye) in eyes(a).iter().enumerate() {
-            for p in eye.peripheral {
-                let cells = eye_cells(e, eye, shares, p.field_deg);
-                let values = [v(a.t), v(p.field_deg), v(p.refraction_d), v(p.relative_d)];
-                rows.push(
-                    values
-                        .into_iter()
-                        .chain(cells)
-                        .chain(age(growth, a.t))
-                        .collect(),
-                );
-            }
-        }
+        let mut through = a.through.clone();
+        eyeshell::growth::refraction::with_shares(&mut through, computed);
+        let age = growth.and_then(|g| g.age_of(a.t));
+        rows.extend(eyeshell::rundir::growth::peripheral_records(
+            a.t,
+            &a.peripheral,
+            &through,
+            true,
+            age,
+        ));
     }
     let columns = eyeshell::growth::PERIPHERAL_COLUMNS
         .into_iter()
-        .chain(REFRACTION_COLUMNS[3..].iter().copied())
+        .chain(eyeshell::rundir::growth::THROUGH_COLUMNS)
         .chain(age_column(growth));
     rundir::table::csv_bytes(columns, rows, rundir::table::QuoteStyle::Necessary)
 }

@@ -46,5 +46,6 @@ mod solve;
 mod status;
 mod study;
 mod sweep;
+mod through;
 mod typed_errors;
 mod years;

@@ -48,7 +48,11 @@ fn first_row(dir: &Path, scene: &str) -> (Vec<String>, Vec<f64>, Vec<Vec<f64>>) 
         .iter()
         .map(|v| v.parse().unwrap_or(f64::NAN))
         .collect();
-    let (_, peripheral) = csv(&out.join("peripheral.csv"));
+    // A scene with lenses adds the rows through them: the naked eye's are `naked`.
+    let peripheral = match csv_cells(&out.join("peripheral.csv")).0.len() {
+        4 => csv(&out.join("peripheral.csv")).1,
+        _ => rows_of(&out.join("peripheral.csv"), "naked", 0),
+    };
     let at0 = peripheral.into_iter().filter(|r| r[0] == 0.0).collect();
     (header, first, at0)
 }
@@ -68,7 +72,8 @@ fn rows_of(path: &Path, through: &str, image: usize) -> Vec<Vec<f64>> {
 /// at the pole and at every field, for the eye without a lens, with a −2 D spectacle lens and
 /// with a dual-focus contact lens (a growth run's refraction is the naked eye's whatever it
 /// wears). Through the spectacle lens at 12 mm, the trial lens held in contact with it, the
-/// refraction is the naked eye's plus 2 D to the tables' error (1e-5 D); through the
+/// refraction is the naked eye's plus 2 D to the tables' error (1e-5 D at the pole, 0.005 D
+/// at every field); through the
 /// MiSight-like contact lens each image has its own, the 0 D rings' the naked eye's, and the
 /// shares of the two images sum to 1 at every field.
 #[test]
@@ -122,8 +127,12 @@ fn optics_gives_a_growth_runs_first_refraction_naked_and_through_the_lenses() {
                 let worn = rows_of(&out.join("peripheral.csv"), "lenses", 0);
                 assert_eq!(worn.len(), 9);
                 assert!((worn[0][2] - through[0][2]).abs() < 1e-3, "{worn:?}");
-                // Off the axis the lens is no longer a change of vergence alone.
-                assert!((worn[8][2] - naked[8][2] - 2.0).abs() > 1e-3, "{worn:?}");
+                // At every field the trial lens and the −2 D lens at 12 mm are one thin lens:
+                // the naked eye's + 2 D, to the two tables' error (each within 1e-3 mm of
+                // its traced foci, about 0.0025 D).
+                for (w, n) in worn.iter().zip(&naked) {
+                    assert!((w[2] - n[2] - 2.0).abs() < 0.005, "{w:?} {n:?}");
+                }
             }
             _ => {
                 let other = rows_of(&out.join("refraction.csv"), "lenses", 1);

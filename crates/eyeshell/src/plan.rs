@@ -16,17 +16,20 @@ pub const MAX_RUN_BYTES: u64 = 8 << 30;
 
 /// The most bytes a growth run writes: a snapshot of every node at t = 0 and at each of
 /// `times` output times, the series, history and peripheral rows (summary.json and the marker
-/// are small beside them).
-pub fn planned_bytes(nodes: usize, times: usize, history_points: usize) -> u64 {
+/// are small beside them). `images` is how many images the lenses worn form (0 without
+/// lenses): peripheral.csv then holds a block of rows for each besides the naked eye's, and
+/// the columns that say which.
+pub fn planned_bytes(nodes: usize, times: usize, history_points: usize, images: usize) -> u64 {
     let row = |cells: usize| cells as u64 * CELL_BYTES;
     let snapshot = (nodes as u64 + 1) * row(COLUMNS.len() + GROWTH_COLUMNS.len());
     let series_rows = times as u64 + 2;
     let history_rows = (history_points + times) as u64 + 2;
     // With room for the age column of a scene with time.unit; peripheral.csv: a row per
     // field angle, every 5° to at most 90°, per output time.
-    let peripheral_rows = series_rows * 20;
+    let peripheral_rows = series_rows * 20 * (1 + images as u64);
+    let peripheral_cells = PERIPHERAL_COLUMNS.len() + 1 + if images > 0 { 4 } else { 0 };
     (times as u64 + 1)
         .saturating_mul(snapshot)
         .saturating_add((series_rows + history_rows) * row(series_columns().len() + 1))
-        .saturating_add(peripheral_rows * row(PERIPHERAL_COLUMNS.len() + 1))
+        .saturating_add(peripheral_rows * row(peripheral_cells))
 }

@@ -141,6 +141,9 @@ pub struct Snapshot {
     pub series: SeriesRow,
     /// The peripheral refraction at each field angle (field 0 first).
     pub peripheral: Vec<PeripheralRow>,
+    /// The refraction through the lenses worn, one entry per image they form, with each
+    /// image's share of the light (none without lenses: [`refraction::through_lenses`]).
+    pub through: Vec<refraction::ThroughLenses>,
 }
 
 /// Work done by a growth run (summary.json records it: eyeshell's `rundir::record`).

@@ -4,10 +4,14 @@
 //! and peripheral rows, `eyeshell optics` and `eyeshell solve` read the same functions here,
 //! so a retina gives the same dioptres in each.
 
+use std::sync::{Arc, Mutex};
+
+use eyeshell_optics::refraction::{PeripheralTable, RefractionTable};
+
 use super::settings::blend_over_ages;
 use super::PeripheralRow;
 use crate::model::eyewear;
-use crate::model::optics::{OpticsKeyError, OpticsSpec};
+use crate::model::optics::{ComputedOptics, OpticsKeyError, OpticsSpec};
 
 /// The refraction (D) at growth time `t` of a retina at `retina_z` on the axis, through the
 /// naked eye of `spec` (NaN beyond ±25 D or when the optics give none): read from a table
@@ -66,6 +70,10 @@ pub struct ThroughLenses {
     pub pole_d: f64,
     /// At each field angle, as [`peripheral`]'s rows.
     pub peripheral: Vec<PeripheralRow>,
+    /// The share of the light this image carries at each field of `peripheral`: 1 for the
+    /// one image of lenses of one smooth profile; a multifocal lens's from the surfaces
+    /// traced for the stimulus ([`with_shares`]; NaN until then).
+    pub share: Vec<f64>,
 }
 
 /// The refraction of one retina at one growth time: of the naked eye (what a growth run's
@@ -81,11 +89,84 @@ pub struct RefractionAt {
     pub through: Vec<ThroughLenses>,
 }
 
+/// The images `spec`'s lenses form, each as the optics its light goes through: one, the
+/// lenses as they are, for lenses of one smooth profile; else one per power of the
+/// multifocal lens, that lens of that power everywhere, as the stimulus traces its images
+/// ([`crate::model::eyewear::LensSpec::image_powers`]). None without lenses.
+fn images(spec: &OpticsSpec) -> Vec<(Option<f64>, OpticsSpec)> {
+    if spec.lenses.is_empty() {
+        return vec![];
+    }
+    let multifocal = (spec.lenses.iter()).position(|l| l.image_powers().len() > 1);
+    match multifocal {
+        None => vec![(None, spec.clone())],
+        Some(i) => (spec.lenses[i].image_powers().into_iter())
+            .map(|p| {
+                let mut s = spec.clone();
+                s.lenses[i] = s.lenses[i].with_power(p);
+                (Some(p), s)
+            })
+            .collect(),
+    }
+}
+
+/// How many images `spec`'s lenses form, each a block of rows of peripheral.csv through the
+/// lenses (0 without lenses).
+pub fn image_count(spec: &OpticsSpec) -> usize {
+    images(spec).len()
+}
+
+/// The tables of one image's refraction through the lenses at one time: the pole's and the
+/// peripheral one.
+type ThroughTables = (RefractionTable, PeripheralTable);
+
+/// The through-lens tables kept, by the image's optics and the growth time they were traced
+/// at: a growth run reads them at every output time, traced once (once per table time for
+/// optics that change with age), and a sweep's runs of the same optics share them.
+static THROUGH: Mutex<Vec<(OpticsSpec, f64, Arc<ThroughTables>)>> = Mutex::new(Vec::new());
+/// The most tables kept: a multifocal lens's images at a few table times.
+const THROUGH_CACHED: usize = 32;
+
+/// The through-lens tables of the image whose optics are `s`, at growth time `at` (a table
+/// time of an eye that changes with age, else 0), traced once and then shared.
+fn through_tables(s: &OpticsSpec, at: f64) -> Result<Arc<ThroughTables>, OpticsKeyError> {
+    let found = THROUGH.lock().ok().and_then(|cache| {
+        (cache.iter())
+            .find(|(k, t, _)| k == s && *t == at)
+            .map(|(_, _, tables)| tables.clone())
+    });
+    if let Some(tables) = found {
+        return Ok(tables);
+    }
+    let tables = Arc::new((
+        eyewear::refraction_table_through(s, at)?,
+        eyewear::peripheral_table_through(s, at)?,
+    ));
+    if let Ok(mut cache) = THROUGH.lock() {
+        if cache.len() >= THROUGH_CACHED {
+            cache.remove(0);
+        }
+        cache.push((s.clone(), at, tables.clone()));
+    }
+    Ok(tables)
+}
+
+/// The times a refraction is traced at: each table time of optics that change with age,
+/// else 0 alone.
+fn traced_times(spec: &OpticsSpec) -> Vec<f64> {
+    let times = spec.times();
+    if times.is_empty() {
+        vec![0.0]
+    } else {
+        times
+    }
+}
+
 /// The refraction through `spec`'s lenses at growth time `t` of the retina through `retina`
-/// (pole first): one entry per image (a lens of several powers is traced at each image's
-/// power, as the stimulus traces its images; [`crate::model::eyewear::LensSpec::image_powers`]),
-/// none without lenses. Traced at `t` itself (an eye that changes with age is traced at
-/// each time asked).
+/// (pole first): one entry per image ([`images`]), none without lenses. The tables are
+/// traced once per image (per table time for optics that change with age, the refractions
+/// there blended in t as the naked eye's are: [`blend_over_ages`]) and kept, so a growth run
+/// pays them once; every output time reads them.
 ///
 /// # Errors
 /// [`OpticsKeyError`] naming the key when the lenses cannot be traced with a trial lens.
@@ -95,36 +176,73 @@ pub fn through_lenses(
     t: f64,
     retina: &[(f64, f64)],
 ) -> Result<Vec<ThroughLenses>, OpticsKeyError> {
-    if spec.lenses.is_empty() {
-        return Ok(vec![]);
+    let images = images(spec);
+    for (_, s) in &images {
+        for at in traced_times(spec) {
+            through_tables(s, at)?;
+        }
     }
-    let multifocal = (spec.lenses.iter()).position(|l| l.image_powers().len() > 1);
-    let images: Vec<(Option<f64>, OpticsSpec)> = match multifocal {
-        None => vec![(None, spec.clone())],
-        Some(i) => (spec.lenses[i].image_powers().into_iter())
-            .map(|p| {
-                let mut s = spec.clone();
-                s.lenses[i] = s.lenses[i].with_power(p);
-                (Some(p), s)
-            })
-            .collect(),
-    };
+    Ok(images
+        .iter()
+        .map(|(power, s)| through_image(spec, s, *power, z_c, t, retina))
+        .collect())
+}
+
+/// [`through_lenses`] where tables that cannot be traced give NaN rather than an error: what
+/// a growth run's snapshots hold (the naked eye's rows are NaN there too).
+pub fn through_lenses_or_nan(
+    spec: &OpticsSpec,
+    z_c: f64,
+    t: f64,
+    retina: &[(f64, f64)],
+) -> Vec<ThroughLenses> {
+    images(spec)
+        .iter()
+        .map(|(power, s)| through_image(spec, s, *power, z_c, t, retina))
+        .collect()
+}
+
+/// The refraction through one image, of optics `s` (`spec`'s, the multifocal lens at the
+/// image's power), blended over `spec`'s table times.
+fn through_image(
+    spec: &OpticsSpec,
+    s: &OpticsSpec,
+    image_power: Option<f64>,
+    z_c: f64,
+    t: f64,
+    retina: &[(f64, f64)],
+) -> ThroughLenses {
     let retina_z = retina.first().map_or(f64::NAN, |p| p.0);
     let fields = eyewear::peripheral_fields(spec.max_field);
-    images
-        .into_iter()
-        .map(|(image_power, s)| {
-            let table = eyewear::refraction_table_through(&s, t)?;
-            let pole_d = table.refraction(retina_z).unwrap_or(f64::NAN);
-            let table = eyewear::peripheral_table_through(&s, t)?;
-            let values = eyewear::peripheral_refraction(&table, z_c, retina);
-            Ok(ThroughLenses {
-                image_power,
-                pole_d,
-                peripheral: rows(&fields, &values),
-            })
-        })
-        .collect()
+    let values = blend_over_ages(spec, t, |at| match through_tables(s, at) {
+        Ok(tables) => {
+            let pole = tables.0.refraction(retina_z).unwrap_or(f64::NAN);
+            let mut v = vec![pole];
+            v.extend(eyewear::peripheral_refraction(&tables.1, z_c, retina));
+            v
+        }
+        Err(_) => vec![f64::NAN; fields.len() + 1],
+    });
+    let share = match image_power {
+        None => 1.0,
+        Some(_) => f64::NAN,
+    };
+    ThroughLenses {
+        image_power,
+        pole_d: values[0],
+        peripheral: rows(&fields, &values[1..]),
+        share: vec![share; fields.len()],
+    }
+}
+
+/// `through` with each image's share of the light at each field, from `computed`'s images
+/// (the surfaces traced at the first wavelength: [`ComputedOptics::image_share`]).
+pub fn with_shares(through: &mut [ThroughLenses], computed: &ComputedOptics) {
+    for l in through {
+        l.share = (l.peripheral.iter())
+            .map(|p| computed.image_share(l.image_power, p.field_deg))
+            .collect();
+    }
 }
 
 /// The refraction of the retina through `retina` (pole first; its z on the axis is the

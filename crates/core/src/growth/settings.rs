@@ -114,6 +114,24 @@ impl GrowthParams {
         super::refraction::peripheral(&self.refraction_optics(), self.blue.z_b, t, retina)
     }
 
+    /// The refraction through the lenses at growth time `t` of the retina through `retina`
+    /// (pole first), one entry per image with its share of the light at each field: the
+    /// same tables and conversion as `eyeshell optics` ([`super::refraction::through_lenses`]),
+    /// traced once per run (once per table time for optics that change with age); NaN
+    /// where they cannot be traced, as [`GrowthParams::peripheral`]'s. None without lenses.
+    pub fn through_lenses(
+        &self,
+        t: f64,
+        retina: &[(f64, f64)],
+    ) -> Vec<super::refraction::ThroughLenses> {
+        let spec = self.refraction_optics();
+        let mut through = super::refraction::through_lenses_or_nan(&spec, self.blue.z_b, t, retina);
+        if let (Source::Optics, Some(c)) = (&self.source, &self.computed) {
+            super::refraction::with_shares(&mut through, c);
+        }
+        through
+    }
+
     /// `eye` at growth time `t` with its refraction, classified as `stimulus.classify` says.
     /// By dioptres, an eye whose refraction_D is NaN (beyond the ±25 D it is traced over)
     /// is [`Refraction::Unknown`]: the surfaces' rule answers another question (a 35 mm

@@ -510,12 +510,14 @@ impl GrowthSystem {
         let retina: Vec<(f64, f64)> = growth.iter().map(|g| (g.z_retina, g.r_retina)).collect();
         let series = self.series_row(t, &retina)?;
         let peripheral = self.growth.peripheral(t, &retina);
+        let through = self.growth.through_lenses(t, &retina);
         Ok(super::Snapshot {
             t,
             fields: sol.rows,
             growth,
             series,
             peripheral,
+            through,
         })
     }
 

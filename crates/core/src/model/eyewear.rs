@@ -687,7 +687,9 @@ fn trace_pole(
 /// 555 nm, fields every 5° to 40°), kept in default_tables.rs rather than traced: every
 /// scene without optics of its own reports its refraction with them, and tracing them
 /// (about 0.2 s of CPU) cost a 10 ms growth run twenty times over. The numerics test
-/// `default_refraction_tables_are_a_fresh_trace` checks them against a new trace.
+/// `default_refraction_tables_are_a_fresh_trace` checks them against a new trace at the
+/// grid's powers and at those traced between them where the cubic misses
+/// ([`PeripheralTable::between`]).
 pub fn default_tables() -> (Arc<RefractionTable>, Arc<PeripheralTable>) {
     static KEPT: OnceLock<(Arc<RefractionTable>, Arc<PeripheralTable>)> = OnceLock::new();
     KEPT.get_or_init(|| {
@@ -704,6 +706,10 @@ pub fn default_tables() -> (Arc<RefractionTable>, Arc<PeripheralTable>) {
             fields: kept::FIELDS.to_vec(),
             powers: power_grid(PERIPHERAL_POWERS),
             foci: kept::PERIPHERAL_FOCI.iter().map(|f| f.to_vec()).collect(),
+            between: kept::PERIPHERAL_BETWEEN
+                .iter()
+                .map(|b| b.to_vec())
+                .collect(),
         };
         (Arc::new(pole), Arc::new(peripheral))
     })

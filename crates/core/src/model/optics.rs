@@ -958,6 +958,22 @@ impl ComputedOptics {
             .unwrap_or(0)
     }
 
+    /// The share of the light the image of power `image` carries at `field` (degrees), as
+    /// the surfaces traced at the first wavelength give it: 1 for the one image of a lens of
+    /// one smooth profile, or no lens; NaN for a power that is none of the images or a
+    /// field the surfaces were not traced at.
+    pub fn image_share(&self, image: Option<f64>, field: f64) -> f64 {
+        let Some(power) = image else {
+            return 1.0;
+        };
+        let Some(im) = self.images.iter().find(|im| im.power == Some(power)) else {
+            return f64::NAN;
+        };
+        (im.surfaces.surfaces.first())
+            .and_then(|s| s.points.iter().position(|p| p.field_deg == field))
+            .map_or(f64::NAN, |j| im.share.traced(j))
+    }
+
     /// True when these are the surfaces of `spec` about `z_c`.
     pub fn is_for(&self, spec: &OpticsSpec, z_c: f64) -> bool {
         self.spec == *spec && self.z_c == z_c

@@ -62,6 +62,20 @@ fn default_refraction_tables_are_a_fresh_trace() {
             }
             out += "    ],\n";
         }
+        out += "];\n\n";
+        out += &format!("pub(super) const PERIPHERAL_BETWEEN: [&[(f64, (f64, f64))]; {nf}] = [\n");
+        for row in &peripheral.between {
+            out += "    &[\n";
+            for (f, (z, r)) in row {
+                out += &format!(
+                    "        ({}, ({}, {})),\n",
+                    literal(*f),
+                    literal(*z),
+                    literal(*r)
+                );
+            }
+            out += "    ],\n";
+        }
         out += "];\n";
         std::fs::write(FILE, out).unwrap();
         return;
@@ -80,6 +94,26 @@ fn default_refraction_tables_are_a_fresh_trace() {
         );
     }
     assert_eq!(kept_peripheral.fields, peripheral.fields, "{hint}");
+    // The powers traced between the grid's, where the cubic missed: the same, to rounding.
+    assert_eq!(
+        kept_peripheral.between.len(),
+        peripheral.between.len(),
+        "{hint}"
+    );
+    for (i, (ka, kb)) in kept_peripheral
+        .between
+        .iter()
+        .zip(&peripheral.between)
+        .enumerate()
+    {
+        assert_eq!(ka.len(), kb.len(), "field {i}: {hint}");
+        for ((fa, a), (fb, b)) in ka.iter().zip(kb) {
+            assert!(
+                fa == fb && (a.0 - b.0).abs() <= 1e-9 && (a.1 - b.1).abs() <= 1e-9,
+                "field {i}, power {fa}: kept {a:?}, traced {b:?}: {hint}"
+            );
+        }
+    }
     assert_eq!(kept_peripheral.powers, peripheral.powers, "{hint}");
     for (i, (ra, rb)) in kept_peripheral
         .foci

@@ -7,6 +7,10 @@
 //!   never half-written;
 //! - `history.csv` (with `output.history_points` > 0): the same columns at every recorded
 //!   time, the history times and the snapshot times, appended and flushed at once;
+//! - `peripheral.csv`: the peripheral refraction at every output time, a row per field
+//!   angle, naked; when the eye whose refraction the run reports wears lenses, the rows of
+//!   `eyeshell optics`'s layout instead, naked and through each image of the lenses with its
+//!   share ([`peripheral_records`]);
 //! - `sensitivities.csv` (with `GrowthSettings::sensitivities`): one row per recorded time
 //!   and parameter, [`SENSITIVITY_COLUMNS`], appended and flushed at once;
 //! - with `time.unit` set, series.csv, history.csv, sensitivities.csv and peripheral.csv
@@ -30,9 +34,10 @@ use super::summary::{GrowthSummary, RunStatus, SnapshotEntry, Summary};
 use super::table::{csv_writer, QuoteStyle};
 use super::{format_value, write_atomic_unsynced, OutputError, OwnedDir, SUMMARY_FILE};
 use crate::bvp::COLUMNS;
+use crate::growth::refraction::ThroughLenses;
 use crate::growth::{
-    GrowthError, GrowthStats, Observer, ObserverError, SensitivityRow, SeriesRow, Snapshot,
-    GROWTH_COLUMNS, PERIPHERAL_COLUMNS,
+    GrowthError, GrowthStats, Observer, ObserverError, PeripheralRow, SensitivityRow, SeriesRow,
+    Snapshot, GROWTH_COLUMNS, PERIPHERAL_COLUMNS,
 };
 use crate::outputs::{series_cells, series_columns};
 use crate::scene::Scene;
@@ -135,6 +140,9 @@ pub struct GrowthWriter {
     scene: Scene,
     series: csv::Writer<fs::File>,
     peripheral: csv::Writer<fs::File>,
+    /// peripheral.csv holds the [`THROUGH_COLUMNS`] and rows through the lenses: the eye
+    /// whose refraction the run reports wears lenses.
+    through_columns: bool,
     history: Option<csv::Writer<fs::File>>,
     sensitivities: Option<csv::Writer<fs::File>>,
     snapshots: Vec<WrittenSnapshot>,
@@ -177,9 +185,14 @@ impl GrowthWriter {
         fs::create_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
         let series_path = target.join(SERIES_FILE);
         let series = create_with_header(&series_path, ages)?;
+        let through_columns = (scene.refraction_optics()).is_some_and(|o| !o.lenses.is_empty());
+        let mut columns = PERIPHERAL_COLUMNS.to_vec();
+        if through_columns {
+            columns.extend(THROUGH_COLUMNS);
+        }
         let peripheral = create_with_columns(
             &target.join(PERIPHERAL_FILE),
-            &with_age_column(&PERIPHERAL_COLUMNS, ages),
+            &with_age_column(&columns, ages),
         )?;
         let history = if history_points > 0 {
             Some(create_with_header(&target.join(HISTORY_FILE), ages)?)
@@ -201,6 +214,7 @@ impl GrowthWriter {
             scene: scene.clone(),
             series,
             peripheral,
+            through_columns,
             history,
             sensitivities,
             snapshots: Vec::new(),
@@ -248,7 +262,7 @@ impl GrowthWriter {
         let age = self.age(s.t);
         append(&mut self.series, &s.series, age).map_err(|e| OutputError::io(&series_path, e))?;
         let peripheral_path = self.dir.join(PERIPHERAL_FILE);
-        append_peripheral(&mut self.peripheral, s, age)
+        append_peripheral(&mut self.peripheral, s, self.through_columns, age)
             .map_err(|e| OutputError::io(&peripheral_path, e))?;
         self.snapshots.push(WrittenSnapshot {
             t: s.t,
@@ -313,21 +327,63 @@ fn append(w: &mut csv::Writer<fs::File>, row: &SeriesRow, age: Option<f64>) -> s
     w.flush()
 }
 
-/// Append the peripheral refraction rows of snapshot `s` (each with its age, in a scene with
-/// ages) and flush them at once.
+/// The columns peripheral.csv holds after [`PERIPHERAL_COLUMNS`] for an eye that wears
+/// lenses (and always in `eyeshell optics`'s): which eye the row is through (`naked` or
+/// `lenses`), the image's index among the lenses' images, its power (empty but for a lens
+/// that forms several) and its share of the light at that field (1 for the naked eye).
+pub const THROUGH_COLUMNS: [&str; 4] = ["through", "image", "image_power_D", "share"];
+
+/// The rows of peripheral.csv at growth time `t`: the naked eye's `naked` at each field,
+/// then, with `through_columns`, the [`THROUGH_COLUMNS`] after them and each image of the
+/// lenses `through` at each field; `age` last in a scene with ages. One function for a
+/// growth run's file and `eyeshell optics`'s, so the two agree row for row.
+pub fn peripheral_records(
+    t: f64,
+    naked: &[PeripheralRow],
+    through: &[ThroughLenses],
+    through_columns: bool,
+    age: Option<f64>,
+) -> Vec<Vec<String>> {
+    let v = format_value;
+    let row = |p: &PeripheralRow, eye: Option<[String; 4]>| -> Vec<String> {
+        [v(t), v(p.field_deg), v(p.refraction_d), v(p.relative_d)]
+            .into_iter()
+            .chain(eye.into_iter().flatten())
+            .chain(age.map(v))
+            .collect()
+    };
+    let naked_cells = || ["naked".into(), "0".into(), String::new(), v(1.0)];
+    let mut rows: Vec<Vec<String>> = (naked.iter())
+        .map(|p| row(p, through_columns.then(naked_cells)))
+        .collect();
+    if !through_columns {
+        return rows;
+    }
+    for (k, l) in through.iter().enumerate() {
+        for (i, p) in l.peripheral.iter().enumerate() {
+            let share = l.share.get(i).copied().unwrap_or(f64::NAN);
+            let cells = [
+                "lenses".into(),
+                k.to_string(),
+                l.image_power.map(v).unwrap_or_default(),
+                v(share),
+            ];
+            rows.push(row(p, Some(cells)));
+        }
+    }
+    rows
+}
+
+/// Append the peripheral refraction rows of snapshot `s` ([`peripheral_records`], each with
+/// its age in a scene with ages) and flush them at once.
 fn append_peripheral(
     w: &mut csv::Writer<fs::File>,
     s: &Snapshot,
+    through_columns: bool,
     age: Option<f64>,
 ) -> std::io::Result<()> {
-    for p in &s.peripheral {
-        let cells = [
-            format_value(s.t),
-            format_value(p.field_deg),
-            format_value(p.refraction_d),
-            format_value(p.relative_d),
-        ];
-        w.write_record(cells.into_iter().chain(age.map(format_value)))?;
+    for row in peripheral_records(s.t, &s.peripheral, &s.through, through_columns, age) {
+        w.write_record(row)?;
     }
     w.flush()
 }
@@ -425,6 +481,7 @@ mod tests {
                 defocus_d: f64::NAN,
             },
             peripheral: vec![],
+            through: vec![],
         }
     }
 

@@ -241,7 +241,9 @@ impl Scene {
                 None => (planned, &["output.times", "solver.nodes"]),
                 Some(_) => (self.solver.max_nodes, &["output.times", "solver.max_nodes"]),
             };
-            let bytes = planned_bytes(nodes, g.output_times.len(), g.history_points);
+            let images = (self.refraction_optics())
+                .map_or(0, |o| crate::growth::refraction::image_count(&o));
+            let bytes = planned_bytes(nodes, g.output_times.len(), g.history_points, images);
             if bytes > MAX_RUN_BYTES {
                 return Err(invalid(
                     keys,
