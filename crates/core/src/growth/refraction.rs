@@ -279,19 +279,9 @@ pub fn of_retina(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::eyewear::tests::sphere;
     use crate::model::eyewear::{LensSpec, ProfileSpec};
     use eyeshell_optics::{best_focus_with, lens::wear};
-
-    /// A spherical retina of radius 11 mm about z = 12 (23 mm long), from just off its pole
-    /// outwards (as a shell's nodes are).
-    fn sphere() -> Vec<(f64, f64)> {
-        (0..=240)
-            .map(|k| {
-                let phi = (0.01 + k as f64 * 0.5).to_radians();
-                (12.0 + 11.0 * phi.cos(), 11.0 * phi.sin())
-            })
-            .collect()
-    }
 
     fn wearing(kind: usize, power: f64) -> OpticsSpec {
         OpticsSpec {

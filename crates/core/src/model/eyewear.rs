@@ -1012,4 +1012,4 @@ pub fn refraction_optics(spec: &OpticsSpec, computed: bool) -> OpticsSpec {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -5,7 +5,7 @@ use eyeshell_optics::best_focus_with;
 
 /// A spherical retina of radius 11 mm about z = 12 (23 mm long), from just off its pole
 /// outwards (as a shell's nodes are).
-fn sphere() -> Vec<(f64, f64)> {
+pub(crate) fn sphere() -> Vec<(f64, f64)> {
     (0..=240)
         .map(|k| {
             let phi = (0.01 + k as f64 * 0.5).to_radians();
