@@ -103,21 +103,49 @@ fn add_age(
 }
 
 /// The peripheral refraction of every snapshot (peripheral.csv's columns, `age` last when
-/// the scene counts in ages, `g`'s time.unit) as arrays.
+/// the scene counts in ages, `g`'s time.unit) as arrays: with lenses worn, each snapshot's
+/// naked rows and then its rows through each image of the lenses, with the columns that say
+/// which (`through`, `image`, `image_power_D`, `share`), as peripheral.csv holds them.
 fn peripheral_dict<'py>(
     py: Python<'py>,
     snapshots: &[Snapshot],
     g: Option<&GrowthParams>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let rows: Vec<(f64, &eyeshell::growth::PeripheralRow)> = snapshots
-        .iter()
-        .flat_map(|s| s.peripheral.iter().map(move |p| (s.t, p)))
-        .collect();
+    // (t, row, through: None for the naked eye, else (image, its power, its share)).
+    type Row<'a> = (
+        f64,
+        &'a eyeshell::growth::PeripheralRow,
+        Option<(usize, f64, f64)>,
+    );
+    let mut rows: Vec<Row> = Vec::new();
+    for s in snapshots {
+        rows.extend(s.peripheral.iter().map(|p| (s.t, p, None)));
+        for (k, l) in s.through.iter().enumerate() {
+            let power = l.image_power.unwrap_or(f64::NAN);
+            rows.extend(l.peripheral.iter().enumerate().map(|(i, p)| {
+                let share = l.share.get(i).copied().unwrap_or(f64::NAN);
+                (s.t, p, Some((k, power, share)))
+            }));
+        }
+    }
     let d = PyDict::new(py);
     d.set_item("t", column(py, &rows, |r| r.0))?;
     d.set_item("field_deg", column(py, &rows, |r| r.1.field_deg))?;
     d.set_item("refraction_D", column(py, &rows, |r| r.1.refraction_d))?;
     d.set_item("relative_D", column(py, &rows, |r| r.1.relative_d))?;
+    if snapshots.iter().any(|s| !s.through.is_empty()) {
+        let through: Vec<&str> = (rows.iter())
+            .map(|r| if r.2.is_some() { "lenses" } else { "naked" })
+            .collect();
+        d.set_item("through", through)?;
+        let image: Vec<i64> = rows.iter().map(|r| r.2.map_or(0, |x| x.0 as i64)).collect();
+        d.set_item("image", PyArray1::from_vec(py, image))?;
+        d.set_item(
+            "image_power_D",
+            column(py, &rows, |r| r.2.map_or(f64::NAN, |x| x.1)),
+        )?;
+        d.set_item("share", column(py, &rows, |r| r.2.map_or(1.0, |x| x.2)))?;
+    }
     add_age(py, &d, rows.iter().map(|r| r.0), g)?;
     Ok(d)
 }

@@ -79,6 +79,32 @@ def test_peripheral_refraction_per_field_at_each_snapshot():
     assert np.all(np.isfinite(p["refraction_D"][p["field_deg"] <= 30.0]))
 
 
+def test_peripheral_through_the_lenses_is_the_files(cli, tmp_path):
+    # A dual-focus contact lens: every snapshot's naked rows, then each image's rows through
+    # the lens with its power and share, as the command line's peripheral.csv has them.
+    sets = {"solver.nodes": 41, "output.times": "[0.5, 1.0]", "output.history_points": 0}
+    g = eyeshell.grow(SCENES / "eyewear" / "dual-focus.toml", frames=False,
+                      **{k.replace(".", "__"): v for k, v in sets.items() if k != "output.times"},
+                      output__times=[0.5, 1.0])
+    args = [a for k, v in sets.items() for a in ("--set", f"{k}={v}")]
+    cli("grow", SCENES / "eyewear" / "dual-focus.toml", *args, "--out", tmp_path / "run", "-q")
+    file = read_csv(tmp_path / "run" / "peripheral.csv")
+    p = g.peripheral
+    assert list(p) == list(file), (list(p), list(file))
+    assert list(p["through"]) == file["through"] and set(file["through"]) == {"naked", "lenses"}
+    assert [int(i) for i in p["image"]] == [int(i) for i in file["image"]]
+    for c in ["t", "field_deg", "refraction_D", "relative_D", "share"]:
+        assert np.array_equal(p[c], np.array(file[c], dtype=float), equal_nan=True), c
+    powers = [math.nan if x == "" else x for x in file["image_power_D"]]
+    assert np.array_equal(p["image_power_D"], np.array(powers, dtype=float), equal_nan=True)
+    # Through the lens the two images' shares sum to 1 at every time and field.
+    lens = p["through"] == "lenses" if isinstance(p["through"], np.ndarray) else np.array(p["through"]) == "lenses"
+    for t in set(p["t"]):
+        for f in set(p["field_deg"]):
+            at = lens & (p["t"] == t) & (p["field_deg"] == f)
+            assert abs(p["share"][at].sum() - 1.0) < 1e-12, (t, f)
+
+
 def test_series_are_data_frames_with_pandas():
     pandas = optional("pandas")
     g = eyeshell.grow(SCENES / "const.toml", solver__nodes=101)

@@ -515,9 +515,10 @@ class Growth:
     - ``series``: series.csv's columns (t, axial_length, equatorial_radius,
       retina_minus_blue, retina_minus_red, class, refraction_D, and ``age`` in a scene
       with ``time.unit``: the age of each t in that unit) at each snapshot;
-    - ``peripheral``: peripheral.csv's columns (t, field_deg, refraction_D, relative_D,
-      and ``age`` with ``time.unit``), the peripheral refraction at each snapshot and field
-      angle;
+    - ``peripheral``: peripheral.csv's columns (t, field_deg, refraction_D, relative_D;
+      with lenses worn, through, image, image_power_D and share: each snapshot's naked rows,
+      then its rows through each image of the lenses; and ``age`` with ``time.unit``), the
+      peripheral refraction at each snapshot and field angle;
     - ``history``: the same at every recorded time when ``output.history_points`` > 0
       (history.csv), else empty;
     - ``snapshots``: {t: every field at every node (the snapshot files' columns)};
