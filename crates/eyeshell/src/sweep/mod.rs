@@ -409,11 +409,14 @@ fn io(path: &Path, e: std::io::Error) -> OutputError {
     }
 }
 
-/// The columns of sweep.csv after `run`, `status` and the swept keys: `kind`, `t`, the
-/// measures of the eye (the table of outputs, [`crate::outputs::quantities`]), then the
-/// run's work and its error.
-pub fn result_columns() -> Vec<&'static str> {
+/// The columns of sweep.csv after `run`, `status` and the swept keys: `kind`, `t` (and
+/// `age` with `ages`), the measures of the eye (the table of outputs,
+/// [`crate::outputs::quantities`]), then the run's work and its error.
+pub fn result_columns(ages: bool) -> Vec<&'static str> {
     let mut columns = vec!["kind", "t"];
+    if ages {
+        columns.push(crate::rundir::growth::AGE_COLUMN);
+    }
     columns.extend(crate::outputs::quantities().iter().map(|q| q.name));
     columns.extend(WORK_COLUMNS);
     columns.push("error");
@@ -487,30 +490,22 @@ pub fn table_csv(sweep: Head<'_>, report: &SweepReport) -> std::io::Result<Vec<u
         .records
         .iter()
         .any(|r| r.result.as_ref().is_some_and(|x| x.age.is_some()));
-    let mut columns = result_columns();
-    if ages {
-        columns.insert(2, crate::rundir::growth::AGE_COLUMN);
-    }
     let header = ["run", "status"]
         .iter()
         .map(|s| s.to_string())
         .chain(sweep.keys.iter().cloned())
-        .chain(columns.into_iter().map(str::to_string));
+        .chain(result_columns(ages).into_iter().map(str::to_string));
     let rows = report.records.iter().map(|r| {
         let mut fields = vec![r.name.clone(), r.status.as_str().to_string()];
         fields.extend(r.values.iter().cloned());
-        let mut result = result_fields(r);
-        if ages {
-            let age = r.result.as_ref().and_then(|x| x.age);
-            result.insert(2, age.map(format_value).unwrap_or_default());
-        }
-        fields.extend(result);
+        fields.extend(result_fields(r, ages));
         fields
     });
     csv_bytes(header, rows, QuoteStyle::Necessary)
 }
 
-fn result_fields(r: &RunRecord) -> Vec<String> {
+/// A run's cells in [`result_columns`]`(ages)` (its age empty when it has none).
+fn result_fields(r: &RunRecord, ages: bool) -> Vec<String> {
     let error = match &r.status {
         RunStatus::Failed(m) => m.clone(),
         _ => String::new(),
@@ -518,6 +513,9 @@ fn result_fields(r: &RunRecord) -> Vec<String> {
     match &r.result {
         Some(x) => {
             let mut v = vec![x.kind.clone(), format_value(x.t)];
+            if ages {
+                v.push(x.age.map(format_value).unwrap_or_default());
+            }
             v.extend(x.eye.0.iter().map(|(_, value)| value.text()));
             v.extend([
                 x.newton_iterations.to_string(),
@@ -530,7 +528,7 @@ fn result_fields(r: &RunRecord) -> Vec<String> {
             v
         }
         None => {
-            let mut v = vec![String::new(); result_columns().len() - 1];
+            let mut v = vec![String::new(); result_columns(ages).len() - 1];
             v.push(error);
             v
         }
