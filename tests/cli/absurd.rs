@@ -311,7 +311,7 @@ fn what_a_run_would_allocate_or_write_is_refused_before_it_starts() {
             "--set",
             "solver.nodes=100000",
         ],
-        "would have the run write about 57.3 GB (1001 snapshot files of up to 100",
+        "would have the run write about 59.9 GB (1001 snapshot files of up to 100",
     );
     refused_at_once(
         d,

@@ -142,7 +142,7 @@ fn numbers(path: &std::path::Path, name: &str) -> Vec<f64> {
 }
 
 /// A scene in years carries the age beside t everywhere: series.csv, history.csv,
-/// sensitivities.csv and peripheral.csv end in an `age` column, the snapshot files are named by age, `plot`
+/// sensitivities.csv, peripheral.csv and the snapshots end in an `age` column, the snapshot files are named by age, `plot`
 /// draws against age, and `fit` (data by age) reports, tabulates and draws by age.
 #[test]
 fn a_scene_in_years_has_ages_in_every_output() {
@@ -202,8 +202,24 @@ fn a_scene_in_years_has_ages_in_every_output() {
             "snapshot_00004_age12.000000.csv"
         ]
     );
-    for (p, _) in snapshots(&run) {
-        assert!(p.is_file(), "{}", p.display());
+    // Each snapshot ends in its age, the same on every node: the age of its name.
+    for ((p, _), want) in snapshots(&run).iter().zip([2.0, 3.0, 4.0, 6.0, 12.0]) {
+        let (h, _) = csv_cells(p);
+        assert_eq!(
+            h.last().map(String::as_str),
+            Some("age"),
+            "{}: {h:?}",
+            p.display()
+        );
+        let age = numbers(p, "age");
+        assert!(age.len() > 10, "{}: {age:?}", p.display());
+        for a in age {
+            assert!(
+                (a - want).abs() <= 1e-12,
+                "{}: age {a}, want {want}",
+                p.display()
+            );
+        }
     }
     // plot: the timeline and the sensitivities against age.
     succeeded(

@@ -150,12 +150,18 @@ fn peripheral_dict<'py>(
     Ok(d)
 }
 
-/// One snapshot's fields (fields.csv's columns, then the growth columns) as arrays.
-fn snapshot_dict<'py>(py: Python<'py>, s: &Snapshot) -> PyResult<Bound<'py, PyDict>> {
+/// One snapshot's fields (fields.csv's columns, then the growth columns) as arrays, and
+/// its age on every node in a scene with time.unit, as the snapshot file has it.
+fn snapshot_dict<'py>(
+    py: Python<'py>,
+    s: &Snapshot,
+    g: Option<&GrowthParams>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = fields_dict(py, &s.fields)?;
     for (j, name) in GROWTH_COLUMNS.iter().enumerate() {
         d.set_item(*name, column(py, &s.growth, |g| g.values()[j]))?;
     }
+    add_age(py, &d, s.fields.iter().map(|_| s.t), g)?;
     Ok(d)
 }
 
@@ -244,7 +250,7 @@ pub(super) fn grow<'py>(
             py,
             [
                 s.t.into_pyobject(py)?.into_any(),
-                snapshot_dict(py, s)?.into_any(),
+                snapshot_dict(py, s, g)?.into_any(),
             ],
         )?)?;
     }

@@ -142,8 +142,9 @@ YEARS = dict(time__unit="years", time__start=2.0, time__end=12.0, solver__nodes=
 
 
 def test_a_scene_in_years_carries_ages_as_the_command_line_writes_them(cli, tmp_path):
-    """series, history, sensitivities and peripheral end in an age column (age = 2 + 10 t
-    here), bit for bit the command line's files; without time.unit there is none."""
+    """series, history, sensitivities, peripheral and the snapshots end in an age column
+    (age = 2 + 10 t here), bit for bit the command line's files; without time.unit there
+    is none."""
     scene = eyeshell.Scene.from_file(SCENES / "const.toml", **YEARS)
     toml = tmp_path / "years.toml"
     toml.write_text(scene.to_toml())
@@ -156,9 +157,17 @@ def test_a_scene_in_years_carries_ages_as_the_command_line_writes_them(cli, tmp_
         assert list(written)[-1] == "age" and list(written) == list(table), name
         assert list(table["age"]) == written["age"], name
         assert np.allclose(table["age"], 2 + 10 * np.asarray(table["t"]), rtol=0, atol=1e-12)
+    # Each snapshot ends in its age on every node, as its file does.
+    files = sorted((run / "snapshots").iterdir())
+    assert len(files) == len(g.snapshots) >= 3
+    for path, (t, fields) in zip(files, sorted(g.snapshots.items())):
+        written = read_csv(path)
+        assert list(written)[-1] == "age" and list(written) == list(fields), path.name
+        assert list(fields["age"]) == written["age"] == [2 + 10 * t] * len(fields["r"]), path.name
     plain = eyeshell.grow(SCENES / "const.toml", frames=False, solver__nodes=21)
     assert "age" not in plain.series and "age" not in plain.sensitivities
     assert "age" not in plain.peripheral
+    assert all("age" not in fields for fields in plain.snapshots.values())
 
 
 def test_fit_takes_data_by_age_and_reports_by_age():

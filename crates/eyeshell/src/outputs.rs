@@ -282,7 +282,8 @@ pub fn reference() -> String {
     md.push_str(&format!(
         "\nWith `time.unit` set, `series.csv`, `history.csv`, `sensitivities.csv` and \
          `peripheral.csv` end in an `{}` column: the age of the row's `t`, in that unit; so \
-         does a table cohort's one `series.csv`. A sweep's `sweep.csv` and a cohort's \
+         does a table cohort's one `series.csv`, and each snapshot file (its age on every \
+         node). A sweep's `sweep.csv` and a cohort's \
          `population.csv` give it after `t`, `population.json` at each time (`age`), at the \
          final time (`final_age`) with its unit (`age_unit`), a run's `result.json` as `age`, \
          and `population.png` is drawn against it.\n\n\

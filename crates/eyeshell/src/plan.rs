@@ -21,10 +21,10 @@ pub const MAX_RUN_BYTES: u64 = 8 << 30;
 /// the columns that say which.
 pub fn planned_bytes(nodes: usize, times: usize, history_points: usize, images: usize) -> u64 {
     let row = |cells: usize| cells as u64 * CELL_BYTES;
-    let snapshot = (nodes as u64 + 1) * row(COLUMNS.len() + GROWTH_COLUMNS.len());
+    let snapshot = (nodes as u64 + 1) * row(COLUMNS.len() + GROWTH_COLUMNS.len() + 1);
     let series_rows = times as u64 + 2;
     let history_rows = (history_points + times) as u64 + 2;
-    // With room for the age column of a scene with time.unit; peripheral.csv: a row per
+    // Every file with room for the age column of a scene with time.unit; peripheral.csv: a row per
     // field angle, every 5° to at most 90°, per output time.
     let peripheral_rows = series_rows * 20 * (1 + images as u64);
     let peripheral_cells = PERIPHERAL_COLUMNS.len() + 1 + if images > 0 { 4 } else { 0 };

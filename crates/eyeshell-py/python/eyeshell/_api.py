@@ -521,7 +521,8 @@ class Growth:
       peripheral refraction at each snapshot and field angle;
     - ``history``: the same at every recorded time when ``output.history_points`` > 0
       (history.csv), else empty;
-    - ``snapshots``: {t: every field at every node (the snapshot files' columns)};
+    - ``snapshots``: {t: every field at every node (the snapshot files' columns, ending in
+      ``age``, the snapshot's age on every node, with ``time.unit``)};
     - ``sensitivities``: with ``grow(..., sensitivities=[...])``, sensitivities.csv's
       columns (t, parameter, d_axial_length, d_equatorial_radius, d_retina_minus_blue,
       scaled_axial_length, and ``age`` with ``time.unit``), one row per recorded time and

@@ -115,14 +115,21 @@ pub fn series_record(row: &SeriesRow) -> Vec<String> {
     series_cells(row)
 }
 
-/// The text of a snapshot file: the [`snapshot_header`] columns, one row per node.
-pub fn snapshot_csv(s: &Snapshot) -> std::io::Result<Vec<u8>> {
-    let header = COLUMNS.iter().chain(GROWTH_COLUMNS.iter()).copied();
+/// The text of a snapshot file: the [`snapshot_header`] columns, one row per node, then
+/// [`AGE_COLUMN`] when the scene counts ages (`age`: the snapshot's age, the same on every
+/// row, so that a snapshot read alone, or concatenated with others, still says when it is).
+pub fn snapshot_csv(s: &Snapshot, age: Option<f64>) -> std::io::Result<Vec<u8>> {
+    let columns: Vec<&str> = COLUMNS
+        .iter()
+        .chain(GROWTH_COLUMNS.iter())
+        .copied()
+        .collect();
+    let header = with_age_column(&columns, age.is_some());
     let rows = s
         .fields
         .iter()
         .zip(&s.growth)
-        .map(|(f, g)| f.values().into_iter().chain(g.values()));
+        .map(|(f, g)| f.values().into_iter().chain(g.values()).chain(age));
     Ok(super::numeric_csv(header, rows))
 }
 
@@ -255,7 +262,7 @@ impl GrowthWriter {
                 )),
             ));
         }
-        snapshot_csv(s)
+        snapshot_csv(s, self.age(s.t))
             .and_then(|text| write_atomic_unsynced(&path, &text))
             .map_err(|e| OutputError::io(&path, e))?;
         let series_path = self.dir.join(SERIES_FILE);
