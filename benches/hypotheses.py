@@ -42,8 +42,8 @@ def main():
         res = {}
         for lens in LENSES:
             for span, end in (("11", 3.0), ("15", 7.0)):
-                times = "[1.0, 2.0, 3.0]" if end == 3.0 else "[1.0, 2.0, 3.0, 7.0]"
-                extra = [f"growth.t_end={end}", f"time.end={8 + end}", f"output.times={times}"]
+                ages = "[9.0, 10.0, 11.0]" if end == 3.0 else "[9.0, 10.0, 11.0, 15.0]"
+                extra = [f"time.end={8 + end}", f"output.times={ages}"]
                 out = os.path.join(tmp, f"{len(rows)}-{lens}-{span}")
                 res[(lens, span)], err = grow(f"scenes/myopia/{lens}.toml", sets + extra, out)
                 if err:
@@ -53,7 +53,7 @@ def main():
         out = os.path.join(tmp, f"{len(rows)}-hyperope")
         hyp, err = grow("scenes/myopia/single-vision.toml", sets + [
             "geometry.R0=11.5", "cornea.R0=11.5", "optics.lenses=[]", "time.start=6.0",
-            "time.end=15.0", "growth.t_end=9.0", "output.times=[3.0, 6.0, 9.0]"], out)
+            "time.end=15.0", "output.times=[9.0, 12.0, 15.0]"], out)
         if err:
             print(f"{name} hyperope: {err}", file=sys.stderr)
         rows.append((name, res, hyp))

@@ -260,7 +260,7 @@ pub(crate) struct OpticsArgs {
     /// Output directory: surfaces.csv, optics.json, optics.png and optics.svg (created whole or not at all; a previous eyeshell output is replaced)
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
-    /// The eye at growth time T (in [0, growth.t_end]; default 0): for optics keys given as tables over t
+    /// The eye at growth time T (in [0, growth.t_end], or with time.unit the age T in [time.start, time.end]; default the start): for optics keys given as tables over t
     #[arg(long, value_name = "T")]
     pub(crate) at: Option<f64>,
     /// Print nothing on success

@@ -85,8 +85,8 @@ pub(super) fn t_label(t: f64) -> String {
 /// exactly as before.
 #[derive(Clone, Copy, Debug)]
 pub struct TimeAxis {
-    /// The clock and growth.t_end of a scene with ages; None: t.
-    pub(super) clock: Option<(eyeshell::growth::schedule::Clock, f64, &'static str)>,
+    /// The clock of a scene with ages, and its unit; None: t.
+    pub(super) clock: Option<(eyeshell::growth::schedule::Clock, &'static str)>,
 }
 
 impl TimeAxis {
@@ -96,7 +96,7 @@ impl TimeAxis {
             clock: scene
                 .growth
                 .as_ref()
-                .and_then(|g| Some((g.clock, g.t_end, g.age_unit()?))),
+                .and_then(|g| Some((g.clock, g.age_unit()?))),
         }
     }
 
@@ -107,8 +107,8 @@ impl TimeAxis {
         let Some(first) = axes.next() else {
             return TimeAxis { clock: None };
         };
-        let unit = first.clock.map(|c| c.2);
-        if axes.all(|a| a.clock.map(|c| c.2) == unit) {
+        let unit = first.clock.map(|c| c.1);
+        if axes.all(|a| a.clock.map(|c| c.1) == unit) {
             first
         } else {
             TimeAxis { clock: None }
@@ -118,7 +118,7 @@ impl TimeAxis {
     /// Where time `t` of a run with this axis lies on it.
     pub fn x(&self, t: f64) -> f64 {
         match self.clock {
-            Some((clock, t_end, _)) => clock.age(t, t_end),
+            Some((clock, _)) => clock.age(t),
             None => t,
         }
     }
@@ -126,7 +126,7 @@ impl TimeAxis {
     /// The axis' title: "age (years)", or "t".
     pub fn title(&self) -> String {
         match self.clock {
-            Some((_, _, unit)) => format!("age ({unit})"),
+            Some((_, unit)) => format!("age ({unit})"),
             None => "t".to_string(),
         }
     }
@@ -134,7 +134,7 @@ impl TimeAxis {
     /// A legend's name for time `t`: "age 3.5 years", or "t = 0.2".
     pub(super) fn label(&self, t: f64) -> String {
         match self.clock {
-            Some((_, _, unit)) => format!("age {} {unit}", trim(self.x(t))),
+            Some((_, unit)) => format!("age {} {unit}", trim(self.x(t))),
             None => t_label(t),
         }
     }

@@ -11,6 +11,7 @@ use eyeshell::growth::GrowthParams;
 use eyeshell::model::optics::{OpticsKeyError, OpticsSpec};
 use eyeshell::rundir::{self, OutputDir, OutputError};
 use eyeshell::scene::{Scene, SceneError};
+use eyeshell::text::number;
 use eyeshell::Error;
 use eyeshell_optics::{paraxial, ray_fan, Paraxial};
 
@@ -215,25 +216,48 @@ fn write_refraction(
 }
 
 /// The growth time of `--at`: 0 by default; else a finite time within [0, growth.t_end]
-/// (within [0, 1] for a scene that does not grow), as the user's error otherwise.
+/// (within [0, 1] for a scene that does not grow), or with time.unit an age within
+/// [time.start, time.end] (t = age − time.start), as the user's error otherwise.
 fn growth_time(scene: &Scene, at: Option<f64>) -> Result<f64, Error> {
-    let Some(t) = at else {
+    let Some(at) = at else {
         return Ok(0.0);
     };
-    let end = scene.growth.as_ref().map_or(1.0, |g| g.t_end);
-    if !(t >= 0.0 && t <= end) {
+    let window = scene
+        .growth
+        .as_ref()
+        .and_then(|g| Some((g.clock.window()?, g.clock.unit)));
+    let (lo, hi, what) = match window {
+        Some(((a0, a1), unit)) => (
+            a0,
+            a1,
+            format!(
+                "age must lie in [{}, {}] {} (time.start, time.end)",
+                number(a0),
+                number(a1),
+                unit.name()
+            ),
+        ),
+        None => {
+            let end = scene.growth.as_ref().map_or(1.0, |g| g.t_end);
+            (
+                0.0,
+                end,
+                format!(
+                    "growth time must lie in [0, {}] (growth.t_end)",
+                    number(end)
+                ),
+            )
+        }
+    };
+    if !(at >= lo && at <= hi) {
         return Err(Error::input(
             eyeshell::Subject::Argument("--at".into()),
-            format!(
-                "--at {}: the eye's growth time must lie in [0, {}] (growth.t_end)",
-                eyeshell::text::number(t),
-                eyeshell::text::number(end)
-            ),
+            format!("--at {}: the eye's {what}", number(at)),
         )
-        .with_value(eyeshell::text::number(t))
+        .with_value(number(at))
         .with_origin(eyeshell::Origin::Argument));
     }
-    Ok(t)
+    Ok((at - lo).clamp(0.0, hi - lo))
 }
 
 /// The first wavelength's best focus, and its sagittal and tangential foci, against the

@@ -12,8 +12,8 @@ use crate::support::*;
 /// quarter of a year, one output time.
 const QUICK: [&str; 4] = [
     "solver.nodes=51",
-    "growth.t_end=0.25",
-    "output.times=[0.25]",
+    "time.end=8.25",
+    "output.times=[8.25]",
     "output.history_points=0",
 ];
 

@@ -266,11 +266,11 @@ fn accepted(what: &str, scene: &Scene) -> Result<(), TestCaseError> {
     let ts: Vec<f64> = (0..=64).map(|k| t_end * (k as f64 / 64.0)).collect();
     // The clock: every age finite.
     for &t in &ts {
-        let a = g.clock.age(t, t_end);
+        let a = g.clock.age(t);
         prop_assert!(a.is_finite(), "{what}: age {a} at t = {t}");
     }
     // The schedule: S(t_end) finite and positive.
-    let warp = eyeshell::growth::schedule::Warp::new(&g.schedule, &g.clock, t_end);
+    let warp = eyeshell::growth::schedule::Warp::new(&g.schedule, &g.clock);
     let tau = warp.clock(t_end);
     prop_assert!(tau.is_finite() && tau > 0.0, "{what}: S(t_end) = {tau}");
     if g.source != eyeshell::model::optics::Source::Optics {

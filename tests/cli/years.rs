@@ -7,7 +7,7 @@ fn grow_fails(scene: &str, needle: &str) {
     fails("grow", scene, &[], needle, "scene.toml: ");
 }
 
-const YEARS: &str = "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 0\nend = 20\n";
+const YEARS: &str = "[growth]\neta0 = 3.5\n[time]\nunit = \"years\"\nstart = 0\nend = 20\n";
 
 #[test]
 fn bad_clocks_and_schedules_are_refused_in_one_line() {
@@ -48,6 +48,76 @@ fn bad_clocks_and_schedules_are_refused_in_one_line() {
         "[growth]\nschedule = \"logistic\"\nschedule_width = 0\n",
         "growth.schedule_width = 0 must be positive",
     );
+}
+
+/// One clock: with time.unit the rates are per year, so the single-vision child of
+/// scenes/myopia/ grown from 8 to 14 years has, at 11, the axial length of the same child
+/// grown from 8 to 11 (to 1e-6 mm at a tolerance that leaves the integrators' difference
+/// below it; 2.5e-8 mm measured), and its snapshots are at the ages written.
+#[test]
+fn a_longer_window_keeps_the_growth_per_year() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = repo().join("scenes/myopia/single-vision.toml");
+    let grow = |out: &str, sets: &[&str]| {
+        let mut args = vec!["grow", s(&scene), "--out", out, "--quiet"];
+        for set in ["solver.rtol=1e-9", "solver.atol=1e-11"].iter().chain(sets) {
+            args.extend(["--set", set]);
+        }
+        succeeded(&eyeshell_in(d, &args), out);
+        let series = d.join(out).join("series.csv");
+        let ages = numbers(&series, "age");
+        let lengths = numbers(&series, "axial_length");
+        (ages, lengths, numbers(&series, "t"))
+    };
+    let (ages, short, t) = grow("short", &[]);
+    assert_eq!(ages, [8.0, 9.0, 10.0, 11.0]);
+    assert_eq!(t, [0.0, 1.0, 2.0, 3.0]);
+    let (ages, long, _) = grow("long", &["time.end=14", "output.times=[9, 10, 11, 14]"]);
+    assert_eq!(ages, [8.0, 9.0, 10.0, 11.0, 14.0]);
+    for (a, b) in short.iter().zip(&long) {
+        assert!((a - b).abs() < 1e-6, "{short:?} against {long:?}");
+    }
+    // The growth goes on after 11, and is the same child's: 3 years more, less than 1.5×
+    // the first 3 years' (the growth slows as the retina nears the surface).
+    let (first, more) = (long[3] - long[0], long[4] - long[3]);
+    assert!(more > 0.2 && more < first * 1.5, "{long:?}");
+}
+
+/// The other times a user writes with time.unit are ages too: `optics --at` takes one in
+/// [time.start, time.end], and `check` shows the window's t_end and default output times as
+/// comments that follow the ages (read back, the scene is the same).
+#[test]
+fn optics_at_takes_an_age_and_check_shows_the_derived_times() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = repo().join("scenes/myopia/single-vision.toml");
+    let optics = |at: &str| {
+        let sets = ["optics.max_field=10", "--at", at, "--out", "o", "--quiet"];
+        let mut args = vec!["optics", s(&scene), "--set"];
+        args.extend(sets);
+        eyeshell_in(d, &args)
+    };
+    assert_bad(
+        &optics("5"),
+        "--at 5: the eye's age must lie in [8, 11] years (time.start, time.end)",
+        "--at before time.start",
+    );
+    assert!(!d.join("o").exists());
+    succeeded(&optics("11"), "--at 11");
+    std::fs::write(
+        d.join("window.toml"),
+        "[growth]\neta0 = 7\n[time]\nunit = \"years\"\nstart = 8\nend = 11\n",
+    )
+    .unwrap();
+    let r = eyeshell_in(d, &["check", "window.toml"]);
+    succeeded(&r, "check");
+    for line in [
+        "# growth.t_end = 3.0  (follows time.start and time.end)",
+        "# output.times = [8.3, 8.6, 9.2, 11.0]  (follows time.start and time.end)",
+    ] {
+        assert!(r.stdout.contains(line), "{line}: {}", r.stdout);
+    }
 }
 
 /// Ages in a fit's data: outside [time.start, time.end], or without a clock in the scene.
@@ -148,10 +218,10 @@ fn numbers(path: &std::path::Path, name: &str) -> Vec<f64> {
 fn a_scene_in_years_has_ages_in_every_output() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    // Ages 2 to 12 years over t in [0, 1]: age = 2 + 10 t.
+    // Ages 2 to 12 years: t = age − 2, and η0 per year.
     std::fs::write(
         d.join("years.toml"),
-        "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\nhistory_points = 4\n[solver]\nnodes = 21\n",
+        "[growth]\neta0 = 7\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\nhistory_points = 4\n[solver]\nnodes = 21\n",
     )
     .unwrap();
     succeeded(
@@ -182,10 +252,7 @@ fn a_scene_in_years_has_ages_in_every_output() {
         let (t, age) = (numbers(&path, "t"), numbers(&path, "age"));
         assert!(t.len() >= 5, "{file}: {t:?}");
         for (t, a) in t.iter().zip(&age) {
-            assert!(
-                (a - (2.0 + 10.0 * t)).abs() <= 1e-12,
-                "{file}: t {t}, age {a}"
-            );
+            assert!((a - (2.0 + t)).abs() <= 1e-12, "{file}: t {t}, age {a}");
         }
     }
     let names: Vec<String> = snapshots(&run)
@@ -255,7 +322,7 @@ fn a_scene_in_years_has_ages_in_every_output() {
             "--fit",
             "growth.eta0",
             "--set",
-            "growth.eta0=63",
+            "growth.eta0=6.3",
             "--out",
             "fit",
         ],
@@ -273,23 +340,20 @@ fn a_scene_in_years_has_ages_in_every_output() {
     assert_eq!(column(&residuals, "age"), ages[1..].to_vec());
     let curve = d.join("fit/curve.csv");
     for (t, a) in column(&curve, "t").iter().zip(column(&curve, "age")) {
-        assert!(
-            (a - (2.0 + 10.0 * t)).abs() <= 1e-12,
-            "curve.csv: t {t}, age {a}"
-        );
+        assert!((a - (2.0 + t)).abs() <= 1e-12, "curve.csv: t {t}, age {a}");
     }
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("fit/fit.json")).unwrap()).unwrap();
     assert_eq!(json["residuals"][0]["age"].as_f64(), Some(ages[1]));
     let estimate = json["parameters"][0]["estimate"].as_f64().unwrap();
-    assert!((estimate - 70.0).abs() < 0.05, "η0 = {estimate}");
+    assert!((estimate - 7.0).abs() < 0.005, "η0 = {estimate}");
     let svg = std::fs::read_to_string(d.join("fit/fit.svg")).unwrap();
     assert!(svg.contains("age (years)"), "fit.svg: no age axis");
 }
 
 /// What a run would find only once it started is refused before it starts: a schedule whose
-/// integral over the window is 0 (check says so too, exit 2, nothing written), a clock whose
-/// rate of ages per unit of t overflows (every age would be NaN), and sensitivities or a fit
+/// integral over the window is 0 (check says so too, exit 2, nothing written), a
+/// growth.t_end that is not the window of the scene's ages, and sensitivities or a fit
 /// to a schedule's parameter the scene's schedule does not have.
 #[test]
 fn a_run_that_cannot_grow_is_refused_before_it_starts() {
@@ -300,10 +364,11 @@ fn a_run_that_cannot_grow_is_refused_before_it_starts() {
     std::fs::write(dir.path().join("zero.toml"), zero).unwrap();
     let r = eyeshell_in(dir.path(), &["check", "zero.toml"]);
     assert_bad(&r, needle, "check of a schedule of zeros");
-    // 1e300 years over t_end = 1e-50: 1e350 years per unit of t.
+    // A window of 10 years written beside growth.t_end = 1: the clock is one, so the two
+    // must agree, and the message says how to convert the rate.
     grow_fails(
-        "[growth]\neta0 = 70\nt_end = 1e-50\n[time]\nunit = \"years\"\nstart = 0\nend = 1e300\n",
-        "time.end = 1e300 maps onto growth.t_end = 1e-50 at inf years per unit of t, which is not a finite positive rate",
+        "[growth]\neta0 = 70\nt_end = 1\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n",
+        "growth.t_end = 1 is not the window of the ages: with time.unit = \"years\" the run lasts time.end − time.start = 10 years; leave growth.t_end out and give growth.eta0 per year (η per unit of t over t_end = T is η·T/(time.end − time.start) per year)",
     );
     let constant = "[growth]\neta0 = 70\n[solver]\nnodes = 21\n";
     let dir = tempfile::tempdir().unwrap();
@@ -355,7 +420,7 @@ fn residuals_by_age_are_short_with_a_tiny_sigma() {
     let d = dir.path();
     std::fs::write(
         d.join("years.toml"),
-        "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\nhistory_points = 4\n[solver]\nnodes = 21\n",
+        "[growth]\neta0 = 7\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\nhistory_points = 4\n[solver]\nnodes = 21\n",
     )
     .unwrap();
     std::fs::write(
@@ -405,7 +470,7 @@ fn a_cohort_in_years_has_ages_in_every_table() {
         std::fs::write(
             d.join(format!("{per_run}.toml")),
             format!(
-                "[growth]\neta0 = 70\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\ntimes = [0.1, 0.5, 1.0]\nhistory_points = 0\n[solver]\nnodes = 21\n[sweep.sample]\neyes = 3\nseed = 2\nper_run = \"{per_run}\"\n[sweep.sample.keys]\n\"growth.eta0\" = {{ dist = \"uniform\", low = 60, high = 80 }}\n"
+                "[growth]\neta0 = 7\n[time]\nunit = \"years\"\nstart = 2\nend = 12\n[output]\ntimes = [3, 7, 12]\nhistory_points = 0\n[solver]\nnodes = 21\n[sweep.sample]\neyes = 3\nseed = 2\nper_run = \"{per_run}\"\n[sweep.sample.keys]\n\"growth.eta0\" = {{ dist = \"uniform\", low = 6, high = 8 }}\n"
             ),
         )
         .unwrap();
@@ -429,7 +494,7 @@ fn a_cohort_in_years_has_ages_in_every_table() {
             let age: f64 = r[1].parse().unwrap();
             let expected = match r[0].as_str() {
                 "final" => 12.0,
-                t => 2.0 + 10.0 * t.parse::<f64>().unwrap(),
+                t => 2.0 + t.parse::<f64>().unwrap(),
             };
             assert!((age - expected).abs() <= 1e-12, "{per_run}: {r:?}");
         }
@@ -456,9 +521,6 @@ fn a_cohort_in_years_has_ages_in_every_table() {
     let (h, _) = csv_cells(&series);
     assert_eq!(h.last().map(String::as_str), Some("age"), "{h:?}");
     for (t, a) in numbers(&series, "t").iter().zip(numbers(&series, "age")) {
-        assert!(
-            (a - (2.0 + 10.0 * t)).abs() <= 1e-12,
-            "series.csv: t {t}, age {a}"
-        );
+        assert!((a - (2.0 + t)).abs() <= 1e-12, "series.csv: t {t}, age {a}");
     }
 }

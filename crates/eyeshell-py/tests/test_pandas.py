@@ -81,8 +81,9 @@ def test_to_frame_has_a_row_per_run_and_output_time_with_the_swept_keys():
 
 
 def test_to_frame_of_a_sweep_in_years_has_the_age_after_t():
-    # Ages 2 to 12 years over t in [0, 1]: age = 2 + 10 t; an elastic run beside has none.
-    years = small(time__unit="years", time__start=2.0, time__end=12.0, output__times=[0.5, 1.0])
+    # Ages 2 to 12 years: t = age − 2, η0 per year; an elastic run beside has none.
+    years = small(time__unit="years", time__start=2.0, time__end=12.0, growth__eta0=7.0,
+                  output__times=[7.0, 12.0])
     runs = eyeshell.sweep(years, grid=GAMMA, frames=False)
     elastic = eyeshell.RunResult("elastic", {}, "ok", eyeshell.solve(solver__nodes=41), None, 0.0, 2)
     columns = eyeshell.SweepResults([*runs, elastic]).to_frame(frames=False)
@@ -90,7 +91,7 @@ def test_to_frame_of_a_sweep_in_years_has_the_age_after_t():
     assert names[names.index("t") + 1] == "age", names
     assert len(columns["t"]) == 2 * 3 + 1
     for t, age in zip(columns["t"][:-1], columns["age"][:-1]):
-        assert age == pytest.approx(2.0 + 10.0 * t, abs=1e-12), (t, age)
+        assert age == pytest.approx(2.0 + t, abs=1e-12), (t, age)
     assert math.isnan(columns["age"][-1])
     # A sweep without ages has no age column.
     assert "age" not in eyeshell.SweepResults(eyeshell.sweep(small(), grid=GAMMA)).to_frame(frames=False)
@@ -312,12 +313,13 @@ def test_growth_to_mat_writes_what_the_command_lines_export_writes(cli, tmp_path
 
 def test_growth_to_mat_names_a_scene_in_years_by_age_as_the_command_line_does(cli, tmp_path):
     optional("scipy.io")
-    sets = ["solver.nodes=51", "time.unit=years", "time.start=2", "time.end=12"]
+    sets = ["solver.nodes=51", "time.unit=years", "time.start=2", "time.end=12",
+            "output.times=[3, 4, 6, 12]"]
     cli("grow", SCENES / "const.toml", *[a for kv in sets for a in ("--set", kv)],
         "--out", tmp_path / "run", "--quiet")
     cli("export", tmp_path / "run", "--mat", tmp_path / "cli")
     g = eyeshell.grow(SCENES / "const.toml", solver__nodes=51, time__unit="years",
-                      time__start=2.0, time__end=12.0)
+                      time__start=2.0, time__end=12.0, output__times=[3.0, 4.0, 6.0, 12.0])
     files = [f.rsplit("/", 1)[1] for f in g.to_mat(tmp_path / "py")]
     names = sorted(p.name for p in (tmp_path / "cli").iterdir() if not p.name.startswith("."))
     assert sorted(files) == names and len(names) == 5 + 2

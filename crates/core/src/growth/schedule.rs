@@ -1,8 +1,9 @@
 //! Growth in the user's time, and growth rates that vary with it (docs/MODEL.md §11).
 //!
-//! The clock (`time.unit`, `time.start`, `time.end`) maps ages affinely onto the growth
-//! window: age a = a₀ + k t with a₀ = time.start and k = (time.end − time.start)/t_end;
-//! without a unit, a = t.
+//! The clock (`time.unit`, `time.start`, `time.end`): with a unit, the model's time is the
+//! age less time.start, t = a − a₀, and the run lasts time.end − time.start; every rate (η0
+//! first) is then per unit of time.unit, so the same child grown over a longer window grows
+//! the same amount each year. Without a unit, a = t, the paper's dimensionless time.
 //!
 //! The schedule (`growth.schedule`) multiplies η0 by a factor s(a) ≥ 0. Every growth rate of
 //! the model is η0 times a function of the state (docs/MODEL.md §5: η = g_c g_v, g_c ∝ η0),
@@ -38,6 +39,11 @@ impl TimeUnit {
     pub fn name(self) -> &'static str {
         Self::NAMES[self as usize]
     }
+
+    /// One of the unit ("year"), for rates: "per year".
+    pub fn one(self) -> &'static str {
+        ["unit of t", "year", "day"][self as usize]
+    }
 }
 
 /// The scene's clock: time.unit, time.start, time.end.
@@ -54,32 +60,27 @@ impl Clock {
         self.unit != TimeUnit::None
     }
 
-    /// (a₀, k) of a = a₀ + k t for a growth window of length `t_end`.
-    pub fn affine(&self, t_end: f64) -> (f64, f64) {
+    /// (time.start, time.end) when the scene counts in ages and gives both.
+    pub fn window(&self) -> Option<(f64, f64)> {
         match (self.unit, self.start, self.end) {
-            (TimeUnit::None, _, _) | (_, None, _) | (_, _, None) => (0.0, 1.0),
-            (_, Some(a0), Some(a1)) => (a0, (a1 - a0) / t_end),
+            (TimeUnit::None, _, _) | (_, None, _) | (_, _, None) => None,
+            (_, Some(a0), Some(a1)) => Some((a0, a1)),
         }
+    }
+
+    /// The age a₀ at t = 0: time.start with ages, else 0 (a = a₀ + t either way).
+    pub fn origin(&self) -> f64 {
+        self.window().map_or(0.0, |w| w.0)
     }
 
     /// The age of model time `t`.
-    pub fn age(&self, t: f64, t_end: f64) -> f64 {
-        let (a0, k) = self.affine(t_end);
-        if self.has_ages() {
-            a0 + k * t
-        } else {
-            t
-        }
+    pub fn age(&self, t: f64) -> f64 {
+        self.origin() + t
     }
 
     /// The model time of age `a`.
-    pub fn t_of(&self, a: f64, t_end: f64) -> f64 {
-        let (a0, k) = self.affine(t_end);
-        if self.has_ages() {
-            (a - a0) / k
-        } else {
-            a
-        }
+    pub fn t_of(&self, a: f64) -> f64 {
+        a - self.origin()
     }
 
     /// Why the clock cannot be used, as (key, problem): a unit without its start or end, an
@@ -136,24 +137,41 @@ impl Clock {
 
 impl Clock {
     /// Why the clock cannot be used over a growth window of length `t_end`, as (key,
-    /// problem): ages whose rate k = (time.end − time.start)/t_end is not a finite positive
-    /// number (the age of every output time would be NaN or infinite).
+    /// problem): with ages, the window is time.end − time.start (one clock: t = age −
+    /// time.start), so a t_end that is not that length names both.
     pub fn check_window(&self, t_end: f64) -> Result<(), (Quantity, String)> {
-        if !self.has_ages() {
+        let Some((a0, a1)) = self.window() else {
             return Ok(());
-        }
-        let (a0, k) = self.affine(t_end);
-        if !(k.is_finite() && k > 0.0 && (a0 + k * t_end).is_finite()) {
+        };
+        let length = a1 - a0;
+        let min = super::settings::MIN_T_END;
+        if length < min {
             return Err((
                 Quantity::TimeEnd,
                 format!(
-                    "maps onto {t_end_name} = {} at {} {} per unit of t, which is not a finite positive rate: bring {} and {} closer or {t_end_name} nearer 1",
-                    number(t_end),
-                    number(k),
-                    self.unit.name(),
+                    "is only {} {unit} after {}: the run must last at least {} {unit} (the integrators multiply times by their steps, and for a shorter run that product underflows)",
+                    number(length),
                     Quantity::TimeStart,
+                    number(min),
+                    unit = self.unit.name(),
+                ),
+            ));
+        }
+        if (t_end - length).abs() > 4.0 * f64::EPSILON * a0.abs().max(a1.abs()) {
+            return Err((
+                Quantity::EndTime,
+                format!(
+                    "is not the window of the ages: with {} = \"{unit}\" the run lasts {} − {} = {} {unit}; leave {} out and give {} per {one} (η per unit of t over t_end = T is η·T/({} − {}) per {one})",
+                    Quantity::TimeUnit,
                     Quantity::TimeEnd,
-                    t_end_name = Quantity::EndTime
+                    Quantity::TimeStart,
+                    number(length),
+                    Quantity::EndTime,
+                    Quantity::GrowthRate,
+                    Quantity::TimeEnd,
+                    Quantity::TimeStart,
+                    one = self.unit.one(),
+                    unit = self.unit.name(),
                 ),
             ));
         }
@@ -307,7 +325,7 @@ impl Schedule {
         if self.is_constant() {
             return Ok(());
         }
-        let tau_end = Warp::new(self, clock, t_end).clock(t_end);
+        let tau_end = Warp::new(self, clock).clock(t_end);
         let min = super::settings::MIN_T_END;
         if !(tau_end.is_finite() && tau_end >= min) {
             let key = match self.form {
@@ -343,21 +361,18 @@ pub struct Warp {
     centre: f64,
     width: f64,
     a0: f64,
-    k: f64,
     table: Option<Hermite>,
 }
 
 impl Warp {
-    /// The warp of `schedule` on `clock` over a window of length `t_end`.
-    pub fn new(schedule: &Schedule, clock: &Clock, t_end: f64) -> Warp {
-        let (a0, k) = clock.affine(t_end);
+    /// The warp of `schedule` on `clock`.
+    pub fn new(schedule: &Schedule, clock: &Clock) -> Warp {
         Warp {
             form: schedule.form,
             tau: schedule.tau,
             centre: schedule.centre,
             width: schedule.width,
-            a0,
-            k,
+            a0: clock.origin(),
             table: (schedule.form == Form::Table)
                 .then(|| Hermite::new(&schedule.times, &schedule.factors)),
         }
@@ -365,7 +380,7 @@ impl Warp {
 
     /// The factor s at model time t.
     pub fn factor(&self, t: f64) -> f64 {
-        let a = self.a0 + self.k * t;
+        let a = self.a0 + t;
         match self.form {
             Form::Constant => 1.0,
             Form::Exponential => (-(a - self.a0) / self.tau).exp(),
@@ -374,14 +389,13 @@ impl Warp {
         }
     }
 
-    /// τ = S(t) = ∫₀ᵗ s dt' = A(a(t))/k with A(a) = ∫_{a₀}^a s da'.
+    /// τ = S(t) = ∫₀ᵗ s dt' = A(a₀ + t) with A(a) = ∫_{a₀}^a s da'.
     pub fn clock(&self, t: f64) -> f64 {
         if self.form == Form::Constant {
             return t;
         }
-        let a = self.a0 + self.k * t;
-        let x = a - self.a0;
-        let area = match self.form {
+        let (a, x) = (self.a0 + t, t);
+        match self.form {
             Form::Constant => x,
             Form::Exponential => -self.tau * (-x / self.tau).exp_m1(),
             Form::Logistic => {
@@ -396,15 +410,13 @@ impl Warp {
                 let h = self.table.as_ref().expect("a table form has its table");
                 h.integral(a) - h.integral(self.a0)
             }
-        };
-        area / self.k
+        }
     }
 
     /// ∂S(t)/∂θ for a parameter of the named forms (in the scene's time units of θ).
     pub fn clock_partial(&self, t: f64, p: ScheduleParam) -> f64 {
-        let a = self.a0 + self.k * t;
-        let x = a - self.a0;
-        let d_area = match (self.form, p) {
+        let (a, x) = (self.a0 + t, t);
+        match (self.form, p) {
             (Form::Exponential, ScheduleParam::Tau) => {
                 let e = (-x / self.tau).exp();
                 -(-x / self.tau).exp_m1() - (x / self.tau) * e
@@ -424,8 +436,7 @@ impl Warp {
                 -(softplus(u) - u * logistic(u)) + (softplus(v) - v * logistic(v))
             }
             _ => 0.0,
-        };
-        d_area / self.k
+        }
     }
 
     /// The model time t at which the clock reads τ (the first, where s vanishes over an
@@ -688,7 +699,7 @@ impl OnClock {
     ) -> Result<OnClock, String> {
         use super::dae::SensParam;
         let t_end = growth.t_end;
-        let warp = Warp::new(&growth.schedule, &growth.clock, t_end);
+        let warp = Warp::new(&growth.schedule, &growth.clock);
         let tau_end = warp.clock(t_end);
         let min = super::settings::MIN_T_END;
         if !(tau_end.is_finite() && tau_end >= min) {
@@ -922,8 +933,8 @@ mod tests {
             },
             table,
         ] {
-            let w = Warp::new(&s, &ages(), 1.0);
-            for t in [0.01, 0.2, 0.5, 1.0] {
+            let w = Warp::new(&s, &ages());
+            for t in [0.2, 4.0, 10.0, 19.75] {
                 let (exact, q) = (w.clock(t), quad(&w, t));
                 assert!(
                     (exact - q).abs() < 1e-10,
@@ -957,9 +968,9 @@ mod tests {
                     ScheduleParam::Centre => s.centre += d,
                     ScheduleParam::Width => s.width += d,
                 }
-                Warp::new(&s, &ages(), 1.0)
+                Warp::new(&s, &ages())
             };
-            for t in [0.1, 0.4, 1.0] {
+            for t in [2.0, 8.0, 19.75] {
                 let h = 1e-5;
                 let fd = (at(h).clock(t) - at(-h).clock(t)) / (2.0 * h);
                 let exact = at(0.0).clock_partial(t, p);

@@ -54,7 +54,7 @@ impl GrowthParams {
     /// carries an `age` beside t asks here, so a scene without ages writes what it always
     /// wrote.
     pub fn age_of(&self, t: f64) -> Option<f64> {
-        self.clock.has_ages().then(|| self.clock.age(t, self.t_end))
+        self.clock.has_ages().then(|| self.clock.age(t))
     }
 
     /// time.unit's name when the scene counts in ages ("years", "days"), else None.

@@ -863,7 +863,10 @@ class FitResult:
         # Both ends, and the run's history holds t = 0 and output.history_points more.
         n = _whole(points, "curve: points", 2, _eyeshell.MAX_HISTORY_POINTS + 1)
         # No snapshot between the ends (t_end is always one), so no time but the history's.
-        scene = self.scene.copy(output__times=[self.scene["growth.t_end"]], output__history_points=n - 1)
+        # The end as the scene writes times: an age with time.unit.
+        ages = self.scene["time.unit"] != "none"
+        end = self.scene["time.end"] if ages else self.scene["growth.t_end"]
+        scene = self.scene.copy(output__times=[end], output__history_points=n - 1)
         h = grow(scene, frames=False).history
         return {k: np.asarray(h[k]) for k in ("t", "axial_length", "age") if k in h}
 

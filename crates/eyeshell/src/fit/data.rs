@@ -287,7 +287,7 @@ impl Observations {
                 .with_value(number(a))
                 .with_origin(Origin::File(self.origin.clone().into())));
             }
-            r.t = clock.t_of(a, g.t_end).clamp(0.0, g.t_end);
+            r.t = clock.t_of(a).clamp(0.0, g.t_end);
         }
         Ok(out)
     }

@@ -679,7 +679,7 @@ pub static KEYS: &[KeySpec] = &[
         key: "growth.eta0",
         access: Access::Float { get: |s| growth(s).eta0, set: |s, v| s.growth_mut().eta0 = v },
         rule: Rule::NonNegative,
-        doc: "η0, the largest growth rate (docs/MODEL.md §4–5); any growth.* key turns growth on",
+        doc: "η0, the largest growth rate (docs/MODEL.md §4–5), per unit of the model's t, or with time.unit per unit of that (per year: the paper's η0 over a window of T years is η0/T per year); any growth.* key turns growth on",
         growth: true,
     },
     KeySpec {
@@ -705,9 +705,9 @@ pub static KEYS: &[KeySpec] = &[
     },
     KeySpec {
         key: "growth.t_end",
-        access: Access::Float { get: |s| growth(s).t_end, set: |s, v| s.growth_mut().t_end = v },
+        access: Access::Float { get: |s| growth(s).t_end, set: |s, v| { s.written_clock.t_end = Some(v); s.growth_mut().t_end = v; s.sync_clock() } },
         rule: Rule::Duration,
-        doc: "end of the growth run (dimensionless time; the paper's t ∈ [0, 1], docs/MODEL.md §8)",
+        doc: "end of the growth run (dimensionless time; the paper's t ∈ [0, 1], docs/MODEL.md §8); with time.unit the run lasts time.end − time.start and this key, if given, must equal it",
         growth: true,
     },
     KeySpec {
@@ -777,24 +777,24 @@ pub static KEYS: &[KeySpec] = &[
         access: Access::Choice {
             names: &TimeUnit::NAMES,
             get: |s| growth(s).clock.unit as usize,
-            set: |s, i| s.growth_mut().clock.unit = TimeUnit::ALL[i],
+            set: |s, i| { s.growth_mut().clock.unit = TimeUnit::ALL[i]; s.sync_clock() },
         },
         rule: Rule::Any,
-        doc: "what ages are counted in: none (the model's dimensionless t), years or days; with a unit, time.start and time.end are the ages of t = 0 and growth.t_end, and fit data may be given by age (the outputs stay in t)",
+        doc: "what ages are counted in: none (the model's dimensionless t), years or days; with a unit every time the scene writes is an age (time.start, time.end, output.times, the schedule's times, fit data), the run lasts time.end − time.start, every rate is per unit (growth.eta0 per year), and the outputs' t is the age less time.start, beside an age column",
         growth: true,
     },
     KeySpec {
         key: "time.start",
-        access: Access::OptionalFloat { get: |s| growth(s).clock.start, set: |s, v| s.growth_mut().clock.start = Some(v) },
+        access: Access::OptionalFloat { get: |s| growth(s).clock.start, set: |s, v| { s.growth_mut().clock.start = Some(v); s.sync_clock() } },
         rule: Rule::Any,
-        doc: "the age (in time.unit) at t = 0",
+        doc: "the age (in time.unit) at which the run starts (t = 0)",
         growth: true,
     },
     KeySpec {
         key: "time.end",
-        access: Access::OptionalFloat { get: |s| growth(s).clock.end, set: |s, v| s.growth_mut().clock.end = Some(v) },
+        access: Access::OptionalFloat { get: |s| growth(s).clock.end, set: |s, v| { s.growth_mut().clock.end = Some(v); s.sync_clock() } },
         rule: Rule::Any,
-        doc: "the age (in time.unit) at t = growth.t_end, after time.start",
+        doc: "the age (in time.unit) at which the run ends, after time.start: the run lasts time.end − time.start",
         growth: true,
     },
     KeySpec {
@@ -842,9 +842,9 @@ pub static KEYS: &[KeySpec] = &[
     },
     KeySpec {
         key: "output.times",
-        access: Access::Floats { get: |s| s.growth_settings.output_times.clone(), set: |s, v| s.growth_settings.output_times = v },
+        access: Access::Floats { get: |s| s.written_output_times(), set: |s, v| { s.written_clock.output_times = Some(v.clone()); s.growth_settings.output_times = v; s.sync_clock() } },
         rule: Rule::PositiveIncreasing(MAX_OUTPUT_TIMES),
-        doc: "times of the growth snapshots, in (0, growth.t_end], strictly increasing; t = 0 is always written",
+        doc: "times of the growth snapshots, strictly increasing: in (0, growth.t_end], or with time.unit ages in (time.start, time.end] (by default 0.1, 0.2, 0.4 and 1 of the window); the start is always written",
         growth: true,
     },
     KeySpec {

@@ -65,6 +65,31 @@ pub struct Scene {
     /// The best-focus surfaces as the scene gives them (kept here too while the scene does
     /// not grow, so that `stimulus.*` keys do not turn growth on).
     pub stimulus: Stimulus,
+    /// growth.t_end and output.times as the scene writes them (ages with time.unit), from
+    /// which [`Scene::growth`] and [`Scene::growth_settings`] hold them on the model's
+    /// clock ([`Scene::sync_clock`]).
+    pub written_clock: WrittenClock,
+}
+
+/// The times a scene writes, before they are put on the model's clock: with time.unit,
+/// `output.times` are ages and the run lasts time.end − time.start, so the model's
+/// t = age − time.start (docs/guide/years.md); without, they are the model's t as written.
+#[derive(Clone, Debug, Default)]
+pub struct WrittenClock {
+    /// growth.t_end, if the scene gives it.
+    pub t_end: Option<f64>,
+    /// output.times, if the scene gives them.
+    pub output_times: Option<Vec<f64>>,
+}
+
+/// Two scenes are equal when they run alike: what a run reads is on the model's clock in
+/// [`Scene::growth`] and [`Scene::growth_settings`], which scenes are compared by; whether a
+/// time was written or is the default only says how a later change of time.* moves it
+/// (a scene written out by [`Scene::to_toml`] gives every time, and reads back equal).
+impl PartialEq for WrittenClock {
+    fn eq(&self, _: &WrittenClock) -> bool {
+        true
+    }
 }
 
 /// The visual stimulus of a scene: the blue and red best-focus surfaces (docs/MODEL.md §6).
@@ -107,6 +132,7 @@ impl Default for Scene {
             growth: None,
             growth_settings: GrowthSettings::default(),
             stimulus: Stimulus::default(),
+            written_clock: WrittenClock::default(),
         }
     }
 }
@@ -354,6 +380,52 @@ impl Scene {
     /// Check every key's range and the limits that tie keys together.
     pub fn validate(&self) -> Result<(), SceneError> {
         self.validate_from(&Sources::new())
+    }
+
+    /// Put the written growth.t_end and output.times on the model's clock. With time.unit
+    /// and both ages of the window, the run lasts time.end − time.start and each output
+    /// time is its age less time.start (k = 1: every rate, η0 first, is per unit of
+    /// time.unit, so moving the window keeps the growth per year); output times not written
+    /// are the default fractions of that window. Without a unit, the written times are the
+    /// model's t. Called by the setters of the five keys involved, so the result does not
+    /// depend on the order they are set in.
+    pub(crate) fn sync_clock(&mut self) {
+        let Some(g) = self.growth.as_mut() else {
+            return;
+        };
+        // A clock that cannot be used is left for validation to name (time.end before
+        // time.start, say), not turned into a window it would blame on growth.t_end.
+        let window = g.clock.window().filter(|_| g.clock.check().is_ok());
+        let defaults = GrowthSettings::default().output_times;
+        let written = &self.written_clock;
+        let times = match window {
+            Some((a0, a1)) => {
+                g.t_end = a1 - a0;
+                match &written.output_times {
+                    Some(ages) => ages.iter().map(|a| a - a0).collect(),
+                    None => defaults.iter().map(|f| f * (a1 - a0)).collect(),
+                }
+            }
+            None => {
+                g.t_end = written.t_end.unwrap_or(GrowthParams::default().t_end);
+                written.output_times.clone().unwrap_or(defaults)
+            }
+        };
+        self.growth_settings.output_times = times;
+    }
+
+    /// output.times as the scene writes them: ages with time.unit.
+    pub(crate) fn written_output_times(&self) -> Vec<f64> {
+        if let Some(times) = &self.written_clock.output_times {
+            return times.clone();
+        }
+        let start = self
+            .growth
+            .as_ref()
+            .and_then(|g| g.clock.window())
+            .map_or(0.0, |w| w.0);
+        let times = &self.growth_settings.output_times;
+        times.iter().map(|t| t + start).collect()
     }
 
     /// The growth model, turning growth on (with the defaults and the scene's surfaces) if

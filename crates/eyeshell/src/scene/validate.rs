@@ -67,6 +67,15 @@ impl Scene {
             if spec.key == "cornea.R0" && self.params.cornea_follows_radius {
                 continue;
             }
+            // So does a run's length that is the window of its ages: the clock's check
+            // names time.end.
+            let ages = self
+                .growth
+                .as_ref()
+                .is_some_and(|g| g.clock.window().is_some());
+            if spec.key == "growth.t_end" && ages && self.written_clock.t_end.is_none() {
+                continue;
+            }
             let check = match spec.get(self) {
                 KeyValue::Float(x) => spec.rule.check_float(x),
                 KeyValue::Count(n) => spec.rule.check_count(n),
@@ -141,7 +150,17 @@ impl Scene {
             ));
         }
         if let Some(g) = &self.growth {
-            // The clock and the schedule: each problem names its key and shows its value.
+            // The clock and the schedule: each problem names its key and shows its value. A
+            // growth.t_end written beside ages must be their window (the run's t_end is).
+            if let Some(written) = self.written_clock.t_end.filter(|_| g.clock.check().is_ok()) {
+                if let Err((_, problem)) = g.clock.check_window(written) {
+                    return Err(invalid(
+                        &["growth.t_end", "time.end"],
+                        number(written),
+                        problem,
+                    ));
+                }
+            }
             if let Some((key, problem)) = (g.clock.check())
                 .and_then(|()| g.clock.check_window(g.t_end))
                 .and_then(|()| g.schedule.check())
@@ -166,24 +185,63 @@ impl Scene {
                     "cannot be combined with optics that change with age (tables over t in optics.surfaces): the schedule runs the model on its own clock".into(),
                 ));
             }
-            let times = &self.growth_settings.output_times;
-            if let Some(&last) = times.last().filter(|&&t| t > g.t_end) {
-                return Err(invalid(
-                    &["output.times", "growth.t_end"],
-                    show(&KeyValue::Floats(times.clone())),
-                    format!(
-                        "must lie in (0, growth.t_end]: {} is after growth.t_end = {}",
-                        number(last),
-                        number(g.t_end)
-                    ),
-                ));
-            }
+            self.check_output_times(g, sources)?;
         }
         Ok(())
     }
 }
 
 impl Scene {
+    /// output.times in the scene's terms: each in (0, growth.t_end], or with ages each in
+    /// (time.start, time.end] (the model's times are those ages less time.start).
+    fn check_output_times(
+        &self,
+        g: &crate::growth::GrowthParams,
+        sources: &Sources,
+    ) -> Result<(), SceneError> {
+        let times = &self.growth_settings.output_times;
+        let written = self.written_output_times();
+        let shown = || show(&KeyValue::Floats(written.clone()));
+        let fail =
+            |keys: &[&str], problem: String| Err(self.invalid(sources, keys, shown(), problem));
+        let Some((a0, a1)) = g.clock.window() else {
+            return match times.last().filter(|&&t| t > g.t_end) {
+                Some(&last) => fail(
+                    &["output.times", "growth.t_end"],
+                    format!(
+                        "must lie in (0, growth.t_end]: {} is after growth.t_end = {}",
+                        number(last),
+                        number(g.t_end)
+                    ),
+                ),
+                None => Ok(()),
+            };
+        };
+        let unit = g.clock.unit.name();
+        let age = |i: usize| number(written.get(i).copied().unwrap_or(times[i] + a0));
+        if let Some(i) = times.iter().position(|&t| t <= 0.0) {
+            return fail(
+                &["output.times", "time.start"],
+                format!(
+                    "must be ages in (time.start, time.end]: {} {unit} is not after time.start = {} {unit}",
+                    age(i),
+                    number(a0)
+                ),
+            );
+        }
+        if let Some(i) = times.iter().position(|&t| t > g.t_end) {
+            return fail(
+                &["output.times", "time.end"],
+                format!(
+                    "must be ages in (time.start, time.end]: {} {unit} is after time.end = {} {unit}",
+                    age(i),
+                    number(a1)
+                ),
+            );
+        }
+        Ok(())
+    }
+
     /// What a run of this scene will allocate and write, counted before it starts: the
     /// largest mesh any of its solves lays (with solver.richardson, the mesh halved twice)
     /// must fit [`crate::mesh::MAX_NODES`], which bounds a solve's memory

@@ -108,10 +108,23 @@ impl Scene {
             // is shown as a comment; so is a cornea whose radius follows geometry.R0.
             let derived = self.stimulus.red_follows_blue && k.key.starts_with("stimulus.red.");
             let sized = self.params.cornea_follows_radius && k.key == "cornea.R0";
+            // So are a run's length and output times that follow the ages of its window.
+            let ages = self
+                .growth
+                .as_ref()
+                .is_some_and(|g| g.clock.window().is_some());
+            let written = &self.written_clock;
+            let windowed = ages
+                && ((k.key == "growth.t_end" && written.t_end.is_none())
+                    || (k.key == "output.times" && written.output_times.is_none()));
             match k.get(self) {
                 KeyValue::Text(None) | KeyValue::Unset => {}
                 v if derived => out.push_str(&format!("# {} = {v}  (follows blue)\n", k.key)),
                 v if sized => out.push_str(&format!("# {} = {v}  (follows geometry.R0)\n", k.key)),
+                v if windowed => out.push_str(&format!(
+                    "# {} = {v}  (follows time.start and time.end)\n",
+                    k.key
+                )),
                 v => out.push_str(&format!("{} = {}\n", k.key, v)),
             }
         }
