@@ -524,3 +524,107 @@ fn a_cohort_in_years_has_ages_in_every_table() {
         assert!((a - (2.0 + t)).abs() <= 1e-12, "series.csv: t {t}, age {a}");
     }
 }
+
+/// With time.unit the optics' tables are over ages too: scenes/optics-age.toml (t ∈ [0, 1]
+/// is 0.25 to 6.5 years, η0 = 70 per unit of t) written in years (tables over
+/// age = 0.25 + 6.25 t, η0 = 70/6.25 = 11.2 per year, output ages 0.25 + 6.25 tᵢ) grows the
+/// same eye: the growth is p' = η0 f(p, optics(t)), unchanged by the affine change of clock,
+/// and the tables' splines are cubics in either time. `check` writes the tables over age and
+/// its scene grows alike again; a table over t in a scene of ages, or over age in one without,
+/// is refused in one line.
+#[test]
+fn optics_tables_are_over_ages_in_a_scene_of_ages() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = repo().join("scenes/optics-age.toml");
+    let tight = ["solver.rtol=1e-9", "solver.atol=1e-11", "solver.nodes=201"];
+    let in_years = [
+        "time.unit=\"years\"",
+        "time.start=0.25",
+        "time.end=6.5",
+        "growth.eta0=11.2",
+        "output.times=[0.875, 1.5, 2.75, 6.5]",
+        "optics.surfaces=[{ radius = { age = [0.25, 0.75, 1.5, 3.0, 6.5], value = [7.472, 7.682, 7.731, 7.761, 7.77] } }, { thickness = { age = [0.25, 0.75, 1.5, 3.0, 6.5], value = [2.512, 2.598, 2.697, 2.842, 3.15] } }]",
+    ];
+    let grow = |scene: &std::path::Path, out: &str, sets: &[&str]| {
+        let mut args = vec!["grow", s(scene), "--out", out, "--quiet"];
+        for set in tight.iter().chain(sets) {
+            args.extend(["--set", set]);
+        }
+        succeeded(&eyeshell_in(d, &args), out);
+        numbers(&d.join(out).join("series.csv"), "axial_length")
+    };
+    let in_t = grow(&scene, "t", &[]);
+    let years = grow(&scene, "years", &in_years);
+    assert_eq!(in_t.len(), 5);
+    for (a, b) in in_t.iter().zip(&years) {
+        assert!((a - b).abs() < 1e-6, "{in_t:?} against {years:?}");
+    }
+    assert!(in_t[4] - in_t[0] > 0.1, "{in_t:?}");
+    assert_eq!(
+        numbers(&d.join("years/series.csv"), "age"),
+        [0.25, 0.875, 1.5, 2.75, 6.5]
+    );
+    // The scene as `check` writes it: the tables over age, read back to the same growth.
+    let mut args = vec!["check", s(&scene)];
+    for set in &in_years {
+        args.extend(["--set", set]);
+    }
+    let r = eyeshell_in(d, &args);
+    succeeded(&r, "check");
+    assert!(
+        r.stdout.contains("age = [0.25, 0.75, 1.5, 3.0, 6.5]") && !r.stdout.contains("{ t = ["),
+        "{}",
+        r.stdout
+    );
+    std::fs::write(d.join("written.toml"), &r.stdout).unwrap();
+    let again = grow(&d.join("written.toml"), "again", &[]);
+    for (a, b) in again.iter().zip(&years) {
+        assert!((a - b).abs() < 1e-12, "{again:?} against {years:?}");
+    }
+    // One surface's key set alone in ages, after the clock, moves with the others.
+    let one = grow(
+        &scene,
+        "one",
+        &[
+            in_years[0], in_years[1], in_years[2], in_years[3], in_years[4], in_years[5],
+            "optics.surfaces[0].radius={ age = [0.25, 0.75, 1.5, 3.0, 6.5], value = [7.472, 7.682, 7.731, 7.761, 7.77] }",
+        ],
+    );
+    assert_eq!(one, years);
+    // Times under the wrong name for the scene's clock.
+    let years_scene = "[growth]\neta0 = 7\n[time]\nunit = \"years\"\nstart = 8\nend = 11\n[stimulus]\nsource = \"optics\"\n[[optics.surfaces]]\nradius = { t = [0, 3], value = [7.7, 7.8] }\n";
+    grow_fails(
+        years_scene,
+        "gives a table over t, but the scene counts in ages (time.unit)",
+    );
+    grow_fails(
+        "[growth]\neta0 = 70\n[stimulus]\nsource = \"optics\"\n[[optics.surfaces]]\nradius = { age = [0, 1], value = [7.7, 7.8] }\n",
+        "gives a table over age, but the scene counts no ages",
+    );
+    grow_fails(
+        "[growth]\neta0 = 70\n[stimulus]\nsource = \"optics\"\n[[optics.surfaces]]\nradius = { t = [0, 1], age = [0, 1], value = [7.7, 7.8] }\n",
+        "gives both t and age",
+    );
+}
+
+/// A table over ages is checked in ages: its times from time.start on, and its spline over
+/// the window, each problem said with the ages the scene writes.
+#[test]
+fn optics_tables_over_ages_are_checked_in_ages() {
+    let scene = |radius: &str| {
+        format!("[growth]\neta0 = 7\n[time]\nunit = \"years\"\nstart = 8\nend = 11\n[stimulus]\nsource = \"optics\"\n[[optics.surfaces]]\nradius = {radius}\n")
+    };
+    grow_fails(
+        &scene("{ age = [5, 9], value = [7.7, 7.8] }"),
+        "optics.surfaces[0].radius = { age = [5, 9], value = [7.7, 7.8] } must list finite ages from time.start = 8 on, not 5",
+    );
+    grow_fails(
+        &scene("{ age = [10, 9], value = [7.7, 7.8] }"),
+        "strictly increasing times (they are not sorted for you): 9 follows 10",
+    );
+    grow_fails(
+        &scene("{ age = [10.9, 11], value = [-6, -100] }"),
+        "optics.surfaces[0].radius = { age = [10.9, 11], value = [-6, -100] } reaches 2720 at age 8 (its spline between or beyond its points): it must stay between 0.5 and 10000 mm in magnitude, of one sign for all ages in [8, 11]",
+    );
+}

@@ -322,8 +322,31 @@ impl SurfaceSpec {
         out
     }
 
+    /// The surface with every table's times moved by `by` (a scene's ages onto the model's
+    /// t, t = age − time.start, and back).
+    pub fn shift_times(&mut self, by: f64) {
+        let index = match &mut self.medium {
+            Some(MediumSpec::Index(v)) => Some(v),
+            _ => None,
+        };
+        for v in [&mut self.radius, &mut self.conic, &mut self.thickness]
+            .into_iter()
+            .flatten()
+            .chain(index)
+        {
+            if let EyeValue::Table { t, .. } = v {
+                t.iter_mut().for_each(|x| *x += by);
+            }
+        }
+    }
+
     /// Each key's own range (tables: times and values), naming the key.
-    pub fn check(&self, i: usize, wavelengths: &[f64]) -> Result<(), SurfaceKeyError> {
+    pub fn check(
+        &self,
+        i: usize,
+        wavelengths: &[f64],
+        clock: TableClock,
+    ) -> Result<(), SurfaceKeyError> {
         let bad = |name: &str, value, problem| surface_key_error(i, name, value, problem);
         let (rlo, rhi) = RADIUS_RANGE;
         if let Some(v) = &self.radius {
@@ -336,6 +359,7 @@ impl SurfaceSpec {
                     "between {rlo} and {} mm in magnitude, or inf for a plane",
                     number(rhi)
                 ),
+                clock,
             )?;
             if let EyeValue::Table { value, .. } = v {
                 if value.iter().any(|x| x.is_infinite())
@@ -356,6 +380,7 @@ impl SurfaceSpec {
                 v,
                 &|x| x.is_finite() && x.abs() <= CONIC_LIMIT,
                 &format!("a finite number between −{CONIC_LIMIT} and {CONIC_LIMIT}"),
+                clock,
             )?;
         }
         if let Some(v) = &self.thickness {
@@ -365,6 +390,7 @@ impl SurfaceSpec {
                 v,
                 &|x| x > 0.0 && x <= MAX_THICKNESS,
                 &format!("positive and at most {MAX_THICKNESS} mm"),
+                clock,
             )?;
         }
         if let Some(a) = &self.aspheric {
@@ -384,6 +410,7 @@ impl SurfaceSpec {
                 v,
                 &|x| x >= nlo && x <= nhi,
                 &format!("a refractive index between {nlo} and {nhi}"),
+                clock,
             )?,
             Some(m) => check_medium(i, m, wavelengths)?,
             None => {}
@@ -415,12 +442,10 @@ impl SurfaceSpec {
     }
 
     /// The value of key `name` as messages show it (tables and lists shortened).
-    pub fn shown(&self, name: &str) -> Option<String> {
+    pub fn shown(&self, name: &str, clock: TableClock) -> Option<String> {
         let value = |v: &EyeValue| match v {
             EyeValue::Fixed(x) => number(*x),
-            EyeValue::Table { t, value } => {
-                format!("{{ t = {}, value = {} }}", list_text(t), list_text(value))
-            }
+            EyeValue::Table { t, value } => clock.table_text(t, value),
         };
         match (name, &self.medium) {
             ("radius", _) => self.radius.as_ref().map(value),
@@ -465,7 +490,12 @@ impl SurfaceSpec {
     /// Each table's values over the whole run, growth times [0, `t_end`], between and beyond
     /// its points (checked there by [`SurfaceSpec::check`]): within the key's range, a radius
     /// of one sign. The error names the key, the time and the value reached.
-    pub fn check_over(&self, i: usize, t_end: f64) -> Result<(), SurfaceKeyError> {
+    pub fn check_over(
+        &self,
+        i: usize,
+        t_end: f64,
+        clock: TableClock,
+    ) -> Result<(), SurfaceKeyError> {
         let (rlo, rhi) = RADIUS_RANGE;
         let (nlo, nhi) = optics::INDEX_RANGE;
         let radius_range = format!(
@@ -525,12 +555,12 @@ impl SurfaceSpec {
             if let Some((x, at)) = bad {
                 return Err(SurfaceKeyError {
                     key: surface_key(i, name),
-                    value: format!("{{ t = {}, value = {} }}", list_text(t), list_text(vs)),
+                    value: clock.table_text(t, vs),
                     problem: format!(
-                        "reaches {} at t = {} (its spline between or beyond its points): it must stay {range} for all t in [0, {}]",
+                        "reaches {} at {} (its spline between or beyond its points): it must stay {range} for {}",
                         significant(x),
-                        significant(at),
-                        number(t_end)
+                        clock.at(at),
+                        clock.span(t_end)
                     ),
                 });
             }
@@ -558,6 +588,70 @@ impl SurfaceSpec {
     }
 }
 
+/// How the times of the optics' tables are shown to the user: over the model's t, or, in a
+/// scene that counts in ages (time.unit), over ages, age = t + time.start. The tables
+/// themselves are always over t; this only names their times in messages.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TableClock {
+    /// time.start, when the scene counts in ages.
+    pub ages_from: Option<f64>,
+}
+
+impl TableClock {
+    /// What a table's times are called: `t`, or `age`.
+    pub fn key(&self) -> &'static str {
+        if self.ages_from.is_some() {
+            "age"
+        } else {
+            "t"
+        }
+    }
+
+    /// A table as written: its times as ages with a clock of ages.
+    pub fn table_text(&self, t: &[f64], value: &[f64]) -> String {
+        let o = self.ages_from.unwrap_or(0.0);
+        let times: Vec<f64> = t.iter().map(|x| x + o).collect();
+        format!(
+            "{{ {} = {}, value = {} }}",
+            self.key(),
+            list_text(&times),
+            list_text(value)
+        )
+    }
+
+    /// Model time `t` in the user's words: "t = 0.5", or "age 8.5".
+    pub fn at(&self, t: f64) -> String {
+        match self.ages_from {
+            Some(o) => format!("age {}", significant(t + o)),
+            None => format!("t = {}", significant(t)),
+        }
+    }
+
+    /// The eye's time `t` in the user's words: "growth time t = 0.5", or "age 8.5".
+    pub fn eye_time(&self, t: f64) -> String {
+        match self.ages_from {
+            Some(_) => self.at(t),
+            None => format!("growth time {}", self.at(t)),
+        }
+    }
+
+    /// The run's span [0, `t_end`] in the user's words.
+    pub fn span(&self, t_end: f64) -> String {
+        match self.ages_from {
+            Some(o) => format!("all ages in [{}, {}]", number(o), number(o + t_end)),
+            None => format!("all t in [0, {}]", number(t_end)),
+        }
+    }
+
+    /// Where a table's times may start, in the user's words.
+    fn first_time(&self) -> String {
+        match self.ages_from {
+            Some(o) => format!("finite ages from time.start = {} on", number(o)),
+            None => "finite times from 0 on (the growth's time)".into(),
+        }
+    }
+}
+
 /// The error of surface `i`'s key `name`, given as `value`: `problem`.
 fn surface_key_error(i: usize, name: &str, value: String, problem: String) -> SurfaceKeyError {
     SurfaceKeyError {
@@ -575,13 +669,12 @@ fn check_value(
     v: &EyeValue,
     ok: &dyn Fn(f64) -> bool,
     range: &str,
+    clock: TableClock,
 ) -> Result<(), SurfaceKeyError> {
     let bad = |name: &str, value, problem| surface_key_error(i, name, value, problem);
     let shown = match v {
         EyeValue::Fixed(x) => number(*x),
-        EyeValue::Table { t, value } => {
-            format!("{{ t = {}, value = {} }}", list_text(t), list_text(value))
-        }
+        EyeValue::Table { t, value } => clock.table_text(t, value),
     };
     if let EyeValue::Table { t, value } = v {
         if t.len() < 2 || t.len() > MAX_TABLE_TIMES {
@@ -603,23 +696,22 @@ fn check_value(
             ));
         }
         if let Some(x) = t.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+            let written = x + clock.ages_from.unwrap_or(0.0);
             return Err(bad(
                 name,
                 shown,
-                format!(
-                    "must list finite times from 0 on (the growth's time), not {}",
-                    number(*x)
-                ),
+                format!("must list {}, not {}", clock.first_time(), number(written)),
             ));
         }
         if let Some(w) = t.windows(2).find(|w| w[1] <= w[0]) {
+            let o = clock.ages_from.unwrap_or(0.0);
             return Err(bad(
                 name,
                 shown,
                 format!(
                     "must list strictly increasing times (they are not sorted for you): {} follows {}",
-                    number(w[1]),
-                    number(w[0])
+                    number(w[1] + o),
+                    number(w[0] + o)
                 ),
             ));
         }

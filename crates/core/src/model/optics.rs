@@ -104,6 +104,9 @@ pub struct OpticsSpec {
     /// optics.pupil_position: the stop's distance from the corneal apex (mm); unset, a
     /// built-in eye's source's (on the lens's front vertex, which it follows).
     pub pupil_position: Option<f64>,
+    /// How messages name the tables' times (over t, or over ages in a scene with
+    /// time.unit); the tables are over t either way.
+    pub table_clock: super::eye::TableClock,
 }
 
 impl Default for OpticsSpec {
@@ -121,6 +124,7 @@ impl Default for OpticsSpec {
             hyperopia_d: 0.5,
             surfaces: Vec::new(),
             pupil_position: None,
+            table_clock: Default::default(),
         }
     }
 }
@@ -268,7 +272,8 @@ impl OpticsSpec {
         }
         let mut times = vec![0.0, t_end];
         for (i, s) in self.surfaces.iter().enumerate() {
-            s.check_over(i, t_end).map_err(surface_error)?;
+            s.check_over(i, t_end, self.table_clock)
+                .map_err(surface_error)?;
             times.extend(s.extreme_times(t_end));
         }
         times.sort_by(f64::total_cmp);
@@ -286,9 +291,9 @@ impl OpticsSpec {
         let at_time = |mut e: OpticsKeyError| {
             if timed {
                 e.problem = format!(
-                    "{} (the eye at growth time t = {})",
+                    "{} (the eye at {})",
                     e.problem,
-                    significant(t)
+                    self.table_clock.eye_time(t)
                 );
             }
             e
@@ -381,7 +386,8 @@ impl OpticsSpec {
             ));
         }
         for (i, s) in self.surfaces.iter().enumerate() {
-            s.check(i, &self.wavelengths).map_err(surface_error)?;
+            s.check(i, &self.wavelengths, self.table_clock)
+                .map_err(surface_error)?;
         }
         if let Some(z) = self.pupil_position {
             if !(z.is_finite() && z > 0.0) {
@@ -633,9 +639,9 @@ impl OpticsSpec {
         let at_time = |mut e: OpticsKeyError| {
             if !self.times().is_empty() {
                 e.problem = format!(
-                    "{} (the eye at growth time t = {})",
+                    "{} (the eye at {})",
                     e.problem,
-                    significant(t)
+                    self.table_clock.eye_time(t)
                 );
             }
             e
@@ -793,7 +799,9 @@ impl OpticsSpec {
         let shown = |i: usize, name: &str| {
             (
                 eye::surface_key(i, name),
-                self.surfaces[i].shown(name).unwrap_or_default(),
+                self.surfaces[i]
+                    .shown(name, self.table_clock)
+                    .unwrap_or_default(),
             )
         };
         if traces(self) {
@@ -841,11 +849,6 @@ pub struct ComputedOptics {
 
 /// An eye's traced surfaces, their blue and red splines and its images.
 pub(crate) type Traced = (Surfaces, PolarSpline, PolarSpline, Vec<ComputedImage>);
-
-/// `x` to 6 significant digits, shortest form: a growth time in a message.
-fn significant(x: f64) -> String {
-    number(format!("{x:.5e}").parse().unwrap_or(x))
-}
 
 /// A surface's key error as the optics keys' error.
 fn surface_error(e: SurfaceKeyError) -> OpticsKeyError {

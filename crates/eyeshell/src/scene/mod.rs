@@ -80,6 +80,12 @@ pub struct WrittenClock {
     pub t_end: Option<f64>,
     /// output.times, if the scene gives them.
     pub output_times: Option<Vec<f64>>,
+    /// The age subtracted from the times of the optics' tables now (time.start with ages,
+    /// else 0): the tables of [`Scene::optics`] are on the model's clock, these plus it are
+    /// as written.
+    pub optics_origin: f64,
+    /// Whether the optics' tables are written over `t`, over `age` (both may be seen).
+    pub optics_time_keys: (bool, bool),
 }
 
 /// Two scenes are equal when they run alike: what a run reads is on the model's clock in
@@ -412,6 +418,49 @@ impl Scene {
             }
         };
         self.growth_settings.output_times = times;
+        // The optics' tables (ages with time.unit) onto the model's clock.
+        let origin = window.map_or(0.0, |w| w.0);
+        let by = self.written_clock.optics_origin - origin;
+        if by != 0.0 && !self.optics().times().is_empty() {
+            self.set_optics(|o| o.surfaces.iter_mut().for_each(|s| s.shift_times(by)));
+        }
+        self.written_clock.optics_origin = origin;
+        let clock = crate::model::eye::TableClock {
+            ages_from: window.map(|w| w.0),
+        };
+        if self.optics().table_clock != clock {
+            self.set_optics(|o| o.table_clock = clock);
+        }
+    }
+
+    /// Put the optics' tables back as written, before an edit that adds written ones to
+    /// them ([`Scene::sync_clock`] puts them on the model's clock again).
+    pub(crate) fn unshift_optics(&mut self) {
+        let by = self.written_clock.optics_origin;
+        if by != 0.0 && !self.optics().times().is_empty() {
+            self.set_optics(|o| o.surfaces.iter_mut().for_each(|s| s.shift_times(by)));
+        }
+        self.written_clock.optics_origin = 0.0;
+    }
+
+    /// The optics' surfaces as the scene writes them: their tables over ages with
+    /// time.unit.
+    pub(crate) fn surfaces_as_written(&self) -> Vec<crate::model::eye::SurfaceSpec> {
+        let mut surfaces = self.optics().surfaces.clone();
+        let by = self.written_clock.optics_origin;
+        if by != 0.0 {
+            surfaces.iter_mut().for_each(|s| s.shift_times(by));
+        }
+        surfaces
+    }
+
+    /// What the optics' tables' times are named when written: `age` in a scene that counts
+    /// in ages, else `t`.
+    pub(crate) fn table_time_key(&self) -> optics_toml::TimeKey {
+        match self.growth.as_ref().and_then(|g| g.clock.window()) {
+            Some(_) => optics_toml::TimeKey::Age,
+            None => optics_toml::TimeKey::T,
+        }
     }
 
     /// output.times as the scene writes them: ages with time.unit.

@@ -21,7 +21,47 @@ pub trait SurfaceToml: Sized {
     /// The surface from a TOML table.
     fn from_toml(i: usize, v: &toml::Value) -> Result<Self, SurfaceKeyError>;
     /// The surface as a TOML table (its keys in the table's own, alphabetical, order).
-    fn to_toml(&self) -> toml::Value;
+    fn to_toml(&self) -> toml::Value {
+        self.to_toml_with(TimeKey::T)
+    }
+    /// [`SurfaceToml::to_toml`], its tables' times under `key` (`t`, or `age` in a scene
+    /// that counts in ages).
+    fn to_toml_with(&self, key: TimeKey) -> toml::Value;
+}
+
+/// What a table's times are named: `t` (the model's time) or `age` (an age in time.unit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeKey {
+    T,
+    Age,
+}
+
+impl TimeKey {
+    pub fn name(self) -> &'static str {
+        match self {
+            TimeKey::T => "t",
+            TimeKey::Age => "age",
+        }
+    }
+}
+
+/// Which time keys the tables inside `v` (a surface's value, a surface table or an array
+/// of them) use: (t, age).
+pub fn time_keys_in(v: &toml::Value) -> (bool, bool) {
+    match v {
+        toml::Value::Table(table) => {
+            let own = (table.contains_key("t"), table.contains_key("age"));
+            table
+                .values()
+                .map(time_keys_in)
+                .fold(own, |a, b| (a.0 || b.0, a.1 || b.1))
+        }
+        toml::Value::Array(items) => items
+            .iter()
+            .map(time_keys_in)
+            .fold((false, false), |a, b| (a.0 || b.0, a.1 || b.1)),
+        _ => (false, false),
+    }
 }
 
 /// `optics.surfaces[i].name`.
@@ -37,7 +77,7 @@ fn key_error(key: String, value: String, problem: impl Into<String>) -> OpticsKe
     }
 }
 
-fn eye_value_toml(value: &EyeValue) -> toml::Value {
+fn eye_value_toml(value: &EyeValue, key: TimeKey) -> toml::Value {
     match value {
         EyeValue::Fixed(x) => toml::Value::Float(*x),
         EyeValue::Table { t, value } => {
@@ -45,7 +85,7 @@ fn eye_value_toml(value: &EyeValue) -> toml::Value {
                 toml::Value::Array(xs.iter().map(|x| toml::Value::Float(*x)).collect())
             };
             let mut table = toml::Table::new();
-            table.insert("t".into(), list(t));
+            table.insert(key.name().into(), list(t));
             table.insert("value".into(), list(value));
             toml::Value::Table(table)
         }
@@ -101,18 +141,26 @@ impl SurfaceToml for SurfaceSpec {
             if !timed {
                 return Err(err(shape.into()));
             }
-            if let Some(k) = table.keys().find(|k| *k != "t" && *k != "value") {
+            if let Some(k) = table
+                .keys()
+                .find(|k| !["t", "age", "value"].contains(&k.as_str()))
+            {
                 return Err(err(format!(
                     "has the unknown key '{}': {shape}",
                     crate::text::one_line(&crate::text::excerpt(k, 40))
                 )));
             }
-            let (Some(t), Some(value)) = (
-                table.get("t").and_then(floats),
-                table.get("value").and_then(floats),
-            ) else {
+            let times = match (table.get("t"), table.get("age")) {
+                (Some(_), Some(_)) => {
+                    return Err(err(format!("gives both t and age: {shape}")));
+                }
+                (t, age) => t.or(age),
+            };
+            let (Some(t), Some(value)) =
+                (times.and_then(floats), table.get("value").and_then(floats))
+            else {
                 return Err(err(format!(
-                    "{shape}: t and value must both be lists of numbers"
+                    "{shape}: t (or age) and value must both be lists of numbers"
                 )));
             };
             Ok(EyeValue::Table { t, value })
@@ -187,7 +235,7 @@ impl SurfaceToml for SurfaceSpec {
     }
 
     /// The surface as a TOML table (its keys in the table's own, alphabetical, order).
-    fn to_toml(&self) -> toml::Value {
+    fn to_toml_with(&self, key: TimeKey) -> toml::Value {
         let mut t = toml::Table::new();
         let mut put = |k: &str, v: toml::Value| {
             t.insert(k.to_string(), v);
@@ -195,19 +243,19 @@ impl SurfaceToml for SurfaceSpec {
         let list =
             |xs: &[f64]| toml::Value::Array(xs.iter().map(|x| toml::Value::Float(*x)).collect());
         if let Some(v) = &self.radius {
-            put("radius", eye_value_toml(v));
+            put("radius", eye_value_toml(v, key));
         }
         if let Some(v) = &self.conic {
-            put("conic", eye_value_toml(v));
+            put("conic", eye_value_toml(v, key));
         }
         if let Some(a) = &self.aspheric {
             put("aspheric", list(a));
         }
         if let Some(v) = &self.thickness {
-            put("thickness", eye_value_toml(v));
+            put("thickness", eye_value_toml(v, key));
         }
         match &self.medium {
-            Some(MediumSpec::Index(v)) => put("index", eye_value_toml(v)),
+            Some(MediumSpec::Index(v)) => put("index", eye_value_toml(v, key)),
             Some(MediumSpec::Cauchy(c)) => put("cauchy", list(c)),
             Some(MediumSpec::Sellmeier { b, c }) => {
                 let mut s = toml::Table::new();

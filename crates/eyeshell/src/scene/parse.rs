@@ -155,6 +155,7 @@ impl Scene {
                         SurfaceSpec::from_toml(i, item).map_err(|e| surface_error(origin, e))?,
                     );
                 }
+                self.written_clock.optics_time_keys = super::optics_toml::time_keys_in(value);
                 set(self, surfaces)
             }
             Access::Floats { set, .. } => {
@@ -219,14 +220,21 @@ impl Scene {
                 ),
             });
         };
-        let mut surfaces = self.optics().surfaces.clone();
+        // The surfaces as written (ages with time.unit), the new value among them, then all
+        // on the model's clock again.
+        let mut surfaces = self.surfaces_as_written();
         if surfaces.len() <= i {
             surfaces.resize(i + 1, SurfaceSpec::default());
         }
         surfaces[i]
             .set(i, name, value)
             .map_err(|e| surface_error(origin, e))?;
+        self.unshift_optics();
         self.set_optics(|o| o.surfaces = surfaces);
+        let (t, age) = super::optics_toml::time_keys_in(value);
+        let keys = &mut self.written_clock.optics_time_keys;
+        *keys = (keys.0 || t, keys.1 || age);
+        self.sync_clock();
         Ok(())
     }
 
