@@ -646,7 +646,11 @@ impl TableClock {
     /// Where a table's times may start, in the user's words.
     fn first_time(&self) -> String {
         match self.ages_from {
-            Some(o) => format!("finite ages from time.start = {} on", number(o)),
+            Some(o) => format!(
+                "finite ages from {} = {} on",
+                crate::names::Quantity::TimeStart.name(),
+                number(o)
+            ),
             None => "finite times from 0 on (the growth's time)".into(),
         }
     }

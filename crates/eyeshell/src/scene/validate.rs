@@ -62,26 +62,7 @@ impl Scene {
         let invalid = |keys: &[&str], value: String, problem: String| {
             self.invalid(sources, keys, value, problem)
         };
-        // The optics' tables are over ages exactly when the scene counts in ages.
-        let ages = self
-            .growth
-            .as_ref()
-            .is_some_and(|g| g.clock.window().is_some());
-        let (over_t, over_age) = self.written_clock.optics_time_keys;
-        if !self.optics().times().is_empty() && ((ages && over_t) || (!ages && over_age)) {
-            let surfaces = crate::scene::keys::find("optics.surfaces")
-                .map_or(String::new(), |k| show(&k.get(self)));
-            let problem = if ages {
-                "gives a table over t, but the scene counts in ages (time.unit): give each table's times as ages, { age = [...], value = [...] } (t is the age less time.start)"
-            } else {
-                "gives a table over age, but the scene counts no ages: set time.unit, time.start and time.end, or give the tables over t"
-            };
-            return Err(invalid(
-                &["optics.surfaces", "time.unit"],
-                surfaces,
-                problem.into(),
-            ));
-        }
+        self.validate_table_clock(sources)?;
         for spec in KEYS {
             // A cornea that follows geometry.R0 has its value: that key's check is its own.
             if spec.key == "cornea.R0" && self.params.cornea_follows_radius {
@@ -370,6 +351,33 @@ impl Scene {
     }
 
     /// The traced optics over the whole run, and the two wavelengths a growth run reads.
+    /// The optics' tables are over ages exactly when the scene counts in ages: a table over
+    /// t beside time.unit, or over age without it, is refused before any other check reads
+    /// its times.
+    fn validate_table_clock(&self, sources: &Sources) -> Result<(), SceneError> {
+        let ages = self
+            .growth
+            .as_ref()
+            .is_some_and(|g| g.clock.window().is_some());
+        let (over_t, over_age) = self.written_clock.optics_time_keys;
+        if self.optics().times().is_empty() || !((ages && over_t) || (!ages && over_age)) {
+            return Ok(());
+        }
+        let surfaces = crate::scene::keys::find("optics.surfaces")
+            .map_or(String::new(), |k| show(&k.get(self)));
+        let problem = if ages {
+            "gives a table over t, but the scene counts in ages (time.unit): give each table's times as ages, { age = [...], value = [...] } (t is the age less time.start)"
+        } else {
+            "gives a table over age, but the scene counts no ages: set time.unit, time.start and time.end, or give the tables over t"
+        };
+        Err(self.invalid(
+            sources,
+            &["optics.surfaces", "time.unit"],
+            surfaces,
+            problem.into(),
+        ))
+    }
+
     fn validate_traced_optics(&self, sources: &Sources) -> Result<(), SceneError> {
         if self.stimulus_source() == Source::Optics {
             // The whole run: growth.t_end, or the [0, 1] an elastic scene's eye is drawn over.
