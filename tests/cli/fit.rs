@@ -230,7 +230,11 @@ fn bad_keys_and_unidentifiable_parameters_are_refused_by_name() {
         ("stimulus.red.offset", "only affects the classification"),
         (
             "solver.nodes",
-            "--fit: sensitivities to solver.nodes are not available",
+            "--fit: solver.nodes is a setting of the solver, not a parameter of the model",
+        ),
+        (
+            "growth.schedule",
+            "--fit: growth.schedule is not a real-valued key",
         ),
         // The check `grow --sensitivities` makes, before any run (exit 2, not 1 at t = 0).
         (
