@@ -714,8 +714,9 @@ fn prepare_arms(
             if data.has(Measured::Refraction) && g.source != crate::model::optics::Source::Optics {
                 let origin = arm.scene.origin_of_key("stimulus.source");
                 return Err(Error::input(Subject::File(data.origin.clone().into()), format!(
-                    "{}: the data give refraction_D, but the scene computes no refraction: its stimulus is not from the optics ({origin}); set stimulus.source = \"optics\" or leave the refraction out",
-                    data.origin
+                    "{}: the data give refraction_D, but the scene computes no refraction: its stimulus is not from the optics (stimulus.source = \"{}\" in {origin}); set stimulus.source = \"optics\" or leave the refraction out",
+                    data.origin,
+                    crate::model::optics::SOURCES[g.source as usize]
                 ))
                 .with_origin(Origin::File(data.origin.clone().into())));
             }

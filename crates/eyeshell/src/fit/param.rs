@@ -234,9 +234,10 @@ impl FitParam {
         let optics_key = self.key.starts_with("optics.");
         if optics_key && scene.stimulus_source() != Source::Optics {
             return Some(format!(
-                "{} is not used by the run of {}: its stimulus is not computed from the optics ({} is not \"optics\")",
+                "{} is not used by the run of {}: its stimulus is not computed from the optics (stimulus.source = \"{}\" in {}; the optics keys need \"optics\")",
                 self.key,
                 scene.origin,
+                crate::model::optics::SOURCES[scene.stimulus_source() as usize],
                 scene.origin_of_key("stimulus.source")
             ));
         }

@@ -253,10 +253,18 @@ pub fn report_table(scene: &Scene, r: &FitReport) -> String {
         d4(r.rms_residual)
     ));
     text.push_str(&format!(
-        "  iterations       {} ({} growth run{}); {}\n  time             {:.3} s\n",
+        "  iterations       {} ({} growth run{}{}); {}\n  time             {:.3} s\n",
         r.iterations,
         r.model_runs,
         plural(r.model_runs),
+        if r.parameters
+            .iter()
+            .all(|p| p.jacobian == "IDAS sensitivity")
+        {
+            " with sensitivities"
+        } else {
+            ", finite differences among them"
+        },
         r.convergence_reason,
         r.wall_seconds,
     ));
