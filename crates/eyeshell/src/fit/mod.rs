@@ -689,7 +689,10 @@ fn prepare_arms(
     if !per_arm.is_empty() && arms.len() < 2 {
         return Err(Error::input(
             Subject::Argument("per-arm".into()),
-            format!("--per-arm {}: a key of each arm's own needs two arms or more (--arm NAME=SCENE:DATA)", per_arm[0].key()),
+            format!(
+                "{} is fitted per arm: a key of each arm's own needs two arms or more",
+                per_arm[0].key()
+            ),
         )
         .with_origin(Origin::Argument));
     }
@@ -698,7 +701,7 @@ fn prepare_arms(
             if arms[..a].iter().any(|b| b.name.as_deref() == Some(name)) {
                 return Err(Error::input(
                     Subject::Argument("arm".into()),
-                    format!("--arm {name}: two arms have this name (each arm's is its own)"),
+                    format!("arm {name}: two arms have this name (each arm's is its own)"),
                 )
                 .with_value(name.clone())
                 .with_origin(Origin::Argument));
