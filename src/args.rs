@@ -270,12 +270,28 @@ pub(crate) struct OpticsArgs {
 
 #[derive(Args, Debug)]
 pub(crate) struct FitArgs {
-    #[command(flatten)]
-    pub(crate) scene: SceneArgs,
-    /// The observations: a CSV file with the header t,axial_length[,sigma] (t in [0, growth.t_end], lengths and σ in mm)
-    #[arg(long, value_name = "DATA.csv")]
-    pub(crate) data: PathBuf,
-    /// The parameters to fit, starting from the scene's values (any key --sensitivities takes: growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B, growth.schedule_tau, growth.schedule_centre, growth.schedule_width, geometry.R0)
+    /// The scene (TOML) of a fit of one scene (with --data); see `eyeshell keys` for its keys
+    #[arg(
+        value_name = "SCENE.toml",
+        required_unless_present = "arm",
+        conflicts_with = "arm"
+    )]
+    pub(crate) scene: Option<PathBuf>,
+    /// Override a scene key, e.g. --set solver.nodes=101 (repeatable; later wins; applies to every arm's scene)
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub(crate) set: Vec<String>,
+    /// The observations: a CSV file with the header t (or age), then axial_length and/or refraction_D, each optionally with its σ (sigma_axial_length or sigma, sigma_refraction_D); t in [0, growth.t_end], lengths in mm, refractions in D
+    #[arg(
+        long,
+        value_name = "DATA.csv",
+        required_unless_present = "arm",
+        conflicts_with = "arm"
+    )]
+    pub(crate) data: Option<PathBuf>,
+    /// An arm of a joint fit, NAME=SCENE.toml:DATA.csv (repeatable, two or more): the arms share every --fit key and each has its own value of every --per-arm key
+    #[arg(long, value_name = "NAME=SCENE:DATA")]
+    pub(crate) arm: Vec<String>,
+    /// The parameters to fit, starting from the scene's values: any real-valued key of the model (growth.eta0, growth.Gamma, pressure.dP, optics.surfaces[0].radius, ...); the keys with a forward sensitivity (growth.eta0, growth.Gamma, growth.delta, fibres.D, material.C, material.bending, pressure.dP, stimulus.blue.z_B, growth.schedule_tau, growth.schedule_centre, growth.schedule_width, geometry.R0) take IDAS's for the axial length, every other column is a finite difference
     #[arg(
         long,
         value_name = "KEY,KEY,...",
@@ -283,6 +299,9 @@ pub(crate) struct FitArgs {
         required = true
     )]
     pub(crate) fit: Vec<String>,
+    /// Keys each arm of a joint fit has its own value of (with --arm), starting from each arm's scene
+    #[arg(long, value_name = "KEY,KEY,...", value_delimiter = ',')]
+    pub(crate) per_arm: Vec<String>,
     /// Output directory: fit.json, scene.toml (the fitted scene), residuals.csv, curve.csv, fit.png and fit.svg (created whole or not at all; only an earlier fit output or an empty directory is replaced)
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,

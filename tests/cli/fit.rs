@@ -230,7 +230,11 @@ fn bad_keys_and_unidentifiable_parameters_are_refused_by_name() {
         ("stimulus.red.offset", "only affects the classification"),
         (
             "solver.nodes",
-            "--fit: sensitivities to solver.nodes are not available",
+            "--fit: solver.nodes is a setting of the solver, not a parameter of the model",
+        ),
+        (
+            "growth.schedule",
+            "--fit: growth.schedule is not a real-valued key",
         ),
         // The check `grow --sensitivities` makes, before any run (exit 2, not 1 at t = 0).
         (
@@ -248,6 +252,12 @@ fn bad_keys_and_unidentifiable_parameters_are_refused_by_name() {
         &eyeshell(&args),
         "the data cannot identify growth.Gamma:",
         "Γ beyond the shell",
+    );
+    // With the data that would identify it.
+    assert_bad(
+        &eyeshell(&args),
+        "; data that would identify growth.Gamma: axial lengths late in the growth",
+        "Γ beyond the shell, advice",
     );
     assert!(!out.exists());
     let mut args = fit_args(DATA, "growth.eta0", s(&out));
@@ -363,4 +373,168 @@ fn a_key_the_scenes_stimulus_cannot_use_is_bad_input() {
         "grow",
     );
     assert_only_entry(d, "data.csv", "nothing written");
+}
+
+/// The joint fit of two arms (the guide's): each arm's scene, data and values in the
+/// report; residuals.csv and curve.csv name the arm; a data path holding ':' and a scene
+/// path holding '=' are split where the files are.
+#[test]
+fn a_joint_fit_of_two_arms_reports_each_arms_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let ex = repo().join("examples/fit");
+    std::fs::copy(ex.join("joint_none.csv"), d.join("a:none.csv")).unwrap();
+    std::fs::copy(ex.join("joint_single-vision.csv"), d.join("sv.csv")).unwrap();
+    std::fs::copy(
+        repo().join("scenes/eyewear/single-vision.toml"),
+        d.join("lens=-2.toml"),
+    )
+    .unwrap();
+    let none = format!(
+        "none={}:a:none.csv",
+        s(&repo().join("scenes/eyewear/none.toml"))
+    );
+    let run = eyeshell_in(
+        d,
+        &[
+            "fit",
+            "--set",
+            "solver.nodes=61",
+            "--set",
+            "output.history_points=0",
+            "--arm",
+            &none,
+            "--arm",
+            "single-vision=lens=-2.toml:sv.csv",
+            "--fit",
+            "growth.Gamma",
+            "--per-arm",
+            "growth.eta0",
+            "--out",
+            "out",
+        ],
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    for needle in [
+        "eyeshell: fitted 2 arms jointly (20 observations, σ given)",
+        "  arm              single-vision: lens=-2.toml to sv.csv (10 observations of axial_length and refraction_D)",
+        "growth.eta0[none]",
+        "growth.eta0[single-vision]",
+    ] {
+        assert!(run.stdout.contains(needle), "{needle:?} not in {}", run.stdout);
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("out/fit.json")).unwrap()).unwrap();
+    let p = json["parameters"].as_array().unwrap();
+    assert_eq!(p.len(), 3);
+    assert_eq!(p[2]["arm"], "single-vision");
+    assert_eq!(
+        p[1]["jacobian"],
+        "IDAS sensitivity (axial length), finite differences (refraction)"
+    );
+    // The data were grown at η0 = 75, Γ = 7.5 in both arms.
+    for q in p {
+        let truth = if q["key"] == "growth.Gamma" {
+            7.5
+        } else {
+            75.0
+        };
+        let z = (q["estimate"].as_f64().unwrap() - truth) / q["standard_error"].as_f64().unwrap();
+        assert!(z.abs() < 2.0, "{q}");
+    }
+    assert_eq!(json["arms"][0]["data"]["file"], "a:none.csv");
+    let residuals = std::fs::read_to_string(d.join("out/residuals.csv")).unwrap();
+    let lines: Vec<&str> = residuals.lines().collect();
+    assert_eq!(
+        lines[0],
+        "arm,t,measured,value,sigma,model,residual,weighted_residual"
+    );
+    assert_eq!(lines.len(), 1 + 2 * 2 * 10);
+    assert!(
+        lines[2].starts_with("none,0.1,refraction_D,5.47,0.15,"),
+        "{}",
+        lines[2]
+    );
+    assert!(
+        lines[40].starts_with("single-vision,1.0,refraction_D,"),
+        "{}",
+        lines[40]
+    );
+    let curve = std::fs::read_to_string(d.join("out/curve.csv")).unwrap();
+    assert!(curve.starts_with("arm,t,fitted_axial_length,initial_axial_length\nnone,0.0,"));
+    for f in [
+        "scene-none.toml",
+        "scene-single-vision.toml",
+        "fit-none.png",
+        "fit-single-vision.svg",
+    ] {
+        assert!(d.join("out").join(f).is_file(), "{f}");
+    }
+}
+
+/// Bad arms, keys and data of a joint fit: each exit 2 with one line, nothing written.
+#[test]
+fn bad_arms_keys_and_refraction_data_are_refused_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let ex = repo().join("examples/fit");
+    std::fs::copy(ex.join("joint_none.csv"), d.join("j.csv")).unwrap();
+    std::fs::copy(repo().join(DATA), d.join("l.csv")).unwrap();
+    let none = s(&repo().join("scenes/eyewear/none.toml")).to_string();
+    let konst = s(&repo().join("scenes/const.toml")).to_string();
+    let arm = |name: &str, scene: &str, data: &str| format!("{name}={scene}:{data}");
+    let cases: Vec<(Vec<String>, &str, &str)> = vec![
+        (vec![format!("a={none}:missing.csv"), arm("b", &none, "j.csv")], "growth.eta0", "the data file \"missing.csv\" does not exist"),
+        (vec![format!("a={none}"), arm("b", &none, "j.csv")], "growth.eta0", "no ':' between the scene and the data file"),
+        (vec![format!("{none}:j.csv"), arm("b", &none, "j.csv")], "growth.eta0", "no '=' after the arm's name"),
+        (vec![arm("a", &none, "j.csv"), arm("a", &none, "j.csv")], "growth.eta0", "--arm a: two arms have this name"),
+        (vec![arm("a b", &none, "j.csv"), arm("b", &none, "j.csv")], "growth.eta0", "the arm's name \"a b\" must be letters"),
+        (vec![arm("a", &none, "j.csv")], "growth.eta0", "a joint fit needs two arms or more"),
+        (vec![arm("a", &none, "j.csv"), arm("b", &none, "j.csv")], "growth.Gama", "--fit: \"growth.Gama\" is not a scene key"),
+        (vec![arm("a", &none, "j.csv"), arm("b", &none, "j.csv")], "growth.schedule", "--fit: growth.schedule is not a real-valued key"),
+        (vec![arm("a", &none, "j.csv"), arm("b", &konst, "j.csv")], "growth.eta0", "j.csv: the data give refraction_D, but the scene computes no refraction: its stimulus is not from the optics"),
+        (vec![arm("a", &konst, "l.csv"), arm("b", &konst, "l.csv")], "optics.surfaces[0].radius", "fit: optics.surfaces[0].radius is not used by the run of"),
+    ];
+    for (arms, key, needle) in cases {
+        let mut args = vec![
+            "fit",
+            "--set",
+            "solver.nodes=61",
+            "--fit",
+            key,
+            "--out",
+            "out",
+        ];
+        for a in &arms {
+            args.extend(["--arm", a.as_str()]);
+        }
+        assert_bad(&eyeshell_in(d, &args), needle, &arms.join(" "));
+        assert!(!d.join("out").exists(), "{needle}: nothing may be written");
+    }
+    // One scene: refraction data of a scene without optics, and --per-arm without arms.
+    let one = |data: &str, extra: &[&str]| {
+        let mut args = vec![
+            "fit",
+            konst.as_str(),
+            "--data",
+            data,
+            "--fit",
+            "growth.eta0",
+            "--out",
+            "out",
+        ];
+        args.extend(extra);
+        eyeshell_in(d, &args)
+    };
+    assert_bad(
+        &one("j.csv", &[]),
+        "(stimulus.source = \"polynomial\" in",
+        "refraction of const",
+    );
+    assert_bad(
+        &one("l.csv", &["--per-arm", "growth.Gamma"]),
+        "--per-arm growth.Gamma: a key of each arm's own needs arms",
+        "per-arm alone",
+    );
+    assert!(!d.join("out").exists());
 }

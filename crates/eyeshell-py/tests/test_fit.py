@@ -87,7 +87,7 @@ def test_fit_refusals_are_input_errors():
                      fit=["growth.Gamma"])
     with pytest.raises(eyeshell.InputError, match="is listed twice"):
         eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma", "growth.Gamma"])
-    with pytest.raises(eyeshell.InputError, match="the columns t \\(or age, not both\\) and axial_length are required"):
+    with pytest.raises(eyeshell.InputError, match="the columns t \\(or age, not both\\) and axial_length or refraction_D are required"):
         eyeshell.fit(SCENES / "const.toml", {"t": [0.5]}, fit=["growth.Gamma"])
     for bad in [0, 1001, True, 2.0]:
         with pytest.raises(eyeshell.InputError, match=f"max_iterations = {bad!r}: must be a whole number from 1 to 1,000"):
@@ -217,3 +217,71 @@ def test_an_out_of_range_keyword_is_blamed_on_the_keyword():
     with pytest.raises(eyeshell.InputError) as e:
         eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma"], solver__nodes=3)
     assert str(e.value).startswith("set solver.nodes=3: solver.nodes"), str(e.value)
+
+
+JOINT = ROOT / "examples" / "fit"
+EYEWEAR = SCENES / "eyewear"
+
+
+def _joint_arms(data_of=lambda path: path):
+    return {
+        "none": (EYEWEAR / "none.toml", data_of(JOINT / "joint_none.csv")),
+        "single-vision": (EYEWEAR / "single-vision.toml", data_of(JOINT / "joint_single-vision.csv")),
+    }
+
+
+def test_a_joint_fit_of_two_arms_is_the_command_lines(cli, tmp_path):
+    out = tmp_path / "joint"
+    cli("fit", "--set", "solver.nodes=61", "--set", "output.history_points=0",
+        "--arm", f"none={EYEWEAR / 'none.toml'}:{JOINT / 'joint_none.csv'}",
+        "--arm", f"single-vision={EYEWEAR / 'single-vision.toml'}:{JOINT / 'joint_single-vision.csv'}",
+        "--fit", "growth.Gamma", "--per-arm", "growth.eta0", "--out", out, "--quiet")
+    written = json.loads((out / "fit.json").read_text())
+    r = eyeshell.fit(fit=["growth.Gamma"], per_arm=["growth.eta0"], arms=_joint_arms(),
+                     frames=False, solver__nodes=61, output__history_points=0)
+    assert r.keys == ["growth.Gamma", "growth.eta0[none]", "growth.eta0[single-vision]"]
+    for a, b in zip(written["parameters"], r.report["parameters"]):
+        assert a["estimate"] == b["estimate"] and a["standard_error"] == b["standard_error"]
+    # Both arms were grown at η0 = 75, Γ = 7.5.
+    for key, truth in [("growth.Gamma", 7.5), ("growth.eta0[none]", 75), ("growth.eta0[single-vision]", 75)]:
+        assert abs(r.estimates[key] - truth) < 2 * r.standard_errors[key], key
+    assert set(r.scenes) == {"none", "single-vision"}
+    assert r.scenes["none"]["growth.eta0"] == r.estimates["growth.eta0[none]"]
+    assert r.scenes["single-vision"]["growth.Gamma"] == r.estimates["growth.Gamma"]
+    res = r.residuals
+    assert list(res["arm"][:2]) == ["none", "none"] and res["arm"][-1] == "single-vision"
+    assert len(res["t"]) == 40
+    # Rows alternate: an axial length (refraction NaN), then a refraction (length NaN).
+    assert np.isnan(res["refraction_D"][0]) and np.isnan(res["axial_length"][1])
+    assert res["refraction_D"][1] == 5.47
+
+
+def test_a_joint_fit_takes_columns_with_nan_for_a_quantity_not_measured():
+    import csv
+
+    def columns(path):
+        with open(path) as f:
+            rows = list(csv.DictReader(f))
+        cols = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+        # The first visit measured the axial length only.
+        cols["refraction_D"][0] = cols["sigma_refraction_D"][0] = np.nan
+        return cols
+
+    r = eyeshell.fit(fit="growth.eta0,growth.Gamma", arms=_joint_arms(columns), frames=False,
+                     solver__nodes=61, output__history_points=0)
+    assert r.converged and len(r.residuals["t"]) == 38
+    for key, truth in [("growth.Gamma", 7.5), ("growth.eta0", 75)]:
+        assert abs(r.estimates[key] - truth) < 2 * r.standard_errors[key], key
+
+
+def test_joint_fit_refusals_are_input_errors():
+    with pytest.raises(eyeshell.InputError, match="the scene computes no refraction"):
+        eyeshell.fit(SCENES / "const.toml", JOINT / "joint_none.csv", fit=["growth.eta0"])
+    with pytest.raises(eyeshell.InputError, match="not both"):
+        eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.eta0"], arms=_joint_arms())
+    with pytest.raises(eyeshell.InputError, match="growth.eta0 is fitted per arm: a key of each arm's own needs two arms"):
+        eyeshell.fit(SCENES / "const.toml", DATA, fit=["growth.Gamma"], per_arm=["growth.eta0"])
+    with pytest.raises(eyeshell.InputError, match="optics.surfaces\\[0\\].radius is not used by the run"):
+        eyeshell.fit(SCENES / "const.toml", DATA, fit=["optics.surfaces[0].radius"])
+    with pytest.raises(TypeError, match="must be a \\(scene, data\\) pair"):
+        eyeshell.fit(fit=["growth.eta0"], arms={"a": SCENES / "const.toml"})

@@ -252,7 +252,7 @@ impl Scene {
         }
         let params = crate::fit::parse_keys(keys, "sensitivities")?;
         crate::fit::check_params(self, &params, "sensitivities")?;
-        self.growth_settings.sensitivities = params.iter().map(|p| p.param).collect();
+        self.growth_settings.sensitivities = params.iter().filter_map(|p| p.param).collect();
         self.growth_settings.sensitivity_error_control = error_control;
         Ok(())
     }
@@ -287,7 +287,7 @@ impl Scene {
         options: &crate::fit::FitOptions,
         observer: &mut dyn Observer,
     ) -> Result<crate::fit::Fit, Error> {
-        let params = crate::fit::parse_keys(keys, "fit")?;
+        let params = crate::fit::parse_fit_keys(keys, "fit")?;
         let t_end = self.growth.as_ref().map_or(f64::NAN, |g| g.t_end);
         crate::fit::fit_watched(self, data, &params, options, &mut |_| {}, &mut |t| {
             observer.progress(t, t_end)

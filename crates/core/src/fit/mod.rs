@@ -104,6 +104,9 @@ pub fn distinct_times(times: &[f64], t_end: f64) -> Vec<f64> {
 #[derive(Clone, Debug)]
 pub struct ModelValues {
     pub axial_length: Vec<f64>,
+    /// The pole's refraction of the naked eye (D) at each observation, as series.csv's
+    /// refraction_D: NaN where the run computes none (a stimulus not from optics).
+    pub refraction_d: Vec<f64>,
     /// Row i, column j.
     pub jacobian: DMatrix<f64>,
     /// The run's wall time (s).
@@ -118,6 +121,9 @@ pub struct GrowthModel<'a> {
     pub problem: &'a crate::problem::GrowthProblem,
     pub fitted: &'a [SensParam],
     pub times: &'a [f64],
+    /// Whether to read the refraction too (each output time's series row: an elastic
+    /// solve there, which moves the integrator's later steps by round-off), else NaN.
+    pub refraction: bool,
 }
 
 impl GrowthModel<'_> {
@@ -135,13 +141,16 @@ impl GrowthModel<'_> {
             .collect();
         settings.history_points = 0;
         settings.sensitivities = self.fitted.to_vec();
-        // Per distinct time: L and its sensitivities (NaN until recorded).
+        // Per distinct time: L, its sensitivities and the refraction (NaN until recorded).
         let k = self.fitted.len();
-        let mut at: Vec<(f64, Vec<f64>)> = vec![(f64::NAN, vec![f64::NAN; k]); times.len()];
-        let slot = |t: f64| times.iter().position(|&x| x == t);
+        let mut at: Vec<(f64, Vec<f64>, f64)> =
+            vec![(f64::NAN, vec![f64::NAN; k], f64::NAN); times.len()];
+        let slot = |t: f64| times.iter().position(|&x| (x - t).abs() <= 1e-9 * t_end);
+        let sens = std::cell::RefCell::new(&mut at);
         let mut take = |rows: &[SensitivityRow]| -> Result<(), growth::ObserverError> {
             if let Some(first) = rows.first() {
                 if let Some(i) = slot(first.t) {
+                    let mut at = sens.borrow_mut();
                     at[i].0 = first.axial_length;
                     for (j, r) in rows.iter().enumerate().take(k) {
                         at[i].1[j] = r.d_axial_length;
@@ -150,14 +159,32 @@ impl GrowthModel<'_> {
             }
             Ok(())
         };
+        // The series of every output time gives the refraction, and L to a run without
+        // sensitivities (one of finite differences).
+        let series = self.refraction || k == 0;
+        let mut output = |sys: &mut growth::system::GrowthSystem,
+                          t: f64,
+                          p: &[f64]|
+         -> Result<(), growth::ObserverError> {
+            if let Some(i) = slot(t).filter(|_| series) {
+                let row = sys.series(t, p)?;
+                let mut at = sens.borrow_mut();
+                if k == 0 {
+                    at[i].0 = row.axial_length;
+                }
+                at[i].2 = row.refraction_d;
+            }
+            Ok(())
+        };
         let start = std::time::Instant::now();
         // The observation times and the fitted parameters are what is recorded, not the
         // problem: the problem checked stays checked.
         let problem = self.problem.recording(settings);
-        growth::run_with(&problem, &mut take, &mut |_, _, _| Ok(()), step)?;
+        growth::run_with(&problem, &mut take, &mut output, step)?;
         let seconds = start.elapsed().as_secs_f64();
         let n = self.times.len();
         let mut axial_length = Vec::with_capacity(n);
+        let mut refraction_d = Vec::with_capacity(n);
         let mut jacobian = DMatrix::zeros(n, k);
         for (i, &t) in self.times.iter().enumerate() {
             // The distinct time this observation was merged into (none only for a time the
@@ -165,17 +192,19 @@ impl GrowthModel<'_> {
             let Some(d) = times.iter().position(|&x| (x - t).abs() <= 1e-9 * t_end) else {
                 return Err(FitError::NotRecorded { t });
             };
-            let (l, dl) = &at[d];
+            let (l, dl, refraction) = &at[d];
             if !l.is_finite() || dl.iter().any(|x| !x.is_finite()) {
                 return Err(FitError::NotRecorded { t: times[d] });
             }
             axial_length.push(*l);
+            refraction_d.push(*refraction);
             for j in 0..k {
                 jacobian[(i, j)] = dl[j];
             }
         }
         Ok(ModelValues {
             axial_length,
+            refraction_d,
             jacobian,
             seconds,
         })
@@ -308,6 +337,7 @@ mod tests {
             problem: &problem,
             fitted: &[SensParam::Eta0],
             times: &times,
+            refraction: false,
         };
         let m = model.evaluate(&mut |_| Ok(())).unwrap();
         assert_eq!(m.axial_length.len(), 3);

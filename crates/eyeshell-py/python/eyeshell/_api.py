@@ -796,10 +796,14 @@ class FitResult:
 
     - ``estimates``, ``standard_errors``, ``initial``: {key: value} in the order fitted;
     - ``correlation``, ``covariance``: k×k arrays in that order;
-    - ``residuals``: each observation against the fitted model (t, axial_length, sigma,
-      model, residual, weighted, and ``age`` in a scene with ``time.unit``), a DataFrame
-      with pandas, else a dict of arrays;
-    - ``scene``: the scene with the estimates (:class:`Scene`);
+    - ``residuals``: each measurement against the fitted model (t, axial_length, sigma,
+      model, residual, weighted, and ``age`` in a scene with ``time.unit``; with refractions
+      also ``refraction_D``, NaN where the row is the other quantity's; in a joint fit first
+      ``arm``), a DataFrame with pandas, else a dict of arrays;
+    - ``scene``: the scene with the estimates (:class:`Scene`; of a joint fit the first
+      arm's), ``scenes``: {arm: scene with its estimates} (empty for one scene);
+    - ``keys``: the parameters in order, a per-arm key as ``key[arm]``; the dicts below are
+      keyed so;
     - ``report``: fit.json's content (χ², iterations, cost history, convergence, data hash);
     - ``notes``: what the numbers alone do not say, one str each (a pair of parameters
       correlated at |ρ| ≥ 0.99: the data determine their combination, not each);
@@ -809,28 +813,44 @@ class FitResult:
     """
 
     def __init__(
-        self, report_text: str, text: str, notes: Sequence[str], scene: Scene, frames: bool | None
+        self,
+        report_text: str,
+        text: str,
+        notes: Sequence[str],
+        scene: Scene,
+        frames: bool | None,
+        scenes: Mapping[str, Scene] | None = None,
     ) -> None:
         self.report: dict[str, Any] = json.loads(report_text)
         self.text = text
         self.notes: list[str] = list(notes)
         self.scene = scene
+        self.scenes: dict[str, Scene] = dict(scenes or {})
         params = self.report["parameters"]
-        self.keys: list[str] = [p["key"] for p in params]
-        self.estimates: dict[str, float] = {p["key"]: p["estimate"] for p in params}
-        self.standard_errors: dict[str, float] = {p["key"]: p["standard_error"] for p in params}
-        self.initial: dict[str, float] = {p["key"]: p["initial"] for p in params}
+
+        def label(p: dict[str, Any]) -> str:
+            return f"{p['key']}[{p['arm']}]" if "arm" in p else p["key"]
+
+        self.keys: list[str] = [label(p) for p in params]
+        self.estimates: dict[str, float] = {label(p): p["estimate"] for p in params}
+        self.standard_errors: dict[str, float] = {label(p): p["standard_error"] for p in params}
+        self.initial: dict[str, float] = {label(p): p["initial"] for p in params}
         self.correlation = np.array(self.report["correlation"], dtype=float)
         self.covariance = np.array(self.report["covariance"], dtype=float)
         rows = self.report["residuals"]
         names = ["t", "axial_length", "sigma", "model", "residual", "weighted"]
+        if any("refraction_D" in r for r in rows):
+            names.insert(2, "refraction_D")
         # fit.json gives each residual its age when the scene counts in ages.
         if rows and "age" in rows[0]:
             names.append("age")
-        columns = {
-            k: np.array([math.nan if r[k] is None else r[k] for r in rows], dtype=float)
-            for k in names
-        }
+        columns: dict[str, Any] = {}
+        if any("arm" in r for r in rows):
+            columns["arm"] = np.array([r.get("arm", "") for r in rows], dtype=object)
+        for k in names:
+            columns[k] = np.array(
+                [math.nan if r.get(k) is None else r[k] for r in rows], dtype=float
+            )
         self.residuals = _frame(columns, frames)
 
     @property
@@ -881,28 +901,44 @@ class FitResult:
 
 
 def fit(
-    scene: SceneLike,
-    data: DataLike,
+    scene: SceneLike | None = None,
+    data: DataLike | None = None,
     /,
-    fit: Sequence[str],
+    fit: Sequence[str] = (),
     max_iterations: int = 50,
     frames: bool | None = None,
+    arms: Mapping[str, tuple[SceneLike, DataLike]] | None = None,
+    per_arm: Sequence[str] = (),
     **overrides: Any,
 ) -> FitResult:
     """``eyeshell fit``: fit the scene keys ``fit`` (start values: the scene's) to measured
-    axial lengths by Levenberg–Marquardt, the Jacobian being the growth run's forward
-    sensitivities (IDAS), each step kept in the key's validity range. ``data`` is a CSV
-    file's path (a str, bytes or os.PathLike; header ``t,axial_length[,sigma]`` or
-    ``age,axial_length[,sigma]``, as the command line reads it) or a mapping with the
-    columns ``t`` (or ``age``: ages in the scene's ``time.unit``, each within
-    [``time.start``, ``time.end``]), ``axial_length`` and optionally ``sigma`` (a dict of
-    sequences or a pandas DataFrame). ``overrides`` are
-    set on a copy of ``scene``. The GIL is released while it fits; Ctrl-C stops it within
-    a step of its current growth run and raises KeyboardInterrupt, as in :func:`grow`.
+    axial lengths and/or refractions by Levenberg–Marquardt, each step kept in the key's
+    validity range. ``fit`` takes any real-valued key of the model: the keys with a forward
+    sensitivity (growth.eta0, growth.Gamma, ...) take IDAS's for the axial length, every
+    other column (``optics.surfaces[0].radius``, and the refraction's of every key) is a
+    central difference of the growth run (relative step 1e-3).
+
+    ``data`` is a CSV file's path (a str, bytes or os.PathLike; header ``t`` or ``age``,
+    then ``axial_length`` and/or ``refraction_D``, each optionally with its σ,
+    ``sigma_axial_length`` (or ``sigma``) and ``sigma_refraction_D``, as the command line
+    reads it) or a mapping with those columns (a dict of sequences or a pandas DataFrame;
+    ``age``: ages in the scene's ``time.unit``, each within [``time.start``,
+    ``time.end``]; with both quantities NaN marks a visit that measured one only).
+    Refractions need a scene whose stimulus is computed from its optics
+    (``stimulus.source = "optics"``).
+
+    Several arms: ``arms={"single-vision": (scene, data), "dual-focus": (scene, data)}``
+    (no positional scene and data then) fits every arm at once, one Levenberg–Marquardt over
+    the stacked residuals: the ``fit`` keys take one value in every arm, the ``per_arm``
+    keys one value in each (reported as ``key[arm]``: ``growth.eta0[dual-focus]``).
+    ``overrides`` are set on a copy of each scene. The GIL is released while it fits; Ctrl-C
+    stops it within a step of its current growth run and raises KeyboardInterrupt, as in
+    :func:`grow`.
 
     Standard errors come from the Gauss–Newton covariance s²(JᵀWJ)⁻¹: s² = 1 with σ (taken
     as known), the residual variance χ²/(n − k) without. Raises :class:`InputError` for bad
-    data or keys, and when the data cannot identify a parameter (naming it).
+    data or keys, and when the data cannot identify a parameter (naming it and what data
+    would).
 
     >>> r = eyeshell.fit(SCENES + "/const.toml", SCENES + "/../examples/fit/const_synthetic.csv",
     ...                  fit=["growth.Gamma"], solver__nodes=101, growth__Gamma=9)
@@ -910,39 +946,83 @@ def fit(
     (True, True)
     >>> r.scene["growth.Gamma"] == r.estimates["growth.Gamma"]
     True
+    >>> ex = SCENES + "/../examples/fit/joint_"
+    >>> j = eyeshell.fit(fit=["growth.Gamma"], per_arm=["growth.eta0"], arms={
+    ...     "none": (SCENES + "/eyewear/none.toml", ex + "none.csv"),
+    ...     "single-vision": (SCENES + "/eyewear/single-vision.toml", ex + "single-vision.csv")},
+    ...     solver__nodes=61, output__history_points=0)
+    >>> j.keys
+    ['growth.Gamma', 'growth.eta0[none]', 'growth.eta0[single-vision]']
+    >>> j.scenes["single-vision"]["growth.eta0"] == j.estimates["growth.eta0[single-vision]"]
+    True
     """
-    s = _as_scene(scene, overrides)
     if isinstance(fit, str):
         fit = [k for k in fit.split(",") if k.strip()]
+    if isinstance(per_arm, str):
+        per_arm = [k for k in per_arm.split(",") if k.strip()]
     max_iterations = _whole(max_iterations, "max_iterations", 1, 1000)
+    if arms is not None:
+        if scene is not None or data is not None:
+            raise _input_error(
+                "arms: give the arms alone, or a scene and its data, not both", "arms", None, "argument"
+            )
+        if not isinstance(arms, Mapping):
+            raise TypeError(
+                f"arms must be a mapping of name -> (scene, data), not {type(arms).__name__}"
+            )
+        native = []
+        for name, pair in arms.items():
+            if not isinstance(name, str) or not isinstance(pair, (tuple, list)) or len(pair) != 2:
+                raise TypeError(f"arms[{name!r}] must be a (scene, data) pair")
+            native.append(_native_arm(name, _as_scene(pair[0], overrides), pair[1]))
+    else:
+        if scene is None or data is None:
+            raise _input_error(
+                "fit: give a scene and its data, or arms={name: (scene, data), ...}", "data", None, "argument"
+            )
+        native = [_native_arm(None, _as_scene(scene, overrides), data)]
+    report, text, notes, scenes = _eyeshell.fit(
+        native, list(fit), list(per_arm), max_iterations=max_iterations
+    )
+    names = [a[0] for a in native]
+    wrapped = [Scene._wrap(s) for s in scenes]
+    return FitResult(report, text, notes, wrapped[0], frames,
+                     {n: s for n, s in zip(names, wrapped) if n is not None})
+
+
+def _native_arm(name: str | None, s: Scene, data: Any) -> tuple[Any, ...]:
+    """One arm as the native fit takes it: (name, scene, path, first column, its values,
+    the other columns)."""
     if isinstance(data, _PATH_TYPES):
-        done = _eyeshell.fit(s._s, list(fit), path=_path(data, "data"), max_iterations=max_iterations)
-    elif isinstance(data, Mapping) or hasattr(data, "columns"):
+        return (name, s._s, _path(data, "data"), "t", [], [])
+    if isinstance(data, Mapping) or hasattr(data, "columns"):
         _check_data_columns(data)
 
-        def col(name: str) -> list[float] | None:
-            if name not in data:
+        def col(column: str) -> list[float] | None:
+            if column not in data:
                 return None
-            return [float(x) for x in np.asarray(data[name], dtype=float).ravel()]
+            return [float(x) for x in np.asarray(data[column], dtype=float).ravel()]
 
-        t, age, length = col("t"), col("age"), col("axial_length")
-        if (t is None) == (age is None) or length is None:
-            raise _input_error("data: the columns t (or age, not both) and axial_length are required",
-                               "data", None, "argument")
-        done = _eyeshell.fit(
-            s._s, list(fit), t=t, axial_length=length, sigma=col("sigma"),
-            max_iterations=max_iterations, age=age,
-        )
-    else:
-        raise TypeError(
-            "data must be a CSV file's path (a str, bytes or os.PathLike) or a mapping of "
-            f"columns t (or age), axial_length[, sigma], not {type(data).__name__}"
-        )
-    report, text, notes, native = done
-    return FitResult(report, text, notes, Scene._wrap(native), frames)
+        t, age = col("t"), col("age")
+        if (t is None) == (age is None) or all(
+            col(c) is None for c in ("axial_length", "refraction_D")
+        ):
+            raise _input_error(
+                "data: the columns t (or age, not both) and axial_length or refraction_D are required",
+                "data", None, "argument",
+            )
+        first, times = ("t", t) if t is not None else ("age", age)
+        columns = [(c, v) for c in _DATA_COLUMNS[2:] if (v := col(c)) is not None]
+        return (name, s._s, None, first, times, columns)
+    raise TypeError(
+        "data must be a CSV file's path (a str, bytes or os.PathLike) or a mapping of "
+        f"columns t (or age), axial_length[, sigma], not {type(data).__name__}"
+    )
 
 
-_DATA_COLUMNS = ("t", "age", "axial_length", "sigma")
+_DATA_COLUMNS = (
+    "t", "age", "axial_length", "sigma", "sigma_axial_length", "refraction_D", "sigma_refraction_D",
+)
 
 
 def _check_data_columns(data: Any) -> None:
@@ -965,7 +1045,8 @@ def _check_data_columns(data: Any) -> None:
     more = f" and {len(unknown) - 1} more" if len(unknown) > 1 else ""
     raise _input_error(
         f"data: column {shown}{hint}{more} is not one the fit reads: give t (or age), "
-        "axial_length and optionally sigma, and nothing else",
+        "axial_length and optionally sigma, and/or refraction_D and sigma_refraction_D, "
+        "and nothing else",
         str(first), None, "argument",
     )
 

@@ -60,15 +60,13 @@ def grow(
     stimulus: Callable[[Any], Any] | None = None,
 ) -> dict[str, Any]: ...
 def fit(
-    scene: _Scene,
+    arms: list[
+        tuple[str | None, _Scene, str | None, str, list[float], list[tuple[str, list[float]]]]
+    ],
     keys: list[str],
-    path: str | None = None,
-    t: list[float] | None = None,
-    axial_length: list[float] | None = None,
-    sigma: list[float] | None = None,
+    per_arm: list[str] = ...,
     max_iterations: int = 50,
-    age: list[float] | None = None,
-) -> tuple[str, str, list[str], _Scene]: ...
+) -> tuple[str, str, list[str], list[_Scene]]: ...
 def expand_sweep(
     text: str, origin: str, overrides: list[str] = ...
 ) -> list[tuple[str, list[tuple[str, Any]], _Scene]]: ...

@@ -19,6 +19,8 @@
 //! come from the Gauss–Newton covariance.
 
 pub mod data;
+pub mod joint;
+pub mod param;
 pub mod report;
 
 use nalgebra::{DMatrix, DVector};
@@ -27,57 +29,15 @@ pub use eyeshell_core::fit::{
     lm, Bounds, FitError, GrowthModel, ModelValues, IDENTIFIABILITY_THRESHOLD,
 };
 
-use crate::growth::dae::SensParam;
 use crate::growth::{self, GrowthParams};
-use crate::scene::keys::{self, KeyValue, Rule};
 use crate::scene::Scene;
 use crate::text::number;
 use crate::{Error, Origin, Stage, Subject};
 
-pub use data::{Observation, Observations};
+pub use data::{Measured, Observation, Observations};
+pub use joint::{Arm, Layout, FD_STEP};
 pub use lm::{Convergence, FitOptions, IterationRecord};
-
-/// A fitted parameter: its key and its validity range (from the scene key's rule).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FitParam {
-    pub param: SensParam,
-    pub bounds: Bounds,
-}
-
-/// The range of a key's rule (`eyeshell keys`).
-fn bounds_of_rule(rule: Rule) -> Bounds {
-    let b = Bounds::NONE;
-    match rule {
-        Rule::Positive => Bounds {
-            lower: Some(0.0),
-            lower_open: true,
-            ..b
-        },
-        Rule::NonNegative => Bounds {
-            lower: Some(0.0),
-            ..b
-        },
-        Rule::OpenUnit => Bounds {
-            lower: Some(0.0),
-            lower_open: true,
-            upper: Some(1.0),
-            upper_open: true,
-        },
-        Rule::UnitFromZero => Bounds {
-            lower: Some(0.0),
-            upper: Some(1.0),
-            upper_open: true,
-            ..b
-        },
-        Rule::OpenHalfTurn => Bounds {
-            lower: Some(0.0),
-            lower_open: true,
-            upper: Some(std::f64::consts::PI),
-            upper_open: true,
-        },
-        _ => b,
-    }
-}
+pub use param::{check_params, parse_fit_keys, parse_keys, values_in, with_values, FitParam};
 
 impl From<FitError> for Error {
     fn from(e: FitError) -> Self {
@@ -89,169 +49,8 @@ impl From<FitError> for Error {
     }
 }
 
-impl FitParam {
-    /// The parameter of scene key `key`, with its range.
-    ///
-    /// # Errors
-    /// [`crate::scene::sensitivity::SensitivityKeyError`] for a key that is not such a parameter.
-    pub fn from_key(key: &str) -> Result<FitParam, crate::scene::sensitivity::SensitivityKeyError> {
-        let param = crate::scene::sensitivity::sensitivity_param(key)?;
-        let bounds = keys::find(crate::scene::names::sensitivity_key(param))
-            .map_or(Bounds::NONE, |k| bounds_of_rule(k.rule));
-        Ok(FitParam { param, bounds })
-    }
-
-    pub fn key(&self) -> &'static str {
-        crate::scene::names::sensitivity_key(self.param)
-    }
-
-    /// The parameter's range in `scene`: its key's range narrowed by the limits that tie
-    /// it to other keys (`Scene::validate`), so that a step never leaves what the scene
-    /// accepts. pressure.dP stays below the cornea's limit, the largest admissible ΔP
-    /// (docs/MODEL.md §3), an open bound: at the limit the cornea's stretch has an infinite
-    /// derivative in ΔP, so neither the model nor its sensitivity can be evaluated there.
-    pub fn in_scene(self, scene: &Scene) -> FitParam {
-        let mut bounds = self.bounds;
-        if self.param == SensParam::Pressure {
-            let limit = crate::model::cornea::max_pressure(&scene.params.cornea);
-            if bounds.upper.is_none_or(|hi| limit <= hi) {
-                bounds.upper = Some(limit);
-                bounds.upper_open = true;
-            }
-        }
-        FitParam { bounds, ..self }
-    }
-}
-
-/// Why `params` cannot be taken in `scene`, if they cannot: a parameter the model of the
-/// scene does not have (fibres.D without fibres), or an integrator without sensitivities.
-/// The one check of every caller (`grow --sensitivities`, `Scene::set_sensitivities`,
-/// `fit`), made before any run; `what` names the option in the message.
-pub fn check_params(scene: &Scene, params: &[FitParam], what: &str) -> Result<(), Error> {
-    if let Some(why) = params
-        .iter()
-        .find_map(|p| p.param.check(&scene.params).err())
-    {
-        let key = params
-            .iter()
-            .find(|p| p.param.check(&scene.params).is_err())
-            .map_or("", |p| p.key());
-        return Err(Error::input(
-            Subject::Key(key.into()),
-            format!("{what}: {why} ({})", scene.origin),
-        )
-        .with_origin(Origin::Scene(scene.origin.clone())));
-    }
-    // What the growth's own surfaces and rule cannot differentiate (z_B of a computed
-    // surface, or under a rule of dioptres): an input error now, not a failed run at t = 0.
-    if let Some(g) = &scene.growth {
-        if let Some((p, why)) = params
-            .iter()
-            .find_map(|p| Some((p, growth::sensitivity_unavailable(p.param, g)?)))
-        {
-            let origin = scene.origin_of_key("stimulus.source");
-            return Err(Error::input(
-                Subject::Key(p.key().into()),
-                format!("{what}: {why} ({origin})"),
-            )
-            .with_origin(Origin::Scene(origin)));
-        }
-    }
-    // A schedule's parameter is a parameter of its form alone: with another form the run
-    // has no such parameter to differentiate by.
-    let form = scene
-        .growth
-        .as_ref()
-        .map_or(growth::schedule::Form::Constant, |g| g.schedule.form);
-    if let Some(sp) = params.iter().find_map(|p| p.param.schedule_param()) {
-        if sp.form() != form {
-            use growth::schedule::Form;
-            return Err(Error::input(Subject::Key("growth.schedule".into()), format!(
-                "{what}: {} needs growth.schedule = \"{}\" ({} has \"{}\"): the schedule has no such parameter",
-                crate::scene::names::key_of(sp.quantity()),
-                Form::NAMES[sp.form() as usize],
-                scene.origin_of_key("growth.schedule"),
-                Form::NAMES[form as usize]
-            ))
-            .with_value(Form::NAMES[form as usize])
-            .with_origin(Origin::Scene(scene.origin_of_key("growth.schedule"))));
-        }
-    }
-    let integrator = scene.growth_settings.integrator;
-    if integrator != growth::Integrator::Ida {
-        return Err(Error::input(
-            Subject::Key("solver.integrator".into()),
-            format!(
-                "{what} need solver.integrator = \"ida\" ({} has \"{}\")",
-                scene.origin,
-                integrator.name()
-            ),
-        )
-        .with_value(integrator.name())
-        .with_origin(Origin::Scene(scene.origin.clone())));
-    }
-    Ok(())
-}
-
-/// Parse `keys` (the `--fit` or `--sensitivities` list): each a parameter, each once.
-/// `what` names the option in messages (`--fit`).
-pub fn parse_keys(keys: &[impl AsRef<str>], what: &str) -> Result<Vec<FitParam>, Error> {
-    if keys.is_empty() {
-        return Err(Error::input(
-            Subject::Argument(what.into()),
-            format!("{what}: no parameter given"),
-        )
-        .with_origin(Origin::Argument));
-    }
-    let mut params: Vec<FitParam> = Vec::with_capacity(keys.len());
-    for key in keys {
-        let key = key.as_ref().trim();
-        let refuse = |message: String| {
-            Error::input(Subject::Key(key.into()), message)
-                .with_value(key)
-                .with_origin(Origin::Argument)
-        };
-        let p = FitParam::from_key(key).map_err(|why| refuse(format!("{what}: {why}")))?;
-        if params.iter().any(|q| q.param == p.param) {
-            return Err(refuse(format!("{what}: {key} is listed twice")));
-        }
-        params.push(p);
-    }
-    Ok(params)
-}
-
-/// The value of parameter `p` in `scene`.
-pub fn value_in(scene: &Scene, p: SensParam) -> f64 {
-    match keys::find(p.key()).map(|k| k.get(scene)) {
-        Some(KeyValue::Float(x)) => x,
-        _ => f64::NAN,
-    }
-}
-
-/// `scene` with the parameters set to `values`, validated (a combination the scene
-/// refuses, e.g. beyond a cross-key limit, is an error naming it).
-pub fn with_values(scene: &Scene, params: &[FitParam], values: &[f64]) -> Result<Scene, Error> {
-    let mut s = scene.clone();
-    for (p, &x) in params.iter().zip(values) {
-        match keys::find(p.key()).map(|k| k.access) {
-            Some(keys::Access::Float { set, .. }) => set(&mut s, x),
-            _ => {
-                return Err(Error::input(
-                    Subject::Key(p.key().into()),
-                    format!(
-                        "{} is not a real-valued scene key: it cannot be fitted",
-                        p.key()
-                    ),
-                ))
-            }
-        }
-    }
-    s.validate()?;
-    Ok(s)
-}
-
-/// Run the growth of `scene` with the sensitivities to `params`, and read L and dL/dp at
-/// the observation times of `data`.
+/// Run the growth of `scene` with the sensitivities to `params` (those that have one),
+/// and read L and dL/dp at the observation times of `data`.
 pub fn evaluate(
     scene: &Scene,
     params: &[FitParam],
@@ -268,29 +67,17 @@ pub fn evaluate_watched(
     data: &Observations,
     step: &mut growth::ProgressFn<'_>,
 ) -> Result<ModelValues, Error> {
-    let Some(problem) = scene.growth_problem()? else {
-        return Err(Error::input(
-            Subject::Key("growth".into()),
-            format!(
-                "{}: the scene has no [growth] section (a fit needs a growth run)",
-                scene.origin
-            ),
-        )
-        .with_origin(Origin::Scene(scene.origin.clone())));
-    };
     let times: Vec<f64> = data.rows.iter().map(|o| o.t).collect();
-    let fitted: Vec<SensParam> = params.iter().map(|p| p.param).collect();
-    let model = GrowthModel {
-        problem: &problem,
-        fitted: &fitted,
-        times: &times,
-    };
-    Ok(model.evaluate(step)?)
+    let sens: Vec<_> = params.iter().filter_map(|p| p.param).collect();
+    joint::run_model(scene, &sens, &times, false, step)
 }
 
-/// The weighted residuals (L − y)/σ and Jacobian (∂L/∂p)/σ of `m` against `data`.
+/// The weighted residuals (L − y)/σ and Jacobian (∂L/∂p)/σ of `m` against the axial
+/// lengths of `data` (NaN where a row has none).
 pub fn weighted(m: &ModelValues, data: &Observations) -> (DVector<f64>, DMatrix<f64>) {
-    let y: Vec<f64> = data.rows.iter().map(|o| o.axial_length).collect();
+    let y: Vec<f64> = (data.rows.iter())
+        .map(|o| o.axial_length.unwrap_or(f64::NAN))
+        .collect();
     let sigma: Vec<Option<f64>> = data.rows.iter().map(|o| o.sigma).collect();
     eyeshell_core::fit::weighted(m, &y, &sigma)
 }
@@ -299,7 +86,12 @@ pub fn weighted(m: &ModelValues, data: &Observations) -> (DVector<f64>, DMatrix<
 /// so: a weighted residual or sensitivity whose square overflows (an axial length of 1e308
 /// mm, or a σ of 1e-160 that makes the weights 1/σ overflow). Names the observation that
 /// carries the largest value, as the data file gives it.
-pub fn overflow(r: &DVector<f64>, j: &DMatrix<f64>, data: &Observations) -> Option<String> {
+pub fn overflow(
+    r: &DVector<f64>,
+    j: &DMatrix<f64>,
+    arms: &[Arm],
+    rows: &[joint::RowOf],
+) -> Option<String> {
     let columns_finite = (0..j.ncols()).all(|c| j.column(c).norm_squared().is_finite());
     if r.norm_squared().is_finite() && columns_finite {
         return None;
@@ -307,43 +99,120 @@ pub fn overflow(r: &DVector<f64>, j: &DMatrix<f64>, data: &Observations) -> Opti
     let largest = |i: usize| j.row(i).iter().fold(0.0_f64, |a, x| a.max(x.abs()));
     let size = |i: usize| r[i].abs().max(largest(i));
     let i = (0..r.len()).max_by(|&a, &b| size(a).total_cmp(&size(b)))?;
-    let o = &data.rows[i];
+    let row = rows[i];
+    let data = &arms[row.arm].data;
+    let o = &data.rows[row.obs];
+    let (y, sigma) = o.value(row.what)?;
+    let (column, unit) = (row.what.column(), row.what.unit());
     Some(format!(
-        "{}: observation {} (t = {}, axial_length = {} mm, σ = {}) gives the weighted residual (L − y)/σ = {} and weighted sensitivities (∂L/∂p)/σ up to {}: their squares overflow the largest floating-point number (about 1.8e308), so χ² and JᵀWJ cannot be computed; give the axial lengths and σ in mm",
+        "{}: observation {} (t = {}, {column} = {} {unit}, σ = {}) gives the weighted residual (model − y)/σ = {} and weighted sensitivities (∂model/∂p)/σ up to {}: their squares overflow the largest floating-point number (about 1.8e308), so χ² and JᵀWJ cannot be computed; give the {column} and σ in {unit}",
         data.origin,
-        i + 1,
+        row.obs + 1,
         number(o.t),
-        number(o.axial_length),
-        o.sigma.map_or("1 (none given)".to_string(), |s| format!("{} mm", number(s))),
+        number(y),
+        sigma.map_or("1 (none given)".to_string(), |s| format!("{} {unit}", number(s))),
         crate::text::decimals6(r[i]),
         crate::text::decimals6(largest(i)),
     ))
 }
 
-/// Why the data cannot identify `params` at `values`, as one line naming them, or None
-/// (eyeshell-core's `fit::identifiability` on the parameters' keys).
-pub fn identifiability(j: &DMatrix<f64>, params: &[FitParam], values: &[f64]) -> Option<String> {
-    let names: Vec<&str> = params.iter().map(|p| p.key()).collect();
-    eyeshell_core::fit::identifiability(j, &names, values)
+/// Why the data cannot identify the parameters named `names` at `values`, as one line
+/// naming them and what data would, or None (eyeshell-core's `fit::identifiability`).
+pub fn identifiability(j: &DMatrix<f64>, names: &[&str], values: &[f64]) -> Option<String> {
+    let why = eyeshell_core::fit::identifiability(j, names, values)?;
+    Some(with_data_advice(&why, names))
 }
 
-/// One observation against the fitted model.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+/// `why` (a refusal naming unidentifiable parameters among `names`) followed by the data
+/// that would identify those it names.
+fn with_data_advice(why: &str, names: &[&str]) -> String {
+    let named: Vec<&str> = names
+        .iter()
+        .copied()
+        .filter(|n| {
+            why.split("identify ")
+                .nth(1)
+                .and_then(|rest| rest.split(':').next())
+                .is_some_and(|list| list.contains(*n))
+        })
+        .collect();
+    let hints: Vec<String> = named
+        .iter()
+        .filter_map(|n| Some(format!("{n}: {}", identifying_data(n)?)))
+        .collect();
+    if hints.is_empty() {
+        return why.to_string();
+    }
+    format!("{why}; data that would identify {}", hints.join("; "))
+}
+
+/// What observations determine key `name` (the bracketed arm of a per-arm key aside).
+fn identifying_data(name: &str) -> Option<&'static str> {
+    let key = name.split('[').next().unwrap_or(name);
+    let key = if key.starts_with("optics.surfaces[") || name.starts_with("optics.surfaces[") {
+        "optics.surfaces"
+    } else {
+        key
+    };
+    Some(match key {
+        "growth.eta0" => "axial lengths at two or more times while the eye grows (η0 sets the rate)",
+        "growth.Gamma" | "growth.delta" => {
+            "axial lengths late in the growth, as the eye nears its limit (Γ and δ shape where and how fast it stops)"
+        }
+        "optics.surfaces" => {
+            "refractions (a refraction_D column) at any time: the surfaces set the eye's power, which the axial length does not see"
+        }
+        "stimulus.blue.z_B" => "axial lengths of eyes whose blue surface differs (another arm, e.g. other lenses)",
+        "pressure.dP" | "material.C" | "material.bending" | "geometry.R0" => {
+            "the axial length at t = 0 and early in the growth (the loaded shell's size)"
+        }
+        _ if key.starts_with("growth.schedule") => {
+            "axial lengths spread over the schedule's change (before, during and after it)"
+        }
+        _ => return None,
+    })
+}
+
+/// One measurement against the fitted model.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ResidualRow {
+    /// The arm's name (a joint fit of several scenes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm: Option<String>,
     pub t: f64,
     /// The observation's age in the scene's time.unit (as the data gave it, or of its t);
     /// absent without a unit.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub age: Option<f64>,
-    pub axial_length: f64,
+    /// The axial length measured (mm), for a row of the axial length.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axial_length: Option<f64>,
+    /// The refraction measured (D), for a row of the refraction.
+    #[serde(rename = "refraction_D", skip_serializing_if = "Option::is_none")]
+    pub refraction_d: Option<f64>,
     /// σ as given (None: no sigma column).
     pub sigma: Option<f64>,
-    /// The model's axial length at t.
+    /// The model's value at t.
     pub model: f64,
-    /// model − data (mm).
+    /// model − data (mm or D).
     pub residual: f64,
     /// (model − data)/σ.
     pub weighted: f64,
+}
+
+impl ResidualRow {
+    /// What this row measures.
+    pub fn measured(&self) -> Measured {
+        match self.axial_length {
+            Some(_) => Measured::AxialLength,
+            None => Measured::Refraction,
+        }
+    }
+
+    /// The value measured (mm or D).
+    pub fn observed(&self) -> f64 {
+        self.axial_length.or(self.refraction_d).unwrap_or(f64::NAN)
+    }
 }
 
 /// The data file (or arrays) a fit used.
@@ -355,12 +224,28 @@ pub struct DataRecord {
     pub observations: usize,
     pub distinct_times: usize,
     pub sigma: bool,
+    /// The quantities measured: axial_length and/or refraction_D.
+    pub measured: Vec<Measured>,
+}
+
+/// One arm of a joint fit in the report.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ArmRecord {
+    pub name: String,
+    pub scene: String,
+    pub data: DataRecord,
 }
 
 /// One fitted parameter in the report.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ParameterReport {
     pub key: String,
+    /// The arm whose own value this is (a per-arm key); absent for a shared key.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm: Option<String>,
+    /// How its Jacobian column is taken: "IDAS sensitivity" or "finite differences" (or
+    /// both: IDAS for the axial length, differences for the refraction).
+    pub jacobian: &'static str,
     pub initial: f64,
     pub estimate: f64,
     pub standard_error: f64,
@@ -372,11 +257,26 @@ pub struct ParameterReport {
     pub at_bound: bool,
 }
 
+impl ParameterReport {
+    /// The key, and its arm in brackets for a per-arm key (`growth.Gamma[dual-focus]`).
+    pub fn label(&self) -> String {
+        match &self.arm {
+            Some(a) => format!("{}[{a}]", self.key),
+            None => self.key.clone(),
+        }
+    }
+}
+
 /// Everything a fit found: fit.json.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct FitReport {
+    /// The scene (each arm's, joined by ", ").
     pub scene: String,
+    /// The data (of a joint fit: the files joined, the counts summed).
     pub data: DataRecord,
+    /// Each arm of a joint fit (absent for the fit of one scene).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub arms: Vec<ArmRecord>,
     pub parameters: Vec<ParameterReport>,
     /// Correlation matrix of the estimates (rows and columns in the order of `parameters`).
     pub correlation: Vec<Vec<f64>>,
@@ -411,11 +311,13 @@ pub struct FitReport {
     pub model_seconds: f64,
 }
 
-/// A finished fit: the report and the scene with the estimates.
+/// A finished fit: the report and the scene with the estimates (of each arm, in order;
+/// `scene` is the first's).
 #[derive(Clone, Debug)]
 pub struct Fit {
     pub report: FitReport,
     pub scene: Scene,
+    pub scenes: Vec<Scene>,
 }
 
 impl Fit {
@@ -434,51 +336,55 @@ impl Fit {
     }
 }
 
-/// The least-squares problem of a fit: the scene with the parameters set (validated, so a
-/// trial beyond a cross-key limit is refused), one growth run with sensitivities per
-/// evaluation, weighted by the data's σ.
-struct SceneProblem<'a, 's> {
-    scene: &'a Scene,
-    params: &'a [FitParam],
-    data: &'a Observations,
+/// The least-squares problem of a fit: each arm's scene with its parameters set
+/// (validated, so a trial beyond a cross-key limit is refused), its runs per evaluation
+/// ([`joint::stack`]), weighted by the data's σ.
+struct JointProblem<'a, 's> {
+    arms: &'a [Arm],
+    layout: &'a Layout,
+    names: Vec<String>,
+    bounds: Vec<Bounds>,
+    rows: Vec<joint::RowOf>,
     step: &'a mut growth::ProgressFn<'s>,
     has_sigma: bool,
     dof: usize,
-    /// Seconds in the growth runs so far.
-    model_seconds: f64,
+    /// Growth runs so far, and their seconds.
+    runs: (usize, f64),
     /// Whether `step` stopped a run (the caller's interruption): the fit ends there.
     stopped: bool,
 }
 
-impl lm::Problem for SceneProblem<'_, '_> {
+impl lm::Problem for JointProblem<'_, '_> {
     type Error = Error;
 
     fn names(&self) -> Vec<&str> {
-        self.params.iter().map(|p| p.key()).collect()
+        self.names.iter().map(String::as_str).collect()
     }
 
     fn bounds(&self) -> Vec<Bounds> {
-        self.params.iter().map(|p| p.bounds).collect()
+        self.bounds.clone()
     }
 
     fn evaluate(&mut self, values: &[f64]) -> Result<lm::Evaluation, Error> {
-        let s = with_values(self.scene, self.params, values)?;
         let step = &mut *self.step;
         let stopped = &mut self.stopped;
-        let m = evaluate_watched(&s, self.params, self.data, &mut |t| {
-            let heard = step(t);
-            *stopped |= heard.is_err();
-            heard
-        })?;
-        self.model_seconds += m.seconds;
-        let (r, j) = weighted(&m, self.data);
-        if let Some(why) = overflow(&r, &j, self.data) {
-            return Err(
-                Error::input(Subject::File(self.data.origin.clone().into()), why)
-                    .with_origin(Origin::File(self.data.origin.clone().into())),
-            );
+        let (r, j, model) = joint::stack(
+            self.arms,
+            self.layout,
+            values,
+            &mut |t| {
+                let heard = step(t);
+                *stopped |= heard.is_err();
+                heard
+            },
+            &mut self.runs,
+        )?;
+        if let Some(why) = overflow(&r, &j, self.arms, &self.rows) {
+            let origin = self.arms[self.rows[0].arm].data.origin.clone();
+            return Err(Error::input(Subject::File(origin.clone().into()), why)
+                .with_origin(Origin::File(origin.into())));
         }
-        Ok((r, j, m.axial_length))
+        Ok((r, j, model))
     }
 
     fn stops(&self, _e: &Error) -> bool {
@@ -518,39 +424,74 @@ pub fn fit_watched(
     each: &mut dyn FnMut(&IterationRecord),
     step: &mut growth::ProgressFn<'_>,
 ) -> Result<Fit, Error> {
+    let arm = Arm {
+        name: None,
+        scene: scene.clone(),
+        data: data.clone(),
+    };
+    fit_arms(vec![arm], params, &[], options, each, step)
+}
+
+/// The joint fit of several arms (each a scene and its data): the keys `shared` take one
+/// value in every arm, the keys `per_arm` one value in each; one Levenberg–Marquardt over
+/// the stacked residuals of every arm. Start values: the first arm's scene for a shared
+/// key, each arm's own for a per-arm key. Refused as [`fit`] is, and for arms of the
+/// same name, a key both shared and per arm, refraction data of a scene that computes no
+/// refraction.
+pub fn fit_arms(
+    arms: Vec<Arm>,
+    shared: &[FitParam],
+    per_arm: &[FitParam],
+    options: &FitOptions,
+    each: &mut dyn FnMut(&IterationRecord),
+    step: &mut growth::ProgressFn<'_>,
+) -> Result<Fit, Error> {
     let start = std::time::Instant::now();
-    let g = fit_refusals(scene, params)?;
-    let params: &[FitParam] = &params.iter().map(|p| p.in_scene(scene)).collect::<Vec<_>>();
-    let data = &data.on_clock(g)?;
-    data.check_times(g.t_end)?;
-    let (n, k) = (data.rows.len(), params.len());
-    let has_sigma = data.has_sigma();
-    check_counts(data, n, k)?;
-    let p0: Vec<f64> = params.iter().map(|p| value_in(scene, p.param)).collect();
+    let arms = prepare_arms(arms, shared, per_arm)?;
+    let layout = Layout {
+        shared: shared.to_vec(),
+        per_arm: per_arm.to_vec(),
+        arms: arms.len(),
+    };
+    let rows = joint::rows_of(&arms);
+    let (n, k) = (rows.len(), layout.len());
+    let has_sigma = arms.iter().all(|a| a.data.has_sigma());
+    check_counts(&arms, n, k, has_sigma)?;
+    let p0: Vec<f64> = (0..k)
+        .map(|g| {
+            let (p, a) = layout.at(g);
+            p.value_in(&arms[a.unwrap_or(0)].scene)
+        })
+        .collect::<Result<_, _>>()?;
     let dof = n - k;
-    let variance = |chi2: f64| if has_sigma { 1.0 } else { chi2 / dof as f64 };
-    let mut problem = SceneProblem {
-        scene,
-        params,
-        data,
+    let names = joint::names(&layout, &arms);
+    let mut problem = JointProblem {
+        arms: &arms,
+        layout: &layout,
+        bounds: joint::bounds(&layout, &arms),
+        names: names.clone(),
+        rows: rows.clone(),
         step,
         has_sigma,
         dof,
-        model_seconds: 0.0,
+        runs: (0, 0.0),
         stopped: false,
     };
+    let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
     let outcome = lm::minimise(&mut problem, &p0, options, each).map_err(|e| match e {
         lm::LmError::Evaluation(e) => e,
-        lm::LmError::Unidentifiable(why) => Error::input_about_nothing(why),
+        lm::LmError::Unidentifiable(why) => {
+            Error::input_about_nothing(with_data_advice(&why, &name_refs))
+        }
         lm::LmError::RankDeficient(why) => Error::failed(Stage::Fit, why),
         e => Error::failed(Stage::Fit, e.to_string()),
     })?;
-    let model_seconds = problem.model_seconds;
-    let names: Vec<&str> = params.iter().map(|p| p.key()).collect();
-    if let Some(why) = identifiability(&outcome.jacobian, params, &outcome.values) {
+    let (runs, model_seconds) = problem.runs;
+    let bounds = problem.bounds.clone();
+    if let Some(why) = identifiability(&outcome.jacobian, &name_refs, &outcome.values) {
         return Err(Error::input_about_nothing(format!(
             "at the estimate ({}): {why}",
-            lm::show(&names, &outcome.values)
+            lm::show(&name_refs, &outcome.values)
         )));
     }
     let chi2 = outcome.residuals.norm_squared();
@@ -560,59 +501,47 @@ pub fn fit_watched(
             format!(
                 "the fit ended at χ² = {} ({}): not a result",
                 number(chi2),
-                lm::show(&names, &outcome.values)
+                lm::show(&name_refs, &outcome.values)
             ),
         ));
     }
-    let (scaling, s2) = (
-        if has_sigma {
-            "sigma"
-        } else {
-            "residual variance"
-        },
-        variance(chi2),
-    );
-    let spread = Spread::at(&outcome, params, &names, s2)?;
-    let residuals = residual_rows(data, &outcome, g);
+    let s2 = if has_sigma { 1.0 } else { chi2 / dof as f64 };
+    let spread = Spread::at(&outcome, &name_refs, s2)?;
+    let parameters = parameter_reports(&layout, &arms, &bounds, &p0, &outcome, &spread.se);
+    let local = layout.local();
+    let scenes = (arms.iter().enumerate())
+        .map(|(a, arm)| with_values(&arm.scene, &local, &layout.local_values(a, &outcome.values)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let residuals = residual_rows(&arms, &rows, &outcome);
     let rms = (residuals
         .iter()
         .map(|r| r.residual * r.residual)
         .sum::<f64>()
         / n as f64)
         .sqrt();
-    let bounds: Vec<Bounds> = params.iter().map(|p| p.bounds).collect();
-    let held = lm::held_by_bounds(
-        &bounds,
-        &outcome.values,
-        &outcome.residuals,
-        &outcome.jacobian,
-    );
-    let parameters = params
+    let records: Vec<ArmRecord> = arms
         .iter()
-        .enumerate()
-        .map(|(a, p)| ParameterReport {
-            key: p.key().to_string(),
-            initial: p0[a],
-            estimate: outcome.values[a],
-            standard_error: spread.se[a],
-            range: p.bounds.describe(),
-            at_bound: held[a],
+        .map(|a| ArmRecord {
+            name: a.name.clone().unwrap_or_default(),
+            scene: a.scene.origin.clone(),
+            data: data_record(a),
         })
         .collect();
-    let fitted = with_values(scene, params, &outcome.values)?;
+    let single = arms.len() == 1 && arms[0].name.is_none();
     let report = FitReport {
-        scene: scene.origin.clone(),
-        data: DataRecord {
-            file: data.origin.clone(),
-            fnv1a64: data.hash.clone(),
-            observations: n,
-            distinct_times: data.distinct_times(g.t_end).len(),
-            sigma: has_sigma,
-        },
+        scene: (arms.iter().map(|a| a.scene.origin.as_str()))
+            .collect::<Vec<_>>()
+            .join(", "),
+        data: combined_record(&records),
+        arms: if single { vec![] } else { records },
         parameters,
         correlation: spread.correlation,
         covariance: spread.covariance,
-        covariance_scaling: scaling,
+        covariance_scaling: if has_sigma {
+            "sigma"
+        } else {
+            "residual variance"
+        },
         residual_variance: s2,
         chi2,
         initial_chi2: outcome.initial_chi2,
@@ -620,7 +549,7 @@ pub fn fit_watched(
         reduced_chi2: if dof > 0 { chi2 / dof as f64 } else { f64::NAN },
         rms_residual: rms,
         iterations: outcome.iterations,
-        model_runs: outcome.evaluations,
+        model_runs: runs,
         convergence: outcome.convergence,
         convergence_reason: match &outcome.last_refusal {
             Some(why) if outcome.convergence == Convergence::Refused => format!(
@@ -637,8 +566,166 @@ pub fn fit_watched(
     };
     Ok(Fit {
         report,
-        scene: fitted,
+        scene: scenes[0].clone(),
+        scenes,
     })
+}
+
+/// Each parameter of the vector in the report: its key and arm, how its column was taken,
+/// its start, estimate, standard error and range.
+fn parameter_reports(
+    layout: &Layout,
+    arms: &[Arm],
+    bounds: &[Bounds],
+    p0: &[f64],
+    outcome: &lm::Outcome,
+    se: &[f64],
+) -> Vec<ParameterReport> {
+    let held = lm::held_by_bounds(
+        bounds,
+        &outcome.values,
+        &outcome.residuals,
+        &outcome.jacobian,
+    );
+    let refraction = arms.iter().any(|a| a.data.has(Measured::Refraction));
+    (0..layout.len())
+        .map(|g| {
+            let (p, a) = layout.at(g);
+            ParameterReport {
+                key: p.key().to_string(),
+                arm: a.and_then(|a| arms[a].name.clone()),
+                jacobian: match (p.has_sensitivity(), refraction) {
+                    (true, false) => "IDAS sensitivity",
+                    (true, true) => {
+                        "IDAS sensitivity (axial length), finite differences (refraction)"
+                    }
+                    (false, _) => "finite differences",
+                },
+                initial: p0[g],
+                estimate: outcome.values[g],
+                standard_error: se[g],
+                range: bounds[g].describe(),
+                at_bound: held[g],
+            }
+        })
+        .collect()
+}
+
+/// The data record of one arm.
+fn data_record(a: &Arm) -> DataRecord {
+    let t_end = a.scene.growth.as_ref().map_or(f64::INFINITY, |g| g.t_end);
+    DataRecord {
+        file: a.data.origin.clone(),
+        fnv1a64: a.data.hash.clone(),
+        observations: a.data.rows.len(),
+        distinct_times: a.data.distinct_times(t_end).len(),
+        sigma: a.data.has_sigma(),
+        measured: [Measured::AxialLength, Measured::Refraction]
+            .into_iter()
+            .filter(|&m| a.data.has(m))
+            .collect(),
+    }
+}
+
+/// The records of several arms as one: the files joined, the counts added (a single
+/// arm's own record).
+fn combined_record(records: &[ArmRecord]) -> DataRecord {
+    if let [one] = records {
+        return one.data.clone();
+    }
+    let join = |f: &dyn Fn(&DataRecord) -> String| {
+        records
+            .iter()
+            .map(|r| f(&r.data))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut measured = vec![];
+    for r in records {
+        for m in &r.data.measured {
+            if !measured.contains(m) {
+                measured.push(*m);
+            }
+        }
+    }
+    DataRecord {
+        file: join(&|d| d.file.clone()),
+        fnv1a64: join(&|d| d.fnv1a64.clone()),
+        observations: records.iter().map(|r| r.data.observations).sum(),
+        distinct_times: records.iter().map(|r| r.data.distinct_times).sum(),
+        sigma: records.iter().all(|r| r.data.sigma),
+        measured,
+    }
+}
+
+/// The arms checked and their data on their scenes' clocks: what refuses a fit before any
+/// run (no growth, not IDA, a parameter the scene cannot fit, data outside the run,
+/// refraction data of a scene without optics, two arms of one name, a key both shared and
+/// per arm, a per-arm key with one arm).
+fn prepare_arms(
+    arms: Vec<Arm>,
+    shared: &[FitParam],
+    per_arm: &[FitParam],
+) -> Result<Vec<Arm>, Error> {
+    if shared.is_empty() && per_arm.is_empty() {
+        return Err(Error::input(
+            Subject::Argument("fit".into()),
+            "no parameter to fit",
+        ));
+    }
+    if let Some(p) = per_arm
+        .iter()
+        .find(|p| shared.iter().any(|q| q.key() == p.key()))
+    {
+        return Err(Error::input(
+            Subject::Key(p.key().into()),
+            format!(
+                "{} is both fitted in common (--fit) and per arm (--per-arm): name it once",
+                p.key()
+            ),
+        )
+        .with_origin(Origin::Argument));
+    }
+    if !per_arm.is_empty() && arms.len() < 2 {
+        return Err(Error::input(
+            Subject::Argument("per-arm".into()),
+            format!(
+                "{} is fitted per arm: a key of each arm's own needs two arms or more",
+                per_arm[0].key()
+            ),
+        )
+        .with_origin(Origin::Argument));
+    }
+    for (a, arm) in arms.iter().enumerate() {
+        if let Some(name) = &arm.name {
+            if arms[..a].iter().any(|b| b.name.as_deref() == Some(name)) {
+                return Err(Error::input(
+                    Subject::Argument("arm".into()),
+                    format!("arm {name}: two arms have this name (each arm's is its own)"),
+                )
+                .with_value(name.clone())
+                .with_origin(Origin::Argument));
+            }
+        }
+    }
+    let params: Vec<FitParam> = shared.iter().chain(per_arm).cloned().collect();
+    arms.into_iter()
+        .map(|arm| {
+            let g = fit_refusals(&arm.scene, &params)?;
+            let data = arm.data.on_clock(g)?;
+            data.check_times(g.t_end)?;
+            if data.has(Measured::Refraction) && g.source != crate::model::optics::Source::Optics {
+                let origin = arm.scene.origin_of_key("stimulus.source");
+                return Err(Error::input(Subject::File(data.origin.clone().into()), format!(
+                    "{}: the data give refraction_D, but the scene computes no refraction: its stimulus is not from the optics (stimulus.source = \"{}\" in {origin}); set stimulus.source = \"optics\" or leave the refraction out",
+                    data.origin,
+                    crate::model::optics::SOURCES[g.source as usize]
+                ))
+                .with_origin(Origin::File(data.origin.clone().into())));
+            }
+            Ok(Arm { data, ..arm })
+        })
+        .collect()
 }
 
 /// What refuses a fit of `params` in `scene` before the data are read: no growth, not IDA,
@@ -670,16 +757,37 @@ fn fit_refusals<'s>(scene: &'s Scene, params: &[FitParam]) -> Result<&'s GrowthP
     Ok(g)
 }
 
-/// `n` observations fit `k` parameters: at least k with σ, k + 1 without (the residual
-/// variance needs a degree of freedom).
-fn check_counts(data: &Observations, n: usize, k: usize) -> Result<(), Error> {
-    let has_sigma = data.has_sigma();
+/// `n` measurements fit `k` parameters: at least k with σ, k + 1 without (the residual
+/// variance needs a degree of freedom); and without σ one quantity only.
+fn check_counts(arms: &[Arm], n: usize, k: usize, has_sigma: bool) -> Result<(), Error> {
+    let data = &arms[0].data;
+    let origin = arms
+        .iter()
+        .map(|a| a.data.origin.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
+    if !has_sigma {
+        let both = arms.iter().any(|a| a.data.has(Measured::AxialLength))
+            && arms.iter().any(|a| a.data.has(Measured::Refraction));
+        let some = arms.iter().any(|a| a.data.has_sigma());
+        if both || some {
+            let why = if some {
+                "some files give σ and some do not"
+            } else {
+                "without σ, axial lengths (mm) and refractions (D) cannot share one residual variance"
+            };
+            return Err(Error::input(
+                Subject::File(data.origin.clone().into()),
+                format!("{origin}: {why}: a joint fit weighs every measurement by its σ, so give σ in every file"),
+            )
+            .with_origin(Origin::File(data.origin.clone().into())));
+        }
+    }
     if n < k || (!has_sigma && n == k) {
         return Err(Error::input(
             Subject::File(data.origin.clone().into()),
             format!(
-                "{}: {n} observation{} for {k} parameter{}: a fit needs at least {}{}",
-                data.origin,
+                "{origin}: {n} observation{} for {k} parameter{}: a fit needs at least {}{}",
                 if n == 1 { "" } else { "s" },
                 if k == 1 { "" } else { "s" },
                 if has_sigma { k } else { k + 1 },
@@ -705,13 +813,8 @@ struct Spread {
 }
 
 impl Spread {
-    fn at(
-        outcome: &lm::Outcome,
-        params: &[FitParam],
-        names: &[&str],
-        s2: f64,
-    ) -> Result<Spread, Error> {
-        let k = params.len();
+    fn at(outcome: &lm::Outcome, names: &[&str], s2: f64) -> Result<Spread, Error> {
+        let k = names.len();
         let inverse = lm::GaussNewton::of(&outcome.jacobian)
             .and_then(|gn| gn.inverse_information())
             .ok_or_else(|| {
@@ -725,7 +828,7 @@ impl Spread {
         if let Some(a) = (0..k).find(|&a| !se[a].is_finite()) {
             return Err(Error::failed(Stage::Fit, format!(
                 "the standard error of {} at the estimate is {} ({}): the information matrix JᵀWJ is too close to singular to invert",
-                params[a].key(),
+                names[a],
                 number(se[a]),
                 lm::show(names, &outcome.values)
             )));
@@ -754,20 +857,27 @@ impl Spread {
     }
 }
 
-/// The observations against the model at the estimate.
-fn residual_rows(data: &Observations, outcome: &lm::Outcome, g: &GrowthParams) -> Vec<ResidualRow> {
-    data.rows
-        .iter()
+/// Each measurement against the model at the estimate, in the order of `rows`.
+fn residual_rows(arms: &[Arm], rows: &[joint::RowOf], outcome: &lm::Outcome) -> Vec<ResidualRow> {
+    rows.iter()
         .zip(&outcome.model)
         .zip(outcome.residuals.iter())
-        .map(|((o, &m), &w)| ResidualRow {
-            t: o.t,
-            age: g.age_of(o.t).map(|a| o.age.unwrap_or(a)),
-            axial_length: o.axial_length,
-            sigma: o.sigma,
-            model: m,
-            residual: m - o.axial_length,
-            weighted: w,
+        .map(|((row, &m), &w)| {
+            let arm = &arms[row.arm];
+            let o = &arm.data.rows[row.obs];
+            let (y, sigma) = o.value(row.what).unwrap_or((f64::NAN, None));
+            let g = arm.scene.growth.as_ref();
+            ResidualRow {
+                arm: arm.name.clone(),
+                t: o.t,
+                age: g.and_then(|g| g.age_of(o.t)).map(|a| o.age.unwrap_or(a)),
+                axial_length: (row.what == Measured::AxialLength).then_some(y),
+                refraction_d: (row.what == Measured::Refraction).then_some(y),
+                sigma,
+                model: m,
+                residual: m - y,
+                weighted: w,
+            }
         })
         .collect()
 }
@@ -815,3 +925,5 @@ pub fn curve(scene: &Scene, points: usize) -> Result<Vec<(f64, f64)>, Error> {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_joint;

@@ -20,13 +20,13 @@ fn plural(n: usize) -> &'static str {
 /// The pairs of fitted parameters correlated at |ρ| ≥ [`STRONG_CORRELATION`], with ρ: their
 /// standard errors are mostly the width of a valley along which the data barely change
 /// (BENCHMARKS.md, "Calibration": η0 and Γ on plateau data).
-pub fn strongly_correlated(r: &FitReport) -> Vec<(&str, &str, f64)> {
+pub fn strongly_correlated(r: &FitReport) -> Vec<(String, String, f64)> {
     let mut pairs = vec![];
     for (i, p) in r.parameters.iter().enumerate() {
         for (j, q) in r.parameters.iter().enumerate().skip(i + 1) {
             let c = r.correlation[i][j];
             if c.abs() >= STRONG_CORRELATION {
-                pairs.push((p.key.as_str(), q.key.as_str(), c));
+                pairs.push((p.label(), q.label(), c));
             }
         }
     }
@@ -44,8 +44,10 @@ pub fn notes(r: &FitReport) -> Vec<String> {
         .iter()
         .map(|(a, b, c)| format!("{a} and {b} at {c:.4}"))
         .collect();
-    // The advice names a key of the pair, never one that was not fitted.
+    // The advice names a key of the pair, never one that was not fitted; a per-arm key's
+    // value is set in its arm's scene.
     let (_, example, _) = &pairs[0];
+    let example = example.split('[').next().unwrap_or(example);
     vec![format!(
         "strongly correlated (|ρ| ≥ {STRONG_CORRELATION}): {}; the data determine a combination \
          of such a pair far better than either (fix one: leave {example}, say, out of the fit \
@@ -58,7 +60,7 @@ pub fn notes(r: &FitReport) -> Vec<String> {
 /// The correlation matrix, its labels "(i) key" in a column as wide as the longest.
 fn correlation_table(r: &FitReport) -> String {
     let labels: Vec<String> = (r.parameters.iter().enumerate())
-        .map(|(i, p)| format!("({}) {}", i + 1, p.key))
+        .map(|(i, p)| format!("({}) {}", i + 1, p.label()))
         .collect();
     let width = labels
         .iter()
@@ -92,35 +94,69 @@ fn signed(x: f64, places: usize) -> String {
     }
 }
 
-/// In a scene that counts in ages (time.unit), each observation against the model by age,
-/// one line each in the data's order: what a growth curve's reader looks at first (where
-/// in life the model runs ahead of the data or behind it). Empty without ages, so a fit in
-/// t reports as it always did.
+/// In a scene that counts in ages (time.unit), each measurement against the model by age,
+/// one line each in the data's order (arm by arm): what a growth curve's reader looks at
+/// first (where in life the model runs ahead of the data or behind it). Empty without
+/// ages, so a fit in t reports as it always did.
 fn residuals_by_age(scene: &Scene, r: &FitReport) -> String {
     let Some(unit) = scene.growth.as_ref().and_then(|g| g.age_unit()) else {
         return String::new();
     };
-    let mut text = format!(
-        "  residuals        {:>10}  {:>10}  {:>10}  {:>10}\n",
-        format!("age ({unit})"),
-        "data (mm)",
-        "model (mm)",
-        "model−data"
-    );
+    let joint = r
+        .residuals
+        .iter()
+        .any(|x| x.arm.is_some() || x.refraction_d.is_some());
+    let arm_width = (r.residuals.iter())
+        .filter_map(|x| x.arm.as_ref().map(|a| a.chars().count()))
+        .max()
+        .unwrap_or(0)
+        .max(3);
+    let mut text = if joint {
+        format!(
+            "  residuals        {:arm_width$}  {:>10}  {:>13}  {:>10}  {:>10}  {:>10}\n",
+            "arm",
+            format!("age ({unit})"),
+            "measured",
+            "data",
+            "model",
+            "model−data"
+        )
+    } else {
+        format!(
+            "  residuals        {:>10}  {:>10}  {:>10}  {:>10}\n",
+            format!("age ({unit})"),
+            "data (mm)",
+            "model (mm)",
+            "model−data"
+        )
+    };
     for x in &r.residuals {
         let Some(age) = x.age else { continue };
-        text.push_str(&format!(
-            "                   {:>10}  {:>10}  {:>10}  {:>10}{}\n",
-            decimals(age, 4),
-            decimals(x.axial_length, 4),
-            decimals(x.model, 4),
-            signed(x.residual, 4),
-            if x.sigma.is_some() {
-                format!("  ({} σ)", signed(x.weighted, 2))
-            } else {
-                String::new()
-            }
-        ));
+        let weighted = if x.sigma.is_some() {
+            format!("  ({} σ)", signed(x.weighted, 2))
+        } else {
+            String::new()
+        };
+        if joint {
+            let m = x.measured();
+            text.push_str(&format!(
+                "                   {:arm_width$}  {:>10}  {:>13}  {:>10}  {:>10}  {:>10}{weighted}\n",
+                x.arm.as_deref().unwrap_or(""),
+                decimals(age, 4),
+                format!("{} ({})", m.column(), m.unit()),
+                decimals(x.observed(), 4),
+                decimals(x.model, 4),
+                signed(x.residual, 4),
+            ));
+        } else {
+            text.push_str(&format!(
+                "                   {:>10}  {:>10}  {:>10}  {:>10}{weighted}\n",
+                decimals(age, 4),
+                decimals(x.observed(), 4),
+                decimals(x.model, 4),
+                signed(x.residual, 4),
+            ));
+        }
     }
     text
 }
@@ -133,23 +169,52 @@ pub fn report_table(scene: &Scene, r: &FitReport) -> String {
     let width = r
         .parameters
         .iter()
-        .map(|p| p.key.chars().count())
+        .map(|p| p.label().chars().count())
         .max()
         .unwrap_or(0)
         .max(9);
-    let mut text = format!(
-        "eyeshell: fitted {} ({}) to {} ({} observation{}, {})\n",
-        scene.origin,
-        one_line(&scene.display_name()),
-        r.data.file,
-        r.data.observations,
-        plural(r.data.observations),
-        if r.data.sigma {
-            "σ given"
-        } else {
-            "no σ: equal weights, covariance scaled by the residual variance"
-        },
-    );
+    let weights = if r.data.sigma {
+        "σ given"
+    } else {
+        "no σ: equal weights, covariance scaled by the residual variance"
+    };
+    let measured = |d: &super::DataRecord| {
+        (d.measured.iter().map(|m| m.column()))
+            .collect::<Vec<_>>()
+            .join(" and ")
+    };
+    let mut text = if r.arms.is_empty() {
+        format!(
+            "eyeshell: fitted {} ({}) to {} ({} observation{}{}, {weights})\n",
+            scene.origin,
+            one_line(&scene.display_name()),
+            r.data.file,
+            r.data.observations,
+            plural(r.data.observations),
+            match r.data.measured.as_slice() {
+                [super::Measured::AxialLength] => String::new(),
+                _ => format!(" of {}", measured(&r.data)),
+            },
+        )
+    } else {
+        let mut text = format!(
+            "eyeshell: fitted {} arms jointly ({} observations, {weights})\n",
+            r.arms.len(),
+            r.data.observations
+        );
+        for a in &r.arms {
+            text.push_str(&format!(
+                "  arm              {}: {} to {} ({} observation{} of {})\n",
+                a.name,
+                a.scene,
+                a.data.file,
+                a.data.observations,
+                plural(a.data.observations),
+                measured(&a.data)
+            ));
+        }
+        text
+    };
     text.push_str(&format!(
         "  {:width$}  {:>12}  {:>12}  {:>12}  range\n",
         "parameter", "initial", "estimate", "std. error"
@@ -157,7 +222,7 @@ pub fn report_table(scene: &Scene, r: &FitReport) -> String {
     for p in &r.parameters {
         text.push_str(&format!(
             "  {:width$}  {:>12}  {:>12}  {:>12}  {}{}\n",
-            p.key,
+            p.label(),
             decimals6(p.initial),
             decimals6(p.estimate),
             decimals6(p.standard_error),
@@ -173,8 +238,13 @@ pub fn report_table(scene: &Scene, r: &FitReport) -> String {
     }
     let d4 = |x: f64| decimals(x, 4);
     text.push_str(&residuals_by_age(scene, r));
+    let rms_unit = match r.data.measured.as_slice() {
+        [super::Measured::AxialLength] => " mm",
+        [super::Measured::Refraction] => " D",
+        _ => " (mm and D together)",
+    };
     text.push_str(&format!(
-        "  χ²               {} (from {}), {} degree{} of freedom, χ²/dof {}; rms residual {} mm\n",
+        "  χ²               {} (from {}), {} degree{} of freedom, χ²/dof {}; rms residual {}{rms_unit}\n",
         d4(r.chi2),
         d4(r.initial_chi2),
         r.degrees_of_freedom,
@@ -183,10 +253,18 @@ pub fn report_table(scene: &Scene, r: &FitReport) -> String {
         d4(r.rms_residual)
     ));
     text.push_str(&format!(
-        "  iterations       {} ({} growth run{} with sensitivities); {}\n  time             {:.3} s\n",
+        "  iterations       {} ({} growth run{}{}); {}\n  time             {:.3} s\n",
         r.iterations,
         r.model_runs,
         plural(r.model_runs),
+        if r.parameters
+            .iter()
+            .all(|p| p.jacobian == "IDAS sensitivity")
+        {
+            " with sensitivities"
+        } else {
+            ", finite differences among them"
+        },
         r.convergence_reason,
         r.wall_seconds,
     ));

@@ -23,6 +23,7 @@ pub mod sensitivity;
 pub mod sweep;
 
 mod parse;
+pub(crate) use parse::indexed;
 mod stimulus;
 mod suggest;
 mod validate;
