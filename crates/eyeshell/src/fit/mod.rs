@@ -37,7 +37,9 @@ use crate::{Error, Origin, Stage, Subject};
 pub use data::{Measured, Observation, Observations};
 pub use joint::{Arm, Layout, FD_STEP};
 pub use lm::{Convergence, FitOptions, IterationRecord};
-pub use param::{check_params, parse_fit_keys, parse_keys, values_in, with_values, FitParam};
+pub use param::{
+    check_params, parse_fit_keys, parse_keys, values_in, with_values, FitKeyError, FitParam,
+};
 
 impl From<FitError> for Error {
     fn from(e: FitError) -> Self {
@@ -673,6 +675,12 @@ fn prepare_arms(
             "no parameter to fit",
         ));
     }
+    if arms.is_empty() {
+        return Err(Error::input(
+            Subject::Argument("arms".into()),
+            "no arm to fit: give a scene and its data",
+        ));
+    }
     if let Some(p) = per_arm
         .iter()
         .find(|p| shared.iter().any(|q| q.key() == p.key()))
@@ -680,7 +688,7 @@ fn prepare_arms(
         return Err(Error::input(
             Subject::Key(p.key().into()),
             format!(
-                "{} is both fitted in common (--fit) and per arm (--per-arm): name it once",
+                "{} is both fitted in common and per arm: name it once",
                 p.key()
             ),
         )

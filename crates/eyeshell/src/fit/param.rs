@@ -67,6 +67,14 @@ const SURFACE_FIT_KEYS: [(&str, Rule); 4] = [
     ("index", Rule::Positive),
 ];
 
+/// Why a key cannot be fitted: one line naming it.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{why}")]
+pub struct FitKeyError {
+    pub key: String,
+    pub why: String,
+}
+
 /// Sections of settings, not of the model: the solver's numerics, the outputs, the clock.
 const NOT_MODEL_SECTIONS: [&str; 3] = ["solver", "output", "time"];
 
@@ -91,7 +99,15 @@ impl FitParam {
     /// The parameter of any real-valued key of the model: one with a forward sensitivity,
     /// a real key of the table, or a surface's radius, conic, thickness or index
     /// (`optics.surfaces[0].radius`). The error is one line naming the key.
-    pub fn from_key(key: &str) -> Result<FitParam, String> {
+    pub fn from_key(key: &str) -> Result<FitParam, FitKeyError> {
+        FitParam::from_key_text(key).map_err(|why| FitKeyError {
+            key: key.to_string(),
+            why,
+        })
+    }
+
+    /// [`FitParam::from_key`], its refusal as text.
+    fn from_key_text(key: &str) -> Result<FitParam, String> {
         if let Ok(p) = FitParam::from_sensitivity_key(key) {
             return Ok(p);
         }
@@ -377,7 +393,7 @@ pub fn parse_keys(keys: &[impl AsRef<str>], what: &str) -> Result<Vec<FitParam>,
 /// Parse `keys` (the `--fit` list): each a real-valued key of the model
 /// ([`FitParam::from_key`]), each once.
 pub fn parse_fit_keys(keys: &[impl AsRef<str>], what: &str) -> Result<Vec<FitParam>, Error> {
-    parse_with(keys, what, FitParam::from_key)
+    parse_with(keys, what, |k| FitParam::from_key(k).map_err(|e| e.why))
 }
 
 /// `scene` with the parameters set to `values`, validated and its optics traced again (a

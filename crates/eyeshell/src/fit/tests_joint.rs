@@ -318,6 +318,34 @@ fn what_a_run_cannot_use_is_refused_before_any_run() {
                 .contains("optics.surfaces[0].radius is not used by the run"),
         "{e}"
     );
+    // No arm, a per-arm key of one arm, a key both shared and per arm.
+    let step = &mut |_| Ok(());
+    let one = || Arm {
+        name: None,
+        scene: polynomial.clone(),
+        data: axial.clone(),
+    };
+    let o = FitOptions::default();
+    let none: &[FitParam] = &[];
+    let eta0: &[FitParam] = &eta0;
+    for (arms, shared, per_arm, want) in [
+        (vec![], eta0, none, "no arm to fit"),
+        (
+            vec![one()],
+            none,
+            eta0,
+            "growth.eta0 is fitted per arm: a key of each arm's own needs two arms",
+        ),
+        (
+            vec![one(), one()],
+            eta0,
+            eta0,
+            "growth.eta0 is both fitted in common and per arm",
+        ),
+    ] {
+        let e = fit_arms(arms, shared, per_arm, &o, &mut |_| {}, step).unwrap_err();
+        assert!(e.is_user_error() && e.to_string().contains(want), "{e}");
+    }
     for (key, want) in [
         ("solver.nodes", "solver.nodes is a setting of the solver"),
         ("growth.schedule", "is not a real-valued key"),
