@@ -368,7 +368,7 @@ fn one_wavelength_draws_its_surface_and_two_give_the_chromatic_difference_of_ref
 /// starts from the same eye as the unscheduled scene and ends shorter (it grows 0.43 of the
 /// time), with η0's sensitivity beside it. The sensitivity to the schedule's own parameter
 /// is refused, by `grow --sensitivities` and by `fit`, in one line naming the key, exit 2,
-/// nothing written.
+/// nothing written, and so is a table that reaches 0 inside the window.
 #[test]
 fn a_schedule_beside_optics_that_change_with_age_grows_and_refuses_its_own_sensitivity() {
     let dir = tempfile::tempdir().unwrap();
@@ -440,4 +440,29 @@ fn a_schedule_beside_optics_that_change_with_age_grows_and_refuses_its_own_sensi
     );
     assert_bad(&r, needle, "fit --fit growth.schedule_tau");
     assert!(!dir.path().join("fit").exists());
+    // A schedule that vanishes inside the window is refused beside such optics (the clock's
+    // inverse is infinitely steep there), and runs with the eye fixed.
+    let zero = [
+        "--set",
+        "growth.schedule=table",
+        "--set",
+        "growth.schedule_times=[0, 0.5, 1]",
+        "--set",
+        "growth.schedule_factors=[1, 0, 1]",
+        "--set",
+        "output.history_points=0",
+    ];
+    let r = grow("scenes/optics-age.toml", "zero", &zero);
+    assert_bad(
+        &r,
+        "growth.schedule_factors = [1, 0, 1] item 2 is 0 (at 0.5 in growth.schedule_times): beside optics that change with age",
+        "a zero factor",
+    );
+    assert!(!dir.path().join("zero").exists());
+    let mut fixed = zero.to_vec();
+    fixed.extend_from_slice(&["--set", "optics.surfaces=[{}, {}]"]);
+    succeeded(
+        &grow("scenes/optics-age.toml", "zero-fixed", &fixed),
+        "a zero factor, fixed eye",
+    );
 }

@@ -624,8 +624,9 @@ pub(crate) fn run_on(
         None => system::GrowthSystem::new(params, solver, growth),
         Some(mesh) => system::GrowthSystem::on_mesh(params, solver, growth, mesh),
     };
-    let mut sys = sys.map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
-    sys.set_real_time(real_time.cloned());
+    let mut sys = sys
+        .and_then(|mut sys| sys.set_real_time(real_time.cloned()).map(|_| sys))
+        .map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let p0 = sys.points.initial_state();
     if settings.integrator != Integrator::Ida {
         // IDA checks the rates of its consistent start (`run_ida`), which it computes anyway.

@@ -8,9 +8,13 @@
 //! S is non-decreasing and flat where s = 0 over an interval (a pause): τ then stands for
 //! every t of the pause, and [`RealTime::at`] takes the latest, so that after a pause the
 //! growth reads the optics at its end, where growth resumes (during the pause nothing grows
-//! whatever the optics are).
+//! whatever the optics are). A run beside changing optics refuses a schedule that reaches 0
+//! inside its window ([`check_zeros`]): there the inverse is infinitely steep and the
+//! integrator cannot pass; a flat S remains possible where s underflows.
 
-use super::schedule::Warp;
+use super::schedule::{Clock, Form, Schedule, Warp};
+use crate::names::Quantity;
+use crate::text::number;
 
 /// t = S⁻¹(τ) of one run: its warp on [0, t_end].
 #[derive(Clone, Debug)]
@@ -63,10 +67,42 @@ impl RealTime {
     }
 }
 
+/// Why `schedule` cannot run beside optics that change with age over the growth window
+/// [0, `t_end`] of `clock`, as (key, problem): a table whose factor is 0 at one of its times
+/// inside the window (only there can the interpolant reach 0: it is monotone between its
+/// points). Near a zero of s the eye changes on the clock 1/s times as fast as in t and
+/// S⁻¹ is infinitely steep, so the integrator's steps shrink without end (measured:
+/// scenes/optics-age.toml at N = 51, factors [1, 0, 1] at t = [0, 0.5, 1] and rtol 1e-8,
+/// ten minutes without reaching t = 0.5; a pause [1, 0, 0, 1] at [0, 0.3, 0.6, 1], 20 s at
+/// rtol 1e-6 without passing 0.3, where the eye jumps to that of the pause's end).
+pub fn check_zeros(
+    schedule: &Schedule,
+    clock: &Clock,
+    t_end: f64,
+) -> Result<(), (Quantity, String)> {
+    if schedule.form != Form::Table {
+        return Ok(());
+    }
+    let (a0, a1) = (clock.origin(), clock.origin() + t_end);
+    let zero = (schedule.times.iter().zip(&schedule.factors))
+        .position(|(&x, &f)| f == 0.0 && x >= a0 && x <= a1);
+    match zero {
+        None => Ok(()),
+        Some(i) => Err((
+            Quantity::ScheduleFactors,
+            format!(
+                "item {} is 0 (at {} in {}): beside optics that change with age (tables over t in optics.surfaces) the schedule must stay above 0 over the growth window, since where it vanishes the run on the schedule's clock meets the changing eye infinitely fast and the integrator cannot step past it; give a small factor instead (1e-3 grows a thousandth as fast)",
+                i + 1,
+                number(schedule.times[i]),
+                Quantity::ScheduleTimes
+            ),
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::growth::schedule::{Clock, Form, Schedule};
 
     fn real_time(schedule: Schedule, t_end: f64) -> RealTime {
         RealTime::new(Warp::new(&schedule, &Clock::default()), t_end)
@@ -127,6 +163,36 @@ mod tests {
         // Just after the pause, S increases again and the inverse is continuous from there.
         let after = rt.at(w.clock(0.65));
         assert!((after - 0.65).abs() < 1e-9, "{after}");
+    }
+
+    /// A table that reaches 0 inside the window is refused, naming the item; beyond the
+    /// window, or small but positive, it is not.
+    #[test]
+    fn a_zero_inside_the_window_is_refused() {
+        let table = |times: &[f64], factors: &[f64]| Schedule {
+            form: Form::Table,
+            times: times.to_vec(),
+            factors: factors.to_vec(),
+            ..Schedule::default()
+        };
+        let c = Clock::default();
+        let pause = table(&[0.0, 0.3, 0.6, 1.0], &[1.0, 0.0, 0.0, 1.0]);
+        let (key, why) = check_zeros(&pause, &c, 1.0).unwrap_err();
+        assert_eq!(key, Quantity::ScheduleFactors);
+        assert!(why.starts_with("item 2 is 0 (at 0.3 in "), "{why}");
+        let start = table(&[0.0, 0.3, 0.4, 1.0], &[0.0, 0.0, 1.0, 1.0]);
+        assert!(check_zeros(&start, &c, 1.0)
+            .unwrap_err()
+            .1
+            .starts_with("item 1 is 0"));
+        for ok in [
+            table(&[0.0, 0.5, 1.0, 2.0], &[1.0, 0.5, 1.0, 0.0]),
+            table(&[0.0, 0.3, 0.6, 1.0], &[1.0, 1e-6, 1e-6, 1.0]),
+        ] {
+            assert_eq!(check_zeros(&ok, &c, 1.0), Ok(()), "{:?}", ok.factors);
+        }
+        // The pause after a window that ends at 0.25 is not the run's.
+        assert_eq!(check_zeros(&pause, &c, 0.25), Ok(()));
     }
 
     /// A table of ones is S(t) = t: the inverse is the identity to rounding.

@@ -756,8 +756,12 @@ impl OnClock {
             t_end: tau_end,
             ..growth.clone()
         };
-        let real_time = (growth.optics_change() && !growth.schedule.is_constant())
-            .then(|| super::real_time::RealTime::new(warp.clone(), t_end));
+        let changing = growth.optics_change() && !growth.schedule.is_constant();
+        if changing {
+            super::real_time::check_zeros(&growth.schedule, &growth.clock, t_end)
+                .map_err(|(key, problem)| format!("{key} {problem}"))?;
+        }
+        let real_time = changing.then(|| super::real_time::RealTime::new(warp.clone(), t_end));
         Ok(OnClock {
             warp,
             t_end,

@@ -256,20 +256,44 @@ impl GrowthSystem {
         Ok(())
     }
 
-    /// Run the growth on a schedule's clock τ whose optics change with age: every later
-    /// [`GrowthSystem::set_time`] reads the surfaces at t = S⁻¹(τ) (None: at the time given,
-    /// as without a schedule). Nothing changes for fixed optics, whose surfaces read no time.
-    pub fn set_real_time(&mut self, real_time: Option<super::real_time::RealTime>) {
-        self.real_time = real_time.map(|rt| (rt, (f64::NAN, f64::NAN)));
+    /// Run the growth on a schedule's clock τ whose optics change with age: the surfaces
+    /// become those of t = S⁻¹(τ) for the current τ, and every later
+    /// [`GrowthSystem::set_time`] reads them there (None: at the time given, as without a
+    /// schedule). Nothing changes for fixed optics, whose surfaces read no time.
+    ///
+    /// # Errors
+    /// [`RhsError::Blend`] if the surfaces at S⁻¹(τ) cannot be blended.
+    pub fn set_real_time(
+        &mut self,
+        real_time: Option<super::real_time::RealTime>,
+    ) -> Result<(), RhsError> {
+        let Some(rt) = real_time else {
+            self.real_time = None;
+            return Ok(());
+        };
+        self.real_time = Some((rt, (f64::NAN, f64::NAN)));
+        self.set_time(self.t)
     }
 
     /// `f` on the growth system with its surfaces read at the times given, not through the
     /// schedule's clock: a scheduled run's outputs are recorded at the real t (what the
-    /// output's surfaces, refraction and rows read), its integration runs on τ.
-    pub fn on_real_clock<R>(&mut self, f: impl FnOnce(&mut Self) -> R) -> R {
-        let real_time = self.real_time.take();
+    /// output's surfaces, refraction and rows read), its integration runs on τ. Afterwards
+    /// the surfaces are again those of the clock's τ, which the integrator's next
+    /// evaluations (a consistent start's among them) read without setting it again.
+    ///
+    /// # Errors
+    /// `f`'s, and [`RhsError::Blend`] if the surfaces at τ cannot be blended again.
+    pub fn on_real_clock<R>(
+        &mut self,
+        f: impl FnOnce(&mut Self) -> Result<R, super::ObserverError>,
+    ) -> Result<R, super::ObserverError> {
+        let Some(real_time) = self.real_time.take() else {
+            return f(self);
+        };
+        let tau = self.t;
         let out = f(self);
-        self.real_time = real_time;
+        self.real_time = Some(real_time);
+        self.set_time(tau)?;
         out
     }
 

@@ -798,8 +798,8 @@ fn replay(
         ..
     } = parts;
     let mut sys = GrowthSystem::on_mesh(params, solver, growth, mesh)
+        .and_then(|mut sys| sys.set_real_time(parts.real_time.cloned()).map(|_| sys))
         .map_err(|e| fail(0.0, e.to_string(), stats))?;
-    sys.set_real_time(parts.real_time.cloned());
     // The sensitivity rows of a recorded time come after t = 0's output and before each
     // later one's ([`super::Observer::sensitivities`]).
     let mut rows = fine.sens.iter();

@@ -165,6 +165,18 @@ impl Scene {
                 .and_then(|()| g.clock.check_window(g.t_end))
                 .and_then(|()| g.schedule.check())
                 .and_then(|()| g.schedule.check_window(&g.clock, g.t_end))
+                .and_then(|()| {
+                    match self.stimulus_source() == Source::Optics
+                        && !self.optics().times().is_empty()
+                    {
+                        // The schedule's clock beside optics that change with age
+                        // (growth/real_time.rs).
+                        true => {
+                            crate::growth::real_time::check_zeros(&g.schedule, &g.clock, g.t_end)
+                        }
+                        false => Ok(()),
+                    }
+                })
                 .err()
             {
                 let key = super::names::key_of(key);

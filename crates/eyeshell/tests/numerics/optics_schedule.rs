@@ -60,8 +60,15 @@ fn axial_lengths(p: &GrowthProblem) -> Vec<(f64, f64)> {
     out
 }
 
-/// RK4 in real t on `steps` steps over [0, 1]: the axial length at each of [`TIMES`].
+/// RK4 in real t on `steps` steps over [0, 1] with the factor exp(−t/[`TAU`]): the axial
+/// length at each of [`TIMES`].
 fn rk4(p: &GrowthProblem, steps: usize) -> Vec<f64> {
+    rk4_with(p, steps, |t| (-t / TAU).exp())
+}
+
+/// RK4 of p' = s(t) G(p, t) in real t on `steps` steps over [0, 1]: the axial length at
+/// each of [`TIMES`].
+fn rk4_with(p: &GrowthProblem, steps: usize, factor: impl Fn(f64) -> f64) -> Vec<f64> {
     let mut sys = GrowthSystem::new(p.params(), p.solver(), p.growth()).unwrap();
     let mut y = sys.points.initial_state();
     let n = y.len();
@@ -70,7 +77,7 @@ fn rk4(p: &GrowthProblem, steps: usize) -> Vec<f64> {
         let mut out = vec![0.0; n];
         sys.set_time(t).unwrap();
         sys.rhs(y, &mut out).unwrap();
-        let s = (-t / TAU).exp();
+        let s = factor(t);
         out.iter_mut().for_each(|v| *v *= s);
         out
     };
@@ -133,6 +140,54 @@ fn the_scheduled_optics_age_growth_is_rk4_in_real_time() {
     );
 }
 
+/// On an age clock (time.unit = "years", time.start = 0.25, time.end = 1.25: t = age − 0.25)
+/// with a logistic schedule in ages (half at age 0.75, width 0.1), the optics' tables over t
+/// and the schedule's ages each keep their own origin: the run agrees with RK4 in real t of
+/// s = 1/(1 + e^((0.25 + t − 0.75)/0.1)), and not with the schedule's origin forgotten.
+#[test]
+fn on_an_age_clock_the_schedule_reads_ages_and_the_optics_t() {
+    use eyeshell::growth::schedule::{Form, TimeUnit};
+    let base = problem(&scene(&[]));
+    let mut g = base.growth().clone();
+    g.clock = Clock {
+        unit: TimeUnit::Years,
+        start: Some(0.25),
+        end: Some(1.25),
+    };
+    g.schedule = Schedule {
+        form: Form::Logistic,
+        centre: 0.75,
+        width: 0.1,
+        ..Schedule::default()
+    };
+    let p = base.to_builder().growth(g).build().unwrap();
+    let run = axial_lengths(&p);
+    let logistic = |a: f64| 1.0 / (1.0 + ((a - 0.75) / 0.1).exp());
+    // The logistic's fall over 0.1 asks for finer steps than the exponential's.
+    let fine = rk4_with(&p, 800, |t| logistic(0.25 + t));
+    let coarse = rk4_with(&p, 400, |t| logistic(0.25 + t));
+    let forgotten = rk4_with(&p, 200, logistic);
+    for (k, &t) in TIMES.iter().enumerate() {
+        let l = run[k + 1].1;
+        println!(
+            "t = {t}: run − RK4 {:.2e}, RK4 400 − 800 {:.2e}, origin forgotten {:.2e}",
+            l - fine[k],
+            coarse[k] - fine[k],
+            forgotten[k] - fine[k]
+        );
+        assert!(
+            (coarse[k] - fine[k]).abs() < 2e-7,
+            "RK4 has not converged at t = {t}"
+        );
+        assert!(
+            (l - fine[k]).abs() < 1e-6,
+            "t = {t}: run {l} vs RK4 {}",
+            fine[k]
+        );
+    }
+    assert!((forgotten[2] - fine[2]).abs() > 1e-2);
+}
+
 /// The wrong clock for the optics is visible: the growth system reading the surfaces at τ
 /// instead of S⁻¹(τ) gives rates that differ, at a state and clock time inside the run.
 #[test]
@@ -140,7 +195,8 @@ fn the_surfaces_are_read_at_the_real_time() {
     let p = problem(&scheduled(&[]));
     let warp = Warp::new(&p.growth().schedule, &p.growth().clock);
     let mut real = GrowthSystem::new(p.params(), p.solver(), p.growth()).unwrap();
-    real.set_real_time(Some(RealTime::new(warp.clone(), 1.0)));
+    real.set_real_time(Some(RealTime::new(warp.clone(), 1.0)))
+        .unwrap();
     let mut direct = GrowthSystem::new(p.params(), p.solver(), p.growth()).unwrap();
     let y = real.points.initial_state();
     let (mut a, mut b) = (vec![0.0; y.len()], vec![0.0; y.len()]);
@@ -184,7 +240,7 @@ fn a_constant_schedule_or_fixed_optics_change_nothing() {
     let constant = Warp::new(&Schedule::default(), &Clock::default());
     for (p, warp) in [(&changing, constant), (&fixed, exponential)] {
         let mut with = GrowthSystem::new(p.params(), p.solver(), p.growth()).unwrap();
-        with.set_real_time(Some(RealTime::new(warp, 1.0)));
+        with.set_real_time(Some(RealTime::new(warp, 1.0))).unwrap();
         let mut without = GrowthSystem::new(p.params(), p.solver(), p.growth()).unwrap();
         let y = with.points.initial_state();
         for t in [0.0, 0.1, 0.37, 1.0] {
