@@ -362,3 +362,107 @@ fn one_wavelength_draws_its_surface_and_two_give_the_chromatic_difference_of_ref
     assert!((lca["power_difference_dioptres"].as_f64().unwrap() - 2.370).abs() < 1e-3);
     assert!((lca["refraction_retina_mm"].as_f64().unwrap() - 23.58).abs() < 1e-9);
 }
+
+/// scenes/optics-age-schedule.toml (the eye of scenes/optics-age.toml beside a growth rate
+/// falling as exp(−t/0.5)) grows from the CLI: its records are at the scene's own times, it
+/// starts from the same eye as the unscheduled scene and ends shorter (it grows 0.43 of the
+/// time), with η0's sensitivity beside it. The sensitivity to the schedule's own parameter
+/// is refused, by `grow --sensitivities` and by `fit`, in one line naming the key, exit 2,
+/// nothing written, and so is a table that reaches 0 inside the window.
+#[test]
+fn a_schedule_beside_optics_that_change_with_age_grows_and_refuses_its_own_sensitivity() {
+    let dir = tempfile::tempdir().unwrap();
+    let grow = |scene: &str, out: &str, more: &[&str]| {
+        let scene = repo().join(scene);
+        let mut args = vec!["grow", s(&scene), "--set", "solver.nodes=51", "--quiet"];
+        args.extend_from_slice(more);
+        args.extend_from_slice(&["--out", out]);
+        eyeshell_in(dir.path(), &args)
+    };
+    let r = grow(
+        "scenes/optics-age-schedule.toml",
+        "scheduled",
+        &["--sensitivities", "growth.eta0"],
+    );
+    succeeded(&r, "the scheduled scene");
+    succeeded(
+        &grow("scenes/optics-age.toml", "plain", &[]),
+        "the plain scene",
+    );
+    // A numeric column of a file with text columns (series.csv's class, the parameter).
+    let numbers = |file: &str, name: &str| -> Vec<f64> {
+        let (h, rows) = csv_cells(&dir.path().join(file));
+        let j = h.iter().position(|c| c == name).unwrap();
+        rows.iter().map(|r| r[j].parse().unwrap()).collect()
+    };
+    let series = |run: &str, name: &str| numbers(&format!("{run}/series.csv"), name);
+    let (t, scheduled) = (
+        series("scheduled", "t"),
+        series("scheduled", "axial_length"),
+    );
+    let plain = series("plain", "axial_length");
+    assert_eq!(t, [0.0, 0.1, 0.2, 0.4, 1.0]);
+    assert_eq!(scheduled[0], plain[0]);
+    println!(
+        "t = 1: scheduled {} mm, unscheduled {} mm",
+        scheduled[4], plain[4]
+    );
+    assert!(plain[4] - scheduled[4] > 0.2, "{scheduled:?} vs {plain:?}");
+    let d = numbers("scheduled/sensitivities.csv", "d_axial_length");
+    assert!(d.iter().skip(1).all(|&x| x > 0.0), "{d:?}");
+
+    let needle = "the sensitivity to growth.schedule_tau needs optics that do not change with age (optics.surfaces has tables over t)";
+    let r = grow(
+        "scenes/optics-age-schedule.toml",
+        "refused",
+        &["--sensitivities", "growth.eta0,growth.schedule_tau"],
+    );
+    assert_bad(&r, needle, "grow --sensitivities growth.schedule_tau");
+    assert!(!dir.path().join("refused").exists());
+    std::fs::write(
+        dir.path().join("data.csv"),
+        "t,axial_length\n0.5,22.5\n1,23\n",
+    )
+    .unwrap();
+    let scene = repo().join("scenes/optics-age-schedule.toml");
+    let r = eyeshell_in(
+        dir.path(),
+        &[
+            "fit",
+            s(&scene),
+            "--data",
+            "data.csv",
+            "--fit",
+            "growth.schedule_tau",
+            "--out",
+            "fit",
+        ],
+    );
+    assert_bad(&r, needle, "fit --fit growth.schedule_tau");
+    assert!(!dir.path().join("fit").exists());
+    // A schedule that vanishes inside the window is refused beside such optics (the clock's
+    // inverse is infinitely steep there), and runs with the eye fixed.
+    let zero = [
+        "--set",
+        "growth.schedule=table",
+        "--set",
+        "growth.schedule_times=[0, 0.5, 1]",
+        "--set",
+        "growth.schedule_factors=[1, 0, 1]",
+        "--set",
+        "output.history_points=0",
+    ];
+    let r = grow("scenes/optics-age.toml", "zero", &zero);
+    assert_bad(
+        &r,
+        "growth.schedule_factors = [1, 0, 1] item 2 is 0 (at 0.5 in growth.schedule_times): beside optics that change with age",
+        "a zero factor",
+    );
+    assert!(!dir.path().join("zero").exists());
+    let mut fixed = zero.to_vec();
+    fixed.extend_from_slice(&["--set", "optics.surfaces=[{}, {}]"]);
+    succeeded(
+        &grow("scenes/optics-age.toml", "zero-fixed", &fixed),
+        "a zero factor, fixed eye",
+    );
+}

@@ -32,6 +32,7 @@ pub use settings::{DaeLinear, GrowthParams, GrowthSettings, Integrator};
 
 pub mod problem;
 pub use problem::GrowthProblem;
+pub mod real_time;
 
 /// One row of series.csv: the eye at one output time, at the posterior pole.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -514,6 +515,9 @@ pub(crate) struct Parts<'a> {
     pub solver: &'a crate::bvp::settings::SolverSettings,
     pub growth: &'a GrowthParams,
     pub settings: &'a GrowthSettings,
+    /// On a schedule's clock with optics that change with age: the real time of each clock
+    /// time, which the growth system reads its surfaces at ([`real_time`]).
+    pub real_time: Option<&'a real_time::RealTime>,
 }
 
 impl<'a> Parts<'a> {
@@ -523,6 +527,7 @@ impl<'a> Parts<'a> {
             solver: problem.solver(),
             growth: problem.growth(),
             settings: problem.settings(),
+            real_time: None,
         }
     }
 }
@@ -576,6 +581,7 @@ pub(crate) fn run_on(
         solver,
         growth,
         settings,
+        real_time,
     } = parts;
     let Hooks {
         sens,
@@ -618,7 +624,9 @@ pub(crate) fn run_on(
         None => system::GrowthSystem::new(params, solver, growth),
         Some(mesh) => system::GrowthSystem::on_mesh(params, solver, growth, mesh),
     };
-    let mut sys = sys.map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
+    let mut sys = sys
+        .and_then(|mut sys| sys.set_real_time(real_time.cloned()).map(|_| sys))
+        .map_err(|e| fail(0.0, e.to_string(), GrowthStats::default()))?;
     let p0 = sys.points.initial_state();
     if settings.integrator != Integrator::Ida {
         // IDA checks the rates of its consistent start (`run_ida`), which it computes anyway.
@@ -901,9 +909,22 @@ fn march(
 /// Why a run of `growth` cannot take the sensitivity to `param`, in the model's words:
 /// the blue surface's centre z_B of a surface computed from the optics (traced about its
 /// centre once), or under a rule that reads defocus in dioptres from the cornea, which
-/// moving z_B does not move. Callers check it before a run (the fit's keys, `grow
-/// --sensitivities`); a run checks it again at t = 0.
+/// moving z_B does not move; or a schedule's parameter beside optics that change with age
+/// (its closed-form sensitivity needs a clock nothing else reads). Callers check it before a
+/// run (the fit's keys, `grow --sensitivities`); a run checks it again at t = 0.
 pub fn sensitivity_unavailable(param: dae::SensParam, growth: &GrowthParams) -> Option<String> {
+    if let Some(sp) = param.schedule_param() {
+        // ∂S/∂θ carries over to L only on an autonomous clock ([`schedule`]): optics that
+        // read t make the run on S(t) depend on θ through t = S⁻¹(τ) as well.
+        return growth.optics_change().then(|| {
+            format!(
+                "the sensitivity to {} needs optics that do not change with age (optics.surfaces has tables over t): the schedule's closed form holds only while nothing but the schedule reads t; those to {} and {} stay exact",
+                sp.quantity(),
+                Quantity::GrowthRate,
+                Quantity::Radius
+            )
+        });
+    }
     if param != dae::SensParam::BlueCentre {
         return None;
     }

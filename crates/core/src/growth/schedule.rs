@@ -17,6 +17,13 @@
 //! the same identity: ∂L(t)/∂θ = L̃'(S(t)) ∂S(t)/∂θ, with L̃'(τ) = (η0/τ) ∂L̃/∂η0 (the
 //! constant-rate growth depends on η0 and τ only through η0 τ), so it needs only the η0
 //! sensitivity the run integrates anyway, and ∂S/∂θ in closed form.
+//!
+//! Optics that change with age read t itself: on τ the growth is p̃' = η0 f(p̃, S⁻¹(τ)), still
+//! exact, with the surfaces read at the real time ([`super::real_time`]) and the outputs
+//! recorded there. η0's sensitivity stays exact (S does not depend on η0), and so does
+//! geometry.R0's difference of runs; the schedule's parameters now move S⁻¹ too and the
+//! growth no longer depends on η0 and τ through η0 τ alone, so their identity fails and
+//! they are refused ([`super::sensitivity_unavailable`]).
 
 use crate::names::Quantity;
 use crate::text::number;
@@ -586,6 +593,10 @@ pub(crate) fn run(
         stats: Box::default(),
     };
     check_schedule_sensitivities(growth, settings).map_err(fail)?;
+    // Optics that change with age are traced over the real window [0, t_end], which the
+    // run on the clock reads through S⁻¹ (its own t_end is S(t_end)).
+    let growth = &*growth.resolved().map_err(|e| fail(e.to_string()))?;
+    let parts = super::Parts { growth, ..parts };
     let clocked = OnClock::new(growth, settings).map_err(fail)?;
     let wanted = settings.sensitivities.clone();
     // geometry.R0: the eye measured at every τ in runs at R0(1 ± step).
@@ -614,6 +625,7 @@ pub(crate) fn run(
         super::Parts {
             growth: &clocked.growth,
             settings: &clocked.settings,
+            real_time: clocked.real_time.as_ref(),
             ..parts
         },
         super::Hooks {
@@ -633,7 +645,8 @@ pub(crate) fn run(
                 for (i, &(tau_i, t)) in pairs.iter().enumerate() {
                     if !out_done[i] && near(tau_i, tau) {
                         out_done[i] = true;
-                        output(sys, t, p)?;
+                        // The record of t reads the eye of t (its surfaces, refraction).
+                        sys.on_real_clock(|sys| output(sys, t, p))?;
                     }
                 }
                 Ok(())
@@ -657,12 +670,16 @@ pub(crate) fn run(
     }
 }
 
-/// A schedule parameter's sensitivity needs the schedule of its form.
+/// A schedule parameter's sensitivity needs the schedule of its form, and optics that do
+/// not change with age.
 fn check_schedule_sensitivities(
     growth: &super::GrowthParams,
     settings: &super::GrowthSettings,
 ) -> Result<(), String> {
     for p in &settings.sensitivities {
+        if let Some(why) = super::sensitivity_unavailable(*p, growth) {
+            return Err(why);
+        }
         if let Some(sp) = p.schedule_param() {
             if growth.schedule.form != sp.form() {
                 let want = Form::NAMES[sp.form() as usize];
@@ -688,6 +705,8 @@ struct OnClock {
     tau_end: f64,
     /// (τ, t) of every recorded time, (0, 0) first.
     pairs: Vec<(f64, f64)>,
+    /// The real time of each τ, when the optics change with age (else the rates read no t).
+    real_time: Option<super::real_time::RealTime>,
     growth: super::GrowthParams,
     settings: super::GrowthSettings,
 }
@@ -737,11 +756,18 @@ impl OnClock {
             t_end: tau_end,
             ..growth.clone()
         };
+        let changing = growth.optics_change() && !growth.schedule.is_constant();
+        if changing {
+            super::real_time::check_zeros(&growth.schedule, &growth.clock, t_end)
+                .map_err(|(key, problem)| format!("{key} {problem}"))?;
+        }
+        let real_time = changing.then(|| super::real_time::RealTime::new(warp.clone(), t_end));
         Ok(OnClock {
             warp,
             t_end,
             tau_end,
             pairs,
+            real_time,
             growth: clocked,
             settings: warped,
         })
@@ -778,6 +804,7 @@ fn radius_runs(
                 params: &shifted,
                 growth: &clocked.growth,
                 settings: &plain,
+                real_time: clocked.real_time.as_ref(),
                 ..parts
             },
             super::Hooks {

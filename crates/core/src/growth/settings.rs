@@ -79,6 +79,13 @@ impl GrowthParams {
         }
     }
 
+    /// True when the stimulus reads optics that change with time (tables over t in
+    /// `optics.surfaces`, `stimulus.source = "optics"`): the growth's rates then depend on t
+    /// itself, not only through η0's schedule.
+    pub fn optics_change(&self) -> bool {
+        self.source == Source::Optics && !self.optics.times().is_empty()
+    }
+
     /// True when the stimulus can be read as it is: polynomial surfaces, or computed ones
     /// that are those of the current optics keys and centre.
     pub fn is_resolved(&self) -> bool {

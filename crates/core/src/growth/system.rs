@@ -133,12 +133,17 @@ pub struct GrowthSystem {
     /// only that a callback failed.
     out_of_time: Option<OutOfTime>,
     /// The blue and red surfaces at the time of the last [`GrowthSystem::set_time`], when the
-    /// eye's optics change with time (`None`: the surfaces of t = 0, or fixed optics).
+    /// eye's optics change with time (`None`: the surfaces of t = 0, or fixed optics), with
+    /// the (real) time they were blended at.
     now: Option<(f64, PolarSpline, PolarSpline)>,
     /// The dioptre conversion of the rule's defocus (None when the rule reads none).
     vergence: Option<Vergence>,
     /// The time of the last [`GrowthSystem::set_time`]: what a rule reads as t.
     t: f64,
+    /// On a schedule's clock with optics that change with age, the real time of each clock
+    /// time, which the surfaces are read at ([`GrowthSystem::set_real_time`]); None: the
+    /// surfaces are read at the time the integrator gives. With the last (τ, t) it gave.
+    real_time: Option<(super::real_time::RealTime, (f64, f64))>,
 }
 
 /// The blue (or red) surface the stimulus reads: at the current time when the optics
@@ -220,23 +225,76 @@ impl GrowthSystem {
             now: None,
             vergence,
             t: 0.0,
+            real_time: None,
         })
     }
 
     /// The growth time the next right sides are evaluated at: the stimulus's surfaces are
     /// blended for it when the eye's optics change with time (once per time; nothing to do
-    /// for fixed optics, whose right side does not depend on t).
+    /// for fixed optics, whose right side does not depend on t). On a schedule's clock
+    /// ([`GrowthSystem::set_real_time`]) `t` is the clock's τ: the rule reads τ, the
+    /// surfaces are those of the real time S⁻¹(τ).
     pub fn set_time(&mut self, t: f64) -> Result<(), RhsError> {
         self.t = t;
         let Some(timed) = self.growth.computed.as_ref().and_then(|c| c.timed.as_ref()) else {
             return Ok(());
         };
-        if self.now.as_ref().is_some_and(|(at, _, _)| *at == t) {
+        let real = match self.real_time.as_mut() {
+            None => t,
+            Some((rt, last)) => {
+                if last.0 != t {
+                    *last = (t, rt.at(t));
+                }
+                last.1
+            }
+        };
+        if self.now.as_ref().is_some_and(|(at, _, _)| *at == real) {
             return Ok(());
         }
-        let (blue, red) = timed.at(t)?;
-        self.now = Some((t, blue, red));
+        let (blue, red) = timed.at(real)?;
+        self.now = Some((real, blue, red));
         Ok(())
+    }
+
+    /// Run the growth on a schedule's clock τ whose optics change with age: the surfaces
+    /// become those of t = S⁻¹(τ) for the current τ, and every later
+    /// [`GrowthSystem::set_time`] reads them there (None: at the time given, as without a
+    /// schedule). Nothing changes for fixed optics, whose surfaces read no time.
+    ///
+    /// # Errors
+    /// [`RhsError::Blend`] if the surfaces at S⁻¹(τ) cannot be blended.
+    pub fn set_real_time(
+        &mut self,
+        real_time: Option<super::real_time::RealTime>,
+    ) -> Result<(), RhsError> {
+        let Some(rt) = real_time else {
+            self.real_time = None;
+            return Ok(());
+        };
+        self.real_time = Some((rt, (f64::NAN, f64::NAN)));
+        self.set_time(self.t)
+    }
+
+    /// `f` on the growth system with its surfaces read at the times given, not through the
+    /// schedule's clock: a scheduled run's outputs are recorded at the real t (what the
+    /// output's surfaces, refraction and rows read), its integration runs on τ. Afterwards
+    /// the surfaces are again those of the clock's τ, which the integrator's next
+    /// evaluations (a consistent start's among them) read without setting it again.
+    ///
+    /// # Errors
+    /// `f`'s, and [`RhsError::Blend`] if the surfaces at τ cannot be blended again.
+    pub fn on_real_clock<R>(
+        &mut self,
+        f: impl FnOnce(&mut Self) -> Result<R, super::ObserverError>,
+    ) -> Result<R, super::ObserverError> {
+        let Some(real_time) = self.real_time.take() else {
+            return f(self);
+        };
+        let tau = self.t;
+        let out = f(self);
+        self.real_time = Some(real_time);
+        self.set_time(tau)?;
+        out
     }
 
     /// The number of growth unknowns.

@@ -45,13 +45,12 @@
 
 use crate::bvp::settings::SolverSettings;
 use crate::mesh::Mesh;
-use crate::model::params::Params;
 use crate::names::Quantity;
 
 use super::system::GrowthSystem;
 use super::{
-    GrowthError, GrowthParams, GrowthSettings, GrowthStats, Integrator, OutputFn, ProgressFn,
-    SensitivityFn, SensitivityRow,
+    GrowthError, GrowthSettings, GrowthStats, Integrator, OutputFn, ProgressFn, SensitivityFn,
+    SensitivityRow,
 };
 
 /// The order in the nodes that the space estimate assumes (module docs).
@@ -291,18 +290,15 @@ struct Recorded {
     stats: GrowthStats,
 }
 
-/// Run the scene on `mesh` at `settings`, recording its outputs, and with `keep_states`
-/// the states [`replay`] hands the caller (the delivered run's only).
+/// Run the scene `parts` on `mesh`, recording its outputs, and with `keep_states` the
+/// states [`replay`] hands the caller (the delivered run's only).
 fn record(
-    params: &Params,
-    solver: &SolverSettings,
-    growth: &GrowthParams,
-    settings: &GrowthSettings,
+    parts: super::Parts<'_>,
     mesh: Mesh,
     keep_states: bool,
     progress: &mut ProgressFn<'_>,
 ) -> Result<Recorded, GrowthError> {
-    let snapshots = super::snapshot_times(settings, growth.t_end);
+    let snapshots = super::snapshot_times(parts.settings, parts.growth.t_end);
     let mut rec = Recorded {
         t: vec![],
         p: vec![],
@@ -335,12 +331,7 @@ fn record(
         Ok(())
     };
     let stats = super::run_on(
-        super::Parts {
-            params,
-            solver,
-            growth,
-            settings,
-        },
+        parts,
         Some(mesh),
         super::Hooks {
             sens: &mut |rows| {
@@ -373,9 +364,7 @@ pub fn round_threads(solver: &SolverSettings) -> usize {
 /// is that of the run that failed first: a failure or an interruption costs no more than
 /// it would one run after another.
 fn three_runs(
-    params: &Params,
-    solver: &SolverSettings,
-    growth: &GrowthParams,
+    parts: super::Parts<'_>,
     at: [GrowthSettings; 2],
     mesh: Mesh,
     fine_mesh: Mesh,
@@ -385,9 +374,17 @@ fn three_runs(
     let [tight, loose] = at;
     // One run of the round: the delivered one keeps its states for the replay.
     let run = |at: &GrowthSettings, mesh: Mesh, delivered: bool, progress: &mut ProgressFn<'_>| {
-        record(params, solver, growth, at, mesh, delivered, progress)
+        record(
+            super::Parts {
+                settings: at,
+                ..parts
+            },
+            mesh,
+            delivered,
+            progress,
+        )
     };
-    if round_threads(solver) < 2 {
+    if round_threads(parts.solver) < 2 {
         let (fine, f) = timed(|| run(&tight, fine_mesh, true, progress));
         let fine = fine?;
         let (others, o) = timed(|| {
@@ -601,8 +598,8 @@ pub(super) fn run(
     let super::Parts {
         params,
         solver,
-        growth,
         settings,
+        ..
     } = parts;
     let super::Hooks {
         sens,
@@ -663,9 +660,10 @@ pub(super) fn run(
         let mesh = crate::bvp::solve::mesh_of(params, &s).map_err(|e| refuse(e.to_string()))?;
         let fine_mesh = mesh.halved();
         let ([fine, coarse, loose], cpu) = three_runs(
-            params,
-            &s,
-            growth,
+            super::Parts {
+                solver: &s,
+                ..parts
+            },
             [at(rtol), at(10.0 * rtol)],
             mesh,
             fine_mesh.clone(),
@@ -692,9 +690,11 @@ pub(super) fn run(
             let mut stats = fine.stats.clone();
             stats.error_estimate = Some(est);
             stats.accuracy = Some(accuracy);
-            replay(
-                params, &s, growth, fine_mesh, &fine, &mut stats, sens, output,
-            )?;
+            let parts = super::Parts {
+                solver: &s,
+                ..parts
+            };
+            replay(parts, fine_mesh, &fine, &mut stats, sens, output)?;
             stats.wall_seconds = start.elapsed().as_secs_f64();
             if let Some(a) = stats.accuracy.as_mut() {
                 a.wall_seconds = stats.wall_seconds;
@@ -778,11 +778,8 @@ fn out_of_reach(
 /// Hand the delivered run's outputs and sensitivity rows to the caller, in the order of the
 /// run: at each output time the growth system on its mesh takes the recorded state (the
 /// snapshots re-polish the elastic state, as in the run).
-#[allow(clippy::too_many_arguments)]
 fn replay(
-    params: &Params,
-    solver: &SolverSettings,
-    growth: &GrowthParams,
+    parts: super::Parts<'_>,
     mesh: Mesh,
     fine: &Recorded,
     stats: &mut GrowthStats,
@@ -794,7 +791,14 @@ fn replay(
         reason,
         stats: Box::new(stats.clone()),
     };
+    let super::Parts {
+        params,
+        solver,
+        growth,
+        ..
+    } = parts;
     let mut sys = GrowthSystem::on_mesh(params, solver, growth, mesh)
+        .and_then(|mut sys| sys.set_real_time(parts.real_time.cloned()).map(|_| sys))
         .map_err(|e| fail(0.0, e.to_string(), stats))?;
     // The sensitivity rows of a recorded time come after t = 0's output and before each
     // later one's ([`super::Observer::sensitivities`]).

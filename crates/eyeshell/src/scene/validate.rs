@@ -166,25 +166,24 @@ impl Scene {
                 .and_then(|()| g.clock.check_window(g.t_end))
                 .and_then(|()| g.schedule.check())
                 .and_then(|()| g.schedule.check_window(&g.clock, g.t_end))
+                .and_then(|()| {
+                    match self.stimulus_source() == Source::Optics
+                        && !self.optics().times().is_empty()
+                    {
+                        // The schedule's clock beside optics that change with age
+                        // (growth/real_time.rs).
+                        true => {
+                            crate::growth::real_time::check_zeros(&g.schedule, &g.clock, g.t_end)
+                        }
+                        false => Ok(()),
+                    }
+                })
                 .err()
             {
                 let key = super::names::key_of(key);
                 let value =
                     crate::scene::keys::find(key).map_or_else(String::new, |k| show(&k.get(self)));
                 return Err(invalid(&[key], value, problem));
-            }
-            // A schedule runs the model on its own clock S(t) (growth/schedule.rs), which is
-            // exact only while nothing but the rates depends on t: optics that change with
-            // age read t itself.
-            if !g.schedule.is_constant()
-                && self.stimulus_source() == Source::Optics
-                && !self.optics().times().is_empty()
-            {
-                return Err(invalid(
-                    &["growth.schedule"],
-                    show(&crate::scene::keys::find("growth.schedule").map_or(KeyValue::Unset, |k| k.get(self))),
-                    "cannot be combined with optics that change with age (tables over t in optics.surfaces): the schedule runs the model on its own clock".into(),
-                ));
             }
             self.check_output_times(g, sources)?;
         }

@@ -12,5 +12,6 @@ mod common;
 mod api_never_panics;
 mod custom_eye;
 mod growth_tol_sweep;
+mod optics_schedule;
 mod run_rays;
 mod shipped_scenes;
