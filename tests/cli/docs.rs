@@ -34,8 +34,9 @@ use std::process::{Command, Stdio};
 
 /// Blocks marked `skip-test` in README.md and docs/guide: the README's two set-up lines,
 /// the pip line of the Python chapter, the bvp4c comparison (the MATLAB code and the
-/// commands that read its files), and the cohort of 10,000 eyes (minutes).
-const SKIPPED: usize = 6;
+/// commands that read its files), the cohort of 10,000 eyes (minutes), and the trial study
+/// (a Python script; tests/cli/trials.rs runs it and checks its tables).
+const SKIPPED: usize = 7;
 
 /// The Markdown files whose commands run: README.md and every chapter of the guide.
 fn documents() -> Vec<PathBuf> {

@@ -47,5 +47,6 @@ mod status;
 mod study;
 mod sweep;
 mod through;
+mod trials;
 mod typed_errors;
 mod years;
