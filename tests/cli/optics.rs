@@ -411,7 +411,7 @@ fn a_schedule_beside_optics_that_change_with_age_grows_and_refuses_its_own_sensi
     let d = numbers("scheduled/sensitivities.csv", "d_axial_length");
     assert!(d.iter().skip(1).all(|&x| x > 0.0), "{d:?}");
 
-    let needle = "the sensitivity to growth.schedule_tau needs optics that do not change with age (optics.surfaces has tables over t)";
+    let needle = "the sensitivity to growth.schedule_tau needs optics that do not change with age (optics.surfaces has tables over time)";
     let r = grow(
         "scenes/optics-age-schedule.toml",
         "refused",

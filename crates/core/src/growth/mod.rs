@@ -918,8 +918,9 @@ pub fn sensitivity_unavailable(param: dae::SensParam, growth: &GrowthParams) -> 
         // read t make the run on S(t) depend on θ through t = S⁻¹(τ) as well.
         return growth.optics_change().then(|| {
             format!(
-                "the sensitivity to {} needs optics that do not change with age (optics.surfaces has tables over t): the schedule's closed form holds only while nothing but the schedule reads t; those to {} and {} stay exact",
+                "the sensitivity to {} needs optics that do not change with age ({} has tables over time): the schedule's closed form holds only while nothing but the schedule reads t; those to {} and {} stay exact",
                 sp.quantity(),
+                Quantity::Surfaces,
                 Quantity::GrowthRate,
                 Quantity::Radius
             )

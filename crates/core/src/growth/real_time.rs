@@ -91,10 +91,11 @@ pub fn check_zeros(
         Some(i) => Err((
             Quantity::ScheduleFactors,
             format!(
-                "item {} is 0 (at {} in {}): beside optics that change with age (tables over t in optics.surfaces) the schedule must stay above 0 over the growth window, since where it vanishes the run on the schedule's clock meets the changing eye infinitely fast and the integrator cannot step past it; give a small factor instead (1e-3 grows a thousandth as fast)",
+                "item {} is 0 (at {} in {}): beside optics that change with age (tables over time in {}) the schedule must stay above 0 over the growth window, since where it vanishes the run on the schedule's clock meets the changing eye infinitely fast and the integrator cannot step past it; give a small factor instead (1e-3 grows a thousandth as fast)",
                 i + 1,
                 number(schedule.times[i]),
-                Quantity::ScheduleTimes
+                Quantity::ScheduleTimes,
+                Quantity::Surfaces
             ),
         )),
     }
