@@ -672,3 +672,27 @@ fn a_schedule_in_years_beside_optics_over_ages_is_the_same_growth() {
     // The schedule slows the growth: the unscheduled eye is longer at the end.
     assert!(in_t[4] < 23.2 && in_t[4] - in_t[0] > 3.0, "{in_t:?}");
 }
+
+/// The ages a scene writes stay its ages when its clock moves after them: the tables of a
+/// scene of ages, with time.start then set later, are shown over the same ages by `check`.
+#[test]
+fn optics_tables_over_ages_keep_their_ages_when_the_clock_moves() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("s.toml"),
+        "[growth]\neta0 = 7\n[time]\nunit = \"years\"\nstart = 8\nend = 11\n[stimulus]\nsource = \"optics\"\n[[optics.surfaces]]\nradius = { age = [9, 11], value = [7.7, 7.8] }\n",
+    )
+    .unwrap();
+    for start in ["8.5", "9"] {
+        let set = format!("time.start={start}");
+        let r = eyeshell_in(d, &["check", "s.toml", "--set", &set]);
+        succeeded(&r, &set);
+        assert!(
+            r.stdout
+                .contains("radius = { age = [9.0, 11.0], value = [7.7, 7.8] }"),
+            "{set}: {}",
+            r.stdout
+        );
+    }
+}

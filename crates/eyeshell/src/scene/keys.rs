@@ -979,7 +979,7 @@ pub static KEYS: &[KeySpec] = &[
     },
     KeySpec {
         key: "optics.surfaces",
-        access: Access::Surfaces { get: |s| s.surfaces_as_written(), set: |s, v| { s.set_optics(|o| o.surfaces = v); s.written_clock.optics_origin = 0.0; s.sync_clock() } },
+        access: Access::Surfaces { get: |s| s.surfaces_as_written(), set: |s, v| s.set_surfaces_as_written(v) },
         rule: Rule::Any,
         doc: "[[optics.surfaces]], one table a surface from the cornea back: radius (mm, inf for a plane), conic, aspheric (r⁴, r⁶, ... terms), thickness (mm to the next surface; the last one's to the retina) and the medium behind it: index, cauchy = [a, b, c, d] (λ in µm) or sellmeier = { b = [..], c = [..] }. The surfaces of optics.eye = \"custom\", or overrides of a built-in eye's (in its surface order; a key left out keeps the source's). radius, conic, thickness and index may be tables over the growth's time, { t = [0, 0.5, 1], value = [7.4, 7.7, 7.8] } (in a scene with time.unit, over ages: { age = [8, 9, 11], value = [...] }). One key alone: optics.surfaces[i].key (i from 0) (docs/guide/optics.md)",
         growth: true,

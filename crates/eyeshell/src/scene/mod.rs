@@ -434,14 +434,15 @@ impl Scene {
         }
     }
 
-    /// Put the optics' tables back as written, before an edit that adds written ones to
-    /// them ([`Scene::sync_clock`] puts them on the model's clock again).
-    pub(crate) fn unshift_optics(&mut self) {
-        let by = self.written_clock.optics_origin;
-        if by != 0.0 && !self.optics().times().is_empty() {
-            self.set_optics(|o| o.surfaces.iter_mut().for_each(|s| s.shift_times(by)));
-        }
+    /// Give the optics' surfaces as the scene writes them (tables over ages with time.unit)
+    /// and put them on the model's clock ([`Scene::sync_clock`]).
+    pub(crate) fn set_surfaces_as_written(
+        &mut self,
+        surfaces: Vec<crate::model::eye::SurfaceSpec>,
+    ) {
+        self.set_optics(|o| o.surfaces = surfaces);
         self.written_clock.optics_origin = 0.0;
+        self.sync_clock();
     }
 
     /// The optics' surfaces as the scene writes them: their tables over ages with

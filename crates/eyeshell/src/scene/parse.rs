@@ -220,8 +220,7 @@ impl Scene {
                 ),
             });
         };
-        // The surfaces as written (ages with time.unit), the new value among them, then all
-        // on the model's clock again.
+        // The surfaces as written (ages with time.unit) with the new value among them.
         let mut surfaces = self.surfaces_as_written();
         if surfaces.len() <= i {
             surfaces.resize(i + 1, SurfaceSpec::default());
@@ -229,12 +228,10 @@ impl Scene {
         surfaces[i]
             .set(i, name, value)
             .map_err(|e| surface_error(origin, e))?;
-        self.unshift_optics();
-        self.set_optics(|o| o.surfaces = surfaces);
         let (t, age) = super::optics_toml::time_keys_in(value);
         let keys = &mut self.written_clock.optics_time_keys;
         *keys = (keys.0 || t, keys.1 || age);
-        self.sync_clock();
+        self.set_surfaces_as_written(surfaces);
         Ok(())
     }
 
